@@ -1,0 +1,39 @@
+"""The workspace cloud: positions by FK, manipulability = |det J|, reproducible."""
+
+import numpy as np
+import pytest
+
+
+def test_points_and_manipulability_come_from_fk_and_the_jacobian(course):
+    points, manipulability, q = course.sample_workspace(20000, seed=3, return_joints=True)
+    assert points.shape == (20000, 3) and manipulability.shape == (20000,) and q.shape == (20000, 6)
+    np.testing.assert_allclose(points, course.fk(q)[:, :3, 3], atol=1e-14)
+    np.testing.assert_allclose(manipulability, np.abs(np.linalg.det(course.jacobian(q))), atol=1e-14)
+    assert (q[:, :5] > -np.pi).all() and (q[:, :5] <= np.pi).all() and (q[:, 5] == 0).all()
+
+
+def test_reproducible_and_seeded(course):
+    a, ma = course.sample_workspace(150_000, seed=7)  # more than one block: threaded
+    b, mb = course.sample_workspace(150_000, seed=7)
+    np.testing.assert_array_equal(a, b)
+    np.testing.assert_array_equal(ma, mb)
+    c, _ = course.sample_workspace(150_000, seed=8)
+    assert not np.array_equal(a, c)
+    # a prefix of a larger cloud is the smaller cloud: blocks are seeded by position
+    d, _ = course.sample_workspace(70_000, seed=7)
+    np.testing.assert_array_equal(d[:65536], a[:65536])
+
+
+def test_inside_the_reach_sphere(course):
+    points, _ = course.sample_workspace(100_000)
+    shoulder = np.array([0, 0, course.d1])
+    reach = np.sqrt((course.a2 + course.a3) ** 2 + course.d4**2) + course.d5 + course.d6
+    assert np.linalg.norm(points - shoulder, axis=-1).max() <= reach
+    # COURSE_NOTES §1: roughly a sphere of Ø2600 mm around the base
+    assert np.linalg.norm(points - shoulder, axis=-1).max() == pytest.approx(1.3, abs=0.1)
+
+
+def test_uniform_joint_angles(course):
+    _, _, q = course.sample_workspace(200_000, seed=1, return_joints=True)
+    counts, _ = np.histogram(q[:, 2], bins=10, range=(-np.pi, np.pi))
+    assert counts.min() > 0.9 * 20_000 and counts.max() < 1.1 * 20_000

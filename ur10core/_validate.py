@@ -1,0 +1,129 @@
+"""Validation at the boundary of the core.
+
+Every public function of :mod:`ur10core` passes its array arguments through one of
+these helpers, so a bad value is refused with a :class:`ValueError` that names the
+argument, what is wrong, and (for batches) the first offending index.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+#: A rotation part may deviate from orthonormal by this much (max |R^T R - I|).
+ROTATION_TOLERANCE = 1e-6
+#: The bottom row of a homogeneous transform must equal [0, 0, 0, 1] to this tolerance.
+BOTTOM_ROW_TOLERANCE = 1e-9
+
+
+def _first_index(mask: np.ndarray) -> tuple[int, ...]:
+    return tuple(int(i) for i in np.argwhere(mask)[0])
+
+
+def as_float_array(value, name: str) -> np.ndarray:
+    """``np.asarray(value, float)`` with a readable error for non-numeric input."""
+    try:
+        return np.asarray(value, dtype=float)
+    except (TypeError, ValueError) as error:
+        raise ValueError(f"{name} must be numeric, got {value!r:.80}") from error
+
+
+def check_finite(array: np.ndarray, name: str) -> None:
+    if not np.isfinite(array).all():
+        where = _first_index(~np.isfinite(array))
+        raise ValueError(
+            f"{name} contains a non-finite value ({float(array[where])} at index {where})"
+        )
+
+
+def joint_vector(q, name: str = "q") -> np.ndarray:
+    """Validate joint angles of shape ``(..., 6)`` in radians; returns a float array."""
+    q = as_float_array(q, name)
+    if q.ndim == 0 or q.shape[-1] != 6:
+        raise ValueError(f"{name} must have shape (..., 6) (six joint angles), got shape {q.shape}")
+    check_finite(q, name)
+    return q
+
+
+def homogeneous_transform(T, name: str = "T") -> np.ndarray:
+    """Validate a base-to-flange pose of shape ``(..., 4, 4)``.
+
+    Checks, in order: shape, finiteness, bottom row ``[0, 0, 0, 1]``, and that the
+    rotation part is a proper rotation (orthonormal to :data:`ROTATION_TOLERANCE`,
+    determinant +1).
+    """
+    T = as_float_array(T, name)
+    if T.ndim < 2 or T.shape[-2:] != (4, 4):
+        raise ValueError(f"{name} must have shape (..., 4, 4) (homogeneous transforms), got shape {T.shape}")
+    check_finite(T, name)
+    bottom = T[..., 3, :]
+    bad_bottom = np.abs(bottom - (0.0, 0.0, 0.0, 1.0)).max(axis=-1) > BOTTOM_ROW_TOLERANCE
+    if bad_bottom.any():
+        where = _first_index(bad_bottom) if bad_bottom.ndim else ()
+        raise ValueError(
+            f"{name}{list(where) if where else ''} has bottom row {bottom[where].tolist()}, "
+            "expected [0, 0, 0, 1]"
+        )
+    R = T[..., :3, :3]
+    error = np.abs(np.swapaxes(R, -1, -2) @ R - np.eye(3)).max(axis=(-2, -1))
+    not_orthonormal = error > ROTATION_TOLERANCE
+    if not_orthonormal.any():
+        where = _first_index(not_orthonormal) if not_orthonormal.ndim else ()
+        raise ValueError(
+            f"{name}{list(where) if where else ''}: rotation part is not orthonormal "
+            f"(max |R^T R - I| = {error[where]:.3g} > {ROTATION_TOLERANCE:g})"
+        )
+    det = np.linalg.det(R)
+    improper = det < 0
+    if improper.any():
+        where = _first_index(improper) if improper.ndim else ()
+        raise ValueError(
+            f"{name}{list(where) if where else ''}: rotation part has determinant "
+            f"{det[where]:.6g}; a proper rotation has +1 (this one is a reflection)"
+        )
+    return T
+
+
+def rotation_matrix(R, name: str = "R") -> np.ndarray:
+    """Validate rotation matrices of shape ``(..., 3, 3)`` (proper, orthonormal)."""
+    R = as_float_array(R, name)
+    if R.ndim < 2 or R.shape[-2:] != (3, 3):
+        raise ValueError(f"{name} must have shape (..., 3, 3) (rotation matrices), got shape {R.shape}")
+    T = np.zeros(R.shape[:-2] + (4, 4))
+    T[..., :3, :3] = R
+    T[..., 3, 3] = 1.0
+    homogeneous_transform(T, name)
+    return R
+
+
+def scalar_transform_rows(T, name: str = "T") -> list[list[float]]:
+    """Fast path of :func:`homogeneous_transform` for a single 4x4 pose.
+
+    Returns the rows as Python floats (what the scalar IK works on); falls back to the
+    array validator to word the error when anything is wrong.
+    """
+    rows = T.tolist()
+    (r11, r12, r13, px), (r21, r22, r23, py), (r31, r32, r33, pz), bottom = rows
+    total = r11 + r12 + r13 + px + r21 + r22 + r23 + py + r31 + r32 + r33 + pz + sum(bottom)
+    ok = total - total == 0.0  # False for nan and inf anywhere
+    if ok:
+        ok = (
+            abs(bottom[0]) <= BOTTOM_ROW_TOLERANCE
+            and abs(bottom[1]) <= BOTTOM_ROW_TOLERANCE
+            and abs(bottom[2]) <= BOTTOM_ROW_TOLERANCE
+            and abs(bottom[3] - 1.0) <= BOTTOM_ROW_TOLERANCE
+        )
+    if ok:
+        tol = ROTATION_TOLERANCE
+        ok = (
+            abs(r11 * r11 + r21 * r21 + r31 * r31 - 1.0) <= tol
+            and abs(r12 * r12 + r22 * r22 + r32 * r32 - 1.0) <= tol
+            and abs(r13 * r13 + r23 * r23 + r33 * r33 - 1.0) <= tol
+            and abs(r11 * r12 + r21 * r22 + r31 * r32) <= tol
+            and abs(r11 * r13 + r21 * r23 + r31 * r33) <= tol
+            and abs(r12 * r13 + r22 * r23 + r32 * r33) <= tol
+            # x cross y must be +z for a proper rotation: check its third component sign
+            and (r21 * r32 - r31 * r22) * r13 + (r31 * r12 - r11 * r32) * r23 + (r11 * r22 - r21 * r12) * r33 > 0
+        )
+    if not ok:
+        homogeneous_transform(T, name)  # raises with the precise message
+    return rows

@@ -1,0 +1,165 @@
+"""The four ways the course reads an orientation (COURSE_NOTES §3, Craig ch. 2).
+
+* Z-Y-X Euler angles (α, β, γ): rotate about Z by α, then about the *new* Y by β,
+  then about the new X by γ: ``R = Rz(α) Ry(β) Rx(γ)``.
+* X-Y-Z fixed angles (γ, β, α): rotate about the *fixed* X by γ, then fixed Y by β,
+  then fixed Z by α: ``R = Rz(α) Ry(β) Rx(γ)`` as well — Craig's observation that the
+  two conventions give the same matrix, with the angles read in opposite order.
+* Equivalent angle–axis (θ, k̂), θ in [0, π].
+* Euler parameters: the unit quaternion (w, x, y, z) with w ≥ 0.
+
+Every function takes rotation matrices of shape (..., 3, 3) (a 4x4 pose's ``[:3, :3]``)
+and is vectorised; angles in radians.
+
+Example
+-------
+>>> R = rotation_from_zyx_euler([0.3, -0.2, 0.1])
+>>> zyx_euler(R).round(6).tolist(), xyz_fixed(R).round(6).tolist()
+([0.3, -0.2, 0.1], [0.1, -0.2, 0.3])
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ._validate import as_float_array, check_finite, rotation_matrix
+
+#: Below this cos β the Z-Y-X angles are at gimbal lock (β = ±90°): α is set to 0.
+GIMBAL_TOLERANCE = 1e-10
+
+
+def _rot(axis: int, angle: np.ndarray) -> np.ndarray:
+    c, s = np.cos(angle), np.sin(angle)
+    R = np.zeros(np.shape(angle) + (3, 3))
+    i, j = [(1, 2), (2, 0), (0, 1)][axis]
+    R[..., axis, axis] = 1.0
+    R[..., i, i] = c
+    R[..., j, j] = c
+    R[..., i, j] = -s
+    R[..., j, i] = s
+    return R
+
+
+def _angles(value, name: str, count: int) -> np.ndarray:
+    value = as_float_array(value, name)
+    if value.ndim == 0 or value.shape[-1] != count:
+        raise ValueError(f"{name} must have shape (..., {count}), got shape {value.shape}")
+    check_finite(value, name)
+    return value
+
+
+def rotation_from_zyx_euler(angles) -> np.ndarray:
+    """``R = Rz(α) Ry(β) Rx(γ)`` from Z-Y-X Euler angles ``(α, β, γ)`` (..., 3)."""
+    alpha, beta, gamma = np.moveaxis(_angles(angles, "angles", 3), -1, 0)
+    # intrinsic: each rotation about the axes of the frame the previous ones produced
+    return _rot(2, alpha) @ _rot(1, beta) @ _rot(0, gamma)
+
+
+def rotation_from_xyz_fixed(angles) -> np.ndarray:
+    """R from X-Y-Z fixed angles ``(γ, β, α)`` (..., 3): about fixed X by γ, Y by β, Z by α."""
+    gamma, beta, alpha = np.moveaxis(_angles(angles, "angles", 3), -1, 0)
+    R = _rot(0, gamma)
+    R = _rot(1, beta) @ R  # extrinsic: each later rotation pre-multiplies
+    return _rot(2, alpha) @ R
+
+
+def zyx_euler(R) -> np.ndarray:
+    """Z-Y-X Euler angles ``(α, β, γ)`` of R, (..., 3); β in [−π/2, π/2].
+
+    Craig (2.66): ``β = atan2(−r31, sqrt(r11² + r21²))``, ``α = atan2(r21, r11)``,
+    ``γ = atan2(r32, r33)``. At gimbal lock (cos β ≈ 0) only α ∓ γ is defined:
+    α = 0 and ``γ = ±atan2(r12, r22)``.
+    """
+    R = rotation_matrix(R)
+    r11, r21, r31 = R[..., 0, 0], R[..., 1, 0], R[..., 2, 0]
+    cos_beta = np.hypot(r11, r21)
+    beta = np.arctan2(-r31, cos_beta)
+    locked = cos_beta < GIMBAL_TOLERANCE
+    alpha = np.where(locked, 0.0, np.arctan2(r21, r11))
+    gamma = np.where(
+        locked,
+        np.sign(-r31) * np.arctan2(R[..., 0, 1], R[..., 1, 1]),
+        np.arctan2(R[..., 2, 1], R[..., 2, 2]),
+    )
+    return np.stack([alpha, beta, gamma], axis=-1)
+
+
+def xyz_fixed(R) -> np.ndarray:
+    """X-Y-Z fixed angles ``(γ, β, α)`` of R, (..., 3), in the order they are applied.
+
+    The same three numbers as :func:`zyx_euler`, read in the opposite order (Craig 2.71).
+    """
+    return zyx_euler(R)[..., ::-1]
+
+
+def quaternion(R) -> np.ndarray:
+    """Euler parameters (unit quaternion) ``(w, x, y, z)`` of R, (..., 4), with w ≥ 0.
+
+    Shepperd's method: divide by the largest of 4w², 4x², 4y², 4z² so it stays
+    accurate at every angle, including θ = π.
+    """
+    R = rotation_matrix(R)
+    r = R
+    trace = r[..., 0, 0] + r[..., 1, 1] + r[..., 2, 2]
+    candidates = np.stack(
+        [
+            np.stack([1 + trace, r[..., 2, 1] - r[..., 1, 2], r[..., 0, 2] - r[..., 2, 0], r[..., 1, 0] - r[..., 0, 1]], -1),
+            np.stack([r[..., 2, 1] - r[..., 1, 2], 1 + 2 * r[..., 0, 0] - trace, r[..., 0, 1] + r[..., 1, 0], r[..., 0, 2] + r[..., 2, 0]], -1),
+            np.stack([r[..., 0, 2] - r[..., 2, 0], r[..., 0, 1] + r[..., 1, 0], 1 + 2 * r[..., 1, 1] - trace, r[..., 1, 2] + r[..., 2, 1]], -1),
+            np.stack([r[..., 1, 0] - r[..., 0, 1], r[..., 0, 2] + r[..., 2, 0], r[..., 1, 2] + r[..., 2, 1], 1 + 2 * r[..., 2, 2] - trace], -1),
+        ],
+        axis=-2,
+    )  # (..., 4, 4): row m is 4·q·q_m, largest when |q_m| is
+    pivot = np.argmax(np.stack([trace, r[..., 0, 0], r[..., 1, 1], r[..., 2, 2]], -1), axis=-1)
+    q = np.take_along_axis(candidates, pivot[..., None, None], axis=-2)[..., 0, :]
+    q = q / np.linalg.norm(q, axis=-1, keepdims=True)
+    return np.where(q[..., :1] < 0, -q, q)
+
+
+def rotation_from_quaternion(q) -> np.ndarray:
+    """R from a quaternion ``(w, x, y, z)`` (..., 4); it is normalised first."""
+    q = _angles(q, "q", 4)
+    norm = np.linalg.norm(q, axis=-1, keepdims=True)
+    if (norm == 0).any():
+        raise ValueError("q must not be the zero quaternion")
+    w, x, y, z = np.moveaxis(q / norm, -1, 0)
+    return np.stack(
+        [
+            np.stack([1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)], -1),
+            np.stack([2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)], -1),
+            np.stack([2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)], -1),
+        ],
+        axis=-2,
+    )
+
+
+def angle_axis(R) -> tuple[np.ndarray, np.ndarray]:
+    """Equivalent angle–axis ``(θ, k̂)`` of R: θ (...) in [0, π], k̂ (..., 3) unit.
+
+    From the quaternion, ``θ = 2 atan2(|(x, y, z)|, w)``, ``k̂ = (x, y, z)/|(x, y, z)|``,
+    which stays accurate near θ = 0 and θ = π where Craig's
+    ``k̂ = (r32 − r23, r13 − r31, r21 − r12) / (2 sin θ)`` loses precision. At θ = 0 the
+    axis is undefined; k̂ = (0, 0, 1) is returned.
+    """
+    q = quaternion(R)
+    vector = q[..., 1:]
+    length = np.linalg.norm(vector, axis=-1)
+    theta = 2.0 * np.arctan2(length, q[..., 0])
+    safe = np.where(length > 0, length, 1.0)[..., None]
+    axis = np.where(length[..., None] > 0, vector / safe, (0.0, 0.0, 1.0))
+    return theta, axis
+
+
+def rotation_from_angle_axis(theta, axis) -> np.ndarray:
+    """Rodrigues: ``R = I + sin θ [k]x + (1 − cos θ) [k]x²`` (Craig 2.80); k̂ is normalised."""
+    theta = as_float_array(theta, "theta")
+    check_finite(theta, "theta")
+    axis = _angles(axis, "axis", 3)
+    norm = np.linalg.norm(axis, axis=-1, keepdims=True)
+    if (norm == 0).any():
+        raise ValueError("axis must not be the zero vector")
+    kx, ky, kz = np.moveaxis(axis / norm, -1, 0)
+    zero = np.zeros_like(kx)
+    K = np.stack([np.stack([zero, -kz, ky], -1), np.stack([kz, zero, -kx], -1), np.stack([-ky, kx, zero], -1)], -2)
+    theta = np.asarray(theta)[..., None, None]
+    return np.eye(3) + np.sin(theta) * K + (1 - np.cos(theta)) * (K @ K)

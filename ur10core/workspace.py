@@ -1,0 +1,55 @@
+"""Cross-sections of a sampled workspace (the side and top views the course draws).
+
+:meth:`Arm.sample_workspace` gives flange positions of random joint vectors. θ1 turns
+the whole arm about the base axis, so the workspace is a solid of revolution about z:
+a vertical section through the base axis can use *every* sample, turned about z into
+the section plane, instead of the few that happen to lie in a thin slab.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ._validate import as_float_array, check_finite
+
+
+def _points(points) -> np.ndarray:
+    points = as_float_array(points, "points")
+    if points.ndim != 2 or points.shape[1] != 3:
+        raise ValueError(f"points must have shape (n, 3), got {points.shape}")
+    check_finite(points, "points")
+    return points
+
+
+def vertical_section(points, azimuth: float = 0.0) -> np.ndarray:
+    """Every point turned about the base axis into the vertical plane at ``azimuth`` (rad).
+
+    Alternate points go to the two halves of the plane (±ρ), so the section shows both
+    sides of the base axis. Returns (n, 3): ``(ρ cos a, ρ sin a, z)`` with ρ signed.
+
+    >>> vertical_section([[3.0, 4.0, 1.0], [0.0, -2.0, 0.5]]).tolist()
+    [[5.0, 0.0, 1.0], [-2.0, -0.0, 0.5]]
+    """
+    points = _points(points)
+    rho = np.hypot(points[:, 0], points[:, 1])
+    rho[1::2] *= -1.0
+    return np.stack([rho * np.cos(azimuth), rho * np.sin(azimuth), points[:, 2]], axis=-1)
+
+
+def horizontal_section(points, height: float, thickness: float = 0.02) -> tuple[np.ndarray, np.ndarray]:
+    """The points within ``thickness / 2`` of the plane z = ``height`` (metres), flattened onto it.
+
+    Returns the flattened points (m, 3) and the boolean mask (n,) of the points kept
+    (to select their colours, say).
+
+    >>> section, kept = horizontal_section([[1.0, 0.0, 0.505], [1.0, 0.0, 0.6]], height=0.5)
+    >>> section.tolist(), kept.tolist()
+    ([[1.0, 0.0, 0.5]], [True, False])
+    """
+    points = _points(points)
+    if not np.isfinite(height) or not np.isfinite(thickness) or thickness <= 0:
+        raise ValueError(f"height must be finite and thickness positive, got {height!r}, {thickness!r}")
+    keep = np.abs(points[:, 2] - height) <= thickness / 2
+    out = points[keep].copy()
+    out[:, 2] = height
+    return out, keep
