@@ -1,0 +1,43 @@
+"""``python -m app`` / ``ur10-teach``: start the UR10 teaching app."""
+
+from __future__ import annotations
+
+import argparse
+import logging
+import time
+
+from ur10core import Arm
+
+
+def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
+    parser = argparse.ArgumentParser(prog="ur10-teach", description="Learn UR10 kinematics in the browser.")
+    parser.add_argument("--host", default="127.0.0.1",
+                        help="interface to listen on (default 127.0.0.1; 0.0.0.0 lets students on the network join)")
+    parser.add_argument("--port", type=int, default=8080, help="port (default 8080; the next free one if busy)")
+    parser.add_argument("--preset", choices=Arm.PRESETS, default="course",
+                        help="link lengths: the course's table, UR's CB3 UR10 or the UR10e (default course)")
+    return parser.parse_args(argv)
+
+
+def main(argv: list[str] | None = None) -> None:
+    args = parse_args(argv)
+    logging.basicConfig(level=logging.INFO, format="%(levelname)s %(name)s: %(message)s")
+    from .server import TeachingServer
+
+    app = TeachingServer(preset=args.preset, host=args.host, port=args.port)
+    moved = "" if app.port == args.port else f" (port {args.port} was busy)"
+    print(f"\nUR10 teaching app ({args.preset}) is running{moved}. Open:", flush=True)
+    for url in app.urls:
+        print(f"    {url}", flush=True)
+    if args.host in ("0.0.0.0", ""):
+        print("Students on the same network use one of the addresses above.", flush=True)
+    print("Press Ctrl+C to stop.", flush=True)
+    try:
+        while True:
+            time.sleep(3600)
+    except KeyboardInterrupt:
+        app.stop()
+
+
+if __name__ == "__main__":
+    main()

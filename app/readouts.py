@@ -1,0 +1,70 @@
+"""Live readouts: T06 in millimetres and the orientation the four ways the course reads it."""
+
+from __future__ import annotations
+
+import numpy as np
+import viser
+
+from ur10core import Arm, to_controller
+from ur10core.orientation import angle_axis, quaternion, xyz_fixed, zyx_euler
+
+from .state import Snapshot
+from .style import JOINT_LABELS
+
+
+def pose_markdown(T: np.ndarray) -> str:
+    """T06 as a table: rotation entries and the position in mm."""
+    rows = ["| | | | p (mm) |", "|---:|---:|---:|---:|"]
+    for i in range(3):
+        rows.append("| " + " | ".join(f"{T[i, j]:+.4f}" for j in range(3)) + f" | **{T[i, 3] * 1000:+.1f}** |")
+    rows.append("| 0 | 0 | 0 | 1 |")
+    return "\n".join(rows)
+
+
+def orientation_markdown(R: np.ndarray) -> str:
+    alpha, beta, gamma = np.degrees(zyx_euler(R))
+    fixed = np.degrees(xyz_fixed(R))
+    theta, axis = angle_axis(R)
+    w, x, y, z = quaternion(R)
+    return "\n".join(
+        [
+            f"- **Z-Y-X Euler** (α, β, γ) = ({alpha:.2f}°, {beta:.2f}°, {gamma:.2f}°)",
+            f"- **X-Y-Z fixed** (γ, β, α) = ({fixed[0]:.2f}°, {fixed[1]:.2f}°, {fixed[2]:.2f}°)",
+            f"- **Angle–axis** θ = {np.degrees(theta):.2f}°, k̂ = ({axis[0]:+.4f}, {axis[1]:+.4f}, {axis[2]:+.4f})",
+            f"- **Quaternion** (w, x, y, z) = ({w:+.4f}, {x:+.4f}, {y:+.4f}, {z:+.4f})",
+        ]
+    )
+
+
+def joints_markdown(q: np.ndarray, with_controller: bool) -> str:
+    """The joint angles in degrees, and the teach pendant's beside them when asked."""
+    course = np.degrees(q)
+    if not with_controller:
+        return " · ".join(f"{name} {value:.2f}°" for name, value in zip(JOINT_LABELS, course))
+    controller = np.degrees(to_controller(q))
+    rows = ["| joint | course | UR controller |", "|---|---:|---:|"]
+    rows += [f"| {name} | {a:.2f}° | {b:.2f}° |" for name, a, b in zip(JOINT_LABELS, course, controller)]
+    rows.append("\nThe controller uses standard DH with a2, a3 < 0: shoulder + 180°, flange turned 180° about z6.")
+    return "\n".join(rows)
+
+
+def dh_markdown(arm: Arm) -> str:
+    rows = ["| i | α(i−1) | a(i−1) (mm) | d(i) (mm) | θ(i) |", "|---:|---:|---:|---:|---|"]
+    for i, (alpha, a, d) in enumerate(arm.dh_table, start=1):
+        rows.append(f"| {i} | {np.degrees(alpha):+.0f}° | {a * 1000:.1f} | {d * 1000:.1f} | θ{i} |")
+    return "\n".join(rows)
+
+
+class Readouts:
+    """The "Flange pose" folder."""
+
+    def __init__(self, gui: viser.GuiApi, arm: Arm) -> None:
+        with gui.add_folder("Flange pose T06"):
+            self.pose = gui.add_markdown("")
+            self.orientation = gui.add_markdown("")
+        with gui.add_folder(f"DH table ({arm.name})", expand_by_default=False):
+            gui.add_markdown(dh_markdown(arm))
+
+    def render(self, snapshot: Snapshot) -> None:
+        self.pose.content = pose_markdown(snapshot.flange)
+        self.orientation.content = orientation_markdown(snapshot.flange[:3, :3])

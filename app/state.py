@@ -1,0 +1,211 @@
+"""What one arm is doing: its joints, its IK target and the eight branches of that target.
+
+No viser here — this is the app's logic, unit-tested without a browser. Every change
+returns a :class:`Snapshot`, which is all the views need to draw.
+
+All kinematics comes from :mod:`ur10core`; this module only decides *which* result to
+use (the branch nearest the current joints, the last reachable pose, …) and checks the
+values a user can type.
+"""
+
+from __future__ import annotations
+
+import math
+import threading
+from dataclasses import dataclass
+
+import numpy as np
+
+from ur10core import JOINT_LIMIT, Arm, IKSolution, SingularityGeometry
+from ur10core.ik import equivalent_near
+
+from .style import JOINT_LABELS
+
+#: Named poses for the buttons: COURSE_NOTES §3 worked examples (degrees).
+COURSE_POSES = {
+    "zero": (0, 0, 0, 0, 0, 0),
+    "stretched": (45, 90, 0, -90, 0, 60),
+    "arbitrary": (30, 45, 26, 50, 60, 80),
+}
+#: The pose a new arm starts in: the course's arbitrary example, clear of every singularity.
+HOME = COURSE_POSES["arbitrary"]
+SINGULARITY_KINDS = ("shoulder", "elbow", "wrist")
+
+
+@dataclass(frozen=True)
+class Snapshot:
+    """Everything the views draw, computed once per change."""
+
+    q: np.ndarray  #: (6,) current joints, rad
+    frames: np.ndarray  #: (7, 4, 4) frames {0}..{6} of the solid arm
+    target: np.ndarray  #: (4, 4) where the IK target is
+    solution: IKSolution  #: the eight branches of the target pose
+    ghost_frames: np.ndarray  #: (8, 7, 4, 4) frames of each branch (identity where invalid)
+    slot: int  #: the branch the solid arm is on, −1 when the target is unreachable
+    reachable: bool
+    reason: str  #: why the target is unreachable ("" when it is reachable)
+    factors: np.ndarray  #: (3,) shoulder, elbow, wrist factors of det J
+    det_j: float
+    geometry: SingularityGeometry
+    cause: str  #: "joints", "target", "branch" or "reset": what made this change
+
+    @property
+    def flange(self) -> np.ndarray:
+        return self.frames[6]
+
+
+class ArmState:
+    """One arm and its IK target. Thread-safe: callbacks of one browser may overlap.
+
+    Parameters
+    ----------
+    arm : Arm
+        The arm's dimensions.
+    q : array_like, shape (6,), optional
+        Starting joints (rad); the course's arbitrary pose by default.
+    """
+
+    def __init__(self, arm: Arm, q=None) -> None:
+        self.arm = arm
+        self.lock = threading.RLock()
+        self._q = self.check_joints(np.radians(HOME) if q is None else q)
+        self._target = arm.fk(self._q)
+        self._solution = arm.ik(self._target, hint=self._q)
+        self._slot = int(self._solution.nearest(self._q).slot)
+        self._reason = ""
+        self._last = self._snapshot("reset")
+
+    # ------------------------------------------------------------------ reading
+
+    @property
+    def q(self) -> np.ndarray:
+        return self._q.copy()
+
+    @property
+    def last(self) -> Snapshot:
+        """The most recent snapshot."""
+        return self._last
+
+    # ------------------------------------------------------------------ validation
+
+    @staticmethod
+    def check_joints(q) -> np.ndarray:
+        """Six finite angles (rad) within the UR10's ±360°, else ``ValueError`` naming the joint."""
+        try:
+            q = np.array(q, dtype=float).reshape(-1)
+        except (TypeError, ValueError):
+            raise ValueError(f"joint angles must be six numbers, got {q!r:.60}") from None
+        if q.shape != (6,):
+            raise ValueError(f"six joint angles are needed, got {q.size}")
+        for name, value in zip(JOINT_LABELS, q):
+            if not math.isfinite(value):
+                raise ValueError(f"{name}: {value} is not a number of degrees")
+            if abs(value) > JOINT_LIMIT + 1e-9:
+                raise ValueError(f"{name}: {math.degrees(value):.1f}° is outside the joint range ±360°")
+        return np.clip(q, -JOINT_LIMIT, JOINT_LIMIT)
+
+    @staticmethod
+    def parse_degrees(text: str, count: int = 6, what: str = "joint angles") -> np.ndarray:
+        """``"30, 45, 26, 50, 60, 80"`` (commas or spaces) → floats, with a message a student understands."""
+        parts = [p for p in text.replace(",", " ").replace(";", " ").split() if p]
+        if len(parts) != count:
+            raise ValueError(f"{what}: expected {count} numbers, got {len(parts)} in {text!r:.60}")
+        values = []
+        for part in parts:
+            try:
+                value = float(part.replace("°", ""))
+            except ValueError:
+                raise ValueError(f"{what}: {part!r} is not a number") from None
+            if not math.isfinite(value):
+                raise ValueError(f"{what}: {part!r} is not a finite number")
+            values.append(value)
+        return np.array(values)
+
+    # ------------------------------------------------------------------ changes
+
+    def set_joints(self, q) -> Snapshot:
+        """Move the arm to ``q`` (rad); the target follows the flange."""
+        q = self.check_joints(q)
+        with self.lock:
+            self._q = q
+            self._target = self.arm.fk(q)
+            self._solution = self.arm.ik(self._target, hint=q)
+            self._slot = int(self._solution.nearest(q, prefer=self._slot).slot)
+            self._reason = ""
+            return self._remember("joints")
+
+    def set_joint(self, index: int, value: float) -> Snapshot:
+        """Change one joint (rad)."""
+        with self.lock:
+            q = self._q.copy()
+            q[index] = value
+            return self.set_joints(q)
+
+    def move_target(self, T) -> Snapshot:
+        """Drag the IK target to ``T`` (4x4): the arm takes the branch nearest its joints.
+
+        An unreachable target leaves the arm where it was and records why.
+        """
+        with self.lock:
+            solution = self.arm.ik(T, hint=self._q)  # ValueError for a malformed pose
+            self._target = np.array(T, dtype=float)
+            self._solution = solution
+            branch = solution.nearest(self._q, prefer=self._slot)
+            if branch.slot < 0:
+                self._slot = -1
+                self._reason = solution.unreachable_reason()
+            else:
+                self._q = branch.q
+                self._slot = int(branch.slot)
+                self._reason = ""
+            return self._remember("target")
+
+    def select_branch(self, slot: int) -> Snapshot:
+        """Put the arm on branch ``slot`` of the current target (shifted next to the current joints)."""
+        if isinstance(slot, bool) or not isinstance(slot, (int, np.integer)) or not 0 <= slot < 8:
+            raise ValueError(f"branch must be 0..7, got {slot!r}")
+        with self.lock:
+            if not self._solution.valid[slot]:
+                raise ValueError(
+                    f"branch {slot + 1} ({self._solution.labels[slot]}) does not exist for this target"
+                )
+            self._q = equivalent_near(self._solution.q[slot], self._q, JOINT_LIMIT)
+            self._slot = int(slot)
+            self._reason = ""
+            return self._remember("branch")
+
+    def place_in_singularity(self, kind: str) -> Snapshot:
+        """Move the arm exactly onto the shoulder, elbow or wrist singularity."""
+        if kind not in SINGULARITY_KINDS:
+            raise ValueError(f"kind must be one of {SINGULARITY_KINDS}, got {kind!r}")
+        with self.lock:
+            return self.set_joints(self.arm.singular_configuration(kind, self._q))
+
+    # ------------------------------------------------------------------ snapshot
+
+    def _remember(self, cause: str) -> Snapshot:
+        self._last = self._snapshot(cause)
+        return self._last
+
+    def _snapshot(self, cause: str) -> Snapshot:
+        arm, solution = self.arm, self._solution
+        # one frames() call for the solid arm and the eight ghosts
+        joints = np.vstack([self._q[None], np.where(solution.valid[:, None], solution.q, 0.0)])
+        frames = arm.frames(joints)
+        ghost_frames = frames[1:]
+        ghost_frames[~solution.valid] = np.eye(4)
+        factors = arm.singularity_factors(self._q)
+        return Snapshot(
+            q=self._q.copy(),
+            frames=frames[0],
+            target=self._target.copy(),
+            solution=solution,
+            ghost_frames=ghost_frames,
+            slot=self._slot,
+            reachable=self._slot >= 0,
+            reason=self._reason,
+            factors=factors,
+            det_j=float(arm.a2 * arm.a3 * factors.prod()),
+            geometry=arm.singularity_geometry_from_frames(frames[0]),
+            cause=cause,
+        )

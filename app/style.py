@@ -1,0 +1,58 @@
+"""Colours, labels and number formatting: change the look of the app here."""
+
+from __future__ import annotations
+
+import numpy as np
+
+#: Light-grey aluminium of the link bodies and the dark blue of the joint caps (RGB 0-255).
+ALUMINIUM = (205, 208, 212)
+JOINT_CAP_BLUE = (28, 64, 128)
+#: One fixed colour per IK slot k = 4 i + 2 j + l (Okabe-Ito, readable by colour-blind students).
+SLOT_COLORS: tuple[tuple[int, int, int], ...] = (
+    (0, 114, 178),  # blue
+    (86, 180, 233),  # sky blue
+    (0, 158, 115),  # bluish green
+    (117, 112, 179),  # purple
+    (230, 159, 0),  # orange
+    (240, 228, 66),  # yellow
+    (204, 121, 167),  # reddish purple
+    (213, 94, 0),  # vermillion
+)
+GHOST_OPACITY = 0.35
+UNREACHABLE_RED = (220, 30, 30)
+#: Singularity overlay: calm and alarming ends of the gauges, and the lit geometry.
+SAFE_GREEN = (46, 160, 67)
+DANGER_RED = (220, 38, 38)
+OVERLAY_IDLE = (150, 150, 160)
+SHOULDER_COLOR = (230, 159, 0)
+ELBOW_COLOR = (0, 158, 115)
+WRIST_COLOR = (204, 121, 167)
+
+JOINT_LABELS = ("base", "shoulder", "elbow", "wrist 1", "wrist 2", "wrist 3")
+
+
+def hex_color(rgb: tuple[int, int, int]) -> str:
+    return "#%02x%02x%02x" % tuple(int(c) for c in rgb)
+
+
+def blend(calm: tuple[int, int, int], alarm: tuple[int, int, int], alarm_level: float) -> tuple[int, int, int]:
+    """Linear mix of two colours; ``alarm_level`` in [0, 1]."""
+    t = float(np.clip(alarm_level, 0.0, 1.0))
+    return tuple(int(round((1 - t) * a + t * b)) for a, b in zip(calm, alarm))
+
+
+def deg(radians) -> np.ndarray:
+    return np.degrees(radians)
+
+
+def fmt_deg(radians: float) -> str:
+    return f"{np.degrees(radians):.2f}°"
+
+
+def fmt_mm(metres: float) -> str:
+    return f"{metres * 1000:.1f} mm"
+
+
+def swatch(rgb: tuple[int, int, int]) -> str:
+    """A small coloured square for markdown tables."""
+    return f'<span style="display:inline-block;width:0.9em;height:0.9em;border-radius:2px;background:{hex_color(rgb)}"></span>'

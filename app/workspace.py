@@ -1,0 +1,122 @@
+"""The workspace point cloud, coloured by manipulability |det J|, with an optional section.
+
+Sampled by ``Arm.sample_workspace`` off the event loop (in the callback's worker thread)
+and cached per (preset, size) for every client; each client is sent only the cloud it
+asked for. 200 k points (the default) is about 1.8 MB per client.
+"""
+
+from __future__ import annotations
+
+import functools
+import threading
+from typing import TYPE_CHECKING
+
+import numpy as np
+import viser
+
+from ur10core import Arm
+from ur10core.workspace import horizontal_section, vertical_section
+
+from .style import hex_color
+
+if TYPE_CHECKING:
+    from .session import ClientSession
+
+SAMPLE_COUNTS = {"10 k": 10_000, "50 k": 50_000, "100 k": 100_000, "200 k": 200_000, "500 k": 500_000, "1 M": 1_000_000}
+DEFAULT_COUNT = "200 k"
+SECTIONS = ("whole cloud", "vertical section (side view)", "horizontal section (top view)")
+POINT_SIZE = 0.006
+SLAB = 0.03  # thickness of the horizontal section, m
+#: Viridis, sampled at 9 stops: dark = near-singular (low |det J|), yellow = dexterous.
+VIRIDIS = np.array(
+    [(68, 1, 84), (71, 44, 122), (59, 81, 139), (44, 113, 142), (33, 144, 141),
+     (39, 173, 129), (92, 200, 99), (170, 220, 50), (253, 231, 37)], dtype=float,
+)
+
+
+def colormap(values: np.ndarray, top: float) -> np.ndarray:
+    """Viridis colours (n, 3) uint8 for ``values`` in [0, top]."""
+    t = np.clip(values / top, 0.0, 1.0) * (len(VIRIDIS) - 1)
+    low = np.minimum(t.astype(int), len(VIRIDIS) - 2)
+    frac = (t - low)[:, None]
+    return ((1 - frac) * VIRIDIS[low] + frac * VIRIDIS[low + 1]).astype(np.uint8)
+
+
+@functools.lru_cache(maxsize=4)
+def coloured_cloud(arm: Arm, n: int) -> tuple[np.ndarray, np.ndarray, float]:
+    """(points (n, 3) float32, colours (n, 3) uint8, colour-scale top in m³), shared by all clients."""
+    points, manipulability = arm.sample_workspace(n, seed=0)
+    top = float(np.percentile(manipulability, 99))
+    return points.astype(np.float32), colormap(manipulability, top), top
+
+
+def legend_html(top: float) -> str:
+    stops = ", ".join(hex_color(tuple(int(c) for c in rgb)) for rgb in VIRIDIS)
+    return (
+        "<div style='font-size:0.85em'>Colour = manipulability |det J|"
+        f"<div style='height:12px;border-radius:3px;margin:4px 0;background:linear-gradient(to right, {stops})'></div>"
+        "<div style='display:flex;justify-content:space-between'><span>0 (singular)</span>"
+        f"<span>≥ {top:.4f} m³</span></div></div>"
+    )
+
+
+class WorkspaceView:
+    def __init__(self, scene: viser.SceneApi, gui: viser.GuiApi, session: "ClientSession") -> None:
+        self._scene = scene
+        self._session = session
+        self._cloud: viser.PointCloudHandle | None = None
+        self._request = 0  # the latest request wins when a student clicks faster than we sample
+        self._lock = threading.Lock()
+        with gui.add_folder("Workspace"):
+            self.enabled = gui.add_checkbox("Show workspace cloud", False)
+            self.count = gui.add_dropdown("Samples", tuple(SAMPLE_COUNTS), initial_value=DEFAULT_COUNT,
+                                          hint="Every client downloads its cloud: about 9 bytes per point")
+            self.section = gui.add_dropdown("Section", SECTIONS, initial_value=SECTIONS[0])
+            self.height = gui.add_slider("Section height (mm)", min=-600.0, max=1600.0, step=10.0,
+                                         initial_value=600.0, visible=False)
+            self.progress = gui.add_progress_bar(0.0, animated=True, visible=False)
+            self.legend = gui.add_html("", visible=False)
+        for widget in (self.enabled, self.count, self.section, self.height):
+            widget.on_update(session.guard(self._changed))
+
+    def _changed(self, _: viser.GuiEvent) -> None:
+        self.height.visible = self.section.value == SECTIONS[2]
+        with self._lock:
+            self._request += 1
+            request = self._request
+        if not self.enabled.value:
+            self._remove_cloud()
+            self.legend.visible = False
+            return
+        self.progress.value = 5.0
+        self.progress.visible = True
+        try:
+            points, colors, top = coloured_cloud(self._session.arm, SAMPLE_COUNTS[self.count.value])
+            self.progress.value = 60.0
+            points, colors = self._section(points, colors)
+            with self._lock:
+                if request != self._request:
+                    return  # a newer choice is on its way
+                self._remove_cloud()
+                self._cloud = self._scene.add_point_cloud(
+                    "/workspace", points, colors, point_size=POINT_SIZE, point_shape="circle"
+                )
+            self.legend.content = legend_html(top)
+            self.legend.visible = True
+        finally:
+            self.progress.value = 100.0
+            self.progress.visible = False
+
+    def _section(self, points: np.ndarray, colors: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        if self.section.value == SECTIONS[1]:
+            azimuth = float(self._session.state.q[0])  # the plane the arm moves in
+            return vertical_section(points, azimuth).astype(np.float32), colors
+        if self.section.value == SECTIONS[2]:
+            section, kept = horizontal_section(points, self.height.value / 1000.0, SLAB)
+            return section.astype(np.float32), colors[kept]
+        return points, colors
+
+    def _remove_cloud(self) -> None:
+        if self._cloud is not None:
+            self._cloud.remove()
+            self._cloud = None

@@ -1,0 +1,71 @@
+"""Headless Chromium from Debian, driven by playwright (never a downloaded browser)."""
+
+from __future__ import annotations
+
+import os
+import time
+from typing import Callable
+
+import numpy as np
+import pytest
+
+CHROMIUM = os.environ.get("UR10_TEACH_CHROMIUM", "/usr/bin/chromium")
+ARGS = [
+    "--no-sandbox", "--use-angle=swiftshader", "--enable-unsafe-swiftshader", "--disable-quic",
+    "--no-first-run", "--disable-background-networking", "--disable-component-update", "--disable-sync",
+]
+VIEWPORT = {"width": 1280, "height": 800}
+#: Several live tabs share two cores of software WebGL: keep them small.
+SMALL_VIEWPORT = {"width": 900, "height": 640}
+CONNECTED = "svg.tabler-icon-cloud-check"
+
+
+def launch(playwright):
+    if not os.path.exists(CHROMIUM):
+        pytest.fail(f"{CHROMIUM} not found: install Debian's chromium (apt-get install -y chromium; scripts/test.sh does)")
+    return playwright.chromium.launch(executable_path=CHROMIUM, headless=True, args=ARGS)
+
+
+def wait_for(condition: Callable[[], object], timeout: float = 15.0, what: str = "condition") -> object:
+    deadline = time.monotonic() + timeout
+    while time.monotonic() < deadline:
+        value = condition()
+        if value:
+            return value
+        time.sleep(0.05)
+    raise AssertionError(f"timed out after {timeout} s waiting for {what}")
+
+
+def dom_id(handle) -> str:
+    """The DOM id viser gives a GUI element (its uuid)."""
+    return f"[id='{handle._impl.uuid}']"
+
+
+def text_field(page, handle):
+    """The <input> of a viser text field (its label, not the input, carries the handle's uuid)."""
+    return page.locator(f"label[for='{handle._impl.uuid}']").locator("xpath=ancestor::div[2]").locator("input").first
+
+
+def project(camera, point, box) -> tuple[float, float]:
+    """Pixel of a world point in the canvas, from the camera the browser reported (OpenCV convention)."""
+    w, x, y, z = camera.wxyz
+    R = np.array([
+        [1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)],
+        [2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)],
+        [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)],
+    ])
+    p = R.T @ (np.asarray(point) - camera.position)
+    focal = (box["height"] / 2) / np.tan(camera.fov / 2)
+    return box["x"] + box["width"] / 2 + focal * p[0] / p[2], box["y"] + box["height"] / 2 + focal * p[1] / p[2]
+
+
+def canvas_pixels(page) -> np.ndarray:
+    """The 3D view as an (H, W, 3) array, from a real screenshot of the page."""
+    import io
+
+    from PIL import Image
+
+    box = page.locator("canvas").first.bounding_box()
+    width = box["width"] - 420  # leave out the control panel on the right
+    png = page.screenshot(clip={"x": box["x"], "y": box["y"], "width": width, "height": box["height"]})
+    return np.asarray(Image.open(io.BytesIO(png)).convert("RGB")).astype(int)

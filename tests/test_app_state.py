@@ -1,0 +1,235 @@
+"""The app's logic without a browser: ArmState and the text the panels show."""
+
+import threading
+
+import numpy as np
+import pytest
+
+from app.ik_target import branch_table, status_markdown
+from app.readouts import joints_markdown, orientation_markdown, pose_markdown
+from app.singularity import alarm, factor_levels
+from app.state import COURSE_POSES, ArmState
+from app.workspace import VIRIDIS, colormap
+from ur10core import Arm
+
+from .conftest import wrapped_difference
+
+
+@pytest.fixture
+def state(course):
+    return ArmState(course)
+
+
+def test_starts_on_the_course_arbitrary_pose(state, course):
+    snap = state.last
+    np.testing.assert_allclose(np.degrees(snap.q), COURSE_POSES["arbitrary"])
+    np.testing.assert_allclose(snap.target, course.fk(snap.q))
+    assert snap.reachable and snap.slot == 4 and snap.solution.valid.all()
+    np.testing.assert_allclose(snap.flange, course.fk(snap.q), atol=1e-14)
+    assert snap.det_j == pytest.approx(np.linalg.det(course.jacobian(snap.q)), rel=1e-9)
+
+
+def test_set_joints_moves_the_target_with_the_flange(state, course):
+    q = np.radians([10, -80, 95, -30, 70, 200])
+    snap = state.set_joints(q)
+    np.testing.assert_allclose(snap.q, q)
+    np.testing.assert_allclose(snap.target, course.fk(q))
+    # the arm's own branch is found even with θ6 beyond 180°
+    np.testing.assert_allclose(snap.solution.q[snap.slot], np.radians([10, -80, 95, -30, 70, -160]), atol=1e-9)
+    assert snap.cause == "joints"
+    assert state.set_joint(2, 0.5).q[2] == 0.5
+
+
+@pytest.mark.parametrize(
+    "q, message",
+    [
+        ([0, 0, np.nan, 0, 0, 0], "elbow: nan is not a number"),
+        ([0, 0, 0, 0, np.radians(361), 0], r"wrist 2: 361.0° is outside the joint range ±360°"),
+        ([0, 0, 0, 0, 0], "six joint angles are needed, got 5"),
+        ("abc", "joint angles must be six numbers"),
+    ],
+)
+def test_bad_joints_are_refused_and_nothing_changes(state, q, message):
+    before = state.q
+    with pytest.raises(ValueError, match=message):
+        state.set_joints(q)
+    np.testing.assert_array_equal(state.q, before)
+
+
+def test_parse_typed_degrees():
+    np.testing.assert_array_equal(ArmState.parse_degrees("30, 45, 26, 50, 60, 80"), [30, 45, 26, 50, 60, 80])
+    np.testing.assert_array_equal(ArmState.parse_degrees("30 45;26,  50 60° 80"), [30, 45, 26, 50, 60, 80])
+    with pytest.raises(ValueError, match="'abc' is not a number"):
+        ArmState.parse_degrees("30, 45, abc, 50, 60, 80")
+    with pytest.raises(ValueError, match="expected 6 numbers, got 3"):
+        ArmState.parse_degrees("1, 2, 3")
+    with pytest.raises(ValueError, match="'inf' is not a finite number"):
+        ArmState.parse_degrees("1 2 3 4 5 inf")
+
+
+def test_dragging_the_target_never_jumps(state, course):
+    """A smooth target path gives a smooth joint path: the nearest branch every step."""
+    q0 = state.q
+    start = course.fk(q0)
+    previous = q0
+    for t in np.linspace(0, 1, 200):
+        T = start.copy()
+        T[:3, 3] += t * np.array([-0.25, 0.3, -0.2])
+        snap = state.move_target(T)
+        assert snap.reachable
+        assert np.abs(snap.q - previous).max() < np.radians(5)
+        np.testing.assert_allclose(course.fk(snap.q), T, atol=1e-9)
+        previous = snap.q
+    assert snap.slot == 4  # stayed on its branch
+
+
+def test_unreachable_target_keeps_the_last_reachable_pose(state, course):
+    q_before = state.q
+    T = course.fk(q_before)
+    T[:3, 3] = (2.0, 0.5, 0.5)
+    snap = state.move_target(T)
+    assert not snap.reachable and snap.slot == -1
+    np.testing.assert_array_equal(snap.q, q_before)
+    np.testing.assert_array_equal(snap.target, T)
+    assert "elbow reach" in snap.reason and "beyond a2 + a3" in snap.reason
+    assert not snap.solution.valid.any()
+    # back within reach, the arm follows again
+    snap = state.move_target(course.fk(q_before))
+    assert snap.reachable and snap.reason == ""
+    np.testing.assert_allclose(snap.q, q_before, atol=1e-9)
+
+
+def test_malformed_target_is_refused(state):
+    before = state.last
+    with pytest.raises(ValueError, match="not orthonormal"):
+        state.move_target(np.diag([2.0, 2.0, 2.0, 1.0]))
+    assert state.last is before
+
+
+def test_wrist_singularity_keeps_theta6(state, course):
+    q = np.radians([20, -60, 70, -40, 30, 123])
+    state.set_joints(q)
+    for theta5 in np.radians([20, 10, 5, 1, 0.0]):  # drag towards the singularity
+        target = q.copy()
+        target[4] = theta5
+        snap = state.move_target(course.fk(target))
+    assert snap.solution.wrist_singular[snap.slot]
+    assert snap.q[5] == pytest.approx(np.radians(123), abs=np.radians(1))
+
+
+def test_select_every_branch(state, course):
+    T = state.last.target
+    for k in range(8):
+        snap = state.select_branch(k)
+        assert snap.slot == k and snap.cause == "branch"
+        np.testing.assert_allclose(course.fk(snap.q), T, atol=1e-9)
+        assert wrapped_difference(snap.q, snap.solution.q[k]).max() < 1e-12
+
+
+def test_select_branch_keeps_the_joint_turns(state, course):
+    q = np.radians([350, -60, 70, -40, 30, 10])  # base one turn round
+    state.set_joints(q)
+    snap = state.select_branch(state.last.slot ^ 1)  # the other elbow
+    assert snap.q[0] == pytest.approx(q[0])
+
+
+def test_select_missing_or_bad_branch(state, course):
+    q = np.array([0.2, 0.1, 0.05, -0.3, 1.0, 0.4])  # near the reach: some branches missing
+    state.set_joints(q)
+    missing = int(np.flatnonzero(~state.last.solution.valid)[0])
+    with pytest.raises(ValueError, match=f"branch {missing + 1} .* does not exist for this target"):
+        state.select_branch(missing)
+    for bad in (8, -1, 2.5, True):
+        with pytest.raises(ValueError, match="branch must be 0..7"):
+            state.select_branch(bad)
+
+
+@pytest.mark.parametrize("kind, factor", [("shoulder", 0), ("elbow", 1), ("wrist", 2)])
+def test_place_in_singularity(state, kind, factor):
+    snap = state.place_in_singularity(kind)
+    assert abs(snap.factors[factor]) < 1e-12
+    assert snap.det_j == pytest.approx(0, abs=1e-12)
+    with pytest.raises(ValueError, match="kind must be one of"):
+        state.place_in_singularity("knee")
+
+
+def test_ghost_frames(state, course):
+    q = np.array([0.2, 0.1, 0.05, -0.3, 1.0, 0.4])
+    snap = state.set_joints(q)
+    valid = snap.solution.valid
+    assert not valid.all()
+    np.testing.assert_array_equal(snap.ghost_frames[~valid], np.broadcast_to(np.eye(4), (int((~valid).sum()), 7, 4, 4)))
+    np.testing.assert_allclose(snap.ghost_frames[valid], course.frames(snap.solution.q[valid]), atol=1e-14)
+
+
+def test_concurrent_changes_stay_consistent(state, course):
+    """Callbacks of one browser overlap on viser's thread pool; the state must not tear."""
+    rng = np.random.default_rng(5)
+    targets = course.fk(rng.uniform(-1, 1, (200, 6)))
+    errors = []
+
+    def drag():
+        for T in targets:
+            try:
+                state.move_target(T)
+            except Exception as error:  # pragma: no cover - reported below
+                errors.append(error)
+
+    def slide():
+        for q in rng.uniform(-1, 1, (200, 6)):
+            state.set_joints(q)
+
+    threads = [threading.Thread(target=drag), threading.Thread(target=slide)]
+    for t in threads:
+        t.start()
+    for t in threads:
+        t.join()
+    assert not errors
+    snap = state.last
+    np.testing.assert_allclose(snap.frames, course.frames(snap.q), atol=1e-14)
+
+
+def test_panel_texts(course):
+    state = ArmState(course)
+    snap = state.last
+    table = branch_table(snap)
+    assert table.count("\n") == 9 and "**← arm**" in table and "shoulder right, elbow down, wrist not flipped" in table
+    assert "8 of 8 branches" in status_markdown(snap) and "5: shoulder right, elbow down" in status_markdown(snap)
+    T = snap.target.copy()
+    T[:3, 3] = (0.05, 0.02, 0.6)
+    T[:3, :3] = np.eye(3)
+    unreachable = state.move_target(T)
+    assert "Target unreachable" in status_markdown(unreachable) and "inside the shoulder cylinder" in status_markdown(unreachable)
+    assert "no solution" in branch_table(unreachable)
+    pose = pose_markdown(course.fk(np.zeros(6)))
+    assert "**+1184.5**" in pose and "**-256.1**" in pose and "**+243.7**" in pose
+    assert "Z-Y-X Euler" in orientation_markdown(np.eye(3)) and "(+1.0000, +0.0000, +0.0000, +0.0000)" in orientation_markdown(np.eye(3))
+    controller = joints_markdown(np.zeros(6), with_controller=True)
+    assert "| shoulder | 0.00° | 180.00° |" in controller
+
+
+def test_singular_poses_show_in_the_status(course):
+    state = ArmState(course, q=np.radians([45, 90, 0, -90, 0, 60]))
+    text = status_markdown(state.last)
+    assert "Shoulder singular" in text and "Elbow singular" in text and "Wrist singular" in text
+
+
+def test_overlay_levels_and_alarm(course):
+    state = ArmState(course, q=np.radians([45, 90, 0, -90, 0, 60]))
+    np.testing.assert_allclose(factor_levels(state.last, course.a2 + course.a3), 0, atol=1e-12)
+    assert alarm(0.0) == 1.0 and alarm(1.0) == 0.0 and 0 < alarm(0.2) < 1
+
+
+def test_colormap_ends():
+    colors = colormap(np.array([0.0, 1.0, 2.0]), top=1.0)
+    np.testing.assert_array_equal(colors[0], VIRIDIS[0])
+    np.testing.assert_array_equal(colors[1], VIRIDIS[-1])
+    np.testing.assert_array_equal(colors[2], VIRIDIS[-1])
+
+
+def test_presets_load_their_meshes():
+    from app.meshes import load_links
+
+    for preset in Arm.PRESETS:
+        links = load_links(preset)
+        assert len(links) == 7 and all(len(link.body_faces) for link in links)
