@@ -8,6 +8,7 @@ ghost, or a number in the branch list, puts the arm on that branch.
 
 from __future__ import annotations
 
+import threading
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -17,9 +18,9 @@ from ur10core import SLOTS
 from ur10core.orientation import rotation_from_quaternion, rotation_from_zyx_euler
 
 from .meshes import LinkMesh
-from .robot import poses
 from .state import ArmState, Snapshot
 from .style import GHOST_OPACITY, SLOT_COLORS, UNREACHABLE_RED, swatch
+from .view import View
 
 if TYPE_CHECKING:
     from .session import ClientSession
@@ -57,15 +58,22 @@ def status_markdown(snapshot: Snapshot) -> str:
     return " ".join(notes)
 
 
-class IKTargetView:
+def branches_markdown(snapshot: Snapshot) -> str:
+    """The status line above the eight-branch table."""
+    return status_markdown(snapshot) + "\n\n" + branch_table(snapshot)
+
+
+class IKTargetView(View):
     def __init__(
         self, scene: viser.SceneApi, gui: viser.GuiApi, links: tuple[LinkMesh, ...], session: "ClientSession"
     ) -> None:
         self._session = session
+        self._pending_target: np.ndarray | None = None
+        self._drag_lock = threading.Lock()
         snapshot = session.state.last
-        wxyz, position = poses(snapshot.flange)
         self.gizmo = scene.add_transform_controls(
-            "/ik_target", scale=0.3, line_width=3.0, depth_test=False, wxyz=wxyz, position=position
+            "/ik_target", scale=0.3, line_width=3.0, depth_test=False,
+            wxyz=snapshot.flange_wxyz, position=snapshot.flange[:3, 3],
         )
         # transform controls have no colour of their own: a red halo on the target says "unreachable"
         self.unreachable_marker = scene.add_icosphere(
@@ -74,7 +82,9 @@ class IKTargetView:
         )
         identity = np.tile([1.0, 0.0, 0.0, 0.0], (8, 1))
         self.ghosts = []
-        for link in links:
+        self._scales: bytes = b""
+        self._positions: dict[int, bytes] = {i: b"" for i in range(1, 7)}  # last sent, to skip unchanged
+        for link in links[1:]:  # every branch shares the fixed base with the solid arm
             vertices, faces = link.merged
             ghost = scene.add_batched_meshes_simple(
                 f"/ghosts/link{link.index}", vertices, faces,
@@ -88,10 +98,9 @@ class IKTargetView:
         with gui.add_folder("IK target: all 8 branches"):
             gui.add_markdown("Drag the gizmo at the flange. Each colour is one IK branch; click a ghost arm "
                              "or a number below to put the arm on it.")
-            self.status = gui.add_markdown("")
             self.show_ghosts = gui.add_checkbox("Show ghost arms", True)
             self.branch_buttons = gui.add_button_group("Use branch", BRANCH_BUTTONS)
-            self.table = gui.add_markdown("")
+            self.branches = gui.add_markdown(branches_markdown(snapshot))
             self.typed_pose = gui.add_text(
                 "Target x y z (mm), α β γ (°)", "",
                 hint="Position in mm and Z-Y-X Euler angles in degrees, e.g. 520, 57.7, 1110.7, -159.6, 25.6, -34.6",
@@ -111,7 +120,18 @@ class IKTargetView:
         T = np.eye(4)
         T[:3, :3] = rotation_from_quaternion(np.asarray(self.gizmo.wxyz, dtype=float))
         T[:3, 3] = self.gizmo.position
-        self._session.apply(lambda state: state.move_target(T), timed="drag")
+        # Latest wins: events that queue up behind a slow one are folded into one update,
+        # so a busy server never works through a backlog of stale targets.
+        self._pending_target = T
+        while self._pending_target is not None:
+            if not self._drag_lock.acquire(blocking=False):
+                return  # the thread holding it picks up our target
+            try:
+                target, self._pending_target = self._pending_target, None
+                if target is not None:
+                    self._session.apply(lambda state: state.move_target(target), timed="drag")
+            finally:
+                self._drag_lock.release()
 
     def _ghost_clicked(self, event) -> None:
         if event.instance_index is None:
@@ -133,20 +153,25 @@ class IKTargetView:
 
     def render(self, snapshot: Snapshot) -> None:
         if snapshot.cause != "target":  # the user is not holding the gizmo: put it on the flange
-            wxyz, position = poses(snapshot.flange)
-            self.gizmo.wxyz = wxyz
-            self.gizmo.position = position
+            self.gizmo.wxyz = snapshot.flange_wxyz
+            self.gizmo.position = snapshot.flange[:3, 3]
         self.unreachable_marker.visible = not snapshot.reachable
         shown = snapshot.solution.valid & self.show_ghosts.value
         if snapshot.slot >= 0:
             shown = shown.copy()
             shown[snapshot.slot] = False  # the solid arm is there already
         scales = shown.astype(np.float32)
-        wxyz, position = poses(snapshot.ghost_frames)  # (8, 7, ...)
-        for i, ghost in enumerate(self.ghosts):
-            ghost.batched_scales = scales
-            ghost.batched_wxyzs = wxyz[:, i]
-            ghost.batched_positions = position[:, i]
-        self.status.content = status_markdown(snapshot)
-        self.table.content = branch_table(snapshot)
+        update_scales = scales.tobytes() != self._scales  # which branches exist rarely changes mid-drag
+        self._scales = scales.tobytes()
+        for i, ghost in enumerate(self.ghosts, start=1):  # links 1..6
+            if update_scales:
+                ghost.batched_scales = scales
+            ghost.batched_wxyzs = snapshot.ghost_wxyz[:, i]
+            positions = snapshot.ghost_frames[:, i, :3, 3].astype(np.float32)
+            if positions.tobytes() != self._positions[i]:  # frames 1 and 2 sit on the shoulder whatever q is
+                self._positions[i] = positions.tobytes()
+                ghost.batched_positions = positions
+
+    def render_panel(self, snapshot: Snapshot) -> None:
+        self.branches.content = branches_markdown(snapshot)
 

@@ -11,6 +11,7 @@ import viser
 from .readouts import joints_markdown
 from .state import COURSE_POSES, ArmState, Snapshot
 from .style import JOINT_LABELS
+from .view import View
 
 if TYPE_CHECKING:
     from .session import ClientSession
@@ -18,7 +19,7 @@ if TYPE_CHECKING:
 POSE_BUTTONS = ("Zero", "Stretched", "Arbitrary", "Random")
 
 
-class JointPanel:
+class JointPanel(View):
     def __init__(self, gui: viser.GuiApi, session: "ClientSession") -> None:
         self._session = session
         self._rng = np.random.default_rng()
@@ -46,7 +47,7 @@ class JointPanel:
             slider.on_update(session.guard(self._slider_moved(index)))
         self.poses.on_click(session.guard(self._pose_button))
         self.apply_typed.on_click(session.guard(self._typed_angles))
-        self.controller.on_update(session.guard(lambda _: self.render(session.state.last)))
+        self.controller.on_update(session.guard(lambda _: self.render_panel(session.state.last)))
 
     def _slider_moved(self, index: int):
         def moved(event: viser.GuiEvent) -> None:
@@ -69,9 +70,9 @@ class JointPanel:
         q = ArmState.parse_degrees(self.typed.value)
         self._session.apply(lambda state: state.set_joints(np.radians(q)))
 
-    def render(self, snapshot: Snapshot) -> None:
+    def render_panel(self, snapshot: Snapshot) -> None:
         for slider, value in zip(self.sliders, np.degrees(snapshot.q)):
             value = round(float(value), 2)
-            if abs(slider.value - value) > 1e-9:
+            if not abs(slider.value - value) <= 1e-9:  # also true when a bad client left a NaN there
                 slider.value = value
         self.summary.content = joints_markdown(snapshot.q, self.controller.value)

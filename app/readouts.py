@@ -6,10 +6,11 @@ import numpy as np
 import viser
 
 from ur10core import Arm, to_controller
-from ur10core.orientation import angle_axis, quaternion, xyz_fixed, zyx_euler
+from ur10core.orientation import angle_axis_from_quaternion, quaternion, xyz_fixed, zyx_euler
 
 from .state import Snapshot
 from .style import JOINT_LABELS
+from .view import View
 
 
 def pose_markdown(T: np.ndarray) -> str:
@@ -21,11 +22,15 @@ def pose_markdown(T: np.ndarray) -> str:
     return "\n".join(rows)
 
 
-def orientation_markdown(R: np.ndarray) -> str:
-    alpha, beta, gamma = np.degrees(zyx_euler(R))
-    fixed = np.degrees(xyz_fixed(R))
-    theta, axis = angle_axis(R)
-    w, x, y, z = quaternion(R)
+def orientation_markdown(R: np.ndarray, wxyz: np.ndarray | None = None) -> str:
+    """The four readouts of a rotation that came from the core (not re-validated).
+
+    ``wxyz`` is its quaternion when the caller has it already.
+    """
+    alpha, beta, gamma = np.degrees(zyx_euler(R, check=False))
+    fixed = np.degrees(xyz_fixed(R, check=False))
+    w, x, y, z = quaternion(R, check=False) if wxyz is None else wxyz
+    theta, axis = angle_axis_from_quaternion((w, x, y, z))
     return "\n".join(
         [
             f"- **Z-Y-X Euler** (α, β, γ) = ({alpha:.2f}°, {beta:.2f}°, {gamma:.2f}°)",
@@ -34,6 +39,10 @@ def orientation_markdown(R: np.ndarray) -> str:
             f"- **Quaternion** (w, x, y, z) = ({w:+.4f}, {x:+.4f}, {y:+.4f}, {z:+.4f})",
         ]
     )
+
+
+def flange_markdown(snapshot: Snapshot) -> str:
+    return pose_markdown(snapshot.flange) + "\n\n" + orientation_markdown(snapshot.flange[:3, :3], snapshot.flange_wxyz)
 
 
 def joints_markdown(q: np.ndarray, with_controller: bool) -> str:
@@ -55,16 +64,14 @@ def dh_markdown(arm: Arm) -> str:
     return "\n".join(rows)
 
 
-class Readouts:
+class Readouts(View):
     """The "Flange pose" folder."""
 
-    def __init__(self, gui: viser.GuiApi, arm: Arm) -> None:
+    def __init__(self, gui: viser.GuiApi, arm: Arm, first: Snapshot) -> None:
         with gui.add_folder("Flange pose T06"):
-            self.pose = gui.add_markdown("")
-            self.orientation = gui.add_markdown("")
+            self.pose = gui.add_markdown(flange_markdown(first))
         with gui.add_folder(f"DH table ({arm.name})", expand_by_default=False):
             gui.add_markdown(dh_markdown(arm))
 
-    def render(self, snapshot: Snapshot) -> None:
-        self.pose.content = pose_markdown(snapshot.flange)
-        self.orientation.content = orientation_markdown(snapshot.flange[:3, :3])
+    def render_panel(self, snapshot: Snapshot) -> None:
+        self.pose.content = flange_markdown(snapshot)

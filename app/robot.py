@@ -1,4 +1,9 @@
-"""The solid arm: link meshes placed at ``frames(q)[i]``, plus the base and flange axes."""
+"""The solid arm: link meshes in a kinematic tree of DH frames, plus the base and flange axes.
+
+Link i's node is a child of link i−1's, posed by the link transform T(i−1, i). Its
+translation is a constant of the DH table, so moving the arm only turns six nodes: six
+small messages per redraw instead of fourteen.
+"""
 
 from __future__ import annotations
 
@@ -9,30 +14,45 @@ from ur10core.orientation import quaternion
 
 from .meshes import LinkMesh
 from .state import Snapshot
+from .view import View
 from .style import ALUMINIUM, JOINT_CAP_BLUE
 
 
 def poses(frames: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """(..., 4, 4) homogeneous frames → (wxyz (..., 4), position (..., 3)) for viser."""
-    return quaternion(frames[..., :3, :3]), frames[..., :3, 3]
+    """(..., 4, 4) frames the core computed → (wxyz (..., 4), position (..., 3)) for viser."""
+    return quaternion(frames[..., :3, :3], check=False), frames[..., :3, 3]
 
 
-class RobotView:
-    """Seven link nodes, each carrying its aluminium body and blue cap, moved as frames."""
+def relative_frames(frames: np.ndarray) -> np.ndarray:
+    """T(i−1, i) for i = 1..6 from the base-frame frames {0}..{6}, (6, 4, 4) (rigid inverse, no solve)."""
+    R_parent_T = np.swapaxes(frames[:-1, :3, :3], -1, -2)
+    relative = np.zeros((len(frames) - 1, 4, 4))
+    relative[:, :3, :3] = R_parent_T @ frames[1:, :3, :3]
+    relative[:, :3, 3] = (R_parent_T @ (frames[1:, :3, 3] - frames[:-1, :3, 3])[..., None])[..., 0]
+    relative[:, 3, 3] = 1.0
+    return relative
 
-    def __init__(self, scene: viser.SceneApi, links: tuple[LinkMesh, ...], root: str = "/arm") -> None:
+
+def node_name(index: int, root: str = "/arm") -> str:
+    """Scene-tree name of link ``index``'s node: ``/arm/link0/link1/…/link<index>``."""
+    return root + "".join(f"/link{i}" for i in range(index + 1))
+
+
+class RobotView(View):
+    def __init__(self, scene: viser.SceneApi, links: tuple[LinkMesh, ...], first: Snapshot) -> None:
         scene.add_frame("/base_frame", axes_length=0.3, axes_radius=0.008, origin_radius=0.015)
+        wxyz, position = poses(relative_frames(first.frames))
         self._links: list[viser.FrameHandle] = []
         for link in links:
-            node = scene.add_frame(f"{root}/link{link.index}", show_axes=False)
-            scene.add_mesh_simple(f"{root}/link{link.index}/body", link.body_vertices, link.body_faces, color=ALUMINIUM)
+            i = link.index
+            pose = {} if i == 0 else {"wxyz": wxyz[i - 1], "position": position[i - 1]}
+            node = scene.add_frame(node_name(i), show_axes=False, **pose)
+            scene.add_mesh_simple(f"{node_name(i)}/body", link.body_vertices, link.body_faces, color=ALUMINIUM)
             if len(link.cap_faces):
-                scene.add_mesh_simple(f"{root}/link{link.index}/cap", link.cap_vertices, link.cap_faces, color=JOINT_CAP_BLUE)
+                scene.add_mesh_simple(f"{node_name(i)}/cap", link.cap_vertices, link.cap_faces, color=JOINT_CAP_BLUE)
             self._links.append(node)
-        scene.add_frame(f"{root}/link6/flange_frame", axes_length=0.15, axes_radius=0.005, origin_radius=0.01)
+        scene.add_frame(f"{node_name(6)}/flange_frame", axes_length=0.15, axes_radius=0.005, origin_radius=0.01)
 
     def render(self, snapshot: Snapshot) -> None:
-        wxyz, position = poses(snapshot.frames)
-        for node, w, p in zip(self._links, wxyz, position):
-            node.wxyz = w
-            node.position = p
+        for node, wxyz in zip(self._links[1:], snapshot.link_wxyz):  # the translations never change
+            node.wxyz = wxyz

@@ -8,6 +8,7 @@ import math
 import os
 import socket
 import threading
+import time
 from pathlib import Path
 
 import viser
@@ -16,6 +17,7 @@ from ur10core import Arm, symbolic
 
 from .meshes import load_links
 from .metrics import LATENCY
+from .refresh import PanelRefresher
 from .session import ClientSession
 from .style import JOINT_CAP_BLUE
 
@@ -44,6 +46,16 @@ def lan_addresses() -> list[str]:
     return [a for i, a in enumerate(found) if not a.startswith("127.") and a not in found[:i]]
 
 
+def _resident_bytes() -> int:
+    try:
+        for line in Path("/proc/self/status").read_text().splitlines():
+            if line.startswith("VmRSS:"):
+                return int(line.split()[1]) * 1024
+    except OSError:
+        pass
+    return 0
+
+
 class TeachingServer:
     """The app: a viser server giving every browser its own UR10.
 
@@ -69,6 +81,7 @@ class TeachingServer:
         self.server.initial_camera.fov = math.radians(CAMERA_FOV_DEGREES)
         # the floor the arm stands on: half-metre cells, shared by everyone (it never changes)
         self.server.scene.add_grid("/floor", width=3.0, height=3.0, cell_size=0.1, section_size=0.5)
+        self.refresher = PanelRefresher()
         self.sessions: dict[int, ClientSession] = {}
         self._sessions_lock = threading.Lock()
         self.server.on_client_connect(self._connected)
@@ -91,7 +104,7 @@ class TeachingServer:
 
     def _connected(self, client: viser.ClientHandle) -> None:
         try:
-            session = ClientSession(client, self.arm, self.links)
+            session = ClientSession(client, self.arm, self.links, self.refresher)
         except Exception:
             log.exception("could not set up client %s", client.client_id)
             try:
@@ -109,11 +122,23 @@ class TeachingServer:
             session.close()
 
     def _write_metrics(self, path: Path) -> None:
+        """Once a second: clients, handler latencies, CPU and memory of this process (for benchmarks)."""
         while not self._metrics_stop.wait(1.0):
             with self._sessions_lock:
                 clients = len(self.sessions)
-            path.write_text(json.dumps({"clients": clients, "latency": LATENCY.summary()}))
+            report = {
+                "time": time.time(),
+                "clients": clients,
+                "latency": LATENCY.summary(),
+                "cpu_seconds": sum(os.times()[:2]),
+                "rss_bytes": _resident_bytes(),
+                "threads": threading.active_count(),
+            }
+            partial = path.with_suffix(".tmp")
+            partial.write_text(json.dumps(report))
+            partial.replace(path)  # readers never see half a file
 
     def stop(self) -> None:
         self._metrics_stop.set()
+        self.refresher.stop()
         self.server.stop()

@@ -27,7 +27,9 @@ import viser.uplot
 
 from ur10core import symbolic
 
+from .robot import node_name
 from .state import SINGULARITY_KINDS, Snapshot
+from .view import View
 from .style import DANGER_RED, ELBOW_COLOR, OVERLAY_IDLE, SAFE_GREEN, SHOULDER_COLOR, WRIST_COLOR, blend, hex_color
 
 if TYPE_CHECKING:
@@ -43,15 +45,15 @@ CIRCLE_SEGMENTS = 96
 AXIS_HALF_LENGTH = 0.25
 
 
-def factor_levels(snapshot: Snapshot, reach: float) -> np.ndarray:
+def factor_levels(snapshot: Snapshot, reach: float) -> tuple[float, float, float]:
     """|factor| as a share of its largest value: shoulder by a2 + a3, elbow |s3|, wrist |s5|."""
-    shoulder, elbow, wrist = np.abs(snapshot.factors)
-    return np.array([min(shoulder / reach, 1.0), elbow, wrist])
+    shoulder, elbow, wrist = snapshot.factors.tolist()
+    return min(abs(shoulder) / reach, 1.0), abs(elbow), abs(wrist)
 
 
 def alarm(level: float) -> float:
     """0 (calm) … 1 (on the singularity) for a factor level in [0, 1]."""
-    return float(np.clip((CALM_AT - level) / (CALM_AT - ALARM_AT), 0.0, 1.0))
+    return min(1.0, max(0.0, (CALM_AT - level) / (CALM_AT - ALARM_AT)))
 
 
 def circle_segments(center: np.ndarray, u: np.ndarray, v: np.ndarray, radius: float) -> np.ndarray:
@@ -61,27 +63,56 @@ def circle_segments(center: np.ndarray, u: np.ndarray, v: np.ndarray, radius: fl
     return np.stack([points[:-1], points[1:]], axis=1)
 
 
+def gauges_html(snapshot: Snapshot, levels: np.ndarray, colors: list[tuple[int, int, int]]) -> str:
+    """Three labelled bars, green → red as each factor of det J approaches zero, and det J."""
+    shoulder, elbow, wrist = snapshot.factors
+    rows = (
+        ("shoulder", f"a2c2 + a3c23 − d5s234 = {shoulder * 1000:+.1f} mm"),
+        ("elbow", f"s3 = {elbow:+.4f}"),
+        ("wrist", f"s5 = {wrist:+.4f}"),
+    )
+    bars = []
+    for (name, value), level, color in zip(rows, levels, colors):
+        bars.append(
+            f"<div style='margin:3px 0'><b>{name}</b> {value}"
+            "<div style='height:8px;background:#e9ecef;border-radius:4px'>"
+            f"<div class='gauge-{name}' style='height:8px;width:{100 * level:.1f}%;border-radius:4px;"
+            f"background:{hex_color(color)}'></div></div></div>"
+        )
+    bars.append(f"<div><b>det J</b> = {snapshot.det_j:+.5f} m³ (|det J| is the manipulability)</div>")
+    return "<div style='font-size:0.85em'>" + "".join(bars) + "</div>"
+
+
 def _segment_colors(rgb: tuple[int, int, int], count: int) -> np.ndarray:
     return np.broadcast_to(np.array(rgb, dtype=np.uint8), (count, 2, 3)).copy()
 
 
-class SingularityOverlay:
+class SingularityOverlay(View):
+    """The overlay's gauges, plot and formula in the panel, and its geometry in the 3D view.
+
+    The markers and lines hang under the solid arm's link nodes (``robot.node_name``) in
+    coordinates taken once from the core's geometry, so a redraw only recolours them.
+    """
+
     def __init__(self, scene: viser.SceneApi, gui: viser.GuiApi, session: "ClientSession") -> None:
         self._session = session
         arm = session.arm
         self._reach = arm.a2 + arm.a3
         self._history: collections.deque = collections.deque(maxlen=PLOT_SAMPLES)
         self._started = time.monotonic()
+        self._drawn_alarms: tuple[float, ...] | None = None
 
         with gui.add_folder("Singularities"):
             self.enabled = gui.add_checkbox("Show singularity overlay", False)
             self.formula = gui.add_html(
                 "<div style='font-size:1.05em'>" + symbolic.det_j_mathml() + "</div>", visible=False
             )
-            self.values = gui.add_markdown("", visible=False)
-            self.gauges = [gui.add_progress_bar(100.0, color=SAFE_GREEN, visible=False) for _ in range(3)]
+            # the three gauges and the numbers in one HTML element: one message per redraw
+            self.gauges = gui.add_html("", visible=False)
+            self.levels = np.ones(3)  #: last drawn gauge levels (share of the factor's maximum)
+            self.colors: list[tuple[int, int, int]] = [SAFE_GREEN] * 3  #: last drawn gauge colours
             self.plot = gui.add_uplot(
-                data=(np.zeros(2), np.ones(2), np.ones(2), np.ones(2)),
+                data=(np.zeros(2, np.float32), np.ones(2, np.float32), np.ones(2, np.float32), np.ones(2, np.float32)),
                 series=(
                     viser.uplot.Series(label="time (s)"),
                     viser.uplot.Series(label="shoulder", stroke=hex_color(SHOULDER_COLOR), width=2),
@@ -93,34 +124,52 @@ class SingularityOverlay:
                 aspect=2.0,
                 visible=False,
             )
-            self.demo = gui.add_button_group("Put the arm on the", ("shoulder", "elbow", "wrist"), visible=False)
+            self.demo = gui.add_button_group("Put the arm on the", SINGULARITY_KINDS, visible=False)
 
-        # 3D geometry, hidden until the overlay is switched on
-        cylinder = trimesh.creation.cylinder(radius=arm.d4, segment=[[0, 0, 0], [0, 0, 1.6]], sections=64)
+        # Geometry in each link's own frame, from the core's geometry of the first pose.
+        first = session.state.last
+        F, g = first.frames, first.geometry
+
+        def local(frame: int, point: np.ndarray) -> np.ndarray:
+            return F[frame, :3, :3].T @ (point - F[frame, :3, 3])
+
+        cylinder = trimesh.creation.cylinder(radius=g.cylinder_radius, segment=[[0, 0, 0], [0, 0, 1.6]], sections=64)
         self.cylinder = scene.add_mesh_simple(
             "/overlay/shoulder_cylinder", cylinder.vertices, cylinder.faces, color=SHOULDER_COLOR,
             opacity=0.18, side="double", cast_shadow=False, receive_shadow=False, visible=False,
         )
-        self.p5 = scene.add_icosphere("/overlay/p5", radius=0.022, color=SHOULDER_COLOR, visible=False, cast_shadow=False)
-        self.p4 = scene.add_icosphere("/overlay/p4", radius=0.022, color=ELBOW_COLOR, visible=False, cast_shadow=False)
-        empty = np.zeros((CIRCLE_SEGMENTS, 2, 3))
-        self.circles = scene.add_line_segments("/overlay/elbow_circles", np.concatenate([empty, empty]),
-                                               OVERLAY_IDLE, thickness=0.006, visible=False)
-        self.axes = scene.add_line_segments("/overlay/wrist_axes", np.zeros((2, 2, 3)), OVERLAY_IDLE,
-                                            thickness=0.01, visible=False)
+        self.p5 = scene.add_icosphere(f"{node_name(5)}/p5", radius=0.022, color=SHOULDER_COLOR,
+                                      position=local(5, g.p5), visible=False, cast_shadow=False)
+        self.p4 = scene.add_icosphere(f"{node_name(4)}/p4", radius=0.022, color=ELBOW_COLOR,
+                                      position=local(4, g.p4), visible=False, cast_shadow=False)
+        # the reach circles turn with θ1: they live in frame {1}, spanned by x1 and z1
+        centre = local(1, g.elbow_center)
+        x1, z1 = np.eye(3)[0], np.eye(3)[2]
+        circles = np.concatenate([circle_segments(centre, x1, z1, r) for r in g.elbow_radii]).astype(np.float32)
+        self.circles = scene.add_line_segments(f"{node_name(1)}/elbow_circles", circles,
+                                               _segment_colors(OVERLAY_IDLE, len(circles)), thickness=0.006,
+                                               visible=False)
+        self.axes = []
+        for frame, point, axis in ((4, g.p4, g.axis4), (6, g.flange, g.axis6)):
+            start = local(frame, point - AXIS_HALF_LENGTH * axis)
+            end = local(frame, point + AXIS_HALF_LENGTH * axis)
+            self.axes.append(scene.add_line_segments(f"{node_name(frame)}/axis{frame}", np.array([[start, end]], np.float32),
+                                                     _segment_colors(WRIST_COLOR, 1), thickness=0.01, visible=False))
 
         self.enabled.on_update(session.guard(self._toggled))
         self.demo.on_click(session.guard(self._demo))
 
     @property
     def _widgets(self) -> list:
-        return [self.formula, self.values, *self.gauges, self.plot, self.demo,
-                self.cylinder, self.p5, self.p4, self.circles, self.axes]
+        return [self.formula, self.gauges, self.plot, self.demo,
+                self.cylinder, self.p5, self.p4, self.circles, *self.axes]
 
     def _toggled(self, _: viser.GuiEvent) -> None:
+        self._drawn_alarms = None
         for widget in self._widgets:
             widget.visible = self.enabled.value
         self.render(self._session.state.last)
+        self.render_panel(self._session.state.last)
 
     def _demo(self, _: viser.GuiEvent) -> None:
         kind = self.demo.value
@@ -134,40 +183,27 @@ class SingularityOverlay:
         self._history.append((now, *levels))
         if not self.enabled.value:
             return
-        shoulder, elbow, wrist = snapshot.factors
-        alarms = [alarm(level) for level in levels]
-        for gauge, level, a in zip(self.gauges, levels, alarms):
-            gauge.value = float(np.clip(100.0 * level, 0.0, 100.0))
-            gauge.color = blend(SAFE_GREEN, DANGER_RED, a)
-        rows = [
-            f"**shoulder** a2c2 + a3c23 − d5s234 = {shoulder * 1000:+.1f} mm",
-            f"**elbow** s3 = {elbow:+.4f}",
-            f"**wrist** s5 = {wrist:+.4f}",
-            f"**det J** = {snapshot.det_j:+.5f} m³  (|det J| is the manipulability)",
-        ]
-        self.values.content = "  \n".join(rows)
-        history = np.array([h for h in self._history if h[0] >= now - PLOT_SECONDS])
-        if len(history) < 2:
-            history = np.vstack([history, history])
-        self.plot.data = tuple(np.ascontiguousarray(column) for column in (history[:, 0] - now, *history[:, 1:].T))
-
-        g = snapshot.geometry
+        alarms = tuple(round(alarm(level), 2) for level in levels)
+        if alarms == self._drawn_alarms:
+            return  # far from every singularity nothing changes colour: skip the lot
+        self._drawn_alarms = alarms
         self.cylinder.color = blend(SHOULDER_COLOR, DANGER_RED, alarms[0])
-        self.p5.position = g.p5
         self.p5.color = blend(SHOULDER_COLOR, DANGER_RED, alarms[0])
-        up = np.array([0.0, 0.0, 1.0])
-        outer, inner = g.elbow_radii
-        self.circles.points = np.concatenate(
-            [circle_segments(g.elbow_center, g.arm_forward, up, r) for r in (outer, inner)]
-        ).astype(np.float32)
-        self.circles.colors = _segment_colors(blend(OVERLAY_IDLE, DANGER_RED, alarms[1]), 2 * CIRCLE_SEGMENTS)
-        self.p4.position = g.p4
+        self.circles.colors = _segment_colors(blend(OVERLAY_IDLE, DANGER_RED, alarms[1]), len(self.circles.points))
         self.p4.color = blend(ELBOW_COLOR, DANGER_RED, alarms[1])
-        self.axes.points = np.array(
-            [
-                [g.p4 - AXIS_HALF_LENGTH * g.axis4, g.p4 + AXIS_HALF_LENGTH * g.axis4],
-                [g.flange - AXIS_HALF_LENGTH * g.axis6, g.flange + AXIS_HALF_LENGTH * g.axis6],
-            ],
-            dtype=np.float32,
-        )
-        self.axes.colors = _segment_colors(blend(WRIST_COLOR, DANGER_RED, alarms[2]), 2)
+        for axis in self.axes:
+            axis.colors = _segment_colors(blend(WRIST_COLOR, DANGER_RED, alarms[2]), 1)
+
+    def render_panel(self, snapshot: Snapshot) -> None:
+        if not self.enabled.value:
+            return
+        levels = factor_levels(snapshot, self._reach)
+        self.levels = levels
+        self.colors = [blend(SAFE_GREEN, DANGER_RED, alarm(level)) for level in levels]
+        self.gauges.content = gauges_html(snapshot, levels, self.colors)
+        now = time.monotonic() - self._started
+        history = np.array([h for h in self._history if h[0] >= now - PLOT_SECONDS], dtype=np.float32)
+        if len(history) < 2:
+            history = np.vstack([history, history]) if len(history) else np.zeros((2, 4), np.float32)
+        history[:, 0] -= np.float32(now)
+        self.plot.data = tuple(np.ascontiguousarray(column) for column in history.T)

@@ -10,6 +10,7 @@ values a user can type.
 
 from __future__ import annotations
 
+import functools
 import math
 import threading
 from dataclasses import dataclass
@@ -18,6 +19,7 @@ import numpy as np
 
 from ur10core import JOINT_LIMIT, Arm, IKSolution, SingularityGeometry
 from ur10core.ik import equivalent_near
+from ur10core.orientation import quaternion
 
 from .style import JOINT_LABELS
 
@@ -44,14 +46,26 @@ class Snapshot:
     slot: int  #: the branch the solid arm is on, −1 when the target is unreachable
     reachable: bool
     reason: str  #: why the target is unreachable ("" when it is reachable)
+    link_wxyz: np.ndarray  #: (6, 4) rotation of T(i−1, i), i = 1..6, as quaternions (the solid arm's tree)
+    ghost_wxyz: np.ndarray  #: (8, 7, 4) rotation of each branch's frames {0}..{6}, as quaternions
+    flange_wxyz: np.ndarray  #: (4,) the flange orientation as a quaternion
     factors: np.ndarray  #: (3,) shoulder, elbow, wrist factors of det J
-    det_j: float
-    geometry: SingularityGeometry
     cause: str  #: "joints", "target", "branch" or "reset": what made this change
+    arm: Arm
 
     @property
     def flange(self) -> np.ndarray:
         return self.frames[6]
+
+    @functools.cached_property
+    def det_j(self) -> float:
+        """det J = a2 a3 × the three factors (COURSE_NOTES §5)."""
+        return float(self.arm.a2 * self.arm.a3 * self.factors.prod())
+
+    @functools.cached_property
+    def geometry(self) -> SingularityGeometry:
+        """The singularity overlay's points and axes (computed when first asked for: not on the drag path)."""
+        return self.arm.singularity_geometry_from_frames(self.frames)
 
 
 class ArmState:
@@ -194,6 +208,10 @@ class ArmState:
         frames = arm.frames(joints)
         ghost_frames = frames[1:]
         ghost_frames[~solution.valid] = np.eye(4)
+        # every rotation the views draw, converted to quaternions in one vectorised call
+        rotations = frames[:, :, :3, :3]
+        relative = np.swapaxes(rotations[0, :-1], -1, -2) @ rotations[0, 1:]
+        wxyz = quaternion(np.concatenate([relative, rotations[1:].reshape(-1, 3, 3), rotations[0, 6:]]), check=False)
         factors = arm.singularity_factors(self._q)
         return Snapshot(
             q=self._q.copy(),
@@ -201,11 +219,13 @@ class ArmState:
             target=self._target.copy(),
             solution=solution,
             ghost_frames=ghost_frames,
+            link_wxyz=wxyz[:6],
+            ghost_wxyz=wxyz[6:-1].reshape(8, 7, 4),
+            flange_wxyz=wxyz[-1],
             slot=self._slot,
             reachable=self._slot >= 0,
             reason=self._reason,
             factors=factors,
-            det_j=float(arm.a2 * arm.a3 * factors.prod()),
-            geometry=arm.singularity_geometry_from_frames(frames[0]),
             cause=cause,
+            arm=arm,
         )

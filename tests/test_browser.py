@@ -110,7 +110,7 @@ def test_dragging_the_ik_target(open_page, app):
     assert snapshot.slot == 4, "the arm jumped to another branch"
     np.testing.assert_allclose(session.arm.fk(snapshot.q), snapshot.target, atol=1e-9)
     # the ghosts of the new target's branches were posed from the same solution
-    ghost = session.ik_target.ghosts[6]
+    ghost = session.ik_target.ghosts[5]  # link 6 (the ghosts start at link 1)
     valid = snapshot.solution.valid
     np.testing.assert_allclose(ghost.batched_positions[valid], snapshot.ghost_frames[valid, 6, :3, 3], atol=1e-5)
 
@@ -131,10 +131,13 @@ def test_singularity_overlay(open_page, app):
     wait_for(lambda: page.locator("math").count() > 0 and page.locator("math").first.is_visible(), what="det J as MathML")
     assert "234" in page.locator("math").first.text_content()
     page.get_by_role("button", name="wrist", exact=True).click()
-    wait_for(lambda: session.singularity.gauges[2].value == 0.0, what="the wrist gauge to drop to zero")
+    wait_for(lambda: session.singularity.levels[2] == 0.0, what="the wrist gauge to drop to zero")
     assert abs(session.state.last.factors[2]) < 1e-12
-    assert session.singularity.gauges[2].color == (220, 38, 38)
+    assert session.singularity.colors[2] == (220, 38, 38)
     wait_for(lambda: page.get_by_text("s5 = +0.0000").count() > 0, what="the wrist factor readout")
+    bar = page.locator(".gauge-wrist").first
+    assert bar.evaluate("e => getComputedStyle(e).backgroundColor") == "rgb(220, 38, 38)"
+    assert bar.evaluate("e => e.style.width") in ("0%", "0.0%")
 
 
 def test_workspace_cloud(open_page, app):

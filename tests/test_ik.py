@@ -340,3 +340,17 @@ def test_nearest_prefers_the_current_slot_on_a_tie(course):
     assert int(generic.nearest(np.radians([30, 45, 26, 50, 60, 80]), prefer=0).slot) == 4  # no tie: nearest wins
     batch = course.ik(course.fk(np.stack([q, q])), hint=q)
     np.testing.assert_array_equal(batch.nearest(np.stack([q, q]), prefer=np.array([3, 6])).slot, [3, 6])
+
+
+def test_nearest_one_pose_path_equals_batch_path(course):
+    rng = np.random.default_rng(19)
+    q = random_joints(400, seed=19)
+    sol = course.ik(course.fk(q))
+    current = q + rng.normal(scale=0.3, size=q.shape) + 2 * np.pi * rng.integers(-1, 2, size=q.shape)
+    current = np.clip(current, -2 * np.pi, 2 * np.pi)
+    prefer = rng.integers(0, 8, size=len(q))
+    batch = sol.nearest(current, prefer=prefer)
+    for k in range(len(q)):
+        one = course.ik(course.fk(q[k])).nearest(current[k], prefer=int(prefer[k]))
+        assert int(one.slot) == int(batch.slot[k])
+        np.testing.assert_allclose(one.q, batch.q[k], atol=1e-12)

@@ -243,21 +243,51 @@ def nearest_branch(solution: IKSolution, q_current, joint_limit: float = _TAU, p
     ([30.0, 45.0, 26.0, 50.0, 60.0, -280.0], 4)
     """
     q_current = joint_vector(q_current, "q_current")
+    if solution.q.shape == (8, 6) and q_current.shape == (6,) and (prefer is None or np.ndim(prefer) == 0):
+        return _nearest_one(solution, q_current, joint_limit, prefer)
     current = np.expand_dims(q_current, -2)  # (..., 1, 6)
     with np.errstate(invalid="ignore"):
         shifted = equivalent_near(solution.q, current, joint_limit)
         distance = np.where(solution.valid, ((shifted - current) ** 2).sum(axis=-1), np.inf)
     slot = np.argmin(distance, axis=-1)
+    flat_distance = distance.reshape(-1, 8)
+    rows = np.arange(len(flat_distance))
     if prefer is not None:
-        prefer = np.broadcast_to(np.asarray(prefer), slot.shape)
+        prefer = np.broadcast_to(np.asarray(prefer), slot.shape).reshape(-1)
         candidate = np.clip(prefer, 0, 7)
-        preferred = np.take_along_axis(distance, candidate[..., None], -1)[..., 0]
-        best = np.take_along_axis(distance, slot[..., None], -1)[..., 0]
-        slot = np.where((prefer == candidate) & (preferred <= best + TIE_TOLERANCE), candidate, slot)
+        tie = (prefer == candidate) & (flat_distance[rows, candidate] <= flat_distance[rows, slot.reshape(-1)] + TIE_TOLERANCE)
+        slot = np.where(tie, candidate, slot.reshape(-1)).reshape(slot.shape)
     any_valid = solution.valid.any(axis=-1)
-    best = np.take_along_axis(shifted, slot[..., None, None], axis=-2)[..., 0, :]
+    best = shifted.reshape(-1, 8, 6)[rows, slot.reshape(-1)].reshape(slot.shape + (6,))
     best = np.where(any_valid[..., None], best, np.nan)
     return Branch(best, np.where(any_valid, slot, -1))
+
+
+def _nearest_one(solution: IKSolution, q_current: np.ndarray, joint_limit: float, prefer) -> Branch:
+    """:func:`nearest_branch` for one pose in plain Python: the app calls it on every drag event."""
+    current = q_current.tolist()
+    best_slot, best_distance, best_q = -1, math.inf, None
+    distances = {}
+    for k, (valid, q) in enumerate(zip(solution.valid.tolist(), solution.q.tolist())):
+        if not valid:
+            continue
+        shifted = []
+        for value, now in zip(q, current):
+            value += _TAU * round((now - value) / _TAU)
+            if value > joint_limit:
+                value -= _TAU
+            elif value < -joint_limit:
+                value += _TAU
+            shifted.append(value)
+        distance = sum((a - b) ** 2 for a, b in zip(shifted, current))
+        distances[k] = (distance, shifted)
+        if distance < best_distance:
+            best_slot, best_distance, best_q = k, distance, shifted
+    if prefer is not None and int(prefer) in distances and distances[int(prefer)][0] <= best_distance + TIE_TOLERANCE:
+        best_slot, best_q = int(prefer), distances[int(prefer)][1]
+    if best_q is None:
+        return Branch(np.full(6, np.nan), np.array(-1))
+    return Branch(np.array(best_q), np.array(best_slot))
 
 
 def equivalent_near(q, q_current, joint_limit: float = _TAU) -> np.ndarray:

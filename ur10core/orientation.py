@@ -9,7 +9,9 @@
 * Euler parameters: the unit quaternion (w, x, y, z) with w ≥ 0.
 
 Every function takes rotation matrices of shape (..., 3, 3) (a 4x4 pose's ``[:3, :3]``)
-and is vectorised; angles in radians.
+and is vectorised; angles in radians. Input is checked to be a proper rotation unless
+``check=False`` is passed, for rotations that come out of the core itself (the app's
+redraw path converts dozens per frame).
 
 Example
 -------
@@ -63,14 +65,18 @@ def rotation_from_xyz_fixed(angles) -> np.ndarray:
     return _rot(2, alpha) @ R
 
 
-def zyx_euler(R) -> np.ndarray:
+def _rotations(R, check: bool) -> np.ndarray:
+    return rotation_matrix(R) if check else np.asarray(R, dtype=float)
+
+
+def zyx_euler(R, check: bool = True) -> np.ndarray:
     """Z-Y-X Euler angles ``(α, β, γ)`` of R, (..., 3); β in [−π/2, π/2].
 
     Craig (2.66): ``β = atan2(−r31, sqrt(r11² + r21²))``, ``α = atan2(r21, r11)``,
     ``γ = atan2(r32, r33)``. At gimbal lock (cos β ≈ 0) only α ∓ γ is defined:
     α = 0 and ``γ = ±atan2(r12, r22)``.
     """
-    R = rotation_matrix(R)
+    R = _rotations(R, check)
     r11, r21, r31 = R[..., 0, 0], R[..., 1, 0], R[..., 2, 0]
     cos_beta = np.hypot(r11, r21)
     beta = np.arctan2(-r31, cos_beta)
@@ -84,36 +90,41 @@ def zyx_euler(R) -> np.ndarray:
     return np.stack([alpha, beta, gamma], axis=-1)
 
 
-def xyz_fixed(R) -> np.ndarray:
+def xyz_fixed(R, check: bool = True) -> np.ndarray:
     """X-Y-Z fixed angles ``(γ, β, α)`` of R, (..., 3), in the order they are applied.
 
     The same three numbers as :func:`zyx_euler`, read in the opposite order (Craig 2.71).
     """
-    return zyx_euler(R)[..., ::-1]
+    return zyx_euler(R, check)[..., ::-1]
 
 
-def quaternion(R) -> np.ndarray:
+def quaternion(R, check: bool = True) -> np.ndarray:
     """Euler parameters (unit quaternion) ``(w, x, y, z)`` of R, (..., 4), with w ≥ 0.
 
     Shepperd's method: divide by the largest of 4w², 4x², 4y², 4z² so it stays
     accurate at every angle, including θ = π.
     """
-    R = rotation_matrix(R)
-    r = R
-    trace = r[..., 0, 0] + r[..., 1, 1] + r[..., 2, 2]
+    r = _rotations(R, check)
+    m00, m01, m02 = r[..., 0, 0], r[..., 0, 1], r[..., 0, 2]
+    m10, m11, m12 = r[..., 1, 0], r[..., 1, 1], r[..., 1, 2]
+    m20, m21, m22 = r[..., 2, 0], r[..., 2, 1], r[..., 2, 2]
+    trace = m00 + m11 + m22
+    # row k is 4 q_k q, largest (and best conditioned) when |q_k| is
     candidates = np.stack(
         [
-            np.stack([1 + trace, r[..., 2, 1] - r[..., 1, 2], r[..., 0, 2] - r[..., 2, 0], r[..., 1, 0] - r[..., 0, 1]], -1),
-            np.stack([r[..., 2, 1] - r[..., 1, 2], 1 + 2 * r[..., 0, 0] - trace, r[..., 0, 1] + r[..., 1, 0], r[..., 0, 2] + r[..., 2, 0]], -1),
-            np.stack([r[..., 0, 2] - r[..., 2, 0], r[..., 0, 1] + r[..., 1, 0], 1 + 2 * r[..., 1, 1] - trace, r[..., 1, 2] + r[..., 2, 1]], -1),
-            np.stack([r[..., 1, 0] - r[..., 0, 1], r[..., 0, 2] + r[..., 2, 0], r[..., 1, 2] + r[..., 2, 1], 1 + 2 * r[..., 2, 2] - trace], -1),
+            1 + trace, m21 - m12, m02 - m20, m10 - m01,
+            m21 - m12, 1 + m00 - m11 - m22, m01 + m10, m02 + m20,
+            m02 - m20, m01 + m10, 1 - m00 + m11 - m22, m12 + m21,
+            m10 - m01, m02 + m20, m12 + m21, 1 - m00 - m11 + m22,
         ],
-        axis=-2,
-    )  # (..., 4, 4): row m is 4·q·q_m, largest when |q_m| is
-    pivot = np.argmax(np.stack([trace, r[..., 0, 0], r[..., 1, 1], r[..., 2, 2]], -1), axis=-1)
-    q = np.take_along_axis(candidates, pivot[..., None, None], axis=-2)[..., 0, :]
-    q = q / np.linalg.norm(q, axis=-1, keepdims=True)
-    return np.where(q[..., :1] < 0, -q, q)
+        axis=-1,
+    ).reshape(-1, 4, 4)
+    rows = np.arange(len(candidates))
+    pivot = candidates[:, [0, 1, 2, 3], [0, 1, 2, 3]].argmax(axis=-1)
+    q = candidates[rows, pivot]
+    q /= np.linalg.norm(q, axis=-1, keepdims=True)
+    q[q[:, 0] < 0] *= -1.0
+    return q.reshape(np.shape(trace) + (4,))
 
 
 def rotation_from_quaternion(q) -> np.ndarray:
@@ -133,7 +144,7 @@ def rotation_from_quaternion(q) -> np.ndarray:
     )
 
 
-def angle_axis(R) -> tuple[np.ndarray, np.ndarray]:
+def angle_axis(R, check: bool = True) -> tuple[np.ndarray, np.ndarray]:
     """Equivalent angle–axis ``(θ, k̂)`` of R: θ (...) in [0, π], k̂ (..., 3) unit.
 
     From the quaternion, ``θ = 2 atan2(|(x, y, z)|, w)``, ``k̂ = (x, y, z)/|(x, y, z)|``,
@@ -141,7 +152,12 @@ def angle_axis(R) -> tuple[np.ndarray, np.ndarray]:
     ``k̂ = (r32 − r23, r13 − r31, r21 − r12) / (2 sin θ)`` loses precision. At θ = 0 the
     axis is undefined; k̂ = (0, 0, 1) is returned.
     """
-    q = quaternion(R)
+    return angle_axis_from_quaternion(quaternion(R, check))
+
+
+def angle_axis_from_quaternion(q) -> tuple[np.ndarray, np.ndarray]:
+    """``(θ, k̂)`` of a unit quaternion ``(w, x, y, z)`` with w ≥ 0 (as :func:`quaternion` returns)."""
+    q = np.asarray(q, dtype=float)
     vector = q[..., 1:]
     length = np.linalg.norm(vector, axis=-1)
     theta = 2.0 * np.arctan2(length, q[..., 0])
