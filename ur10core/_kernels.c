@@ -120,6 +120,7 @@ static void solve_pose(const Params *P, const double *T, double theta6_hint, Out
             s6_up = s6s5 / s5_abs;
             theta6_up = wrap(atan2(s6_up, c6_up));
         }
+        double c234_up = 0.0, s234_up = 0.0, theta234_up = 0.0;
         for (int j = 0; j < 2; j++) {
             /* The j = 1 branch negates s5 and, away from the wrist singularity, turns theta6
              * by pi (negating c6, s6): the same angles the reference computes per branch. */
@@ -129,13 +130,26 @@ static void solve_pose(const Params *P, const double *T, double theta6_hint, Out
             const double c6 = singular_wrist ? c6_up : sign * c6_up;
             const double s6 = singular_wrist ? s6_up : sign * s6_up;
             const double theta6 = (j == 0 || singular_wrist) ? theta6_up : wrap(theta6_up + M_PI);
-            /* Step 4, blended with the third row so it holds at every theta5. */
-            double c234 = s5 * c234s5 + c5 * c5 * (s6 * r31 + c6 * r32);
-            double s234 = s5 * r33 + c5 * (c6 * r31 - s6 * r32);
-            const double norm = norm2(c234, s234);
-            c234 /= norm;
-            s234 /= norm;
-            const double theta234 = atan2(s234, c234);
+            /* Step 4, blended with the third row so it holds at every theta5. Away from the
+             * wrist singularity the j = 1 branch negates c234 and s234: theta234 + pi. */
+            double c234, s234, theta234;
+            if (j == 1 && !singular_wrist) {
+                c234 = -c234_up;
+                s234 = -s234_up;
+                theta234 = theta234_up > 0.0 ? theta234_up - M_PI : theta234_up + M_PI;
+            } else {
+                c234 = s5 * c234s5 + c5 * c5 * (s6 * r31 + c6 * r32);
+                s234 = s5 * r33 + c5 * (c6 * r31 - s6 * r32);
+                const double norm = norm2(c234, s234);
+                c234 /= norm;
+                s234 /= norm;
+                theta234 = atan2(s234, c234);
+                if (j == 0) {
+                    c234_up = c234;
+                    s234_up = s234;
+                    theta234_up = theta234;
+                }
+            }
             /* Step 5: the planar 2R problem for the frame-4 origin. */
             const double h4 = A + d5 * s234;
             const double v4 = p5z - d1 - d5 * c234;
