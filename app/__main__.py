@@ -16,6 +16,9 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
     parser.add_argument("--port", type=int, default=8080, help="port (default 8080; the next free one if busy)")
     parser.add_argument("--preset", choices=Arm.PRESETS, default="course",
                         help="link lengths: the course's table, UR's CB3 UR10 or the UR10e (default course)")
+    parser.add_argument("--shared", action="store_true",
+                        help="shared demo mode: everyone watches the presenter's arm; the browser that enters "
+                             "the printed join code presents")
     return parser.parse_args(argv)
 
 
@@ -24,13 +27,16 @@ def main(argv: list[str] | None = None) -> None:
     logging.basicConfig(level=logging.INFO, format="%(levelname)s %(name)s: %(message)s")
     from .server import TeachingServer
 
-    app = TeachingServer(preset=args.preset, host=args.host, port=args.port)
-    moved = "" if app.port == args.port else f" (port {args.port} was busy)"
-    print(f"\nUR10 teaching app ({args.preset}) is running{moved}. Open:", flush=True)
+    app = TeachingServer(preset=args.preset, host=args.host, port=args.port, shared=args.shared)
+    moved = "" if args.port in (0, app.port) else f" (port {args.port} was busy)"
+    mode = "shared demo mode" if args.shared else "every browser has its own arm"
+    print(f"\nUR10 teaching app ({args.preset}, {mode}) is running{moved}. Open:", flush=True)
     for url in app.urls:
         print(f"    {url}", flush=True)
     if args.host in ("0.0.0.0", ""):
         print("Students on the same network use one of the addresses above.", flush=True)
+    if app.classroom is not None:
+        print(f"Join code for the presenter: {app.classroom.code}", flush=True)
     print("Press Ctrl+C to stop.", flush=True)
     try:
         while True:

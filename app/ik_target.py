@@ -4,19 +4,27 @@ Each slot k keeps its colour and label for every pose (``ur10core.SLOTS``); a br
 that does not exist for the target is hidden by scaling its instances to zero. The
 solid arm follows the branch nearest its joints (``ArmState.move_target``); clicking a
 ghost, or a number in the branch list, puts the arm on that branch.
+
+:class:`BranchesScene` is the 3D part (ghosts, target marker, the red "unreachable"
+halo); :class:`IKTargetControls` is the user's gizmo and panel. In the classroom's
+shared mode the scene part is shared by everyone while only the presenter has the
+controls.
 """
 
 from __future__ import annotations
 
+import logging
+import math
 import threading
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Callable
 
 import numpy as np
 import viser
 
 from ur10core import SLOTS
-from ur10core.orientation import rotation_from_quaternion, rotation_from_zyx_euler
+from ur10core.orientation import quaternion, rotation_from_zyx_euler
 
+from .fast_updates import set_instances, stop_echo
 from .meshes import LinkMesh
 from .state import ArmState, Snapshot
 from .style import GHOST_OPACITY, SLOT_COLORS, UNREACHABLE_RED, swatch
@@ -24,6 +32,8 @@ from .view import View
 
 if TYPE_CHECKING:
     from .session import ClientSession
+
+log = logging.getLogger(__name__)
 
 BRANCH_BUTTONS = tuple(str(slot.index + 1) for slot in SLOTS)
 
@@ -63,27 +73,48 @@ def branches_markdown(snapshot: Snapshot) -> str:
     return status_markdown(snapshot) + "\n\n" + branch_table(snapshot)
 
 
-class IKTargetView(View):
-    def __init__(
-        self, scene: viser.SceneApi, gui: viser.GuiApi, links: tuple[LinkMesh, ...], session: "ClientSession"
-    ) -> None:
-        self._session = session
-        self._pending_target: np.ndarray | None = None
-        self._drag_lock = threading.Lock()
-        snapshot = session.state.last
-        self.gizmo = scene.add_transform_controls(
-            "/ik_target", scale=0.3, line_width=3.0, depth_test=False,
-            wxyz=snapshot.flange_wxyz, position=snapshot.flange[:3, 3],
-        )
-        # transform controls have no colour of their own: a red halo on the target says "unreachable"
-        self.unreachable_marker = scene.add_icosphere(
-            "/ik_target/unreachable", radius=0.06, color=UNREACHABLE_RED, opacity=0.45, visible=False,
-            cast_shadow=False, receive_shadow=False,
-        )
+def target_from_pose(pose: tuple) -> np.ndarray:
+    """A gizmo's ``(wxyz, position)`` as the 4x4 target it stands for (on every drag event)."""
+    (w, x, y, z), (px, py, pz) = pose
+    norm = math.sqrt(w * w + x * x + y * y + z * z)
+    if not 0.0 < norm < math.inf:  # zero, infinite or not a number: a browser should never send it
+        raise ValueError(f"the target's orientation {pose[0]} is not a rotation")
+    w, x, y, z = w / norm, x / norm, y / norm, z / norm
+    return np.array([  # rotation_from_quaternion, written out: this is the hot path
+        [1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y), px],
+        [2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x), py],
+        [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y), pz],
+        [0.0, 0.0, 0.0, 1.0],
+    ])
+
+
+def add_unreachable_halo(scene: viser.SceneApi, parent: str) -> viser.IcosphereHandle:
+    """Transform controls have no colour of their own: a red halo on the target says "unreachable"."""
+    return scene.add_icosphere(f"{parent}/unreachable", radius=0.06, color=UNREACHABLE_RED, opacity=0.45,
+                               visible=False, cast_shadow=False, receive_shadow=False)
+
+
+class BranchesScene(View):
+    """The eight ghost arms, one batched mesh per moving link with an instance per slot.
+
+    With ``target_marker`` it also draws the target itself (axes and the red halo): the
+    shared scene of the classroom needs that, since only the presenter has a gizmo.
+    """
+
+    def __init__(self, scene: viser.SceneApi, links: tuple[LinkMesh, ...], first: Snapshot,
+                 target_marker: bool = False) -> None:
+        self.show_ghosts = True
+        #: called with (client, slot) when a ghost is clicked; set by whoever drives this scene
+        self.on_select: Callable[[viser.ClientHandle | None, int], None] | None = None
+        self.target = self.unreachable = None
+        if target_marker:
+            self.target = scene.add_frame("/target", axes_length=0.1, axes_radius=0.004, origin_radius=0.008,
+                                          wxyz=first.flange_wxyz, position=first.flange[:3, 3])
+            self.unreachable = add_unreachable_halo(scene, "/target")
         identity = np.tile([1.0, 0.0, 0.0, 0.0], (8, 1))
         self.ghosts = []
-        self._scales: bytes = b""
-        self._positions: dict[int, bytes] = {i: b"" for i in range(1, 7)}  # last sent, to skip unchanged
+        self._scales = b""
+        self._positions = {i: b"" for i in range(1, 7)}  # last sent, to skip unchanged ones
         for link in links[1:]:  # every branch shares the fixed base with the solid arm
             vertices, faces = link.merged
             ghost = scene.add_batched_meshes_simple(
@@ -92,13 +123,59 @@ class IKTargetView(View):
                 batched_colors=np.array(SLOT_COLORS, dtype=np.uint8), opacity=GHOST_OPACITY, lod="off",
                 cast_shadow=False, receive_shadow=False,
             )
-            ghost.on_click(session.guard(self._ghost_clicked))
+            ghost.on_click(self._clicked)
             self.ghosts.append(ghost)
 
-        with gui.add_folder("IK target: all 8 branches"):
+    def _clicked(self, event) -> None:
+        if self.on_select is not None and event.instance_index is not None:
+            self.on_select(event.client, int(event.instance_index))
+
+    def render(self, snapshot: Snapshot) -> None:
+        if self.target is not None:
+            self.target.wxyz = quaternion(snapshot.target[:3, :3], check=False)
+            self.target.position = snapshot.target[:3, 3]
+            self.unreachable.visible = not snapshot.reachable
+        shown = snapshot.solution.valid & self.show_ghosts
+        if snapshot.slot >= 0:
+            shown = shown.copy()
+            shown[snapshot.slot] = False  # the solid arm is there already
+        scales = shown.astype(np.float32)
+        update_scales = scales.tobytes() != self._scales  # which branches exist rarely changes mid-drag
+        self._scales = scales.tobytes()
+        for i, ghost in enumerate(self.ghosts, start=1):  # links 1..6
+            if update_scales:
+                ghost.batched_scales = scales
+            positions = snapshot.ghost_frames[:, i, :3, 3].astype(np.float32)
+            if positions.tobytes() == self._positions[i]:  # frames 1 and 2 sit on the shoulder whatever q is
+                positions = None
+            else:
+                self._positions[i] = positions.tobytes()
+            set_instances(ghost, snapshot.ghost_wxyz[:, i], positions)
+
+
+class IKTargetControls(View):
+    """One user's gizmo at the flange and the "IK target" folder of their panel."""
+
+    def __init__(self, controls: viser.SceneApi, gui: viser.GuiApi, branches: BranchesScene,
+                 session: "ClientSession") -> None:
+        self._session = session
+        self._branches = branches
+        self._seen_pose: tuple | None = None
+        self._seen_lock = threading.Lock()
+        snapshot = session.state.last
+        self.gizmo = controls.add_transform_controls(
+            "/ik_target", scale=0.3, line_width=3.0, depth_test=False,
+            wxyz=snapshot.flange_wxyz, position=snapshot.flange[:3, 3],
+        )
+        stop_echo(self.gizmo)
+        # the halo rides on the gizmo unless the (shared) scene draws the target itself
+        self.unreachable = None if branches.target is not None else add_unreachable_halo(controls, "/ik_target")
+        folder = gui.add_folder("IK target: all 8 branches")
+        self.folders = (folder,)
+        with folder:
             gui.add_markdown("Drag the gizmo at the flange. Each colour is one IK branch; click a ghost arm "
                              "or a number below to put the arm on it.")
-            self.show_ghosts = gui.add_checkbox("Show ghost arms", True)
+            self.show_ghosts = gui.add_checkbox("Show ghost arms", branches.show_ghosts)
             self.branch_buttons = gui.add_button_group("Use branch", BRANCH_BUTTONS)
             self.branches = gui.add_markdown(branches_markdown(snapshot))
             self.typed_pose = gui.add_text(
@@ -108,39 +185,44 @@ class IKTargetView(View):
             self.move_button = gui.add_button("Move target here", icon=viser.Icon.TARGET)
             self.snap_button = gui.add_button("Put target back on the flange", icon=viser.Icon.ARROW_BACK_UP)
 
-        self.gizmo.on_update(session.guard(self._dragged))
+        branches.on_select = self._ghost_clicked
+        self.gizmo.on_update(self._dragged)
         self.branch_buttons.on_click(session.guard(self._branch_button))
-        self.show_ghosts.on_update(session.guard(lambda _: self.render(session.state.last)))
+        self.show_ghosts.on_update(session.guard(self._toggle_ghosts))
         self.move_button.on_click(session.guard(self._typed_target))
         self.snap_button.on_click(session.guard(lambda _: session.apply(lambda state: state.set_joints(state.q))))
 
+    def detach(self) -> None:
+        """Stop driving the branches scene (a presenter handing over)."""
+        if self._branches.on_select == self._ghost_clicked:
+            self._branches.on_select = None
+
     # ------------------------------------------------------------------ input
 
-    def _dragged(self, event: viser.TransformControlsEvent) -> None:
-        T = np.eye(4)
-        T[:3, :3] = rotation_from_quaternion(np.asarray(self.gizmo.wxyz, dtype=float))
-        T[:3, 3] = self.gizmo.position
-        # Latest wins: events that queue up behind a slow one are folded into one update,
-        # so a busy server never works through a backlog of stale targets.
-        self._pending_target = T
-        while self._pending_target is not None:
-            if not self._drag_lock.acquire(blocking=False):
-                return  # the thread holding it picks up our target
-            try:
-                target, self._pending_target = self._pending_target, None
-                if target is not None:
-                    self._session.apply(lambda state: state.move_target(target), timed="drag")
-            finally:
-                self._drag_lock.release()
+    async def _dragged(self, event: viser.TransformControlsEvent) -> None:
+        """Runs on viser's event loop (no thread-pool hop): it only files the newest pose."""
+        try:
+            pose = (tuple(self.gizmo.wxyz), tuple(self.gizmo.position))
+            with self._seen_lock:
+                if pose == self._seen_pose:
+                    return  # the end of a drag repeats its last update
+                self._seen_pose = pose
+            self._session.drags.submit(self._session, pose)  # solved by the drag queue's worker
+        except Exception:  # nothing may escape onto the event loop
+            log.exception("could not queue a drag")
 
-    def _ghost_clicked(self, event) -> None:
-        if event.instance_index is None:
-            return
-        self._session.apply(lambda state: state.select_branch(int(event.instance_index)))
+    def _ghost_clicked(self, client: viser.ClientHandle | None, slot: int) -> None:
+        if client is None or client.client_id != self._session.client.client_id:
+            return  # in the shared scene only the presenter's clicks count
+        self._session.guard(lambda _: self._session.apply(lambda state: state.select_branch(slot)))(None)
 
     def _branch_button(self, _: viser.GuiEvent) -> None:
         slot = int(self.branch_buttons.value) - 1
         self._session.apply(lambda state: state.select_branch(slot))
+
+    def _toggle_ghosts(self, _: viser.GuiEvent) -> None:
+        self._branches.show_ghosts = self.show_ghosts.value
+        self._branches.render(self._session.state.last)
 
     def _typed_target(self, _: viser.GuiEvent) -> None:
         values = ArmState.parse_degrees(self.typed_pose.value, count=6, what="target pose")
@@ -155,23 +237,10 @@ class IKTargetView(View):
         if snapshot.cause != "target":  # the user is not holding the gizmo: put it on the flange
             self.gizmo.wxyz = snapshot.flange_wxyz
             self.gizmo.position = snapshot.flange[:3, 3]
-        self.unreachable_marker.visible = not snapshot.reachable
-        shown = snapshot.solution.valid & self.show_ghosts.value
-        if snapshot.slot >= 0:
-            shown = shown.copy()
-            shown[snapshot.slot] = False  # the solid arm is there already
-        scales = shown.astype(np.float32)
-        update_scales = scales.tobytes() != self._scales  # which branches exist rarely changes mid-drag
-        self._scales = scales.tobytes()
-        for i, ghost in enumerate(self.ghosts, start=1):  # links 1..6
-            if update_scales:
-                ghost.batched_scales = scales
-            ghost.batched_wxyzs = snapshot.ghost_wxyz[:, i]
-            positions = snapshot.ghost_frames[:, i, :3, 3].astype(np.float32)
-            if positions.tobytes() != self._positions[i]:  # frames 1 and 2 sit on the shoulder whatever q is
-                self._positions[i] = positions.tobytes()
-                ghost.batched_positions = positions
+            with self._seen_lock:
+                self._seen_pose = None  # the next drag starts afresh, even from this very pose
+        if self.unreachable is not None:
+            self.unreachable.visible = not snapshot.reachable
 
     def render_panel(self, snapshot: Snapshot) -> None:
         self.branches.content = branches_markdown(snapshot)
-

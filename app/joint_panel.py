@@ -24,7 +24,9 @@ class JointPanel(View):
         self._session = session
         self._rng = np.random.default_rng()
         q = np.degrees(session.state.q)
-        with gui.add_folder("Joints (°)"):
+        folder = gui.add_folder("Joints (°)")
+        self.folders = (folder,)
+        with folder:
             self.sliders = [
                 gui.add_slider(
                     f"θ{i + 1} {name}", min=-360.0, max=360.0, step=0.1, initial_value=round(float(q[i]), 2),

@@ -68,10 +68,13 @@ class Readouts(View):
     """The "Flange pose" folder."""
 
     def __init__(self, gui: viser.GuiApi, arm: Arm, first: Snapshot) -> None:
-        with gui.add_folder("Flange pose T06"):
+        pose = gui.add_folder("Flange pose T06")
+        with pose:
             self.pose = gui.add_markdown(flange_markdown(first))
-        with gui.add_folder(f"DH table ({arm.name})", expand_by_default=False):
+        table = gui.add_folder(f"DH table ({arm.name})", expand_by_default=False)
+        with table:
             gui.add_markdown(dh_markdown(arm))
+        self.folders = (pose, table)
 
     def render_panel(self, snapshot: Snapshot) -> None:
         self.pose.content = flange_markdown(snapshot)

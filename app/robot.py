@@ -12,6 +12,7 @@ import viser
 
 from ur10core.orientation import quaternion
 
+from .fast_updates import set_orientations
 from .meshes import LinkMesh
 from .state import Snapshot
 from .view import View
@@ -38,7 +39,7 @@ def node_name(index: int, root: str = "/arm") -> str:
     return root + "".join(f"/link{i}" for i in range(index + 1))
 
 
-class RobotView(View):
+class RobotScene(View):
     def __init__(self, scene: viser.SceneApi, links: tuple[LinkMesh, ...], first: Snapshot) -> None:
         scene.add_frame("/base_frame", axes_length=0.3, axes_radius=0.008, origin_radius=0.015)
         wxyz, position = poses(relative_frames(first.frames))
@@ -54,5 +55,4 @@ class RobotView(View):
         scene.add_frame(f"{node_name(6)}/flange_frame", axes_length=0.15, axes_radius=0.005, origin_radius=0.01)
 
     def render(self, snapshot: Snapshot) -> None:
-        for node, wxyz in zip(self._links[1:], snapshot.link_wxyz):  # the translations never change
-            node.wxyz = wxyz
+        set_orientations(self._links[1:], snapshot.link_wxyz)  # the translations never change

@@ -2,6 +2,9 @@
 
 from __future__ import annotations
 
+import asyncio
+import ctypes
+import gc
 import json
 import logging
 import math
@@ -9,19 +12,26 @@ import os
 import socket
 import threading
 import time
+import warnings
 from pathlib import Path
 
 import viser
 
 from ur10core import Arm, symbolic
 
+from .classroom import Classroom
 from .meshes import load_links
 from .metrics import LATENCY
-from .refresh import PanelRefresher
+from .workers import DragQueue, PanelRefresher
 from .session import ClientSession
 from .style import JOINT_CAP_BLUE
 
 log = logging.getLogger(__name__)
+
+# A browser that leaves mid-redraw gets a few late messages before its session hears it has
+# gone; viser warns about each such connection. The session stops drawing as soon as it
+# hears, so nothing accumulates: the warning would only clutter the teacher's console.
+warnings.filterwarnings("ignore", message=r"Queued a \w+ on a closed connection", category=UserWarning)
 
 #: Where the camera starts (and "reset view" returns): the whole arm, a little from above.
 CAMERA_POSITION = (2.1, -1.9, 1.4)
@@ -56,6 +66,78 @@ def _resident_bytes() -> int:
     return 0
 
 
+async def _watch_event_loop(stop: threading.Event, period: float = 0.02) -> None:
+    """How late viser's event loop runs a callback it was asked to run ``period`` s from now.
+
+    Everything a browser sends and receives passes through that loop, so its lag adds to
+    every round trip; recorded as the ``event_loop_lag`` latency.
+    """
+    while not stop.is_set():
+        expected = time.perf_counter() + period
+        await asyncio.sleep(period)
+        LATENCY.record("event_loop_lag", max(0.0, time.perf_counter() - expected))
+
+
+def _watch_garbage_collector() -> None:
+    """Record each collection's pause as the ``gc`` latency (it stops every thread)."""
+    started: dict[str, float] = {}
+
+    def callback(phase: str, info: dict) -> None:
+        if phase == "start":
+            started["t"] = time.perf_counter()
+        elif "t" in started:
+            LATENCY.record(f"gc{info['generation']}", time.perf_counter() - started.pop("t"))
+
+    gc.callbacks.append(callback)
+
+
+def _thread_cpu_seconds() -> dict[str, float]:
+    """CPU seconds per kind of thread (the event loop, the workers, viser's pool), from /proc."""
+    ticks = os.sysconf("SC_CLK_TCK")
+    out: dict[str, float] = {}
+    for thread in threading.enumerate():
+        kind = "viser pool" if thread.name.startswith("ThreadPoolExecutor") else thread.name
+        try:
+            fields = Path(f"/proc/self/task/{thread.native_id}/stat").read_text().rsplit(") ", 1)[1].split()
+        except (OSError, IndexError):
+            continue
+        out[kind] = out.get(kind, 0.0) + (int(fields[11]) + int(fields[12])) / ticks
+    return out
+
+
+class Janitor:
+    """Hands the memory of departed clients back to the system, a little after they leave.
+
+    A class leaving at the bell frees thousands of small objects at once; Python keeps
+    the freed memory for reuse and glibc keeps the pages. A collection and a
+    ``malloc_trim`` a few seconds after the last departure returns the server to its
+    baseline instead (one pass however many leave, and never while a drag is being drawn).
+    """
+
+    DELAY = 3.0
+
+    def __init__(self) -> None:
+        self._timer: threading.Timer | None = None
+        self._lock = threading.Lock()
+        try:
+            self._trim = ctypes.CDLL("libc.so.6").malloc_trim
+        except (OSError, AttributeError):  # not glibc: collecting is all we can do
+            self._trim = None
+
+    def soon(self) -> None:
+        with self._lock:
+            if self._timer is not None:
+                self._timer.cancel()
+            self._timer = threading.Timer(self.DELAY, self.sweep)
+            self._timer.daemon = True
+            self._timer.start()
+
+    def sweep(self) -> None:
+        gc.collect()
+        if self._trim is not None:
+            self._trim(0)
+
+
 class TeachingServer:
     """The app: a viser server giving every browser its own UR10.
 
@@ -68,7 +150,7 @@ class TeachingServer:
         :attr:`port` is the real one. ``port=0`` lets the OS choose (tests).
     """
 
-    def __init__(self, preset: str = "course", host: str = "127.0.0.1", port: int = 8080) -> None:
+    def __init__(self, preset: str = "course", host: str = "127.0.0.1", port: int = 8080, shared: bool = False) -> None:
         self.arm = Arm.preset(preset)
         self.links = load_links(preset)
         symbolic.load()  # read the cached derivation now rather than in the first student's callback
@@ -81,14 +163,26 @@ class TeachingServer:
         self.server.initial_camera.fov = math.radians(CAMERA_FOV_DEGREES)
         # the floor the arm stands on: half-metre cells, shared by everyone (it never changes)
         self.server.scene.add_grid("/floor", width=3.0, height=3.0, cell_size=0.1, section_size=0.5)
-        self.refresher = PanelRefresher()
-        self.sessions: dict[int, ClientSession] = {}
+        loop = self.server.get_event_loop()
+        self.refresher = PanelRefresher(loop)
+        self.drags = DragQueue(loop)
+        self._sessions: dict[int, ClientSession] = {}
         self._sessions_lock = threading.Lock()
+        #: shared demo mode (``--shared``): everyone watches the presenter (``app.classroom``)
+        self.classroom = Classroom(self) if shared else None
+        self._janitor = Janitor()
         self.server.on_client_connect(self._connected)
         self.server.on_client_disconnect(self._disconnected)
         self._metrics_stop = threading.Event()
+        # Everything loaded so far (numpy, sympy, viser, the meshes) lives as long as the
+        # server: keep the collector from rescanning it, which paused every client for
+        # ~0.1 s at each full collection under a classroom's load.
+        gc.collect()
+        gc.freeze()
         metrics_path = os.environ.get("UR10_TEACH_METRICS")
         if metrics_path:
+            _watch_garbage_collector()
+            asyncio.run_coroutine_threadsafe(_watch_event_loop(self._metrics_stop), self.server.get_event_loop())
             threading.Thread(target=self._write_metrics, args=(Path(metrics_path),), daemon=True).start()
 
     @property
@@ -102,9 +196,20 @@ class TeachingServer:
             return [f"http://127.0.0.1:{self.port}"] + [f"http://{a}:{self.port}" for a in lan_addresses()]
         return [f"http://{self.host}:{self.port}"]
 
+    @property
+    def sessions(self) -> dict[int, ClientSession]:
+        """Client id → the session driving an arm for it (independent mode: every client)."""
+        if self.classroom is not None:
+            return self.classroom.sessions
+        with self._sessions_lock:
+            return dict(self._sessions)
+
     def _connected(self, client: viser.ClientHandle) -> None:
         try:
-            session = ClientSession(client, self.arm, self.links, self.refresher)
+            if self.classroom is not None:
+                self.classroom.connect(client)
+                return
+            session = ClientSession(client, self.arm, self.links, self.refresher, self.drags)
         except Exception:
             log.exception("could not set up client %s", client.client_id)
             try:
@@ -113,26 +218,31 @@ class TeachingServer:
                 pass
             return
         with self._sessions_lock:
-            self.sessions[client.client_id] = session
+            self._sessions[client.client_id] = session
 
     def _disconnected(self, client: viser.ClientHandle) -> None:
-        with self._sessions_lock:
-            session = self.sessions.pop(client.client_id, None)
-        if session is not None:
-            session.close()
+        if self.classroom is not None:
+            self.classroom.disconnect(client)
+        else:
+            with self._sessions_lock:
+                session = self._sessions.pop(client.client_id, None)
+            if session is not None:
+                session.close()
+        self._janitor.soon()
 
     def _write_metrics(self, path: Path) -> None:
         """Once a second: clients, handler latencies, CPU and memory of this process (for benchmarks)."""
         while not self._metrics_stop.wait(1.0):
-            with self._sessions_lock:
-                clients = len(self.sessions)
+            clients = len(self.server.get_clients())
             report = {
                 "time": time.time(),
                 "clients": clients,
+                "sessions": len(self.sessions),
                 "latency": LATENCY.summary(),
                 "cpu_seconds": sum(os.times()[:2]),
                 "rss_bytes": _resident_bytes(),
                 "threads": threading.active_count(),
+                "thread_cpu_seconds": _thread_cpu_seconds(),
             }
             partial = path.with_suffix(".tmp")
             partial.write_text(json.dumps(report))
@@ -141,4 +251,5 @@ class TeachingServer:
     def stop(self) -> None:
         self._metrics_stop.set()
         self.refresher.stop()
+        self.drags.stop()
         self.server.stop()

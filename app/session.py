@@ -3,7 +3,7 @@
 viser runs plain ``def`` callbacks on a thread pool, so callbacks of one browser can
 overlap: every change goes through :meth:`ClientSession.apply`, which holds the arm's
 lock while it changes the state and redraws the 3D view, then asks the
-:class:`~app.refresh.PanelRefresher` to redraw the side panel. Every callback is wrapped
+:class:`~app.workers.PanelRefresher` to redraw the side panel. Every callback is wrapped
 by :meth:`ClientSession.guard`: no exception escapes, a refused value is explained in a
 notification in that browser, and every other browser carries on.
 
@@ -13,7 +13,7 @@ Each view has ``render(snapshot)`` (the 3D scene, on every change) and
 
 from __future__ import annotations
 
-import functools
+import dataclasses
 import logging
 import time
 from typing import Any, Callable
@@ -22,39 +22,85 @@ import viser
 
 from ur10core import Arm
 
-from .ik_target import IKTargetView
+from .ik_target import BranchesScene, IKTargetControls, target_from_pose
+from .feedback import guard, notify
 from .joint_panel import JointPanel
 from .meshes import LinkMesh
 from .metrics import LATENCY
 from .readouts import Readouts
-from .refresh import PanelRefresher
-from .robot import RobotView
-from .singularity import SingularityOverlay
+from .workers import DragQueue, PanelRefresher
+from .robot import RobotScene
+from .singularity import OverlayPanel, OverlayScene
 from .state import ArmState, Snapshot
 from .workspace import WorkspaceView
 
 log = logging.getLogger(__name__)
 
 
+@dataclasses.dataclass
+class SceneViews:
+    """The 3D part of an arm: solid arm, ghost branches, singularity geometry.
+
+    A session builds its own on its browser's scene; the classroom builds one on the
+    shared scene, which the presenter's session then drives.
+    """
+
+    robot: RobotScene
+    branches: BranchesScene
+    overlay: OverlayScene
+
+    @classmethod
+    def build(cls, scene: viser.SceneApi, links: tuple[LinkMesh, ...], first: Snapshot,
+              target_marker: bool = False) -> "SceneViews":
+        return cls(RobotScene(scene, links, first), BranchesScene(scene, links, first, target_marker),
+                   OverlayScene(scene, first))
+
+    def __iter__(self):
+        return iter((self.robot, self.branches, self.overlay))
+
+
 class ClientSession:
+    """One browser's controls on an arm.
+
+    Parameters
+    ----------
+    client : viser.ClientHandle
+        The browser. Its panel and gizmo are always its own.
+    arm, links : Arm, tuple of LinkMesh
+        The arm's dimensions and meshes.
+    refresher, drags : PanelRefresher, DragQueue
+        The server's workers: panel redraws and drag events, off viser's thread pool.
+    state : ArmState, optional
+        The arm to drive; a new one at the home pose by default.
+    scene, scene_views : viser.SceneApi, SceneViews, optional
+        Where the arm is drawn: the browser's own scene by default; the classroom's
+        presenter drives the shared scene's views instead.
+    """
+
     def __init__(
         self, client: viser.ClientHandle, arm: Arm, links: tuple[LinkMesh, ...], refresher: PanelRefresher,
-        state: ArmState | None = None,
+        drags: DragQueue, state: ArmState | None = None, scene: viser.SceneApi | None = None,
+        scene_views: SceneViews | None = None,
     ) -> None:
         self.client = client
         self.arm = arm
         self.state = state or ArmState(arm)
         self.refresher = refresher
+        self.drags = drags
         self.closed = False
-        scene, gui = client.scene, client.gui
-        self.robot = RobotView(scene, links, self.state.last)
+        #: called after every change, e.g. to refresh the classroom's live panel
+        self.observers: list[Callable[[Snapshot], None]] = []
+        scene = scene or client.scene
+        gui = client.gui
+        first = self.state.last
+        self.scene_views = scene_views or SceneViews.build(scene, links, first)
         self.joints = JointPanel(gui, self)
-        self.ik_target = IKTargetView(scene, gui, links, self)
-        self.readouts = Readouts(gui, arm, self.state.last)
-        self.singularity = SingularityOverlay(scene, gui, self)
+        self.ik_target = IKTargetControls(client.scene, gui, self.scene_views.branches, self)
+        self.readouts = Readouts(gui, arm, first)
+        self.singularity = OverlayPanel(gui, self.scene_views.overlay, self)
         self.workspace = WorkspaceView(scene, gui, self)
-        self.views = (self.robot, self.joints, self.ik_target, self.readouts, self.singularity)
-        self.render(self.state.last)
+        self.views = (*self.scene_views, self.joints, self.ik_target, self.readouts, self.singularity)
+        self.render(first)
         self.render_panel()
 
     # ------------------------------------------------------------------ changes
@@ -68,7 +114,13 @@ class ClientSession:
         if timed:
             LATENCY.record(timed, time.perf_counter() - start)
         self.refresher.request(self)
+        for observer in self.observers:
+            observer(snapshot)
         return snapshot
+
+    def drag_to(self, pose) -> None:
+        """The drag queue's worker solving for the gizmo's newest ``(wxyz, position)``."""
+        self.guard(lambda _: self.apply(lambda state: state.move_target(target_from_pose(pose)), timed="drag"))(None)
 
     def render(self, snapshot: Snapshot) -> None:
         """The 3D scene, atomically."""
@@ -92,38 +144,24 @@ class ClientSession:
     # ------------------------------------------------------------------ safety
 
     def guard(self, handler: Callable[[Any], None]) -> Callable[[Any], None]:
-        """Wrap a viser callback so that nothing it raises escapes."""
-
-        @functools.wraps(handler)
-        def guarded(event: Any) -> None:
-            if self.closed:
-                return
-            try:
-                handler(event)
-            except ValueError as error:
-                self.notify("Not accepted", str(error), color="yellow")
-                self._restore()
-            except Exception as error:  # a bug must not take the class down
-                if self.closed:
-                    return  # the browser left while we were drawing for it
-                log.exception("callback failed for client %s", self.client.client_id)
-                self.notify("Something went wrong", f"{type(error).__name__}: {error}. The app is still running.", color="red")
-
-        return guarded
-
-    def _restore(self) -> None:
-        """Put every widget back on the state after a refused value (a slider may show it)."""
-        self.refresher.request(self)
+        """Wrap a viser callback so that nothing it raises escapes (see ``app.feedback``)."""
+        return guard(self.client, handler, is_closed=lambda: self.closed, on_refused=lambda: self.refresher.request(self))
 
     def notify(self, title: str, body: str, color: str = "yellow") -> None:
-        if self.closed:
-            return
-        try:
-            self.client.add_notification(title, body, auto_close_seconds=8.0, color=color)
-        except Exception:  # the connection is gone: nobody left to tell
-            log.debug("could not notify client %s", self.client.client_id, exc_info=True)
+        if not self.closed:
+            notify(self.client, title, body, color)
 
     def close(self) -> None:
-        """The browser has gone: stop drawing; viser drops its scene and GUI with the client."""
+        """The browser has gone (or handed over): stop drawing and let go of shared views."""
         self.closed = True
+        self.ik_target.detach()
         self.refresher.forget(self)
+
+    def remove(self) -> None:
+        """Close, and take this session's panel and gizmo out of a browser that stays."""
+        self.close()
+        for view in self.views:
+            for folder in getattr(view, "folders", ()):
+                folder.remove()
+        self.ik_target.gizmo.remove()
+        self.workspace.clear()

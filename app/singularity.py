@@ -87,47 +87,17 @@ def _segment_colors(rgb: tuple[int, int, int], count: int) -> np.ndarray:
     return np.broadcast_to(np.array(rgb, dtype=np.uint8), (count, 2, 3)).copy()
 
 
-class SingularityOverlay(View):
-    """The overlay's gauges, plot and formula in the panel, and its geometry in the 3D view.
+class OverlayScene(View):
+    """The overlay's geometry in the 3D view, hidden until switched on.
 
     The markers and lines hang under the solid arm's link nodes (``robot.node_name``) in
     coordinates taken once from the core's geometry, so a redraw only recolours them.
     """
 
-    def __init__(self, scene: viser.SceneApi, gui: viser.GuiApi, session: "ClientSession") -> None:
-        self._session = session
-        arm = session.arm
-        self._reach = arm.a2 + arm.a3
-        self._history: collections.deque = collections.deque(maxlen=PLOT_SAMPLES)
-        self._started = time.monotonic()
+    def __init__(self, scene: viser.SceneApi, first: Snapshot) -> None:
+        self.enabled = False
+        self._reach = first.arm.a2 + first.arm.a3
         self._drawn_alarms: tuple[float, ...] | None = None
-
-        with gui.add_folder("Singularities"):
-            self.enabled = gui.add_checkbox("Show singularity overlay", False)
-            self.formula = gui.add_html(
-                "<div style='font-size:1.05em'>" + symbolic.det_j_mathml() + "</div>", visible=False
-            )
-            # the three gauges and the numbers in one HTML element: one message per redraw
-            self.gauges = gui.add_html("", visible=False)
-            self.levels = np.ones(3)  #: last drawn gauge levels (share of the factor's maximum)
-            self.colors: list[tuple[int, int, int]] = [SAFE_GREEN] * 3  #: last drawn gauge colours
-            self.plot = gui.add_uplot(
-                data=(np.zeros(2, np.float32), np.ones(2, np.float32), np.ones(2, np.float32), np.ones(2, np.float32)),
-                series=(
-                    viser.uplot.Series(label="time (s)"),
-                    viser.uplot.Series(label="shoulder", stroke=hex_color(SHOULDER_COLOR), width=2),
-                    viser.uplot.Series(label="elbow |s3|", stroke=hex_color(ELBOW_COLOR), width=2),
-                    viser.uplot.Series(label="wrist |s5|", stroke=hex_color(WRIST_COLOR), width=2),
-                ),
-                scales={"x": viser.uplot.Scale(time=False), "y": viser.uplot.Scale(range=(0.0, 1.0))},
-                title="factors over the last 10 s (share of their maximum)",
-                aspect=2.0,
-                visible=False,
-            )
-            self.demo = gui.add_button_group("Put the arm on the", SINGULARITY_KINDS, visible=False)
-
-        # Geometry in each link's own frame, from the core's geometry of the first pose.
-        first = session.state.last
         F, g = first.frames, first.geometry
 
         def local(frame: int, point: np.ndarray) -> np.ndarray:
@@ -156,34 +126,17 @@ class SingularityOverlay(View):
             self.axes.append(scene.add_line_segments(f"{node_name(frame)}/axis{frame}", np.array([[start, end]], np.float32),
                                                      _segment_colors(WRIST_COLOR, 1), thickness=0.01, visible=False))
 
-        self.enabled.on_update(session.guard(self._toggled))
-        self.demo.on_click(session.guard(self._demo))
-
-    @property
-    def _widgets(self) -> list:
-        return [self.formula, self.gauges, self.plot, self.demo,
-                self.cylinder, self.p5, self.p4, self.circles, *self.axes]
-
-    def _toggled(self, _: viser.GuiEvent) -> None:
+    def set_enabled(self, enabled: bool, snapshot: Snapshot) -> None:
+        self.enabled = enabled
         self._drawn_alarms = None
-        for widget in self._widgets:
-            widget.visible = self.enabled.value
-        self.render(self._session.state.last)
-        self.render_panel(self._session.state.last)
-
-    def _demo(self, _: viser.GuiEvent) -> None:
-        kind = self.demo.value
-        if kind not in SINGULARITY_KINDS:
-            raise ValueError(f"unknown singularity {kind!r}")
-        self._session.apply(lambda state: state.place_in_singularity(kind))
+        for node in (self.cylinder, self.p5, self.p4, self.circles, *self.axes):
+            node.visible = enabled
+        self.render(snapshot)
 
     def render(self, snapshot: Snapshot) -> None:
-        levels = factor_levels(snapshot, self._reach)
-        now = time.monotonic() - self._started
-        self._history.append((now, *levels))
-        if not self.enabled.value:
+        if not self.enabled:
             return
-        alarms = tuple(round(alarm(level), 2) for level in levels)
+        alarms = tuple(round(alarm(level), 2) for level in factor_levels(snapshot, self._reach))
         if alarms == self._drawn_alarms:
             return  # far from every singularity nothing changes colour: skip the lot
         self._drawn_alarms = alarms
@@ -194,16 +147,68 @@ class SingularityOverlay(View):
         for axis in self.axes:
             axis.colors = _segment_colors(blend(WRIST_COLOR, DANGER_RED, alarms[2]), 1)
 
+
+class OverlayPanel(View):
+    """The "Singularities" folder: the switch, det J's formula, gauges, rolling plot, demo buttons."""
+
+    def __init__(self, gui: viser.GuiApi, scene: OverlayScene, session: "ClientSession") -> None:
+        self._session = session
+        self._scene = scene
+        self._reach = session.arm.a2 + session.arm.a3
+        self._history: collections.deque = collections.deque(maxlen=PLOT_SAMPLES)
+        self._started = time.monotonic()
+        folder = gui.add_folder("Singularities")
+        self.folders = (folder,)
+        with folder:
+            self.enabled = gui.add_checkbox("Show singularity overlay", scene.enabled)
+            self.formula = gui.add_html(
+                "<div style='font-size:1.05em'>" + symbolic.det_j_mathml() + "</div>", visible=scene.enabled
+            )
+            # the three gauges and the numbers in one HTML element: one message per redraw
+            self.gauges = gui.add_html("", visible=scene.enabled)
+            self.levels = (1.0, 1.0, 1.0)  #: last drawn gauge levels (share of the factor's maximum)
+            self.colors: list[tuple[int, int, int]] = [SAFE_GREEN] * 3  #: last drawn gauge colours
+            self.plot = gui.add_uplot(
+                data=(np.zeros(2, np.float32), np.ones(2, np.float32), np.ones(2, np.float32), np.ones(2, np.float32)),
+                series=(
+                    viser.uplot.Series(label="time (s)"),
+                    viser.uplot.Series(label="shoulder", stroke=hex_color(SHOULDER_COLOR), width=2),
+                    viser.uplot.Series(label="elbow |s3|", stroke=hex_color(ELBOW_COLOR), width=2),
+                    viser.uplot.Series(label="wrist |s5|", stroke=hex_color(WRIST_COLOR), width=2),
+                ),
+                scales={"x": viser.uplot.Scale(time=False), "y": viser.uplot.Scale(range=(0.0, 1.0))},
+                title="factors over the last 10 s (share of their maximum)",
+                aspect=2.0,
+                visible=scene.enabled,
+            )
+            self.demo = gui.add_button_group("Put the arm on the", SINGULARITY_KINDS, visible=scene.enabled)
+        self.enabled.on_update(session.guard(self._toggled))
+        self.demo.on_click(session.guard(self._demo))
+
+    def _toggled(self, _: viser.GuiEvent) -> None:
+        for widget in (self.formula, self.gauges, self.plot, self.demo):
+            widget.visible = self.enabled.value
+        snapshot = self._session.state.last
+        self._scene.set_enabled(self.enabled.value, snapshot)
+        self.render_panel(snapshot)
+
+    def _demo(self, _: viser.GuiEvent) -> None:
+        kind = self.demo.value
+        if kind not in SINGULARITY_KINDS:
+            raise ValueError(f"unknown singularity {kind!r}")
+        self._session.apply(lambda state: state.place_in_singularity(kind))
+
     def render_panel(self, snapshot: Snapshot) -> None:
+        levels = factor_levels(snapshot, self._reach)
+        now = time.monotonic() - self._started
+        self._history.append((now, *levels))
         if not self.enabled.value:
             return
-        levels = factor_levels(snapshot, self._reach)
         self.levels = levels
         self.colors = [blend(SAFE_GREEN, DANGER_RED, alarm(level)) for level in levels]
         self.gauges.content = gauges_html(snapshot, levels, self.colors)
-        now = time.monotonic() - self._started
         history = np.array([h for h in self._history if h[0] >= now - PLOT_SECONDS], dtype=np.float32)
         if len(history) < 2:
-            history = np.vstack([history, history]) if len(history) else np.zeros((2, 4), np.float32)
+            history = np.vstack([history, history])
         history[:, 0] -= np.float32(now)
         self.plot.data = tuple(np.ascontiguousarray(column) for column in history.T)

@@ -67,7 +67,9 @@ class WorkspaceView:
         self._cloud: viser.PointCloudHandle | None = None
         self._request = 0  # the latest request wins when a student clicks faster than we sample
         self._lock = threading.Lock()
-        with gui.add_folder("Workspace"):
+        folder = gui.add_folder("Workspace")
+        self.folders = (folder,)
+        with folder:
             self.enabled = gui.add_checkbox("Show workspace cloud", False)
             self.count = gui.add_dropdown("Samples", tuple(SAMPLE_COUNTS), initial_value=DEFAULT_COUNT,
                                           hint="Every client downloads its cloud: about 9 bytes per point")
@@ -85,7 +87,7 @@ class WorkspaceView:
             self._request += 1
             request = self._request
         if not self.enabled.value:
-            self._remove_cloud()
+            self.clear()
             self.legend.visible = False
             return
         self.progress.value = 5.0
@@ -97,7 +99,7 @@ class WorkspaceView:
             with self._lock:
                 if request != self._request:
                     return  # a newer choice is on its way
-                self._remove_cloud()
+                self.clear()
                 self._cloud = self._scene.add_point_cloud(
                     "/workspace", points, colors, point_size=POINT_SIZE, point_shape="circle"
                 )
@@ -116,7 +118,8 @@ class WorkspaceView:
             return section.astype(np.float32), colors[kept]
         return points, colors
 
-    def _remove_cloud(self) -> None:
+    def clear(self) -> None:
+        """Remove the cloud from the scene (toggled off, or its session has gone)."""
         if self._cloud is not None:
             self._cloud.remove()
             self._cloud = None

@@ -14,6 +14,7 @@ import re
 import subprocess
 import sys
 import tempfile
+import threading
 import time
 from pathlib import Path
 from typing import Iterator
@@ -24,7 +25,7 @@ URL = re.compile(r"(http://127\.0\.0\.1:\d+)")
 
 @contextlib.contextmanager
 def running_app(*args: str, timeout: float = 60.0) -> Iterator["AppProcess"]:
-    """``python -m app --port 0 *args`` in a subprocess; yields once it is serving."""
+    """``python -m app --port 0 *args`` in a subprocess (a later ``--port`` wins); yields once it is serving."""
     with tempfile.TemporaryDirectory() as folder:
         metrics = Path(folder) / "metrics.json"
         environment = dict(os.environ, UR10_TEACH_METRICS=str(metrics), PYTHONUNBUFFERED="1")
@@ -32,19 +33,21 @@ def running_app(*args: str, timeout: float = 60.0) -> Iterator["AppProcess"]:
             [sys.executable, "-m", "app", "--port", "0", *args], cwd=ROOT, env=environment,
             stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True,
         )
-        try:
-            deadline = time.monotonic() + timeout
-            output = []
-            url = None
-            while url is None:
-                line = process.stdout.readline()
-                if not line:
-                    raise RuntimeError("the app exited before serving:\n" + "".join(output))
+        output: list[str] = []
+        ready = threading.Event()
+
+        def drain() -> None:  # keep reading, or a chatty server would block on a full pipe
+            for line in process.stdout:
                 output.append(line)
-                match = URL.search(line) if "Open:" not in line and line.startswith("    ") else None
-                url = match.group(1) if match else None
-                if time.monotonic() > deadline:
-                    raise TimeoutError("the app did not start:\n" + "".join(output))
+                if line.startswith("Press Ctrl+C"):
+                    ready.set()
+            ready.set()
+
+        threading.Thread(target=drain, daemon=True).start()
+        try:
+            if not ready.wait(timeout) or process.poll() is not None:
+                raise RuntimeError("the app did not start:\n" + "".join(output))
+            url = next(URL.search(line).group(1) for line in output if line.startswith("    ") and URL.search(line))
             yield AppProcess(process, url, metrics, output)
         finally:
             process.terminate()

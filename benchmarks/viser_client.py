@@ -44,6 +44,7 @@ def decode_frame(raw: bytes, decompressor: zstandard.ZstdDecompressor) -> tuple[
     compressed_length = int.from_bytes(raw[8:16], "little")
     inner = decompressor.decompress(raw[16 : 16 + compressed_length], max_output_size=inner_length)
     decoded = msgspec.msgpack.decode(inner)
+    decode_frame.last_sent = decoded.get("timestampSec")
     buffers, offset, view = [], 16 + compressed_length, memoryview(raw)
     for length in decoded["binaryBufferLengths"]:
         offset += (8 - offset % 8) % 8
@@ -70,6 +71,8 @@ class Received:
     #: every valid branch ends at the IK target, so this is the 3D view answering a drag
     ghost_flanges: list[tuple[float, np.ndarray]] = dataclasses.field(default_factory=list)
     notifications: list[tuple[str, str]] = dataclasses.field(default_factory=list)
+    #: seconds from the server sending a frame (its perf_counter, the same clock) to our reading it
+    delivery_lag: list[float] = dataclasses.field(default_factory=list)
 
 
 class ViserClient:
@@ -81,7 +84,7 @@ class ViserClient:
         self.received = Received()
         self.gui: dict[str, dict[str, Any]] = {}  # label -> {"uuid", "type", "value"}
         self.gizmo_owner: str | None = None
-        self._pose_readout: str | None = None  # uuid of the T06 markdown
+        self.owners_seen: set[str] = set()  # scene scopes this client was sent messages for
         self.ready = asyncio.Event()
         self._websocket: websockets.ClientConnection | None = None
         self._reader: asyncio.Task | None = None
@@ -113,6 +116,13 @@ class ViserClient:
         if self._websocket is not None:
             await self._websocket.close()
 
+    def freeze(self) -> None:
+        """Stop reading the socket altogether (a frozen laptop): not even pings are answered."""
+        if self._reader is not None:
+            self._reader.cancel()
+        if self._websocket is not None:
+            self._websocket.transport.pause_reading()
+
     def abort(self) -> None:
         """Vanish without a goodbye, like a laptop lid closing: drop the TCP connection."""
         if self._reader is not None:
@@ -124,17 +134,28 @@ class ViserClient:
 
     async def _read(self) -> None:
         assert self._websocket is not None
+        try:
+            await self._read_frames()
+        except websockets.ConnectionClosed:
+            pass  # the server hung up (as it should on garbage): nothing more to read
+
+    async def _read_frames(self) -> None:
+        assert self._websocket is not None
         async for raw in self._websocket:
             now = time.perf_counter()
             self.received.frames += 1
             self.received.bytes += len(raw)
             self.received.byte_log.append((now, len(raw)))
             decoded, buffers = decode_frame(raw, self._decompressor)
+            if decode_frame.last_sent is not None:  # the server stamps frames with its monotonic clock
+                self.received.delivery_lag.append(now - decode_frame.last_sent)
             for message in decoded:
                 self._handle(now, message, buffers)
 
     def _handle(self, now: float, message: dict[str, Any], buffers: list[memoryview]) -> None:
         kind = message.get("type", "")
+        if "owner" in message:
+            self.owners_seen.add(message["owner"])
         if kind == "SceneNodeUpdateMessage" and message.get("name") == "/ghosts/link6":
             positions = message.get("updates", {}).get("batched_positions")
             if positions is not None:
@@ -142,20 +163,26 @@ class ViserClient:
         if kind == "TransformControlsMessage" and message.get("name") == "/ik_target":
             self.gizmo_owner = message.get("owner", "")
         elif kind == "GuiMarkdownMessage" and "p (mm)" in message.get("props", {}).get("_markdown", ""):
-            self._pose_readout = message["uuid"]
             self._read_flange(now, message["props"]["_markdown"])
         elif kind.startswith("Gui") and kind.endswith("Message") and "props" in message:
             label = message["props"].get("label")
             if label:
                 self.gui[label] = {"uuid": message["uuid"], "type": kind, "value": message.get("value")}
-        elif kind == "GuiUpdateMessage" and message.get("uuid") == self._pose_readout:
-            if "_markdown" in message.get("updates", {}):
-                self._read_flange(now, message["updates"]["_markdown"])
+        elif kind == "GuiUpdateMessage" and "value" in message.get("updates", {}):
+            for entry in self.gui.values():
+                if entry["uuid"] == message["uuid"]:
+                    entry["value"] = message["updates"]["value"]
+        elif kind == "GuiUpdateMessage" and "p (mm)" in message.get("updates", {}).get("_markdown", ""):
+            # viser may send a markdown's content as a separate update after creating it empty
+            self._read_flange(now, message["updates"]["_markdown"])
         elif kind == "NotificationShowMessage":
             props = message.get("props", {})
             self.received.notifications.append((props.get("title", ""), props.get("body", "")))
-        # the session is built once its last widget exists and the arm has been drawn
-        if self.gizmo_owner is not None and "Show workspace cloud" in self.gui and self.received.flange_updates:
+        # ready once the arm is drawn and either a whole session (own gizmo and panel) is
+        # built or, in the classroom's shared mode, the watcher's controls are there
+        if self.received.flange_updates and (
+            (self.gizmo_owner is not None and "Show workspace cloud" in self.gui) or "Explore on my own" in self.gui
+        ):
             self.ready.set()
 
     def _read_flange(self, now: float, content: str) -> None:
@@ -183,28 +210,39 @@ class ViserClient:
             await self.send(messages.TransformControlsDragEndMessage(name="/ik_target", owner=owner))
         return sent
 
-    def latencies(self, sends: list[tuple[float, Any]], tolerance: float = 1e-5, window: float = 2.0) -> list[float | None]:
-        """For each ``(send time, target position)`` in time order: seconds until the first 3D
-        update whose branches end at that position, or None (superseded by a newer event,
-        unreachable, or not answered within ``window`` seconds)."""
-        updates = self.received.ghost_flanges
-        out: list[float | None] = []
-        start = 0
-        for sent, position in sends:
-            target = np.asarray(position, dtype=np.float32)
-            while start < len(updates) and updates[start][0] < sent:
-                start += 1
-            found = None
-            for index in range(start, len(updates)):
-                arrival, flanges = updates[index]
-                if arrival - sent > window:
-                    break
-                if (np.abs(flanges - target).max(axis=-1) < tolerance).any():
-                    found = arrival - sent
-                    start = index
-                    break
-            out.append(found)
-        return out
+    def latencies(self, sends: list[tuple[float, Any]], tolerance: float = 1e-5) -> list[float | None]:
+        """End-to-end latency of each ``(send time, target position)`` (in sending order).
+
+        The latency of event k is the time until the screen first shows a target at least
+        as new as k: the first 3D update answering event k *or a later one* (a busy server
+        folds queued events into the newest). None for events after the last answer
+        (or when nothing was answered).
+        """
+        return staleness(sends, self.received.ghost_flanges, tolerance)
+
+
+def staleness(sends, updates, tolerance: float = 1e-5) -> list[float | None]:
+    """See :meth:`ViserClient.latencies`; ``updates`` are (arrival, (8, 3) ghost flanges)."""
+    targets = np.array([np.asarray(p, dtype=np.float32) for _, p in sends]) if sends else np.zeros((0, 3))
+    answered = []  # (arrival, index of the event it answers)
+    for arrival, flanges in updates:
+        valid = np.abs(flanges).sum(axis=-1) > 0  # invalid branches sit at the origin
+        if not valid.any():
+            continue
+        position = flanges[valid][0]
+        matches = np.flatnonzero(np.abs(targets - position).max(axis=-1) < tolerance)
+        if len(matches):
+            earlier = matches[[sends[m][0] <= arrival for m in matches]]
+            if len(earlier):
+                answered.append((arrival, int(earlier[-1])))
+    first_answer = np.full(len(sends), np.inf)  # earliest arrival answering each event
+    for arrival, index in answered:
+        first_answer[index] = min(first_answer[index], arrival)
+    shown = np.minimum.accumulate(first_answer[::-1])[::-1]  # first answer to this event or a later one
+    out: list[float | None] = []
+    for (sent, _), arrival in zip(sends, shown):
+        out.append(float(arrival - sent) if np.isfinite(arrival) and arrival >= sent else None)
+    return out
 
 
 def wxyz_of(T: np.ndarray) -> np.ndarray:

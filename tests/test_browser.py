@@ -110,7 +110,7 @@ def test_dragging_the_ik_target(open_page, app):
     assert snapshot.slot == 4, "the arm jumped to another branch"
     np.testing.assert_allclose(session.arm.fk(snapshot.q), snapshot.target, atol=1e-9)
     # the ghosts of the new target's branches were posed from the same solution
-    ghost = session.ik_target.ghosts[5]  # link 6 (the ghosts start at link 1)
+    ghost = session.scene_views.branches.ghosts[5]  # link 6 (the ghosts start at link 1)
     valid = snapshot.solution.valid
     np.testing.assert_allclose(ghost.batched_positions[valid], snapshot.ghost_frames[valid, 6, :3, 3], atol=1e-5)
 
@@ -127,7 +127,7 @@ def test_switching_branch_from_the_list(open_page, app):
 def test_singularity_overlay(open_page, app):
     page, session = open_page()
     page.locator(dom_id(session.singularity.enabled)).check()
-    wait_for(lambda: session.singularity.enabled.value and session.singularity.cylinder.visible, what="the overlay")
+    wait_for(lambda: session.singularity.enabled.value and session.scene_views.overlay.cylinder.visible, what="the overlay")
     wait_for(lambda: page.locator("math").count() > 0 and page.locator("math").first.is_visible(), what="det J as MathML")
     assert "234" in page.locator("math").first.text_content()
     page.get_by_role("button", name="wrist", exact=True).click()

@@ -81,3 +81,14 @@ def test_presets_hold_the_published_numbers():
     assert (ur10e.d1, ur10e.a2, ur10e.a3, ur10e.d4, ur10e.d5, ur10e.d6) == (0.1807, 0.6127, 0.57155, 0.17415, 0.11985, 0.11655)
     course = Arm.preset("course")
     assert course.dh_lengths == (0.128, 0.6129, 0.5716, 0.1639, 0.1157, 0.0922)
+
+
+def test_compiled_frames_equal_the_product_of_link_transforms(any_arm):
+    q = random_joints(300, seed=6)
+    links = any_arm.link_transforms(q)
+    product = np.broadcast_to(np.eye(4), (300, 4, 4)).copy()
+    expected = [product.copy()]
+    for i in range(6):
+        product = product @ links[:, i]
+        expected.append(product.copy())
+    np.testing.assert_allclose(any_arm.frames(q), np.stack(expected, axis=1), atol=1e-14)

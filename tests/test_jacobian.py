@@ -74,3 +74,10 @@ def test_singularity_geometry(course):
     # p4 lies in the plane through elbow_center spanned by x1 and z
     normal = np.cross(g.arm_forward, [0, 0, 1])
     np.testing.assert_allclose(np.einsum("ni,ni->n", g.p4 - g.elbow_center, normal), 0, atol=1e-14)
+
+
+def test_one_pose_factors_equal_batch_factors(course):
+    q = random_joints(200, seed=24)
+    batch = course.singularity_factors(q)
+    for k in range(len(q)):
+        np.testing.assert_allclose(course.singularity_factors(q[k]), batch[k], atol=1e-15)

@@ -347,7 +347,97 @@ static PyObject *fk_one(PyObject *self, PyObject *args)
     return T_obj;
 }
 
+/* frames(q (n, 6), params, out (n, 7, 4, 4)): T0i = T01 T12 ... T(i-1,i) of the course's
+ * modified DH table (COURSE_NOTES §2), every joint vector; ur10core.arm.Arm.frames. */
+static PyObject *frames(PyObject *self, PyObject *args)
+{
+    PyObject *q_obj, *params, *out_obj;
+    Params P;
+    if (!PyArg_ParseTuple(args, "OOO", &q_obj, &params, &out_obj)) return NULL;
+    if (!parse_params(params, &P)) return NULL;
+    if (!is_c_array(q_obj, NPY_DOUBLE) || !is_c_array(out_obj, NPY_DOUBLE)) {
+        PyErr_SetString(PyExc_TypeError, "frames needs C-contiguous float64 arrays");
+        return NULL;
+    }
+    const npy_intp n = PyArray_SIZE((PyArrayObject *)q_obj) / 6;
+    if (PyArray_SIZE((PyArrayObject *)q_obj) != 6 * n || PyArray_SIZE((PyArrayObject *)out_obj) != 112 * n) {
+        PyErr_SetString(PyExc_ValueError, "frames: q must hold n x 6 angles and out n x 7 x 4 x 4");
+        return NULL;
+    }
+    const double *q = (const double *)PyArray_DATA((PyArrayObject *)q_obj);
+    double *out = (double *)PyArray_DATA((PyArrayObject *)out_obj);
+    /* alpha_{i-1}: 0, +pi/2, 0, 0, -pi/2, +pi/2 as (cos, sin); a_{i-1}; d_i */
+    const double ca[6] = {1.0, 0.0, 1.0, 1.0, 0.0, 0.0}, sa[6] = {0.0, 1.0, 0.0, 0.0, -1.0, 1.0};
+    const double a[6] = {0.0, 0.0, P.a2, P.a3, 0.0, 0.0}, d[6] = {P.d1, 0.0, 0.0, P.d4, P.d5, P.d6};
+    Py_BEGIN_ALLOW_THREADS
+    for (npy_intp m = 0; m < n; m++) {
+        double *F = out + 112 * m;
+        for (int k = 0; k < 16; k++) F[k] = (k % 5 == 0) ? 1.0 : 0.0; /* frame {0} = I */
+        for (int i = 0; i < 6; i++) {
+            const double ct = cos(q[6 * m + i]), st = sin(q[6 * m + i]);
+            /* T(i-1,i) = RotX(alpha) TransX(a) RotZ(theta) TransZ(d) */
+            const double L[12] = {ct, -st, 0.0, a[i],
+                                  st * ca[i], ct * ca[i], -sa[i], -sa[i] * d[i],
+                                  st * sa[i], ct * sa[i], ca[i], ca[i] * d[i]};
+            const double *A = F + 16 * i;
+            double *B = F + 16 * (i + 1);
+            for (int r = 0; r < 3; r++) {
+                for (int c = 0; c < 4; c++) {
+                    double v = A[4 * r + 0] * L[c] + A[4 * r + 1] * L[4 + c] + A[4 * r + 2] * L[8 + c];
+                    B[4 * r + c] = c == 3 ? v + A[4 * r + 3] : v;
+                }
+            }
+            B[12] = B[13] = B[14] = 0.0;
+            B[15] = 1.0;
+        }
+    }
+    Py_END_ALLOW_THREADS
+    Py_RETURN_NONE;
+}
+
+/* quaternions(R (n, 3, 3), out (n, 4)): unit (w, x, y, z), w >= 0, by Shepperd's method;
+ * ur10core.orientation.quaternion. */
+static PyObject *quaternions(PyObject *self, PyObject *args)
+{
+    PyObject *R_obj, *out_obj;
+    if (!PyArg_ParseTuple(args, "OO", &R_obj, &out_obj)) return NULL;
+    if (!is_c_array(R_obj, NPY_DOUBLE) || !is_c_array(out_obj, NPY_DOUBLE)) {
+        PyErr_SetString(PyExc_TypeError, "quaternions needs C-contiguous float64 arrays");
+        return NULL;
+    }
+    const npy_intp n = PyArray_SIZE((PyArrayObject *)R_obj) / 9;
+    if (PyArray_SIZE((PyArrayObject *)R_obj) != 9 * n || PyArray_SIZE((PyArrayObject *)out_obj) != 4 * n) {
+        PyErr_SetString(PyExc_ValueError, "quaternions: R must hold n x 3 x 3 and out n x 4");
+        return NULL;
+    }
+    const double *R = (const double *)PyArray_DATA((PyArrayObject *)R_obj);
+    double *out = (double *)PyArray_DATA((PyArrayObject *)out_obj);
+    for (npy_intp m = 0; m < n; m++) {
+        const double *r = R + 9 * m;
+        double *q = out + 4 * m;
+        const double trace = r[0] + r[4] + r[8];
+        /* row k is 4 q_k q; divide by the largest q_k */
+        const double diag[4] = {1.0 + trace, 1.0 + r[0] - r[4] - r[8], 1.0 - r[0] + r[4] - r[8], 1.0 - r[0] - r[4] + r[8]};
+        int k = 0;
+        for (int i = 1; i < 4; i++)
+            if (diag[i] > diag[k]) k = i;
+        double v[4];
+        switch (k) {
+        case 0: v[0] = diag[0]; v[1] = r[7] - r[5]; v[2] = r[2] - r[6]; v[3] = r[3] - r[1]; break;
+        case 1: v[0] = r[7] - r[5]; v[1] = diag[1]; v[2] = r[1] + r[3]; v[3] = r[2] + r[6]; break;
+        case 2: v[0] = r[2] - r[6]; v[1] = r[1] + r[3]; v[2] = diag[2]; v[3] = r[5] + r[7]; break;
+        default: v[0] = r[3] - r[1]; v[1] = r[2] + r[6]; v[2] = r[5] + r[7]; v[3] = diag[3]; break;
+        }
+        double norm = sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2] + v[3] * v[3]);
+        if (v[0] < 0.0) norm = -norm;
+        for (int i = 0; i < 4; i++) q[i] = v[i] / norm;
+    }
+    Py_RETURN_NONE;
+}
+
 static PyMethodDef methods[] = {
+    {"frames", frames, METH_VARARGS, "Frames {0}..{6} of n joint vectors into a preallocated array."},
+    {"quaternions", quaternions, METH_VARARGS, "Unit quaternions (w >= 0) of n rotation matrices."},
     {"fk_one", fk_one, METH_VARARGS, "Closed-form T06 of one joint vector."},
     {"ik_one", ik_one, METH_VARARGS, "IK of one validated-on-the-fly 4x4 pose (all eight slots)."},
     {"ik_batch", ik_batch, METH_VARARGS, "IK of n poses into preallocated outputs, without the GIL."},

@@ -160,13 +160,14 @@ class Arm:
         """Frames {0}..{6} in the base frame, (..., 7, 4, 4): ``T0i = T01 T12 ... T(i-1,i)``.
 
         ``frames(q)[..., i, :, :]`` places link i's mesh; ``frames(q)[..., 6]`` equals ``fk(q)``.
+        The product of :meth:`link_transforms`, computed by the compiled kernel (the app
+        asks for nine arms' frames on every drag event).
         """
-        links = self.link_transforms(q)
-        out = np.empty(links.shape[:-3] + (7, 4, 4))
-        out[..., 0, :, :] = np.eye(4)
-        for i in range(6):
-            out[..., i + 1, :, :] = out[..., i, :, :] @ links[..., i, :, :]
-        return out
+        q = joint_vector(q)
+        flat = np.ascontiguousarray(q.reshape(-1, 6))
+        out = np.empty((len(flat), 7, 4, 4))
+        _kernels.frames(flat, self.dh_lengths, out)
+        return out.reshape(q.shape[:-1] + (7, 4, 4))
 
     # ------------------------------------------------------------------ FK
 
@@ -295,6 +296,10 @@ class Arm:
         when P5 lies on the cylinder of radius d4 about the base axis.
         """
         q = joint_vector(q)
+        if q.shape == (6,):  # one pose: plain floats beat a dozen numpy calls
+            _, t2, t3, t4, t5, _ = q.tolist()
+            shoulder = self.a2 * math.cos(t2) + self.a3 * math.cos(t2 + t3) - self.d5 * math.sin(t2 + t3 + t4)
+            return np.array([shoulder, math.sin(t3), math.sin(t5)])
         t2, t3, t4, t5 = np.moveaxis(q[..., 1:5], -1, 0)
         t23 = t2 + t3
         shoulder = self.a2 * np.cos(t2) + self.a3 * np.cos(t23) - self.d5 * np.sin(t23 + t4)

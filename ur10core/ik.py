@@ -264,30 +264,16 @@ def nearest_branch(solution: IKSolution, q_current, joint_limit: float = _TAU, p
 
 
 def _nearest_one(solution: IKSolution, q_current: np.ndarray, joint_limit: float, prefer) -> Branch:
-    """:func:`nearest_branch` for one pose in plain Python: the app calls it on every drag event."""
-    current = q_current.tolist()
-    best_slot, best_distance, best_q = -1, math.inf, None
-    distances = {}
-    for k, (valid, q) in enumerate(zip(solution.valid.tolist(), solution.q.tolist())):
-        if not valid:
-            continue
-        shifted = []
-        for value, now in zip(q, current):
-            value += _TAU * round((now - value) / _TAU)
-            if value > joint_limit:
-                value -= _TAU
-            elif value < -joint_limit:
-                value += _TAU
-            shifted.append(value)
-        distance = sum((a - b) ** 2 for a, b in zip(shifted, current))
-        distances[k] = (distance, shifted)
-        if distance < best_distance:
-            best_slot, best_distance, best_q = k, distance, shifted
-    if prefer is not None and int(prefer) in distances and distances[int(prefer)][0] <= best_distance + TIE_TOLERANCE:
-        best_slot, best_q = int(prefer), distances[int(prefer)][1]
-    if best_q is None:
+    """:func:`nearest_branch` for one pose, without the batch path's indexing (the app calls it per drag event)."""
+    shifted = equivalent_near(solution.q, q_current, joint_limit)
+    distance = ((shifted - q_current) ** 2).sum(axis=-1)
+    distance[~solution.valid] = np.inf
+    slot = int(distance.argmin())
+    if not np.isfinite(distance[slot]):
         return Branch(np.full(6, np.nan), np.array(-1))
-    return Branch(np.array(best_q), np.array(best_slot))
+    if prefer is not None and 0 <= int(prefer) < 8 and distance[int(prefer)] <= distance[slot] + TIE_TOLERANCE:
+        slot = int(prefer)
+    return Branch(shifted[slot], np.array(slot))
 
 
 def equivalent_near(q, q_current, joint_limit: float = _TAU) -> np.ndarray:

@@ -24,6 +24,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from . import _kernels
 from ._validate import as_float_array, check_finite, rotation_matrix
 
 #: Below this cos β the Z-Y-X angles are at gimbal lock (β = ±90°): α is set to 0.
@@ -101,30 +102,17 @@ def xyz_fixed(R, check: bool = True) -> np.ndarray:
 def quaternion(R, check: bool = True) -> np.ndarray:
     """Euler parameters (unit quaternion) ``(w, x, y, z)`` of R, (..., 4), with w ≥ 0.
 
-    Shepperd's method: divide by the largest of 4w², 4x², 4y², 4z² so it stays
-    accurate at every angle, including θ = π.
+    Shepperd's method: with ``t = trace R``, the rows
+    ``(1 + t, r32 − r23, r13 − r31, r21 − r12)``, ``(r32 − r23, 1 + 2 r11 − t, r12 + r21, r13 + r31)``, …
+    are 4 q_k q for k = w, x, y, z; the one with the largest diagonal term (the largest
+    |q_k|) is normalised, so it stays accurate at every angle, including θ = π.
+    Computed by the compiled kernel (``_kernels.c``).
     """
-    r = _rotations(R, check)
-    m00, m01, m02 = r[..., 0, 0], r[..., 0, 1], r[..., 0, 2]
-    m10, m11, m12 = r[..., 1, 0], r[..., 1, 1], r[..., 1, 2]
-    m20, m21, m22 = r[..., 2, 0], r[..., 2, 1], r[..., 2, 2]
-    trace = m00 + m11 + m22
-    # row k is 4 q_k q, largest (and best conditioned) when |q_k| is
-    candidates = np.stack(
-        [
-            1 + trace, m21 - m12, m02 - m20, m10 - m01,
-            m21 - m12, 1 + m00 - m11 - m22, m01 + m10, m02 + m20,
-            m02 - m20, m01 + m10, 1 - m00 + m11 - m22, m12 + m21,
-            m10 - m01, m02 + m20, m12 + m21, 1 - m00 - m11 + m22,
-        ],
-        axis=-1,
-    ).reshape(-1, 4, 4)
-    rows = np.arange(len(candidates))
-    pivot = candidates[:, [0, 1, 2, 3], [0, 1, 2, 3]].argmax(axis=-1)
-    q = candidates[rows, pivot]
-    q /= np.linalg.norm(q, axis=-1, keepdims=True)
-    q[q[:, 0] < 0] *= -1.0
-    return q.reshape(np.shape(trace) + (4,))
+    R = _rotations(R, check)
+    flat = np.ascontiguousarray(R.reshape(-1, 3, 3), dtype=float)
+    out = np.empty((len(flat), 4))
+    _kernels.quaternions(flat, out)
+    return out.reshape(R.shape[:-2] + (4,))
 
 
 def rotation_from_quaternion(q) -> np.ndarray:

@@ -1,0 +1,256 @@
+"""Shared demo mode (``--shared``): everyone watches the presenter's arm.
+
+The demo arm lives in viser's *shared* scene and a shared, read-only "Live from the
+presenter" panel, so a redraw is serialised once and broadcast to every browser —
+thirty students cost the server one redraw, not thirty.
+
+* A browser starts as a **viewer**: it sees the presenter's arm, target, branches and
+  overlays move live; its camera is its own.
+* viser has no authentication, so the server prints a short **join code** at start-up;
+  the browser that enters it becomes the **presenter** and gets the full panel and the
+  gizmo (its own, client-scoped: a shared gizmo would let anyone drag it). Entering the
+  code elsewhere hands the role over. Wrong codes lock a browser out for a while.
+* A viewer can **explore on their own**: a private arm starting from the presenter's
+  pose, drawn with the same scene names in the browser's own scope, which hides the
+  shared arm for that browser only. **Back to the presenter's arm** removes it again.
+"""
+
+from __future__ import annotations
+
+import logging
+import secrets
+import threading
+import time
+from typing import TYPE_CHECKING
+
+import viser
+
+from .feedback import guard
+from .ik_target import branches_markdown
+from .readouts import flange_markdown, joints_markdown
+from .singularity import alarm, factor_levels, gauges_html
+from .state import ArmState
+from .style import DANGER_RED, SAFE_GREEN, blend
+
+if TYPE_CHECKING:
+    from .server import TeachingServer
+    from .session import ClientSession
+
+log = logging.getLogger(__name__)
+
+#: Letters and digits that cannot be mistaken for one another when read off a projector.
+JOIN_ALPHABET = "ACDEFHJKMNPRTUVWXY3479"
+JOIN_LENGTH = 6
+MAX_WRONG_CODES = 5
+LOCKOUT_SECONDS = 30.0
+VIEWER, PRESENTER, EXPLORER = "viewer", "presenter", "explorer"
+
+
+def make_join_code() -> str:
+    """Six characters from :data:`JOIN_ALPHABET`, shown as ``ABC-DEF``."""
+    code = "".join(secrets.choice(JOIN_ALPHABET) for _ in range(JOIN_LENGTH))
+    return f"{code[:3]}-{code[3:]}"
+
+
+def normalise_code(text: str) -> str:
+    return "".join(ch for ch in text.upper() if ch.isalnum())
+
+
+class LivePanel:
+    """The shared, read-only panel everyone sees: the presenter's joints, pose, branches, gauges."""
+
+    closed = False  # the refresher's protocol: a shared panel never closes
+
+    def __init__(self, gui: viser.GuiApi, state: ArmState, overlay_enabled) -> None:
+        self._state = state
+        self._overlay_enabled = overlay_enabled
+        self._reach = state.arm.a2 + state.arm.a3
+        self.presenter_here = False
+        first = state.last
+        # last in every panel: below the presenter's or an explorer's own controls
+        with gui.add_folder("Live from the presenter", order=1e9):
+            self.status = gui.add_markdown(self._status())
+            self.joints = gui.add_markdown(joints_markdown(first.q, with_controller=False))
+            self.branches = gui.add_markdown(branches_markdown(first))
+            self.flange = gui.add_markdown(flange_markdown(first))
+            self.gauges = gui.add_html("", visible=False)
+
+    def _status(self) -> str:
+        if self.presenter_here:
+            return "The presenter is moving this arm; you can turn the view as you like."
+        return "No presenter yet: the teacher enters the join code to take the arm."
+
+    def render_panel(self) -> None:
+        snapshot = self._state.last
+        self.status.content = self._status()
+        self.joints.content = joints_markdown(snapshot.q, with_controller=False)
+        self.branches.content = branches_markdown(snapshot)
+        self.flange.content = flange_markdown(snapshot)
+        self.gauges.visible = self._overlay_enabled()
+        if self.gauges.visible:
+            levels = factor_levels(snapshot, self._reach)
+            colors = [blend(SAFE_GREEN, DANGER_RED, alarm(level)) for level in levels]
+            self.gauges.content = gauges_html(snapshot, levels, colors)
+
+
+class Member:
+    """One browser in the classroom and its "Classroom" folder."""
+
+    def __init__(self, client: viser.ClientHandle) -> None:
+        self.client = client
+        self.role = VIEWER
+        self.session: "ClientSession | None" = None
+        self.wrong_codes = 0
+        self.locked_until = 0.0
+        self.folder: viser.GuiFolderHandle | None = None
+        self.closed = False
+
+
+class Classroom:
+    def __init__(self, app: "TeachingServer") -> None:
+        from .session import SceneViews  # the session module imports views; keep the import graph one-way
+
+        self.app = app
+        self.code = make_join_code()
+        self.state = ArmState(app.arm)
+        self.scene_views = SceneViews.build(app.server.scene, app.links, self.state.last, target_marker=True)
+        self.live = LivePanel(app.server.gui, self.state, lambda: self.scene_views.overlay.enabled)
+        self.members: dict[int, Member] = {}
+        self.presenter: Member | None = None
+        self._lock = threading.RLock()
+
+    # ------------------------------------------------------------------ clients
+
+    def connect(self, client: viser.ClientHandle) -> None:
+        member = Member(client)
+        with self._lock:
+            self.members[client.client_id] = member
+        self._draw_controls(member)
+
+    def disconnect(self, client: viser.ClientHandle) -> None:
+        with self._lock:
+            member = self.members.pop(client.client_id, None)
+            if member is None:
+                return
+            member.closed = True
+            if member.session is not None:
+                member.session.close()
+                member.session = None
+            if self.presenter is member:
+                self.presenter = None
+                self.live.presenter_here = False
+        self.app.refresher.request(self.live)
+
+    @property
+    def sessions(self) -> dict[int, "ClientSession"]:
+        """The sessions of the presenter and the explorers."""
+        with self._lock:
+            return {cid: m.session for cid, m in self.members.items() if m.session is not None}
+
+    # ------------------------------------------------------------------ roles
+
+    def claim(self, member: Member, code: str) -> None:
+        """Make ``member`` the presenter if ``code`` is the join code (``ValueError`` if not)."""
+        now = time.monotonic()
+        if now < member.locked_until:
+            raise ValueError(f"too many wrong codes: try again in {member.locked_until - now:.0f} s")
+        if not secrets.compare_digest(normalise_code(code), normalise_code(self.code)):
+            member.wrong_codes += 1
+            if member.wrong_codes >= MAX_WRONG_CODES:
+                member.wrong_codes = 0
+                member.locked_until = now + LOCKOUT_SECONDS
+            raise ValueError("that is not the join code (the teacher's screen shows it)")
+        member.wrong_codes = 0
+        from .session import ClientSession
+
+        with self._lock:
+            previous = self.presenter
+            if previous is member:
+                return
+            if previous is not None:
+                self._leave_role(previous)
+                self._draw_controls(previous)
+            self._leave_role(member)
+            session = ClientSession(
+                member.client, self.app.arm, self.app.links, self.app.refresher, self.app.drags,
+                state=self.state, scene=self.app.server.scene, scene_views=self.scene_views,
+            )
+            session.observers.append(lambda _: self.app.refresher.request(self.live))
+            member.session, member.role = session, PRESENTER
+            self.presenter = member
+            self.live.presenter_here = True
+        self._draw_controls(member)
+        self.app.refresher.request(self.live)
+        log.info("client %s is presenting", member.client.client_id)
+
+    def stop_presenting(self, member: Member) -> None:
+        with self._lock:
+            if self.presenter is member:
+                self._leave_role(member)
+                self.presenter = None
+                self.live.presenter_here = False
+        self._draw_controls(member)
+        self.app.refresher.request(self.live)
+
+    def explore(self, member: Member) -> None:
+        """A private copy of the arm, starting from the presenter's pose."""
+        from .session import ClientSession
+
+        with self._lock:
+            if member.role == EXPLORER:
+                return
+            if self.presenter is member:
+                self.stop_presenting(member)
+            member.client.scene.add_frame("/target", show_axes=False, visible=False)  # hide the shared target
+            member.session = ClientSession(
+                member.client, self.app.arm, self.app.links, self.app.refresher, self.app.drags,
+                state=ArmState(self.app.arm, self.state.q),
+            )
+            member.role = EXPLORER
+        self._draw_controls(member)
+
+    def rejoin(self, member: Member) -> None:
+        """Back to watching the presenter: drop the private arm (the shared one shows again)."""
+        with self._lock:
+            if member.role != EXPLORER:
+                return
+            self._leave_role(member)
+        self._draw_controls(member)
+
+    def _leave_role(self, member: Member) -> None:
+        if member.session is not None:
+            member.session.remove()
+            member.session = None
+        if member.role == EXPLORER:
+            member.client.scene.reset()  # the private arm goes; the shared one is visible again
+        member.role = VIEWER
+
+    # ------------------------------------------------------------------ the Classroom folder
+
+    def _draw_controls(self, member: Member) -> None:
+        if member.closed:
+            return
+        gui = member.client.gui
+
+        def action(handler):
+            return guard(member.client, handler, is_closed=lambda: member.closed)
+
+        if member.folder is not None:
+            member.folder.remove()
+        member.folder = gui.add_folder("Classroom", order=0.0)
+        with member.folder:
+            if member.role == PRESENTER:
+                gui.add_markdown("You are **presenting**: everyone sees your arm, target and overlays.")
+                stop = gui.add_button("Stop presenting", icon=viser.Icon.PLAYER_STOP)
+                stop.on_click(action(lambda _: self.stop_presenting(member)))
+            elif member.role == EXPLORER:
+                gui.add_markdown("You are **exploring on your own**: nobody else sees this arm.")
+                back = gui.add_button("Back to the presenter's arm", icon=viser.Icon.ARROW_BACK_UP)
+                back.on_click(action(lambda _: self.rejoin(member)))
+            else:
+                gui.add_markdown("You are **watching** the presenter's arm.")
+                explore = gui.add_button("Explore on my own", icon=viser.Icon.ROBOT)
+                explore.on_click(action(lambda _: self.explore(member)))
+                code = gui.add_text("Join code", "", hint="The code on the teacher's screen makes this browser the presenter")
+                claim = gui.add_button("Become presenter", icon=viser.Icon.PRESENTATION)
+                claim.on_click(action(lambda _: self.claim(member, code.value)))

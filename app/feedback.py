@@ -1,0 +1,52 @@
+"""No exception escapes a callback: a refused value is explained, a bug is reported, and the
+server carries on serving everyone else."""
+
+from __future__ import annotations
+
+import functools
+import logging
+from typing import Any, Callable
+
+import viser
+
+log = logging.getLogger(__name__)
+
+
+def notify(client: viser.ClientHandle, title: str, body: str, color: str = "yellow") -> None:
+    """A notification in one browser; nothing happens if that browser has gone."""
+    try:
+        client.add_notification(title, body, auto_close_seconds=8.0, color=color)
+    except Exception:
+        log.debug("could not notify client %s", client.client_id, exc_info=True)
+
+
+def guard(
+    client: viser.ClientHandle,
+    handler: Callable[[Any], None],
+    is_closed: Callable[[], bool] = lambda: False,
+    on_refused: Callable[[], None] | None = None,
+) -> Callable[[Any], None]:
+    """Wrap a viser callback of ``client``'s.
+
+    ``ValueError`` is a value the user gave that we refuse: it is shown to them as "Not
+    accepted" and ``on_refused`` puts the widgets back. Anything else is a bug: it is
+    logged and the user is told the app is still running.
+    """
+
+    @functools.wraps(handler)
+    def guarded(event: Any) -> None:
+        if is_closed():
+            return
+        try:
+            handler(event)
+        except ValueError as error:
+            notify(client, "Not accepted", str(error))
+            if on_refused is not None:
+                on_refused()
+        except Exception as error:
+            if is_closed():
+                return  # the browser left while we were drawing for it
+            log.exception("callback failed for client %s", client.client_id)
+            notify(client, "Something went wrong", f"{type(error).__name__}: {error}. The app is still running.", "red")
+
+    return guarded

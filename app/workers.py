@@ -1,0 +1,203 @@
+"""The two background workers every session shares, running on viser's own event loop.
+
+**Why on the event loop.** Everything a browser sends and receives goes through viser's
+asyncio loop. CPython runs one thread at a time; a thread that gives up the GIL for a
+socket call must wait for a busy worker thread to hand it back. With thirty students
+dragging, CPU-bound worker *threads* made the loop wait at every one of its thousands
+of socket calls a second, and drag events reached the server tens of milliseconds late.
+So the workers are asyncio tasks on that loop: they take turns with the sockets instead
+of fighting them for the GIL, and each turn is short (a drag update or a panel redraw
+takes about a millisecond).
+
+**Drags** (:class:`DragQueue`). Thirty students dragging at 20 Hz send 600 gizmo events
+a second. The gizmo callback only files the newest target of its session; the drag
+task takes the waiting sessions in turn and solves and redraws each for its newest
+target. A session waits in the queue at most once, so a busy server shows every student
+their newest target a little later rather than working through stale ones.
+
+**Panels** (:class:`PanelRefresher`). The side panel's text (joint sliders, branch
+table, readouts, gauges, plot) cannot be read faster than a few times a second, yet
+redrawing it costs more than the 3D update. So a change redraws the 3D view at once and
+only *asks* for a panel redraw; the refresher serves those requests, each session at
+most every :data:`PANEL_INTERVAL` seconds, always with its newest state, and rests
+between redraws so that it never takes more than :data:`DUTY` of the time. A burst of
+drag events costs one panel redraw, a click is answered at once, and thirty students
+dragging at once slow the panels down rather than the arms.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import collections
+import heapq
+import itertools
+import logging
+import threading
+import time
+from typing import Any, Protocol
+
+from .metrics import LATENCY
+
+log = logging.getLogger(__name__)
+
+#: Shortest time between two panel redraws of one browser (s).
+PANEL_INTERVAL = 0.1
+#: Largest share of the time the refresher may spend drawing: under a classroom's load the
+#: panels slow down (each still shows the newest state) before the 3D view does.
+DUTY = 0.15
+
+
+class HasPanel(Protocol):
+    closed: bool
+
+    def render_panel(self) -> None: ...
+
+
+class HasDrags(Protocol):
+    closed: bool
+    state: Any  # has a ``lock``
+
+    def drag_to(self, target) -> None: ...
+
+
+class _LoopWorker:
+    """A task on ``loop``; ``_call`` runs a method on the loop from any thread."""
+
+    def __init__(self, loop: asyncio.AbstractEventLoop) -> None:
+        self._loop = loop
+        self._stopped = False
+        self._wake: asyncio.Event | None = None
+        self._started = threading.Event()
+        asyncio.run_coroutine_threadsafe(self._main(), loop)
+        self._started.wait(timeout=10.0)
+
+    async def _main(self) -> None:
+        self._wake = asyncio.Event()
+        self._started.set()
+        try:
+            await self._run()
+        except Exception:
+            log.exception("%s stopped", type(self).__name__)
+
+    async def _run(self) -> None:
+        raise NotImplementedError
+
+    def _call(self, function, *args) -> None:
+        try:
+            running = asyncio.get_running_loop()
+        except RuntimeError:
+            running = None
+        if running is self._loop:
+            function(*args)
+        else:
+            try:
+                self._loop.call_soon_threadsafe(function, *args)
+            except RuntimeError:
+                pass  # the loop has closed: the server is stopping
+
+    def stop(self) -> None:
+        self._stopped = True
+        self._call(lambda: self._wake.set() if self._wake is not None else None)
+
+
+class DragQueue(_LoopWorker):
+    """The newest drag target of each session, solved and drawn session by session."""
+
+    def __init__(self, loop: asyncio.AbstractEventLoop) -> None:
+        self._ready: collections.deque[int] = collections.deque()  # session ids, oldest request first
+        self._pending: dict[int, tuple[HasDrags, object, float]] = {}  # session, target, filed at
+        super().__init__(loop)
+
+    def submit(self, session: HasDrags, target) -> None:
+        """Replace ``session``'s pending target (queueing the session if it was not waiting)."""
+        self._call(self._file, session, target, time.perf_counter())
+
+    def _file(self, session: HasDrags, target, now: float) -> None:
+        key = id(session)
+        if key in self._pending:
+            now = self._pending[key][2]  # still waiting since its oldest unserved event
+        else:
+            self._ready.append(key)
+            self._wake.set()
+        self._pending[key] = (session, target, now)
+
+    async def _run(self) -> None:
+        while not self._stopped:
+            await self._wake.wait()
+            self._wake.clear()
+            while self._ready and not self._stopped:
+                key = self._ready.popleft()
+                session, target, filed = self._pending.pop(key)
+                if session.closed:
+                    continue
+                if not session.state.lock.acquire(blocking=False):
+                    # a click on this arm is being handled on viser's thread pool: never
+                    # block the loop for it, come back to this session in a moment
+                    self._file(session, target, filed)
+                    await asyncio.sleep(0.001)
+                    continue
+                try:
+                    LATENCY.record("drag_wait", time.perf_counter() - filed)
+                    session.drag_to(target)  # guarded by the session: nothing escapes
+                finally:
+                    session.state.lock.release()
+                await asyncio.sleep(0)  # let the sockets have a turn between sessions
+
+
+class PanelRefresher(_LoopWorker):
+    """Panel redraws: each session at most every ``interval`` s, at most ``duty`` of the time."""
+
+    def __init__(self, loop: asyncio.AbstractEventLoop, interval: float = PANEL_INTERVAL, duty: float = DUTY) -> None:
+        self.interval = interval
+        self.duty = duty
+        self._queue: list[tuple[float, int, HasPanel]] = []  # (due, order, session)
+        self._waiting: set[int] = set()  # id() of sessions in the queue
+        self._last: dict[int, float] = {}
+        self._order = itertools.count()
+        super().__init__(loop)
+
+    def request(self, session: HasPanel) -> None:
+        """Redraw ``session``'s panel soon (at once if it has not been redrawn lately)."""
+        self._call(self._file, session)
+
+    def forget(self, session: HasPanel) -> None:
+        self._call(self._last.pop, id(session), None)
+
+    def _file(self, session: HasPanel) -> None:
+        key = id(session)
+        if key in self._waiting:
+            return  # already queued: it will draw the newest state when its turn comes
+        due = max(time.monotonic(), self._last.get(key, 0.0) + self.interval)
+        heapq.heappush(self._queue, (due, next(self._order), session))
+        self._waiting.add(key)
+        self._wake.set()
+
+    async def _run(self) -> None:
+        while not self._stopped:
+            if not self._queue:
+                await self._wake.wait()
+                self._wake.clear()
+                continue
+            delay = self._queue[0][0] - time.monotonic()
+            if delay > 0:
+                self._wake.clear()
+                try:
+                    await asyncio.wait_for(self._wake.wait(), delay)
+                except asyncio.TimeoutError:
+                    pass
+                continue
+            _, _, session = heapq.heappop(self._queue)
+            key = id(session)
+            self._waiting.discard(key)
+            if session.closed:
+                self._last.pop(key, None)
+                continue
+            self._last[key] = time.monotonic()
+            started = time.perf_counter()
+            try:
+                session.render_panel()
+            except Exception:
+                if not session.closed:
+                    log.exception("panel redraw failed")
+            spent = time.perf_counter() - started
+            await asyncio.sleep(spent * (1.0 / self.duty - 1.0))

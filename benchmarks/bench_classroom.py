@@ -1,0 +1,207 @@
+"""Thirty students at once: the app under a classroom's load, in both modes.
+
+    python benchmarks/bench_classroom.py [--seconds 180]
+
+The app runs in its own process (``server_process.py``); thirty headless clients
+(``viser_client.py``, viser's own websocket protocol: the messages a browser sends, and
+every frame received and decoded) run in this one. Scenarios:
+
+* **independent** — 30 students, each dragging their own IK target at 20 Hz;
+* **shared** — ``--shared``: the presenter drags at 20 Hz, 29 students watch;
+* **shared + explorers** — the presenter drags, 15 students explore on their own copies
+  (dragging at 20 Hz), 14 watch.
+
+Reported per scenario: server-side drag handler latency (the app's own measurement),
+end-to-end latency (a drag event sent → the client receives a 3D update showing that
+target or a newer one; a busy server folds queued events into the newest), bytes per
+client per second, and the server's CPU and resident memory over the run.
+"""
+
+from __future__ import annotations
+
+import argparse
+import asyncio
+import os
+import re
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
+
+from benchmarks._report import machine, table, write_section  # noqa: E402
+from benchmarks.bench_drag import HOME_ROTATION, loop_path  # noqa: E402
+from benchmarks.server_process import AppProcess, running_app  # noqa: E402
+from benchmarks.viser_client import ViserClient, staleness, wxyz_of  # noqa: E402
+
+CLIENTS = 30
+RATE_HZ = 20.0
+JOIN_CODE = re.compile(r"Join code for the presenter: (\S+)")
+
+
+async def connect_all(url: str, count: int) -> list[ViserClient]:
+    """A classroom arriving: five students a second."""
+    clients = []
+    for k in range(count):
+        clients.append(await ViserClient(url).connect(timeout=120))
+        if k % 5 == 4:
+            await asyncio.sleep(1.0)
+    return clients
+
+
+async def drag_loop(client: ViserClient, seconds: float, phase_offset: int, sends: list) -> None:
+    """Drag this client's target along a loop at 20 Hz for ``seconds``."""
+    start_flange = client.received.flange_updates[-1][1]
+    T0 = np.eye(4)
+    T0[:3, :3] = HOME_ROTATION
+    T0[:3, 3] = start_flange
+    n = int(seconds * RATE_HZ)
+    path = loop_path(T0, n + phase_offset)[phase_offset:]
+    start = time.perf_counter()
+    for k, T in enumerate(path):
+        phase = "start" if k == 0 else ("end" if k == n - 1 else "update")
+        sends.append((await client.drag_target(T[:3, 3], wxyz_of(T), phase), T[:3, 3]))
+        await asyncio.sleep(max(0.0, start + (k + 1) / RATE_HZ - time.perf_counter()))
+
+
+async def sample_server(app: AppProcess, until: float, samples: list) -> None:
+    while time.time() < until:
+        report = await asyncio.to_thread(app.metrics, time.time() - 0.5)
+        samples.append(report)
+        await asyncio.sleep(5.0)
+
+
+async def run_scenario(app: AppProcess, name: str, seconds: float) -> dict:
+    clients = await connect_all(app.url, CLIENTS)
+    draggers: list[ViserClient] = []
+    presenter = None
+    if name == "independent":
+        draggers = clients
+    else:
+        code = next(JOIN_CODE.search(line).group(1) for line in app.output if JOIN_CODE.search(line))
+        presenter = clients[0]
+        await presenter.set_gui("Join code", code)
+        await asyncio.sleep(0.2)
+        await presenter.set_gui("Become presenter", True)
+        explorers = clients[1:16] if name == "shared + explorers" else []
+        for explorer in explorers:
+            await explorer.set_gui("Explore on my own", True)
+        deadline = time.monotonic() + 60
+        while presenter.gizmo_owner is None or any(e.gizmo_owner is None for e in explorers):
+            if time.monotonic() > deadline:
+                raise TimeoutError("presenter or explorers did not get their gizmo")
+            await asyncio.sleep(0.2)
+        await asyncio.sleep(2.0)
+        draggers = [presenter, *explorers]
+    await asyncio.sleep(2.0)
+
+    before = await asyncio.to_thread(app.metrics, time.time())
+    bytes_before = [c.received.bytes for c in clients]
+    load_cpu_before = sum(os.times()[:2])
+    samples: list[dict] = [before]
+    sends: dict[int, list] = {id(c): [] for c in draggers}
+    started = time.time()
+    await asyncio.gather(
+        sample_server(app, started + seconds, samples),
+        *(drag_loop(c, seconds, 7 * k, sends[id(c)]) for k, c in enumerate(draggers)),
+    )
+    await asyncio.sleep(1.5)
+    elapsed = time.time() - started
+    after = await asyncio.to_thread(app.metrics, time.time())
+    samples.append(after)
+
+    latencies: list[float] = []
+    for client in clients:
+        if id(client) in sends:
+            events = sends[id(client)]
+        elif presenter is not None and client.gizmo_owner is None:
+            events = sends[id(presenter)]  # a watcher sees the presenter's target
+        else:
+            continue
+        values = staleness(events, client.received.ghost_flanges)
+        latencies.extend(v for v in values if v is not None)
+    received = [(c.received.bytes - b) / elapsed for c, b in zip(clients, bytes_before)]
+    for client in clients:
+        await client.close()
+    return {
+        "handler": after["latency"].get("drag", {}),
+        "panel": after["latency"].get("panel", {}),
+        "latency_ms": np.percentile(latencies, [50, 99]) * 1e3 if latencies else (np.nan, np.nan),
+        "events": sum(len(v) for v in sends.values()),
+        "bytes_per_client": (float(np.mean(received)), float(np.max(received))),
+        "samples": samples,
+        "load_cpu": (sum(os.times()[:2]) - load_cpu_before) / elapsed,
+        "elapsed": elapsed,
+        "draggers": len(draggers),
+    }
+
+
+def describe(name: str, result: dict) -> tuple[list[str], list[list[str]]]:
+    samples = result["samples"]
+    rss = [s["rss_bytes"] / 2**20 for s in samples]
+    cpu = [
+        100 * (b["cpu_seconds"] - a["cpu_seconds"]) / (b["time"] - a["time"])
+        for a, b in zip(samples, samples[1:]) if b["time"] > a["time"]
+    ]
+    handler = result["handler"]
+    p50, p99 = result["latency_ms"]
+    summary = [
+        name,
+        f"{result['draggers']} at 20 Hz, {result['events']} events",
+        f"{handler.get('p50_ms', float('nan')):.1f} / {handler.get('p99_ms', float('nan')):.1f} ms",
+        f"{p50:.0f} / {p99:.0f} ms",
+        f"{result['bytes_per_client'][0] / 1024:.0f} KiB/s (max {result['bytes_per_client'][1] / 1024:.0f})",
+        f"{np.mean(cpu):.0f} % (max {np.max(cpu):.0f} %)",
+        f"{rss[0]:.0f} → {rss[-1]:.0f} MiB (max {max(rss):.0f})",
+        "PASS" if p99 <= 50 else "FAIL",
+    ]
+    series = []
+    for k in range(0, len(samples) - 1, 6):  # every 30 s
+        a, b = samples[k], samples[min(k + 6, len(samples) - 1)]
+        if b["time"] > a["time"]:
+            share = 100 * (b["cpu_seconds"] - a["cpu_seconds"]) / (b["time"] - a["time"])
+            series.append([name, f"{a['time'] - samples[0]['time']:.0f} s", f"{share:.0f} %",
+                           f"{a['rss_bytes'] / 2**20:.0f} MiB", str(a["clients"])])
+    return summary, series
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--seconds", type=float, default=180.0, help="drag time per scenario")
+    args = parser.parse_args()
+    summaries, series, notes = [], [], []
+    for name, flags in (("independent", ()), ("shared", ("--shared",)), ("shared + explorers", ("--shared",))):
+        with running_app(*flags) as app:
+            result = asyncio.run(run_scenario(app, name, args.seconds))
+        summary, rows = describe(name, result)
+        summaries.append(summary)
+        series.extend(rows)
+        notes.append(f"{name}: load generator used {100 * result['load_cpu']:.0f} % of a core")
+        print(summary, flush=True)
+    body = "\n".join(
+        [
+            "## Classroom load (`benchmarks/bench_classroom.py`)",
+            "",
+            f"Run: {machine()}. {CLIENTS} headless clients (viser's websocket protocol, every frame decoded) in one "
+            f"process, the app in another, on the same two cores; {args.seconds:.0f} s of dragging per scenario. "
+            "End to end = a drag event sent → a 3D update showing that target or a newer one arrives "
+            "(the server folds queued events into the newest). Target: p99 ≤ 50 ms, memory flat.",
+            "",
+            table(["scenario", "dragging", "handler p50 / p99 (server)", "end to end p50 / p99",
+                   "received per client", "server CPU (of one core)", "server RSS", "verdict"], summaries),
+            "",
+            "Over time (server process; every 30 s):",
+            "",
+            table(["scenario", "t", "CPU", "RSS", "clients"], series),
+            "",
+            "; ".join(notes) + ".",
+        ]
+    )
+    write_section("classroom", body)
+    print(body)
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,78 @@
+"""Shared demo mode in real browsers: the presenter moves the arm, a student watches, explores, comes back."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from playwright.sync_api import sync_playwright
+
+from app.classroom import EXPLORER, PRESENTER, VIEWER
+from app.server import TeachingServer
+
+from .browser_support import CONNECTED, SMALL_VIEWPORT, dom_id, launch, wait_for
+
+pytestmark = pytest.mark.browser
+
+
+def field(page, label: str):
+    return page.locator("label", has_text=label).locator("xpath=ancestor::div[2]").locator("input").first
+
+
+def test_presenter_and_student(tmp_path):
+    app = TeachingServer(port=0, shared=True)
+    try:
+        with sync_playwright() as playwright:
+            teacher_browser, student_browser = launch(playwright), launch(playwright)
+            teacher = teacher_browser.new_page(viewport=SMALL_VIEWPORT)
+            teacher.goto(f"http://127.0.0.1:{app.port}")
+            teacher.wait_for_selector(CONNECTED, timeout=30_000)
+            student = student_browser.new_page(viewport=SMALL_VIEWPORT)
+            student.goto(f"http://127.0.0.1:{app.port}")
+            student.wait_for_selector(CONNECTED, timeout=30_000)
+            wait_for(lambda: len(app.classroom.members) == 2, what="both browsers")
+            teacher_member, student_member = list(app.classroom.members.values())
+
+            # a wrong code is refused in the browser; the right one makes a presenter
+            field(student, "Join code").fill("AAA-AAA")
+            student.wait_for_timeout(200)
+            student.get_by_role("button", name="Become presenter").click()
+            wait_for(lambda: student.get_by_text("that is not the join code").count() > 0, what="the refusal")
+            field(teacher, "Join code").fill(app.classroom.code)
+            teacher.wait_for_timeout(200)
+            teacher.get_by_role("button", name="Become presenter").click()
+            wait_for(lambda: teacher_member.role == PRESENTER and teacher_member.session is not None, what="the presenter")
+            wait_for(lambda: teacher.get_by_text("You are presenting").count() > 0, what="the presenter's status")
+
+            # the presenter moves a joint; the student's live panel follows
+            session = teacher_member.session
+            teacher.wait_for_selector(dom_id(session.joints.sliders[0]), timeout=30_000)
+            thumb = teacher.locator(f"{dom_id(session.joints.sliders[0])} [role=slider]")
+            thumb.focus()
+            for _ in range(50):
+                thumb.press("ArrowRight")
+            wait_for(lambda: abs(np.degrees(app.classroom.state.q[0]) - 35.0) < 1e-6, what="the presenter's move")
+            wait_for(lambda: student.get_by_text("base 35.00°").count() > 0, what="the student's live panel")
+            assert student.locator("[role=slider]").count() == 0  # watching: nothing to move
+
+            # the student explores on their own copy, starting from the class's pose
+            student.get_by_role("button", name="Explore on my own").click()
+            wait_for(lambda: student_member.role == EXPLORER and student_member.session is not None, what="exploring")
+            own = student_member.session
+            student.wait_for_selector(dom_id(own.joints.sliders[1]), timeout=30_000)
+            np.testing.assert_allclose(own.state.q, app.classroom.state.q)
+            own_thumb = student.locator(f"{dom_id(own.joints.sliders[1])} [role=slider]")
+            own_thumb.focus()
+            for _ in range(30):
+                own_thumb.press("ArrowLeft")
+            wait_for(lambda: abs(np.degrees(own.state.q[1]) - 42.0) < 1e-6, what="the student's own move")
+            assert abs(np.degrees(app.classroom.state.q[1]) - 45.0) < 1e-6  # the class's arm did not move
+
+            # and comes back to the class
+            student.get_by_role("button", name="Back to the presenter's arm").click()
+            wait_for(lambda: student_member.role == VIEWER and student_member.session is None, what="coming back")
+            wait_for(lambda: student.locator("[role=slider]").count() == 0, what="the private panel to go")
+            student.screenshot(path=str(tmp_path / "student.png"))
+            teacher_browser.close()
+            student_browser.close()
+    finally:
+        app.stop()

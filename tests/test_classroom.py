@@ -1,0 +1,162 @@
+"""Shared demo mode, driven by headless clients speaking viser's protocol (no browser needed)."""
+
+from __future__ import annotations
+
+import asyncio
+import time
+
+import numpy as np
+import pytest
+
+from app.classroom import EXPLORER, LOCKOUT_SECONDS, MAX_WRONG_CODES, PRESENTER, VIEWER, make_join_code, normalise_code
+from app.server import TeachingServer
+from benchmarks.viser_client import ViserClient
+
+
+@pytest.fixture
+def classroom():
+    server = TeachingServer(port=0, shared=True)
+    yield server
+    server.stop()
+
+
+async def until(condition, timeout: float = 15.0, what: str = "condition"):
+    deadline = time.monotonic() + timeout
+    while time.monotonic() < deadline:
+        if condition():
+            return
+        await asyncio.sleep(0.05)
+    raise AssertionError(f"timed out waiting for {what}")
+
+
+def member_of(app: TeachingServer, index: int):
+    return list(app.classroom.members.values())[index]
+
+
+def test_join_codes():
+    codes = {make_join_code() for _ in range(200)}
+    assert len(codes) > 190
+    for code in codes:
+        assert len(code) == 7 and code[3] == "-"
+        assert not set(code.replace("-", "")) & set("0O1IL5S2Z8B6G")
+    assert normalise_code(" abc-def ") == "ABCDEF"
+
+
+def test_viewers_watch_and_the_code_makes_a_presenter(classroom):
+    async def scenario():
+        teacher = await ViserClient(f"http://127.0.0.1:{classroom.port}").connect()
+        student = await ViserClient(f"http://127.0.0.1:{classroom.port}").connect()
+        assert teacher.gizmo_owner is None and student.gizmo_owner is None  # nobody can drag yet
+        assert member_of(classroom, 0).role == VIEWER
+        # a wrong code is refused, with a message, and changes nothing
+        await student.set_gui("Join code", "AAA-AAA")
+        await asyncio.sleep(0.1)
+        await student.set_gui("Become presenter", True)
+        await until(lambda: any("not the join code" in body for _, body in student.received.notifications), what="refusal")
+        assert classroom.classroom.presenter is None
+        # the right code (lower case, no dash) makes the teacher the presenter
+        await teacher.set_gui("Join code", classroom.classroom.code.lower().replace("-", ""))
+        await asyncio.sleep(0.1)
+        await teacher.set_gui("Become presenter", True)
+        await until(lambda: teacher.gizmo_owner is not None, what="the presenter's gizmo")
+        await until(lambda: member_of(classroom, 0).role == PRESENTER, what="the presenter's role")
+        assert student.gizmo_owner is None
+        # the presenter drags; the student sees the shared arm's branches move
+        state = classroom.classroom.state
+        target = state.last.flange.copy()
+        target[:3, 3] += (0.05, -0.04, 0.03)
+        from benchmarks.viser_client import wxyz_of
+
+        before = len(student.received.ghost_flanges)
+        await teacher.drag_target(target[:3, 3], wxyz_of(target), "start")
+        await until(lambda: np.allclose(state.last.target, target, atol=1e-9), what="the presenter's drag")
+        await until(lambda: len(student.received.ghost_flanges) > before, what="the student to see it")
+        _, flanges = student.received.ghost_flanges[-1]
+        assert (np.abs(flanges - target[:3, 3]).max(axis=-1) < 1e-5).any()
+        # a student's forged drag on the presenter's gizmo name does nothing
+        forged = target.copy()
+        forged[:3, 3] += 0.1
+        student.gizmo_owner = teacher.gizmo_owner
+        await student.drag_target(forged[:3, 3], wxyz_of(forged), "start")
+        await asyncio.sleep(0.5)
+        assert np.allclose(state.last.target, target, atol=1e-9)
+        for client in (teacher, student):
+            await client.close()
+
+    asyncio.run(scenario())
+
+
+def test_exploring_on_your_own_and_back(classroom):
+    async def scenario():
+        teacher = await ViserClient(f"http://127.0.0.1:{classroom.port}").connect()
+        student = await ViserClient(f"http://127.0.0.1:{classroom.port}").connect()
+        await teacher.set_gui("Join code", classroom.classroom.code)
+        await asyncio.sleep(0.1)
+        await teacher.set_gui("Become presenter", True)
+        await until(lambda: teacher.gizmo_owner is not None, what="presenter")
+        demo = classroom.classroom.state
+        demo.set_joints(np.radians([10, -70, 80, -30, 60, 20]))  # where the class is
+        await student.set_gui("Explore on my own", True)
+        await until(lambda: student.gizmo_owner is not None, what="the student's own gizmo")
+        explorer = member_of(classroom, 1)
+        await until(lambda: explorer.role == EXPLORER and explorer.session is not None, what="the explorer's role")
+        own = explorer.session.state
+        assert own is not demo
+        np.testing.assert_allclose(own.q, demo.q)  # starts from the presenter's pose
+        # the student's moves stay theirs; the presenter's stay the class's
+        await student.set_gui("θ1 base", 25.0)
+        await until(lambda: abs(np.degrees(own.q[0]) - 25.0) < 1e-9, what="the student's slider")
+        assert abs(np.degrees(demo.q[0]) - 10.0) < 1e-9
+        demo.set_joints(np.radians([40, -70, 80, -30, 60, 20]))
+        assert abs(np.degrees(own.q[0]) - 25.0) < 1e-9
+        # back to the class: the private arm is gone
+        await student.set_gui("Back to the presenter's arm", True)
+        await until(lambda: explorer.role == VIEWER and explorer.session is None, what="re-attaching")
+        assert len(classroom.sessions) == 1  # only the presenter drives an arm
+        for client in (teacher, student):
+            await client.close()
+
+    asyncio.run(scenario())
+
+
+def test_handing_over_and_leaving(classroom):
+    async def scenario():
+        first = await ViserClient(f"http://127.0.0.1:{classroom.port}").connect()
+        second = await ViserClient(f"http://127.0.0.1:{classroom.port}").connect()
+        for client in (first, second):
+            await client.set_gui("Join code", classroom.classroom.code)
+        await asyncio.sleep(0.1)
+        await first.set_gui("Become presenter", True)
+        await until(lambda: member_of(classroom, 0).role == PRESENTER, what="first presenter")
+        await second.set_gui("Become presenter", True)
+        await until(lambda: member_of(classroom, 1).role == PRESENTER, what="hand-over")
+        assert member_of(classroom, 0).role == VIEWER and member_of(classroom, 0).session is None
+        # the presenter leaves: the arm stays, the role is free again
+        q = classroom.classroom.state.q
+        await second.close()
+        await until(lambda: classroom.classroom.presenter is None, what="the presenter's departure")
+        np.testing.assert_array_equal(classroom.classroom.state.q, q)
+        assert len(classroom.classroom.members) == 1
+        await first.close()
+
+    asyncio.run(scenario())
+
+
+def test_wrong_codes_lock_a_browser_out(classroom, monkeypatch):
+    async def scenario():
+        student = await ViserClient(f"http://127.0.0.1:{classroom.port}").connect()
+        for _ in range(MAX_WRONG_CODES):
+            await student.set_gui("Join code", "WRONG1")
+            await asyncio.sleep(0.05)
+            await student.set_gui("Become presenter", True)
+            await asyncio.sleep(0.1)
+        await student.set_gui("Join code", classroom.classroom.code)  # even the right one, for a while
+        await asyncio.sleep(0.1)
+        await student.set_gui("Become presenter", True)
+        await until(lambda: any("too many wrong codes" in body for _, body in student.received.notifications), what="lock-out")
+        assert classroom.classroom.presenter is None
+        member = member_of(classroom, 0)
+        assert member.locked_until - time.monotonic() <= LOCKOUT_SECONDS
+        await student.close()
+
+    asyncio.run(scenario())

@@ -1,0 +1,44 @@
+"""``python -m app``: what the teacher types and what it prints."""
+
+from __future__ import annotations
+
+import ipaddress
+import re
+import socket
+
+from app.__main__ import parse_args
+from app.server import lan_addresses
+from benchmarks.server_process import running_app
+
+
+def test_defaults_are_loopback_8080_course():
+    args = parse_args([])
+    assert (args.host, args.port, args.preset, args.shared) == ("127.0.0.1", 8080, "course", False)
+    args = parse_args(["--host", "0.0.0.0", "--port", "9000", "--preset", "ur10e", "--shared"])
+    assert (args.host, args.port, args.preset, args.shared) == ("0.0.0.0", 9000, "ur10e", True)
+
+
+def test_lan_addresses_are_real_ipv4_addresses():
+    for address in lan_addresses():
+        assert not ipaddress.IPv4Address(address).is_loopback
+
+
+def test_prints_the_real_port_when_the_asked_one_is_busy():
+    with socket.socket() as busy:
+        busy.bind(("127.0.0.1", 0))
+        busy.listen()
+        port = busy.getsockname()[1]
+        with running_app("--port", str(port)) as app:
+            text = "".join(app.output)
+    assert f"(port {port} was busy)" in text
+    served = int(re.search(r"http://127\.0\.0\.1:(\d+)", app.url).group(1))
+    assert served != port
+
+
+def test_lan_address_and_join_code_in_shared_mode():
+    with running_app("--host", "0.0.0.0", "--shared") as app:
+        text = "".join(app.output)
+    assert "shared demo mode" in text
+    assert re.search(r"Join code for the presenter: [A-Z0-9]{3}-[A-Z0-9]{3}", text)
+    for address in lan_addresses():
+        assert f"http://{address}:" in text

@@ -1,0 +1,221 @@
+"""Faults and bad input: the server keeps serving everyone else and frees what the departed held.
+
+Headless clients speak viser's own protocol (``benchmarks/viser_client.py``), so a test can
+do what a browser never would: vanish mid-drag, stop reading, send garbage.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import time
+
+import msgspec
+import numpy as np
+import pytest
+from viser import _messages as messages
+
+from app.server import TeachingServer
+from benchmarks.server_process import running_app
+from benchmarks.viser_client import ViserClient, wxyz_of
+
+from .test_classroom import until
+
+
+@pytest.fixture
+def app():
+    server = TeachingServer(port=0)
+    yield server
+    server.stop()
+
+
+def url(app: TeachingServer) -> str:
+    return f"http://127.0.0.1:{app.port}"
+
+
+def session_of(app: TeachingServer, client: ViserClient):
+    return app.sessions[int(client.gizmo_owner)]  # a client-scoped node's owner is its client id
+
+
+async def drag_a_little(client: ViserClient, session, steps: int = 10, offset=(0.0, 0.0, 0.0)) -> np.ndarray:
+    T = session.state.last.flange.copy()
+    for k in range(steps):
+        T[:3, 3] += np.array([0.004, -0.003, 0.002]) + offset
+        await client.drag_target(T[:3, 3], wxyz_of(T), "start" if k == 0 else "update")
+        await asyncio.sleep(0.05)
+    return T
+
+
+def test_clients_vanishing_mid_drag(app):
+    async def scenario():
+        clients = [await ViserClient(url(app)).connect() for _ in range(6)]
+        sessions = [session_of(app, c) for c in clients]
+        leaving, staying = clients[:3], clients[3:]
+        T = sessions[0].state.last.flange.copy()
+        for k in range(5):  # everyone is dragging...
+            T[:3, 3] += (0.003, 0.0, 0.0)
+            for c in clients:
+                await c.drag_target(T[:3, 3], wxyz_of(T), "start" if k == 0 else "update")
+            await asyncio.sleep(0.05)
+        for c in leaving:  # ...when three laptops drop off the network
+            c.abort()
+        targets = await asyncio.gather(*(drag_a_little(c, s) for c, s in zip(staying, sessions[3:])))
+        for session, target in zip(sessions[3:], targets):
+            await until(lambda s=session, t=target: np.allclose(s.state.last.target, t, atol=1e-9), what="the others' drags")
+        await until(lambda: len(app.sessions) == 3, what="the departed sessions to be freed")
+        assert all(s.closed for s in sessions[:3])
+        for c in staying:
+            await c.close()
+        await until(lambda: len(app.sessions) == 0, what="everyone to be freed")
+
+    asyncio.run(scenario())
+
+
+def test_twenty_reconnect_at_once(app):
+    async def scenario():
+        clients = await asyncio.gather(*(ViserClient(url(app)).connect(timeout=60) for _ in range(20)))
+        assert len(app.sessions) == 20
+        for c in clients:
+            c.abort()
+        await until(lambda: len(app.sessions) == 0, what="all twenty to be freed")
+        clients = await asyncio.gather(*(ViserClient(url(app)).connect(timeout=60) for _ in range(20)))
+        assert len(app.sessions) == 20
+        # every one of them works
+        targets = await asyncio.gather(*(drag_a_little(c, session_of(app, c), steps=3) for c in clients))
+        for c, target in zip(clients, targets):
+            await until(lambda s=session_of(app, c), t=target: np.allclose(s.state.last.target, t, atol=1e-9), what="drags")
+        await asyncio.gather(*(c.close() for c in clients))
+        await until(lambda: len(app.sessions) == 0, what="all twenty to be freed again")
+
+    asyncio.run(scenario())
+
+
+def test_a_client_that_stops_reading_does_not_hold_up_the_others(app):
+    async def scenario():
+        frozen = await ViserClient(url(app)).connect()
+        frozen_session = session_of(app, frozen)
+        frozen.freeze()  # stops reading its socket, even the server's pings
+        # the frozen one's arm keeps changing (its messages pile up on the server)...
+        for k in range(200):
+            frozen_session.apply(lambda state, k=k: state.set_joint(0, 0.01 * k))
+        # ...while a student next to it drags and is answered promptly
+        active = await ViserClient(url(app)).connect()
+        session = session_of(app, active)
+        sends = []
+        T = session.state.last.flange.copy()
+        for k in range(40):
+            T[:3, 3] += (0.002, 0.001, 0.0)
+            sends.append((await active.drag_target(T[:3, 3], wxyz_of(T), "start" if k == 0 else "update"), T[:3, 3].copy()))
+            await asyncio.sleep(0.05)
+        await asyncio.sleep(0.5)
+        latencies = [x for x in active.latencies(sends) if x is not None]
+        assert len(latencies) > 35 and np.percentile(latencies, 90) < 0.5
+        # the server gives up on the frozen client (websocket pings go unanswered) and frees it
+        await until(lambda: frozen_session.closed, timeout=90, what="the frozen client to be dropped")
+        assert len(app.sessions) == 1
+        await active.close()
+
+    asyncio.run(scenario())
+
+
+def test_garbage_and_out_of_range_input_is_refused(app):
+    async def scenario():
+        bad = await ViserClient(url(app)).connect()
+        good = await ViserClient(url(app)).connect()
+        bad_session, good_session = session_of(app, bad), session_of(app, good)
+        before = bad_session.state.q
+        slider = bad.gui["θ1 base"]["uuid"]
+        for value in (float("nan"), float("inf"), 1e9, -725.0):
+            await bad.send(messages.GuiUpdateMessage(slider, {"value": value}))
+        await bad.send(messages.GuiUpdateMessage(slider, {"value": "forty"}))  # viser cannot even cast it
+        await bad.send(messages.GuiUpdateMessage(bad.gui["Use branch"]["uuid"], {"value": "99"}))
+        await bad.send(messages.GuiUpdateMessage(bad.gui["All six (°)"]["uuid"], {"value": "1, 2, x, 4, 5, 6"}))
+        await bad.set_gui("Set these angles", True)
+        for position, wxyz in (
+            ((np.nan, 0.0, 0.5), (1.0, 0.0, 0.0, 0.0)),
+            ((0.5, 0.0, 0.5), (0.0, 0.0, 0.0, 0.0)),
+            ((1e300, 1e300, 1e300), (1.0, 0.0, 0.0, 0.0)),
+            ((0.5, 0.2, 0.5), (np.inf, 0.0, 0.0, 0.0)),
+        ):
+            await bad.drag_target(position, wxyz, "update")
+            await asyncio.sleep(0.05)
+        await asyncio.sleep(1.0)
+        # nothing of it reached the arm, and the student was told
+        np.testing.assert_array_equal(bad_session.state.q, before)
+        assert np.isfinite(bad_session.state.last.target).all()
+        titles = [title for title, _ in bad.received.notifications]
+        assert titles.count("Not accepted") >= 5, bad.received.notifications
+        assert not any(title == "Something went wrong" for title in titles)
+        # the slider was put back on the arm's angle, on the server and in the student's browser
+        await until(lambda: bad_session.joints.sliders[0].value == 30.0, what="the slider to be restored")
+        await until(lambda: bad.gui["θ1 base"]["value"] == 30.0, what="the browser's slider to be restored")
+        # both students carry on
+        await bad.set_gui("θ2 shoulder", 50.0)
+        await until(lambda: abs(np.degrees(bad_session.state.q[1]) - 50.0) < 1e-9, what="a good value after the bad ones")
+        target = await drag_a_little(good, good_session, steps=5)
+        await until(lambda: np.allclose(good_session.state.last.target, target, atol=1e-9), what="the other student")
+        # bytes that are not even a message cost only that connection
+        await bad.send_raw(b"\x00\x01garbage")
+        await bad.send_raw(msgspec.msgpack.encode({"type": "NoSuchMessage"}))
+        await until(lambda: bad_session.closed, what="the garbage sender's connection to close")
+        target = await drag_a_little(good, good_session, steps=3)
+        await until(lambda: np.allclose(good_session.state.last.target, target, atol=1e-9), what="the other student, still")
+        await good.close()
+
+    asyncio.run(scenario())
+
+
+def test_students_never_see_each_others_arms(app):
+    async def scenario():
+        alice = await ViserClient(url(app)).connect()
+        bob = await ViserClient(url(app)).connect()
+        bob_owner = bob.gizmo_owner
+        alice_target = await drag_a_little(alice, session_of(app, alice), steps=8, offset=(0.01, 0.0, 0.0))
+        await until(lambda: np.allclose(session_of(app, alice).state.last.target, alice_target, atol=1e-9), what="alice")
+        await asyncio.sleep(0.3)
+        # every scene message bob received is his own or the shared, unchanging scene
+        assert bob.owners_seen <= {bob_owner, ""}
+        for _, flanges in bob.received.ghost_flanges:
+            assert not (np.abs(flanges - alice_target[:3, 3]).max(axis=-1) < 1e-4).any()
+        np.testing.assert_allclose(np.degrees(session_of(app, bob).state.q), [30, 45, 26, 50, 60, 80])
+        await alice.close()
+        await bob.close()
+
+    asyncio.run(scenario())
+
+
+@pytest.mark.slow
+def test_memory_returns_to_baseline_after_a_class_leaves():
+    """Thirty students come, drag, and go, three times: the server's memory stays flat."""
+
+    async def one_class(address: str) -> None:
+        clients = await asyncio.gather(*(ViserClient(address).connect(timeout=120) for _ in range(30)))
+        T0 = np.eye(4)
+        for k in range(20):
+            for i, c in enumerate(clients):
+                T0[:3, :3] = np.eye(3)
+                T = T0.copy()
+                T[:3, 3] = (0.6 + 0.01 * k, 0.1 + 0.005 * i, 0.6)
+                await c.drag_target(T[:3, 3], wxyz_of(T), "update")
+            await asyncio.sleep(0.05)
+        await asyncio.gather(*(c.close() for c in clients))
+
+    with running_app() as app:
+        async def run():
+            warm = await ViserClient(app.url).connect()  # first client: caches, imports, the lot
+            await warm.close()
+            await asyncio.sleep(2)
+            baseline = await asyncio.to_thread(app.metrics, time.time())
+            rss = []
+            for _ in range(3):
+                await one_class(app.url)
+                await asyncio.sleep(3)
+                report = await asyncio.to_thread(app.metrics, time.time())
+                assert report["sessions"] == 0 and report["clients"] == 0
+                rss.append(report["rss_bytes"])
+            return baseline["rss_bytes"], rss
+
+        baseline, rss = asyncio.run(run())
+    growth = [(r - baseline) / 2**20 for r in rss]
+    # the first class may leave allocator slack behind; later ones must not add to it
+    assert growth[-1] - growth[0] < 8, f"memory grew by {growth} MiB over three classes"
+    assert growth[0] < 40, f"memory after the first class: +{growth[0]:.1f} MiB"
