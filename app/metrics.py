@@ -1,4 +1,4 @@
-"""Server-side handler latencies, kept in a ring buffer per kind of event.
+"""Server-side handler latencies, kept in a fixed-size ring buffer per kind of event.
 
 The drag benchmark and the classroom load test read them; nothing here is shown to
 students. ``UR10_TEACH_METRICS=<path>`` makes the server write a JSON summary to
@@ -16,21 +16,31 @@ CAPACITY = 100_000
 
 
 class LatencyLog:
+    """The last ``capacity`` samples of each kind, in preallocated float64 rings.
+
+    Preallocated so that measuring a long run does not itself show up as memory growth
+    (a deque of Python floats grows by ~32 bytes a sample until it is full).
+    """
+
     def __init__(self, capacity: int = CAPACITY) -> None:
+        self._capacity = capacity
         self._lock = threading.Lock()
-        self._samples: dict[str, collections.deque] = collections.defaultdict(lambda: collections.deque(maxlen=capacity))
+        self._rings: dict[str, np.ndarray] = {}
         self._counts: collections.Counter = collections.Counter()
 
     def record(self, kind: str, seconds: float) -> None:
         with self._lock:
-            self._samples[kind].append(seconds)
+            ring = self._rings.get(kind)
+            if ring is None:
+                ring = self._rings[kind] = np.empty(self._capacity)
+            ring[self._counts[kind] % self._capacity] = seconds
             self._counts[kind] += 1
 
     def summary(self) -> dict[str, dict[str, float]]:
         """Per kind: count (all time) and p50 / p99 / max (ms) over the retained samples."""
         with self._lock:
-            data = {kind: np.array(samples) for kind, samples in self._samples.items()}
             counts = dict(self._counts)
+            data = {kind: ring[: min(counts[kind], self._capacity)].copy() for kind, ring in self._rings.items()}
         out = {}
         for kind, samples in data.items():
             if len(samples):
@@ -41,7 +51,7 @@ class LatencyLog:
 
     def clear(self) -> None:
         with self._lock:
-            self._samples.clear()
+            self._rings.clear()
             self._counts.clear()
 
 

@@ -26,7 +26,7 @@ def launch(playwright):
     return playwright.chromium.launch(executable_path=CHROMIUM, headless=True, args=ARGS)
 
 
-def wait_for(condition: Callable[[], object], timeout: float = 15.0, what: str = "condition") -> object:
+def wait_for(condition: Callable[[], object], timeout: float = 30.0, what: str = "condition") -> object:
     deadline = time.monotonic() + timeout
     while time.monotonic() < deadline:
         value = condition()
@@ -34,6 +34,22 @@ def wait_for(condition: Callable[[], object], timeout: float = 15.0, what: str =
             return value
         time.sleep(0.05)
     raise AssertionError(f"timed out after {timeout} s waiting for {what}")
+
+
+def step_slider(page, handle, key: str, target: float, limit: int = 200) -> None:
+    """Press ``key`` on a viser slider's thumb until the browser shows ``target``.
+
+    Pressing a fixed number of times is not enough on a loaded machine: a key event can land while
+    the panel is re-rendering and the thumb has lost focus. Counting on what the slider shows keeps
+    the test about the server following the browser, not about keyboard timing.
+    """
+    thumb = page.locator(f"{dom_id(handle)} [role=slider]")
+    for _ in range(limit):
+        if abs(float(thumb.get_attribute("aria-valuenow")) - target) < 1e-9:
+            return
+        thumb.focus()
+        thumb.press(key)
+    raise AssertionError(f"slider still at {thumb.get_attribute('aria-valuenow')} after {limit} presses of {key}, wanted {target}")
 
 
 def dom_id(handle) -> str:

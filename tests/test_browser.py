@@ -11,7 +11,7 @@ from playwright.sync_api import sync_playwright
 
 from app.server import TeachingServer
 
-from .browser_support import CONNECTED, SMALL_VIEWPORT, VIEWPORT, canvas_pixels, dom_id, launch, project, text_field, wait_for
+from .browser_support import CONNECTED, SMALL_VIEWPORT, VIEWPORT, canvas_pixels, dom_id, launch, project, step_slider, text_field, wait_for
 
 pytestmark = pytest.mark.browser
 
@@ -74,9 +74,7 @@ def test_page_shows_the_arm_and_its_panel(open_page, app):
 def test_moving_a_joint_slider(open_page, app):
     page, session = open_page()
     thumb = page.locator(f"{dom_id(session.joints.sliders[0])} [role=slider]")
-    thumb.focus()
-    for _ in range(50):
-        thumb.press("ArrowRight")  # 0.1° steps
+    step_slider(page, session.joints.sliders[0], "ArrowRight", 35.0)  # 0.1° steps from 30°
     wait_for(lambda: abs(np.degrees(session.state.q[0]) - 35.0) < 1e-6, what="θ1 to reach 35°")
     snapshot = session.state.last
     # the IK target followed the flange, and the readout shows the new pose
@@ -178,10 +176,7 @@ def test_two_students_have_their_own_arms(open_page, app):
     page_a, session_a = open_page(viewport=SMALL_VIEWPORT)
     page_b, session_b = open_page(known=1, viewport=SMALL_VIEWPORT)
     assert session_a is not session_b
-    thumb = page_a.locator(f"{dom_id(session_a.joints.sliders[1])} [role=slider]")
-    thumb.focus()
-    for _ in range(20):
-        thumb.press("ArrowLeft")
+    step_slider(page_a, session_a.joints.sliders[1], "ArrowLeft", 43.0)
     wait_for(lambda: abs(np.degrees(session_a.state.q[1]) - 43.0) < 1e-6, what="student A's shoulder")
     np.testing.assert_allclose(np.degrees(session_b.state.q), [30, 45, 26, 50, 60, 80])
     page_b.close()

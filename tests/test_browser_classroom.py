@@ -9,7 +9,7 @@ from playwright.sync_api import sync_playwright
 from app.classroom import EXPLORER, PRESENTER, VIEWER
 from app.server import TeachingServer
 
-from .browser_support import CONNECTED, SMALL_VIEWPORT, dom_id, launch, wait_for
+from .browser_support import CONNECTED, SMALL_VIEWPORT, dom_id, launch, step_slider, wait_for
 
 pytestmark = pytest.mark.browser
 
@@ -46,10 +46,7 @@ def test_presenter_and_student(tmp_path):
             # the presenter moves a joint; the student's live panel follows
             session = teacher_member.session
             teacher.wait_for_selector(dom_id(session.joints.sliders[0]), timeout=30_000)
-            thumb = teacher.locator(f"{dom_id(session.joints.sliders[0])} [role=slider]")
-            thumb.focus()
-            for _ in range(50):
-                thumb.press("ArrowRight")
+            step_slider(teacher, session.joints.sliders[0], "ArrowRight", 35.0)
             wait_for(lambda: abs(np.degrees(app.classroom.state.q[0]) - 35.0) < 1e-6, what="the presenter's move")
             wait_for(lambda: student.get_by_text("base 35.00°").count() > 0, what="the student's live panel")
             assert student.locator("[role=slider]").count() == 0  # watching: nothing to move
@@ -60,10 +57,7 @@ def test_presenter_and_student(tmp_path):
             own = student_member.session
             student.wait_for_selector(dom_id(own.joints.sliders[1]), timeout=30_000)
             np.testing.assert_allclose(own.state.q, app.classroom.state.q)
-            own_thumb = student.locator(f"{dom_id(own.joints.sliders[1])} [role=slider]")
-            own_thumb.focus()
-            for _ in range(30):
-                own_thumb.press("ArrowLeft")
+            step_slider(student, own.joints.sliders[1], "ArrowLeft", 42.0)
             wait_for(lambda: abs(np.degrees(own.state.q[1]) - 42.0) < 1e-6, what="the student's own move")
             assert abs(np.degrees(app.classroom.state.q[1]) - 45.0) < 1e-6  # the class's arm did not move
 

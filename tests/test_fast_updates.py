@@ -1,0 +1,80 @@
+"""app.fast_updates sends what viser's public setters send (it relies on viser internals)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+import viser
+from viser import _messages
+
+from app.fast_updates import set_instances, set_orientations, stop_echo
+
+
+@pytest.fixture
+def scene():
+    server = viser.ViserServer(port=0, verbose=False)
+    yield server.scene
+    server.stop()
+
+
+def record(scene, monkeypatch) -> list:
+    sent = []
+    original = type(scene)._queue_scene_message
+
+    def spy(self, message):
+        sent.append(message)
+        original(self, message)
+
+    monkeypatch.setattr(type(scene), "_queue_scene_message", spy)
+    return sent
+
+
+def test_orientations_match_the_public_setter(scene, monkeypatch):
+    public = [scene.add_frame(f"/public/{i}") for i in range(3)]
+    fast = [scene.add_frame(f"/fast/{i}") for i in range(3)]
+    wxyz = np.array([[0.5, 0.5, 0.5, 0.5], [0.0, 1.0, 0.0, 0.0], [np.cos(0.2), 0.0, 0.0, np.sin(0.2)]])
+    sent = record(scene, monkeypatch)
+    for node, w in zip(public, wxyz):
+        node.wxyz = w
+    set_orientations(fast, wxyz)
+    assert len(sent) == 6
+    for a, b in zip(sent[:3], sent[3:]):
+        assert type(a) is type(b) is _messages.SetOrientationMessage
+        assert a.name.replace("/public/", "") == b.name.replace("/fast/", "")
+        np.testing.assert_allclose(a.wxyz, b.wxyz)
+        assert a.owner == b.owner
+    for p, f in zip(public, fast):
+        np.testing.assert_allclose(p.wxyz, f.wxyz)
+
+
+def test_instances_match_the_public_setters(scene, monkeypatch):
+    vertices = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0]], np.float32)
+    faces = np.array([[0, 1, 2]], np.uint32)
+    kwargs = dict(batched_wxyzs=np.tile([1.0, 0, 0, 0], (8, 1)), batched_positions=np.zeros((8, 3)), lod="off")
+    public = scene.add_batched_meshes_simple("/public", vertices, faces, **kwargs)
+    fast = scene.add_batched_meshes_simple("/fast", vertices, faces, **kwargs)
+    rng = np.random.default_rng(0)
+    wxyzs, positions = rng.normal(size=(8, 4)), rng.normal(size=(8, 3))
+    wxyzs /= np.linalg.norm(wxyzs, axis=1, keepdims=True)
+    sent = record(scene, monkeypatch)
+    public.batched_wxyzs = wxyzs
+    public.batched_positions = positions
+    set_instances(fast, wxyzs, positions)
+    assert [type(m) for m in sent] == [_messages.SceneNodeUpdateMessage] * 3
+    merged = {**sent[0].updates, **sent[1].updates}
+    assert merged.keys() == sent[2].updates.keys()
+    for key in merged:
+        np.testing.assert_array_equal(merged[key], sent[2].updates[key])
+        assert merged[key].dtype == sent[2].updates[key].dtype
+    np.testing.assert_array_equal(public.batched_wxyzs, fast.batched_wxyzs)
+    np.testing.assert_array_equal(public.batched_positions, fast.batched_positions)
+    set_instances(fast, wxyzs[::-1], None)  # orientations only
+    assert list(sent[-1].updates) == ["batched_wxyzs"]
+    np.testing.assert_array_equal(fast.batched_positions, public.batched_positions)
+
+
+def test_stop_echo(scene):
+    gizmo = scene.add_transform_controls("/gizmo")
+    assert callable(gizmo._impl_aux.sync_cb)  # viser still echoes by default...
+    stop_echo(gizmo)
+    assert gizmo._impl_aux.sync_cb is None  # ...and this is how it is switched off

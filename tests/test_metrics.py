@@ -1,0 +1,29 @@
+"""The latency log keeps the newest samples in a fixed ring and summarises them."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from app.metrics import LatencyLog
+
+
+def test_ring_keeps_the_newest_samples_and_counts_all():
+    log = LatencyLog(capacity=5)
+    for i in range(12):
+        log.record("drag", i / 1000)
+    summary = log.summary()["drag"]
+    assert summary["count"] == 12
+    # only 7..11 ms are retained
+    assert summary["max_ms"] == 11.0
+    np.testing.assert_allclose(summary["p50_ms"], 9.0)
+
+
+def test_partly_filled_ring_and_clear():
+    log = LatencyLog(capacity=100)
+    log.record("panel", 0.002)
+    log.record("panel", 0.004)
+    summary = log.summary()["panel"]
+    assert summary["count"] == 2 and summary["max_ms"] == 4.0
+    np.testing.assert_allclose(summary["p50_ms"], 3.0)
+    log.clear()
+    assert log.summary() == {}
