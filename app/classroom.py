@@ -174,6 +174,7 @@ class Classroom:
             session = ClientSession(
                 member.client, self.app.arm, self.app.links, self.app.refresher, self.app.drags,
                 state=self.state, scene=self.app.server.scene, scene_views=self.scene_views,
+                flush=self.app.server.flush,
             )
             session.observers.append(lambda _: self.app.refresher.request(self.live))
             member.session, member.role = session, PRESENTER

@@ -142,15 +142,18 @@ class BranchesScene(View):
         scales = shown.astype(np.float32)
         update_scales = scales.tobytes() != self._scales  # which branches exist rarely changes mid-drag
         self._scales = scales.tobytes()
+        # link-major float32 copies, made once: each link's (8, 3) and (8, 4) rows are then contiguous
+        all_positions = np.ascontiguousarray(np.swapaxes(snapshot.ghost_frames[:, 1:, :3, 3], 0, 1), dtype=np.float32)
+        all_wxyzs = np.ascontiguousarray(np.swapaxes(snapshot.ghost_wxyz[:, 1:], 0, 1), dtype=np.float32)
         for i, ghost in enumerate(self.ghosts, start=1):  # links 1..6
             if update_scales:
                 ghost.batched_scales = scales
-            positions = snapshot.ghost_frames[:, i, :3, 3].astype(np.float32)
+            positions = all_positions[i - 1]
             if positions.tobytes() == self._positions[i]:  # frames 1 and 2 sit on the shoulder whatever q is
                 positions = None
             else:
                 self._positions[i] = positions.tobytes()
-            set_instances(ghost, snapshot.ghost_wxyz[:, i], positions)
+            set_instances(ghost, all_wxyzs[i - 1], positions)
 
 
 class IKTargetControls(View):

@@ -75,12 +75,16 @@ class ClientSession:
     scene, scene_views : viser.SceneApi, SceneViews, optional
         Where the arm is drawn: the browser's own scene by default; the classroom's
         presenter drives the shared scene's views instead.
+    flush : callable, optional
+        Sends what the scene has queued now (``client.flush`` by default; the shared
+        scene's is ``server.flush``). viser otherwise holds a message up to 1/60 s to
+        batch it with the next; a drag's redraw is already one batch.
     """
 
     def __init__(
         self, client: viser.ClientHandle, arm: Arm, links: tuple[LinkMesh, ...], refresher: PanelRefresher,
         drags: DragQueue, state: ArmState | None = None, scene: viser.SceneApi | None = None,
-        scene_views: SceneViews | None = None,
+        scene_views: SceneViews | None = None, flush: Callable[[], None] | None = None,
     ) -> None:
         self.client = client
         self.arm = arm
@@ -91,6 +95,7 @@ class ClientSession:
         #: called after every change, e.g. to refresh the classroom's live panel
         self.observers: list[Callable[[Snapshot], None]] = []
         scene = scene or client.scene
+        self._flush = flush or client.flush
         gui = client.gui
         first = self.state.last
         self.scene_views = scene_views or SceneViews.build(scene, links, first)
@@ -129,6 +134,7 @@ class ClientSession:
         with self.client.atomic():
             for view in self.views:
                 view.render(snapshot)
+        self._flush()
 
     def render_panel(self) -> None:
         """The side panel, from the newest state (called by the refresher, one thread at a time)."""

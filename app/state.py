@@ -204,10 +204,16 @@ class ArmState:
     def _snapshot(self, cause: str) -> Snapshot:
         arm, solution = self.arm, self._solution
         # one frames() call for the solid arm and the eight ghosts
-        joints = np.vstack([self._q[None], np.where(solution.valid[:, None], solution.q, 0.0)])
+        joints = np.empty((9, 6))
+        joints[0], joints[1:] = self._q, solution.q
+        invalid = ~solution.valid
+        some_invalid = invalid.any()
+        if some_invalid:
+            joints[1:][invalid] = 0.0
         frames = arm.frames(joints)
         ghost_frames = frames[1:]
-        ghost_frames[~solution.valid] = np.eye(4)
+        if some_invalid:
+            ghost_frames[invalid] = np.eye(4)
         # every rotation the views draw, converted to quaternions in one vectorised call
         rotations = frames[:, :, :3, :3]
         relative = np.swapaxes(rotations[0, :-1], -1, -2) @ rotations[0, 1:]

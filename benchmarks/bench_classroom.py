@@ -6,7 +6,10 @@ The app runs in its own process (``server_process.py``); thirty headless clients
 (``viser_client.py``, viser's own websocket protocol: the messages a browser sends, and
 every frame received and decoded) run in this one. Scenarios:
 
-* **independent** — 30 students, each dragging their own IK target at 20 Hz;
+* **independent** — 30 students, each dragging their own IK target at 20 Hz (each
+  browser's 20 Hz clock at its own random phase, as in a classroom);
+* **independent, phase-locked** — the same, with all thirty clocks in step: thirty
+  events arrive at the same instant every 50 ms (a worst case no classroom produces);
 * **independent, half dragging** — 30 connected, 15 of them dragging at 20 Hz;
 * **shared** — ``--shared``: the presenter drags at 20 Hz, 29 students watch;
 * **shared + explorers** — the presenter drags, 15 students explore on their own copies
@@ -52,8 +55,9 @@ async def connect_all(url: str, count: int) -> list[ViserClient]:
     return clients
 
 
-async def drag_loop(client: ViserClient, seconds: float, phase_offset: int, sends: list) -> None:
-    """Drag this client's target along a loop at 20 Hz for ``seconds``."""
+async def drag_loop(client: ViserClient, seconds: float, phase_offset: int, sends: list, clock_phase: float) -> None:
+    """Drag this client's target along a loop at 20 Hz for ``seconds``, its clock starting ``clock_phase`` s late."""
+    await asyncio.sleep(clock_phase)
     start_flange = client.received.flange_updates[-1][1]
     T0 = np.eye(4)
     T0[:3, :3] = HOME_ROTATION
@@ -78,7 +82,7 @@ async def run_scenario(app: AppProcess, name: str, seconds: float) -> dict:
     clients = await connect_all(app.url, CLIENTS)
     draggers: list[ViserClient] = []
     presenter = None
-    if name == "independent":
+    if name in ("independent", "independent, phase-locked"):
         draggers = clients
     elif name == "independent, half dragging":
         draggers = clients[:15]
@@ -105,10 +109,17 @@ async def run_scenario(app: AppProcess, name: str, seconds: float) -> dict:
     load_cpu_before = sum(os.times()[:2])
     samples: list[dict] = [before]
     sends: dict[int, list] = {id(c): [] for c in draggers}
+    # Students' browsers are not synchronised: each 20 Hz clock starts at its own random
+    # phase. "phase-locked" sends all thirty events at the same instant every 50 ms instead
+    # (the worst case, which no classroom produces).
+    if "phase-locked" in name:
+        clock_phases = [0.0] * len(draggers)
+    else:
+        clock_phases = list(np.random.default_rng(0).uniform(0.0, 1.0 / RATE_HZ, len(draggers)))
     started = time.time()
     await asyncio.gather(
         sample_server(app, started + seconds, samples),
-        *(drag_loop(c, seconds, 7 * k, sends[id(c)]) for k, c in enumerate(draggers)),
+        *(drag_loop(c, seconds, 7 * k, sends[id(c)], clock_phases[k]) for k, c in enumerate(draggers)),
     )
     await asyncio.sleep(1.5)
     elapsed = time.time() - started
@@ -182,6 +193,7 @@ def main() -> None:
     summaries, series, notes = [], [], []
     scenarios = (
         ("independent", ()),
+        ("independent, phase-locked", ()),
         ("independent, half dragging", ()),
         ("shared", ("--shared",)),
         ("shared + explorers", ("--shared",)),
@@ -201,7 +213,10 @@ def main() -> None:
             f"Run: {machine()}. {CLIENTS} headless clients (viser's websocket protocol, every frame decoded) in one "
             f"process, the app in another, on the same two cores; {args.seconds:.0f} s of dragging per scenario. "
             "End to end = a drag event sent → a 3D update showing that target or a newer one arrives "
-            "(the server folds queued events into the newest). Target: p99 ≤ 50 ms, memory flat.",
+            "(the server folds queued events into the newest). Each student's 20 Hz clock starts at a random "
+            "phase, as in a classroom; *phase-locked* puts all thirty in step (thirty events at once every 50 ms). "
+            "Queue wait = a drag event's wait for the drag worker; event-loop lag = how late a 20 ms timer on "
+            "viser's loop fires. Target: p99 ≤ 50 ms, memory flat.",
             "",
             table(["scenario", "dragging", "handler p50 / p99 (server)", "queue wait p50 / p99",
                    "event-loop lag p50 / p99", "end to end p50 / p99", "received per client",

@@ -224,6 +224,19 @@ def test_unreachable_far_pose_says_elbow_reach_with_numbers(course):
     assert f"{excess_mm:.1f} mm beyond" in reason
 
 
+@pytest.mark.parametrize("coordinate", [1e150, 1e300, -1e308])
+def test_absurdly_far_finite_pose_is_unreachable_not_nan(course, coordinate):
+    """Finite but huge coordinates overflow the reach to inf or NaN: every slot must still say "too far"."""
+    T = np.eye(4)
+    T[:3, 3] = coordinate
+    for solution in (course.ik(T), solve_reference(course, T), course.ik(np.stack([T, T]))):
+        assert not solution.valid.any()
+        assert (solution.failure == ELBOW_TOO_FAR).all()
+    assert course.ik(T).unreachable_reason().startswith("unreachable: elbow reach")
+    branch = course.ik(T).nearest(np.zeros(6))
+    assert int(branch.slot) == -1 and np.isnan(branch.q).all()
+
+
 def test_unreachable_inside_cylinder_says_so_with_numbers(course):
     T = np.eye(4)
     T[:3, 3] = (0.05, 0.02, 0.6)  # z6 = z: P5 is 53.9 mm from the base axis

@@ -156,7 +156,7 @@ static void solve_pose(const Params *P, const double *T, double theta6_hint, Out
             const double r = norm2(h4, v4);
             const int base = 4 * i + 2 * j;
             o.elbow_distance[base] = o.elbow_distance[base + 1] = r;
-            if (r > outer + LENGTH_TOLERANCE) {
+            if (!(r <= outer + LENGTH_TOLERANCE)) { /* NaN too: a target so far that r overflowed */
                 o.failure[base] = o.failure[base + 1] = ELBOW_TOO_FAR;
                 continue;
             }
@@ -435,7 +435,60 @@ static PyObject *quaternions(PyObject *self, PyObject *args)
     Py_RETURN_NONE;
 }
 
+/* nearest_one(q (8, 6), valid (8,) bool, current (6,), joint_limit, prefer, tie) -> (slot, shifted (6,))
+ * ur10core.ik.nearest_branch for one pose: every angle of every valid slot moved to its
+ * 2pi-equivalent nearest the current one (one turn back where that leaves +-joint_limit),
+ * the slot with the smallest squared joint distance (first on ties, as numpy's argmin),
+ * kept as `prefer` when that is within `tie` of it. slot -1 (and NaN angles) when no slot
+ * is valid. prefer < 0 means no preference. */
+static PyObject *nearest_one(PyObject *self, PyObject *args)
+{
+    PyObject *q_obj, *valid_obj, *current_obj;
+    double limit, tie;
+    int prefer;
+    if (!PyArg_ParseTuple(args, "OOOdid", &q_obj, &valid_obj, &current_obj, &limit, &prefer, &tie)) return NULL;
+    if (!is_c_array(q_obj, NPY_DOUBLE) || PyArray_SIZE((PyArrayObject *)q_obj) != 48 ||
+        !is_c_array(valid_obj, NPY_BOOL) || PyArray_SIZE((PyArrayObject *)valid_obj) != 8 ||
+        !is_c_array(current_obj, NPY_DOUBLE) || PyArray_SIZE((PyArrayObject *)current_obj) != 6) {
+        PyErr_SetString(PyExc_TypeError, "nearest_one needs C-contiguous q (8, 6) float64, valid (8,) bool, current (6,) float64");
+        return NULL;
+    }
+    const double *q = (const double *)PyArray_DATA((PyArrayObject *)q_obj);
+    const npy_bool *valid = (const npy_bool *)PyArray_DATA((PyArrayObject *)valid_obj);
+    const double *current = (const double *)PyArray_DATA((PyArrayObject *)current_obj);
+    double shifted[48], distance[8];
+    int best = -1;
+    for (int k = 0; k < 8; k++) {
+        distance[k] = INFINITY;
+        if (!valid[k]) continue;
+        double sum = 0.0;
+        for (int j = 0; j < 6; j++) {
+            const double angle = q[6 * k + j];
+            double v = angle + TAU * nearbyint((current[j] - angle) / TAU); /* half to even, as np.round */
+            if (v > limit) v -= TAU;
+            if (v < -limit) v += TAU;
+            shifted[6 * k + j] = v;
+            sum += (v - current[j]) * (v - current[j]);
+        }
+        if (!isfinite(sum)) continue; /* never chosen, as an invalid slot */
+        distance[k] = sum;
+        if (best < 0 || sum < distance[best]) best = k;
+    }
+    npy_intp dims[1] = {6};
+    PyObject *out = PyArray_SimpleNew(1, dims, NPY_DOUBLE);
+    if (!out) return NULL;
+    double *o = (double *)PyArray_DATA((PyArrayObject *)out);
+    if (best < 0) {
+        for (int j = 0; j < 6; j++) o[j] = NAN;
+        return Py_BuildValue("(iN)", -1, out);
+    }
+    if (prefer >= 0 && prefer < 8 && distance[prefer] <= distance[best] + tie) best = prefer;
+    for (int j = 0; j < 6; j++) o[j] = shifted[6 * best + j];
+    return Py_BuildValue("(iN)", best, out);
+}
+
 static PyMethodDef methods[] = {
+    {"nearest_one", nearest_one, METH_VARARGS, "The valid IK slot nearest the current joints, shifted next to them."},
     {"frames", frames, METH_VARARGS, "Frames {0}..{6} of n joint vectors into a preallocated array."},
     {"quaternions", quaternions, METH_VARARGS, "Unit quaternions (w >= 0) of n rotation matrices."},
     {"fk_one", fk_one, METH_VARARGS, "Closed-form T06 of one joint vector."},

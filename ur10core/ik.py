@@ -190,6 +190,11 @@ class IKSolution:
         distance = self.elbow_distance[index]
         outer, inner = arm.a2 + arm.a3, abs(arm.a2 - arm.a3)
         excess = np.where(failure == ELBOW_TOO_FAR, distance - outer, inner - distance)
+        if np.isnan(excess).all():  # coordinates so large that the distances overflowed
+            return (
+                f"unreachable: elbow reach — the target is too far away to measure "
+                f"(the arm reaches a2 + a3 = {1e3 * outer:.1f} mm from the shoulder)"
+            )
         k = int(np.nanargmin(excess))
         if failure[k] == ELBOW_TOO_FAR:
             return (
@@ -264,16 +269,13 @@ def nearest_branch(solution: IKSolution, q_current, joint_limit: float = _TAU, p
 
 
 def _nearest_one(solution: IKSolution, q_current: np.ndarray, joint_limit: float, prefer) -> Branch:
-    """:func:`nearest_branch` for one pose, without the batch path's indexing (the app calls it per drag event)."""
-    shifted = equivalent_near(solution.q, q_current, joint_limit)
-    distance = ((shifted - q_current) ** 2).sum(axis=-1)
-    distance[~solution.valid] = np.inf
-    slot = int(distance.argmin())
-    if not np.isfinite(distance[slot]):
-        return Branch(np.full(6, np.nan), np.array(-1))
-    if prefer is not None and 0 <= int(prefer) < 8 and distance[int(prefer)] <= distance[slot] + TIE_TOLERANCE:
-        slot = int(prefer)
-    return Branch(shifted[slot], np.array(slot))
+    """:func:`nearest_branch` for one pose, in the compiled kernel (the app calls it on every drag event)."""
+    preferred = -1 if prefer is None else int(prefer)
+    slot, q = _kernels.nearest_one(
+        np.ascontiguousarray(solution.q, dtype=float), np.ascontiguousarray(solution.valid, dtype=bool),
+        np.ascontiguousarray(q_current, dtype=float), float(joint_limit), preferred, TIE_TOLERANCE,
+    )
+    return Branch(q, np.array(slot))
 
 
 def equivalent_near(q, q_current, joint_limit: float = _TAU) -> np.ndarray:
@@ -364,7 +366,7 @@ def solve_reference(arm: "Arm", T, theta6_hint: float = 0.0) -> IKSolution:
                 r = hypot(h4, v4)
                 base = 4 * i + 2 * j
                 elbow_distance[base] = elbow_distance[base + 1] = r
-                if r > outer + LENGTH_TOLERANCE:
+                if not r <= outer + LENGTH_TOLERANCE:  # NaN too: a target so far that r overflowed
                     failure[base] = failure[base + 1] = ELBOW_TOO_FAR
                     continue
                 if r < inner - LENGTH_TOLERANCE:
