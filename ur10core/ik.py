@@ -270,7 +270,7 @@ def nearest_branch(solution: IKSolution, q_current, joint_limit: float = _TAU, p
 
 def _nearest_one(solution: IKSolution, q_current: np.ndarray, joint_limit: float, prefer) -> Branch:
     """:func:`nearest_branch` for one pose, in the compiled kernel (the app calls it on every drag event)."""
-    preferred = -1 if prefer is None else int(prefer)
+    preferred = int(prefer) if prefer is not None and 0 <= int(prefer) < 8 else -1
     slot, q = _kernels.nearest_one(
         np.ascontiguousarray(solution.q, dtype=float), np.ascontiguousarray(solution.valid, dtype=bool),
         np.ascontiguousarray(q_current, dtype=float), float(joint_limit), preferred, TIE_TOLERANCE,
