@@ -22,6 +22,7 @@ from ur10core import Arm, symbolic
 from .classroom import Classroom
 from .meshes import load_links
 from .metrics import LATENCY
+from .processes import viser_listens_on
 from .workers import DragQueue, PanelRefresher
 from .session import ClientSession
 from .style import JOINT_CAP_BLUE
@@ -148,14 +149,25 @@ class TeachingServer:
     host, port : str, int
         Where to listen. viser moves to the next free port when ``port`` is busy:
         :attr:`port` is the real one. ``port=0`` lets the OS choose (tests).
+    shared : bool
+        Shared demo mode: everyone watches the presenter's arm (:class:`app.classroom.Classroom`).
+    listener : socket.socket, optional
+        A listening socket to serve instead of binding ``port``: how several processes
+        serve one port (:mod:`app.processes`).
     """
 
-    def __init__(self, preset: str = "course", host: str = "127.0.0.1", port: int = 8080, shared: bool = False) -> None:
+    def __init__(self, preset: str = "course", host: str = "127.0.0.1", port: int = 8080, shared: bool = False,
+                 listener: socket.socket | None = None) -> None:
         self.arm = Arm.preset(preset)
         self.links = load_links(preset)
         symbolic.load()  # read the cached derivation now rather than in the first student's callback
         self.host = host
-        self.server = viser.ViserServer(host=host, port=port, label=f"UR10 kinematics ({preset})", verbose=False)
+        label = f"UR10 kinematics ({preset})"
+        if listener is None:
+            self.server = viser.ViserServer(host=host, port=port, label=label, verbose=False)
+        else:
+            with viser_listens_on(listener):
+                self.server = viser.ViserServer(host=host, port=listener.getsockname()[1], label=label, verbose=False)
         self.server.gui.configure_theme(show_share_button=False, brand_color=JOINT_CAP_BLUE, control_width="large")
         self.server.initial_camera.position = CAMERA_POSITION
         self.server.initial_camera.look_at = CAMERA_LOOK_AT

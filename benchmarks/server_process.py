@@ -21,6 +21,7 @@ from typing import Iterator
 
 ROOT = Path(__file__).resolve().parent.parent
 URL = re.compile(r"(http://127\.0\.0\.1:\d+)")
+PROCESSES = re.compile(r"(\d+) processes\) is running")
 
 
 @contextlib.contextmanager
@@ -63,16 +64,37 @@ class AppProcess:
         self.url = url
         self.metrics_path = metrics
         self.output = output
+        found = PROCESSES.search("".join(output))
+        #: how many processes serve the app (``--processes``; helpers write ``<metrics>.1``, ``.2``, ...)
+        self.processes = int(found.group(1)) if found else 1
 
     def metrics(self, newer_than: float = 0.0, timeout: float = 10.0) -> dict:
-        """The server's latest report written after ``newer_than`` (a time.time())."""
+        """The server's latest report written after ``newer_than`` (a time.time()), over all its processes.
+
+        Clients, CPU seconds and resident bytes are summed; each latency kind gives the
+        total count and the worst process's p50 / p99 / max. ``"processes"`` keeps the
+        per-process reports (the first process first).
+        """
+        paths = [self.metrics_path] + [Path(f"{self.metrics_path}.{k}") for k in range(1, self.processes)]
         deadline = time.monotonic() + timeout
         while time.monotonic() < deadline:
             try:
-                report = json.loads(self.metrics_path.read_text())
-                if report["time"] > newer_than:
-                    return report
+                reports = [json.loads(path.read_text()) for path in paths]
+                if all(report["time"] > newer_than for report in reports):
+                    return merge_reports(reports)
             except (FileNotFoundError, json.JSONDecodeError):
                 pass
             time.sleep(0.1)
         raise TimeoutError("no metrics from the app")
+
+
+def merge_reports(reports: list[dict]) -> dict:
+    """One report for an app served by several processes (see :meth:`AppProcess.metrics`)."""
+    merged = {"time": min(r["time"] for r in reports), "processes": reports, "latency": {}}
+    for key in ("clients", "sessions", "cpu_seconds", "rss_bytes"):
+        merged[key] = sum(r[key] for r in reports)
+    for kind in {kind for r in reports for kind in r["latency"]}:
+        parts = [r["latency"][kind] for r in reports if kind in r["latency"]]
+        merged["latency"][kind] = {"count": sum(p["count"] for p in parts),
+                                   **{f: max(p[f] for p in parts) for f in ("p50_ms", "p99_ms", "max_ms")}}
+    return merged
