@@ -22,8 +22,8 @@ from ur10core import Arm, symbolic
 from .classroom import Classroom
 from .meshes import load_links
 from .metrics import LATENCY
-from .processes import viser_listens_on
-from .workers import DragQueue, PanelRefresher
+from .processes import BalancedListener, viser_listens_on
+from .workers import DUTY, DragQueue, PanelRefresher
 from .session import ClientSession
 from .style import JOINT_CAP_BLUE
 
@@ -176,7 +176,9 @@ class TeachingServer:
         # the floor the arm stands on: half-metre cells, shared by everyone (it never changes)
         self.server.scene.add_grid("/floor", width=3.0, height=3.0, cell_size=0.1, section_size=0.5)
         loop = self.server.get_event_loop()
-        self.refresher = PanelRefresher(loop)
+        # the panels' share of the time is the machine's: processes serving one class split it
+        processes = len(listener.board.counts) if isinstance(listener, BalancedListener) else 1
+        self.refresher = PanelRefresher(loop, duty=DUTY / processes)
         self.drags = DragQueue(loop)
         self._sessions: dict[int, ClientSession] = {}
         self._sessions_lock = threading.Lock()
@@ -220,8 +222,10 @@ class TeachingServer:
         try:
             if self.classroom is not None:
                 self.classroom.connect(client)
-                return
-            session = ClientSession(client, self.arm, self.links, self.refresher, self.drags)
+            else:
+                session = ClientSession(client, self.arm, self.links, self.refresher, self.drags)
+                with self._sessions_lock:
+                    self._sessions[client.client_id] = session
         except Exception:
             log.exception("could not set up client %s", client.client_id)
             try:
@@ -229,8 +233,10 @@ class TeachingServer:
             except Exception:
                 pass
             return
-        with self._sessions_lock:
-            self._sessions[client.client_id] = session
+        # viser runs connect and disconnect callbacks on its thread pool side by side: a
+        # browser that left while its arm was being built was not here to be freed yet
+        if client.client_id not in self.server.get_clients():
+            self._disconnected(client)
 
     def _disconnected(self, client: viser.ClientHandle) -> None:
         if self.classroom is not None:

@@ -42,8 +42,9 @@ log = logging.getLogger(__name__)
 
 #: Shortest time between two panel redraws of one browser (s).
 PANEL_INTERVAL = 0.1
-#: Largest share of the time the refresher may spend drawing: under a classroom's load the
-#: panels slow down (each still shows the newest state) before the 3D view does.
+#: Largest share of the machine's time the panel redraws may take: under a classroom's load
+#: the panels slow down (each still shows the newest state) before the 3D view does. Processes
+#: serving one class (``app.processes``) split it, so the share stays the same however many.
 DUTY = 0.15
 
 

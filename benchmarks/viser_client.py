@@ -17,7 +17,7 @@ import asyncio
 import dataclasses
 import re
 import time
-from typing import Any
+from typing import Any, NamedTuple
 
 import msgspec
 import numpy as np
@@ -73,6 +73,14 @@ class Received:
     notifications: list[tuple[str, str]] = dataclasses.field(default_factory=list)
     #: seconds from the server sending a frame (its perf_counter, the same clock) to our reading it
     delivery_lag: list[float] = dataclasses.field(default_factory=list)
+
+
+class DragStep(NamedTuple):
+    """One gizmo event as encoded frames: ``before`` and ``after`` hold a drag's start and end messages."""
+
+    before: tuple[bytes, ...]
+    update: bytes
+    after: tuple[bytes, ...]
 
 
 class ViserClient:
@@ -197,18 +205,33 @@ class ViserClient:
         """What the browser sends when a student changes a widget (or clicks a button: value True)."""
         await self.send(messages.GuiUpdateMessage(self.gui[label]["uuid"], {"value": value}))
 
-    async def drag_target(self, position, wxyz, phase: str = "update") -> float:
-        """One gizmo event; returns the send time."""
+    def drag_step(self, position, wxyz, phase: str = "update") -> DragStep:
+        """The frames a browser sends for one gizmo event, encoded now so that sending costs little.
+
+        ``phase`` "start" and "end" add the drag's start and end messages around the update.
+        """
         owner = self.gizmo_owner or ""
-        if phase == "start":
-            await self.send(messages.TransformControlsDragStartMessage(name="/ik_target", owner=owner))
-        sent = time.perf_counter()
-        await self.send(messages.TransformControlsUpdateMessage(
+        update = encode(messages.TransformControlsUpdateMessage(
             name="/ik_target", wxyz=tuple(float(v) for v in wxyz), position=tuple(float(v) for v in position), owner=owner,
         ))
-        if phase == "end":
-            await self.send(messages.TransformControlsDragEndMessage(name="/ik_target", owner=owner))
+        before = (encode(messages.TransformControlsDragStartMessage(name="/ik_target", owner=owner)),) if phase == "start" else ()
+        after = (encode(messages.TransformControlsDragEndMessage(name="/ik_target", owner=owner)),) if phase == "end" else ()
+        return DragStep(before, update, after)
+
+    async def send_drag(self, step: DragStep) -> float:
+        """Send one prepared gizmo event; returns the time its update was sent."""
+        assert self._websocket is not None
+        for frame in step.before:
+            await self._websocket.send(frame)
+        sent = time.perf_counter()
+        await self._websocket.send(step.update)
+        for frame in step.after:
+            await self._websocket.send(frame)
         return sent
+
+    async def drag_target(self, position, wxyz, phase: str = "update") -> float:
+        """One gizmo event; returns the send time."""
+        return await self.send_drag(self.drag_step(position, wxyz, phase))
 
     def latencies(self, sends: list[tuple[float, Any]], tolerance: float = 1e-5) -> list[float | None]:
         """End-to-end latency of each ``(send time, target position)`` (in sending order).

@@ -33,7 +33,12 @@ def url(app: TeachingServer) -> str:
 
 
 def session_of(app: TeachingServer, client: ViserClient):
-    return app.sessions[int(client.gizmo_owner)]  # a client-scoped node's owner is its client id
+    """The server's session for ``client`` (registered a moment after the page is drawn)."""
+    client_id = int(client.gizmo_owner)  # a client-scoped node's owner is its client id
+    deadline = time.monotonic() + 15.0
+    while client_id not in app.sessions and time.monotonic() < deadline:
+        time.sleep(0.01)
+    return app.sessions[client_id]
 
 
 async def drag_a_little(client: ViserClient, session, steps: int = 10, offset=(0.0, 0.0, 0.0)) -> np.ndarray:
@@ -73,18 +78,34 @@ def test_clients_vanishing_mid_drag(app):
 def test_twenty_reconnect_at_once(app):
     async def scenario():
         clients = await asyncio.gather(*(ViserClient(url(app)).connect(timeout=60) for _ in range(20)))
-        assert len(app.sessions) == 20
+        await until(lambda: len(app.sessions) == 20, what="twenty sessions")
         for c in clients:
             c.abort()
         await until(lambda: len(app.sessions) == 0, what="all twenty to be freed")
         clients = await asyncio.gather(*(ViserClient(url(app)).connect(timeout=60) for _ in range(20)))
-        assert len(app.sessions) == 20
+        await until(lambda: len(app.sessions) == 20, what="twenty sessions again")
         # every one of them works
         targets = await asyncio.gather(*(drag_a_little(c, session_of(app, c), steps=3) for c in clients))
         for c, target in zip(clients, targets):
             await until(lambda s=session_of(app, c), t=target: np.allclose(s.state.last.target, t, atol=1e-9), what="drags")
         await asyncio.gather(*(c.close() for c in clients))
         await until(lambda: len(app.sessions) == 0, what="all twenty to be freed again")
+
+    asyncio.run(scenario())
+
+
+def test_a_browser_that_leaves_while_its_arm_is_being_built_is_freed(app):
+    """viser runs connect and disconnect callbacks side by side on its thread pool."""
+
+    async def scenario():
+        client = await ViserClient(url(app)).connect()
+        handle = app.server.get_clients()[int(client.gizmo_owner)]
+        session = session_of(app, client)
+        client.abort()
+        await until(lambda: session.closed and not app.sessions, what="the departed session to be freed")
+        # the connect callback of a browser that has already gone finishes only now
+        await asyncio.to_thread(app._connected, handle)
+        assert not app.sessions
 
     asyncio.run(scenario())
 

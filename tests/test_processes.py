@@ -15,6 +15,8 @@ import pytest
 
 from app.__main__ import parse_args
 from app.processes import BalancedListener, Helpers, LoadBoard, bind_listener, default_process_count, serve_balanced
+from app.server import TeachingServer
+from app.workers import DUTY
 from benchmarks.bench_drag import HOME_ROTATION
 from benchmarks.server_process import running_app
 from benchmarks.viser_client import ViserClient, wxyz_of
@@ -155,6 +157,19 @@ def test_a_helper_that_cannot_start_stops_the_app_with_a_clear_error(monkeypatch
 
 
 # ---------------------------------------------------------------------- the app
+
+
+def test_the_processes_split_the_machines_panel_budget():
+    listener = serve_balanced("127.0.0.1", 0, 2)
+    app = TeachingServer(port=0, listener=listener)
+    alone = TeachingServer(port=0)
+    try:
+        assert app.refresher.duty == pytest.approx(DUTY / 2)
+        assert alone.refresher.duty == pytest.approx(DUTY)
+    finally:
+        app.stop()
+        alone.stop()
+        listener.close()
 
 
 async def drag_and_see(client: ViserClient, offset: float) -> np.ndarray:
