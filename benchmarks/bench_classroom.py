@@ -190,6 +190,7 @@ async def run_scenario(app: AppProcess, name: str, seconds: float) -> dict:
         "idle_stolen": idle[2],
         "waited": idle[3],
         "stolen": stolen_share(before["machine_ticks"], after["machine_ticks"]),
+        "worst_stolen": max(stolen_share(a["machine_ticks"], b["machine_ticks"]) for a, b in zip(samples, samples[1:])),
     }
 
 
@@ -197,7 +198,7 @@ def machine_state(result: dict) -> str:
     """The idle machine just before the run (timer lag p99, stolen share) / the share stolen during it."""
     waited = f" after waiting {result['waited']:.0f} s" if result["waited"] >= 1 else ""
     return (f"{result['idle_lag_ms']:.0f} ms, {100 * result['idle_stolen']:.0f} %{waited} / "
-            f"{100 * result['stolen']:.0f} %")
+            f"{100 * result['stolen']:.0f} % (worst 5 s: {100 * result['worst_stolen']:.0f} %)")
 
 
 def describe(name: str, result: dict) -> tuple[list[str], list[list[str]]]:
