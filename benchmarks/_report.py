@@ -6,6 +6,7 @@ import datetime
 import os
 import platform
 import re
+import time
 from pathlib import Path
 
 BENCHMARKS_MD = Path(__file__).resolve().parent.parent / "BENCHMARKS.md"
@@ -51,8 +52,6 @@ def idle_timer_lag(seconds: float = 10.0, period: float = 0.02) -> tuple[float, 
 
     The floor under every latency measured on this machine at this moment.
     """
-    import time
-
     import numpy
 
     before, lags = cpu_ticks(), []
@@ -72,8 +71,6 @@ def quiet_machine(max_wait: float = 600.0, lag_p99: float = 0.02, stolen: float 
     the host takes half our cores measures them, not us. Gives up after ``max_wait`` s.
     Returns :func:`idle_timer_lag`'s last (p50, p99, stolen) and the seconds waited before it.
     """
-    import time
-
     started = time.monotonic()
     while True:
         waited = time.monotonic() - started

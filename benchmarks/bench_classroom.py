@@ -49,6 +49,8 @@ from benchmarks.viser_client import DragStep, ViserClient, staleness, wxyz_of  #
 
 CLIENTS = 30
 RATE_HZ = 20.0
+#: end to end p99 (ms) the issue asks for
+TARGET_P99_MS = 50.0
 JOIN_CODE = re.compile(r"Join code for the presenter: (\S+)")
 
 
@@ -194,6 +196,15 @@ async def run_scenario(app: AppProcess, name: str, seconds: float) -> dict:
     }
 
 
+def server_cpu(a: dict, b: dict) -> float:
+    """The server's CPU (all processes, % of one core) between two of its reports."""
+    return 100 * (b["cpu_seconds"] - a["cpu_seconds"]) / (b["time"] - a["time"])
+
+
+def verdict(p99_ms: float) -> str:
+    return "PASS" if p99_ms <= TARGET_P99_MS else "FAIL"
+
+
 def machine_state(result: dict) -> str:
     """The idle machine just before the run (timer lag p99, stolen share) / the share stolen during it."""
     waited = f" after waiting {result['waited']:.0f} s" if result["waited"] >= 1 else ""
@@ -204,10 +215,7 @@ def machine_state(result: dict) -> str:
 def describe(name: str, result: dict) -> tuple[list[str], list[list[str]]]:
     samples = result["samples"]
     rss = [s["rss_bytes"] / 2**20 for s in samples]
-    cpu = [
-        100 * (b["cpu_seconds"] - a["cpu_seconds"]) / (b["time"] - a["time"])
-        for a, b in zip(samples, samples[1:]) if b["time"] > a["time"]
-    ]
+    cpu = [server_cpu(a, b) for a, b in zip(samples, samples[1:]) if b["time"] > a["time"]]
     handler = result["handler"]
     p50, p99 = result["latency_ms"]
     summary = [
@@ -223,15 +231,14 @@ def describe(name: str, result: dict) -> tuple[list[str], list[list[str]]]:
         f"{result['bytes_per_client'][0] / 1024:.0f} KiB/s (max {result['bytes_per_client'][1] / 1024:.0f})",
         f"{np.mean(cpu):.0f} % (max {np.max(cpu):.0f} %)",
         f"{rss[0]:.0f} → {rss[-1]:.0f} MiB (max {max(rss):.0f})",
-        "PASS" if p99 <= 50 else "FAIL",
+        verdict(p99),
     ]
     series = []
     for k in range(0, len(samples) - 1, 6):  # every 30 s
         a, b = samples[k], samples[min(k + 6, len(samples) - 1)]
         if b["time"] > a["time"]:
-            share = 100 * (b["cpu_seconds"] - a["cpu_seconds"]) / (b["time"] - a["time"])
             stolen = stolen_share(a["machine_ticks"], b["machine_ticks"])
-            series.append([name, f"{a['time'] - samples[0]['time']:.0f} s", f"{share:.0f} %",
+            series.append([name, f"{a['time'] - samples[0]['time']:.0f} s", f"{server_cpu(a, b):.0f} %",
                            f"{a['rss_bytes'] / 2**20:.0f} MiB", str(a["clients"]), f"{100 * stolen:.0f} %"])
     return summary, series
 
@@ -239,10 +246,9 @@ def describe(name: str, result: dict) -> tuple[list[str], list[list[str]]]:
 def repeated(run: int, result: dict) -> list[str]:
     """One row of the repeat table."""
     samples = result["samples"]
-    cpu = 100 * (samples[-1]["cpu_seconds"] - samples[0]["cpu_seconds"]) / (samples[-1]["time"] - samples[0]["time"])
     p50, p99 = result["latency_ms"]
-    return [str(run), f"{p50:.0f} / {p99:.0f} ms", f"{result['generator_lag_ms'][1]:.0f} ms", f"{cpu:.0f} %",
-            machine_state(result), "PASS" if p99 <= 50 else "FAIL"]
+    return [str(run), f"{p50:.0f} / {p99:.0f} ms", f"{result['generator_lag_ms'][1]:.0f} ms",
+            f"{server_cpu(samples[0], samples[-1]):.0f} %", machine_state(result), verdict(p99)]
 
 
 def main() -> None:
