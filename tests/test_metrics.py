@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import os
+
 import numpy as np
 
 from app.metrics import LatencyLog
@@ -27,3 +29,21 @@ def test_partly_filled_ring_and_clear():
     np.testing.assert_allclose(summary["p50_ms"], 3.0)
     log.clear()
     assert log.summary() == {}
+
+
+def _resident_bytes() -> int:
+    with open("/proc/self/statm") as statm:
+        return int(statm.read().split()[1]) * os.sysconf("SC_PAGE_SIZE")
+
+
+def test_filling_the_ring_takes_no_more_memory():
+    """A ring's memory is taken when its kind is first recorded, not sample by sample:
+    a long class must not look like a leak in the server's resident memory."""
+    capacity = 500_000  # 4 MB of samples, far above the allocator's noise
+    log = LatencyLog(capacity=capacity)
+    log.record("drag", 0.001)
+    before = _resident_bytes()
+    for _ in range(capacity):
+        log.record("drag", 0.001)
+    grown = _resident_bytes() - before
+    assert grown < 1_000_000, f"resident memory grew by {grown / 1e6:.1f} MB while the ring filled"
