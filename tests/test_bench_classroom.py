@@ -1,0 +1,60 @@
+"""The classroom load test's own judgements: memory after the warm-up, and the competing load."""
+
+from __future__ import annotations
+
+import os
+import time
+from pathlib import Path
+
+from benchmarks.bench_classroom import FLAT_MIB, TARGET_P99_MS, WARMUP_S, competing_load, settled_growth, verdict
+
+MIB = 2**20
+
+
+def samples(rss_mib) -> list[dict]:
+    """Server reports every 5 s with the given resident memory (MiB)."""
+    return [{"time": 1000.0 + 5 * k, "rss_bytes": int(r * MIB)} for k, r in enumerate(rss_mib)]
+
+
+def warm_then(after) -> list[dict]:
+    """A run whose memory climbs 10 MiB in its first 25 s (warm-up), then follows ``after(t)``."""
+    return samples([170 + min(t, 25) * 0.4 + (after(t) if t >= 25 else 0.0) for t in range(0, 185, 5)])
+
+
+def test_the_warm_up_is_not_counted():
+    run = warm_then(lambda t: 1.5 * ((t // 30) % 2))  # allocator wander up and down after it
+    settled, end, highest = settled_growth(run)
+    assert settled == run[12]["rss_bytes"] / MIB  # the sample 60 s in
+    assert end - settled <= FLAT_MIB and highest >= settled
+    assert verdict(10.0, run) == "PASS"
+
+
+def test_a_steady_creep_fails_on_memory():
+    creep = 3.0 / 60  # MiB per second: 6 MiB over the two minutes after the warm-up
+    run = warm_then(lambda t: creep * (t - 25))
+    settled, end, _ = settled_growth(run)
+    assert end - settled > FLAT_MIB
+    assert verdict(10.0, run) == "FAIL (memory)"
+    assert verdict(TARGET_P99_MS + 1, run) == "FAIL (p99, memory)"
+    assert verdict(TARGET_P99_MS + 1, warm_then(lambda t: 0.0)) == "FAIL (p99)"
+
+
+def test_a_run_shorter_than_the_warm_up_is_judged_from_its_last_sample():
+    run = samples([170, 175, 180])
+    assert (run[-1]["time"] - run[0]["time"]) < WARMUP_S
+    assert settled_growth(run) == (180.0, 180.0, 180.0)
+
+
+def cpu_seconds(pid: int) -> float:
+    fields = Path(f"/proc/{pid}/stat").read_text().rsplit(") ", 1)[1].split()
+    return (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")
+
+
+def test_the_competing_load_burns_a_core_each_and_is_gone_afterwards():
+    with competing_load(2) as spinners:
+        assert len(spinners) == 2
+        time.sleep(1.0)
+        assert all(spinner.poll() is None for spinner in spinners)
+        burnt = [cpu_seconds(spinner.pid) for spinner in spinners]
+        assert all(b > 0.2 for b in burnt), f"the busy loops used only {burnt} s of CPU in 1 s"
+    assert all(spinner.returncode is not None for spinner in spinners)
