@@ -188,6 +188,7 @@ async def _drive(app: AppProcess, name: str, seconds: float, idle: tuple) -> dic
     )
     await asyncio.sleep(1.5)
     elapsed = time.time() - started
+    load_cpu = (sum(os.times()[:2]) - load_cpu_before) / elapsed  # before the analysis below, which is not load
     after = await asyncio.to_thread(app.metrics, time.time())
     after["machine_ticks"] = cpu_ticks()
     samples.append(after)
@@ -212,7 +213,7 @@ async def _drive(app: AppProcess, name: str, seconds: float, idle: tuple) -> dic
         "events": sum(len(v) for v in sends.values()),
         "bytes_per_client": (float(np.mean(received)), float(np.max(received))),
         "samples": samples,
-        "load_cpu": (sum(os.times()[:2]) - load_cpu_before) / elapsed,
+        "load_cpu": load_cpu,
         "elapsed": elapsed,
         "draggers": len(draggers),
         "split": split,
