@@ -85,7 +85,19 @@ class AppProcess:
             except (FileNotFoundError, json.JSONDecodeError):
                 pass
             time.sleep(0.1)
-        raise TimeoutError("no metrics from the app")
+        raise TimeoutError(f"no metrics from the app newer than {newer_than:.1f} after {timeout:.0f} s: "
+                           f"{self._metrics_state(paths)}; the app's last output:\n" + "".join(self.output[-40:]))
+
+    def _metrics_state(self, paths: list[Path]) -> str:
+        """Each report's age (or why it cannot be read) and whether the first process still runs."""
+        now, states = time.time(), []
+        for path in paths:
+            try:
+                states.append(f"{path.name} {now - json.loads(path.read_text())['time']:.1f} s old")
+            except (OSError, ValueError, KeyError) as error:
+                states.append(f"{path.name} unreadable ({type(error).__name__})")
+        code = self.process.poll()
+        return ", ".join(states) + ("; the app is running" if code is None else f"; the app exited with {code}")
 
 
 def merge_reports(reports: list[dict]) -> dict:

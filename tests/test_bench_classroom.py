@@ -2,11 +2,16 @@
 
 from __future__ import annotations
 
+import asyncio
 import os
 import time
 from pathlib import Path
 
-from benchmarks.bench_classroom import FLAT_MIB, TARGET_P99_MS, WARMUP_S, competing_load, settled_growth, verdict
+import pytest
+
+from benchmarks.bench_classroom import (
+    FLAT_MIB, TARGET_P99_MS, WARMUP_S, competing_load, sample_server, settled_growth, verdict,
+)
 
 MIB = 2**20
 
@@ -58,3 +63,29 @@ def test_the_competing_load_burns_a_core_each_and_is_gone_afterwards():
         burnt = [cpu_seconds(spinner.pid) for spinner in spinners]
         assert all(b > 0.2 for b in burnt), f"the busy loops used only {burnt} s of CPU in 1 s"
     assert all(spinner.returncode is not None for spinner in spinners)
+
+
+class StallingApp:
+    """An app whose first metrics read times out; ``exit_code`` None means it is still running."""
+
+    def __init__(self, exit_code: int | None) -> None:
+        self.reads = 0
+        self.process = type("Process", (), {"poll": lambda _: exit_code})()
+
+    def metrics(self, newer_than: float) -> dict:
+        self.reads += 1
+        if self.reads == 1:
+            raise TimeoutError("no metrics from the app newer than 0.0 after 10 s: metrics.json 12.0 s old\nlog")
+        return {"time": time.time(), "rss_bytes": 0}
+
+
+def test_a_late_report_from_a_running_app_is_recorded_and_sampling_goes_on():
+    app, reports, late = StallingApp(exit_code=None), [], []
+    asyncio.run(sample_server(app, time.time() + 0.5, reports, late))
+    assert late == ["no metrics from the app newer than 0.0 after 10 s: metrics.json 12.0 s old"]
+    assert len(reports) == 1 and app.reads == 2
+
+
+def test_a_late_report_from_an_app_that_exited_ends_the_run():
+    with pytest.raises(TimeoutError):
+        asyncio.run(sample_server(StallingApp(exit_code=1), time.time() + 0.5, [], []))
