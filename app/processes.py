@@ -1,11 +1,12 @@
-"""One port, several processes: a class of thirty all dragging needs more than one core.
+"""One port, several processes: thirty students dragging are most of a core's work.
 
-viser serves every websocket from one asyncio event loop in one Python process. With
-thirty students dragging at 20 Hz that loop is saturated (about 1.5 ms of server time per
-drag event, most of it viser's per-message work; BENCHMARKS.md) and the end-to-end p99
-passes 50 ms. Independent mode shares nothing between students, so the app can serve them
-from several processes on one port: the first process binds the listening socket and
-starts helpers that inherit it.
+viser serves every websocket from one asyncio event loop in one Python process. Thirty
+students dragging at 20 Hz cost that loop 1 to 1.5 ms of server time per drag event (most
+of it viser's per-message work), 60 to 90 % of a core depending on the machine
+(BENCHMARKS.md). On the slower of the machines measured, one loop fell behind and the
+end-to-end p99 passed 50 ms. Independent mode shares nothing between students, so the app
+can serve them from several processes on one port: the first process binds the listening
+socket and starts helpers that inherit it.
 
 Left to the kernel, whichever process accepts first gets the connection: measured, a
 class of thirty split 10 + 20 and the busier process missed the target. So the processes
