@@ -107,8 +107,8 @@ async def sample_server(app: AppProcess, until: float, samples: list, late: list
     """A server report every 5 s into ``samples``; one not written within 10 s goes into ``late`` (why, as seen).
 
     A late report with the app still running loses one sample, not the run: in one of three
-    15-minute soaks run on 2026-11-23 the reports went stale for 10 s once, unexplained, while
-    every drag's end-to-end time stayed in the table's figures.
+    15-minute soaks run on 2026-11-23 the reports went stale for 10 s once, unexplained, with
+    the app still running, and the old code threw away the hour's run.
     """
     while time.time() < until:
         try:
