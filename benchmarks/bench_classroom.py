@@ -53,7 +53,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
 from benchmarks._report import cpu_ticks, machine, quiet_machine, stolen_share, table, write_section  # noqa: E402
 from benchmarks.bench_drag import HOME_ROTATION, loop_path  # noqa: E402
-from benchmarks.server_process import AppProcess, running_app  # noqa: E402
+from benchmarks.server_process import METRICS_TIMEOUT_S, AppProcess, running_app  # noqa: E402
 from benchmarks.viser_client import DragStep, ViserClient, staleness, wxyz_of  # noqa: E402
 
 CLIENTS = 30
@@ -104,7 +104,8 @@ async def drag_loop(client: ViserClient, steps: list[tuple[DragStep, np.ndarray]
 
 
 async def sample_server(app: AppProcess, until: float, samples: list, late: list[str]) -> None:
-    """A server report every 5 s into ``samples``; one not written within 10 s goes into ``late`` (why, as seen).
+    """A server report every 5 s into ``samples``; one not written within ``METRICS_TIMEOUT_S``
+    goes into ``late`` (why, as seen).
 
     A late report with the app still running loses one sample, not the run: in one of three
     15-minute soaks run on 2026-11-23 the reports went stale for 10 s once, unexplained, with
@@ -358,7 +359,8 @@ def main() -> None:
         summary, rows = describe(label, result)
         summaries.append(summary)
         series.extend(rows)
-        late = f" ({len(result['late_reports'])} server reports late by 10 s)" if result["late_reports"] else ""
+        count = len(result["late_reports"])
+        late = f" ({count} server reports late by {METRICS_TIMEOUT_S:.0f} s)" if count else ""
         notes.append(f"{label}: load generator used {100 * result['load_cpu']:.0f} % of a core{late}")
         print(summary, flush=True)
 

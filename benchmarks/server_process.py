@@ -22,6 +22,8 @@ from typing import Iterator
 ROOT = Path(__file__).resolve().parent.parent
 URL = re.compile(r"(http://127\.0\.0\.1:\d+)")
 PROCESSES = re.compile(r"(\d+) processes\) is running")
+#: how long :meth:`AppProcess.metrics` waits for a fresh report (the app writes one every second)
+METRICS_TIMEOUT_S = 10.0
 
 
 @contextlib.contextmanager
@@ -68,7 +70,7 @@ class AppProcess:
         #: how many processes serve the app (``--processes``; helpers write ``<metrics>.1``, ``.2``, ...)
         self.processes = int(found.group(1)) if found else 1
 
-    def metrics(self, newer_than: float = 0.0, timeout: float = 10.0) -> dict:
+    def metrics(self, newer_than: float = 0.0, timeout: float = METRICS_TIMEOUT_S) -> dict:
         """The server's latest report written after ``newer_than`` (a time.time()), over all its processes.
 
         Clients, CPU seconds and resident bytes are summed; each latency kind gives the
