@@ -3,13 +3,15 @@
 from __future__ import annotations
 
 import functools
+import importlib.resources
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 import trimesh
 
-MESH_DIR = Path(__file__).resolve().parent.parent / "assets" / "meshes"
+#: ``assets/meshes`` of the source tree, installed as the package data of ``app.assets``.
+MESH_DIR = Path(str(importlib.resources.files("app.assets") / "meshes"))
 
 
 @dataclass(frozen=True)

@@ -1,4 +1,4 @@
-"""The singularity-manifold overlay (COURSE_NOTES §5).
+"""The singularity-manifold overlay (docs/kinematics.md §5).
 
 det J = a2 · a3 · (a2 c2 + a3 c23 − d5 s234) · s3 · s5: three factors, three kinds of
 singularity. The overlay shows each factor as a gauge that turns from green to red as it

@@ -23,7 +23,7 @@ from ur10core.orientation import quaternion
 
 from .style import JOINT_LABELS
 
-#: Named poses for the buttons: COURSE_NOTES §3 worked examples (degrees).
+#: Named poses for the buttons: docs/kinematics.md §3 worked examples (degrees).
 COURSE_POSES = {
     "zero": (0, 0, 0, 0, 0, 0),
     "stretched": (45, 90, 0, -90, 0, 60),
@@ -59,7 +59,7 @@ class Snapshot:
 
     @functools.cached_property
     def det_j(self) -> float:
-        """det J = a2 a3 × the three factors (COURSE_NOTES §5)."""
+        """det J = a2 a3 × the three factors (docs/kinematics.md §5)."""
         return float(self.arm.a2 * self.arm.a3 * self.factors.prod())
 
     @functools.cached_property

@@ -1,6 +1,6 @@
 """The reference for batch IK speed: a plain numpy vectorisation of the course's steps.
 
-COURSE_NOTES §4 as written, all eight branches at once by broadcasting over a leading
+docs/kinematics.md §4 as written, all eight branches at once by broadcasting over a leading
 (2, 2, 2) axis for (θ1 sign, θ5 sign, θ3 sign): arccos where the notes say acos, sin
 and cos of each intermediate angle, no special cases. It is what one would write first;
 ``benchmarks/bench_core.py`` checks that it is right before timing it.

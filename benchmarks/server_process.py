@@ -27,11 +27,14 @@ METRICS_TIMEOUT_S = 10.0
 
 
 @contextlib.contextmanager
-def running_app(*args: str, timeout: float = 60.0) -> Iterator["AppProcess"]:
-    """``python -m app --port 0 *args`` in a subprocess (a later ``--port`` wins); yields once it is serving."""
+def running_app(*args: str, timeout: float = 60.0, env: dict[str, str] | None = None) -> Iterator["AppProcess"]:
+    """``python -m app --port 0 *args`` in a subprocess (a later ``--port`` wins); yields once it is serving.
+
+    ``env`` adds to the environment (``UR10CORE_BACKEND``, say).
+    """
     with tempfile.TemporaryDirectory() as folder:
         metrics = Path(folder) / "metrics.json"
-        environment = dict(os.environ, UR10_TEACH_METRICS=str(metrics), PYTHONUNBUFFERED="1")
+        environment = dict(os.environ, **(env or {}), UR10_TEACH_METRICS=str(metrics), PYTHONUNBUFFERED="1")
         process = subprocess.Popen(
             [sys.executable, "-m", "app", "--port", "0", *args], cwd=ROOT, env=environment,
             stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True,

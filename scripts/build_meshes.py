@@ -2,7 +2,7 @@
 
     python scripts/build_meshes.py            # writes assets/meshes/<preset>/link<i>_{body,cap}.ply
 
-Every link i is modelled in its own DH frame {i} (COURSE_NOTES §2), so the app places
+Every link i is modelled in its own DH frame {i} (docs/kinematics.md §2), so the app places
 it with ``arm.frames(q)[i]``. Each link has a light-grey aluminium ``body`` and the
 dark-blue joint ``cap`` people recognise from the real arm. Sizes follow the UR10:
 base Ø190 mm, joint housings of Ø150 (base, shoulder), Ø120 (elbow) and Ø90 (wrist),
@@ -108,6 +108,31 @@ def link_meshes(arm: Arm) -> dict[int, tuple[trimesh.Trimesh, trimesh.Trimesh]]:
     }
 
 
+def split_sharp_edges(mesh: trimesh.Trimesh, crease_degrees: float = 30.0) -> trimesh.Trimesh:
+    """One vertex per (vertex, group of its faces whose normals lie within ``crease_degrees``).
+
+    The browser averages the normals of the faces sharing a vertex: splitting vertices
+    where a cylinder's side meets its caps keeps the rims crisp while the sides stay
+    smooth. (trimesh's ``smooth_shaded`` does this too, but needs scipy or networkx.)
+    """
+    normals = mesh.face_normals
+    cos_crease = np.cos(np.radians(crease_degrees))
+    vertices, faces = [], np.empty_like(mesh.faces)
+    for vertex in range(len(mesh.vertices)):
+        face_index, corner = np.nonzero(mesh.faces == vertex)
+        groups: list[np.ndarray] = []  # the first normal of each group
+        for f, c in zip(face_index, corner):
+            for g, reference in enumerate(groups):
+                if normals[f] @ reference >= cos_crease:
+                    break
+            else:
+                g = len(groups)
+                groups.append(normals[f])
+                vertices.append(mesh.vertices[vertex])
+            faces[f, c] = len(vertices) - len(groups) + g
+    return trimesh.Trimesh(vertices=np.array(vertices), faces=faces, process=False)
+
+
 def write(preset: str, output: Path = OUTPUT) -> list[Path]:
     folder = output / preset
     folder.mkdir(parents=True, exist_ok=True)
@@ -116,9 +141,7 @@ def write(preset: str, output: Path = OUTPUT) -> list[Path]:
         for part, mesh in (("body", body), ("cap", cap)):
             path = folder / f"link{i}_{part}.ply"
             if len(mesh.faces):
-                # split vertices along sharp edges so the browser's smooth normals keep the
-                # cylinders' rims crisp
-                mesh = mesh.smooth_shaded
+                mesh = split_sharp_edges(mesh)
             mesh = trimesh.Trimesh(vertices=np.round(mesh.vertices, 7).astype(np.float32), faces=mesh.faces, process=False)
             path.write_bytes(trimesh.exchange.ply.export_ply(mesh, encoding="binary", include_attributes=False))
             written.append(path)

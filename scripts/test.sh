@@ -1,10 +1,12 @@
 #!/usr/bin/env bash
-# Install what the tests need on a fresh machine, then run every test.
+# Install what the tests need, then run every test on both backends of ur10core.
 #   - Debian's chromium for the browser tests (playwright drives it; it never downloads one)
-#   - the project with its test extras
-# Extra arguments go to pytest, e.g. scripts/test.sh -k ik
+#   - a virtual environment ($UR10_TEST_VENV, default .venv-test) with the project and its
+#     test extras; .ci/run points it at a new, empty folder every time
+# Extra arguments go to one pytest run on the default backend, e.g. scripts/test.sh -k ik
 set -euo pipefail
 cd "$(dirname "$0")/.."
+VENV="${UR10_TEST_VENV:-.venv-test}"
 
 if ! command -v chromium >/dev/null 2>&1; then
     echo "== installing Debian's chromium for the browser tests"
@@ -14,13 +16,31 @@ if ! command -v chromium >/dev/null 2>&1; then
     $SUDO env DEBIAN_FRONTEND=noninteractive apt-get install -y -qq chromium
 fi
 
-echo "== installing ur10-teach with its test dependencies"
-python3 -m pip install --quiet --disable-pip-version-check -e ".[test]"
+echo "== installing ur10-teach with its test dependencies into $VENV"
+python3 -m venv "$VENV"
+PYTHON="$VENV/bin/python"
+"$PYTHON" -m pip install --quiet --disable-pip-version-check -e ".[test]"
 
-echo "== running the tests"
 # CPython 3.11's tracebacks parse source lines to place their ^^^ markers; a traceback
 # formatted while the parser is busy in another frame trips a CPython bug
 # (https://github.com/python/cpython/issues/106905). The fault tests make viser log
 # plenty of them, so switch the markers off.
 export PYTHONNODEBUGRANGES=1
-exec python3 -m pytest "$@"
+if [ $# -gt 0 ]; then
+    exec "$PYTHON" -m pytest "$@"
+fi
+
+BACKEND="$("$PYTHON" -c 'import ur10core; print(ur10core.BACKEND)')"
+if [ "$BACKEND" = "compiled" ]; then
+    echo "== the compiled backend: every test, the install on a laptop without a compiler included"
+    "$PYTHON" -m pytest
+elif [ -n "${UR10_REQUIRE_COMPILED:-}" ]; then
+    echo "the compiled kernel did not build (see pip's output with --verbose); CI requires it" >&2
+    exit 1
+else
+    echo "== no C compiler here: the compiled backend is not built, its comparison tests are skipped"
+    "$PYTHON" -m pytest -m "browser or install"
+fi
+echo "== the numpy backend (UR10CORE_BACKEND=numpy): every test but the browser and install ones"
+UR10CORE_BACKEND=numpy "$PYTHON" -c 'import ur10core; print("backend:", ur10core.BACKEND)'
+UR10CORE_BACKEND=numpy "$PYTHON" -m pytest -m "not browser and not install"

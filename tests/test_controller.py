@@ -1,4 +1,4 @@
-"""The course's convention against UR's own (COURSE_NOTES §6) via the ur-analytic-ik package."""
+"""The course's convention against UR's own (docs/kinematics.md §6) via the ur-analytic-ik package."""
 
 import numpy as np
 import pytest

@@ -9,7 +9,7 @@ from .conftest import random_joints
 
 
 def test_zero_state_matches_course_example(course):
-    # COURSE_NOTES §3: all joints 0°.
+    # docs/kinematics.md §3: all joints 0°.
     T = course.fk(np.zeros(6))
     np.testing.assert_allclose(T[:3, :3], [[1, 0, 0], [0, 0, -1], [0, 1, 0]], atol=1e-15)
     np.testing.assert_allclose(T[:3, 3] * 1000, [1184.5, -256.1, 243.7], atol=1e-9)

@@ -47,7 +47,7 @@ def test_factors_vanish_at_the_course_singular_poses(course):
 
 
 def test_shoulder_factor_is_the_wrist2_reach_along_x1(course):
-    # COURSE_NOTES §5: singular when P5 is at horizontal distance d4 from the base axis;
+    # docs/kinematics.md §5: singular when P5 is at horizontal distance d4 from the base axis;
     # |P5_xy|² = A² + d4² with A the shoulder factor.
     q = random_joints(500, seed=22)
     g = course.singularity_geometry(q)
@@ -81,3 +81,33 @@ def test_one_pose_factors_equal_batch_factors(course):
     batch = course.singularity_factors(q)
     for k in range(len(q)):
         np.testing.assert_allclose(course.singularity_factors(q[k]), batch[k], atol=1e-15)
+
+
+def test_shoulder_singular_configuration_turns_only_theta4_when_it_can(course):
+    """Upper arm and forearm pointing nearly up: |a2 c2 + a3 c23| ≤ d5, so θ4 alone reaches the singularity."""
+    rng = np.random.default_rng(25)
+    q = random_joints(300, seed=25)
+    q[:, 1] = np.pi / 2 + rng.uniform(-0.05, 0.05, len(q))
+    q[:, 2] = rng.uniform(-0.05, 0.05, len(q))
+    assert (np.abs(course.a2 * np.cos(q[:, 1]) + course.a3 * np.cos(q[:, 1] + q[:, 2])) <= course.d5).all()
+    moved = course.singular_configuration("shoulder", q)
+    np.testing.assert_array_equal(np.delete(moved, 3, axis=-1), np.delete(q, 3, axis=-1))
+    np.testing.assert_allclose(course.singularity_factors(moved)[:, 0], 0, atol=1e-14)
+    # of the two θ234 with that sine, the one nearer the current θ234
+    s234 = (course.a2 * np.cos(q[:, 1]) + course.a3 * np.cos(q[:, 1] + q[:, 2])) / course.d5
+    current = q[:, 1:4].sum(-1)
+    chosen = moved[:, 1:4].sum(-1)
+    other = np.pi - chosen
+    gap = lambda a, b: np.abs(np.remainder(a - b + np.pi, 2 * np.pi) - np.pi)  # noqa: E731
+    assert (gap(chosen, current) <= gap(other, current) + 1e-12).all()
+    np.testing.assert_allclose(np.sin(chosen), s234, atol=1e-14)
+    assert (np.abs(moved[:, 3]) <= 2 * np.pi).all()
+
+
+def test_shoulder_singular_configuration_turns_theta2_when_it_must(course):
+    q = np.radians([30, 45, 26, 50, 60, 80])  # |a2 c2 + a3 c23| = 0.62 m > d5
+    moved = course.singular_configuration("shoulder", q)
+    assert moved[1] != q[1]
+    assert course.a2 * np.cos(moved[1]) + course.a3 * np.cos(moved[1] + moved[2]) == pytest.approx(0, abs=1e-14)
+    assert np.sin(moved[1:4].sum()) == pytest.approx(0, abs=1e-14)
+    np.testing.assert_array_equal(moved[[0, 2, 4, 5]], q[[0, 2, 4, 5]])

@@ -41,7 +41,7 @@ def test_t06_matches_course_closed_form(cached):
     c23, s23 = sp.cos(THETA[1] + THETA[2]), sp.sin(THETA[1] + THETA[2])
     c234, s234 = sp.cos(sum(THETA[1:4])), sp.sin(sum(THETA[1:4]))
     d1, a2, a3, d4, d5, d6 = LENGTHS
-    course = sp.Matrix(  # COURSE_NOTES §3, typed from the notes
+    course = sp.Matrix(  # docs/kinematics.md §3, typed from the notes
         [
             [c[6] * (-s[1] * s[5] + c[1] * c[5] * c234) - s[6] * s234 * c[1], -s[6] * (-s[1] * s[5] + c[1] * c[5] * c234) - s234 * c[1] * c[6], s[1] * c[5] + s[5] * c[1] * c234,
              c[1] * (a2 * c[2] + a3 * c23) + d4 * s[1] - d5 * s234 * c[1] + d6 * (s[1] * c[5] + s[5] * c[1] * c234)],

@@ -22,7 +22,7 @@ def pose(course):
         ([0, 0, 0, 0, 0], r"q must have shape \(\.\.\., 6\) \(six joint angles\), got shape \(5,\)"),
         (np.zeros((3, 7)), r"got shape \(3, 7\)"),
         (0.0, r"got shape \(\)"),
-        ("zero", r"q must be numeric"),
+        ("zero", r"q must be real numbers, got text"),
         ([[0] * 6, [0, 0, 0, 0, 0, np.nan]], r"index \(1, 5\)"),
     ],
 )
@@ -40,7 +40,7 @@ def test_bad_pose_shape_and_values(course, pose):
     bad[1, 3] = np.nan
     with pytest.raises(ValueError, match=r"T contains a non-finite value \(nan at index \(1, 3\)\)"):
         course.ik(bad)
-    with pytest.raises(ValueError, match="T must be numeric"):
+    with pytest.raises(ValueError, match="T must be real numbers"):
         course.ik([["a"] * 4] * 4)
 
 
@@ -126,3 +126,83 @@ def test_bad_controller_input():
         from_controller([1, 2, 3])
     with pytest.raises(ValueError, match="q contains a non-finite"):
         to_controller([0, 0, 0, 0, 0, np.nan])
+
+
+@pytest.mark.parametrize(
+    "q, message",
+    [
+        ([10**400] * 6, r"must be real numbers"),  # an int too large for a float: was OverflowError
+        (np.array([10**400] * 6, dtype=object), r"must be real numbers"),
+        (np.full(6, 1j), r"must be real numbers, got complex numbers"),  # was: imaginary part dropped
+        ([0, 0, 0, 0, 0, 1 + 0j], r"got complex numbers"),
+        (np.zeros(6, "datetime64[s]"), r"got dates"),  # was: read as numbers
+        (np.zeros(6, "timedelta64[s]"), r"got time spans"),
+        (np.ma.masked_array(np.zeros(6), mask=[0, 0, 1, 0, 0, 0]), r"not a masked array"),  # was: mask ignored
+        (["0"] * 6, r"got text"),
+        ([True] * 6, r"got true/false values"),
+    ],
+)
+def test_values_that_are_not_plainly_real_numbers(course, pose, q, message):
+    for call in (course.fk, course.jacobian, course.singularity_factors, lambda v: course.ik(pose, hint=v)):
+        with pytest.raises(ValueError, match=message):
+            call(q)
+
+
+def test_poses_that_are_not_plainly_real_numbers(course, pose):
+    with pytest.raises(ValueError, match=r"T must be real numbers, got complex numbers"):
+        course.ik(pose + 0j)
+    with pytest.raises(ValueError, match=r"T must be a plain array of numbers, not a masked array"):
+        course.ik(np.ma.masked_array(pose))
+    with pytest.raises(ValueError, match=r"T must be real numbers"):
+        course.ik(np.full((4, 4), 10**400, dtype=object))
+
+
+@pytest.mark.parametrize("prefer", [3.7, True, 8, -2, "3", np.array([0.5, 1.0]), np.array([1, 9])])
+def test_bad_preferred_slot(course, pose, prefer):
+    """prefer=3.7 used to mean slot 3 on the one-pose path and an IndexError on the batch path."""
+    one, batch = course.ik(pose), course.ik(np.stack([pose, pose]))
+    with pytest.raises(ValueError, match=r"prefer must be a slot number 0\.\.7"):
+        one.nearest(np.zeros(6), prefer=prefer)
+    with pytest.raises(ValueError, match=r"prefer must be a slot number 0\.\.7"):
+        batch.nearest(np.zeros((2, 6)), prefer=prefer)
+
+
+def test_preferred_slot_must_broadcast(course, pose):
+    batch = course.ik(np.stack([pose, pose]))
+    with pytest.raises(ValueError, match=r"prefer of shape \(3,\) does not broadcast"):
+        batch.nearest(np.zeros((2, 6)), prefer=np.array([1, 2, 3]))
+    assert batch.nearest(np.zeros((2, 6)), prefer=-1).slot.shape == (2,)  # −1: no preference
+
+
+@pytest.mark.parametrize("limit", [3.0, -1.0, np.inf, np.nan, "2pi", True])
+def test_bad_joint_limit(course, pose, limit):
+    with pytest.raises(ValueError, match="joint_limit must be"):
+        course.ik(pose).nearest(np.zeros(6), joint_limit=limit)
+
+
+@pytest.mark.parametrize("batch", [False, True])
+def test_nearest_stays_within_the_joint_limit_from_far_away(course, batch):
+    """A current q1 of 20 rad used to give 15.62 rad, beyond ±360°."""
+    q = np.array([0.5, -1.0, 1.2, 2.0, 0.8, -0.3])
+    current = np.array([20.0, -1.0, 1.2, 2.0, 0.8, -55.0])
+    solution = course.ik(course.fk(np.stack([q, q]) if batch else q))
+    branch = solution.nearest(np.stack([current, current]) if batch else current)
+    assert (np.abs(branch.q) <= 2 * np.pi).all()
+    chosen = np.reshape(branch.q, (-1, 6))[0]
+    slot = int(np.reshape(branch.slot, -1)[0])
+    raw = np.reshape(solution.q, (-1, 8, 6))[0, slot]
+    np.testing.assert_allclose(np.remainder(chosen - raw + np.pi, 2 * np.pi) - np.pi, 0, atol=1e-12)  # a whole turn
+    assert chosen[0] + 2 * np.pi > 2 * np.pi  # q1 (current far above the range): its highest turn within it
+    assert chosen[5] - 2 * np.pi < -2 * np.pi  # q6 (current far below): its lowest turn within it
+
+
+def test_equal_upper_arm_and_forearm_are_refused():
+    with pytest.raises(ValueError, match="Arm.a2 and Arm.a3 must differ"):
+        Arm(d1=0.1, a2=0.5, a3=0.5, d4=0.1, d5=0.1, d6=0.1)
+    Arm(d1=0.1, a2=0.5, a3=0.5 + 1e-12, d4=0.1, d5=0.1, d6=0.1)
+
+
+@pytest.mark.parametrize("seed", [-1, 2.5, "7", True, None])
+def test_bad_workspace_seed(course, seed):
+    with pytest.raises(ValueError, match="seed must be a non-negative integer"):
+        course.sample_workspace(10, seed=seed)

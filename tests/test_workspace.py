@@ -29,7 +29,7 @@ def test_inside_the_reach_sphere(course):
     shoulder = np.array([0, 0, course.d1])
     reach = np.sqrt((course.a2 + course.a3) ** 2 + course.d4**2) + course.d5 + course.d6
     assert np.linalg.norm(points - shoulder, axis=-1).max() <= reach
-    # COURSE_NOTES §1: roughly a sphere of Ø2600 mm around the base
+    # docs/kinematics.md §1: roughly a sphere of Ø2600 mm around the base
     assert np.linalg.norm(points - shoulder, axis=-1).max() == pytest.approx(1.3, abs=0.1)
 
 

@@ -1,10 +1,14 @@
 /*
- * Compiled IK kernel for ur10core: the same algorithm as ur10core/ik.py's readable
- * reference (`solve_reference`), line for line, so that one pose costs a couple of
- * microseconds and a batch runs without the GIL on several threads.
+ * ur10core's compiled kernel: the UR family's eight-slot IK, the closed-form FK, the DH
+ * frames, quaternions and the nearest-branch pick, in C.
  *
- * COURSE_NOTES §4 (separation of variables, eight branches); slot k = 4 i + 2 j + l.
- * The tests check this kernel against the Python reference on many poses.
+ * An accelerator, not a second method: every function follows its Python counterpart
+ * step for step (the IK: ur10core/ik_reference.py; the rest: ur10core/_numpy_kernels.py),
+ * with the same formulas in the same order, and the tests compare the two backends,
+ * flags, failure codes and distances included. ur10core runs without it
+ * (UR10CORE_BACKEND=numpy, or no C compiler at install time).
+ *
+ * Portable C99 that MSVC also compiles: no M_PI, no variable-length arrays.
  */
 #define PY_SSIZE_T_CLEAN
 #include <Python.h>
@@ -12,13 +16,13 @@
 #include <numpy/arrayobject.h>
 #include <math.h>
 
-#define TAU (2.0 * M_PI)
+#define PI 3.14159265358979323846
+#define TAU (2.0 * PI)
 
-/* Mirror ur10core/ik.py and ur10core/_validate.py. */
-static double LENGTH_TOLERANCE = 1e-9;
-static double WRIST_TOLERANCE = 1e-9;
-static double ROTATION_TOLERANCE = 1e-6;
-static double BOTTOM_ROW_TOLERANCE = 1e-9;
+/* ur10core/tolerances.py, handed over by set_tolerances() when ur10core loads this module. */
+static int configured = 0;
+static double LENGTH_TOLERANCE, CHOICE_TOLERANCE, WRIST_TURN_TOLERANCE, WRIST_TOLERANCE, ROTATION_TOLERANCE,
+    BOTTOM_ROW_TOLERANCE, BAND_LEVERAGE;
 
 enum { REACHABLE = 0, WRIST_INSIDE_CYLINDER = 1, ELBOW_TOO_FAR = 2, ELBOW_TOO_CLOSE = 3 };
 
@@ -37,16 +41,26 @@ typedef struct {          /* where one pose's results go */
     npy_bool *shoulder;   /* 1 */
 } Out;
 
-static inline double wrap(double x) /* into (-pi, pi]; x is within a few turns */
+typedef struct {          /* a pose's rotation and wrist-2 point */
+    double r11, r12, r13, r21, r22, r23, r31, r32, r33;
+    double p5x, p5y, p5z;
+} Pose;
+
+typedef struct {          /* one (theta1, wrist sign) pair: ik_reference._wrist_and_elbow's tuple */
+    double theta1, theta5, theta6, theta234, s5_abs, h4, v4, r;
+} Slot;
+
+/* Into (-pi, pi], exactly (IEEE remainder), in O(1) for any finite angle: ik_reference.wrap. */
+static double wrap(double angle)
 {
-    while (x > M_PI) x -= TAU;
-    while (x <= -M_PI) x += TAU;
-    return x;
+    if (angle > -PI && angle <= PI) return angle; /* most are: what remainder() would return */
+    angle = remainder(angle, TAU);
+    return angle <= -PI ? angle + TAU : angle;
 }
 
-static inline double norm2(double x, double y) /* |(x, y)|: our values are O(1), no overflow */
+static double clamp_unit(double x)
 {
-    return sqrt(x * x + y * y);
+    return x > 1.0 ? 1.0 : (x < -1.0 ? -1.0 : x);
 }
 
 /* 1 if T (row-major 4x4) is finite, has bottom row [0 0 0 1] and a proper rotation part. */
@@ -68,16 +82,151 @@ static int pose_is_valid(const double *T)
     return det > 0.0;
 }
 
-static void solve_pose(const Params *P, const double *T, double theta6_hint, Out o)
+static int in_reach(double r, const Params *P)
 {
-    const double r11 = T[0], r12 = T[1], r13 = T[2], px = T[3];
-    const double r21 = T[4], r22 = T[5], r23 = T[6], py = T[7];
-    const double r31 = T[8], r32 = T[9], r33 = T[10], pz = T[11];
-    const double d1 = P->d1, a2 = P->a2, a3 = P->a3, d4 = P->d4, d5 = P->d5, d6 = P->d6;
+    return P->a2 + P->a3 + LENGTH_TOLERANCE >= r && r >= fabs(P->a2 - P->a3) - LENGTH_TOLERANCE;
+}
 
+static int within(double r, const Params *P) /* the exact reach, no tolerance; 0 for NaN */
+{
+    return P->a2 + P->a3 >= r && r >= fabs(P->a2 - P->a3);
+}
+
+/* ik_reference.nearest_reachable_theta234: the theta234 nearest `theta234` that puts the
+ * frame-4 origin `distance` from the shoulder (or as near as any theta234 can). R > 0. */
+static double nearest_reachable_theta234(double A, double V, double theta234, double d5, double distance)
+{
+    const double R = hypot(A, V);
+    const double u = clamp_unit((distance * distance - (R * R + d5 * d5)) / (2.0 * d5 * R));
+    const double x = theta234 - atan2(V, A);
+    const double first = wrap(asin(u) - x);
+    const double second = wrap(PI - asin(u) - x);
+    return theta234 + (fabs(first) <= fabs(second) ? first : second);
+}
+
+/* ik_reference._wrist_and_elbow: steps 2-5 for one theta1 (c1, s1, reach A) and one wrist sign. */
+static Slot wrist_and_elbow(const Params *P, const Pose *T, double c1, double s1, double A, double sign,
+                            double hint)
+{
+    Slot o;
+    o.theta1 = wrap(atan2(s1, c1));
+    /* Step 2: c5 = z4 . z6; |s5| from the row pair of step 3. */
+    const double c5 = T->r13 * s1 - T->r23 * c1;
+    const double c6s5 = T->r21 * c1 - T->r11 * s1;
+    const double s6s5 = T->r12 * s1 - T->r22 * c1;
+    o.s5_abs = sqrt(c6s5 * c6s5 + s6s5 * s6s5); /* O(1) values: no hypot needed (nor in the reference) */
+    const double s5 = sign * o.s5_abs;
+    o.theta5 = wrap(atan2(s5, c5));
+    /* Step 3: theta6 from the pose, or the hint's wherever that reproduces the pose. */
+    double c6 = 1.0, s6 = 0.0;
+    if (o.s5_abs > 0.0) {
+        c6 = sign * c6s5 / o.s5_abs;
+        s6 = sign * s6s5 / o.s5_abs;
+    }
+    const double theta6_pose = atan2(s6, c6);
+    if (o.s5_abs * fabs(wrap(hint - theta6_pose)) <= WRIST_TURN_TOLERANCE) {
+        o.theta6 = hint;
+        c6 = cos(hint);
+        s6 = sin(hint);
+    } else {
+        o.theta6 = wrap(theta6_pose);
+    }
+    /* Step 4, blended with the third row so that it holds at every theta5. */
+    double c234 = s5 * (T->r13 * c1 + T->r23 * s1) + c5 * c5 * (s6 * T->r31 + c6 * T->r32);
+    double s234 = s5 * T->r33 + c5 * (c6 * T->r31 - s6 * T->r32);
+    const double norm = sqrt(c234 * c234 + s234 * s234);
+    c234 /= norm;
+    s234 /= norm;
+    o.theta234 = atan2(s234, c234);
+    /* Step 5: the frame-4 origin in the arm plane. */
+    const double V = T->p5z - P->d1;
+    o.h4 = A + P->d5 * s234;
+    o.v4 = V - P->d5 * c234;
+    o.r = hypot(o.h4, o.v4);
+    /* a turn that could not fit the tolerance is not tried: r moves at most d5 |(A, V)| / r per radian */
+    const double beyond = o.r > P->a2 + P->a3 ? o.r - (P->a2 + P->a3) : fabs(P->a2 - P->a3) - o.r;
+    const double R = hypot(A, V);
+    if (beyond > 0.0 && R > 0.0 && o.s5_abs * beyond * o.r <= 2.0 * WRIST_TURN_TOLERANCE * P->d5 * R) {
+        /* beyond the reach (if only just): slide along the wrist's singular direction */
+        const double turn = c5 >= 0.0 ? 1.0 : -1.0;
+        const double moved = nearest_reachable_theta234(A, V, o.theta234, P->d5,
+                                                        o.r > P->a2 + P->a3 ? P->a2 + P->a3 : fabs(P->a2 - P->a3));
+        const double theta6_moved = wrap(o.theta6 - turn * (moved - o.theta234));
+        if (o.s5_abs * fabs(wrap(theta6_moved - theta6_pose)) <= WRIST_TURN_TOLERANCE) {
+            o.theta234 = moved;
+            o.theta6 = theta6_moved;
+            o.h4 = A + P->d5 * sin(o.theta234);
+            o.v4 = V - P->d5 * cos(o.theta234);
+            o.r = hypot(o.h4, o.v4);
+        }
+    }
+    return o;
+}
+
+/* ik_reference._reach_within_band: 1 and *slot redone with a reach A in [low, high] that puts
+ * the elbow at its limit (secant steps on r(A), four evaluations at most); 0 otherwise. */
+static int reach_within_band(const Params *P, const Pose *T, Slot *slot, double A, double band_a, double band_b,
+                             double sign, double hint)
+{
+    const double outer = P->a2 + P->a3, inner = fabs(P->a2 - P->a3);
+    const double low = fmin(band_a, band_b), high = fmax(band_a, band_b);
+    const double rho = sqrt(T->p5x * T->p5x + T->p5y * T->p5y);
+    Slot best = *slot;
+    double r = slot->r;
+    const double limit = r > outer ? outer : inner;
+    if (!(fabs(r - limit) <= BAND_LEVERAGE * (high - low)) || fabs(slot->v4) > limit) return 0;
+    double step = copysign(sqrt(limit * limit - slot->v4 * slot->v4), slot->h4) - slot->h4;
+    for (int k = 0; k < 4; k++) {
+        const double moved = fmin(high, fmax(low, A + step));
+        if (moved == A) break;
+        const double scale = rho * hypot(moved, P->d4);
+        const double c1 = (T->p5x * moved - T->p5y * P->d4) / scale;
+        const double s1 = (T->p5y * moved + T->p5x * P->d4) / scale;
+        const Slot better = wrist_and_elbow(P, T, c1, s1, moved, sign, hint);
+        if (within(better.r, P)) {
+            *slot = better;
+            return 1;
+        }
+        if (better.r != r) step = (limit - better.r) * (moved - A) / (better.r - r); /* secant on r(A) */
+        if (in_reach(better.r, P) || fabs(better.r - limit) < fabs(best.r - limit)) best = better;
+        A = moved;
+        r = better.r;
+    }
+    if (!in_reach(best.r, P)) return 0;
+    *slot = best;
+    return 1;
+}
+
+/* ik_reference._theta1_for_reach: 1 and *better if a theta1 in its band makes the wrist reach. */
+static int theta1_for_reach(const Params *P, const Pose *T, const Slot *slot, double sign, double hint, Slot *better)
+{
+    const double A = slot->h4 - P->d5 * sin(slot->theta234);
+    const double V = T->p5z - P->d1;
+    if (!isfinite(slot->r) || (A == 0.0 && V == 0.0)) return 0;
+    const double moved = nearest_reachable_theta234(A, V, slot->theta234, P->d5,
+                                                    slot->r > P->a2 + P->a3 ? P->a2 + P->a3 : fabs(P->a2 - P->a3));
+    const double c5 = T->r13 * sin(slot->theta1) - T->r23 * cos(slot->theta1);
+    const double wanted = slot->theta6 - (c5 >= 0.0 ? 1.0 : -1.0) * (moved - slot->theta234);
+    const double ex = cos(wanted), ey = sin(wanted);
+    double candidate = atan2(T->r21 * ey + T->r22 * ex, T->r11 * ey + T->r12 * ex);
+    candidate += PI * nearbyint((slot->theta1 - candidate) / PI);
+    const double c1 = cos(candidate), s1 = sin(candidate);
+    if (fabs(T->p5x * s1 - T->p5y * c1 - P->d4) > CHOICE_TOLERANCE) return 0;
+    *better = wrist_and_elbow(P, T, c1, s1, T->p5x * c1 + T->p5y * s1, sign, hint);
+    return in_reach(better->r, P);
+}
+
+/* ik_reference.solve_pose for one valid pose. */
+static void solve_pose(const Params *P, const double *M, double theta6_hint, double reach_hint, double theta3_hint,
+                       Out o)
+{
+    const double d4 = P->d4, a2 = P->a2, a3 = P->a3;
+    Pose T = {M[0], M[1], M[2], M[4], M[5], M[6], M[8], M[9], M[10], 0.0, 0.0, 0.0};
     /* Step 1: the wrist-2 point P5 = p - d6 z6 and its distance rho from the base axis. */
-    const double p5x = px - d6 * r13, p5y = py - d6 * r23, p5z = pz - d6 * r33;
-    const double rho2 = p5x * p5x + p5y * p5y;
+    T.p5x = M[3] - P->d6 * M[2];
+    T.p5y = M[7] - P->d6 * M[6];
+    T.p5z = M[11] - P->d6 * M[10];
+    const double rho2 = T.p5x * T.p5x + T.p5y * T.p5y;
     const double rho = sqrt(rho2);
     *o.rho = rho;
     *o.shoulder = fabs(rho - d4) <= LENGTH_TOLERANCE;
@@ -91,104 +240,88 @@ static void solve_pose(const Params *P, const double *T, double theta6_hint, Out
     for (int k = 0; k < 48; k++) o.q[k] = NAN;
     if (!(rho >= d4 - LENGTH_TOLERANCE)) return;
 
-    const double reach = rho2 > d4 * d4 ? sqrt(rho2 - d4 * d4) : 0.0;
+    const double reach = sqrt(fmax(rho2 - d4 * d4, 0.0));
+    const double low = rho - CHOICE_TOLERANCE, high = rho + CHOICE_TOLERANCE;
+    const double reach_low = sqrt(fmax(low * low - d4 * d4, 0.0));
+    const double reach_high = sqrt(fmax(high * high - d4 * d4, 0.0));
+    const double theta1_band = (reach_high - reach_low) * d4 / (reach * reach + d4 * d4);
     const double outer = a2 + a3, inner = fabs(a2 - a3);
-    const double a2a3x2 = 2.0 * a2 * a3, a2sq_a3sq = a2 * a2 + a3 * a3;
-    theta6_hint = wrap(theta6_hint);
-    const double c6_hint = cos(theta6_hint), s6_hint = sin(theta6_hint);
-
+    const double hint = wrap(theta6_hint);
+    const double elbow_hint = isfinite(theta3_hint) ? fabs(wrap(theta3_hint)) : NAN;
+    const double r_hint = sqrt(a2 * a2 + a3 * a3 + 2.0 * a2 * a3 * cos(elbow_hint)); /* where the hint's elbow puts P4 */
     for (int i = 0; i < 2; i++) {
-        const double A = i == 0 ? -reach : reach; /* signed reach of P5 along x1 */
-        const double c1 = (p5x * A - p5y * d4) / rho2;
-        const double s1 = (p5y * A + p5x * d4) / rho2;
-        const double theta1 = wrap(atan2(s1, c1));
-        /* Step 2: c5 = z4 . z6; |s5| from the row pair of step 3. */
-        const double c5 = r13 * s1 - r23 * c1;
-        const double c6s5 = r21 * c1 - r11 * s1;
-        const double s6s5 = r12 * s1 - r22 * c1;
-        const double s5_abs = norm2(c6s5, s6s5);
-        const double c234s5 = r13 * c1 + r23 * s1;
-        const int singular_wrist = s5_abs < WRIST_TOLERANCE;
-        const double theta5_up = atan2(s5_abs, c5); /* in [0, pi] */
-        double c6_up, s6_up, theta6_up;
-        if (singular_wrist) { /* only theta234 +- theta6 is determined: keep the hint's theta6 */
-            c6_up = c6_hint;
-            s6_up = s6_hint;
-            theta6_up = theta6_hint;
-        } else { /* Step 3 */
-            c6_up = c6s5 / s5_abs;
-            s6_up = s6s5 / s5_abs;
-            theta6_up = wrap(atan2(s6_up, c6_up));
-        }
-        double c234_up = 0.0, s234_up = 0.0, theta234_up = 0.0;
+        const double side = i == 0 ? -1.0 : 1.0;
+        const double A = side * ((reach_low <= fabs(reach_hint) && fabs(reach_hint) <= reach_high) ? fabs(reach_hint) : reach);
+        const double scale = rho * hypot(A, d4);
+        const double c1 = (T.p5x * A - T.p5y * d4) / scale;
+        const double s1 = (T.p5y * A + T.p5x * d4) / scale;
         for (int j = 0; j < 2; j++) {
-            /* The j = 1 branch negates s5 and, away from the wrist singularity, turns theta6
-             * by pi (negating c6, s6): the same angles the reference computes per branch. */
             const double sign = j == 0 ? 1.0 : -1.0;
-            const double s5 = sign * s5_abs;
-            const double theta5 = j == 0 ? theta5_up : wrap(-theta5_up);
-            const double c6 = singular_wrist ? c6_up : sign * c6_up;
-            const double s6 = singular_wrist ? s6_up : sign * s6_up;
-            const double theta6 = (j == 0 || singular_wrist) ? theta6_up : wrap(theta6_up + M_PI);
-            /* Step 4, blended with the third row so it holds at every theta5. Away from the
-             * wrist singularity the j = 1 branch negates c234 and s234: theta234 + pi. */
-            double c234, s234, theta234;
-            if (j == 1 && !singular_wrist) {
-                c234 = -c234_up;
-                s234 = -s234_up;
-                theta234 = theta234_up > 0.0 ? theta234_up - M_PI : theta234_up + M_PI;
-            } else {
-                c234 = s5 * c234s5 + c5 * c5 * (s6 * r31 + c6 * r32);
-                s234 = s5 * r33 + c5 * (c6 * r31 - s6 * r32);
-                const double norm = norm2(c234, s234);
-                c234 /= norm;
-                s234 /= norm;
-                theta234 = atan2(s234, c234);
-                if (j == 0) {
-                    c234_up = c234;
-                    s234_up = s234;
-                    theta234_up = theta234;
-                }
+            Slot s = wrist_and_elbow(P, &T, c1, s1, A, sign, hint);
+            if (!within(s.r, P)) {
+                /* where the band holds A = 0 the two shoulder slots are one branch: either may cross */
+                const double band_a = reach_low > 0.0 ? side * reach_low : -side * reach_high;
+                reach_within_band(P, &T, &s, A, band_a, side * reach_high, sign, hint);
             }
-            /* Step 5: the planar 2R problem for the frame-4 origin. */
-            const double h4 = A + d5 * s234;
-            const double v4 = p5z - d1 - d5 * c234;
-            const double r = norm2(h4, v4);
+            if (!within(s.r, P) && s.s5_abs <= theta1_band) {
+                Slot better;
+                if (theta1_for_reach(P, &T, &s, sign, hint, &better)) s = better;
+            }
             const int base = 4 * i + 2 * j;
-            o.elbow_distance[base] = o.elbow_distance[base + 1] = r;
-            if (!(r <= outer + LENGTH_TOLERANCE)) { /* NaN too: a target so far that r overflowed */
+            o.elbow_distance[base] = o.elbow_distance[base + 1] = s.r;
+            o.wrist[base] = o.wrist[base + 1] = (npy_bool)(s.s5_abs <= WRIST_TOLERANCE);
+            if (!(s.r <= outer + LENGTH_TOLERANCE)) { /* NaN too: a target so far that r overflowed */
                 o.failure[base] = o.failure[base + 1] = ELBOW_TOO_FAR;
                 continue;
             }
-            if (r < inner - LENGTH_TOLERANCE) {
+            if (s.r < inner - LENGTH_TOLERANCE) {
                 o.failure[base] = o.failure[base + 1] = ELBOW_TOO_CLOSE;
                 continue;
             }
-            const int at_limit = r >= outer - LENGTH_TOLERANCE || r <= inner + LENGTH_TOLERANCE;
-            double c3 = (r * r - a2sq_a3sq) / a2a3x2;
-            c3 = c3 > 1.0 ? 1.0 : (c3 < -1.0 ? -1.0 : c3);
-            const double s3 = sqrt(1.0 - c3 * c3);
-            const double theta3 = atan2(s3, c3);
-            const double beta = atan2(v4, h4);
+            const int at_limit = s.r >= outer - LENGTH_TOLERANCE || s.r <= inner + LENGTH_TOLERANCE;
+            double c3 = clamp_unit((s.r * s.r - a2 * a2 - a3 * a3) / (2.0 * a2 * a3));
+            double s3 = sqrt(1.0 - c3 * c3);
+            double theta3 = atan2(s3, c3);
+            if (fabs(s.r - r_hint) <= CHOICE_TOLERANCE) { /* theta3 is fixed only to sqrt(rounding) at the limits */
+                theta3 = elbow_hint;
+                c3 = cos(elbow_hint);
+                s3 = sin(elbow_hint);
+            }
+            const double beta = atan2(s.v4, s.h4);
             const double gamma = atan2(a3 * s3, a2 + a3 * c3);
             for (int l = 0; l < 2; l++) {
                 const int k = base + l;
-                const double t3 = l == 0 ? theta3 : wrap(-theta3);
+                const double t3 = wrap(l == 0 ? theta3 : -theta3);
                 const double t2 = wrap(l == 0 ? beta - gamma : beta + gamma);
                 double *qk = o.q + 6 * k;
-                qk[0] = theta1;
+                qk[0] = s.theta1;
                 qk[1] = t2;
                 qk[2] = t3;
-                qk[3] = wrap(theta234 - t2 - t3);
-                qk[4] = theta5;
-                qk[5] = theta6;
+                qk[3] = wrap(s.theta234 - t2 - t3);
+                qk[4] = s.theta5;
+                qk[5] = s.theta6;
                 o.valid[k] = 1;
-                o.wrist[k] = (npy_bool)singular_wrist;
                 o.elbow[k] = (npy_bool)at_limit;
                 o.failure[k] = REACHABLE;
             }
         }
     }
+}
+
+static int check_configured(void)
+{
+    if (!configured) PyErr_SetString(PyExc_RuntimeError, "_kernels.set_tolerances() was not called");
+    return configured;
+}
+
+/* set_tolerances(length, choice, wrist_turn, wrist, rotation, bottom_row, band_leverage): ur10core/tolerances.py. */
+static PyObject *set_tolerances(PyObject *self, PyObject *args)
+{
+    if (!PyArg_ParseTuple(args, "ddddddd", &LENGTH_TOLERANCE, &CHOICE_TOLERANCE, &WRIST_TURN_TOLERANCE,
+                          &WRIST_TOLERANCE, &ROTATION_TOLERANCE, &BOTTOM_ROW_TOLERANCE, &BAND_LEVERAGE))
+        return NULL;
+    configured = 1;
+    Py_RETURN_NONE;
 }
 
 static int parse_params(PyObject *tuple, Params *P)
@@ -202,14 +335,15 @@ static int is_c_array(PyObject *obj, int typenum)
            PyArray_IS_C_CONTIGUOUS((PyArrayObject *)obj);
 }
 
-/* ik_one(T, theta6_hint, params) -> tuple of arrays, or None when T is not a valid pose.
- * T must be a C-contiguous float64 (4, 4) array (the caller guarantees it). */
+/* ik_one(T, theta6_hint, reach_hint, theta3_hint, params) -> tuple of arrays, or None when T is not
+ * a valid pose. T must be a C-contiguous float64 (4, 4) array (the caller guarantees it). */
 static PyObject *ik_one(PyObject *self, PyObject *args)
 {
     PyObject *T_obj, *params;
-    double hint;
+    double hint, reach_hint, theta3_hint;
     Params P;
-    if (!PyArg_ParseTuple(args, "OdO", &T_obj, &hint, &params)) return NULL;
+    if (!check_configured()) return NULL;
+    if (!PyArg_ParseTuple(args, "OdddO", &T_obj, &hint, &reach_hint, &theta3_hint, &params)) return NULL;
     if (!parse_params(params, &P)) return NULL;
     if (!is_c_array(T_obj, NPY_DOUBLE) || PyArray_SIZE((PyArrayObject *)T_obj) != 16) {
         PyErr_SetString(PyExc_TypeError, "ik_one needs a C-contiguous float64 (4, 4) array");
@@ -242,24 +376,26 @@ static PyObject *ik_one(PyObject *self, PyObject *args)
         (double *)PyArray_DATA((PyArrayObject *)rho),
         (npy_bool *)PyArray_DATA((PyArrayObject *)shoulder),
     };
-    solve_pose(&P, T, hint, o);
+    solve_pose(&P, T, hint, reach_hint, theta3_hint, o);
     return Py_BuildValue("(NNNNNNNN)", q, valid, wrist, elbow, shoulder, failure, rho, distance);
 }
 
-/* ik_batch(T (n,4,4), hint (n,), params, q (n,8,6), valid, wrist, elbow (n,8) bool,
+/* ik_batch(T (n,4,4), theta6_hint (n,), reach_hint (n,), theta3_hint (n,), params, q (n,8,6), valid, wrist, elbow (n,8) bool,
  *          shoulder (n,) bool, failure (n,8) int8, rho (n,), distance (n,8)) -> int
  * Solves every pose without the GIL; returns the index of the first pose that is not
  * a valid transform (the caller raises; such a pose's outputs are not written), or -1. */
 static PyObject *ik_batch(PyObject *self, PyObject *args)
 {
-    PyObject *T_obj, *hint_obj, *params, *q, *valid, *wrist, *elbow, *shoulder, *failure, *rho,
-        *distance;
+    PyObject *T_obj, *hint_obj, *reach_obj, *elbow_obj, *params, *q, *valid, *wrist, *elbow, *shoulder, *failure,
+        *rho, *distance;
     Params P;
-    if (!PyArg_ParseTuple(args, "OOOOOOOOOOO", &T_obj, &hint_obj, &params, &q, &valid, &wrist,
-                          &elbow, &shoulder, &failure, &rho, &distance))
+    if (!check_configured()) return NULL;
+    if (!PyArg_ParseTuple(args, "OOOOOOOOOOOOO", &T_obj, &hint_obj, &reach_obj, &elbow_obj, &params, &q, &valid,
+                          &wrist, &elbow, &shoulder, &failure, &rho, &distance))
         return NULL;
     if (!parse_params(params, &P)) return NULL;
-    if (!is_c_array(T_obj, NPY_DOUBLE) || !is_c_array(hint_obj, NPY_DOUBLE) ||
+    if (!is_c_array(T_obj, NPY_DOUBLE) || !is_c_array(hint_obj, NPY_DOUBLE) || !is_c_array(reach_obj, NPY_DOUBLE) ||
+        !is_c_array(elbow_obj, NPY_DOUBLE) ||
         !is_c_array(q, NPY_DOUBLE) || !is_c_array(valid, NPY_BOOL) ||
         !is_c_array(wrist, NPY_BOOL) || !is_c_array(elbow, NPY_BOOL) ||
         !is_c_array(shoulder, NPY_BOOL) || !is_c_array(failure, NPY_INT8) ||
@@ -269,6 +405,7 @@ static PyObject *ik_batch(PyObject *self, PyObject *args)
     }
     npy_intp n = PyArray_SIZE((PyArrayObject *)T_obj) / 16;
     if (PyArray_SIZE((PyArrayObject *)T_obj) != 16 * n || PyArray_SIZE((PyArrayObject *)hint_obj) != n ||
+        PyArray_SIZE((PyArrayObject *)reach_obj) != n || PyArray_SIZE((PyArrayObject *)elbow_obj) != n ||
         PyArray_SIZE((PyArrayObject *)q) != 48 * n || PyArray_SIZE((PyArrayObject *)valid) != 8 * n ||
         PyArray_SIZE((PyArrayObject *)wrist) != 8 * n || PyArray_SIZE((PyArrayObject *)elbow) != 8 * n ||
         PyArray_SIZE((PyArrayObject *)shoulder) != n || PyArray_SIZE((PyArrayObject *)failure) != 8 * n ||
@@ -278,6 +415,8 @@ static PyObject *ik_batch(PyObject *self, PyObject *args)
     }
     const double *T = (const double *)PyArray_DATA((PyArrayObject *)T_obj);
     const double *hint = (const double *)PyArray_DATA((PyArrayObject *)hint_obj);
+    const double *reach_hint = (const double *)PyArray_DATA((PyArrayObject *)reach_obj);
+    const double *theta3_hint = (const double *)PyArray_DATA((PyArrayObject *)elbow_obj);
     double *q_data = (double *)PyArray_DATA((PyArrayObject *)q);
     npy_bool *valid_data = (npy_bool *)PyArray_DATA((PyArrayObject *)valid);
     npy_bool *wrist_data = (npy_bool *)PyArray_DATA((PyArrayObject *)wrist);
@@ -297,14 +436,14 @@ static PyObject *ik_batch(PyObject *self, PyObject *args)
             if (first_bad < 0) first_bad = m;
             continue;
         }
-        solve_pose(&P, Tm, hint[m], o);
+        solve_pose(&P, Tm, hint[m], reach_hint[m], theta3_hint[m], o);
     }
     Py_END_ALLOW_THREADS
 
     return PyLong_FromSsize_t(first_bad);
 }
 
-/* fk_one(q, params) -> (4, 4) array T06 in closed form (COURSE_NOTES §3), or None if q is
+/* fk_one(q, params) -> (4, 4) array T06 in closed form (docs/kinematics.md §3), or None if q is
  * not finite. q must be a C-contiguous float64 array of 6 joint angles. */
 static PyObject *fk_one(PyObject *self, PyObject *args)
 {
@@ -348,7 +487,7 @@ static PyObject *fk_one(PyObject *self, PyObject *args)
 }
 
 /* frames(q (n, 6), params, out (n, 7, 4, 4)): T0i = T01 T12 ... T(i-1,i) of the course's
- * modified DH table (COURSE_NOTES §2), every joint vector; ur10core.arm.Arm.frames. */
+ * modified DH table (docs/kinematics.md §2), every joint vector; ur10core.arm.Arm.frames. */
 static PyObject *frames(PyObject *self, PyObject *args)
 {
     PyObject *q_obj, *params, *out_obj;
@@ -437,7 +576,7 @@ static PyObject *quaternions(PyObject *self, PyObject *args)
 
 /* nearest_one(q (8, 6), valid (8,) bool, current (6,), joint_limit, prefer, tie) -> (slot, shifted (6,))
  * ur10core.ik.nearest_branch for one pose: every angle of every valid slot moved to its
- * 2pi-equivalent nearest the current one (one turn back where that leaves +-joint_limit),
+ * 2pi-equivalent nearest the current one, moved by whole turns into +-joint_limit (>= pi),
  * the slot with the smallest squared joint distance (first on ties, as numpy's argmin),
  * kept as `prefer` when that is within `tie` of it. slot -1 (and NaN angles) when no slot
  * is valid. prefer < 0 means no preference. */
@@ -465,8 +604,10 @@ static PyObject *nearest_one(PyObject *self, PyObject *args)
         for (int j = 0; j < 6; j++) {
             const double angle = q[6 * k + j];
             double v = angle + TAU * nearbyint((current[j] - angle) / TAU); /* half to even, as np.round */
-            if (v > limit) v -= TAU;
-            if (v < -limit) v += TAU;
+            if (v > limit)
+                v -= TAU * ceil((v - limit) / TAU);
+            else if (v < -limit)
+                v += TAU * ceil((-limit - v) / TAU);
             shifted[6 * k + j] = v;
             sum += (v - current[j]) * (v - current[j]);
         }
@@ -488,6 +629,7 @@ static PyObject *nearest_one(PyObject *self, PyObject *args)
 }
 
 static PyMethodDef methods[] = {
+    {"set_tolerances", set_tolerances, METH_VARARGS, "Hand over ur10core/tolerances.py's values."},
     {"nearest_one", nearest_one, METH_VARARGS, "The valid IK slot nearest the current joints, shifted next to them."},
     {"frames", frames, METH_VARARGS, "Frames {0}..{6} of n joint vectors into a preallocated array."},
     {"quaternions", quaternions, METH_VARARGS, "Unit quaternions (w >= 0) of n rotation matrices."},
@@ -498,7 +640,7 @@ static PyMethodDef methods[] = {
 };
 
 static struct PyModuleDef module = {PyModuleDef_HEAD_INIT, "_kernels",
-                                    "Compiled IK kernel of ur10core (see ur10core/ik.py).", -1,
+                                    "ur10core's compiled kernel (see ur10core/ik_reference.py and ur10core/_numpy_kernels.py).", -1,
                                     methods};
 
 PyMODINIT_FUNC PyInit__kernels(void)

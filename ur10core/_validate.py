@@ -7,6 +7,8 @@ argument, what is wrong, and (for batches) the first offending index.
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 #: A rotation part may deviate from orthonormal by this much (max |R^T R - I|).
@@ -20,14 +22,31 @@ def _first_index(mask: np.ndarray) -> tuple[int, ...]:
 
 
 def as_float_array(value, name: str) -> np.ndarray:
-    """``np.asarray(value, float)`` with a readable error for non-numeric input."""
+    """``value`` as a float64 array, or ``ValueError`` for anything that is not plainly real numbers.
+
+    Refused: complex numbers (their imaginary part would be dropped), dates and times,
+    strings, masked arrays (their mask would be ignored), and integers too large for a
+    float.
+    """
+    if isinstance(value, np.ma.MaskedArray):
+        raise ValueError(f"{name} must be a plain array of numbers, not a masked array (its mask would be ignored)")
+    if type(value) is np.ndarray and value.dtype == np.float64:
+        return value
     try:
-        return np.asarray(value, dtype=float)
-    except (TypeError, ValueError) as error:
-        raise ValueError(f"{name} must be numeric, got {value!r:.80}") from error
+        array = np.asarray(value)
+        if array.dtype.kind in "iuf":
+            return array.astype(float, copy=False)
+        if array.dtype.kind == "O" and not any(isinstance(v, (complex, np.complexfloating, str, bytes)) for v in array.flat):
+            return array.astype(float)
+    except (TypeError, ValueError, OverflowError) as error:
+        raise ValueError(f"{name} must be real numbers, got {value!r:.80}") from error
+    kind = {"b": "true/false values", "c": "complex numbers", "M": "dates", "m": "time spans", "U": "text", "S": "bytes"}.get(array.dtype.kind, "not numbers")
+    raise ValueError(f"{name} must be real numbers, got {kind}: {value!r:.80}")
 
 
 def check_finite(array: np.ndarray, name: str) -> None:
+    if array.size <= 16 and all(map(math.isfinite, array.ravel().tolist())):
+        return  # one pose or joint vector: plain floats beat a numpy reduction
     if not np.isfinite(array).all():
         where = _first_index(~np.isfinite(array))
         raise ValueError(

@@ -1,6 +1,6 @@
 """The UR10 arm: forward kinematics, frames, Jacobian, singularities, workspace.
 
-All quantities follow the course's modified (Craig) DH table (COURSE_NOTES §2):
+All quantities follow the course's modified (Craig) DH table (docs/kinematics.md §2):
 
 ====  ==========  =========  =====  ======
  i    alpha_i-1    a_i-1      d_i   theta_i
@@ -26,18 +26,19 @@ from typing import ClassVar
 
 import numpy as np
 
-from . import _kernels
 from . import ik as _ik
-from ._validate import as_float_array, homogeneous_transform, joint_vector
+from . import ik_reference
+from ._backend import kernels
+from ._validate import as_float_array, check_finite, homogeneous_transform, joint_vector
 
 #: alpha_{i-1} of the course's DH table, rows i = 1..6.
 DH_ALPHA = (0.0, math.pi / 2, 0.0, 0.0, -math.pi / 2, math.pi / 2)
 JOINT_NAMES = ("base", "shoulder", "elbow", "wrist 1", "wrist 2", "wrist 3")
-#: The UR10's joint range, every joint (COURSE_NOTES §1): ±360°.
+#: The UR10's joint range, every joint (docs/kinematics.md §1): ±360°.
 JOINT_LIMIT = 2.0 * math.pi
 
 _PRESETS = {
-    # COURSE_NOTES §2: the course's table.
+    # docs/kinematics.md §2: the course's table.
     "course": dict(d1=0.128, a2=0.6129, a3=0.5716, d4=0.1639, d5=0.1157, d6=0.0922),
     # UR's own numbers (standard DH, same structure; a2, a3 given as magnitudes).
     "ur10": dict(d1=0.1273, a2=0.612, a3=0.5723, d4=0.163941, d5=0.1157, d6=0.0922),
@@ -49,7 +50,7 @@ _PRESETS = {
 class SingularityGeometry:
     """What the singularity overlay draws for joint angles ``q`` (leading shape ``...``).
 
-    COURSE_NOTES §5. All points and directions in the base frame, metres.
+    docs/kinematics.md §5. All points and directions in the base frame, metres.
 
     * **shoulder**: singular when the wrist-2 point ``p5`` lies on the cylinder of
       radius ``cylinder_radius`` (= d4) about the base axis (the z axis).
@@ -80,7 +81,7 @@ class Arm:
     Example
     -------
     >>> arm = Arm.preset("course")
-    >>> (arm.fk([0, 0, 0, 0, 0, 0])[:3, 3] * 1000).round(1).tolist()   # COURSE_NOTES §3
+    >>> (arm.fk([0, 0, 0, 0, 0, 0])[:3, 3] * 1000).round(1).tolist()   # docs/kinematics.md §3
     [1184.5, -256.1, 243.7]
     """
 
@@ -112,7 +113,7 @@ class Arm:
 
     @classmethod
     def preset(cls, name: str) -> "Arm":
-        """``"course"`` (COURSE_NOTES §2), ``"ur10"`` (UR's CB3 numbers) or ``"ur10e"``."""
+        """``"course"`` (docs/kinematics.md §2), ``"ur10"`` (UR's CB3 numbers) or ``"ur10e"``."""
         try:
             return cls(name=name, **_PRESETS[name])
         except KeyError:
@@ -122,7 +123,7 @@ class Arm:
 
     @property
     def dh_table(self) -> tuple[tuple[float, float, float], ...]:
-        """Rows ``(alpha_{i-1}, a_{i-1}, d_i)`` for i = 1..6 (COURSE_NOTES §2)."""
+        """Rows ``(alpha_{i-1}, a_{i-1}, d_i)`` for i = 1..6 (docs/kinematics.md §2)."""
         a = (0.0, 0.0, self.a2, self.a3, 0.0, 0.0)
         d = (self.d1, 0.0, 0.0, self.d4, self.d5, self.d6)
         return tuple(zip(DH_ALPHA, a, d))
@@ -130,7 +131,7 @@ class Arm:
     def link_transforms(self, q) -> np.ndarray:
         """``T(i-1, i) = RotX(alpha_{i-1}) TransX(a_{i-1}) RotZ(θi) TransZ(d_i)``, (..., 6, 4, 4).
 
-        COURSE_NOTES §2, Craig form::
+        docs/kinematics.md §2, Craig form::
 
             [ cθ      -sθ      0     a     ]
             [ sθ·cα   cθ·cα   -sα   -sα·d  ]
@@ -166,13 +167,13 @@ class Arm:
         q = joint_vector(q)
         flat = np.ascontiguousarray(q.reshape(-1, 6))
         out = np.empty((len(flat), 7, 4, 4))
-        _kernels.frames(flat, self.dh_lengths, out)
+        kernels.frames(flat, self.dh_lengths, out)
         return out.reshape(q.shape[:-1] + (7, 4, 4))
 
     # ------------------------------------------------------------------ FK
 
     def fk(self, q) -> np.ndarray:
-        """Base → flange pose T06 in closed form (COURSE_NOTES §3), (..., 4, 4), metres.
+        """Base → flange pose T06 in closed form (docs/kinematics.md §3), (..., 4, 4), metres.
 
         Example
         -------
@@ -182,12 +183,12 @@ class Arm:
         [519.984, 57.726, 1110.697]
         """
         if type(q) is np.ndarray and q.shape == (6,) and q.dtype == np.float64 and q.flags.c_contiguous:
-            T = _kernels.fk_one(q, self.dh_lengths)  # the same closed form, compiled: one pose in ~1 µs
+            T = kernels.fk_one(q, self.dh_lengths)  # the same closed form for one pose, without numpy's overhead
             if T is not None:
                 return T
         q = joint_vector(q)
         if q.shape == (6,):
-            return _kernels.fk_one(np.ascontiguousarray(q), self.dh_lengths)
+            return kernels.fk_one(np.ascontiguousarray(q), self.dh_lengths)
         c1, c2, c3, c4, c5, c6 = np.moveaxis(np.cos(q), -1, 0)
         s1, s2, s3, s4, s5, s6 = np.moveaxis(np.sin(q), -1, 0)
         c23, s23 = c2 * c3 - s2 * s3, s2 * c3 + c2 * s3
@@ -215,7 +216,7 @@ class Arm:
     # ------------------------------------------------------------------ IK
 
     def ik(self, T, hint=None) -> _ik.IKSolution:
-        """All eight analytic IK branches of base → flange poses (COURSE_NOTES §4).
+        """All eight analytic IK branches of base → flange poses (docs/kinematics.md §4).
 
         Parameters
         ----------
@@ -224,8 +225,11 @@ class Arm:
             other than [0, 0, 0, 1] or a non-finite entry raises ``ValueError``; an
             unreachable pose does not (every slot is then invalid).
         hint : array_like, shape (..., 6), optional
-            The current joints; only θ6 is used, at the wrist singularity, where only
-            θ234 ± θ6 is determined (θ2, θ3, θ4 then follow θ6). Default: θ6 = 0.
+            The current joints. Where the pose fixes a joint only loosely — θ6 near the
+            wrist singularity (only θ234 ± θ6 is determined), the shoulder's reach near the
+            shoulder singularity, θ3 at the stretched or folded elbow — the hint's value is
+            kept whenever it reproduces the pose within the tolerances of
+            :mod:`ur10core.tolerances`. Default: θ6 = 0.
 
         Returns
         -------
@@ -249,7 +253,7 @@ class Arm:
         if T.shape == (4, 4) and (hint is None or hint.shape == (6,)):
             solution = _ik.solve_one(
                 self, T if T.flags.c_contiguous else np.ascontiguousarray(T),
-                0.0 if hint is None else float(hint[5]),
+                ik_reference.hint_values(None if hint is None else hint.tolist(), self.dh_lengths),
             )
             if solution is None:
                 homogeneous_transform(T)  # words what is wrong
@@ -257,15 +261,18 @@ class Arm:
             return solution
         if T.ndim < 2 or T.shape[-2:] != (4, 4):
             homogeneous_transform(T)  # raises: wrong shape
-        theta6_hint = np.zeros(()) if hint is None else hint[..., 5]
+        if hint is None:
+            hints = np.array([0.0, np.nan, np.nan])
+        else:
+            hints = np.stack([hint[..., 5], self.singularity_factors(hint)[..., 0], hint[..., 2]], axis=-1)
         try:
-            batch = np.broadcast_shapes(T.shape[:-2], theta6_hint.shape)
+            batch = np.broadcast_shapes(T.shape[:-2], hints.shape[:-1])
         except ValueError:
             raise ValueError(
                 f"hint of shape {hint.shape} does not broadcast against poses of shape {T.shape}"
             ) from None
         T = np.broadcast_to(T, batch + (4, 4))
-        solution = _ik.solve_batch(self, T, theta6_hint)
+        solution = _ik.solve_batch(self, T, hints)
         if isinstance(solution, int):
             homogeneous_transform(T)  # words what is wrong
             where = list(np.unravel_index(solution, batch))
@@ -277,7 +284,7 @@ class Arm:
     def jacobian(self, q) -> np.ndarray:
         """Geometric Jacobian at the flange origin in the base frame, (..., 6, 6), rows [v; w].
 
-        COURSE_NOTES §5: column i is ``[z_i × (o_6 − o_i); z_i]`` with z_i, o_i the axis
+        docs/kinematics.md §5: column i is ``[z_i × (o_6 − o_i); z_i]`` with z_i, o_i the axis
         and origin of frame {i} (every joint revolute).
         """
         frames = self.frames(q)
@@ -289,7 +296,7 @@ class Arm:
         return J
 
     def singularity_factors(self, q) -> np.ndarray:
-        """The three factors of det J, (..., 3): shoulder, elbow, wrist (COURSE_NOTES §5).
+        """The three factors of det J, (..., 3): shoulder, elbow, wrist (docs/kinematics.md §5).
 
         ``(a2 c2 + a3 c23 − d5 s234, s3, s5)``; ``det J = a2 a3`` times their product.
         The shoulder factor is the signed reach of the wrist-2 point along x1: it is zero
@@ -306,7 +313,7 @@ class Arm:
         return np.stack([shoulder, np.sin(t3), np.sin(t5)], axis=-1)
 
     def det_jacobian(self, q) -> np.ndarray:
-        """``det J = a2 a3 (a2 c2 + a3 c23 − d5 s234) s3 s5`` (COURSE_NOTES §5), shape (...)."""
+        """``det J = a2 a3 (a2 c2 + a3 c23 − d5 s234) s3 s5`` (docs/kinematics.md §5), shape (...)."""
         return self.a2 * self.a3 * self.singularity_factors(q).prod(axis=-1)
 
     def singularity_geometry(self, q) -> SingularityGeometry:
@@ -315,9 +322,10 @@ class Arm:
 
     def singularity_geometry_from_frames(self, frames: np.ndarray) -> SingularityGeometry:
         """The same from frames {0}..{6} already computed by :meth:`frames`, (..., 7, 4, 4)."""
-        frames = np.asarray(frames, dtype=float)
+        frames = as_float_array(frames, "frames")
         if frames.shape[-3:] != (7, 4, 4):
             raise ValueError(f"frames must have shape (..., 7, 4, 4), got {frames.shape}")
+        check_finite(frames, "frames")
         shoulder = frames[..., 2, :3, 3]
         return SingularityGeometry(
             shoulder=shoulder,
@@ -334,7 +342,7 @@ class Arm:
         )
 
     def singular_configuration(self, kind: str, q) -> np.ndarray:
-        """Joints ``q`` changed as little as needed to sit exactly on one singularity (COURSE_NOTES §5).
+        """Joints ``q`` changed as little as needed to sit exactly on one singularity (docs/kinematics.md §5).
 
         * ``"elbow"``: θ3 = 0, the arm stretched (s3 = 0).
         * ``"wrist"``: θ5 = 0, axes 4 and 6 parallel (s5 = 0).
@@ -383,7 +391,7 @@ class Arm:
         """Flange positions of ``n`` random joint vectors and their manipulability.
 
         θ1..θ5 are drawn uniformly from (−π, π] (θ6 moves neither the flange origin nor
-        det J, so it is 0); positions come from the closed form of COURSE_NOTES §3 and
+        det J, so it is 0); positions come from the closed form of docs/kinematics.md §3 and
         the manipulability is ``|det J| = |a2 a3 (a2 c2 + a3 c23 − d5 s234) s3 s5|`` (§5).
         The same ``n`` and ``seed`` always give the same cloud, on any number of threads.
 

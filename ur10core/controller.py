@@ -1,4 +1,4 @@
-"""The UR controller's joint convention (COURSE_NOTES §6).
+"""The UR controller's joint convention (docs/kinematics.md §6).
 
 UR's controller (and ROS) use *standard* DH with a2, a3 negative. With the same link
 lengths the two conventions differ by a half turn of the shoulder:

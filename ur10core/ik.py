@@ -1,8 +1,10 @@
-"""All-eight-branch analytic inverse kinematics (COURSE_NOTES §4).
+"""All-eight-branch analytic inverse kinematics (docs/kinematics.md §4).
 
 The method is the course's separation of variables, written so that every branch is
 computed from a handful of ``atan2`` and square roots, with no sine or cosine of an
-intermediate angle (they are formed algebraically instead):
+intermediate angle (they are formed algebraically instead). Its readable statement is
+:func:`ur10core.ik_reference.solve_pose`; this module holds the slots, the result type,
+the nearest-branch pick and the dispatch to the backend (compiled or numpy).
 
 1. θ1 from ``(py − d6 r23) c1 + (d6 r13 − px) s1 = −d4``. With the wrist-2 point
    ``P5 = p − d6 z6`` at horizontal distance ρ from the base axis and
@@ -11,10 +13,11 @@ intermediate angle (they are formed algebraically instead):
    course's ``θ1 = atan2(P5y, P5x) + π/2 + acos(d4/ρ)``, ``A ≥ 0`` the ``−acos``.
 2. θ5 = ±acos(r13 s1 − r23 c1), taken as ``atan2(±|s5|, c5)`` with
    ``|s5| = |(r21 c1 − r11 s1, r12 s1 − r22 c1)|`` so it stays accurate near s5 = 0.
-3. θ6 from ``s5 c6 = r21 c1 − r11 s1`` and ``−s5 s6 = r22 c1 − r12 s1``. At the wrist
-   singularity (|s5| < :data:`WRIST_TOLERANCE`, axes 4 and 6 parallel) only
-   θ234 ± θ6 is determined (θ4 ± θ6 for a fixed forearm): θ6 is taken from the hint
-   (the current joints) and θ2, θ3, θ4 follow from it.
+3. θ6 from ``s5 c6 = r21 c1 − r11 s1`` and ``−s5 s6 = r22 c1 − r12 s1``. Near the wrist
+   singularity (axes 4 and 6 parallel) the pose fixes only θ234 ± θ6: the hint's θ6 is
+   kept wherever it reproduces the pose within ``WRIST_TURN_TOLERANCE`` (always at
+   s5 = 0), and where a θ6 leaves the elbow out of reach the feasible θ6 nearest it is
+   taken, in closed form (docs/kinematics.md §4.3).
 4. θ234 from ``c234 s5 = r13 c1 + r23 s1``, ``s234 s5 = r33``, blended with the
    third row ``c234 = s6 r31 + c6 r32``, ``c5 s234 = c6 r31 − s6 r32`` (weights s5, c5²)
    so that it is exact at every θ5, including the wrist singularity.
@@ -55,23 +58,20 @@ from typing import TYPE_CHECKING, ClassVar, NamedTuple
 
 import numpy as np
 
-from . import _kernels
-from ._validate import homogeneous_transform, joint_vector
+from . import ik_reference
+from ._backend import kernels
+from ._validate import as_float_array, homogeneous_transform, joint_vector
+from .ik_reference import ELBOW_TOO_CLOSE, ELBOW_TOO_FAR, REACHABLE, WRIST_INSIDE_CYLINDER
+from .tolerances import LENGTH_TOLERANCE, WRIST_TOLERANCE, WRIST_TURN_TOLERANCE
 
 if TYPE_CHECKING:
     from .arm import Arm
 
-#: Distance (m) within which the shoulder and elbow count as exactly singular: the two
-#: θ1 (or θ3) branches coincide and a pose that far outside the reach is clamped onto it.
-LENGTH_TOLERANCE = 1e-9
-#: |s5| below which the wrist counts as exactly singular and θ6 comes from the hint.
-WRIST_TOLERANCE = 1e-9
-
-#: Why a slot has no solution (``IKSolution.failure``).
-REACHABLE = 0
-WRIST_INSIDE_CYLINDER = 1  #: P5 closer than d4 to the base axis: no θ1 at all
-ELBOW_TOO_FAR = 2  #: the frame-4 origin is beyond a2 + a3 from the shoulder
-ELBOW_TOO_CLOSE = 3  #: the frame-4 origin is closer than |a2 - a3| to the shoulder
+__all__ = [
+    "ELBOW_TOO_CLOSE", "ELBOW_TOO_FAR", "LENGTH_TOLERANCE", "REACHABLE", "WRIST_INSIDE_CYLINDER",
+    "WRIST_TOLERANCE", "WRIST_TURN_TOLERANCE", "Branch", "IKSolution", "SLOTS", "SLOT_LABELS", "Slot",
+    "equivalent_near", "nearest_branch", "solve_reference",
+]
 
 _PI = math.pi
 _TAU = 2.0 * math.pi
@@ -134,7 +134,9 @@ class IKSolution:
         Joint angles in (−π, π]; NaN in invalid slots.
     valid : ndarray of bool, shape (..., 8)
     wrist_singular : ndarray of bool, shape (..., 8)
-        |s5| < :data:`WRIST_TOLERANCE`: θ6 was taken from the hint, θ4 derived.
+        |s5| ≤ :data:`WRIST_TOLERANCE` (axes 4 and 6 parallel): θ6 was chosen, not
+        computed — the hint's, or the one nearest it that lets the elbow reach; θ2, θ3,
+        θ4 follow from it. Also set on slots that fail although θ6 was free to choose.
     elbow_singular : ndarray of bool, shape (..., 8)
         |c3| = 1 (stretched or folded): the two elbow slots coincide.
     shoulder_singular : ndarray of bool, shape (...)
@@ -146,7 +148,8 @@ class IKSolution:
         ρ, the horizontal distance of the wrist-2 point P5 from the base axis (m).
     elbow_distance : ndarray, shape (..., 8)
         Distance from the shoulder to the frame-4 origin in the arm plane (m), the
-        planar 2R reach; NaN where θ1 does not exist.
+        planar 2R reach; NaN where θ1 does not exist. Where the wrist is singular and
+        no θ6 lets the elbow reach, the nearest any θ6 comes.
     arm : Arm
         The arm solved for (its lengths word :meth:`unreachable_reason`).
     """
@@ -196,15 +199,19 @@ class IKSolution:
                 f"(the arm reaches a2 + a3 = {1e3 * outer:.1f} mm from the shoulder)"
             )
         k = int(np.nanargmin(excess))
-        if failure[k] == ELBOW_TOO_FAR:
-            return (
-                f"unreachable: elbow reach — the wrist-1 centre would be {1e3 * distance[k]:.1f} mm "
-                f"from the shoulder, {1e3 * excess[k]:.1f} mm beyond a2 + a3 = {1e3 * outer:.1f} mm"
+        if self.wrist_singular[index][k]:
+            where = (
+                f"with the wrist singular (axes 4 and 6 parallel) no θ6 works: the wrist-1 centre "
+                f"stays at least {1e3 * distance[k]:.1f} mm from the shoulder"
+                if failure[k] == ELBOW_TOO_FAR
+                else f"with the wrist singular (axes 4 and 6 parallel) no θ6 works: the wrist-1 centre "
+                f"stays within {1e3 * distance[k]:.1f} mm of the shoulder"
             )
-        return (
-            f"unreachable: elbow reach — the wrist-1 centre would be {1e3 * distance[k]:.1f} mm "
-            f"from the shoulder, {1e3 * excess[k]:.1f} mm closer than |a2 − a3| = {1e3 * inner:.1f} mm"
-        )
+        else:
+            where = f"the wrist-1 centre would be {1e3 * distance[k]:.1f} mm from the shoulder"
+        if failure[k] == ELBOW_TOO_FAR:
+            return f"unreachable: elbow reach — {where}, {1e3 * excess[k]:.1f} mm beyond a2 + a3 = {1e3 * outer:.1f} mm"
+        return f"unreachable: elbow reach — {where}, {1e3 * excess[k]:.1f} mm closer than |a2 − a3| = {1e3 * inner:.1f} mm"
 
 
 #: Squared joint distances (rad²) closer than this count as a tie in :func:`nearest_branch`.
@@ -248,8 +255,14 @@ def nearest_branch(solution: IKSolution, q_current, joint_limit: float = _TAU, p
     ([30.0, 45.0, 26.0, 50.0, 60.0, -280.0], 4)
     """
     q_current = joint_vector(q_current, "q_current")
-    if solution.q.shape == (8, 6) and q_current.shape == (6,) and (prefer is None or np.ndim(prefer) == 0):
-        return _nearest_one(solution, q_current, joint_limit, prefer)
+    joint_limit = _joint_limit(joint_limit)
+    prefer = _preferred_slot(prefer)
+    if solution.q.shape == (8, 6) and q_current.shape == (6,) and type(prefer) is int:
+        slot, q = kernels.nearest_one(
+            np.ascontiguousarray(solution.q, dtype=float), np.ascontiguousarray(solution.valid, dtype=bool),
+            np.ascontiguousarray(q_current), joint_limit, prefer, TIE_TOLERANCE,
+        )
+        return Branch(q, np.array(slot))
     current = np.expand_dims(q_current, -2)  # (..., 1, 6)
     with np.errstate(invalid="ignore"):
         shifted = equivalent_near(solution.q, current, joint_limit)
@@ -257,154 +270,85 @@ def nearest_branch(solution: IKSolution, q_current, joint_limit: float = _TAU, p
     slot = np.argmin(distance, axis=-1)
     flat_distance = distance.reshape(-1, 8)
     rows = np.arange(len(flat_distance))
-    if prefer is not None:
-        prefer = np.broadcast_to(np.asarray(prefer), slot.shape).reshape(-1)
-        candidate = np.clip(prefer, 0, 7)
-        tie = (prefer == candidate) & (flat_distance[rows, candidate] <= flat_distance[rows, slot.reshape(-1)] + TIE_TOLERANCE)
-        slot = np.where(tie, candidate, slot.reshape(-1)).reshape(slot.shape)
+    try:
+        prefer = np.broadcast_to(prefer, slot.shape).reshape(-1)
+    except ValueError:
+        raise ValueError(f"prefer of shape {np.shape(prefer)} does not broadcast against poses of shape {slot.shape}") from None
+    candidate = np.maximum(prefer, 0)
+    tie = (prefer >= 0) & (flat_distance[rows, candidate] <= flat_distance[rows, slot.reshape(-1)] + TIE_TOLERANCE)
+    slot = np.where(tie, candidate, slot.reshape(-1)).reshape(slot.shape)
     any_valid = solution.valid.any(axis=-1)
     best = shifted.reshape(-1, 8, 6)[rows, slot.reshape(-1)].reshape(slot.shape + (6,))
     best = np.where(any_valid[..., None], best, np.nan)
     return Branch(best, np.where(any_valid, slot, -1))
 
 
-def _nearest_one(solution: IKSolution, q_current: np.ndarray, joint_limit: float, prefer) -> Branch:
-    """:func:`nearest_branch` for one pose, in the compiled kernel (the app calls it on every drag event)."""
-    preferred = int(prefer) if prefer is not None and 0 <= int(prefer) < 8 else -1
-    slot, q = _kernels.nearest_one(
-        np.ascontiguousarray(solution.q, dtype=float), np.ascontiguousarray(solution.valid, dtype=bool),
-        np.ascontiguousarray(q_current, dtype=float), float(joint_limit), preferred, TIE_TOLERANCE,
-    )
-    return Branch(q, np.array(slot))
+def _joint_limit(joint_limit) -> float:
+    if type(joint_limit) is float and _PI <= joint_limit < math.inf:
+        return joint_limit
+    if isinstance(joint_limit, bool) or not isinstance(joint_limit, (int, float, np.integer, np.floating)):
+        raise ValueError(f"joint_limit must be a number of radians, got {joint_limit!r:.60}")
+    if not _PI <= joint_limit < math.inf:
+        raise ValueError(f"joint_limit must be at least π (every angle then has a turn within ±joint_limit), got {joint_limit!r}")
+    return float(joint_limit)
+
+
+def _preferred_slot(prefer) -> int | np.ndarray:
+    """``prefer`` as an int (or int array) with values −1 (none) or 0..7; ValueError otherwise."""
+    if prefer is None:
+        return -1
+    if type(prefer) is int and -1 <= prefer <= 7:  # the app's one-pose call, without numpy's overhead
+        return prefer
+    value = np.asarray(prefer)
+    if value.dtype == bool or not np.issubdtype(value.dtype, np.integer):
+        raise ValueError(f"prefer must be a slot number 0..7 (or −1 for none), got {prefer!r:.60}")
+    if ((value < -1) | (value > 7)).any():
+        raise ValueError(f"prefer must be a slot number 0..7 (or −1 for none), got {prefer!r:.60}")
+    return int(value) if value.ndim == 0 else value.astype(np.intp)
 
 
 def equivalent_near(q, q_current, joint_limit: float = _TAU) -> np.ndarray:
     """Each angle of ``q`` replaced by its 2π-equivalent nearest ``q_current``, kept within ±joint_limit.
 
-    Shapes broadcast; where the nearest equivalent would leave the joint range the one a
-    turn back is taken instead. Used by :func:`nearest_branch` and wherever a branch is
-    applied to an arm that has turned some joints past ±180°.
+    Shapes broadcast. Where the nearest equivalent would leave the joint range, it is
+    moved by whole turns back into it (``joint_limit ≥ π``, so there always is one).
+    Used by :func:`nearest_branch` and wherever a branch is applied to an arm that has
+    turned some joints past ±180°.
 
     >>> np.degrees(equivalent_near(np.radians([170.0, -10.0]), np.radians([-170.0, 350.0]))).round(6).tolist()
     [-190.0, 350.0]
+    >>> round(float(np.degrees(equivalent_near(np.radians(10.0), 20.0))), 9)  # 20 rad is beyond ±360°
+    10.0
     """
-    q = np.asarray(q, dtype=float)
+    q = as_float_array(q, "q")
+    q_current = as_float_array(q_current, "q_current")
     shifted = q + _TAU * np.round((q_current - q) / _TAU)
-    shifted = np.where(shifted > joint_limit, shifted - _TAU, shifted)
-    return np.where(shifted < -joint_limit, shifted + _TAU, shifted)
+    shifted = np.where(shifted > joint_limit, shifted - _TAU * np.ceil((shifted - joint_limit) / _TAU), shifted)
+    return np.where(shifted < -joint_limit, shifted + _TAU * np.ceil((-joint_limit - shifted) / _TAU), shifted)
 
 
-# --------------------------------------------------------------------------- reference
+# --------------------------------------------------------------------------- solving
 
 
-def _wrap(angle: float) -> float:
-    """Into (−π, π]."""
-    angle = math.remainder(angle, _TAU)
-    return angle + _TAU if angle <= -_PI else angle
+def solve_reference(arm: "Arm", T, hint=None) -> IKSolution:
+    """The IK of one pose by :func:`ur10core.ik_reference.solve_pose`, in plain Python.
 
-
-def solve_reference(arm: "Arm", T, theta6_hint: float = 0.0) -> IKSolution:
-    """The course's IK of one pose, step by step in plain Python (COURSE_NOTES §4).
-
-    This is the readable statement of the method; the compiled kernel
-    (``ur10core/_kernels.c``) that :meth:`Arm.ik` runs is a line-for-line port of it,
-    and the tests hold the two to each other. Same arguments and result as
-    :meth:`Arm.ik` for a single pose.
+    The readable statement of the method, whatever the backend; same arguments and
+    result as :meth:`Arm.ik` for a single pose.
     """
     T = homogeneous_transform(T)
     if T.shape != (4, 4):
         raise ValueError(f"solve_reference takes one pose of shape (4, 4), got {T.shape}")
-    (r11, r12, r13, px), (r21, r22, r23, py), (r31, r32, r33, pz), _ = T.tolist()
-    d1, a2, a3, d4, d5, d6 = arm.d1, arm.a2, arm.a3, arm.d4, arm.d5, arm.d6
-    sqrt, atan2, hypot = math.sqrt, math.atan2, math.hypot
-    nan = math.nan
-
-    # Step 1: the wrist-2 point P5 = p − d6 z6 and its distance ρ from the base axis.
-    p5x, p5y, p5z = px - d6 * r13, py - d6 * r23, pz - d6 * r33
-    rho2 = p5x * p5x + p5y * p5y
-    rho = sqrt(rho2)
-    values = [nan] * 48
-    elbow_distance = [nan] * 8
-    wrist_singular = [False] * 8
-    elbow_singular = [False] * 8
-    failure = [WRIST_INSIDE_CYLINDER] * 8
-    shoulder_singular = abs(rho - d4) <= LENGTH_TOLERANCE
-    if rho >= d4 - LENGTH_TOLERANCE:
-        reach = sqrt(max(rho2 - d4 * d4, 0.0))
-        outer, inner = a2 + a3, abs(a2 - a3)
-        a2a3x2, a2sq_a3sq = 2.0 * a2 * a3, a2 * a2 + a3 * a3
-        theta6_hint = _wrap(theta6_hint)
-        c6_hint, s6_hint = math.cos(theta6_hint), math.sin(theta6_hint)
-        for i, A in ((0, -reach), (1, reach)):  # A: signed reach of P5 along x1
-            c1 = (p5x * A - p5y * d4) / rho2
-            s1 = (p5y * A + p5x * d4) / rho2
-            theta1 = _wrap(atan2(s1, c1))
-            # Step 2: c5 = z4·z6; |s5| from the row pair of step 3.
-            c5 = r13 * s1 - r23 * c1
-            c6s5 = r21 * c1 - r11 * s1
-            s6s5 = r12 * s1 - r22 * c1
-            s5_abs = hypot(c6s5, s6s5)
-            c234s5 = r13 * c1 + r23 * s1
-            singular_wrist = s5_abs < WRIST_TOLERANCE
-            for j, sign in ((0, 1.0), (1, -1.0)):
-                s5 = sign * s5_abs
-                theta5 = _wrap(atan2(s5, c5))
-                if singular_wrist:  # only θ234 ± θ6 is determined: keep the hint's θ6
-                    c6, s6, theta6 = c6_hint, s6_hint, theta6_hint
-                else:  # Step 3
-                    c6, s6 = sign * c6s5 / s5_abs, sign * s6s5 / s5_abs
-                    theta6 = _wrap(atan2(s6, c6))
-                # Step 4, blended with the third row so that it holds at every θ5.
-                c234 = s5 * c234s5 + c5 * c5 * (s6 * r31 + c6 * r32)
-                s234 = s5 * r33 + c5 * (c6 * r31 - s6 * r32)
-                norm = hypot(c234, s234)
-                c234, s234 = c234 / norm, s234 / norm
-                theta234 = atan2(s234, c234)
-                # Step 5: the planar 2R problem for the frame-4 origin.
-                h4 = A + d5 * s234
-                v4 = p5z - d1 - d5 * c234
-                r = hypot(h4, v4)
-                base = 4 * i + 2 * j
-                elbow_distance[base] = elbow_distance[base + 1] = r
-                if not r <= outer + LENGTH_TOLERANCE:  # NaN too: a target so far that r overflowed
-                    failure[base] = failure[base + 1] = ELBOW_TOO_FAR
-                    continue
-                if r < inner - LENGTH_TOLERANCE:
-                    failure[base] = failure[base + 1] = ELBOW_TOO_CLOSE
-                    continue
-                failure[base] = failure[base + 1] = REACHABLE
-                wrist_singular[base] = wrist_singular[base + 1] = singular_wrist
-                elbow_singular[base] = elbow_singular[base + 1] = (
-                    r >= outer - LENGTH_TOLERANCE or r <= inner + LENGTH_TOLERANCE
-                )
-                c3 = min(1.0, max(-1.0, (r * r - a2sq_a3sq) / a2a3x2))
-                s3 = sqrt(1.0 - c3 * c3)
-                theta3 = atan2(s3, c3)
-                beta = atan2(v4, h4)
-                gamma = atan2(a3 * s3, a2 + a3 * c3)
-                for l, (t3, t2) in enumerate(((theta3, beta - gamma), (-theta3, beta + gamma))):
-                    t3, t2 = _wrap(t3), _wrap(t2)
-                    offset = 6 * (base + l)
-                    values[offset : offset + 6] = (
-                        theta1, t2, t3, _wrap(theta234 - t2 - t3), theta5, theta6,
-                    )
-    valid = [code == REACHABLE for code in failure]
-    flags = np.array(valid + wrist_singular + elbow_singular + [shoulder_singular])
-    floats = np.array(values + elbow_distance + [rho])
+    hint = None if hint is None else joint_vector(hint, "hint")
+    if hint is not None and hint.shape != (6,):
+        raise ValueError(f"solve_reference takes one hint of shape (6,), got {hint.shape}")
+    hints = ik_reference.hint_values(None if hint is None else hint.tolist(), arm.dh_lengths)
+    q, valid, wrist, elbow, shoulder, failure, rho, distance = ik_reference.solve_pose(T.tolist(), *hints, arm.dh_lengths)
     return IKSolution(
-        q=floats[:48].reshape(8, 6),
-        valid=flags[:8],
-        wrist_singular=flags[8:16],
-        elbow_singular=flags[16:24],
-        shoulder_singular=flags[24:].reshape(()),
-        failure=np.array(failure, dtype=np.int8),
-        wrist2_radius=floats[56:].reshape(()),
-        elbow_distance=floats[48:56],
-        arm=arm,
+        np.array(q).reshape(8, 6), np.array(valid), np.array(wrist), np.array(elbow), np.array(shoulder),
+        np.array(failure, dtype=np.int8), np.array(rho), np.array(distance), arm,
     )
 
-
-# --------------------------------------------------------------------------- compiled path
 
 #: Poses per task that :func:`solve_batch` hands to the thread pool.
 BLOCK = 16384
@@ -418,26 +362,31 @@ def _pool() -> ThreadPoolExecutor:
     return _POOL
 
 
-def solve_one(arm: "Arm", T: np.ndarray, theta6_hint: float) -> IKSolution | None:
-    """The compiled kernel on one C-contiguous float64 (4, 4) pose; ``None`` if ``T`` is not a valid pose."""
-    result = _kernels.ik_one(T, theta6_hint, arm.dh_lengths)
+def solve_one(arm: "Arm", T: np.ndarray, hints: tuple[float, float, float]) -> IKSolution | None:
+    """The backend on one C-contiguous float64 (4, 4) pose; ``None`` if ``T`` is not a valid pose.
+
+    ``hints`` are :func:`ur10core.ik_reference.hint_values`.
+    """
+    result = kernels.ik_one(T, *hints, arm.dh_lengths)
     if result is None:
         return None
     q, valid, wrist, elbow, shoulder, failure, rho, distance = result
     return IKSolution(q, valid, wrist, elbow, shoulder, failure, rho, distance, arm)
 
 
-def solve_batch(arm: "Arm", T: np.ndarray, theta6_hint: np.ndarray) -> IKSolution | int:
-    """The compiled kernel on poses ``T`` (..., 4, 4), ``theta6_hint`` broadcast to (...).
+def solve_batch(arm: "Arm", T: np.ndarray, hints: np.ndarray) -> IKSolution | int:
+    """The backend on poses ``T`` (..., 4, 4); ``hints`` (..., 3) are (θ6, A, θ3), broadcast.
 
-    Blocks of :data:`BLOCK` poses run on a thread pool; the kernel releases the GIL.
-    Returns the flat index of the first pose that is not a valid transform instead of a
-    result, so that the caller can word the error.
+    Blocks of :data:`BLOCK` poses run on a thread pool (the compiled kernel releases the
+    GIL, as numpy does inside its loops). Returns the flat index of the first pose that
+    is not a valid transform instead of a result, so that the caller can word the error.
     """
     shape = T.shape[:-2]
     flat = np.ascontiguousarray(T, dtype=float).reshape(-1, 16)
     n = flat.shape[0]
-    hint = np.ascontiguousarray(np.broadcast_to(theta6_hint, shape), dtype=float).reshape(-1)
+    theta6_hint, reach_hint, theta3_hint = (
+        np.ascontiguousarray(np.broadcast_to(hints[..., k], shape), dtype=float).reshape(-1) for k in range(3)
+    )
     q = np.empty((n, 8, 6))
     valid = np.empty((n, 8), dtype=bool)
     wrist = np.empty((n, 8), dtype=bool)
@@ -450,7 +399,10 @@ def solve_batch(arm: "Arm", T: np.ndarray, theta6_hint: np.ndarray) -> IKSolutio
 
     def run(start: int) -> int:
         block = slice(start, min(start + BLOCK, n))
-        bad = _kernels.ik_batch(flat[block], hint[block], arm.dh_lengths, *(out[block] for out in outputs))
+        bad = kernels.ik_batch(
+            flat[block], theta6_hint[block], reach_hint[block], theta3_hint[block], arm.dh_lengths,
+            *(out[block] for out in outputs),
+        )
         return -1 if bad < 0 else start + bad
 
     starts = range(0, n, BLOCK)

@@ -1,4 +1,4 @@
-"""The four ways the course reads an orientation (COURSE_NOTES §3, Craig ch. 2).
+"""The four ways the course reads an orientation (docs/kinematics.md §3, Craig ch. 2).
 
 * Z-Y-X Euler angles (α, β, γ): rotate about Z by α, then about the *new* Y by β,
   then about the new X by γ: ``R = Rz(α) Ry(β) Rx(γ)``.
@@ -24,7 +24,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from . import _kernels
+from ._backend import kernels
 from ._validate import as_float_array, check_finite, rotation_matrix
 
 #: Below this cos β the Z-Y-X angles are at gimbal lock (β = ±90°): α is set to 0.
@@ -106,12 +106,12 @@ def quaternion(R, check: bool = True) -> np.ndarray:
     ``(1 + t, r32 − r23, r13 − r31, r21 − r12)``, ``(r32 − r23, 1 + 2 r11 − t, r12 + r21, r13 + r31)``, …
     are 4 q_k q for k = w, x, y, z; the one with the largest diagonal term (the largest
     |q_k|) is normalised, so it stays accurate at every angle, including θ = π.
-    Computed by the compiled kernel (``_kernels.c``).
+    Computed by the backend's kernel (compiled, or numpy).
     """
     R = _rotations(R, check)
     flat = np.ascontiguousarray(R.reshape(-1, 3, 3), dtype=float)
     out = np.empty((len(flat), 4))
-    _kernels.quaternions(flat, out)
+    kernels.quaternions(flat, out)
     return out.reshape(R.shape[:-2] + (4,))
 
 
@@ -145,7 +145,7 @@ def angle_axis(R, check: bool = True) -> tuple[np.ndarray, np.ndarray]:
 
 def angle_axis_from_quaternion(q) -> tuple[np.ndarray, np.ndarray]:
     """``(θ, k̂)`` of a unit quaternion ``(w, x, y, z)`` with w ≥ 0 (as :func:`quaternion` returns)."""
-    q = np.asarray(q, dtype=float)
+    q = _angles(q, "q", 4)
     vector = q[..., 1:]
     length = np.linalg.norm(vector, axis=-1)
     theta = 2.0 * np.arctan2(length, q[..., 0])

@@ -1,4 +1,4 @@
-"""T06, the Jacobian and det J derived with sympy from the DH table (COURSE_NOTES §2, §3, §5).
+"""T06, the Jacobian and det J derived with sympy from the DH table (docs/kinematics.md §2, §3, §5).
 
 The derivation takes about a minute (sympy's ``simplify``), so the app never runs it:
 :func:`load` reads the result cached in ``symbolic_cache.json`` (milliseconds), and the
@@ -62,7 +62,7 @@ def _s(*joints: int) -> sp.Expr:
     return sp.sin(sum(THETA[j - 1] for j in joints))
 
 
-#: The three factors of det J as the course writes them (COURSE_NOTES §5).
+#: The three factors of det J as the course writes them (docs/kinematics.md §5).
 SHOULDER_FACTOR = a2 * _c(2) + a3 * _c(2, 3) - d5 * _s(2, 3, 4)
 ELBOW_FACTOR = _s(3)
 WRIST_FACTOR = _s(5)
@@ -88,7 +88,7 @@ class Derivation:
 
 
 def link_transform(alpha, a, theta, d) -> sp.Matrix:
-    """``RotX(alpha) TransX(a) RotZ(theta) TransZ(d)`` (COURSE_NOTES §2, Craig form)."""
+    """``RotX(alpha) TransX(a) RotZ(theta) TransZ(d)`` (docs/kinematics.md §2, Craig form)."""
     ca, sa, ct, st = sp.cos(alpha), sp.sin(alpha), sp.cos(theta), sp.sin(theta)
     return sp.Matrix(
         [

@@ -47,6 +47,7 @@ def horizontal_section(points, height: float, thickness: float = 0.02) -> tuple[
     ([[1.0, 0.0, 0.5]], [True, False])
     """
     points = _points(points)
+    height, thickness = float(as_float_array(height, "height")), float(as_float_array(thickness, "thickness"))
     if not np.isfinite(height) or not np.isfinite(thickness) or thickness <= 0:
         raise ValueError(f"height must be finite and thickness positive, got {height!r}, {thickness!r}")
     keep = np.abs(points[:, 2] - height) <= thickness / 2

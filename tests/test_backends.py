@@ -1,0 +1,251 @@
+"""The compiled kernel and the numpy backend give the same results, corners included.
+
+``ur10core._numpy_kernels`` and ``ur10core._kernels`` are called side by side here,
+whichever backend the rest of the suite runs on (CI runs it twice, the second time with
+``UR10CORE_BACKEND=numpy``). The plain-Python reference (``ik_reference``) is the
+numpy backend's one-pose path, so it is compared too.
+"""
+
+import math
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import ur10core
+from ur10core import Arm, _numpy_kernels, ik_reference
+from ur10core._backend import configured
+from ur10core.tolerances import LENGTH_TOLERANCE
+
+from .conftest import random_joints
+
+compiled = configured(pytest.importorskip("ur10core._kernels", reason="the compiled kernel was not built (no C compiler)"))
+ROOT = Path(__file__).resolve().parent.parent
+FIELDS = ("q", "valid", "wrist_singular", "elbow_singular", "shoulder_singular", "failure", "rho", "elbow_distance")
+
+
+def _batch(module, arm: Arm, T: np.ndarray, hints: np.ndarray) -> dict:
+    """``module.ik_batch`` on poses (n, 4, 4) with hints (n, 3): θ6, the shoulder's reach A, θ3 (NaN: none)."""
+    n = len(T)
+    out = (np.empty((n, 8, 6)), np.empty((n, 8), bool), np.empty((n, 8), bool), np.empty((n, 8), bool),
+           np.empty(n, bool), np.empty((n, 8), np.int8), np.empty(n), np.empty((n, 8)))
+    columns = (np.ascontiguousarray(hints[:, k], dtype=float) for k in range(3))
+    bad = module.ik_batch(np.ascontiguousarray(T.reshape(n, 16)), *columns, arm.dh_lengths, *out)
+    assert bad == -1
+    return dict(zip(FIELDS, out))
+
+
+def _one(module, arm: Arm, T: np.ndarray, hints: np.ndarray) -> dict:
+    return dict(zip(FIELDS, module.ik_one(np.ascontiguousarray(T), *map(float, hints), arm.dh_lengths)))
+
+
+def _hints(arm: Arm, q: np.ndarray) -> np.ndarray:
+    """What Arm.ik hands the kernels for the joints ``q`` (n, 6)."""
+    return np.stack([q[:, 5], arm.singularity_factors(q)[:, 0], q[:, 2]], axis=-1)
+
+
+#: At the stretched or folded elbow θ3 = ±acos(c3) is fixed only to √(rounding): one bit of
+#: difference in r between two implementations moves it by 1.5e-8 rad (docs/kinematics.md §4.3).
+ELBOW_SINGULAR_ANGLES = 1e-7
+
+
+def _assert_same(a: dict, b: dict, where: str, angle_tolerance: float = 1e-12) -> None:
+    """Flags and failure codes equal; ρ and the distances to 1e-12 m; angles to ``angle_tolerance``, ±π spelled alike."""
+    for name in ("valid", "wrist_singular", "elbow_singular", "shoulder_singular", "failure"):
+        np.testing.assert_array_equal(a[name], b[name], err_msg=f"{name} differs ({where})")
+    for name in ("rho", "elbow_distance"):
+        np.testing.assert_allclose(a[name], b[name], rtol=0, atol=1e-12, err_msg=f"{name} differs ({where})")
+    tolerance = np.where(a["elbow_singular"], ELBOW_SINGULAR_ANGLES, angle_tolerance)[..., None]
+    difference = np.where(np.isnan(a["q"]) & np.isnan(b["q"]), 0.0, np.abs(a["q"] - b["q"]))
+    assert (difference <= tolerance).all(), f"angles differ by {np.nanmax(difference):.3g} ({where})"
+    valid_q = a["q"][a["valid"]]
+    assert ((valid_q > -math.pi) & (valid_q <= math.pi)).all(), f"angles outside (−π, π] ({where})"
+
+
+def _corner_poses(arm: Arm) -> tuple[np.ndarray, np.ndarray, list[str]]:
+    """Poses and hints (θ6, A, θ3) at the corners where two implementations could part."""
+    rng = np.random.default_rng(40)
+    joints, hints, names = [], [], []
+
+    def add(q, name, hint6=0.0, generating_hint=False):
+        joints.append(np.asarray(q, float))
+        hints.append(_hints(arm, q[None])[0] if generating_hint else (hint6, math.nan, math.nan))
+        names.append(name)
+
+    for k in range(60):
+        q = random_joints(1, seed=100 + k)[0]
+        q_w = q.copy()
+        q_w[4] = [0.0, math.pi, -math.pi][k % 3]
+        add(q_w, f"wrist exactly singular {k}", hint6=rng.uniform(-4, 4))
+        q_e = q.copy()
+        q_e[2] = [0.0, math.pi, -math.pi][k % 3]
+        add(q_e, f"elbow exactly singular {k}", generating_hint=k % 2 == 0)
+        q_s = arm.singular_configuration("shoulder", q)
+        add(q_s, f"shoulder exactly singular {k}", generating_hint=k % 2 == 0)
+        add(arm.singular_configuration("wrist", arm.singular_configuration("elbow", q_s)), f"all three {k}", hint6=q[5])
+        q_pi = q.copy()
+        q_pi[k % 6] = math.pi if k % 2 else -math.pi
+        add(q_pi, f"a joint at ±π {k}", hint6=math.pi)
+    for hint in (1e9, -1e9, 1e16, 1e300, -1e308, 2 * math.pi * 1e6 + 0.3):
+        q = np.radians([45, 90, 0, -90, 0, 60])
+        add(q, f"hint {hint:g}", hint6=hint)
+    poses = arm.fk(np.array(joints))
+    hints = np.array(hints)
+    # ±1e-7 m around the reach boundary: the stretched arm moved along its own length
+    for k in range(30):
+        q = random_joints(1, seed=200 + k)[0]
+        q[2] = 0.0
+        T = arm.fk(q)
+        geometry = arm.singularity_geometry(q)
+        along = geometry.p4 - geometry.elbow_center  # in the arm plane, from the shoulder to the frame-4 origin
+        along /= np.linalg.norm(along)
+        for shift in (-1e-7, 1e-7):
+            moved = T.copy()
+            moved[:3, 3] += shift * along
+            poses = np.concatenate([poses, moved[None]])
+            hints = np.concatenate([hints, [(q[5], math.nan, math.nan)]])
+            names.append(f"{shift:+g} m from the reach boundary {k}")
+    return poses, hints, names
+
+
+@pytest.mark.parametrize("preset", Arm.PRESETS)
+def test_backends_agree_at_the_corners(preset):
+    arm = Arm.preset(preset)
+    T, hints, names = _corner_poses(arm)
+    c = _batch(compiled, arm, T, hints)
+    n = _batch(_numpy_kernels, arm, T, hints)
+    for k, name in enumerate(names):
+        c_k = {field: value[k] for field, value in c.items()}
+        n_k = {field: value[k] for field, value in n.items()}
+        one_c = _one(compiled, arm, T[k], hints[k])
+        one_ref = _one(_numpy_kernels, arm, T[k], hints[k])  # the plain-Python reference
+        for other, label in ((n_k, "numpy batch"), (one_c, "compiled one pose"), (one_ref, "reference")):
+            # at an exact singularity the free angle is the hint's in every implementation
+            _assert_same(c_k, other, f"{name}: compiled batch vs {label}", angle_tolerance=1e-9)
+    # 1e-7 m beyond the boundary is out of reach for the stretched arm's own slot pair, 1e-7 m inside is not
+    outer = arm.a2 + arm.a3
+    for k, name in enumerate(names):
+        if "reach boundary" in name:
+            pair = np.abs(c["elbow_distance"][k] - outer).argmin()
+            beyond = name.startswith("+")
+            assert c["elbow_distance"][k, pair] - outer == pytest.approx(1e-7 if beyond else -1e-7, abs=1e-9)
+            assert c["valid"][k, pair] != beyond and (c["failure"][k, pair] == 2) == beyond
+
+
+def test_backends_agree_on_random_poses(course):
+    q = random_joints(3000, seed=41)
+    T = course.fk(q)
+    hints = _hints(course, np.where(np.arange(len(q))[:, None] % 2 == 0, q, random_joints(len(q), seed=42)))
+    _assert_same(_batch(compiled, course, T, hints), _batch(_numpy_kernels, course, T, hints), "random")
+
+
+def test_far_and_huge_poses_agree(course):
+    T = np.tile(np.eye(4), (6, 1, 1))
+    T[:, :3, 3] = [[2.5, 0.3, 0.4], [1e150] * 3, [1e300] * 3, [-1e308] * 3, [0.05, 0.02, 0.6], [0.0, 0.0, 0.0]]
+    hints = np.tile([0.0, np.nan, np.nan], (6, 1))
+    c, n = _batch(compiled, course, T, hints), _batch(_numpy_kernels, course, T, hints)
+    for name in ("valid", "failure", "wrist_singular", "shoulder_singular"):
+        np.testing.assert_array_equal(c[name], n[name])
+    np.testing.assert_array_equal(np.isnan(c["elbow_distance"]), np.isnan(n["elbow_distance"]))
+
+
+@pytest.mark.parametrize("angle", [0.0, math.pi, -math.pi, 3 * math.pi, 1e9, -1e9, 1e16, 1e300, -1e308, 5e-324])
+def test_wrap_is_exact_and_the_same_everywhere(angle):
+    expected = math.remainder(angle, 2 * math.pi)
+    expected = expected + 2 * math.pi if expected <= -math.pi else expected
+    assert ik_reference.wrap(angle) == expected
+    assert float(_numpy_kernels.wrap(np.array(angle))) == expected
+    arm = Arm.preset("course")
+    # wrist singular with the elbow well inside its reach: every θ6 works, and the
+    # wrapped hint comes back through each kernel
+    T = arm.fk(np.array([0.4, -1.1, 1.3, 0.5, 0.0, 1.0]))
+    assert compiled.ik_one(T, angle, math.nan, math.nan, arm.dh_lengths)[0][4, 5] == expected
+    assert _numpy_kernels.ik_one(T, angle, math.nan, math.nan, arm.dh_lengths)[0][4, 5] == expected
+
+
+def test_a_huge_hint_returns_at_once():
+    """The old C wrap() subtracted 2π in a loop: 0.26 s at 1e9, forever (holding the GIL) from 1e16."""
+    code = (
+        "import numpy as np, time; from ur10core import Arm; a = Arm.preset('course'); T = a.fk(np.zeros(6));"
+        "t = time.perf_counter(); [a.ik(T, hint=[0, 0, 0, 0, 0, h]) for h in (1e9, 1e16, 1e300)];"
+        "print(time.perf_counter() - t)"
+    )
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=60, cwd=ROOT)
+    assert done.returncode == 0, done.stderr
+    assert float(done.stdout) < 0.1
+
+
+def test_frames_fk_and_quaternions_agree(course):
+    q = np.concatenate([random_joints(500, seed=43), np.radians([[45, 90, 0, -90, 0, 60], [0, 0, 0, 0, 0, 0]])])
+    out_c, out_n = np.empty((len(q), 7, 4, 4)), np.empty((len(q), 7, 4, 4))
+    compiled.frames(q, course.dh_lengths, out_c)
+    _numpy_kernels.frames(q, course.dh_lengths, out_n)
+    np.testing.assert_allclose(out_c, out_n, rtol=0, atol=1e-14)
+    for k in range(0, len(q), 25):
+        np.testing.assert_allclose(compiled.fk_one(q[k], course.dh_lengths), _numpy_kernels.fk_one(q[k], course.dh_lengths),
+                                   rtol=0, atol=1e-15)
+    assert compiled.fk_one(np.array([0, 0, 0, np.nan, 0, 0]), course.dh_lengths) is None
+    assert _numpy_kernels.fk_one(np.array([0, 0, 0, np.nan, 0, 0]), course.dh_lengths) is None
+    R = np.ascontiguousarray(out_c[:, 1:, :3, :3].reshape(-1, 3, 3))
+    # rotations by exactly π about each axis take every branch of Shepperd's method
+    R = np.concatenate([R, np.diag([1.0, -1.0, -1.0])[None], np.diag([-1.0, 1.0, -1.0])[None], np.diag([-1.0, -1.0, 1.0])[None]])
+    w_c, w_n = np.empty((len(R), 4)), np.empty((len(R), 4))
+    compiled.quaternions(R, w_c)
+    _numpy_kernels.quaternions(R, w_n)
+    np.testing.assert_allclose(w_c, w_n, rtol=0, atol=1e-15)
+
+
+def test_nearest_one_agrees(course):
+    rng = np.random.default_rng(44)
+    for k in range(400):
+        q = random_joints(1, seed=300 + k)[0]
+        solution = course.ik(course.fk(q))
+        valid = solution.valid & (rng.random(8) < 0.8)
+        current = q + rng.normal(scale=0.5, size=6) + 2 * np.pi * rng.integers(-3, 4, size=6)
+        limit = [2 * np.pi, np.pi, 10.0][k % 3]
+        prefer = int(rng.integers(-1, 8))
+        args = (np.ascontiguousarray(solution.q), np.ascontiguousarray(valid), current, limit, prefer, 1e-10)
+        slot_c, q_c = compiled.nearest_one(*args)
+        slot_n, q_n = _numpy_kernels.nearest_one(*args)
+        assert slot_c == slot_n
+        np.testing.assert_allclose(q_c, q_n, rtol=0, atol=1e-12)
+        if slot_c >= 0:
+            assert (np.abs(q_c) <= limit).all()
+
+
+def test_the_kernel_refuses_to_run_without_its_tolerances():
+    """Loaded on its own (not through ur10core, which hands them over), the kernel will not guess them."""
+    code = (
+        "import importlib.util as u, numpy as np, sys; s = u.spec_from_file_location('_kernels', sys.argv[1]);"
+        "k = u.module_from_spec(s); s.loader.exec_module(k); k.ik_one(np.eye(4), 0.0, float('nan'), float('nan'), (0.1,) * 6)"
+    )
+    done = subprocess.run([sys.executable, "-c", code, compiled.__file__], capture_output=True, text=True, timeout=60)
+    assert "set_tolerances() was not called" in done.stderr
+
+
+@pytest.mark.parametrize("requested, expected", [("numpy", "numpy"), ("compiled", "compiled"), ("", "compiled")])
+def test_the_environment_variable_picks_the_backend(requested, expected):
+    env = dict(os.environ, UR10CORE_BACKEND=requested)
+    code = "import ur10core, ur10core.ik as ik, sys; print(ur10core.BACKEND, ik.kernels.__name__, 'ur10core._kernels' in sys.modules)"
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=env, timeout=60, cwd=ROOT)
+    assert done.returncode == 0, done.stderr
+    backend, module, compiled_imported = done.stdout.split()
+    assert backend == expected
+    assert module == ("ur10core._numpy_kernels" if expected == "numpy" else "ur10core._kernels")
+    assert compiled_imported == str(expected == "compiled")  # forced numpy behaves as if it were not built
+
+
+def test_a_misspelt_backend_is_refused():
+    env = dict(os.environ, UR10CORE_BACKEND="fortran")
+    done = subprocess.run([sys.executable, "-c", "import ur10core"], capture_output=True, text=True, env=env, timeout=60)
+    assert done.returncode != 0 and "UR10CORE_BACKEND must be 'compiled' or 'numpy', got 'fortran'" in done.stderr
+
+
+def test_one_tolerance_source():
+    """The C file holds no tolerance of its own: every value comes from ur10core/tolerances.py."""
+    source = (ROOT / "ur10core" / "_kernels.c").read_text()
+    assert "1e-9" not in source and "1e-6" not in source and "1e-7" not in source
+    assert LENGTH_TOLERANCE == 1e-9

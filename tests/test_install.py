@@ -1,0 +1,85 @@
+"""A student's laptop: ``pip install .`` into a fresh venv with no C compiler, then the app starts.
+
+Slow (it installs viser and friends into a new virtual environment): marked ``install``,
+which ``scripts/test.sh`` runs.
+"""
+
+import os
+import re
+import shutil
+import subprocess
+import sys
+import threading
+import time
+import urllib.request
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parent.parent
+pytestmark = pytest.mark.install
+
+
+@pytest.fixture(scope="module")
+def installed(tmp_path_factory) -> tuple[Path, dict]:
+    """A venv holding a normal (non-editable) install of this checkout, built with no compiler in reach."""
+    folder = tmp_path_factory.mktemp("laptop")
+    venv = folder / "venv"
+    subprocess.run([sys.executable, "-m", "venv", str(venv)], check=True)
+    bin_dir = venv / ("Scripts" if os.name == "nt" else "bin")
+    # only the venv on PATH: no gcc, cc or clang, as on a laptop without build tools
+    env = dict(os.environ, PATH=str(bin_dir), CC="no-c-compiler-here", PIP_DISABLE_PIP_VERSION_CHECK="1")
+    env.pop("UR10CORE_BACKEND", None)
+    for compiler in ("gcc", "cc", "clang", "no-c-compiler-here"):
+        assert shutil.which(compiler, path=env["PATH"]) is None
+    done = subprocess.run(
+        [str(bin_dir / "python"), "-m", "pip", "install", "--quiet", str(ROOT)],
+        cwd=folder, env=env, capture_output=True, text=True, timeout=900,
+    )
+    assert done.returncode == 0, done.stdout + done.stderr
+    return bin_dir, env
+
+
+def test_the_core_installs_without_a_compiler_and_runs_on_numpy(installed, tmp_path):
+    bin_dir, env = installed
+    code = (
+        "import numpy as np, ur10core, pathlib; from ur10core import Arm;"
+        "a = Arm.preset('course'); q = np.radians([45, 90, 0, -90, 0, 60]); s = a.ik(a.fk(q));"
+        "print(ur10core.BACKEND, int(s.valid.sum()), ur10core.__file__,"
+        " sorted(p.name for p in pathlib.Path(ur10core.__file__).parent.glob('_kernels*')))"
+    )
+    done = subprocess.run([str(bin_dir / "python"), "-c", code], cwd=tmp_path, env=env, capture_output=True, text=True)
+    assert done.returncode == 0, done.stderr
+    backend, valid, location, kernels = done.stdout.split(maxsplit=3)
+    assert backend == "numpy" and valid == "8"
+    assert str(ROOT) not in location  # the installed copy, not this checkout
+    assert "_kernels.c" in kernels and ".so" not in kernels and ".pyd" not in kernels
+
+
+def test_the_app_starts_from_another_directory(installed, tmp_path):
+    bin_dir, env = installed
+    app = subprocess.Popen(
+        [str(bin_dir / "ur10-teach"), "--port", "0"], cwd=tmp_path, env=dict(env, PYTHONUNBUFFERED="1"),
+        stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True,
+    )
+    output: list[str] = []
+    ready = threading.Event()
+
+    def drain() -> None:
+        for line in app.stdout:
+            output.append(line)
+            if line.startswith("Press Ctrl+C"):
+                ready.set()
+        ready.set()
+
+    threading.Thread(target=drain, daemon=True).start()
+    try:
+        assert ready.wait(120) and app.poll() is None, "".join(output)
+        url = re.search(r"http://127\.0\.0\.1:\d+", "".join(output)).group(0)
+        with urllib.request.urlopen(url, timeout=30) as page:
+            assert page.status == 200 and b"<html" in page.read().lower()
+        time.sleep(1.0)
+        assert app.poll() is None and "Traceback" not in "".join(output), "".join(output)
+    finally:
+        app.terminate()
+        app.wait(timeout=30)

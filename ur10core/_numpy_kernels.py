@@ -1,0 +1,391 @@
+"""The numpy backend: every function of the compiled kernel ``_kernels.c``, in numpy.
+
+Same names, arguments and results, so the rest of the core does not care which one
+runs (``ur10core.BACKEND``). One pose goes through plain Python (numpy's per-call
+overhead would dominate); many poses through the vectorised steps of
+:mod:`ur10core.ik_reference`, one array element per (pose, θ1, wrist sign).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from . import ik_reference as ref
+from .tolerances import (
+    BAND_LEVERAGE,
+    BOTTOM_ROW_TOLERANCE,
+    LENGTH_TOLERANCE,
+    ROTATION_TOLERANCE,
+    CHOICE_TOLERANCE,
+    WRIST_TOLERANCE,
+    WRIST_TURN_TOLERANCE,
+)
+
+PI, TAU = ref.PI, ref.TAU
+
+
+def wrap(angle: np.ndarray) -> np.ndarray:
+    """Into (−π, π], exactly: ``fmod`` is exact and so are both corrections (Sterbenz)."""
+    angle = np.fmod(angle, TAU)
+    angle = np.where(angle > PI, angle - TAU, angle)
+    return np.where(angle <= -PI, angle + TAU, angle)
+
+
+# --------------------------------------------------------------------------- FK, frames, quaternions
+
+
+def fk_one(q: np.ndarray, params) -> np.ndarray | None:
+    """Closed-form T06 of one joint vector (docs/kinematics.md §3); None if q is not finite."""
+    t1, t2, t3, t4, t5, t6 = q.tolist()
+    if not all(map(math.isfinite, (t1, t2, t3, t4, t5, t6))):
+        return None
+    d1, a2, a3, d4, d5, d6 = params
+    cos, sin = math.cos, math.sin
+    c1, s1, c5, s5, c6, s6 = cos(t1), sin(t1), cos(t5), sin(t5), cos(t6), sin(t6)
+    c2, s2, c23, s23 = cos(t2), sin(t2), cos(t2 + t3), sin(t2 + t3)
+    c234, s234 = cos(t2 + t3 + t4), sin(t2 + t3 + t4)
+    u, w = -s1 * s5 + c1 * c5 * c234, s5 * c1 + s1 * c5 * c234
+    r13, r23, r33 = s1 * c5 + s5 * c1 * c234, -c1 * c5 + s5 * s1 * c234, s5 * s234
+    reach = a2 * c2 + a3 * c23 - d5 * s234
+    return np.array(
+        [
+            [c6 * u - s6 * s234 * c1, -s6 * u - s234 * c1 * c6, r13, c1 * reach + d4 * s1 + d6 * r13],
+            [c6 * w - s6 * s234 * s1, -s6 * w - s234 * s1 * c6, r23, s1 * reach - d4 * c1 + d6 * r23],
+            [s6 * c234 + s234 * c5 * c6, c6 * c234 - s234 * c5 * s6, r33, a2 * s2 + a3 * s23 + d1 + d5 * c234 + d6 * r33],
+            [0.0, 0.0, 0.0, 1.0],
+        ]
+    )
+
+
+#: cos and sin of alpha_{i-1}, rows i = 1..6 of the course's DH table.
+_COS_ALPHA = np.array([1.0, 0.0, 1.0, 1.0, 0.0, 0.0])
+_SIN_ALPHA = np.array([0.0, 1.0, 0.0, 0.0, -1.0, 1.0])
+
+
+def frames(q: np.ndarray, params, out: np.ndarray) -> None:
+    """Frames {0}..{6} of n joint vectors (n, 6) into ``out`` (n, 7, 4, 4): T0i = T01 ... T(i-1,i)."""
+    d1, a2, a3, d4, d5, d6 = params
+    a = np.array([0.0, 0.0, a2, a3, 0.0, 0.0])
+    d = np.array([d1, 0.0, 0.0, d4, d5, d6])
+    ct, st = np.cos(q), np.sin(q)
+    link = np.zeros(q.shape + (4, 4))
+    link[..., 0, 0], link[..., 0, 1], link[..., 0, 3] = ct, -st, a
+    link[..., 1, 0], link[..., 1, 1], link[..., 1, 2], link[..., 1, 3] = st * _COS_ALPHA, ct * _COS_ALPHA, -_SIN_ALPHA, -_SIN_ALPHA * d
+    link[..., 2, 0], link[..., 2, 1], link[..., 2, 2], link[..., 2, 3] = st * _SIN_ALPHA, ct * _SIN_ALPHA, _COS_ALPHA, _COS_ALPHA * d
+    link[..., 3, 3] = 1.0
+    out[:, 0] = np.eye(4)
+    for i in range(6):
+        np.matmul(out[:, i], link[:, i], out=out[:, i + 1])
+
+
+def quaternions(R: np.ndarray, out: np.ndarray) -> None:
+    """Unit quaternions (w, x, y, z), w ≥ 0, of n rotations (n, 3, 3), by Shepperd's method."""
+    r = R.reshape(-1, 9)
+    trace = r[:, 0] + r[:, 4] + r[:, 8]
+    diag = np.stack([1.0 + trace, 1.0 + r[:, 0] - r[:, 4] - r[:, 8], 1.0 - r[:, 0] + r[:, 4] - r[:, 8],
+                     1.0 - r[:, 0] - r[:, 4] + r[:, 8]], -1)
+    rows = np.stack(
+        [
+            np.stack([diag[:, 0], r[:, 7] - r[:, 5], r[:, 2] - r[:, 6], r[:, 3] - r[:, 1]], -1),
+            np.stack([r[:, 7] - r[:, 5], diag[:, 1], r[:, 1] + r[:, 3], r[:, 2] + r[:, 6]], -1),
+            np.stack([r[:, 2] - r[:, 6], r[:, 1] + r[:, 3], diag[:, 2], r[:, 5] + r[:, 7]], -1),
+            np.stack([r[:, 3] - r[:, 1], r[:, 2] + r[:, 6], r[:, 5] + r[:, 7], diag[:, 3]], -1),
+        ],
+        1,
+    )
+    v = rows[np.arange(len(r)), np.argmax(diag, axis=-1)]  # row k is 4 q_k q: divide by the largest q_k
+    norm = np.linalg.norm(v, axis=-1, keepdims=True)
+    out[:] = v / np.where(v[:, :1] < 0.0, -norm, norm)
+
+
+# --------------------------------------------------------------------------- nearest branch
+
+
+def shift_near(angle: float, current: float, limit: float) -> float:
+    """The 2π-equivalent of ``angle`` nearest ``current``, moved by whole turns into ±limit (limit ≥ π)."""
+    value = angle + TAU * round((current - angle) / TAU)  # half to even, as np.round and C's nearbyint
+    if value > limit:
+        value -= TAU * math.ceil((value - limit) / TAU)
+    elif value < -limit:
+        value += TAU * math.ceil((-limit - value) / TAU)
+    return value
+
+
+def nearest_one(q: np.ndarray, valid: np.ndarray, current: np.ndarray, limit: float, prefer: int, tie: float):
+    """The valid slot nearest ``current`` and its angles shifted next to it; see ``_kernels.c``."""
+    current = current.tolist()
+    best, best_distance, distances, shifted = -1, math.inf, [math.inf] * 8, [None] * 8
+    for k, (angles, ok) in enumerate(zip(q.tolist(), valid.tolist())):
+        if not ok:
+            continue
+        moved = [shift_near(a, c, limit) for a, c in zip(angles, current)]
+        distance = sum((m - c) * (m - c) for m, c in zip(moved, current))
+        if not math.isfinite(distance):
+            continue
+        distances[k], shifted[k] = distance, moved
+        if best < 0 or distance < best_distance:
+            best, best_distance = k, distance
+    if best < 0:
+        return -1, np.full(6, math.nan)
+    if 0 <= prefer < 8 and distances[prefer] <= best_distance + tie:
+        best = prefer
+    return best, np.array(shifted[best])
+
+
+# --------------------------------------------------------------------------- IK
+
+
+def pose_is_valid(T: np.ndarray) -> np.ndarray:
+    """(n,) bool for (n, 16) row-major poses: finite, bottom row [0 0 0 1], proper rotation."""
+    with np.errstate(invalid="ignore", over="ignore"):
+        ok = np.isfinite(T).all(axis=-1)
+        ok &= (np.abs(T[:, 12:15]) <= BOTTOM_ROW_TOLERANCE).all(axis=-1) & (np.abs(T[:, 15] - 1.0) <= BOTTOM_ROW_TOLERANCE)
+        R = T.reshape(-1, 4, 4)[:, :3, :3]
+        gram = np.einsum("nia,nib->nab", R, R)
+        ok &= (np.abs(gram - np.eye(3)) <= ROTATION_TOLERANCE).all(axis=(-2, -1))
+        ok &= np.einsum("ni,ni->n", np.cross(R[:, :, 0], R[:, :, 1]), R[:, :, 2]) > 0.0
+    return ok
+
+
+def ik_one(T: np.ndarray, theta6_hint: float, reach_hint: float, theta3_hint: float, params):
+    """All eight slots of one C-contiguous (4, 4) pose, or None when it is not a valid pose."""
+    if not pose_is_valid(T.reshape(1, 16))[0]:
+        return None
+    q, valid, wrist, elbow, shoulder, failure, rho, distance = ref.solve_pose(
+        T.tolist(), theta6_hint, reach_hint, theta3_hint, params
+    )
+    return (
+        np.array(q).reshape(8, 6), np.array(valid), np.array(wrist), np.array(elbow), np.array(shoulder),
+        np.array(failure, dtype=np.int8), np.array(rho), np.array(distance),
+    )
+
+
+def ik_batch(T, theta6_hint, reach_hint, theta3_hint, params, q, valid, wrist, elbow, shoulder, failure, rho_out, distance) -> int:
+    """All eight slots of n poses (n, 16) into the preallocated outputs; see ``_kernels.c``.
+
+    Returns the index of the first pose that is not a valid transform (its outputs are
+    not written), or −1.
+    """
+    ok = pose_is_valid(T)
+    bad = np.flatnonzero(~ok)
+    if len(bad):
+        good = np.flatnonzero(ok)
+        outputs = (q, valid, wrist, elbow, shoulder, failure, rho_out, distance)
+        parts = [np.empty((len(good),) + out.shape[1:], out.dtype) for out in outputs]
+        ik_batch(T[good], theta6_hint[good], reach_hint[good], theta3_hint[good], params, *parts)
+        for out, part in zip(outputs, parts):
+            out[good] = part
+        return int(bad[0])
+    with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
+        _solve(T, theta6_hint, reach_hint, theta3_hint, params, q, valid, wrist, elbow, shoulder, failure, rho_out, distance)
+    return -1
+
+
+def _nearest_reachable_theta234(A, V, theta234, d5, distance):
+    """Vectorised :func:`ur10core.ik_reference.nearest_reachable_theta234`."""
+    R = np.hypot(A, V)
+    u = np.clip((distance * distance - (R * R + d5 * d5)) / (2.0 * d5 * R), -1.0, 1.0)
+    x = theta234 - np.arctan2(V, A)
+    first = wrap(np.arcsin(u) - x)
+    second = wrap(PI - np.arcsin(u) - x)
+    return theta234 + np.where(np.abs(first) <= np.abs(second), first, second)
+
+
+def _in_reach(r, outer, inner):
+    return (inner - LENGTH_TOLERANCE <= r) & (r <= outer + LENGTH_TOLERANCE)
+
+
+def _within(r, outer, inner):
+    """Within the exact reach (no tolerance); False for NaN."""
+    return (inner <= r) & (r <= outer)
+
+
+def _wrist_and_elbow(R, p5, c1, s1, A, sign, hint, params):
+    """Vectorised :func:`ur10core.ik_reference._wrist_and_elbow`: every argument (m,) or (m, 3, 3)/(m, 3)."""
+    d1, a2, a3, d4, d5, d6 = params
+    r11, r12, r13, r21, r22, r23, r31, r32, r33 = (R[:, a, b] for a in range(3) for b in range(3))
+    theta1 = wrap(np.arctan2(s1, c1))
+    c5 = r13 * s1 - r23 * c1
+    c6s5 = r21 * c1 - r11 * s1
+    s6s5 = r12 * s1 - r22 * c1
+    s5_abs = np.sqrt(c6s5 * c6s5 + s6s5 * s6s5)
+    s5 = sign * s5_abs
+    theta5 = wrap(np.arctan2(s5, c5))
+    nonzero = s5_abs > 0.0
+    c6 = np.where(nonzero, sign * c6s5 / s5_abs, 1.0)
+    s6 = np.where(nonzero, sign * s6s5 / s5_abs, 0.0)
+    theta6_pose = np.arctan2(s6, c6)
+    keep_hint = s5_abs * np.abs(wrap(hint - theta6_pose)) <= WRIST_TURN_TOLERANCE
+    theta6 = np.where(keep_hint, hint, wrap(theta6_pose))
+    c6 = np.where(keep_hint, np.cos(hint), c6)
+    s6 = np.where(keep_hint, np.sin(hint), s6)
+    c234 = s5 * (r13 * c1 + r23 * s1) + c5 * c5 * (s6 * r31 + c6 * r32)
+    s234 = s5 * r33 + c5 * (c6 * r31 - s6 * r32)
+    norm = np.sqrt(c234 * c234 + s234 * s234)
+    c234, s234 = c234 / norm, s234 / norm
+    theta234 = np.arctan2(s234, c234)
+    V = p5[:, 2] - d1
+    h4, v4 = A + d5 * s234, V - d5 * c234
+    r = np.hypot(h4, v4)
+    outer, inner = a2 + a3, abs(a2 - a3)
+    beyond, reach = np.where(r > outer, r - outer, inner - r), np.hypot(A, V)
+    slide = np.flatnonzero((beyond > 0.0) & (reach > 0.0) & (s5_abs * beyond * r <= 2.0 * WRIST_TURN_TOLERANCE * d5 * reach))
+    if len(slide):
+        Ai, Vi, t234 = A[slide], V[slide], theta234[slide]
+        moved = _nearest_reachable_theta234(Ai, Vi, t234, d5, np.where(r[slide] > outer, outer, inner))
+        turn = np.where(c5[slide] >= 0.0, 1.0, -1.0)
+        theta6_moved = wrap(theta6[slide] - turn * (moved - t234))
+        allowed = s5_abs[slide] * np.abs(wrap(theta6_moved - theta6_pose[slide])) <= WRIST_TURN_TOLERANCE
+        take = slide[allowed]
+        theta234[take], theta6[take] = moved[allowed], theta6_moved[allowed]
+        h4[take] = A[take] + d5 * np.sin(theta234[take])
+        v4[take] = V[take] - d5 * np.cos(theta234[take])
+        r[take] = np.hypot(h4[take], v4[take])
+    return theta1, theta5, theta6, theta234, s5_abs, h4, v4, r
+
+
+def _reach_within_band(R, p5, slot, A, band_a, band_b, sign, hint, params):
+    """Vectorised :func:`ur10core.ik_reference._reach_within_band`: (best slot values, where found)."""
+    d1, a2, a3, d4, d5, d6 = params
+    outer, inner = a2 + a3, abs(a2 - a3)
+    low, high = np.minimum(band_a, band_b), np.maximum(band_a, band_b)
+    rho = np.sqrt(p5[:, 0] * p5[:, 0] + p5[:, 1] * p5[:, 1])
+    h4, v4, r = slot[5], slot[6], slot[7].copy()
+    limit = np.where(r > outer, outer, inner)
+    done = ~((np.abs(r - limit) <= BAND_LEVERAGE * (high - low)) & (np.abs(v4) <= limit))
+    step = np.copysign(np.sqrt(np.maximum(limit * limit - v4 * v4, 0.0)), h4) - h4
+    best = [value.copy() for value in slot]
+    A = A.copy()
+    for _ in range(4):
+        active = np.flatnonzero(~done)
+        moved = np.clip(A[active] + step[active], low[active], high[active])
+        stuck = moved == A[active]
+        done[active[stuck]] = True
+        active, moved = active[~stuck], moved[~stuck]
+        if not len(active):
+            break
+        scale = rho[active] * np.hypot(moved, d4)
+        c1 = (p5[active, 0] * moved - p5[active, 1] * d4) / scale
+        s1 = (p5[active, 1] * moved + p5[active, 0] * d4) / scale
+        better = _wrist_and_elbow(R[active], p5[active], c1, s1, moved, sign[active], hint[active], params)
+        reached = better[-1]
+        changed = reached != r[active]
+        secant = (limit[active] - reached) * (moved - A[active]) / np.where(changed, reached - r[active], 1.0)
+        step[active] = np.where(changed, secant, step[active])
+        keep = _in_reach(reached, outer, inner) | (np.abs(reached - limit[active]) < np.abs(best[-1][active] - limit[active]))
+        for value, new in zip(best, better):
+            value[active[keep]] = new[keep]
+        A[active], r[active] = moved, reached
+        done[active[_within(reached, outer, inner)]] = True
+    return best, _in_reach(best[-1], outer, inner) & np.isfinite(slot[7])
+
+
+def _theta1_for_reach(R, p5, slot, sign, hint, params):
+    """Vectorised :func:`ur10core.ik_reference._theta1_for_reach`: (better slot values, where found)."""
+    d1, a2, a3, d4, d5, d6 = params
+    theta1, _, theta6, theta234, _, h4, _, r = slot
+    A = h4 - d5 * np.sin(theta234)
+    V = p5[:, 2] - d1
+    usable = np.isfinite(r) & ((A != 0.0) | (V != 0.0))
+    outer, inner = a2 + a3, abs(a2 - a3)
+    moved = _nearest_reachable_theta234(A, V, theta234, d5, np.where(r > outer, outer, inner))
+    c5 = R[:, 0, 2] * np.sin(theta1) - R[:, 1, 2] * np.cos(theta1)
+    wanted = theta6 - np.where(c5 >= 0.0, 1.0, -1.0) * (moved - theta234)
+    ex, ey = np.cos(wanted), np.sin(wanted)
+    r11, r12, r21, r22 = R[:, 0, 0], R[:, 0, 1], R[:, 1, 0], R[:, 1, 1]
+    candidate = np.arctan2(r21 * ey + r22 * ex, r11 * ey + r12 * ex)
+    candidate = candidate + PI * np.round((theta1 - candidate) / PI)
+    c1, s1 = np.cos(candidate), np.sin(candidate)
+    usable &= np.abs(p5[:, 0] * s1 - p5[:, 1] * c1 - d4) <= CHOICE_TOLERANCE
+    better = _wrist_and_elbow(R, p5, c1, s1, p5[:, 0] * c1 + p5[:, 1] * s1, sign, hint, params)
+    return better, usable & _in_reach(better[-1], outer, inner)
+
+
+def _solve(T, theta6_hint, reach_hint, theta3_hint, params, q, valid, wrist, elbow, shoulder, failure, rho_out, distance) -> None:
+    d1, a2, a3, d4, d5, d6 = params
+    n = len(T)
+    M = T.reshape(n, 4, 4)
+    p5 = M[:, :3, 3] - d6 * M[:, :3, 2]
+    rho2 = p5[:, 0] ** 2 + p5[:, 1] ** 2
+    rho = np.sqrt(rho2)
+    rho_out[:] = rho
+    shoulder[:] = np.abs(rho - d4) <= LENGTH_TOLERANCE
+    q[:] = np.nan
+    valid[:] = False
+    wrist[:] = False
+    elbow[:] = False
+    failure[:] = ref.WRIST_INSIDE_CYLINDER
+    distance[:] = np.nan
+    has_theta1 = np.flatnonzero(rho >= d4 - LENGTH_TOLERANCE)
+    if not len(has_theta1):
+        return
+    # one element per (pose, θ1 side i, wrist sign j): index 4 m + 2 i + j
+    pose = np.repeat(has_theta1, 4)
+    side = np.tile([-1.0, -1.0, 1.0, 1.0], len(has_theta1))
+    sign = np.tile([1.0, -1.0, 1.0, -1.0], len(has_theta1))
+    rho, rho2, P5, R = rho[pose], rho2[pose], p5[pose], M[pose, :3, :3]
+    reach = np.sqrt(np.maximum(rho2 - d4 * d4, 0.0))
+    reach_low = np.sqrt(np.maximum((rho - CHOICE_TOLERANCE) ** 2 - d4 * d4, 0.0))
+    reach_high = np.sqrt(np.maximum((rho + CHOICE_TOLERANCE) ** 2 - d4 * d4, 0.0))
+    theta1_band = (reach_high - reach_low) * d4 / (reach * reach + d4 * d4)
+    A_hint = reach_hint[pose]
+    A = side * np.where((reach_low <= np.abs(A_hint)) & (np.abs(A_hint) <= reach_high), np.abs(A_hint), reach)
+    scale = rho * np.hypot(A, d4)
+    c1 = (P5[:, 0] * A - P5[:, 1] * d4) / scale
+    s1 = (P5[:, 1] * A + P5[:, 0] * d4) / scale
+    hint = wrap(theta6_hint)[pose]
+    slot = list(_wrist_and_elbow(R, P5, c1, s1, A, sign, hint, params))
+    outer, inner = a2 + a3, abs(a2 - a3)
+    beyond = np.flatnonzero(~_within(slot[-1], outer, inner))
+    if len(beyond):
+        band_a = np.where(reach_low > 0.0, side * reach_low, -side * reach_high)
+        better, found = _reach_within_band(
+            R[beyond], P5[beyond], [value[beyond] for value in slot], A[beyond], band_a[beyond],
+            (side * reach_high)[beyond], sign[beyond], hint[beyond], params,
+        )
+        for value, new in zip(slot, better):
+            value[beyond[found]] = new[found]
+    retry = np.flatnonzero(~_within(slot[-1], outer, inner) & (slot[4] <= theta1_band))
+    if len(retry):
+        better, found = _theta1_for_reach(
+            R[retry], P5[retry], [value[retry] for value in slot], sign[retry], hint[retry], params
+        )
+        for value, new in zip(slot, better):
+            value[retry[found]] = new[found]
+    theta1, theta5, theta6, theta234, s5_abs, h4, v4, r = slot
+    # per slot pair: the two elbow slots 4 i + 2 j + l share everything above
+    pair = 8 * pose + 4 * (side > 0) + 2 * (sign < 0)
+    too_far = ~(r <= outer + LENGTH_TOLERANCE)
+    too_close = ~too_far & (r < inner - LENGTH_TOLERANCE)
+    ok = ~too_far & ~too_close
+    flat_distance, flat_wrist, flat_failure = distance.reshape(-1), wrist.reshape(-1), failure.reshape(-1)
+    code = np.where(too_far, ref.ELBOW_TOO_FAR, np.where(too_close, ref.ELBOW_TOO_CLOSE, ref.REACHABLE))
+    for l in (0, 1):
+        flat_distance[pair + l] = r
+        flat_wrist[pair + l] = s5_abs <= WRIST_TOLERANCE
+        flat_failure[pair + l] = code
+    at_limit = (r >= outer - LENGTH_TOLERANCE) | (r <= inner + LENGTH_TOLERANCE)
+    c3 = np.clip((r * r - a2 * a2 - a3 * a3) / (2.0 * a2 * a3), -1.0, 1.0)
+    s3 = np.sqrt(1.0 - c3 * c3)
+    theta3 = np.arctan2(s3, c3)
+    elbow_hint = np.abs(wrap(theta3_hint))[pose]
+    r_hint = np.sqrt(a2 * a2 + a3 * a3 + 2.0 * a2 * a3 * np.cos(elbow_hint))
+    keep = np.abs(r - r_hint) <= CHOICE_TOLERANCE  # θ3 is fixed only to √rounding at the limits
+    theta3 = np.where(keep, elbow_hint, theta3)
+    c3 = np.where(keep, np.cos(elbow_hint), c3)
+    s3 = np.where(keep, np.sin(elbow_hint), s3)
+    beta = np.arctan2(v4, h4)
+    gamma = np.arctan2(a3 * s3, a2 + a3 * c3)
+    flat_q, flat_valid, flat_elbow = q.reshape(-1, 6), valid.reshape(-1), elbow.reshape(-1)
+    for l, (t3, t2) in enumerate(((theta3, beta - gamma), (-theta3, beta + gamma))):
+        t3, t2 = wrap(t3), wrap(t2)
+        k = (pair + l)[ok]
+        flat_q[k] = np.stack([theta1, t2, t3, wrap(theta234 - t2 - t3), theta5, theta6], -1)[ok]
+        flat_valid[k] = True
+        flat_elbow[k] = at_limit[ok]
+
+
+def set_tolerances(*values: float) -> None:
+    """The compiled kernel is handed the tolerances; this module reads :mod:`ur10core.tolerances` itself."""

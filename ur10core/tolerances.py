@@ -1,0 +1,46 @@
+"""Every tolerance of the core, in one place (the compiled kernel is handed these values).
+
+The IK's decisions follow the conditioning of the numbers they are made from
+(docs/kinematics.md §4.3): a choice along a direction the pose barely fixes is allowed
+exactly as far as it keeps the pose within these bounds.
+"""
+
+from __future__ import annotations
+
+import math
+
+#: Metres. A frame-4 origin this far beyond the elbow's reach (or a wrist-2 point this far
+#: inside the shoulder cylinder) is put on the boundary, not refused; the pose then moves
+#: by at most this much.
+LENGTH_TOLERANCE = 1e-9
+
+#: Metres. Where the pose fixes a value only loosely, the IK may choose it — keep the
+#: hint's, or pick one that reaches — as long as the choice moves the arm by at most this
+#: much. Near the shoulder singularity the signed reach A of the wrist-2 point is
+#: uncertain (ρ² − d4² cancels: ~1e-8 m at A = 0): any A of the band that moves P5 by at
+#: most this much (±0.6 µm at A = 0) will do, and θ1 with it. At the stretched or folded
+#: elbow θ3 = ±acos(c3) is fixed only to √rounding: the hint's θ3 is kept where it puts
+#: the frame-4 origin within this much of where the pose puts it.
+CHOICE_TOLERANCE = 1e-12
+
+#: Not a tolerance but a bound that saves work: moving the reach A within its band moves
+#: the elbow's distance r by at most about this many times as much (more only near the
+#: wrist singularity, where θ1 is turned instead), so a band this many times narrower than
+#: the distance r must go is not tried.
+BAND_LEVERAGE = 1000.0
+
+#: How much a choice along the wrist's singular direction may change the rotation.
+#: Turning θ6 by Δ and θ2 + θ3 + θ4 by ∓Δ (so that θ234 ± θ6 stays) changes every entry
+#: of R06 by about |s5|·|Δ| at most (1.4 |s5| |Δ| measured over all θ5, |s5| |Δ| near
+#: s5 = 0); that estimate must stay below this value.
+WRIST_TURN_TOLERANCE = 1e-10
+
+#: |s5| below which every θ6 qualifies (WRIST_TURN_TOLERANCE / π): the wrist is singular,
+#: axes 4 and 6 parallel, and θ6 is chosen rather than computed.
+WRIST_TOLERANCE = WRIST_TURN_TOLERANCE / math.pi
+
+#: A pose's rotation part may deviate from orthonormal by this much (max |Rᵀ R − I|).
+ROTATION_TOLERANCE = 1e-6
+
+#: A pose's bottom row must equal [0, 0, 0, 1] to this tolerance.
+BOTTOM_ROW_TOLERANCE = 1e-9
