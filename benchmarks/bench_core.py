@@ -153,11 +153,11 @@ def main() -> None:
             f"Run: {machine()}. Medians of repeated runs, each backend in its own process, the",
             "references in a third, one after the other. UR10 numbers (`Arm.preset(\"ur10\")`) so that",
             "ur-analytic-ik solves the same arm. The compiled kernel earns its place on the one-pose",
-            f"and batch IK rows: {n['ik_one_us'] / c['ik_one_us']:.0f}× and {c['batch_per_s'] / n['batch_per_s']:.0f}× the numpy backend. "
-            "The numpy backend is slower than the plain numpy baseline in batches: the baseline skips",
-            f"every singular case. On regular poses its worst FK(IK) error is {ref['numpy_baseline_error']:.1e} m, but it",
-            f"solves only {100 * ref['numpy_baseline_singular_solved']:.0f} % of 2000 exactly wrist-singular poses (θ5 = 0 or π),",
-            "all of which both backends solve.",
+            f"and batch IK rows: {n['ik_one_us'] / c['ik_one_us']:.0f}× and {c['batch_per_s'] / n['batch_per_s']:.1f}× the numpy backend.",
+            "The plain numpy baseline runs the course's steps with no singular cases: on regular poses",
+            f"its worst FK(IK) error is {ref['numpy_baseline_error']:.1e} m, but it solves only "
+            f"{100 * ref['numpy_baseline_singular_solved']:.0f} % of 2000 exactly wrist-singular",
+            "poses (θ5 = 0 or π), all of which both backends solve.",
             "",
             table(["what", "compiled backend", "numpy backend", "reference", "verdict"], rows),
         ]

@@ -27,7 +27,7 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
-from benchmarks._report import machine, table, write_section  # noqa: E402
+from benchmarks._report import cpu_ticks, machine, quiet_machine, stolen_share, table, write_section  # noqa: E402
 from benchmarks.server_process import running_app  # noqa: E402
 from benchmarks.viser_client import ViserClient, wxyz_of  # noqa: E402
 from ur10core import Arm  # noqa: E402
@@ -84,45 +84,70 @@ def ghost_update_bytes() -> float:
     return 6 * (8 * 4 * 4 + 8 * 3 * 4)
 
 
-def run(backend: str) -> tuple[dict, dict]:
-    """One drag session against the app running on ``backend``: (client-side result, the app's report)."""
+#: Sessions per backend, alternating between the backends so that both see the same host.
+SESSIONS = 3
+
+
+def run(backend: str) -> tuple[dict, dict, float]:
+    """One drag session against the app on ``backend``: (client-side result, the app's report, host steal)."""
+    quiet_machine(max_wait=300.0)
     with running_app(env={"UR10CORE_BACKEND": backend}) as app:
+        before = cpu_ticks()
         result = asyncio.run(drive(app.url))
+        stolen = stolen_share(before, cpu_ticks())
         report = app.metrics(newer_than=time.time() + 0.1)
-    return result, report
+    return result, report, stolen
 
 
 def main() -> None:
-    runs = {backend: run(backend) for backend in ("compiled", "numpy")}
+    sessions: dict[str, list] = {"compiled": [], "numpy": []}
+    for _ in range(SESSIONS):
+        for backend in sessions:
+            sessions[backend].append(run(backend))
     ghost = ghost_update_bytes()
     rows = []
-    for backend, (result, report) in runs.items():
-        handler, panel = report["latency"]["drag"], report["latency"]["panel"]
+    for backend, runs in sessions.items():
+        runs.sort(key=lambda run: run[1]["latency"]["drag_cpu"]["p99_ms"])
+        result, report, stolen = runs[len(runs) // 2]  # the median session by handler p99
+        cpu, wall, panel = (report["latency"][kind] for kind in ("drag_cpu", "drag", "panel"))
+        spread = ", ".join(f"{run[1]['latency']['drag_cpu']['p99_ms']:.2f}" for run in runs)
+        wall_spread = ", ".join(f"{run[1]['latency']['drag']['p99_ms']:.2f}" for run in runs)
         rows += [
-            [f"**{backend} backend**: drag handler, server side (IK, nearest branch, solid arm, 8 ghosts, overlay geometry)",
-             f"p50 {handler['p50_ms']:.2f} ms, p99 {handler['p99_ms']:.2f} ms, max {handler['max_ms']:.2f} ms",
-             "p99 ≤ 5 ms", "PASS" if handler["p99_ms"] <= 5 else "FAIL"],
+            [f"**{backend} backend**: drag handler, server side, CPU time (IK, nearest branch, solid arm, 8 ghosts, "
+             "overlay geometry)",
+             f"p50 {cpu['p50_ms']:.2f} ms, p99 {cpu['p99_ms']:.2f} ms, max {cpu['max_ms']:.2f} ms "
+             f"(p99 of the {len(runs)} sessions: {spread} ms)",
+             "p99 ≤ 5 ms", "PASS" if cpu["p99_ms"] <= 5 else "FAIL"],
+            [f"{backend}: the same, wall time (also the time the OS ran the load generator on these two cores)",
+             f"p50 {wall['p50_ms']:.2f} ms, p99 {wall['p99_ms']:.2f} ms, max {wall['max_ms']:.2f} ms "
+             f"(p99 of the sessions: {wall_spread} ms; host steal {100 * stolen:.0f} %)", "—", "—"],
             [f"{backend}: side-panel redraw, ≤ 10 per second off the drag path (sliders, tables, gauges, plot)",
              f"p50 {panel['p50_ms']:.2f} ms, p99 {panel['p99_ms']:.2f} ms", "—", "—"],
             [f"{backend}: gizmo event → moved arm received (loopback, one client, separate processes)",
              f"p50 {result['end_to_end_ms'][0]:.1f} ms, p99 {result['end_to_end_ms'][1]:.1f} ms", "—", "—"],
         ]
-    result = runs["compiled"][0]
+    result, report, _ = sessions["compiled"][len(sessions["compiled"]) // 2]
     rows += [
         ["bytes sent per drag update (3D at 20 Hz + panel at ≤ 10 Hz, overlay on; compiled backend)",
          f"{result['bytes_per_update'] / 1024:.1f} KiB", "a few KB", "PASS" if result["bytes_per_update"] < 8192 else "FAIL"],
         ["of which ghost-arm instance poses (6 moving links × 8 instances)", f"{ghost / 1024:.1f} KiB of arrays",
          "a few KB", "PASS" if ghost < 4096 else "FAIL"],
     ]
-    handler = runs["compiled"][1]["latency"]["drag"]
+    handler = report["latency"]["drag"]
+    numpy_cpu = sorted(run[1]["latency"]["drag_cpu"]["p50_ms"] for run in sessions["numpy"])[SESSIONS // 2]
+    compiled_cpu = sorted(run[1]["latency"]["drag_cpu"]["p50_ms"] for run in sessions["compiled"])[SESSIONS // 2]
     body = "\n".join(
         [
             "## Drag handler (`benchmarks/bench_drag.py`)",
             "",
-            f"Run: {machine()}. The app in its own process, once per backend (`UR10CORE_BACKEND`); "
-            f"{handler['count']} gizmo events at {RATE_HZ:.0f} Hz from one headless client in another "
-            "(viser's protocol, the messages a browser sends), singularity overlay on; "
-            f"{result['answered']} of them answered by a 3D update on the compiled backend (the rest folded into the next).",
+            f"Run: {machine()}. The app in its own process on each backend (`UR10CORE_BACKEND`), {SESSIONS} sessions "
+            "each, alternating, each after waiting for a quiet host; each backend's median session (by handler CPU p99) "
+            f"is shown. A session: {handler['count']} gizmo events at {RATE_HZ:.0f} Hz from one headless client in "
+            "another process (viser's protocol, the messages a browser sends), singularity overlay on; "
+            f"{result['answered']} of them answered by a 3D update (the rest folded into the next). The verdict is on the "
+            "handler's CPU time, the server's own work without whatever the OS ran meanwhile on these two cores (the "
+            "load generator decoding every frame, above all); the wall time is beside it, and the tails of both move "
+            f"from session to session. The numpy backend adds {numpy_cpu - compiled_cpu:.2f} ms of CPU time at the median.",
             "",
             table(["what", "measured", "target", "verdict"], rows),
         ]

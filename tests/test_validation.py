@@ -174,7 +174,7 @@ def test_preferred_slot_must_broadcast(course, pose):
     assert batch.nearest(np.zeros((2, 6)), prefer=-1).slot.shape == (2,)  # −1: no preference
 
 
-@pytest.mark.parametrize("limit", [3.0, -1.0, np.inf, np.nan, "2pi", True])
+@pytest.mark.parametrize("limit", [3.0, -1.0, -np.inf, np.nan, "2pi", True])
 def test_bad_joint_limit(course, pose, limit):
     with pytest.raises(ValueError, match="joint_limit must be"):
         course.ik(pose).nearest(np.zeros(6), joint_limit=limit)

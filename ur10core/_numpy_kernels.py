@@ -80,58 +80,51 @@ def frames(q: np.ndarray, params, out: np.ndarray) -> None:
         np.matmul(out[:, i], link[:, i], out=out[:, i + 1])
 
 
+#: Shepperd's method: row k of the symmetric matrix below is 4 q_k q; entry (a, b) is
+#: Σ sign · R[i, j] over these terms, the first row plus or minus the trace's terms.
+_SHEPPERD = np.zeros((4, 4, 9))
+for (a, b), terms in {
+    (0, 0): [(1, 0), (1, 4), (1, 8)], (1, 1): [(1, 0), (-1, 4), (-1, 8)], (2, 2): [(-1, 0), (1, 4), (-1, 8)],
+    (3, 3): [(-1, 0), (-1, 4), (1, 8)], (0, 1): [(1, 7), (-1, 5)], (0, 2): [(1, 2), (-1, 6)], (0, 3): [(1, 3), (-1, 1)],
+    (1, 2): [(1, 1), (1, 3)], (1, 3): [(1, 2), (1, 6)], (2, 3): [(1, 5), (1, 7)],
+}.items():
+    for sign, index in terms:
+        _SHEPPERD[a, b, index] = _SHEPPERD[b, a, index] = sign
+
+
 def quaternions(R: np.ndarray, out: np.ndarray) -> None:
     """Unit quaternions (w, x, y, z), w ≥ 0, of n rotations (n, 3, 3), by Shepperd's method."""
-    r = R.reshape(-1, 9)
-    trace = r[:, 0] + r[:, 4] + r[:, 8]
-    diag = np.stack([1.0 + trace, 1.0 + r[:, 0] - r[:, 4] - r[:, 8], 1.0 - r[:, 0] + r[:, 4] - r[:, 8],
-                     1.0 - r[:, 0] - r[:, 4] + r[:, 8]], -1)
-    rows = np.stack(
-        [
-            np.stack([diag[:, 0], r[:, 7] - r[:, 5], r[:, 2] - r[:, 6], r[:, 3] - r[:, 1]], -1),
-            np.stack([r[:, 7] - r[:, 5], diag[:, 1], r[:, 1] + r[:, 3], r[:, 2] + r[:, 6]], -1),
-            np.stack([r[:, 2] - r[:, 6], r[:, 1] + r[:, 3], diag[:, 2], r[:, 5] + r[:, 7]], -1),
-            np.stack([r[:, 3] - r[:, 1], r[:, 2] + r[:, 6], r[:, 5] + r[:, 7], diag[:, 3]], -1),
-        ],
-        1,
-    )
-    v = rows[np.arange(len(r)), np.argmax(diag, axis=-1)]  # row k is 4 q_k q: divide by the largest q_k
-    norm = np.linalg.norm(v, axis=-1, keepdims=True)
+    rows = _SHEPPERD @ R.reshape(-1, 1, 9, 1)  # (n, 4, 4, 1)
+    rows = rows[..., 0] + np.eye(4)  # the diagonal's 1 + ...
+    largest = np.argmax(np.diagonal(rows, axis1=-2, axis2=-1), axis=-1)  # divide by the largest q_k
+    v = np.take_along_axis(rows, largest[:, None, None], axis=1)[:, 0]
+    norm = np.sqrt((v * v).sum(axis=-1, keepdims=True))
     out[:] = v / np.where(v[:, :1] < 0.0, -norm, norm)
 
 
 # --------------------------------------------------------------------------- nearest branch
 
 
-def shift_near(angle: float, current: float, limit: float) -> float:
-    """The 2π-equivalent of ``angle`` nearest ``current``, moved by whole turns into ±limit (limit ≥ π)."""
-    value = angle + TAU * round((current - angle) / TAU)  # half to even, as np.round and C's nearbyint
-    if value > limit:
-        value -= TAU * math.ceil((value - limit) / TAU)
-    elif value < -limit:
-        value += TAU * math.ceil((-limit - value) / TAU)
-    return value
+def shift_near(q, current, limit: float) -> np.ndarray:
+    """Each angle of ``q`` as its 2π-equivalent nearest ``current``, moved by whole turns into ±limit (≥ π)."""
+    with np.errstate(invalid="ignore"):
+        shifted = q + TAU * np.round((current - q) / TAU)  # half to even, as C's nearbyint
+        shifted = np.where(shifted > limit, shifted - TAU * np.ceil((shifted - limit) / TAU), shifted)
+        return np.where(shifted < -limit, shifted + TAU * np.ceil((-limit - shifted) / TAU), shifted)
 
 
 def nearest_one(q: np.ndarray, valid: np.ndarray, current: np.ndarray, limit: float, prefer: int, tie: float):
     """The valid slot nearest ``current`` and its angles shifted next to it; see ``_kernels.c``."""
-    current = current.tolist()
-    best, best_distance, distances, shifted = -1, math.inf, [math.inf] * 8, [None] * 8
-    for k, (angles, ok) in enumerate(zip(q.tolist(), valid.tolist())):
-        if not ok:
-            continue
-        moved = [shift_near(a, c, limit) for a, c in zip(angles, current)]
-        distance = sum((m - c) * (m - c) for m, c in zip(moved, current))
-        if not math.isfinite(distance):
-            continue
-        distances[k], shifted[k] = distance, moved
-        if best < 0 or distance < best_distance:
-            best, best_distance = k, distance
-    if best < 0:
+    shifted = shift_near(q, current, limit)
+    with np.errstate(invalid="ignore"):
+        distance = ((shifted - current) ** 2).sum(axis=-1)
+    distance = np.where(valid & np.isfinite(distance), distance, np.inf)
+    best = int(np.argmin(distance))  # the first of equals, as the C loop
+    if distance[best] == np.inf:
         return -1, np.full(6, math.nan)
-    if 0 <= prefer < 8 and distances[prefer] <= best_distance + tie:
+    if 0 <= prefer < 8 and distance[prefer] <= distance[best] + tie:
         best = prefer
-    return best, np.array(shifted[best])
+    return best, shifted[best]
 
 
 # --------------------------------------------------------------------------- IK
@@ -149,12 +142,29 @@ def pose_is_valid(T: np.ndarray) -> np.ndarray:
     return ok
 
 
+def _one_pose_is_valid(rows: list[list[float]]) -> bool:
+    """:func:`pose_is_valid` for one pose's rows, in plain Python (the same checks as the C kernel)."""
+    if not all(math.isfinite(value) for row in rows for value in row):
+        return False
+    if any(abs(value) > BOTTOM_ROW_TOLERANCE for value in rows[3][:3]) or abs(rows[3][3] - 1.0) > BOTTOM_ROW_TOLERANCE:
+        return False
+    columns = list(zip(*rows[:3]))[:3]
+    for a in range(3):
+        for b in range(a, 3):
+            dot = sum(x * y for x, y in zip(columns[a], columns[b]))
+            if abs(dot - (1.0 if a == b else 0.0)) > ROTATION_TOLERANCE:
+                return False
+    (x1, x2, x3), (y1, y2, y3), (z1, z2, z3) = columns
+    return (x2 * y3 - x3 * y2) * z1 + (x3 * y1 - x1 * y3) * z2 + (x1 * y2 - x2 * y1) * z3 > 0.0
+
+
 def ik_one(T: np.ndarray, theta6_hint: float, reach_hint: float, theta3_hint: float, params):
     """All eight slots of one C-contiguous (4, 4) pose, or None when it is not a valid pose."""
-    if not pose_is_valid(T.reshape(1, 16))[0]:
+    rows = T.tolist()
+    if not _one_pose_is_valid(rows):
         return None
     q, valid, wrist, elbow, shoulder, failure, rho, distance = ref.solve_pose(
-        T.tolist(), theta6_hint, reach_hint, theta3_hint, params
+        rows, theta6_hint, reach_hint, theta3_hint, params
     )
     return (
         np.array(q).reshape(8, 6), np.array(valid), np.array(wrist), np.array(elbow), np.array(shoulder),

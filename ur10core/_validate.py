@@ -112,37 +112,3 @@ def rotation_matrix(R, name: str = "R") -> np.ndarray:
     T[..., 3, 3] = 1.0
     homogeneous_transform(T, name)
     return R
-
-
-def scalar_transform_rows(T, name: str = "T") -> list[list[float]]:
-    """Fast path of :func:`homogeneous_transform` for a single 4x4 pose.
-
-    Returns the rows as Python floats (what the scalar IK works on); falls back to the
-    array validator to word the error when anything is wrong.
-    """
-    rows = T.tolist()
-    (r11, r12, r13, px), (r21, r22, r23, py), (r31, r32, r33, pz), bottom = rows
-    total = r11 + r12 + r13 + px + r21 + r22 + r23 + py + r31 + r32 + r33 + pz + sum(bottom)
-    ok = total - total == 0.0  # False for nan and inf anywhere
-    if ok:
-        ok = (
-            abs(bottom[0]) <= BOTTOM_ROW_TOLERANCE
-            and abs(bottom[1]) <= BOTTOM_ROW_TOLERANCE
-            and abs(bottom[2]) <= BOTTOM_ROW_TOLERANCE
-            and abs(bottom[3] - 1.0) <= BOTTOM_ROW_TOLERANCE
-        )
-    if ok:
-        tol = ROTATION_TOLERANCE
-        ok = (
-            abs(r11 * r11 + r21 * r21 + r31 * r31 - 1.0) <= tol
-            and abs(r12 * r12 + r22 * r22 + r32 * r32 - 1.0) <= tol
-            and abs(r13 * r13 + r23 * r23 + r33 * r33 - 1.0) <= tol
-            and abs(r11 * r12 + r21 * r22 + r31 * r32) <= tol
-            and abs(r11 * r13 + r21 * r23 + r31 * r33) <= tol
-            and abs(r12 * r13 + r22 * r23 + r32 * r33) <= tol
-            # x cross y must be +z for a proper rotation: check its third component sign
-            and (r21 * r32 - r31 * r22) * r13 + (r31 * r12 - r11 * r32) * r23 + (r11 * r22 - r21 * r12) * r33 > 0
-        )
-    if not ok:
-        homogeneous_transform(T, name)  # raises with the precise message
-    return rows

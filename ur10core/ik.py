@@ -58,7 +58,7 @@ from typing import TYPE_CHECKING, ClassVar, NamedTuple
 
 import numpy as np
 
-from . import ik_reference
+from . import _numpy_kernels, ik_reference
 from ._backend import kernels
 from ._validate import as_float_array, homogeneous_transform, joint_vector
 from .ik_reference import ELBOW_TOO_CLOSE, ELBOW_TOO_FAR, REACHABLE, WRIST_INSIDE_CYLINDER
@@ -264,8 +264,8 @@ def nearest_branch(solution: IKSolution, q_current, joint_limit: float = _TAU, p
         )
         return Branch(q, np.array(slot))
     current = np.expand_dims(q_current, -2)  # (..., 1, 6)
+    shifted = _numpy_kernels.shift_near(solution.q, current, joint_limit)
     with np.errstate(invalid="ignore"):
-        shifted = equivalent_near(solution.q, current, joint_limit)
         distance = np.where(solution.valid, ((shifted - current) ** 2).sum(axis=-1), np.inf)
     slot = np.argmin(distance, axis=-1)
     flat_distance = distance.reshape(-1, 8)
@@ -284,11 +284,12 @@ def nearest_branch(solution: IKSolution, q_current, joint_limit: float = _TAU, p
 
 
 def _joint_limit(joint_limit) -> float:
-    if type(joint_limit) is float and _PI <= joint_limit < math.inf:
+    """``joint_limit`` (radians, ≥ π so that every angle has a turn within ±joint_limit; inf: no limit)."""
+    if type(joint_limit) is float and _PI <= joint_limit:
         return joint_limit
     if isinstance(joint_limit, bool) or not isinstance(joint_limit, (int, float, np.integer, np.floating)):
         raise ValueError(f"joint_limit must be a number of radians, got {joint_limit!r:.60}")
-    if not _PI <= joint_limit < math.inf:
+    if not _PI <= joint_limit:  # NaN too
         raise ValueError(f"joint_limit must be at least π (every angle then has a turn within ±joint_limit), got {joint_limit!r}")
     return float(joint_limit)
 
@@ -320,11 +321,7 @@ def equivalent_near(q, q_current, joint_limit: float = _TAU) -> np.ndarray:
     >>> round(float(np.degrees(equivalent_near(np.radians(10.0), 20.0))), 9)  # 20 rad is beyond ±360°
     10.0
     """
-    q = as_float_array(q, "q")
-    q_current = as_float_array(q_current, "q_current")
-    shifted = q + _TAU * np.round((q_current - q) / _TAU)
-    shifted = np.where(shifted > joint_limit, shifted - _TAU * np.ceil((shifted - joint_limit) / _TAU), shifted)
-    return np.where(shifted < -joint_limit, shifted + _TAU * np.ceil((-joint_limit - shifted) / _TAU), shifted)
+    return _numpy_kernels.shift_near(as_float_array(q, "q"), as_float_array(q_current, "q_current"), _joint_limit(joint_limit))
 
 
 # --------------------------------------------------------------------------- solving
