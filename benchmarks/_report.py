@@ -79,6 +79,44 @@ def quiet_machine(max_wait: float = 600.0, lag_p99: float = 0.02, stolen: float 
             return p50, p99, share, waited
 
 
+def work_unit_floor(seconds: float = 3.0) -> tuple[float, float]:
+    """The same small piece of pure-Python work, timed over and over in thread CPU time: (p50, p99) in ms.
+
+    The work never changes, so any spread is the machine's: a virtual CPU that the host
+    slows or stalls, a hyperthread sibling busy with something else. It is the floor
+    under every tail latency measured at that moment.
+    """
+    import numpy
+
+    def unit() -> int:
+        total = 0
+        for i in range(20000):
+            total += i * i
+        return total
+
+    times = []
+    end = time.perf_counter() + seconds
+    while time.perf_counter() < end:
+        start = time.thread_time()
+        unit()
+        times.append(time.thread_time() - start)
+        time.sleep(0.002)
+    p50, p99 = numpy.percentile(times, [50, 99]) * 1e3
+    return float(p50), float(p99)
+
+
+def steady_cpu(max_wait: float = 600.0, spread: float = 1.5) -> tuple[float, float, float]:
+    """Wait until :func:`work_unit_floor`'s p99 is within ``spread`` × its p50 (or ``max_wait`` s have passed).
+
+    Returns the last (p50, p99) and the seconds waited.
+    """
+    started = time.monotonic()
+    while True:
+        p50, p99 = work_unit_floor()
+        if p99 <= spread * p50 or time.monotonic() - started > max_wait:
+            return p50, p99, time.monotonic() - started
+
+
 def write_section(name: str, body: str) -> None:
     """Replace the text between ``<!-- name:begin -->`` and ``<!-- name:end -->``."""
     begin, end = f"<!-- {name}:begin -->", f"<!-- {name}:end -->"

@@ -16,14 +16,18 @@ from . import ik_reference as ref
 from .tolerances import (
     BAND_LEVERAGE,
     BOTTOM_ROW_TOLERANCE,
+    CHOICE_TOLERANCE,
     LENGTH_TOLERANCE,
     ROTATION_TOLERANCE,
-    CHOICE_TOLERANCE,
     WRIST_TOLERANCE,
     WRIST_TURN_TOLERANCE,
 )
 
 PI, TAU = ref.PI, ref.TAU
+
+
+def set_tolerances(*values: float) -> None:
+    """The compiled kernel is handed the tolerances; this module reads :mod:`ur10core.tolerances` itself."""
 
 
 def wrap(angle: np.ndarray) -> np.ndarray:
@@ -395,7 +399,3 @@ def _solve(T, theta6_hint, reach_hint, theta3_hint, params, q, valid, wrist, elb
         flat_q[k] = np.stack([theta1, t2, t3, wrap(theta234 - t2 - t3), theta5, theta6], -1)[ok]
         flat_valid[k] = True
         flat_elbow[k] = at_limit[ok]
-
-
-def set_tolerances(*values: float) -> None:
-    """The compiled kernel is handed the tolerances; this module reads :mod:`ur10core.tolerances` itself."""
