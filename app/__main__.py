@@ -3,13 +3,12 @@
 from __future__ import annotations
 
 import argparse
-import logging
 import signal
 import time
 
 from ur10core import Arm
 
-from .processes import MAX_PROCESSES, Helpers, can_share_a_socket, default_process_count, serve_balanced
+from . import logs
 
 
 def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
@@ -22,41 +21,25 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
     parser.add_argument("--shared", action="store_true",
                         help="shared demo mode: everyone watches the presenter's arm; the browser that enters "
                              "the printed join code presents")
-    parser.add_argument("--processes", type=int, default=None, metavar="N",
-                        help="serve from N processes on the one port (default: one per core, at most "
-                             f"{MAX_PROCESSES}, when serving the network in independent mode; otherwise 1)")
+    parser.add_argument("--allow-origin", action="append", default=[], metavar="URL",
+                        help="a web page besides the app's own that may connect, e.g. http://course-site:8000 "
+                             "(repeat for more; by default only the app's own page can)")
     args = parser.parse_args(argv)
-    if args.processes is None:
-        args.processes = default_process_count(args.host, args.shared)
-    elif args.processes < 1:
-        parser.error("--processes must be at least 1")
-    elif args.processes > 1 and args.shared:
-        parser.error("--shared runs in one process (everyone watches one arm): leave out --processes")
-    elif args.processes > 1 and not can_share_a_socket():
-        parser.error("--processes above 1 needs a POSIX system (Linux, macOS)")
+    for origin in args.allow_origin:
+        if not origin.startswith(("http://", "https://")) or "/" in origin.split("://", 1)[1].rstrip("/"):
+            parser.error(f"--allow-origin takes a page's origin such as http://host:8000, got {origin!r}")
     return args
 
 
 def main(argv: list[str] | None = None) -> None:
     args = parse_args(argv)
-    logging.basicConfig(level=logging.INFO, format="%(levelname)s %(name)s: %(message)s")
+    logs.install()
     from .server import TeachingServer
 
-    helpers = None
-    if args.processes > 1:
-        listener = serve_balanced(args.host, args.port, args.processes)
-        app = TeachingServer(preset=args.preset, host=args.host, listener=listener)
-        try:
-            helpers = Helpers(listener, preset=args.preset, host=args.host)
-        except RuntimeError as exc:
-            app.stop()
-            raise SystemExit(f"{exc}; --processes 1 serves from this process alone") from None
-    else:
-        app = TeachingServer(preset=args.preset, host=args.host, port=args.port, shared=args.shared)
+    app = TeachingServer(preset=args.preset, host=args.host, port=args.port, shared=args.shared,
+                         allowed_origins=args.allow_origin)
     moved = "" if args.port in (0, app.port) else f" (port {args.port} was busy)"
     mode = "shared demo mode" if args.shared else "every browser has its own arm"
-    if args.processes > 1:
-        mode += f", {args.processes} processes"
     print(f"\nUR10 teaching app ({args.preset}, {mode}) is running{moved}. Open:", flush=True)
     for url in app.urls:
         print(f"    {url}", flush=True)
@@ -65,15 +48,13 @@ def main(argv: list[str] | None = None) -> None:
     if app.classroom is not None:
         print(f"Join code for the presenter: {app.classroom.code}", flush=True)
     print("Press Ctrl+C to stop.", flush=True)
-    signal.signal(signal.SIGTERM, _interrupt)  # stop as on Ctrl+C, helpers included
+    signal.signal(signal.SIGTERM, _interrupt)  # stop as on Ctrl+C
     try:
         while True:
             time.sleep(3600)
     except KeyboardInterrupt:
         pass
     finally:
-        if helpers is not None:
-            helpers.stop()
         app.stop()
 
 

@@ -9,7 +9,9 @@ thirty students cost the server one redraw, not thirty.
 * viser has no authentication, so the server prints a short **join code** at start-up;
   the browser that enters it becomes the **presenter** and gets the full panel and the
   gizmo (its own, client-scoped: a shared gizmo would let anyone drag it). Entering the
-  code elsewhere hands the role over. Wrong codes lock a browser out for a while.
+  code elsewhere hands the role over. Wrong codes, from anyone, lock the code for the
+  whole class for a while, longer each time, and each is logged on the teacher's console:
+  guessing across fresh connections gains nothing.
 * A viewer can **explore on their own**: a private arm starting from the presenter's
   pose, drawn with the same scene names in the browser's own scope, which hides the
   shared arm for that browser only. **Back to the presenter's arm** removes it again.
@@ -41,8 +43,11 @@ log = logging.getLogger(__name__)
 #: Letters and digits that cannot be mistaken for one another when read off a projector.
 JOIN_ALPHABET = "ACDEFHJKMNPRTUVWXY3479"
 JOIN_LENGTH = 6
+#: Wrong codes (from anyone) that lock the join code, at first for LOCKOUT_SECONDS, twice as long
+#: each time after that up to MAX_LOCKOUT_SECONDS, until someone enters the right one.
 MAX_WRONG_CODES = 5
-LOCKOUT_SECONDS = 30.0
+LOCKOUT_SECONDS = 10.0
+MAX_LOCKOUT_SECONDS = 600.0
 VIEWER, PRESENTER, EXPLORER = "viewer", "presenter", "explorer"
 
 
@@ -57,9 +62,15 @@ def normalise_code(text: str) -> str:
 
 
 class LivePanel:
-    """The shared, read-only panel everyone sees: the presenter's joints, pose, branches, gauges."""
+    """The shared, read-only panel everyone sees: the presenter's joints, pose, branches, gauges.
+
+    Redrawn three times a second rather than ten: viser serialises and compresses a shared
+    widget's update once per browser, and in a lecture hall of a hundred that was most of
+    the server's work (BENCHMARKS.md, *lecture hall*).
+    """
 
     closed = False  # the refresher's protocol: a shared panel never closes
+    panel_interval = 0.3
 
     def __init__(self, gui: viser.GuiApi, state: ArmState, overlay_enabled) -> None:
         self._state = state
@@ -100,8 +111,6 @@ class Member:
         self.client = client
         self.role = VIEWER
         self.session: "ClientSession | None" = None
-        self.wrong_codes = 0
-        self.locked_until = 0.0
         self.folder: viser.GuiFolderHandle | None = None
         self.closed = False
 
@@ -117,6 +126,9 @@ class Classroom:
         self.live = LivePanel(app.server.gui, self.state, lambda: self.scene_views.overlay.enabled)
         self.members: dict[int, Member] = {}
         self.presenter: Member | None = None
+        self.wrong_codes = 0  #: since the last lock-out or the last right code
+        self.lockouts = 0  #: since the last right code: each lasts twice as long as the one before
+        self.locked_until = 0.0
         self._lock = threading.RLock()
 
     # ------------------------------------------------------------------ clients
@@ -151,19 +163,24 @@ class Classroom:
 
     def claim(self, member: Member, code: str) -> None:
         """Make ``member`` the presenter if ``code`` is the join code (``ValueError`` if not)."""
-        now = time.monotonic()
-        if now < member.locked_until:
-            raise ValueError(f"too many wrong codes: try again in {member.locked_until - now:.0f} s")
-        if not secrets.compare_digest(normalise_code(code), normalise_code(self.code)):
-            member.wrong_codes += 1
-            if member.wrong_codes >= MAX_WRONG_CODES:
-                member.wrong_codes = 0
-                member.locked_until = now + LOCKOUT_SECONDS
-            raise ValueError("that is not the join code (the teacher's screen shows it)")
-        member.wrong_codes = 0
         from .session import ClientSession
 
-        with self._lock:
+        with self._lock:  # one claim at a time, and none for a browser that has gone meanwhile
+            if member.closed:
+                return
+            now = time.monotonic()
+            if now < self.locked_until:
+                raise ValueError(f"too many wrong codes in this class: the code works again in {self.locked_until - now:.0f} s")
+            if not secrets.compare_digest(normalise_code(code), normalise_code(self.code)):
+                self.wrong_codes += 1
+                log.warning("a wrong join code from browser %s (%d wrong since the last lock-out)",
+                            member.client.client_id, self.wrong_codes)
+                if self.wrong_codes >= MAX_WRONG_CODES:
+                    seconds = min(MAX_LOCKOUT_SECONDS, LOCKOUT_SECONDS * 2**self.lockouts)
+                    self.wrong_codes, self.lockouts, self.locked_until = 0, self.lockouts + 1, now + seconds
+                    log.warning("the join code is locked for %.0f s after %d wrong codes", seconds, MAX_WRONG_CODES)
+                raise ValueError("that is not the join code (the teacher's screen shows it)")
+            self.wrong_codes = self.lockouts = 0
             previous = self.presenter
             if previous is member:
                 return

@@ -20,10 +20,10 @@ import viser
 from ur10core import Arm, symbolic
 
 from .classroom import Classroom
+from .gate import Gate, gated_serve
 from .meshes import load_links
 from .metrics import LATENCY
-from .processes import BalancedListener, viser_listens_on
-from .workers import DUTY, DragQueue, PanelRefresher
+from .workers import DragQueue, PanelRefresher
 from .session import ClientSession
 from .style import JOINT_CAP_BLUE
 
@@ -151,23 +151,23 @@ class TeachingServer:
         :attr:`port` is the real one. ``port=0`` lets the OS choose (tests).
     shared : bool
         Shared demo mode: everyone watches the presenter's arm (:class:`app.classroom.Classroom`).
-    listener : socket.socket, optional
-        A listening socket to serve instead of binding ``port``: how several processes
-        serve one port (:mod:`app.processes`).
+    allowed_origins : iterable of str
+        Web pages besides the app's own that may open its websocket (``--allow-origin``).
+    gate : Gate, optional
+        What the server accepts from browsers (:mod:`app.gate`); one with
+        ``allowed_origins`` by default.
     """
 
     def __init__(self, preset: str = "course", host: str = "127.0.0.1", port: int = 8080, shared: bool = False,
-                 listener: socket.socket | None = None) -> None:
+                 allowed_origins=(), gate: Gate | None = None) -> None:
         self.arm = Arm.preset(preset)
         self.links = load_links(preset)
         symbolic.load()  # read the cached derivation now rather than in the first student's callback
         self.host = host
         label = f"UR10 kinematics ({preset})"
-        if listener is None:
+        self.gate = gate or Gate(allowed_origins)
+        with gated_serve(self.gate):
             self.server = viser.ViserServer(host=host, port=port, label=label, verbose=False)
-        else:
-            with viser_listens_on(listener):
-                self.server = viser.ViserServer(host=host, port=listener.getsockname()[1], label=label, verbose=False)
         self.server.gui.configure_theme(show_share_button=False, brand_color=JOINT_CAP_BLUE, control_width="large")
         self.server.initial_camera.position = CAMERA_POSITION
         self.server.initial_camera.look_at = CAMERA_LOOK_AT
@@ -176,9 +176,7 @@ class TeachingServer:
         # the floor the arm stands on: half-metre cells, shared by everyone (it never changes)
         self.server.scene.add_grid("/floor", width=3.0, height=3.0, cell_size=0.1, section_size=0.5)
         loop = self.server.get_event_loop()
-        # the panels' share of the time is the machine's: processes serving one class split it
-        processes = len(listener.board.counts) if isinstance(listener, BalancedListener) else 1
-        self.refresher = PanelRefresher(loop, duty=DUTY / processes)
+        self.refresher = PanelRefresher(loop)
         self.drags = DragQueue(loop)
         self._sessions: dict[int, ClientSession] = {}
         self._sessions_lock = threading.Lock()

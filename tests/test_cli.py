@@ -6,9 +6,13 @@ import ipaddress
 import re
 import socket
 
+import pytest
+
 from app.__main__ import parse_args
 from app.server import lan_addresses
-from benchmarks.server_process import running_app
+from .app_process import running_app
+
+pytestmark = pytest.mark.server
 
 
 def test_defaults_are_loopback_8080_course():

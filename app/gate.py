@@ -1,0 +1,354 @@
+"""What the server accepts from a browser: one gate on viser's websocket, in every mode.
+
+viser accepts any message of up to 50 MB from any page, decodes it on the event loop,
+and dispatches every message type it knows (share tunnels, file uploads, form
+broadcasts), to anyone. A classroom needs less. The gate sits on the websocket server
+that viser starts (``websockets.asyncio.server.serve``, viser's only call into it, is
+given these settings for as long as the server starts up) and does four things:
+
+* **Size.** No incoming message over :data:`MAX_MESSAGE_BYTES`: the app's largest is a
+  typed pose of a few hundred bytes. A bigger frame closes that connection (1009) before
+  a byte of it is decoded.
+* **Kind.** Only the messages the app has a use for pass (:data:`ALLOWED`): widget values,
+  the gizmo, clicks on the arm, the camera. Anything else — a share-tunnel request, a file
+  upload, a form broadcast, a widget property other than its value — is dropped, and the
+  first of each kind is logged.
+* **Rate.** Each connection's messages pass at most :data:`MESSAGES_PER_SECOND` (after a
+  burst), one at a time, and while one waits, a newer message for the same widget or
+  gizmo replaces it: a flood of slider updates costs the server one update per tick, and
+  only the flooding student waits.
+* **Who.** A websocket must come from a page the server itself served (its ``Origin``
+  names the host the browser asked for) or from an origin the teacher allowed
+  (``--allow-origin``), and name this machine or an IP address as its host (no DNS
+  rebinding). Apart from loopback (this machine: the teacher's own tabs and tools), an
+  address may hold :data:`CONNECTIONS_PER_ADDRESS` connections and open new ones at
+  :data:`NEW_CONNECTIONS_PER_SECOND` after a burst.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import collections
+import contextlib
+import http
+import ipaddress
+import logging
+import socket
+import threading
+import time
+import urllib.parse
+from typing import Any, Iterator
+
+import msgspec
+import websockets.asyncio.server
+
+log = logging.getLogger(__name__)
+
+#: Largest message a browser may send (bytes). A typed pose or a camera is under 1 KiB.
+MAX_MESSAGE_BYTES = 64 * 1024
+#: Messages per second a connection's messages pass at, after a burst of :data:`MESSAGE_BURST`.
+MESSAGES_PER_SECOND = 60.0
+MESSAGE_BURST = 60
+#: Different widgets (or gizmos) one connection may have waiting at once; more are dropped.
+MAX_WAITING = 64
+#: Open websockets per address (loopback excepted).
+CONNECTIONS_PER_ADDRESS = 8
+#: New websockets per address and second, after a burst of :data:`CONNECTIONS_PER_ADDRESS`.
+NEW_CONNECTIONS_PER_SECOND = 0.5
+
+#: The messages the app uses, and what makes two of them the same (the newer replaces the older).
+ALLOWED = {
+    "GuiUpdateMessage": ("uuid",),
+    "TransformControlsUpdateMessage": ("name",),
+    "TransformControlsDragStartMessage": ("name",),
+    "TransformControlsDragEndMessage": ("name",),
+    "SceneNodeClickMessage": ("name", "instance_index"),
+    "ViewerCameraMessage": (),
+}
+#: A widget value is one of these, or a short list of them (a vector widget).
+_SCALARS = (str, int, float, bool)
+_LONGEST_TEXT = 1000
+_LONGEST_LIST = 16
+
+
+class TokenBucket:
+    """``rate`` tokens a second up to ``burst``; :meth:`take` says whether one was there."""
+
+    def __init__(self, rate: float, burst: float) -> None:
+        self.rate, self.burst = rate, burst
+        self.tokens, self.stamp = float(burst), time.monotonic()
+
+    def _fill(self) -> None:
+        now = time.monotonic()
+        self.tokens = min(self.burst, self.tokens + (now - self.stamp) * self.rate)
+        self.stamp = now
+
+    def take(self) -> bool:
+        self._fill()
+        if self.tokens >= 1.0:
+            self.tokens -= 1.0
+            return True
+        return False
+
+    def wait_time(self) -> float:
+        """Seconds until a token is there."""
+        self._fill()
+        return max(0.0, (1.0 - self.tokens) / self.rate)
+
+
+def message_key(raw: bytes) -> tuple | None:
+    """What the gate knows a browser's message by, or None when it is not one the app takes."""
+    try:
+        message = msgspec.msgpack.decode(raw)
+    except (msgspec.DecodeError, ValueError, TypeError):
+        return None
+    if not isinstance(message, dict):
+        return None
+    kind = message.get("type")
+    fields = ALLOWED.get(kind) if isinstance(kind, str) else None
+    if fields is None:
+        return None
+    if kind == "GuiUpdateMessage" and not _plain_value_update(message.get("updates")):
+        return None
+    key = tuple(message.get(field) for field in fields)
+    if not all(value is None or isinstance(value, (str, int)) for value in key):
+        return None
+    return (kind, *key)
+
+
+def _plain_value_update(updates: Any) -> bool:
+    """A browser only ever sends ``{"value": v}``; other properties (options, disabled, ...) are not its to set."""
+    if not isinstance(updates, dict) or set(updates) != {"value"}:
+        return False
+    value = updates["value"]
+    if isinstance(value, list):
+        return len(value) <= _LONGEST_LIST and all(isinstance(v, _SCALARS) and not isinstance(v, str) for v in value)
+    return isinstance(value, _SCALARS) and (not isinstance(value, str) or len(value) <= _LONGEST_TEXT)
+
+
+class Gate:
+    """The limits one server applies, and what it has turned away (for the logs and the tests).
+
+    Parameters
+    ----------
+    allowed_origins : iterable of str
+        Origins (``http://host:port``) allowed besides the server's own pages.
+    trust_loopback : bool
+        Whether connections from this machine skip the per-address limits (default True).
+    """
+
+    def __init__(self, allowed_origins=(), trust_loopback: bool = True) -> None:
+        self.allowed_origins = {origin.rstrip("/").lower() for origin in allowed_origins}
+        self.trust_loopback = trust_loopback
+        self.local_names = {"localhost", socket.gethostname().lower()}
+        self.local_names |= {f"{name}.local" for name in list(self.local_names)}
+        self.dropped: collections.Counter = collections.Counter()  # message kind -> how many
+        self.refused: collections.Counter = collections.Counter()  # reason -> how many connections
+        self._open: collections.Counter = collections.Counter()  # address -> open websockets
+        self._arrivals: dict[str, TokenBucket] = {}
+        self._lock = threading.Lock()
+
+    # ------------------------------------------------------------------ connections
+
+    def check_request(self, connection, request) -> Any:
+        """``process_request`` for websocket upgrades: None to go on, or the refusal to send."""
+        if request.headers.get("Upgrade", "").lower() != "websocket":
+            return None  # the page and its files: nothing to guard
+        hosts, origins = request.headers.get_all("Host"), request.headers.get_all("Origin")
+        if len(hosts) != 1 or len(origins) > 1:
+            return self._refuse(connection, http.HTTPStatus.BAD_REQUEST, "host", "a request with several Host or Origin headers")
+        host, origin = hosts[0], (origins[0] if origins else None)
+        if not self._is_our_host(host):
+            return self._refuse(connection, http.HTTPStatus.FORBIDDEN, "host", f"unknown host {host!r}")
+        if origin is not None and not self._is_allowed_origin(origin, host):
+            return self._refuse(connection, http.HTTPStatus.FORBIDDEN, "origin", f"websocket from the page {origin!r}")
+        address = _address(connection)
+        if self._trusted(address):
+            return None
+        with self._lock:
+            bucket = self._arrivals.setdefault(address, TokenBucket(NEW_CONNECTIONS_PER_SECOND, CONNECTIONS_PER_ADDRESS))
+            if self._open[address] >= CONNECTIONS_PER_ADDRESS:
+                reason = f"{address} already has {CONNECTIONS_PER_ADDRESS} connections"
+            elif not bucket.take():
+                reason = f"{address} is opening connections too fast"
+            else:
+                return None
+        return self._refuse(connection, http.HTTPStatus.TOO_MANY_REQUESTS, "address", reason)
+
+    def _refuse(self, connection, status: http.HTTPStatus, kind: str, reason: str):
+        with self._lock:
+            self.refused[kind] += 1
+            first = self.refused[kind] == 1
+        (log.warning if first else log.debug)("refused a websocket: %s", reason)
+        return connection.respond(status, f"{status.phrase}: {reason}\n")
+
+    def _is_our_host(self, host: str) -> bool:
+        name = _hostname(host)
+        if name in self.local_names or name in {urllib.parse.urlsplit(origin).hostname for origin in self.allowed_origins}:
+            return True
+        with contextlib.suppress(ValueError):
+            ipaddress.ip_address(name)
+            return True  # an address, not a name: nothing to rebind
+        return False
+
+    def _is_allowed_origin(self, origin: str, host: str) -> bool:
+        origin = origin.rstrip("/").lower()
+        return origin in (f"http://{host.lower()}", f"https://{host.lower()}") or origin in self.allowed_origins
+
+    def _trusted(self, address: str) -> bool:
+        if not self.trust_loopback:
+            return False
+        with contextlib.suppress(ValueError):
+            return ipaddress.ip_address(address).is_loopback
+        return False
+
+    def opened(self, address: str) -> None:
+        with self._lock:
+            self._open[address] += 1
+
+    def closed(self, address: str) -> None:
+        with self._lock:
+            self._open[address] -= 1
+            if self._open[address] <= 0:
+                del self._open[address]
+
+    def open_connections(self, address: str) -> int:
+        with self._lock:
+            return self._open[address]
+
+    # ------------------------------------------------------------------ messages
+
+    def note_dropped(self, kind: str) -> None:
+        with self._lock:
+            self.dropped[kind] += 1
+            first = self.dropped[kind] == 1
+        if first:
+            log.warning("ignored a %s from a browser (the app has no use for it); more are counted, not logged", kind)
+
+
+def _hostname(host: str) -> str:
+    """The name in a ``Host`` header: ``name:port``, ``[v6 address]:port`` or ``name``."""
+    if host.startswith("["):
+        return host[1 : host.find("]")].lower()
+    return (host.rsplit(":", 1)[0] if host.count(":") == 1 else host).lower()
+
+
+def _address(connection) -> str:
+    remote = connection.remote_address
+    return str(remote[0]) if remote else "?"
+
+
+def _kind(raw: bytes) -> str:
+    """For the log: the type a dropped message claimed to be."""
+    try:
+        message = msgspec.msgpack.decode(raw)
+        kind = message.get("type") if isinstance(message, dict) else None
+        return kind if isinstance(kind, str) and len(kind) < 64 else "undecodable message"
+    except Exception:
+        return "undecodable message"
+
+
+class GatedConnection:
+    """A websocket connection as viser sees it, passing only what the gate lets through.
+
+    A reader task takes every message off the socket as it arrives, keeps the newest of
+    each kind (:func:`message_key`) waiting, and :meth:`recv` hands them out oldest
+    first at the connection's rate. Everything else is the connection's own.
+    """
+
+    def __init__(self, connection, gate: Gate) -> None:
+        self._connection = connection
+        self._gate = gate
+        self._waiting: dict[tuple, bytes] = {}
+        self._arrived = asyncio.Event()
+        self._ended: BaseException | None = None
+        self._rate = TokenBucket(MESSAGES_PER_SECOND, MESSAGE_BURST)
+        self._reader = asyncio.get_running_loop().create_task(self._read())
+
+    def __getattr__(self, name: str) -> Any:
+        return getattr(self._connection, name)
+
+    async def _read(self) -> None:
+        try:
+            while True:
+                raw = await self._connection.recv()
+                key = message_key(raw) if isinstance(raw, bytes) else None
+                if key is None:
+                    self._gate.note_dropped(_kind(raw) if isinstance(raw, bytes) else "text frame")
+                    continue
+                if key not in self._waiting and len(self._waiting) >= MAX_WAITING:
+                    self._gate.note_dropped("message over the waiting limit")
+                    continue
+                self._waiting[key] = raw  # a newer one for the same widget keeps the older one's place
+                self._arrived.set()
+        except BaseException as error:  # the connection closed (or we were cancelled): recv says so
+            self._ended = error
+            self._arrived.set()
+
+    async def recv(self) -> bytes:
+        while True:
+            if self._waiting:
+                delay = self._rate.wait_time()
+                if delay > 0.0:
+                    await asyncio.sleep(delay)  # newer messages for the same keys replace those waiting meanwhile
+                    continue
+                self._rate.take()
+                key = next(iter(self._waiting))
+                return self._waiting.pop(key)
+            if self._ended is not None:
+                raise self._ended
+            self._arrived.clear()
+            await self._arrived.wait()
+
+    def close_reader(self) -> None:
+        self._reader.cancel()
+
+
+_STARTING = threading.Lock()
+
+
+@contextlib.contextmanager
+def gated_serve(gate: Gate) -> Iterator[None]:
+    """While active, a viser server that starts serves through ``gate``.
+
+    viser hands ``websockets.asyncio.server.serve`` its handler, a 50 MB message limit
+    and its HTTP handler; for the moment the server starts (``viser.ViserServer()``
+    returns once it is listening) the call gets the gate's limit, a request check in
+    front of viser's HTTP handler, and a handler that sees the connection through
+    :class:`GatedConnection`. ``tests/test_gate.py`` fails if viser stops calling it so.
+    """
+    _STARTING.acquire()  # one server starting at a time: the patch is the whole process's
+    original = websockets.asyncio.server.serve
+
+    class serve_through_gate(original):  # type: ignore[misc, valid-type]
+        def __init__(self, handler, *args, process_request=None, **kwargs) -> None:  # noqa: ANN001
+            async def gated_handler(connection) -> None:  # noqa: ANN001
+                address = _address(connection)
+                gate.opened(address)
+                gated = GatedConnection(connection, gate)
+                try:
+                    await handler(gated)
+                finally:
+                    gated.close_reader()
+                    gate.closed(address)
+
+            def check_then_serve(connection, request):  # noqa: ANN001
+                refusal = gate.check_request(connection, request)
+                if refusal is not None:
+                    return refusal
+                return process_request(connection, request) if process_request is not None else None
+
+            kwargs["max_size"] = MAX_MESSAGE_BYTES
+            serve_through_gate.used = True
+            super().__init__(gated_handler, *args, process_request=check_then_serve, **kwargs)
+
+    serve_through_gate.used = False
+    websockets.asyncio.server.serve = serve_through_gate
+    try:
+        yield
+    finally:
+        websockets.asyncio.server.serve = original
+        _STARTING.release()
+        if not serve_through_gate.used:
+            raise RuntimeError("viser did not start its websocket server through websockets.asyncio.server.serve: "
+                               "the gate would not apply (has viser changed?)")

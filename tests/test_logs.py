@@ -1,0 +1,58 @@
+"""The teacher's console stays readable however often one error repeats."""
+
+import io
+import logging
+
+from app.logs import RepeatLimiter
+
+
+def _logger(stream: io.StringIO, limiter: RepeatLimiter) -> logging.Logger:
+    logger = logging.getLogger(f"test.logs.{id(stream)}")
+    logger.propagate = False
+    handler = logging.StreamHandler(stream)
+    handler.addFilter(limiter)
+    logger.addHandler(handler)
+    return logger
+
+
+def test_twenty_thousand_tracebacks_become_a_few_lines():
+    """A bad widget value used to log a full traceback each time: 20 000 messages wrote 15 MB."""
+    stream = io.StringIO()
+    logger = _logger(stream, RepeatLimiter(burst=3, window=60.0))
+    for k in range(20_000):
+        try:
+            raise ValueError(f"could not convert string to float: 'x{k}'")
+        except ValueError:
+            logger.exception("callback failed for client %d", k % 30)
+    text = stream.getvalue()
+    assert len(text) < 10_000
+    assert text.count("Traceback") == 3
+    assert "repeating: more like this are counted, not shown" in text
+
+
+def test_asyncio_reports_of_different_tasks_are_one_kind():
+    """asyncio names a different task on each report's second line: still one kind."""
+    stream = io.StringIO()
+    logger = _logger(stream, RepeatLimiter(burst=2, window=60.0))
+    for k in range(500):
+        logger.error(f"Task exception was never retrieved\nfuture: <Task finished name='Task-{k}'>")
+    assert stream.getvalue().count("Task exception was never retrieved") == 3  # two, and the note
+
+
+def test_other_kinds_still_show_and_the_count_comes_with_the_next_window():
+    stream = io.StringIO()
+    limiter = RepeatLimiter(burst=1, window=0.0)  # every record starts a new window
+    logger = _logger(stream, limiter)
+    logger.warning("refused a websocket: %s", "one")
+    logger.warning("refused a websocket: %s", "two")
+    assert stream.getvalue().count("refused a websocket") == 2
+    limiter.window = 60.0
+    logger.warning("an accept failed")
+    logger.warning("an accept failed")  # counted: the note
+    logger.warning("an accept failed")  # counted silently
+    logger.error("something else entirely")
+    limiter.window = 0.0
+    logger.warning("an accept failed")
+    text = stream.getvalue()
+    assert "something else entirely" in text
+    assert "(and 2 more like this in the minute before, not shown)" in text
