@@ -14,12 +14,16 @@ dictionary straight from fields whose types are known (under 4 µs). With thirty
 students dragging that was another tenth of a core.
 
 They rely on viser 1.1 internals (``SceneApi._queue_scene_message``, the handles'
-``_impl``); ``tests/test_fast_updates.py`` holds what they send to what the public
-setters send, so a viser upgrade that changes those internals fails the tests instead
-of drawing wrong.
+``_impl``), so viser is pinned exactly (pyproject.toml) and ``tests/test_fast_updates.py``
+holds what they send to what the public setters send: a viser upgrade that changes those
+internals fails the tests instead of drawing wrong. ``UR10_TEACH_PUBLIC_SETTERS=1`` draws
+through the public setters instead; ``benchmarks/bench_drag.py`` measures both, which is
+what keeps this module here (BENCHMARKS.md).
 """
 
 from __future__ import annotations
+
+import os
 
 import numpy as np
 import viser
@@ -54,8 +58,16 @@ class _InstancesMessage(_messages.SceneNodeUpdateMessage):
         return {"name": self.name, "updates": updates, "owner": self.owner, "type": "SceneNodeUpdateMessage"}
 
 
+#: Draw through viser's public setters instead (for the benchmark that keeps this module honest).
+PUBLIC_SETTERS = os.environ.get("UR10_TEACH_PUBLIC_SETTERS") == "1"
+
+
 def set_orientations(nodes: list[viser.SceneNodeHandle], wxyzs: np.ndarray) -> None:
     """``node.wxyz = w`` for each pair, one message each, without viser's per-call checks."""
+    if PUBLIC_SETTERS:
+        for node, wxyz in zip(nodes, wxyzs):
+            node.wxyz = wxyz
+        return
     for node, wxyz in zip(nodes, wxyzs.tolist()):
         impl = node._impl
         impl.wxyz[:] = wxyz
@@ -64,6 +76,11 @@ def set_orientations(nodes: list[viser.SceneNodeHandle], wxyzs: np.ndarray) -> N
 
 def set_instances(mesh: viser.BatchedMeshHandle, wxyzs: np.ndarray, positions: np.ndarray | None) -> None:
     """``mesh.batched_wxyzs = wxyzs`` and (unless None) ``mesh.batched_positions = positions`` in one message."""
+    if PUBLIC_SETTERS:
+        mesh.batched_wxyzs = wxyzs
+        if positions is not None:
+            mesh.batched_positions = positions
+        return
     impl = mesh._impl
     # sent as they are when already C-contiguous float32 (the caller must not change them afterwards)
     updates = {"batched_wxyzs": np.ascontiguousarray(wxyzs, dtype=np.float32)}

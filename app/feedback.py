@@ -9,13 +9,15 @@ from typing import Any, Callable
 
 import viser
 
+from .style import sentence
+
 log = logging.getLogger(__name__)
 
 
 def notify(client: viser.ClientHandle, title: str, body: str, color: str = "yellow") -> None:
     """A notification in one browser; nothing happens if that browser has gone."""
     try:
-        client.add_notification(title, body, auto_close_seconds=8.0, color=color)
+        client.add_notification(title, sentence(body), auto_close_seconds=8.0, color=color)
     except Exception:
         log.debug("could not notify client %s", client.client_id, exc_info=True)
 
@@ -50,3 +52,17 @@ def guard(
             notify(client, "Something went wrong", f"{type(error).__name__}: {error}. The app is still running.", "red")
 
     return guarded
+
+
+def chosen(handle, what: str) -> str:
+    """The value of a dropdown or button group, or ``ValueError`` when a client sent one not among its options.
+
+    A browser only ever sends one of the options it was given; anything else came from
+    something else, and is put back (for a dropdown, to its first option) before it is refused.
+    """
+    value, options = handle.value, tuple(handle.options)
+    if value in options:
+        return value
+    if isinstance(handle, viser.GuiDropdownHandle):  # a button group holds no choice to show
+        handle.value = options[0]
+    raise ValueError(f"{what}: {value!r:.40} is not one of the choices")

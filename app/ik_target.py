@@ -14,20 +14,21 @@ controls.
 from __future__ import annotations
 
 import logging
-import math
 import threading
 from typing import TYPE_CHECKING, Callable
 
 import numpy as np
 import viser
 
-from ur10core import SLOTS
+from ur10core import JOINT_LIMIT, SLOTS
+from ur10core.ik import equivalent_near
 from ur10core.orientation import quaternion, rotation_from_zyx_euler
 
 from .fast_updates import set_instances, stop_echo
+from .feedback import chosen
 from .meshes import LinkMesh
 from .state import ArmState, Snapshot
-from .style import GHOST_OPACITY, SLOT_COLORS, UNREACHABLE_RED, swatch
+from .style import GHOST_OPACITY, SLOT_COLORS, UNREACHABLE_RED, number, sentence, swatch
 from .view import View
 
 if TYPE_CHECKING:
@@ -39,13 +40,18 @@ BRANCH_BUTTONS = tuple(str(slot.index + 1) for slot in SLOTS)
 
 
 def branch_table(snapshot: Snapshot) -> str:
-    """The eight slots with their colour, label and joint values (°)."""
+    """The eight slots with their colour, label and joint values (°).
+
+    Each angle is the turn of it nearest the arm's own joints, as the sliders show them:
+    the arm's branch reads exactly as its sliders do.
+    """
     solution = snapshot.solution
-    rows = ["| | # | branch | θ1…θ6 (°) |", "|---|---:|---|---|"]
+    rows = ["| | # | branch | θ1…θ6 (°), as the sliders would show them |", "|---|---:|---|---|"]
+    shown = equivalent_near(np.where(solution.valid[:, None], solution.q, 0.0), snapshot.q, JOINT_LIMIT)
     for slot in SLOTS:
         k = slot.index
         if solution.valid[k]:
-            values = ", ".join(f"{v:.1f}" for v in np.degrees(solution.q[k]))
+            values = ", ".join(number(v, ".1f") for v in np.degrees(shown[k]))
         else:
             values = "— no solution"
         mark = " **← arm**" if k == snapshot.slot else ""
@@ -55,7 +61,7 @@ def branch_table(snapshot: Snapshot) -> str:
 
 def status_markdown(snapshot: Snapshot) -> str:
     if not snapshot.reachable:
-        return f"<span style='color:#c81e1e'>**Target unreachable.**</span> {snapshot.reason[len('unreachable: '):]}"
+        return f"<span style='color:#c81e1e'>**Target unreachable.**</span> {sentence(snapshot.reason[len('unreachable: '):])}."
     solution = snapshot.solution
     notes = [f"**{int(solution.valid.sum())} of 8 branches** reach this target; the arm is on "
              f"**{snapshot.slot + 1}: {SLOTS[snapshot.slot].label}**."]
@@ -71,21 +77,6 @@ def status_markdown(snapshot: Snapshot) -> str:
 def branches_markdown(snapshot: Snapshot) -> str:
     """The status line above the eight-branch table."""
     return status_markdown(snapshot) + "\n\n" + branch_table(snapshot)
-
-
-def target_from_pose(pose: tuple) -> np.ndarray:
-    """A gizmo's ``(wxyz, position)`` as the 4x4 target it stands for (on every drag event)."""
-    (w, x, y, z), (px, py, pz) = pose
-    norm = math.sqrt(w * w + x * x + y * y + z * z)
-    if not 0.0 < norm < math.inf:  # zero, infinite or not a number: a browser should never send it
-        raise ValueError(f"the target's orientation {pose[0]} is not a rotation")
-    w, x, y, z = w / norm, x / norm, y / norm, z / norm
-    return np.array([  # rotation_from_quaternion, written out: this is the hot path
-        [1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y), px],
-        [2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x), py],
-        [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y), pz],
-        [0.0, 0.0, 0.0, 1.0],
-    ])
 
 
 def add_unreachable_halo(scene: viser.SceneApi, parent: str) -> viser.IcosphereHandle:
@@ -195,10 +186,14 @@ class IKTargetControls(View):
         self.move_button.on_click(session.guard(self._typed_target))
         self.snap_button.on_click(session.guard(lambda _: session.apply(lambda state: state.set_joints(state.q))))
 
-    def detach(self) -> None:
-        """Stop driving the branches scene (a presenter handing over)."""
+    def close(self) -> None:
+        """Stop driving the branches scene (the browser has gone, or a presenter handed over)."""
         if self._branches.on_select == self._ghost_clicked:
             self._branches.on_select = None
+
+    def remove(self) -> None:
+        super().remove()
+        self.gizmo.remove()  # the red halo hangs under it
 
     # ------------------------------------------------------------------ input
 
@@ -220,26 +215,26 @@ class IKTargetControls(View):
         self._session.guard(lambda _: self._session.apply(lambda state: state.select_branch(slot)))(None)
 
     def _branch_button(self, _: viser.GuiEvent) -> None:
-        slot = int(self.branch_buttons.value) - 1
+        slot = int(chosen(self.branch_buttons, "branch")) - 1
         self._session.apply(lambda state: state.select_branch(slot))
 
     def _toggle_ghosts(self, _: viser.GuiEvent) -> None:
         self._branches.show_ghosts = self.show_ghosts.value
-        self._branches.render(self._session.state.last)
+        self._session.redraw()
 
     def _typed_target(self, _: viser.GuiEvent) -> None:
         values = ArmState.parse_degrees(self.typed_pose.value, count=6, what="target pose")
         T = np.eye(4)
         T[:3, :3] = rotation_from_zyx_euler(np.radians(values[3:]))
         T[:3, 3] = values[:3] / 1000.0
-        self._session.apply(lambda state: state.move_target(T))
+        self._session.apply(lambda state: state.move_target(T, cause="typed"))
 
     # ------------------------------------------------------------------ output
 
     def render(self, snapshot: Snapshot) -> None:
-        if snapshot.cause != "target":  # the user is not holding the gizmo: put it on the flange
-            self.gizmo.wxyz = snapshot.flange_wxyz
-            self.gizmo.position = snapshot.flange[:3, 3]
+        if snapshot.cause != "target":  # the user is not holding the gizmo: put it on the target
+            self.gizmo.wxyz = quaternion(snapshot.target[:3, :3], check=False)
+            self.gizmo.position = snapshot.target[:3, 3]
             with self._seen_lock:
                 self._seen_pose = None  # the next drag starts afresh, even from this very pose
         if self.unreachable is not None:

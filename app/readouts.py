@@ -9,7 +9,7 @@ from ur10core import Arm, to_controller
 from ur10core.orientation import angle_axis_from_quaternion, quaternion, xyz_fixed, zyx_euler
 
 from .state import Snapshot
-from .style import JOINT_LABELS
+from .style import JOINT_LABELS, number
 from .view import View
 
 
@@ -17,7 +17,7 @@ def pose_markdown(T: np.ndarray) -> str:
     """T06 as a table: rotation entries and the position in mm."""
     rows = ["| | | | p (mm) |", "|---:|---:|---:|---:|"]
     for i in range(3):
-        rows.append("| " + " | ".join(f"{T[i, j]:+.4f}" for j in range(3)) + f" | **{T[i, 3] * 1000:+.1f}** |")
+        rows.append("| " + " | ".join(number(T[i, j], "+.4f") for j in range(3)) + f" | **{number(T[i, 3] * 1000, '+.1f')}** |")
     rows.append("| 0 | 0 | 0 | 1 |")
     return "\n".join(rows)
 
@@ -33,12 +33,16 @@ def orientation_markdown(R: np.ndarray, wxyz: np.ndarray | None = None) -> str:
     theta, axis = angle_axis_from_quaternion((w, x, y, z))
     return "\n".join(
         [
-            f"- **Z-Y-X Euler** (α, β, γ) = ({alpha:.2f}°, {beta:.2f}°, {gamma:.2f}°)",
-            f"- **X-Y-Z fixed** (γ, β, α) = ({fixed[0]:.2f}°, {fixed[1]:.2f}°, {fixed[2]:.2f}°)",
-            f"- **Angle–axis** θ = {np.degrees(theta):.2f}°, k̂ = ({axis[0]:+.4f}, {axis[1]:+.4f}, {axis[2]:+.4f})",
-            f"- **Quaternion** (w, x, y, z) = ({w:+.4f}, {x:+.4f}, {y:+.4f}, {z:+.4f})",
+            f"- **Z-Y-X Euler** (α, β, γ) = ({_degrees(alpha, beta, gamma)})",
+            f"- **X-Y-Z fixed** (γ, β, α) = ({_degrees(*fixed)})",
+            f"- **Angle–axis** θ = {number(np.degrees(theta), '.2f')}°, k̂ = ({', '.join(number(v, '+.4f') for v in axis)})",
+            f"- **Quaternion** (w, x, y, z) = ({', '.join(number(v, '+.4f') for v in (w, x, y, z))})",
         ]
     )
+
+
+def _degrees(*angles: float) -> str:
+    return ", ".join(f"{number(angle, '.2f')}°" for angle in angles)
 
 
 def flange_markdown(snapshot: Snapshot) -> str:
@@ -49,10 +53,10 @@ def joints_markdown(q: np.ndarray, with_controller: bool) -> str:
     """The joint angles in degrees, and the teach pendant's beside them when asked."""
     course = np.degrees(q)
     if not with_controller:
-        return " · ".join(f"{name} {value:.2f}°" for name, value in zip(JOINT_LABELS, course))
+        return " · ".join(f"{name} {number(value, '.2f')}°" for name, value in zip(JOINT_LABELS, course))
     controller = np.degrees(to_controller(q))
     rows = ["| joint | course | UR controller |", "|---|---:|---:|"]
-    rows += [f"| {name} | {a:.2f}° | {b:.2f}° |" for name, a, b in zip(JOINT_LABELS, course, controller)]
+    rows += [f"| {name} | {number(a, '.2f')}° | {number(b, '.2f')}° |" for name, a, b in zip(JOINT_LABELS, course, controller)]
     rows.append("\nThe controller uses standard DH with a2, a3 < 0: shoulder + 180°, flange turned 180° about z6.")
     return "\n".join(rows)
 

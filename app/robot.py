@@ -24,16 +24,6 @@ def poses(frames: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return quaternion(frames[..., :3, :3], check=False), frames[..., :3, 3]
 
 
-def relative_frames(frames: np.ndarray) -> np.ndarray:
-    """T(i−1, i) for i = 1..6 from the base-frame frames {0}..{6}, (6, 4, 4) (rigid inverse, no solve)."""
-    R_parent_T = np.swapaxes(frames[:-1, :3, :3], -1, -2)
-    relative = np.zeros((len(frames) - 1, 4, 4))
-    relative[:, :3, :3] = R_parent_T @ frames[1:, :3, :3]
-    relative[:, :3, 3] = (R_parent_T @ (frames[1:, :3, 3] - frames[:-1, :3, 3])[..., None])[..., 0]
-    relative[:, 3, 3] = 1.0
-    return relative
-
-
 def node_name(index: int, root: str = "/arm") -> str:
     """Scene-tree name of link ``index``'s node: ``/arm/link0/link1/…/link<index>``."""
     return root + "".join(f"/link{i}" for i in range(index + 1))
@@ -42,7 +32,7 @@ def node_name(index: int, root: str = "/arm") -> str:
 class RobotScene(View):
     def __init__(self, scene: viser.SceneApi, links: tuple[LinkMesh, ...], first: Snapshot) -> None:
         scene.add_frame("/base_frame", axes_length=0.3, axes_radius=0.008, origin_radius=0.015)
-        wxyz, position = poses(relative_frames(first.frames))
+        wxyz, position = poses(first.arm.link_transforms(first.q))
         self._links: list[viser.FrameHandle] = []
         for link in links:
             i = link.index

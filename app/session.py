@@ -21,8 +21,9 @@ from typing import Any, Callable
 import viser
 
 from ur10core import Arm
+from ur10core.orientation import transform_from_quaternion
 
-from .ik_target import BranchesScene, IKTargetControls, target_from_pose
+from .ik_target import BranchesScene, IKTargetControls
 from .feedback import guard, notify
 from .joint_panel import JointPanel
 from .meshes import LinkMesh
@@ -104,7 +105,9 @@ class ClientSession:
         self.readouts = Readouts(gui, arm, first)
         self.singularity = OverlayPanel(gui, self.scene_views.overlay, self)
         self.workspace = WorkspaceView(scene, gui, self)
-        self.views = (*self.scene_views, self.joints, self.ik_target, self.readouts, self.singularity)
+        self.views = (*self.scene_views, self.joints, self.ik_target, self.readouts, self.singularity, self.workspace)
+        #: the views this session built in the browser's own panel (the scene views may be the classroom's)
+        self.own_views = (self.joints, self.ik_target, self.readouts, self.singularity, self.workspace)
         self.render(first)
         self.render_panel()
 
@@ -125,9 +128,14 @@ class ClientSession:
             observer(snapshot)
         return snapshot
 
+    def redraw(self) -> None:
+        """The 3D view again, unchanged state (a toggle changed what is shown), on the one path every redraw takes."""
+        with self.state.lock:
+            self.render(self.state.last)
+
     def drag_to(self, pose) -> None:
         """The drag queue's worker solving for the gizmo's newest ``(wxyz, position)``."""
-        self.guard(lambda _: self.apply(lambda state: state.move_target(target_from_pose(pose)), timed="drag"))(None)
+        self.guard(lambda _: self.apply(lambda state: state.move_target(transform_from_quaternion(*pose)), timed="drag"))(None)
 
     def render(self, snapshot: Snapshot) -> None:
         """The 3D scene, atomically."""
@@ -160,16 +168,17 @@ class ClientSession:
             notify(self.client, title, body, color)
 
     def close(self) -> None:
-        """The browser has gone (or handed over): stop drawing and let go of shared views."""
+        """The browser has gone (or handed over): stop drawing and let go of everything shared."""
         self.closed = True
-        self.ik_target.detach()
+        with self.state.lock:  # not while a drag is being drawn
+            for view in self.own_views:
+                view.close()
         self.refresher.forget(self)
 
     def remove(self) -> None:
         """Close, and take this session's panel and gizmo out of a browser that stays."""
-        self.close()
-        for view in self.views:
-            for folder in getattr(view, "folders", ()):
-                folder.remove()
-        self.ik_target.gizmo.remove()
-        self.workspace.clear()
+        self.closed = True
+        with self.state.lock:
+            for view in self.own_views:
+                view.remove()
+        self.refresher.forget(self)

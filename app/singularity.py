@@ -26,11 +26,13 @@ import viser
 import viser.uplot
 
 from ur10core import symbolic
+from ur10core.orientation import in_frame
 
+from .feedback import chosen
 from .robot import node_name
 from .state import SINGULARITY_KINDS, Snapshot
 from .view import View
-from .style import DANGER_RED, ELBOW_COLOR, OVERLAY_IDLE, SAFE_GREEN, SHOULDER_COLOR, WRIST_COLOR, blend, hex_color
+from .style import DANGER_RED, ELBOW_COLOR, OVERLAY_IDLE, SAFE_GREEN, SHOULDER_COLOR, WRIST_COLOR, blend, hex_color, number
 
 if TYPE_CHECKING:
     from .session import ClientSession
@@ -67,9 +69,9 @@ def gauges_html(snapshot: Snapshot, levels: np.ndarray, colors: list[tuple[int, 
     """Three labelled bars, green → red as each factor of det J approaches zero, and det J."""
     shoulder, elbow, wrist = snapshot.factors
     rows = (
-        ("shoulder", f"a2c2 + a3c23 − d5s234 = {shoulder * 1000:+.1f} mm"),
-        ("elbow", f"s3 = {elbow:+.4f}"),
-        ("wrist", f"s5 = {wrist:+.4f}"),
+        ("shoulder", f"a2c2 + a3c23 − d5s234 = {number(shoulder * 1000, '+.1f')} mm"),
+        ("elbow", f"s3 = {number(elbow, '+.4f')}"),
+        ("wrist", f"s5 = {number(wrist, '+.4f')}"),
     )
     bars = []
     for (name, value), level, color in zip(rows, levels, colors):
@@ -79,7 +81,7 @@ def gauges_html(snapshot: Snapshot, levels: np.ndarray, colors: list[tuple[int, 
             f"<div class='gauge-{name}' style='height:8px;width:{100 * level:.1f}%;border-radius:4px;"
             f"background:{hex_color(color)}'></div></div></div>"
         )
-    bars.append(f"<div><b>det J</b> = {snapshot.det_j:+.5f} m³ (|det J| is the manipulability)</div>")
+    bars.append(f"<div><b>det J</b> = {number(snapshot.det_j, '+.5f')} m³ (|det J| is the manipulability)</div>")
     return "<div style='font-size:0.85em'>" + "".join(bars) + "</div>"
 
 
@@ -101,7 +103,7 @@ class OverlayScene(View):
         F, g = first.frames, first.geometry
 
         def local(frame: int, point: np.ndarray) -> np.ndarray:
-            return F[frame, :3, :3].T @ (point - F[frame, :3, 3])
+            return in_frame(F[frame], point)
 
         cylinder = trimesh.creation.cylinder(radius=g.cylinder_radius, segment=[[0, 0, 0], [0, 0, 1.6]], sections=64)
         self.cylinder = scene.add_mesh_simple(
@@ -126,12 +128,12 @@ class OverlayScene(View):
             self.axes.append(scene.add_line_segments(f"{node_name(frame)}/axis{frame}", np.array([[start, end]], np.float32),
                                                      _segment_colors(WRIST_COLOR, 1), thickness=0.01, visible=False))
 
-    def set_enabled(self, enabled: bool, snapshot: Snapshot) -> None:
+    def set_enabled(self, enabled: bool) -> None:
+        """Show or hide the overlay; the next render colours it (the session redraws at once)."""
         self.enabled = enabled
         self._drawn_alarms = None
         for node in (self.cylinder, self.p5, self.p4, self.circles, *self.axes):
             node.visible = enabled
-        self.render(snapshot)
 
     def render(self, snapshot: Snapshot) -> None:
         if not self.enabled:
@@ -176,8 +178,10 @@ class OverlayPanel(View):
                     viser.uplot.Series(label="elbow |s3|", stroke=hex_color(ELBOW_COLOR), width=2),
                     viser.uplot.Series(label="wrist |s5|", stroke=hex_color(WRIST_COLOR), width=2),
                 ),
-                scales={"x": viser.uplot.Scale(time=False), "y": viser.uplot.Scale(range=(0.0, 1.0))},
-                title="factors over the last 10 s (share of their maximum)",
+                scales={"x": viser.uplot.Scale(time=False, range=(-PLOT_SECONDS, 0.0)),
+                        "y": viser.uplot.Scale(range=(0.0, 1.0))},
+                axes=(viser.uplot.Axis(label="seconds (0 = now)"), viser.uplot.Axis(label="share of maximum")),
+                title="Factors over the last 10 s (share of their maximum)",
                 aspect=2.0,
                 visible=scene.enabled,
             )
@@ -188,14 +192,13 @@ class OverlayPanel(View):
     def _toggled(self, _: viser.GuiEvent) -> None:
         for widget in (self.formula, self.gauges, self.plot, self.demo):
             widget.visible = self.enabled.value
-        snapshot = self._session.state.last
-        self._scene.set_enabled(self.enabled.value, snapshot)
-        self.render_panel(snapshot)
+        with self._session.state.lock:
+            self._scene.set_enabled(self.enabled.value)
+        self._session.redraw()
+        self._session.refresher.request(self._session)
 
     def _demo(self, _: viser.GuiEvent) -> None:
-        kind = self.demo.value
-        if kind not in SINGULARITY_KINDS:
-            raise ValueError(f"unknown singularity {kind!r}")
+        kind = chosen(self.demo, "singularity")
         self._session.apply(lambda state: state.place_in_singularity(kind))
 
     def render_panel(self, snapshot: Snapshot) -> None:

@@ -50,7 +50,7 @@ class Snapshot:
     ghost_wxyz: np.ndarray  #: (8, 7, 4) rotation of each branch's frames {0}..{6}, as quaternions
     flange_wxyz: np.ndarray  #: (4,) the flange orientation as a quaternion
     factors: np.ndarray  #: (3,) shoulder, elbow, wrist factors of det J
-    cause: str  #: "joints", "target", "branch" or "reset": what made this change
+    cause: str  #: "joints", "target" (dragged), "typed", "branch", "singularity" or "reset": what made this change
     arm: Arm
 
     @property
@@ -87,6 +87,7 @@ class ArmState:
         self._solution = arm.ik(self._target, hint=self._q)
         self._slot = int(self._solution.nearest(self._q).slot)
         self._reason = ""
+        self._before_singularity = self._q.copy()  #: where a row of singularity buttons started
         self._last = self._snapshot("reset")
 
     # ------------------------------------------------------------------ reading
@@ -137,7 +138,7 @@ class ArmState:
 
     # ------------------------------------------------------------------ changes
 
-    def set_joints(self, q) -> Snapshot:
+    def set_joints(self, q, cause: str = "joints") -> Snapshot:
         """Move the arm to ``q`` (rad); the target follows the flange."""
         q = self.check_joints(q)
         with self.lock:
@@ -146,7 +147,7 @@ class ArmState:
             self._solution = self.arm.ik(self._target, hint=q)
             self._slot = int(self._solution.nearest(q, prefer=self._slot).slot)
             self._reason = ""
-            return self._remember("joints")
+            return self._remember(cause)
 
     def set_joint(self, index: int, value: float) -> Snapshot:
         """Change one joint (rad)."""
@@ -155,10 +156,11 @@ class ArmState:
             q[index] = value
             return self.set_joints(q)
 
-    def move_target(self, T) -> Snapshot:
-        """Drag the IK target to ``T`` (4x4): the arm takes the branch nearest its joints.
+    def move_target(self, T, cause: str = "target") -> Snapshot:
+        """Move the IK target to ``T`` (4x4): the arm takes the branch nearest its joints.
 
-        An unreachable target leaves the arm where it was and records why.
+        An unreachable target leaves the arm where it was and records why. ``cause`` is
+        ``"target"`` for a drag (the user holds the gizmo there already) or ``"typed"``.
         """
         with self.lock:
             solution = self.arm.ik(T, hint=self._q)  # ValueError for a malformed pose
@@ -172,7 +174,7 @@ class ArmState:
                 self._q = branch.q
                 self._slot = int(branch.slot)
                 self._reason = ""
-            return self._remember("target")
+            return self._remember(cause)
 
     def select_branch(self, slot: int) -> Snapshot:
         """Put the arm on branch ``slot`` of the current target (shifted next to the current joints)."""
@@ -189,11 +191,17 @@ class ArmState:
             return self._remember("branch")
 
     def place_in_singularity(self, kind: str) -> Snapshot:
-        """Move the arm exactly onto the shoulder, elbow or wrist singularity."""
+        """Move the arm exactly onto the shoulder, elbow or wrist singularity, and onto no other.
+
+        Each one starts from the pose the arm had before the first of a row of these
+        (pressing "wrist" after "elbow" must not leave the arm on both).
+        """
         if kind not in SINGULARITY_KINDS:
             raise ValueError(f"kind must be one of {SINGULARITY_KINDS}, got {kind!r}")
         with self.lock:
-            return self.set_joints(self.arm.singular_configuration(kind, self._q))
+            if self._last.cause != "singularity":
+                self._before_singularity = self._q.copy()
+            return self.set_joints(self.arm.singular_configuration(kind, self._before_singularity), cause="singularity")
 
     # ------------------------------------------------------------------ snapshot
 
@@ -216,8 +224,8 @@ class ArmState:
             ghost_frames[invalid] = np.eye(4)
         # every rotation the views draw, converted to quaternions in one vectorised call
         rotations = frames[:, :, :3, :3]
-        relative = np.swapaxes(rotations[0, :-1], -1, -2) @ rotations[0, 1:]
-        wxyz = quaternion(np.concatenate([relative, rotations[1:].reshape(-1, 3, 3), rotations[0, 6:]]), check=False)
+        links = arm.link_transforms(self._q)[:, :3, :3]  # T(i−1, i): the solid arm's tree
+        wxyz = quaternion(np.concatenate([links, rotations[1:].reshape(-1, 3, 3), rotations[0, 6:]]), check=False)
         factors = arm.singularity_factors(self._q)
         return Snapshot(
             q=self._q.copy(),

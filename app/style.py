@@ -41,16 +41,17 @@ def blend(calm: tuple[int, int, int], alarm: tuple[int, int, int], alarm_level: 
     return tuple(int(round((1 - t) * a + t * b)) for a, b in zip(calm, alarm))
 
 
-def deg(radians) -> np.ndarray:
-    return np.degrees(radians)
+def number(value: float, spec: str) -> str:
+    """``format(value, spec)``, except that what rounds to zero never shows a minus sign ("−0.0")."""
+    text = format(value, spec)
+    if text.lstrip("+-").strip("0.") == "" and text.startswith("-"):
+        return format(0.0, spec)
+    return text
 
 
-def fmt_deg(radians: float) -> str:
-    return f"{np.degrees(radians):.2f}°"
-
-
-def fmt_mm(metres: float) -> str:
-    return f"{metres * 1000:.1f} mm"
+def sentence(text: str) -> str:
+    """``text`` with a capital first letter (messages are written to follow a colon)."""
+    return text[:1].upper() + text[1:]
 
 
 def swatch(rgb: tuple[int, int, int]) -> str:

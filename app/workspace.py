@@ -17,7 +17,9 @@ import viser
 from ur10core import Arm
 from ur10core.workspace import horizontal_section, vertical_section
 
+from .feedback import chosen
 from .style import hex_color
+from .view import View
 
 if TYPE_CHECKING:
     from .session import ClientSession
@@ -60,13 +62,20 @@ def legend_html(top: float) -> str:
     )
 
 
-class WorkspaceView:
+class WorkspaceView(View):
+    """The "Workspace" folder and the cloud it draws (in the session's scene: the classroom's, for a presenter).
+
+    A cloud takes a moment; widget changes that come meanwhile are folded into one more
+    computation with the newest choices, however many there were, so one student moving
+    the section slider costs at most one cloud in the making and one waiting.
+    """
+
     def __init__(self, scene: viser.SceneApi, gui: viser.GuiApi, session: "ClientSession") -> None:
         self._scene = scene
         self._session = session
         self._cloud: viser.PointCloudHandle | None = None
-        self._request = 0  # the latest request wins when a student clicks faster than we sample
         self._lock = threading.Lock()
+        self._busy = self._again = self._closed = False
         folder = gui.add_folder("Workspace")
         self.folders = (folder,)
         with folder:
@@ -82,10 +91,26 @@ class WorkspaceView:
             widget.on_update(session.guard(self._changed))
 
     def _changed(self, _: viser.GuiEvent) -> None:
-        self.height.visible = self.section.value == SECTIONS[2]
         with self._lock:
-            self._request += 1
-            request = self._request
+            if self._busy:
+                self._again = True  # the running computation picks up the newest choices
+                return
+            self._busy = True
+        try:
+            while True:
+                self._update()
+                with self._lock:
+                    if not self._again:
+                        return
+                    self._again = False
+        finally:
+            with self._lock:
+                self._busy = False
+
+    def _update(self) -> None:
+        section = chosen(self.section, "section")
+        count = SAMPLE_COUNTS[chosen(self.count, "samples")]
+        self.height.visible = section == SECTIONS[2]
         if not self.enabled.value:
             self.clear()
             self.legend.visible = False
@@ -93,13 +118,14 @@ class WorkspaceView:
         self.progress.value = 5.0
         self.progress.visible = True
         try:
-            points, colors, top = coloured_cloud(self._session.arm, SAMPLE_COUNTS[self.count.value])
+            points, colors, top = coloured_cloud(self._session.arm, count)
             self.progress.value = 60.0
-            points, colors = self._section(points, colors)
+            points, colors = self._section(section, points, colors)
             with self._lock:
-                if request != self._request:
-                    return  # a newer choice is on its way
-                self.clear()
+                if self._closed:
+                    return
+                if self._cloud is not None:
+                    self._cloud.remove()
                 self._cloud = self._scene.add_point_cloud(
                     "/workspace", points, colors, point_size=POINT_SIZE, point_shape="circle"
                 )
@@ -109,17 +135,24 @@ class WorkspaceView:
             self.progress.value = 100.0
             self.progress.visible = False
 
-    def _section(self, points: np.ndarray, colors: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        if self.section.value == SECTIONS[1]:
+    def _section(self, section: str, points: np.ndarray, colors: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        if section == SECTIONS[1]:
             azimuth = float(self._session.state.q[0])  # the plane the arm moves in
             return vertical_section(points, azimuth).astype(np.float32), colors
-        if self.section.value == SECTIONS[2]:
-            section, kept = horizontal_section(points, self.height.value / 1000.0, SLAB)
-            return section.astype(np.float32), colors[kept]
+        if section == SECTIONS[2]:
+            kept_points, kept = horizontal_section(points, self.height.value / 1000.0, SLAB)
+            return kept_points.astype(np.float32), colors[kept]
         return points, colors
 
     def clear(self) -> None:
-        """Remove the cloud from the scene (toggled off, or its session has gone)."""
-        if self._cloud is not None:
-            self._cloud.remove()
-            self._cloud = None
+        """Take the cloud out of the scene (toggled off)."""
+        with self._lock:
+            if self._cloud is not None:
+                self._cloud.remove()
+                self._cloud = None
+
+    def close(self) -> None:
+        """The session has gone: its cloud goes too, even from a scene everyone shares."""
+        with self._lock:
+            self._closed = True
+        self.clear()

@@ -153,6 +153,22 @@ def test_place_in_singularity(state, kind, factor):
         state.place_in_singularity("knee")
 
 
+def test_each_singularity_button_starts_from_a_clean_pose(state):
+    """Pressing "wrist" after "elbow" used to leave the arm on both."""
+    start = state.q
+    assert (np.abs(state.last.factors) > 0.1).all()
+    for kind, factor in (("elbow", 1), ("wrist", 2), ("shoulder", 0), ("wrist", 2)):
+        snap = state.place_in_singularity(kind)
+        assert abs(snap.factors[factor]) < 1e-12
+        others = [k for k in range(3) if k != factor]
+        assert (np.abs(snap.factors[others]) > 0.05).all(), f"{kind} left the arm on another singularity"
+    # any other change starts a new row from where the arm then is
+    moved = state.set_joint(0, 1.0)
+    snap = state.place_in_singularity("elbow")
+    assert snap.q[0] == pytest.approx(1.0) and snap.q[2] == 0.0
+    assert not np.allclose(start, moved.q)
+
+
 def test_ghost_frames(state, course):
     q = np.array([0.2, 0.1, 0.05, -0.3, 1.0, 0.4])
     snap = state.set_joints(q)

@@ -9,6 +9,8 @@ from viser import _messages
 
 from app.fast_updates import set_instances, set_orientations, stop_echo
 
+pytestmark = pytest.mark.server
+
 
 @pytest.fixture
 def scene():

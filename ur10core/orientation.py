@@ -22,6 +22,8 @@ Example
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from ._backend import kernels
@@ -119,8 +121,8 @@ def rotation_from_quaternion(q) -> np.ndarray:
     """R from a quaternion ``(w, x, y, z)`` (..., 4); it is normalised first."""
     q = _angles(q, "q", 4)
     norm = np.linalg.norm(q, axis=-1, keepdims=True)
-    if (norm == 0).any():
-        raise ValueError("q must not be the zero quaternion")
+    if (norm == 0).any() or not np.isfinite(norm).all():
+        raise ValueError("q must not be the zero quaternion (nor overflow)")
     w, x, y, z = np.moveaxis(q / norm, -1, 0)
     return np.stack(
         [
@@ -130,6 +132,51 @@ def rotation_from_quaternion(q) -> np.ndarray:
         ],
         axis=-2,
     )
+
+
+def transform_from_quaternion(wxyz, position) -> np.ndarray:
+    """The pose with rotation ``rotation_from_quaternion(wxyz)`` and translation ``position``, (..., 4, 4).
+
+    What a gizmo reports (a quaternion and a point) as the 4x4 target the IK takes.
+    One pose is built in plain Python (it is on the drag path); ``ValueError`` for a
+    quaternion that is zero or not finite, or a position that is not finite.
+
+    >>> transform_from_quaternion((0.0, 0.0, 0.0, 2.0), (0.1, 0.2, 0.3))[:3].round(6).tolist()  # half a turn about z
+    [[-1.0, 0.0, 0.0, 0.1], [0.0, -1.0, 0.0, 0.2], [0.0, 0.0, 1.0, 0.3]]
+    """
+    if type(wxyz) is tuple and type(position) is tuple and len(wxyz) == 4 and len(position) == 3 \
+            and all(isinstance(v, float) for v in wxyz + position):  # a gizmo's pose, as viser hands it over
+        (w, x, y, z), (px, py, pz) = wxyz, position
+        norm = math.sqrt(w * w + x * x + y * y + z * z)
+        if not (0.0 < norm < math.inf and all(map(math.isfinite, position))):
+            _angles(wxyz, "wxyz", 4)  # words what is wrong
+            _angles(position, "position", 3)
+            raise ValueError(f"wxyz {wxyz} is not a rotation (its norm is {norm})")
+        w, x, y, z = w / norm, x / norm, y / norm, z / norm
+        return np.array([
+            [1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y), px],
+            [2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x), py],
+            [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y), pz],
+            [0.0, 0.0, 0.0, 1.0],
+        ])
+    R = rotation_from_quaternion(wxyz)
+    position = _angles(position, "position", 3)
+    T = np.zeros(np.broadcast_shapes(R.shape[:-2], position.shape[:-1]) + (4, 4))
+    T[..., :3, :3] = R
+    T[..., :3, 3] = position
+    T[..., 3, 3] = 1.0
+    return T
+
+
+def in_frame(T, points) -> np.ndarray:
+    """Base-frame ``points`` (..., 3) expressed in the frame whose pose is ``T`` (4, 4): ``Rᵀ (p − o)``.
+
+    >>> in_frame(transform_from_quaternion((1.0, 0.0, 0.0, 0.0), (1.0, 0.0, 0.0)), [2.0, 0.0, 0.0]).tolist()
+    [1.0, 0.0, 0.0]
+    """
+    T = as_float_array(T, "T")
+    points = _angles(points, "points", 3)
+    return (points - T[:3, 3]) @ T[:3, :3]
 
 
 def angle_axis(R, check: bool = True) -> tuple[np.ndarray, np.ndarray]:

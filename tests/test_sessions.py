@@ -1,0 +1,278 @@
+"""One browser's session against a real server: the state bugs a first tour of the app found.
+
+Each test failed before its fix. The clients are headless (``tests/viser_client.py``).
+"""
+
+from __future__ import annotations
+
+import asyncio
+import gc
+import time
+import weakref
+
+import numpy as np
+import pytest
+
+from app import joint_panel, workers
+from app.server import TeachingServer
+from app.style import number, sentence
+
+from .test_classroom import member_of, until
+from .test_faults import drag_a_little, session_of
+from .viser_client import ViserClient
+
+pytestmark = pytest.mark.server
+
+
+@pytest.fixture
+def app():
+    server = TeachingServer(port=0)
+    yield server
+    server.stop()
+
+
+@pytest.fixture
+def classroom():
+    server = TeachingServer(port=0, shared=True)
+    yield server
+    server.stop()
+
+
+def url(server: TeachingServer) -> str:
+    return f"http://127.0.0.1:{server.port}"
+
+
+def test_a_typed_target_moves_the_gizmo_and_the_red_halo_there(app):
+    """"Move target here" moved the arm but not the gizmo, and the "unreachable" halo sat at the arm's hand."""
+
+    async def scenario():
+        client = await ViserClient(url(app)).connect()
+        session = session_of(app, client)
+        for typed, reachable in (("600, -200, 500, 180, 0, 0", True), ("0, 0, 0, 0, 0, 0", False), ("2500, 0, 400, 0, 0, 0", False)):
+            await client.set_gui("Target x y z (mm), α β γ (°)", typed)
+            await asyncio.sleep(0.1)
+            await client.set_gui("Move target here", True)
+            point = np.array([float(v) for v in typed.split(",")[:3]]) / 1000
+            await until(lambda p=point: np.allclose(session.state.last.target[:3, 3], p), what="the typed target")
+            assert session.state.last.reachable == reachable
+            np.testing.assert_allclose(session.ik_target.gizmo.position, point, atol=1e-6)
+            assert session.ik_target.unreachable.visible == (not reachable)  # it hangs under the gizmo: at the point
+            if reachable:  # the arm went there
+                np.testing.assert_allclose(session.state.last.flange[:3, 3], point, atol=1e-9)
+        await client.close()
+
+    asyncio.run(scenario())
+
+
+def test_explore_and_back_leaves_nothing_behind(classroom):
+    """Every "Explore on my own" → "Back" left a dead Workspace folder and kept the closed session alive."""
+
+    async def scenario():
+        student = await ViserClient(url(classroom)).connect()
+        member = member_of(classroom, 0)
+        for _ in range(3):
+            await student.set_gui("Explore on my own", True)
+            await until(lambda: member.session is not None, what="the private arm")
+            session = member.session
+            folders = [v.folders for v in session.own_views]
+            uuids = {folder._impl.uuid for group in folders for folder in group}
+            assert len(uuids) == 6  # joints, IK target, pose, DH table, singularities, workspace
+            checkbox = session.workspace.enabled._impl.uuid  # this private arm's, not the last one's
+            await until(lambda: student.gui.get("Show workspace cloud", {}).get("uuid") == checkbox, what="the panel")
+            await student.set_gui("Show workspace cloud", True)
+            await until(lambda s=session: s.workspace._cloud is not None, timeout=60, what="the private cloud")
+            await until(lambda: "Back to the presenter's arm" in student.gui, what="the way back")
+            await student.set_gui("Back to the presenter's arm", True)
+            await until(lambda: member.session is None, what="the private arm to go")
+            await until(lambda u=uuids: u <= student.received.removed_gui, what="every folder of the private arm to go")
+            assert session.workspace._cloud is None and "/workspace" in student.received.removed_nodes
+            dead = weakref.ref(session)
+            del session
+            for _ in range(20):
+                gc.collect()
+                if dead() is None:
+                    break
+                await asyncio.sleep(0.05)
+            assert dead() is None, "the closed session is still alive"
+        await student.close()
+
+    asyncio.run(scenario())
+
+
+def test_a_presenter_who_leaves_takes_the_cloud_with_them(classroom):
+    """A presenter closing the tab with the workspace cloud on left it on every screen, and nobody could remove it."""
+
+    async def scenario():
+        presenter = await ViserClient(url(classroom)).connect()
+        viewer = await ViserClient(url(classroom)).connect()
+        await presenter.set_gui("Join code", classroom.classroom.code)
+        await asyncio.sleep(0.1)
+        await presenter.set_gui("Become presenter", True)
+        await until(lambda: classroom.classroom.presenter is not None, what="the presenter")
+        await asyncio.sleep(0.5)
+        await presenter.set_gui("Show workspace cloud", True)
+        await until(lambda: "/workspace" in viewer.received.nodes, timeout=60, what="the cloud on the viewer's screen")
+        presenter.abort()  # the tab closes
+        await until(lambda: "/workspace" not in viewer.received.nodes, what="the cloud to leave every screen")
+        await viewer.close()
+
+    asyncio.run(scenario())
+
+
+def test_every_redraw_holds_the_arms_lock(app):
+    """Ghost and overlay toggles redrew from viser's thread pool without the lock, racing the drag worker."""
+
+    async def scenario():
+        client = await ViserClient(url(app)).connect()
+        session = session_of(app, client)
+        unlocked = []
+        for view in session.views:
+            original = view.render
+
+            def checked(snapshot, original=original, view=view):
+                if not session.state.lock._is_owned():
+                    unlocked.append(type(view).__name__)
+                original(snapshot)
+
+            view.render = checked
+        for value in (False, True, False, True):
+            await client.set_gui("Show ghost arms", value)
+            await client.set_gui("Show singularity overlay", value)
+            await drag_a_little(client, session, steps=3)
+        await asyncio.sleep(0.5)
+        assert not unlocked, f"rendered without the lock: {set(unlocked)}"
+        await client.close()
+
+    asyncio.run(scenario())
+
+
+def test_a_failing_drag_worker_starts_again_and_says_so(app, monkeypatch, caplog):
+    """If the loop worker raised, drags stopped for every student and the only trace was one log line."""
+
+    async def scenario():
+        client = await ViserClient(url(app)).connect()
+        other = await ViserClient(url(app)).connect()
+        session, other_session = session_of(app, client), session_of(app, other)
+        original = type(session).drag_to
+        failures = []
+
+        def drag_to(self, pose):
+            if self is session and not failures:
+                failures.append(pose)
+                raise RuntimeError("a bug in the drag path")
+            original(self, pose)
+
+        monkeypatch.setattr(type(session), "drag_to", drag_to)
+        await drag_a_little(client, session, steps=1)
+        await until(lambda: failures, what="the failure")
+        await until(lambda: any("Something went wrong" in title for title, _ in client.received.notifications),
+                    what="the student to be told")
+        target = await drag_a_little(other, other_session, steps=3)  # everyone else's drags go on
+        await until(lambda: np.allclose(other_session.state.last.target, target, atol=1e-9), what="the other's drag")
+        target = await drag_a_little(client, session, steps=3)  # and the student's own
+        await until(lambda: np.allclose(session.state.last.target, target, atol=1e-9), what="the student's next drag")
+        await client.close()
+        await other.close()
+
+    with caplog.at_level("ERROR", logger=workers.__name__):
+        asyncio.run(scenario())
+    assert any("starts again" in r.getMessage() for r in caplog.records)
+
+
+def test_typing_into_a_slider_box_applies_the_number_not_each_keystroke(app):
+    """Typing 200 moved the arm through 2° and 20°."""
+
+    async def scenario():
+        client = await ViserClient(url(app)).connect()
+        session = session_of(app, client)
+        seen = []
+        session.observers.append(lambda snapshot: seen.append(round(float(np.degrees(snapshot.q[0])), 6)))
+        for keystrokes in ("2", "20", "200"):
+            await client.set_gui("θ1 base", float(keystrokes))
+            await asyncio.sleep(0.05)
+        await until(lambda: seen and seen[-1] == 200.0, what="200°")
+        assert 2.0 not in seen and 20.0 not in seen
+        # a dragged slider moves in small steps, and each is applied as it comes
+        seen.clear()
+        for value in (201.0, 202.5, 204.0, 205.0):
+            await client.set_gui("θ1 base", value)
+            await asyncio.sleep(0.05)
+        await until(lambda: seen[-1:] == [205.0], what="the drag's last value")
+        assert seen == [201.0, 202.5, 204.0, 205.0]
+        await client.close()
+
+    asyncio.run(scenario())
+
+
+def test_the_all_six_box_shows_the_current_pose(app):
+    async def scenario():
+        client = await ViserClient(url(app)).connect()
+        session = session_of(app, client)
+        await client.set_gui("Pose", "Stretched")
+        await until(lambda: client.gui["All six (°)"]["value"] == "45, 90, 0, -90, 0, 60", what="the box to follow")
+        await client.set_gui("θ2 shoulder", 91.0)
+        await until(lambda: client.gui["All six (°)"]["value"] == "45, 91, 0, -90, 0, 60", what="the box to follow the slider")
+        assert np.degrees(session.state.q[1]) == pytest.approx(91.0)
+        await client.close()
+
+    asyncio.run(scenario())
+
+
+def test_the_branch_table_shows_the_angles_the_sliders_show(app):
+    """The sliders said 300° where the branch table said −60° for the same joint."""
+
+    async def scenario():
+        client = await ViserClient(url(app)).connect()
+        session = session_of(app, client)
+        await client.set_gui("θ1 base", 300.0)
+        await until(lambda: abs(np.degrees(session.state.q[0]) - 300.0) < 1e-9, timeout=5, what="300°")
+        await asyncio.sleep(0.3)
+        table = session.ik_target.branches.content
+        row = next(line for line in table.splitlines() if "← arm" in line)
+        assert row.split("|")[-2].strip().startswith("300.0,")
+        await client.close()
+
+    asyncio.run(scenario())
+
+
+def test_choices_outside_a_widgets_options_are_refused(app):
+    """Dropdown and button-group values outside their options reached the app (KeyError: '999 M')."""
+
+    async def scenario():
+        client = await ViserClient(url(app)).connect()
+        session = session_of(app, client)
+        before = session.state.q
+        for label, value in (("Samples", "999 M"), ("Pose", "Upside down"), ("Use branch", "9"),
+                             ("Put the arm on the", "knee"), ("Section", "diagonal")):
+            await client.set_gui(label, value)
+            await asyncio.sleep(0.1)
+        await until(lambda: sum(title == "Not accepted" for title, _ in client.received.notifications) >= 4,
+                    what="the refusals")
+        bodies = [body for title, body in client.received.notifications if title == "Not accepted"]
+        assert any("'999 M' is not one of the choices" in body for body in bodies)
+        assert all(body[0].isupper() for body in bodies)  # sentences, capitalised
+        assert session.workspace.count.value in session.workspace.count.options
+        np.testing.assert_array_equal(session.state.q, before)
+        await client.close()
+
+    asyncio.run(scenario())
+
+
+def test_numbers_never_read_minus_zero():
+    assert number(-0.00001, "+.4f") == "+0.0000"
+    assert number(-0.04, ".1f") == "0.0"
+    assert number(-0.06, ".1f") == "-0.1"
+    assert joint_panel.degrees_text(np.radians([-0.001, 0.0, -0.0, 12.345, -200.0, 0.5])) == "0, 0, 0, 12.35, -200, 0.5"
+    assert sentence("elbow reach — the wrist") == "Elbow reach — the wrist"
+
+
+def test_the_singularity_plot_says_seconds(app):
+    async def scenario():
+        client = await ViserClient(url(app)).connect()
+        session = session_of(app, client)
+        plot = session.singularity.plot
+        assert plot.axes[0]["label"] == "seconds (0 = now)"
+        assert tuple(plot.scales["x"]["range"]) == (-10.0, 0.0)
+        await client.close()
+
+    asyncio.run(scenario())
