@@ -2,24 +2,28 @@
 
     python benchmarks/bench_classroom.py [--seconds 180] [--repeat 3] [--soak 900]
 
-The app runs in its own process (``server_process.py``); thirty headless clients
-(``viser_client.py``, viser's own websocket protocol: the messages a browser sends, and
+The app runs in its own process (``tests/app_process.py``); thirty headless clients
+(``tests/viser_client.py``, viser's own websocket protocol: the messages a browser sends, and
 every frame received and decoded) run in this one. Scenarios:
 
 * **independent** — 30 students, each dragging their own IK target at 20 Hz (each
-  browser's 20 Hz clock at its own random phase, as in a classroom), served by two
-  processes (what ``--host 0.0.0.0`` runs on a two-core machine; ``app/processes.py``);
+  browser's 20 Hz clock at its own random phase, as in a classroom);
 * **independent, phase-locked** — the same, with all thirty clocks in step: thirty
   events arrive at the same instant every 50 ms;
 * **independent, half dragging** — 30 connected, 15 of them dragging at 20 Hz;
 * **independent, machine busy** — as *independent* while one spinning process per core
   competes for the machine the whole time (the projector's browser and whatever else
   the teacher's laptop is running): how much headroom the server has, reproducibly;
-* **independent, one process** — as *independent* with ``--processes 1``: why the app
-  serves a class from more than one process;
+* **independent, viser's public setters** — as *independent*, the 3D updates drawn through
+  viser's public setters instead of ``app/fast_updates.py`` (``UR10_TEACH_PUBLIC_SETTERS=1``):
+  what that module, which leans on viser's internals, buys;
+* **independent, panels without rest** — as *independent*, the panel refresher allowed all
+  of the machine's time (``UR10_TEACH_PANEL_DUTY=1``) instead of 15 %: what its duty cycle buys;
 * **shared** — ``--shared``: the presenter drags at 20 Hz, 29 students watch;
 * **shared + explorers** — the presenter drags, 15 students explore on their own copies
-  (dragging at 20 Hz), 14 watch.
+  (dragging at 20 Hz), 14 watch;
+* **lecture hall** — ``--shared`` with 101 browsers: the presenter drags at 20 Hz, 100
+  students watch.
 
 Reported per scenario: server-side drag handler latency (the app's own measurement),
 end-to-end latency (a drag event sent → the client receives a 3D update showing that
@@ -53,16 +57,18 @@ sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
 from benchmarks._report import cpu_ticks, machine, quiet_machine, stolen_share, table, write_section  # noqa: E402
 from benchmarks.bench_drag import HOME_ROTATION, loop_path  # noqa: E402
-from benchmarks.server_process import METRICS_TIMEOUT_S, AppProcess, running_app  # noqa: E402
-from benchmarks.viser_client import DragStep, ViserClient, staleness, wxyz_of  # noqa: E402
+from tests.app_process import METRICS_TIMEOUT_S, AppProcess, running_app  # noqa: E402
+from tests.viser_client import DragStep, ViserClient, staleness, wxyz_of  # noqa: E402
 
+#: Browsers in a class; the lecture hall has LECTURE_HALL.
 CLIENTS = 30
+LECTURE_HALL = 101
 RATE_HZ = 20.0
 #: end to end p99 (ms) the issue asks for
 TARGET_P99_MS = 50.0
 #: memory is judged from this far into the run: the first drags warm up caches and the allocator
 WARMUP_S = 60.0
-#: "flat": resident memory at the end within this much (all processes) of its value after the warm-up
+#: "flat": resident memory at the end within this much of its value after the warm-up
 FLAT_MIB = 5.0
 JOIN_CODE = re.compile(r"Join code for the presenter: (\S+)")
 
@@ -154,7 +160,7 @@ async def run_scenario(app: AppProcess, name: str, seconds: float, competing: in
 
 
 async def _drive(app: AppProcess, name: str, seconds: float, idle: tuple) -> dict:
-    clients = await connect_all(app.url, CLIENTS)
+    clients = await connect_all(app.url, LECTURE_HALL if name == "lecture hall" else CLIENTS)
     draggers: list[ViserClient] = []
     presenter = None
     if name == "independent, half dragging":
@@ -181,7 +187,6 @@ async def _drive(app: AppProcess, name: str, seconds: float, idle: tuple) -> dic
     plans = [planned_drag(c, seconds, 7 * k) for k, c in enumerate(draggers)]
 
     before = await asyncio.to_thread(app.metrics, time.time())
-    split = [report["clients"] for report in before["processes"]]
     bytes_before = [c.received.bytes for c in clients]
     load_cpu_before = sum(os.times()[:2])
     before["machine_ticks"] = cpu_ticks()
@@ -232,7 +237,7 @@ async def _drive(app: AppProcess, name: str, seconds: float, idle: tuple) -> dic
         "late_reports": late,
         "elapsed": elapsed,
         "draggers": len(draggers),
-        "split": split,
+        "clients": len(clients),
         "folded": 1.0 - after["latency"].get("drag", {}).get("count", 0) / max(1, sum(len(v) for v in sends.values())),
         "wait": after["latency"].get("drag_wait", {}),
         "loop_lag": after["latency"].get("event_loop_lag", {}),
@@ -257,12 +262,12 @@ def worst_stolen(samples: list[dict]) -> float:
 
 
 def server_cpu(a: dict, b: dict) -> float:
-    """The server's CPU (all processes, % of one core) between two of its reports."""
+    """The server's CPU (% of one core) between two of its reports."""
     return 100 * (b["cpu_seconds"] - a["cpu_seconds"]) / (b["time"] - a["time"])
 
 
 def settled_growth(samples: list[dict], warmup: float = WARMUP_S) -> tuple[float, float, float]:
-    """Resident memory (MiB, all processes) after the warm-up, at the end, and its largest after the warm-up.
+    """Resident memory (MiB) after the warm-up, at the end, and its largest after the warm-up.
 
     The reference is the first sample at least ``warmup`` s into the run (the last sample
     if the run is shorter).
@@ -297,7 +302,7 @@ def describe(name: str, result: dict) -> tuple[list[str], list[list[str]]]:
     busy = f"; {result['competing']} busy processes" if result["competing"] else ""
     summary = [
         name,
-        " + ".join(map(str, result["split"])),
+        str(result["clients"]),
         f"{result['draggers']} at 20 Hz, {result['events']} events ({100 * max(0.0, result['folded']):.0f} % folded){busy}",
         f"{handler.get('p50_ms', float('nan')):.1f} / {handler.get('p99_ms', float('nan')):.1f} ms",
         f"{result['wait'].get('p50_ms', float('nan')):.0f} / {result['wait'].get('p99_ms', float('nan')):.0f} ms",
@@ -338,21 +343,26 @@ def main() -> None:
                         help="run the first scenario K more times at the end (how reliable its verdict is)")
     parser.add_argument("--soak", type=float, default=900.0, metavar="SECONDS",
                         help="and once for this long (is memory still flat over a lesson?); 0 skips it")
+    parser.add_argument("--only", metavar="SCENARIO",
+                        help="run this one scenario once and print it (BENCHMARKS.md is left as it is)")
     args = parser.parse_args()
     summaries, series, notes, repeats = [], [], [], []
     cores = os.cpu_count() or 1
-    scenarios = (  # (name, the app's flags, competing busy processes)
-        ("independent", ("--processes", "2"), 0),
-        ("independent, phase-locked", ("--processes", "2"), 0),
-        ("independent, half dragging", ("--processes", "2"), 0),
-        ("independent, machine busy", ("--processes", "2"), cores),
-        ("independent, one process", ("--processes", "1"), 0),
-        ("shared", ("--shared",), 0),
-        ("shared + explorers", ("--shared",), 0),
+    public_setters = {"UR10_TEACH_PUBLIC_SETTERS": "1"}
+    scenarios = (  # (name, the app's flags, competing busy processes, environment)
+        ("independent", (), 0, {}),
+        ("independent, phase-locked", (), 0, {}),
+        ("independent, half dragging", (), 0, {}),
+        ("independent, machine busy", (), cores, {}),
+        ("independent, viser's public setters", (), 0, public_setters),
+        ("independent, panels without rest", (), 0, {"UR10_TEACH_PANEL_DUTY": "1"}),
+        ("shared", ("--shared",), 0, {}),
+        ("shared + explorers", ("--shared",), 0, {}),
+        ("lecture hall", ("--shared",), 0, {}),
     )
 
-    def run(name: str, flags: tuple[str, ...], seconds: float, competing: int = 0) -> dict:
-        with running_app(*flags) as app:
+    def run(name: str, flags: tuple[str, ...], seconds: float, competing: int = 0, env: dict | None = None) -> dict:
+        with running_app(*flags, env=env) as app:
             return asyncio.run(run_scenario(app, name, seconds, competing))
 
     def report(label: str, result: dict) -> None:
@@ -364,12 +374,17 @@ def main() -> None:
         notes.append(f"{label}: load generator used {100 * result['load_cpu']:.0f} % of a core{late}")
         print(summary, flush=True)
 
-    for name, flags, competing in scenarios:
-        result = run(name, flags, args.seconds, competing)
+    if args.only:
+        name, flags, competing, env = next(s for s in scenarios if s[0] == args.only)
+        result = run(name, flags, args.seconds, competing, env)
+        print(describe(name, result)[0], f"load generator: {100 * result['load_cpu']:.0f} % of a core", sep="\n")
+        return
+    for name, flags, competing, env in scenarios:
+        result = run(name, flags, args.seconds, competing, env)
         report(name, result)
         if not repeats:
             repeats.append(repeated(1, result))
-    name, flags, _ = scenarios[0]
+    name, flags, _, _ = scenarios[0]
     for k in range(args.repeat):
         repeats.append(repeated(k + 2, run(name, flags, args.seconds)))
         print(repeats[-1], flush=True)
@@ -379,10 +394,9 @@ def main() -> None:
         [
             "## Classroom load (`benchmarks/bench_classroom.py`)",
             "",
-            f"Run: {machine()}. {CLIENTS} headless clients (viser's websocket protocol, every frame decoded) in one "
-            f"process, the app in its own (one or two, see *clients per process*: independent mode serves a class "
-            f"from one process per core, `app/processes.py`), all on the same two cores; {args.seconds:.0f} s of "
-            "dragging per scenario. "
+            f"Run: {machine()}. {CLIENTS} headless clients ({LECTURE_HALL} in the lecture hall; viser's websocket "
+            "protocol, every frame decoded) in one process, the app in its own, both on the same two cores; "
+            f"{args.seconds:.0f} s of dragging per scenario. "
             "End to end = a drag event sent → a 3D update showing that target or a newer one arrives "
             "(the server folds queued events into the newest). Each student's 20 Hz clock starts at a random "
             "phase, as in a classroom; *phase-locked* puts all thirty in step (thirty events at once every 50 ms); "
@@ -390,19 +404,17 @@ def main() -> None:
             "Queue wait = a drag event's wait for the drag worker; event-loop lag = how late a 20 ms timer on "
             "viser's loop fires; the load generator's loop lag is the same measure in the clients' process (part of "
             "every end-to-end time, and not there in a real classroom, where each browser has its own machine). "
-            "With two processes, handler, queue wait and loop lag are the worse process's "
-            "figures; CPU and RSS are summed. "
             f"Target: p99 ≤ {TARGET_P99_MS:.0f} ms, memory flat: RSS at the end within {FLAT_MIB:.0f} MiB of its "
             f"value {WARMUP_S:.0f} s in (the first drags warm up caches and the allocator).",
             "",
-            table(["scenario", "clients per process", "dragging", "handler p50 / p99 (server)", "queue wait p50 / p99",
+            table(["scenario", "clients", "dragging", "handler p50 / p99 (server)", "queue wait p50 / p99",
                    "event-loop lag p50 / p99", "end to end p50 / p99", "load generator's loop lag p50 / p99",
                    "idle machine: timer lag p99, stolen / stolen during run",
                    "received per client",
-                   "server CPU (all processes, % of one core)",
-                   f"server RSS (all processes): at the start; from {WARMUP_S:.0f} s to the end", "verdict"], summaries),
+                   "server CPU (% of one core)",
+                   f"server RSS: at the start; from {WARMUP_S:.0f} s to the end", "verdict"], summaries),
             "",
-            "Over time (all server processes):",
+            "Over time:",
             "",
             table(["scenario", "t", "CPU", "RSS", "clients", "stolen by the host"], series),
             "",

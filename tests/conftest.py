@@ -29,14 +29,16 @@ def wrapped_difference(a, b) -> np.ndarray:
 
 
 @pytest.fixture(autouse=True)
-def collect_garbage_after_each_test():
+def collect_garbage_after_server_tests(request):
     """Finalise what a test's servers left behind (asyncio tasks whose errors nobody read) now.
 
     On CPython 3.11 a collection that runs inside ``ast.parse`` (pytest rewriting an
     import) and finalises such a task, which formats a traceback and so parses too,
     corrupts the parser's recursion counter: https://github.com/python/cpython/issues/106905.
+    Only tests that run servers leave such tasks.
     """
     yield
-    import gc
+    if any(request.node.get_closest_marker(name) for name in ("server", "browser")):
+        import gc
 
-    gc.collect()
+        gc.collect()

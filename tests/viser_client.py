@@ -71,6 +71,12 @@ class Received:
     #: every valid branch ends at the IK target, so this is the 3D view answering a drag
     ghost_flanges: list[tuple[float, np.ndarray]] = dataclasses.field(default_factory=list)
     notifications: list[tuple[str, str]] = dataclasses.field(default_factory=list)
+    #: scene nodes added (name -> the message's type), removed, and each node's last position
+    nodes: dict[str, str] = dataclasses.field(default_factory=dict)
+    removed_nodes: list[str] = dataclasses.field(default_factory=list)
+    positions: dict[str, tuple[float, float, float]] = dataclasses.field(default_factory=dict)
+    visible: dict[str, bool] = dataclasses.field(default_factory=dict)
+    removed_gui: set[str] = dataclasses.field(default_factory=set)
     #: seconds from the server sending a frame (its perf_counter, the same clock) to our reading it
     delivery_lag: list[float] = dataclasses.field(default_factory=list)
 
@@ -164,6 +170,20 @@ class ViserClient:
         kind = message.get("type", "")
         if "owner" in message:
             self.owners_seen.add(message["owner"])
+        name = message.get("name")
+        if kind == "RemoveSceneNodeMessage":
+            self.received.removed_nodes.append(name)
+            self.received.nodes.pop(name, None)
+        elif kind == "SetPositionMessage":
+            self.received.positions[name] = tuple(message["position"])
+        elif kind == "SetSceneNodeVisibilityMessage":
+            self.received.visible[name] = message["visible"]
+        elif kind == "GuiRemoveMessage":
+            self.received.removed_gui.add(message["uuid"])
+        elif kind.endswith("Message") and isinstance(name, str) and name.startswith("/") and "props" in message:
+            self.received.nodes[name] = kind
+            if "position" in message.get("props", {}):
+                self.received.positions[name] = tuple(message["props"]["position"])
         if kind == "SceneNodeUpdateMessage" and message.get("name") == "/ghosts/link6":
             positions = message.get("updates", {}).get("batched_positions")
             if positions is not None:
