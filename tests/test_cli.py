@@ -2,15 +2,21 @@
 
 from __future__ import annotations
 
+import asyncio
+import contextlib
 import ipaddress
 import re
+import signal
 import socket
+from pathlib import Path
 
 import pytest
+from viser import _messages as messages
 
 from app.__main__ import parse_args
 from app.server import lan_addresses
 from .app_process import running_app
+from .viser_client import ViserClient
 
 pytestmark = pytest.mark.server
 
@@ -46,3 +52,32 @@ def test_lan_address_and_join_code_in_shared_mode():
     assert re.search(r"Join code for the presenter: [A-Z0-9]{3}-[A-Z0-9]{3}", text)
     for address in lan_addresses():
         assert f"http://{address}:" in text
+
+
+def _children(pid: int) -> list[int]:
+    """Every process the app started (Linux: /proc/PID/task/*/children)."""
+    found = []
+    for task in Path(f"/proc/{pid}/task").iterdir():
+        with contextlib.suppress(FileNotFoundError):
+            found += [int(child) for child in (task / "children").read_text().split()]
+    return found
+
+
+@pytest.mark.skipif(not Path("/proc/self/task").exists(), reason="reads /proc")
+def test_the_app_starts_no_helpers_and_frees_its_port_when_killed():
+    """A share request used to start two tunnel processes that outlived the app and kept its port."""
+    async def visit(url: str) -> None:
+        client = await ViserClient(url).connect()
+        await client.send(messages.ShareUrlRequest())
+        await asyncio.sleep(0.5)
+        await client.close()
+
+    with running_app("--shared") as app:
+        asyncio.run(visit(app.url))
+        assert _children(app.process.pid) == []
+        port = int(re.search(r":(\d+)", app.url).group(1))
+        app.process.send_signal(signal.SIGKILL)
+        app.process.wait(timeout=10)
+    with socket.socket() as again:  # a restarted app gets the same port
+        again.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
+        again.bind(("127.0.0.1", port))

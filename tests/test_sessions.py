@@ -276,3 +276,39 @@ def test_the_singularity_plot_says_seconds(app):
         await client.close()
 
     asyncio.run(scenario())
+
+
+def test_a_section_slider_flood_costs_one_cloud_in_the_making_and_one_waiting(app, monkeypatch):
+    """The section height at 200 Hz with a slow (1 M point) cloud queued a recomputation per message."""
+    from app.workspace import WorkspaceView
+
+    computed: list[float] = []
+    original = WorkspaceView._update
+
+    def slow_update(self):
+        computed.append(self.height.value)
+        time.sleep(0.3)  # what a big cloud costs
+        original(self)
+
+    monkeypatch.setattr(WorkspaceView, "_update", slow_update)
+
+    async def scenario():
+        client = await ViserClient(url(app)).connect()
+        session = session_of(app, client)
+        await client.set_gui("Samples", "10 k")
+        await client.set_gui("Section", "horizontal section (top view)")
+        await client.set_gui("Show workspace cloud", True)
+        heights = [-500.0 + 5.0 * k for k in range(400)]
+        started = time.monotonic()
+        for height in heights:  # 2 s at 200 Hz
+            await client.set_gui("Section height (mm)", height)
+            await asyncio.sleep(0.005)
+        await until(lambda: computed and computed[-1] == heights[-1] and not session.workspace._busy,
+                    what="the newest height drawn", timeout=20)
+        flooding = time.monotonic() - started
+        await client.close()
+        return len(computed), flooding
+
+    calls, flooding = asyncio.run(scenario())
+    # one cloud at a time, each folding in whatever came meanwhile (and the three set-up changes)
+    assert calls <= flooding / 0.3 + 5, f"{calls} clouds computed for 400 slider messages in {flooding:.1f} s"
