@@ -190,8 +190,7 @@ class Classroom:
             self._leave_role(member)
             session = ClientSession(
                 member.client, self.app.arm, self.app.links, self.app.refresher, self.app.drags,
-                state=self.state, scene=self.app.server.scene, scene_views=self.scene_views,
-                flush=self.app.server.flush,
+                state=self.state, server=self.app.server, scene_views=self.scene_views,
             )
             session.observers.append(lambda _: self.app.refresher.request(self.live))
             member.session, member.role = session, PRESENTER

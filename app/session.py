@@ -13,6 +13,7 @@ Each view has ``render(snapshot)`` (the 3D scene, on every change) and
 
 from __future__ import annotations
 
+import contextlib
 import dataclasses
 import logging
 import time
@@ -73,19 +74,19 @@ class ClientSession:
         The server's workers: panel redraws and drag events, off viser's thread pool.
     state : ArmState, optional
         The arm to drive; a new one at the home pose by default.
-    scene, scene_views : viser.SceneApi, SceneViews, optional
+    server, scene_views : viser.ViserServer, SceneViews, optional
         Where the arm is drawn: the browser's own scene by default; the classroom's
-        presenter drives the shared scene's views instead.
-    flush : callable, optional
-        Sends what the scene has queued now (``client.flush`` by default; the shared
-        scene's is ``server.flush``). viser otherwise holds a message up to 1/60 s to
-        batch it with the next; a drag's redraw is already one batch.
+        presenter drives the views in the server's shared scene instead. Their messages
+        go out through the server's queue, which a redraw batches (``atomic``) and sends
+        at once (``flush``) as it does the browser's own: viser otherwise holds a message
+        up to 1/60 s to batch it with the next, and a viewer could see the arm moved and
+        its ghosts not yet.
     """
 
     def __init__(
         self, client: viser.ClientHandle, arm: Arm, links: tuple[LinkMesh, ...], refresher: PanelRefresher,
-        drags: DragQueue, state: ArmState | None = None, scene: viser.SceneApi | None = None,
-        scene_views: SceneViews | None = None, flush: Callable[[], None] | None = None,
+        drags: DragQueue, state: ArmState | None = None, server: viser.ViserServer | None = None,
+        scene_views: SceneViews | None = None,
     ) -> None:
         self.client = client
         self.arm = arm
@@ -95,8 +96,8 @@ class ClientSession:
         self.closed = False
         #: called after every change, e.g. to refresh the classroom's live panel
         self.observers: list[Callable[[Snapshot], None]] = []
-        scene = scene or client.scene
-        self._flush = flush or client.flush
+        scene = client.scene if server is None else server.scene
+        self._senders: tuple[viser.ClientHandle | viser.ViserServer, ...] = (client,) if server is None else (client, server)
         gui = client.gui
         first = self.state.last
         self.scene_views = scene_views or SceneViews.build(scene, links, first)
@@ -141,10 +142,13 @@ class ClientSession:
         """The 3D scene, atomically."""
         if self.closed:
             return
-        with self.client.atomic():
+        with contextlib.ExitStack() as batch:
+            for sender in self._senders:
+                batch.enter_context(sender.atomic())
             for view in self.views:
                 view.render(snapshot)
-        self._flush()
+        for sender in self._senders:
+            sender.flush()
 
     def render_panel(self) -> None:
         """The side panel, from the newest state (called by the refresher, one thread at a time)."""

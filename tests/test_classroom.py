@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import asyncio
+import collections
 import time
 
 import numpy as np
@@ -86,6 +87,56 @@ def test_viewers_watch_and_the_code_makes_a_presenter(classroom):
             await client.close()
 
     asyncio.run(scenario())
+
+
+def test_a_viewer_gets_each_presenter_update_whole(classroom, monkeypatch):
+    """The shared scene's redraw was not batched: a viewer could get the arm in one frame and its ghosts in the next.
+
+    (A drag is redrawn on the event loop, between two sends; a click is redrawn on viser's
+    thread pool, while the loop sends, and that is where a redraw could be split.)
+    """
+    from app.ik_target import BranchesScene
+
+    draw_ghosts = BranchesScene.render
+
+    def slow_ghosts(self, snapshot):
+        time.sleep(0.05)  # a busy moment between drawing the arm and its ghosts
+        draw_ghosts(self, snapshot)
+
+    monkeypatch.setattr(BranchesScene, "render", slow_ghosts)
+
+    async def scenario():
+        teacher = await ViserClient(f"http://127.0.0.1:{classroom.port}").connect()
+        student = await ViserClient(f"http://127.0.0.1:{classroom.port}").connect()
+        await teacher.set_gui("Join code", classroom.classroom.code)
+        await asyncio.sleep(0.1)
+        await teacher.set_gui("Become presenter", True)
+        await until(lambda: teacher.gizmo_owner is not None, what="the presenter's gizmo")
+        await asyncio.sleep(0.5)
+        frames: dict[float, set[str]] = collections.defaultdict(set)  # arrival time -> scene nodes updated
+        handle = student._handle
+
+        def record(now, message, buffers):
+            if message.get("type") in ("SetOrientationMessage", "SceneNodeUpdateMessage"):
+                frames[now].add(message["name"])
+            handle(now, message, buffers)
+
+        student._handle = record
+        for k in range(12):  # typed targets: a click, handled on viser's thread pool, not the drag worker
+            await teacher.set_gui("Target x y z (mm), α β γ (°)", f"{600 + 10 * k}, -200, 500, 180, 0, 0")
+            await asyncio.sleep(0.05)
+            await teacher.set_gui("Move target here", True)
+            await asyncio.sleep(0.15)
+        await asyncio.sleep(0.5)
+        for client in (teacher, student):
+            await client.close()
+        return list(frames.values())
+
+    frames = asyncio.run(scenario())
+    assert len(frames) >= 12
+    whole = {"/arm/link0/link1", "/ghosts/link1", "/ghosts/link6"}
+    split = [sorted(names) for names in frames if names & whole and not whole <= names]
+    assert not split, f"{len(split)} of {len(frames)} frames held part of a redraw: {split[:3]}"
 
 
 def test_exploring_on_your_own_and_back(classroom):
