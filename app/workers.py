@@ -49,6 +49,12 @@ PANEL_INTERVAL = 0.1
 DUTY = float(os.environ.get("UR10_TEACH_PANEL_DUTY", "0.15"))
 
 
+#: The drag worker serves waiting sessions for this long (s) before the sockets get a turn.
+#: A turn after every session cost each of thirty waiting students a pass of the event
+#: loop over every socket: a drag event waited up to 48 ms in the queue (BENCHMARKS.md).
+DRAG_TURN = 0.004
+
+
 class HasPanel(Protocol):
     closed: bool
 
@@ -136,7 +142,11 @@ class DragQueue(_LoopWorker):
         while not self._stopped:
             await self._wake.wait()
             self._wake.clear()
+            turn = time.perf_counter()
             while self._ready and not self._stopped:
+                if time.perf_counter() - turn > DRAG_TURN:
+                    await asyncio.sleep(0)  # let the sockets have a turn
+                    turn = time.perf_counter()
                 key = self._ready.popleft()
                 session, target, filed = self._pending.pop(key)
                 if session.closed:
@@ -154,7 +164,6 @@ class DragQueue(_LoopWorker):
                 finally:
                     session.state.lock.release()
                 self._serving = None
-                await asyncio.sleep(0)  # let the sockets have a turn between sessions
 
     def _failed(self) -> None:
         session, self._serving = self._serving, None
