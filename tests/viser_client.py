@@ -221,8 +221,16 @@ class ViserClient:
 
     # ------------------------------------------------------------------ acting
 
-    async def set_gui(self, label: str, value: Any) -> None:
-        """What the browser sends when a student changes a widget (or clicks a button: value True)."""
+    async def set_gui(self, label: str, value: Any, timeout: float = 15.0) -> None:
+        """What the browser sends when a student changes a widget (or clicks a button: value True).
+
+        The panel arrives a moment after the page: a widget not seen yet is waited for.
+        """
+        deadline = time.monotonic() + timeout
+        while label not in self.gui:
+            if time.monotonic() > deadline:
+                raise KeyError(f"no widget {label!r} arrived within {timeout:.0f} s")
+            await asyncio.sleep(0.02)
         await self.send(messages.GuiUpdateMessage(self.gui[label]["uuid"], {"value": value}))
 
     def drag_step(self, position, wxyz, phase: str = "update") -> DragStep:
