@@ -26,6 +26,38 @@ METRICS_TIMEOUT_S = 10.0
 
 
 @contextlib.contextmanager
+def serving(command: list[str], cwd: Path, env: dict[str, str], timeout: float = 60.0) -> Iterator[tuple[subprocess.Popen, list[str]]]:
+    """Start the app with ``command``; yields (the process, its output so far, still growing) once it is serving.
+
+    Raises ``RuntimeError`` with its output if it exits or does not say it is ready within
+    ``timeout`` s; terminates it afterwards.
+    """
+    process = subprocess.Popen(command, cwd=cwd, env=dict(env, PYTHONUNBUFFERED="1"),
+                               stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+    output: list[str] = []
+    ready = threading.Event()
+
+    def drain() -> None:  # keep reading, or a chatty server would block on a full pipe
+        for line in process.stdout:
+            output.append(line)
+            if line.startswith("Press Ctrl+C"):
+                ready.set()
+        ready.set()
+
+    threading.Thread(target=drain, daemon=True).start()
+    try:
+        if not ready.wait(timeout) or process.poll() is not None:
+            raise RuntimeError("the app did not start:\n" + "".join(output))
+        yield process, output
+    finally:
+        process.terminate()
+        try:
+            process.wait(timeout=10)
+        except subprocess.TimeoutExpired:
+            process.kill()
+
+
+@contextlib.contextmanager
 def running_app(*args: str, timeout: float = 60.0, env: dict[str, str] | None = None) -> Iterator["AppProcess"]:
     """``python -m app --port 0 *args`` in a subprocess (a later ``--port`` wins); yields once it is serving.
 
@@ -33,33 +65,11 @@ def running_app(*args: str, timeout: float = 60.0, env: dict[str, str] | None = 
     """
     with tempfile.TemporaryDirectory() as folder:
         metrics = Path(folder) / "metrics.json"
-        environment = dict(os.environ, **(env or {}), UR10_TEACH_METRICS=str(metrics), PYTHONUNBUFFERED="1")
-        process = subprocess.Popen(
-            [sys.executable, "-m", "app", "--port", "0", *args], cwd=ROOT, env=environment,
-            stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True,
-        )
-        output: list[str] = []
-        ready = threading.Event()
-
-        def drain() -> None:  # keep reading, or a chatty server would block on a full pipe
-            for line in process.stdout:
-                output.append(line)
-                if line.startswith("Press Ctrl+C"):
-                    ready.set()
-            ready.set()
-
-        threading.Thread(target=drain, daemon=True).start()
-        try:
-            if not ready.wait(timeout) or process.poll() is not None:
-                raise RuntimeError("the app did not start:\n" + "".join(output))
+        environment = dict(os.environ, **(env or {}), UR10_TEACH_METRICS=str(metrics))
+        command = [sys.executable, "-m", "app", "--port", "0", *args]
+        with serving(command, ROOT, environment, timeout) as (process, output):
             url = next(URL.search(line).group(1) for line in output if line.startswith("    ") and URL.search(line))
             yield AppProcess(process, url, metrics, output)
-        finally:
-            process.terminate()
-            try:
-                process.wait(timeout=10)
-            except subprocess.TimeoutExpired:
-                process.kill()
 
 
 class AppProcess:

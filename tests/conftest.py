@@ -1,4 +1,4 @@
-"""Shared fixtures: the presets, and reproducible random joint vectors and poses."""
+"""Shared fixtures: the presets, reproducible random joint vectors and poses, and servers."""
 
 from __future__ import annotations
 
@@ -26,6 +26,26 @@ def random_joints(n: int, seed: int = 0) -> np.ndarray:
 def wrapped_difference(a, b) -> np.ndarray:
     """|a − b| modulo 2π, in [0, π]."""
     return np.abs(np.remainder(np.asarray(a) - np.asarray(b) + np.pi, 2 * np.pi) - np.pi)
+
+
+@pytest.fixture
+def app():
+    """A server in independent mode on a free port, in this process."""
+    from app.server import TeachingServer
+
+    server = TeachingServer(port=0)
+    yield server
+    server.stop()
+
+
+@pytest.fixture
+def classroom():
+    """A server in shared demo mode (``--shared``) on a free port, in this process."""
+    from app.server import TeachingServer
+
+    server = TeachingServer(port=0, shared=True)
+    yield server
+    server.stop()
 
 
 @pytest.fixture(autouse=True)

@@ -9,7 +9,6 @@ import numpy as np
 import pytest
 from playwright.sync_api import sync_playwright
 
-from app.server import TeachingServer
 
 from .browser_support import CONNECTED, SMALL_VIEWPORT, VIEWPORT, canvas_pixels, dom_id, launch, project, step_slider, text_field, wait_for
 
@@ -20,13 +19,6 @@ pytestmark = pytest.mark.browser
 def playwright():
     with sync_playwright() as playwright:
         yield playwright
-
-
-@pytest.fixture
-def app():
-    server = TeachingServer(port=0)
-    yield server
-    server.stop()
 
 
 @pytest.fixture

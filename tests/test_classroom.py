@@ -10,30 +10,10 @@ import numpy as np
 import pytest
 
 from app.classroom import EXPLORER, LOCKOUT_SECONDS, MAX_WRONG_CODES, PRESENTER, VIEWER, make_join_code, normalise_code
-from app.server import TeachingServer
+from .server_support import become_presenter, member_of, until
 from .viser_client import ViserClient
 
 pytestmark = pytest.mark.server
-
-
-@pytest.fixture
-def classroom():
-    server = TeachingServer(port=0, shared=True)
-    yield server
-    server.stop()
-
-
-async def until(condition, timeout: float = 15.0, what: str = "condition"):
-    deadline = time.monotonic() + timeout
-    while time.monotonic() < deadline:
-        if condition():
-            return
-        await asyncio.sleep(0.05)
-    raise AssertionError(f"timed out waiting for {what}")
-
-
-def member_of(app: TeachingServer, index: int):
-    return list(app.classroom.members.values())[index]
 
 
 def test_join_codes():
@@ -108,10 +88,7 @@ def test_a_viewer_gets_each_presenter_update_whole(classroom, monkeypatch):
     async def scenario():
         teacher = await ViserClient(f"http://127.0.0.1:{classroom.port}").connect()
         student = await ViserClient(f"http://127.0.0.1:{classroom.port}").connect()
-        await teacher.set_gui("Join code", classroom.classroom.code)
-        await asyncio.sleep(0.1)
-        await teacher.set_gui("Become presenter", True)
-        await until(lambda: teacher.gizmo_owner is not None, what="the presenter's gizmo")
+        await become_presenter(teacher, classroom)
         await asyncio.sleep(0.5)
         frames: dict[float, set[str]] = collections.defaultdict(set)  # arrival time -> scene nodes updated
         handle = student._handle
@@ -143,10 +120,7 @@ def test_exploring_on_your_own_and_back(classroom):
     async def scenario():
         teacher = await ViserClient(f"http://127.0.0.1:{classroom.port}").connect()
         student = await ViserClient(f"http://127.0.0.1:{classroom.port}").connect()
-        await teacher.set_gui("Join code", classroom.classroom.code)
-        await asyncio.sleep(0.1)
-        await teacher.set_gui("Become presenter", True)
-        await until(lambda: teacher.gizmo_owner is not None, what="presenter")
+        await become_presenter(teacher, classroom)
         demo = classroom.classroom.state
         demo.set_joints(np.radians([10, -70, 80, -30, 60, 20]))  # where the class is
         await student.set_gui("Explore on my own", True)

@@ -14,42 +14,11 @@ import numpy as np
 import pytest
 from viser import _messages as messages
 
-from app.server import TeachingServer
 from .app_process import running_app
+from .server_support import drag_a_little, session_of, until, url
 from .viser_client import ViserClient, wxyz_of
 
-from .test_classroom import until
-
 pytestmark = pytest.mark.server
-
-
-@pytest.fixture
-def app():
-    server = TeachingServer(port=0)
-    yield server
-    server.stop()
-
-
-def url(app: TeachingServer) -> str:
-    return f"http://127.0.0.1:{app.port}"
-
-
-def session_of(app: TeachingServer, client: ViserClient):
-    """The server's session for ``client`` (registered a moment after the page is drawn)."""
-    client_id = int(client.gizmo_owner)  # a client-scoped node's owner is its client id
-    deadline = time.monotonic() + 15.0
-    while client_id not in app.sessions and time.monotonic() < deadline:
-        time.sleep(0.01)
-    return app.sessions[client_id]
-
-
-async def drag_a_little(client: ViserClient, session, steps: int = 10, offset=(0.0, 0.0, 0.0)) -> np.ndarray:
-    T = session.state.last.flange.copy()
-    for k in range(steps):
-        T[:3, 3] += np.array([0.004, -0.003, 0.002]) + offset
-        await client.drag_target(T[:3, 3], wxyz_of(T), "start" if k == 0 else "update")
-        await asyncio.sleep(0.05)
-    return T
 
 
 def test_clients_vanishing_mid_drag(app):

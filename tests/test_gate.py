@@ -24,22 +24,10 @@ from app import gate as gate_module
 from app.gate import MAX_MESSAGE_BYTES, MESSAGE_BURST, Gate, TokenBucket, gated_serve, message_key
 from app.server import TeachingServer
 
-from .test_classroom import until
-from .test_faults import drag_a_little, session_of
+from .server_support import drag_a_little, session_of, until, url
 from .viser_client import ViserClient, encode
 
 pytestmark = pytest.mark.server
-
-
-@pytest.fixture
-def app():
-    server = TeachingServer(port=0)
-    yield server
-    server.stop()
-
-
-def url(app: TeachingServer) -> str:
-    return f"http://127.0.0.1:{app.port}"
 
 
 def resident_mib() -> float:

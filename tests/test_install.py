@@ -9,12 +9,13 @@ import re
 import shutil
 import subprocess
 import sys
-import threading
 import time
 import urllib.request
 from pathlib import Path
 
 import pytest
+
+from .app_process import serving
 
 ROOT = Path(__file__).resolve().parent.parent
 pytestmark = pytest.mark.install
@@ -58,28 +59,9 @@ def test_the_core_installs_without_a_compiler_and_runs_on_numpy(installed, tmp_p
 
 def test_the_app_starts_from_another_directory(installed, tmp_path):
     bin_dir, env = installed
-    app = subprocess.Popen(
-        [str(bin_dir / "ur10-teach"), "--port", "0"], cwd=tmp_path, env=dict(env, PYTHONUNBUFFERED="1"),
-        stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True,
-    )
-    output: list[str] = []
-    ready = threading.Event()
-
-    def drain() -> None:
-        for line in app.stdout:
-            output.append(line)
-            if line.startswith("Press Ctrl+C"):
-                ready.set()
-        ready.set()
-
-    threading.Thread(target=drain, daemon=True).start()
-    try:
-        assert ready.wait(120) and app.poll() is None, "".join(output)
+    with serving([str(bin_dir / "ur10-teach"), "--port", "0"], tmp_path, env, timeout=120) as (app, output):
         url = re.search(r"http://127\.0\.0\.1:\d+", "".join(output)).group(0)
         with urllib.request.urlopen(url, timeout=30) as page:
             assert page.status == 200 and b"<html" in page.read().lower()
         time.sleep(1.0)
         assert app.poll() is None and "Traceback" not in "".join(output), "".join(output)
-    finally:
-        app.terminate()
-        app.wait(timeout=30)

@@ -14,32 +14,12 @@ import numpy as np
 import pytest
 
 from app import joint_panel, workers
-from app.server import TeachingServer
 from app.style import number, sentence
 
-from .test_classroom import member_of, until
-from .test_faults import drag_a_little, session_of
+from .server_support import become_presenter, drag_a_little, member_of, session_of, until, url
 from .viser_client import ViserClient
 
 pytestmark = pytest.mark.server
-
-
-@pytest.fixture
-def app():
-    server = TeachingServer(port=0)
-    yield server
-    server.stop()
-
-
-@pytest.fixture
-def classroom():
-    server = TeachingServer(port=0, shared=True)
-    yield server
-    server.stop()
-
-
-def url(server: TeachingServer) -> str:
-    return f"http://127.0.0.1:{server.port}"
 
 
 def test_a_typed_target_moves_the_gizmo_and_the_red_halo_there(app):
@@ -105,10 +85,7 @@ def test_a_presenter_who_leaves_takes_the_cloud_with_them(classroom):
     async def scenario():
         presenter = await ViserClient(url(classroom)).connect()
         viewer = await ViserClient(url(classroom)).connect()
-        await presenter.set_gui("Join code", classroom.classroom.code)
-        await asyncio.sleep(0.1)
-        await presenter.set_gui("Become presenter", True)
-        await until(lambda: classroom.classroom.presenter is not None, what="the presenter")
+        await become_presenter(presenter, classroom)
         await asyncio.sleep(0.5)
         await presenter.set_gui("Show workspace cloud", True)
         await until(lambda: "/workspace" in viewer.received.nodes, timeout=60, what="the cloud on the viewer's screen")
