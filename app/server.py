@@ -19,6 +19,7 @@ import viser
 
 from ur10core import Arm, symbolic
 
+from . import shared_frames
 from .classroom import Classroom
 from .gate import Gate, gated_serve
 from .meshes import load_links
@@ -166,6 +167,7 @@ class TeachingServer:
         self.host = host
         label = f"UR10 kinematics ({preset})"
         self.gate = gate or Gate(allowed_origins)
+        shared_frames.install()
         with gated_serve(self.gate):
             self.server = viser.ViserServer(host=host, port=port, label=label, verbose=False)
         self.server.gui.configure_theme(show_share_button=False, brand_color=JOINT_CAP_BLUE, control_width="large")

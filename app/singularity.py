@@ -41,6 +41,8 @@ if TYPE_CHECKING:
 ALARM_AT = 0.05
 #: From this share up a factor is drawn fully green.
 CALM_AT = 0.35
+#: The 3D overlay's colours move in this many steps from calm to alarm (each step is a message).
+ALARM_STEPS = 20
 PLOT_SECONDS = 10.0
 PLOT_SAMPLES = 200
 CIRCLE_SEGMENTS = 96
@@ -138,16 +140,20 @@ class OverlayScene(View):
     def render(self, snapshot: Snapshot) -> None:
         if not self.enabled:
             return
-        alarms = tuple(round(alarm(level), 2) for level in factor_levels(snapshot, self._reach))
-        if alarms == self._drawn_alarms:
-            return  # far from every singularity nothing changes colour: skip the lot
+        alarms = tuple(round(alarm(level) * ALARM_STEPS) / ALARM_STEPS for level in factor_levels(snapshot, self._reach))
+        drawn = self._drawn_alarms or (None, None, None)
         self._drawn_alarms = alarms
-        self.cylinder.color = blend(SHOULDER_COLOR, DANGER_RED, alarms[0])
-        self.p5.color = blend(SHOULDER_COLOR, DANGER_RED, alarms[0])
-        self.circles.colors = _segment_colors(blend(OVERLAY_IDLE, DANGER_RED, alarms[1]), len(self.circles.points))
-        self.p4.color = blend(ELBOW_COLOR, DANGER_RED, alarms[1])
-        for axis in self.axes:
-            axis.colors = _segment_colors(blend(WRIST_COLOR, DANGER_RED, alarms[2]), 1)
+        shoulder, elbow, wrist = alarms
+        # a drag usually moves one factor's colour a step, or none: recolour only what changed
+        if shoulder != drawn[0]:
+            self.cylinder.color = blend(SHOULDER_COLOR, DANGER_RED, shoulder)
+            self.p5.color = blend(SHOULDER_COLOR, DANGER_RED, shoulder)
+        if elbow != drawn[1]:
+            self.circles.colors = _segment_colors(blend(OVERLAY_IDLE, DANGER_RED, elbow), len(self.circles.points))
+            self.p4.color = blend(ELBOW_COLOR, DANGER_RED, elbow)
+        if wrist != drawn[2]:
+            for axis in self.axes:
+                axis.colors = _segment_colors(blend(WRIST_COLOR, DANGER_RED, wrist), 1)
 
 
 class OverlayPanel(View):

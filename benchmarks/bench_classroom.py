@@ -23,7 +23,10 @@ every frame received and decoded) run in this one. Scenarios:
 * **shared + explorers** — the presenter drags, 15 students explore on their own copies
   (dragging at 20 Hz), 14 watch;
 * **lecture hall** — ``--shared`` with 101 browsers: the presenter drags at 20 Hz, 100
-  students watch.
+  students watch;
+* **lecture hall, viser's per-browser encoding** — as *lecture hall*, every browser's copy
+  of a shared redraw encoded separately, as viser does it, instead of once
+  (``app/shared_frames.py``; ``UR10_TEACH_ENCODE_PER_CLIENT=1``): what that module buys.
 
 Reported per scenario: server-side drag handler latency (the app's own measurement),
 end-to-end latency (a drag event sent → the client receives a 3D update showing that
@@ -160,7 +163,7 @@ async def run_scenario(app: AppProcess, name: str, seconds: float, competing: in
 
 
 async def _drive(app: AppProcess, name: str, seconds: float, idle: tuple) -> dict:
-    clients = await connect_all(app.url, LECTURE_HALL if name == "lecture hall" else CLIENTS)
+    clients = await connect_all(app.url, LECTURE_HALL if name.startswith("lecture hall") else CLIENTS)
     draggers: list[ViserClient] = []
     presenter = None
     if name == "independent, half dragging":
@@ -359,6 +362,7 @@ def main() -> None:
         ("shared", ("--shared",), 0, {}),
         ("shared + explorers", ("--shared",), 0, {}),
         ("lecture hall", ("--shared",), 0, {}),
+        ("lecture hall, viser's per-browser encoding", ("--shared",), 0, {"UR10_TEACH_ENCODE_PER_CLIENT": "1"}),
     )
 
     def run(name: str, flags: tuple[str, ...], seconds: float, competing: int = 0, env: dict | None = None) -> dict:

@@ -1,0 +1,112 @@
+"""Encode a broadcast window once, for every browser that receives it: the lecture hall's hot spot.
+
+viser sends each browser its windows of queued messages through its own
+``_message_producer``, which turns the window into dictionaries, msgpack-encodes them and
+zstd-compresses the result for that one browser. In shared mode the presenter's redraw is
+the same window of the same message objects for every viewer, so a hall of a hundred
+encoded every redraw a hundred times: about 45 % of the server's event loop (py-spy,
+BENCHMARKS.md, *lecture hall*). :func:`install` puts in a producer that keeps the frames
+of recent windows of viser's shared (broadcast) queue and sends the same bytes to every
+browser whose window holds the same messages. Each browser's own queue is encoded as
+viser does it, since no other browser receives those windows.
+
+This replaces a private function of viser 1.1.1, which is pinned exactly
+(pyproject.toml). ``tests/test_shared_frames.py`` checks that the frames decode to what
+viser's own producer sends and fails when viser's producer changes.
+``UR10_TEACH_ENCODE_PER_CLIENT=1`` keeps viser's own producer (the benchmark's
+comparison row).
+"""
+
+from __future__ import annotations
+
+import collections
+import os
+import threading
+import time
+from typing import Sequence
+
+import msgspec
+import zstandard
+from viser.infra import _infra
+from viser.infra._async_message_buffer import AsyncMessageBuffer
+from viser.infra._messages import Message
+
+#: Frames larger than this (a newcomer's backlog, a point cloud) are encoded per browser, not kept.
+MAX_KEPT_BYTES = 256 * 1024
+#: Recent windows kept: a hundred viewers drain the same redraw within a few windows of each other.
+KEPT_WINDOWS = 16
+
+VISER_PRODUCER = _infra._message_producer
+ENCODE_PER_CLIENT = os.environ.get("UR10_TEACH_ENCODE_PER_CLIENT") == "1"
+
+
+def encode(window: Sequence[Message], zstd: zstandard.ZstdCompressor) -> bytes:
+    """One websocket frame for ``window``, in viser's wire format (as its ``_message_producer``)."""
+    binary_buffers: list[memoryview] = []
+    serialized = tuple(message.as_serializable_dict(binary_buffers) for message in window)
+    inner = msgspec.msgpack.encode({
+        "messages": serialized,
+        "timestampSec": time.perf_counter(),
+        "binaryBufferLengths": tuple(b.nbytes for b in binary_buffers),
+    })
+    compressed = zstd.compress(inner)
+    parts: list[bytes | memoryview] = [len(inner).to_bytes(8, "little"), len(compressed).to_bytes(8, "little"), compressed]
+    _infra._append_aligned_buffers(parts, binary_buffers, 16 + len(compressed))
+    return b"".join(parts)
+
+
+class KeptFrames:
+    """The frames of the last :data:`KEPT_WINDOWS` windows, by the identity of their messages.
+
+    An entry holds its window's messages, so no other message can take their ids while
+    it is kept. Every server in the process shares it (tests run several, on their own
+    threads), hence the lock.
+    """
+
+    def __init__(self) -> None:
+        self._frames: collections.OrderedDict[tuple[int, ...], tuple[Sequence[Message], bytes]] = collections.OrderedDict()
+        self._lock = threading.Lock()
+        self._zstd = zstandard.ZstdCompressor(level=1)
+        self.encoded = self.reused = 0
+
+    def frame(self, window: Sequence[Message]) -> bytes:
+        key = tuple(map(id, window))
+        with self._lock:
+            kept = self._frames.get(key)
+            if kept is not None:
+                self._frames.move_to_end(key)
+                self.reused += 1
+                return kept[1]
+            frame = encode(window, self._zstd)
+            self.encoded += 1
+            if len(frame) <= MAX_KEPT_BYTES:
+                self._frames[key] = (window, frame)
+                if len(self._frames) > KEPT_WINDOWS:
+                    self._frames.popitem(last=False)
+            return frame
+
+
+KEPT = KeptFrames()
+
+
+async def shared_message_producer(websocket, buffer: AsyncMessageBuffer, client_id: int,
+                                  backlog_done_message: Message | None = None) -> None:
+    """viser's ``_message_producer``, with the broadcast queue's frames encoded once for everyone."""
+    window_generator = buffer.window_generator(client_id, backlog_done_message=backlog_done_message)
+    zstd = zstandard.ZstdCompressor(level=1)
+    shared = buffer.persistent_messages  # viser's broadcast queue; each browser's own is not kept
+    try:
+        while not buffer.done:
+            try:
+                window = await window_generator.__anext__()
+            except StopAsyncIteration:
+                break
+            await websocket.send(KEPT.frame(window) if shared else encode(window, zstd))
+    finally:
+        await window_generator.aclose()  # as viser's: run the generator's cleanup now, not at a later collection
+
+
+def install() -> None:
+    """Use :func:`shared_message_producer` for every connection from now on (unless told not to)."""
+    if not ENCODE_PER_CLIENT:
+        _infra._message_producer = shared_message_producer

@@ -1,0 +1,122 @@
+"""app.shared_frames sends what viser's own producer sends, encoding a broadcast window once."""
+
+from __future__ import annotations
+
+import asyncio
+import hashlib
+import inspect
+
+import numpy as np
+import pytest
+import zstandard
+from viser import _messages
+from viser.infra import _infra
+from viser.infra._async_message_buffer import AsyncMessageBuffer
+
+from app import shared_frames
+from app.fast_updates import _InstancesMessage
+from tests.viser_client import decode_frame
+
+#: viser 1.1.1's ``_message_producer``, which shared_frames.shared_message_producer copies.
+VISER_PRODUCER_SHA256 = "8283328d06cfa014576888930c49a857a2d79892dc89f9694444895945018ea3"
+
+
+class Recorder:
+    """A websocket that keeps what is sent."""
+
+    def __init__(self) -> None:
+        self.sent: list[bytes] = []
+
+    async def send(self, data: bytes) -> None:
+        self.sent.append(data)
+
+
+def a_window() -> list[_messages.Message]:
+    return [
+        _messages.SetOrientationMessage("/arm/link0/link1", (0.5, 0.5, 0.5, 0.5)),
+        _messages.SetPositionMessage("/target", (0.1, -0.2, 0.3)),
+        _InstancesMessage("/ghosts/link3", {
+            "batched_wxyzs": np.arange(32, dtype=np.float32).reshape(8, 4),
+            "batched_positions": np.linspace(0, 1, 24, dtype=np.float32).reshape(8, 3),
+        }),
+        _messages.GuiUpdateMessage("markdown-1", {"content": "**θ1** = 30.0°"}),
+    ]
+
+
+def produce(producer, window, persistent: bool = True, clients: int = 1) -> list[bytes]:
+    """The first frame each of ``clients`` connections gets from ``producer`` for ``window``."""
+
+    async def run() -> list[bytes]:
+        buffer = AsyncMessageBuffer(asyncio.get_running_loop(), persistent_messages=persistent)
+        for message in window:
+            buffer.push(message)
+        sockets = [Recorder() for _ in range(clients)]
+        tasks = [asyncio.create_task(producer(socket, buffer, client_id)) for client_id, socket in enumerate(sockets)]
+        async def all_sent() -> None:
+            while not all(socket.sent for socket in sockets):
+                await asyncio.sleep(0.001)
+
+        await asyncio.wait_for(all_sent(), 5)
+        buffer.set_done()
+        await asyncio.wait_for(asyncio.gather(*tasks), 5)
+        return [socket.sent[0] for socket in sockets]
+
+    return asyncio.run(run())
+
+
+def decoded(frame: bytes):
+    messages, buffers = decode_frame(frame, zstandard.ZstdDecompressor())
+    return messages, [bytes(b) for b in buffers]
+
+
+def test_frames_decode_to_what_viser_sends():
+    window = a_window()
+    ours = produce(shared_frames.shared_message_producer, window)[0]
+    theirs = produce(shared_frames.VISER_PRODUCER, window)[0]
+    assert decoded(ours) == decoded(theirs)
+    # also for a browser's own queue, which is encoded per browser
+    assert decoded(produce(shared_frames.shared_message_producer, window, persistent=False)[0]) == decoded(theirs)
+
+
+def test_a_broadcast_window_is_encoded_once_for_every_browser():
+    encoded, reused = shared_frames.KEPT.encoded, shared_frames.KEPT.reused
+    frames = produce(shared_frames.shared_message_producer, a_window(), clients=5)
+    assert all(frame is frames[0] for frame in frames)
+    assert shared_frames.KEPT.encoded - encoded == 1
+    assert shared_frames.KEPT.reused - reused == 4
+
+
+def test_a_browsers_own_queue_is_not_kept():
+    encoded = shared_frames.KEPT.encoded
+    produce(shared_frames.shared_message_producer, a_window(), persistent=False)
+    assert shared_frames.KEPT.encoded == encoded
+
+
+def test_a_large_frame_is_not_kept():
+    big = _messages.GuiUpdateMessage("markdown-2", {"content": np.random.default_rng(0).bytes(400_000).hex()})
+    kept = shared_frames.KeptFrames()
+    kept.frame([big])
+    kept.frame([big])
+    assert kept.encoded == 2 and kept.reused == 0
+
+
+def test_only_recent_windows_are_kept():
+    kept = shared_frames.KeptFrames()
+    windows = [a_window() for _ in range(shared_frames.KEPT_WINDOWS + 1)]
+    for window in windows:
+        kept.frame(window)
+    kept.frame(windows[-1])
+    kept.frame(windows[0])  # pushed out by the newer ones
+    assert kept.reused == 1 and kept.encoded == len(windows) + 1
+
+
+def test_viser_producer_is_the_one_copied():
+    """Fails when a viser upgrade changes the producer that app/shared_frames.py replaces: compare them again."""
+    source = inspect.getsource(shared_frames.VISER_PRODUCER)
+    assert hashlib.sha256(source.encode()).hexdigest() == VISER_PRODUCER_SHA256
+
+
+@pytest.mark.server
+def test_the_app_sends_through_it(classroom):
+    """Every connection of the running app, shared mode included, gets its frames from shared_frames."""
+    assert _infra._message_producer is shared_frames.shared_message_producer
