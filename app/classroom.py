@@ -27,8 +27,10 @@ from typing import TYPE_CHECKING
 
 import viser
 
+from .camera import CameraControls
 from .feedback import guard
 from .ik_target import branches_markdown
+from .meshes import body_points
 from .readouts import flange_markdown, joints_markdown
 from .singularity import alarm, factor_levels, gauges_html
 from .state import ArmState
@@ -112,6 +114,7 @@ class Member:
         self.role = VIEWER
         self.session: "ClientSession | None" = None
         self.folder: viser.GuiFolderHandle | None = None
+        self.camera: CameraControls | None = None
         self.closed = False
 
 
@@ -121,7 +124,7 @@ class Classroom:
 
         self.app = app
         self.code = make_join_code()
-        self.state = ArmState(app.arm)
+        self.state = ArmState(app.arm, body_points=body_points(app.links))
         self.scene_views = SceneViews.build(app.server.scene, app.links, self.state.last, target_marker=True)
         self.live = LivePanel(app.server.gui, self.state, lambda: self.scene_views.overlay.enabled)
         self.members: dict[int, Member] = {}
@@ -137,6 +140,11 @@ class Classroom:
         member = Member(client)
         with self._lock:
             self.members[client.client_id] = member
+        # one camera per browser, whatever its role: it frames the arm this browser is watching
+        member.camera = CameraControls(
+            client, lambda: (member.session or self).state.last,
+            lambda handler: guard(client, handler, is_closed=lambda: member.closed), lecture=self.app.lecture,
+        )
         self._draw_controls(member)
 
     def disconnect(self, client: viser.ClientHandle) -> None:
@@ -145,6 +153,8 @@ class Classroom:
             if member is None:
                 return
             member.closed = True
+            if member.camera is not None:
+                member.camera.close()
             if member.session is not None:
                 member.session.close()
                 member.session = None
@@ -190,9 +200,10 @@ class Classroom:
             self._leave_role(member)
             session = ClientSession(
                 member.client, self.app.arm, self.app.links, self.app.refresher, self.app.drags,
-                state=self.state, server=self.app.server, scene_views=self.scene_views,
+                state=self.state, server=self.app.server, scene_views=self.scene_views, own_camera=False,
             )
             session.observers.append(lambda _: self.app.refresher.request(self.live))
+            session.follow_lecture_mode(member.camera.lecture)
             member.session, member.role = session, PRESENTER
             self.presenter = member
             self.live.presenter_here = True
@@ -221,8 +232,9 @@ class Classroom:
             member.client.scene.add_frame("/target", show_axes=False, visible=False)  # hide the shared target
             member.session = ClientSession(
                 member.client, self.app.arm, self.app.links, self.app.refresher, self.app.drags,
-                state=ArmState(self.app.arm, self.state.q),
+                state=ArmState(self.app.arm, self.state.q, body_points=body_points(self.app.links)), own_camera=False,
             )
+            member.session.follow_lecture_mode(member.camera.lecture)
             member.role = EXPLORER
         self._draw_controls(member)
 

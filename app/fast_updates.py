@@ -44,6 +44,16 @@ class _OrientationMessage(_messages.SetOrientationMessage):
         return f"scene:{self.name}:update:SetOrientationMessage"  # supersedes viser's own, and vice versa
 
 
+class _PositionMessage(_messages.SetPositionMessage):
+    """A ``SetPositionMessage`` whose ``position`` is already a tuple of Python floats."""
+
+    def as_serializable_dict(self, binary_buffers: list | None = None) -> dict:
+        return {"name": self.name, "position": self.position, "owner": self.owner, "type": "SetPositionMessage"}
+
+    def redundancy_key(self) -> str:
+        return f"scene:{self.name}:update:SetPositionMessage"
+
+
 class _InstancesMessage(_messages.SceneNodeUpdateMessage):
     """A ``SceneNodeUpdateMessage`` whose updates are C-contiguous float32 arrays."""
 
@@ -72,6 +82,18 @@ def set_orientations(nodes: list[viser.SceneNodeHandle], wxyzs: np.ndarray) -> N
         impl = node._impl
         impl.wxyz[:] = wxyz
         impl.api._queue_scene_message(_OrientationMessage(impl.name, tuple(wxyz)))
+
+
+def set_positions(nodes: list[viser.SceneNodeHandle], positions: np.ndarray) -> None:
+    """``node.position = p`` for each pair, one message each, without viser's per-call checks."""
+    if PUBLIC_SETTERS:
+        for node, position in zip(nodes, positions):
+            node.position = position
+        return
+    for node, position in zip(nodes, positions.tolist()):
+        impl = node._impl
+        impl.position[:] = position
+        impl.api._queue_scene_message(_PositionMessage(impl.name, tuple(position)))
 
 
 def set_instances(mesh: viser.BatchedMeshHandle, wxyzs: np.ndarray, positions: np.ndarray | None) -> None:

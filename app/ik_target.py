@@ -24,7 +24,7 @@ from ur10core import JOINT_LIMIT, SLOTS
 from ur10core.ik import equivalent_near
 from ur10core.orientation import quaternion, rotation_from_zyx_euler
 
-from .fast_updates import set_instances, stop_echo
+from .fast_updates import set_instances, set_positions, stop_echo
 from .feedback import chosen
 from .meshes import LinkMesh
 from .state import ArmState, Snapshot
@@ -37,6 +37,88 @@ if TYPE_CHECKING:
 log = logging.getLogger(__name__)
 
 BRANCH_BUTTONS = tuple(str(slot.index + 1) for slot in SLOTS)
+#: What the "Ghosts shown" dropdown offers: every branch, one branch, or the arm's branch and
+#: the one that differs from it in a single choice.
+ALL_BRANCHES = "All 8 branches"
+FLIPS = {"Flip the shoulder": "shoulder", "Flip the elbow": "elbow", "Flip the wrist": "wrist"}
+FOCUS_OPTIONS = (ALL_BRANCHES, *FLIPS, *(f"Only branch {k}" for k in BRANCH_BUTTONS))
+#: Branches whose frame origins all lie this close (m) are drawn as one, labelled "3 = 4".
+SAME_POSE = 1e-3
+#: The gizmo's size as a share of the arm's reach a2 + a3: small enough to leave the wrist's
+#: axes and the overlay's P5 in view (it is drawn over everything, to stay grabbable).
+GIZMO_SHARE = 0.12
+GIZMO_LINE_WIDTH = {False: 3.0, True: 6.0}  #: pixels, normal and in lecture mode
+#: How far above a branch's elbow (frame {3}) its number floats. Not the wrist: every branch of a
+#: target shares the wrist centre P5 (and the flange); the elbows are where branches differ.
+LABEL_LIFT = 0.07
+
+
+def flipped(slot: int, choice: str) -> int:
+    """The slot that differs from ``slot`` in ``choice`` ("shoulder", "elbow" or "wrist") alone.
+
+    >>> flipped(4, "shoulder"), flipped(4, "elbow"), flipped(4, "wrist")
+    (1, 5, 6)
+    """
+    this = SLOTS[slot]
+    others = ("shoulder", "elbow", "wrist")
+    return next(other.index for other in SLOTS
+                if all((getattr(other, name) == getattr(this, name)) != (name == choice) for name in others))
+
+
+def focused(focus: str, arm_slot: int) -> np.ndarray:
+    """(8,) bool: the branches the "Ghosts shown" choice ``focus`` asks for.
+
+    >>> focused("Flip the elbow", 4).nonzero()[0].tolist(), focused("Only branch 3", 4).nonzero()[0].tolist()
+    ([4, 5], [2])
+    """
+    if focus not in FOCUS_OPTIONS:
+        raise ValueError(f"ghosts shown: {focus!r:.40} is not one of the choices")
+    shown = np.zeros(8, bool)
+    if focus == ALL_BRANCHES:
+        shown[:] = True
+    elif focus in FLIPS:
+        slot = max(arm_slot, 0)  # with the target out of reach: the pair of branch 1
+        shown[[slot, flipped(slot, FLIPS[focus])]] = True
+    else:
+        shown[int(focus.rsplit(" ", 1)[1]) - 1] = True  # "Only branch k"
+    return shown
+
+
+def same_pose_groups(ghost_frames: np.ndarray, valid: np.ndarray, tolerance: float = SAME_POSE) -> tuple[tuple[int, ...], ...]:
+    """The valid slots grouped by pose: slots in one group have every frame origin within ``tolerance``.
+
+    At a singularity two branches coincide (docs/kinematics.md §5); they are drawn as one.
+
+    >>> frames = np.tile(np.eye(4), (8, 7, 1, 1)); frames[3, :, 0, 3] = 1.0
+    >>> same_pose_groups(frames, np.array([True, True, False, True, False, False, False, False]))
+    ((0, 1), (3,))
+    """
+    origins = ghost_frames[:, :, :3, 3]
+    apart = np.abs(origins[:, None] - origins[None]).max(axis=(2, 3)) > tolerance
+    groups, taken = [], ~np.asarray(valid, bool)
+    for k in range(8):
+        if not taken[k]:
+            members = (~apart[k] & ~taken).nonzero()[0]
+            taken[members] = True
+            groups.append(tuple(int(m) for m in members))
+    return tuple(groups)
+
+
+def branch_labels(snapshot: Snapshot, groups: tuple[tuple[int, ...], ...]) -> list[str]:
+    """The 3D label of each slot ("" for none): its number, "3 = 4" for coinciding branches, the arm's marked.
+
+    Only the first slot of a group carries the group's label.
+    """
+    texts = [""] * 8
+    floor = snapshot.through_floor[1:]
+    for group in groups:
+        text = " = ".join(str(k + 1) for k in group)
+        if snapshot.slot in group:
+            text = f"arm: {text}"
+        if floor[list(group)].any():
+            text += " ⚠ floor"
+        texts[group[0]] = text
+    return texts
 
 
 def branch_table(snapshot: Snapshot) -> str:
@@ -55,6 +137,8 @@ def branch_table(snapshot: Snapshot) -> str:
         else:
             values = "— no solution"
         mark = " **← arm**" if k == snapshot.slot else ""
+        if solution.valid[k] and snapshot.through_floor[k + 1]:
+            mark += " ⚠ through the floor"
         rows.append(f"| {swatch(SLOT_COLORS[k])} | {k + 1} | {slot.label}{mark} | {values} |")
     return "\n".join(rows)
 
@@ -95,6 +179,8 @@ class BranchesScene(View):
     def __init__(self, scene: viser.SceneApi, links: tuple[LinkMesh, ...], first: Snapshot,
                  target_marker: bool = False) -> None:
         self.show_ghosts = True
+        self.focus = ALL_BRANCHES  #: one of FOCUS_OPTIONS
+        self.shown = np.zeros(8, bool)  #: the ghosts drawn by the last render
         #: called with (client, slot) when a ghost is clicked; set by whoever drives this scene
         self.on_select: Callable[[viser.ClientHandle | None, int], None] | None = None
         self.target = self.unreachable = None
@@ -116,6 +202,10 @@ class BranchesScene(View):
             )
             ghost.on_click(self._clicked)
             self.ghosts.append(ghost)
+        # each branch's number by its elbow, as in the table: colours alone cannot tell eight apart for everyone
+        self.labels = [scene.add_label(f"/ghosts/number{k + 1}", str(k + 1), visible=False, font_screen_scale=1.6,
+                                       anchor="bottom-center") for k in range(8)]
+        self._label_state: tuple = ()
 
     def _clicked(self, event) -> None:
         if self.on_select is not None and event.instance_index is not None:
@@ -126,10 +216,15 @@ class BranchesScene(View):
             self.target.wxyz = quaternion(snapshot.target[:3, :3], check=False)
             self.target.position = snapshot.target[:3, 3]
             self.unreachable.visible = not snapshot.reachable
-        shown = snapshot.solution.valid & self.show_ghosts
-        if snapshot.slot >= 0:
-            shown = shown.copy()
-            shown[snapshot.slot] = False  # the solid arm is there already
+        valid = snapshot.solution.valid
+        groups = same_pose_groups(snapshot.ghost_frames, valid)
+        focus = focused(self.focus, snapshot.slot)
+        shown = np.zeros(8, bool)
+        for group in groups:
+            # one ghost per pose, none where the solid arm is: the arm is never tinted by a ghost
+            shown[group[0]] = self.show_ghosts and focus[list(group)].any() and snapshot.slot not in group
+        self.shown = shown
+        self._draw_labels(snapshot, groups, focus)
         scales = shown.astype(np.float32)
         update_scales = scales.tobytes() != self._scales  # which branches exist rarely changes mid-drag
         self._scales = scales.tobytes()
@@ -146,6 +241,22 @@ class BranchesScene(View):
                 self._positions[i] = positions.tobytes()
             set_instances(ghost, all_wxyzs[i - 1], positions)
 
+    def _draw_labels(self, snapshot: Snapshot, groups, focus: np.ndarray) -> None:
+        texts = branch_labels(snapshot, groups)
+        visible = [False] * 8
+        for group in groups:  # a group's label is its first slot's; the arm's is shown whatever the focus
+            visible[group[0]] = snapshot.slot in group or (self.show_ghosts and bool(focus[list(group)].any()))
+        state = (tuple(texts), tuple(visible))
+        if state != self._label_state:  # which branches exist, and where they coincide, rarely changes mid-drag
+            self._label_state = state
+            for label, text, show in zip(self.labels, texts, visible):
+                if show and label.text != text:
+                    label.text = text
+                if label.visible != show:
+                    label.visible = show
+        elbows = snapshot.ghost_frames[:, 3, :3, 3] + (0.0, 0.0, LABEL_LIFT)
+        set_positions([self.labels[k] for k in range(8) if visible[k]], elbows[np.array(visible)])
+
 
 class IKTargetControls(View):
     """One user's gizmo at the flange and the "IK target" folder of their panel."""
@@ -158,7 +269,8 @@ class IKTargetControls(View):
         self._seen_lock = threading.Lock()
         snapshot = session.state.last
         self.gizmo = controls.add_transform_controls(
-            "/ik_target", scale=0.3, line_width=3.0, depth_test=False,
+            "/ik_target", scale=GIZMO_SHARE * (session.arm.a2 + session.arm.a3), line_width=GIZMO_LINE_WIDTH[False],
+            depth_test=False, opacity=0.85,
             wxyz=snapshot.flange_wxyz, position=snapshot.flange[:3, 3],
         )
         stop_echo(self.gizmo)
@@ -167,9 +279,11 @@ class IKTargetControls(View):
         folder = gui.add_folder("IK target: all 8 branches")
         self.folders = (folder,)
         with folder:
-            gui.add_markdown("Drag the gizmo at the flange. Each colour is one IK branch; click a ghost arm "
-                             "or a number below to put the arm on it.")
+            gui.add_markdown("Drag the gizmo at the flange. Each ghost arm is one IK branch, numbered at its "
+                             "elbow as in the table; click a ghost or a number below to put the arm on it.")
             self.show_ghosts = gui.add_checkbox("Show ghost arms", branches.show_ghosts)
+            self.focus = gui.add_dropdown("Ghosts shown", FOCUS_OPTIONS, initial_value=branches.focus,
+                                          hint="One branch, or the arm's branch beside the one a single choice away")
             self.branch_buttons = gui.add_button_group("Use branch", BRANCH_BUTTONS)
             self.branches = gui.add_markdown(branches_markdown(snapshot))
             self.typed_pose = gui.add_text(
@@ -183,8 +297,13 @@ class IKTargetControls(View):
         self.gizmo.on_update(self._dragged)
         self.branch_buttons.on_click(session.guard(self._branch_button))
         self.show_ghosts.on_update(session.guard(self._toggle_ghosts))
+        self.focus.on_update(session.guard(self._choose_focus))
         self.move_button.on_click(session.guard(self._typed_target))
         self.snap_button.on_click(session.guard(lambda _: session.apply(lambda state: state.set_joints(state.q))))
+
+    def thicken(self, lecture: bool) -> None:
+        """The gizmo's lines for lecture mode (thick) or not."""
+        self.gizmo.line_width = GIZMO_LINE_WIDTH[lecture]
 
     def close(self) -> None:
         """Stop driving the branches scene (the browser has gone, or a presenter handed over)."""
@@ -220,6 +339,10 @@ class IKTargetControls(View):
 
     def _toggle_ghosts(self, _: viser.GuiEvent) -> None:
         self._branches.show_ghosts = self.show_ghosts.value
+        self._session.redraw()
+
+    def _choose_focus(self, _: viser.GuiEvent) -> None:
+        self._branches.focus = chosen(self.focus, "ghosts shown")
         self._session.redraw()
 
     def _typed_target(self, _: viser.GuiEvent) -> None:

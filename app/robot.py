@@ -16,7 +16,7 @@ from .fast_updates import set_orientations
 from .meshes import LinkMesh
 from .state import Snapshot
 from .view import View
-from .style import ALUMINIUM, JOINT_CAP_BLUE
+from .style import ALUMINIUM, JOINT_CAP_GREY
 
 
 def poses(frames: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -33,16 +33,16 @@ class RobotScene(View):
     def __init__(self, scene: viser.SceneApi, links: tuple[LinkMesh, ...], first: Snapshot) -> None:
         scene.add_frame("/base_frame", axes_length=0.3, axes_radius=0.008, origin_radius=0.015)
         wxyz, position = poses(first.arm.link_transforms(first.q))
-        self._links: list[viser.FrameHandle] = []
+        self.links: list[viser.FrameHandle] = []
         for link in links:
             i = link.index
             pose = {} if i == 0 else {"wxyz": wxyz[i - 1], "position": position[i - 1]}
             node = scene.add_frame(node_name(i), show_axes=False, **pose)
             scene.add_mesh_simple(f"{node_name(i)}/body", link.body_vertices, link.body_faces, color=ALUMINIUM)
             if len(link.cap_faces):
-                scene.add_mesh_simple(f"{node_name(i)}/cap", link.cap_vertices, link.cap_faces, color=JOINT_CAP_BLUE)
-            self._links.append(node)
+                scene.add_mesh_simple(f"{node_name(i)}/cap", link.cap_vertices, link.cap_faces, color=JOINT_CAP_GREY)
+            self.links.append(node)
         scene.add_frame(f"{node_name(6)}/flange_frame", axes_length=0.15, axes_radius=0.005, origin_radius=0.01)
 
     def render(self, snapshot: Snapshot) -> None:
-        set_orientations(self._links[1:], snapshot.link_wxyz)  # the translations never change
+        set_orientations(self.links[1:], snapshot.link_wxyz)  # the translations never change

@@ -26,7 +26,7 @@ from .meshes import load_links
 from .metrics import LATENCY
 from .workers import DragQueue, PanelRefresher
 from .session import ClientSession
-from .style import JOINT_CAP_BLUE
+from .style import BRAND_BLUE
 
 log = logging.getLogger(__name__)
 
@@ -157,11 +157,14 @@ class TeachingServer:
     gate : Gate, optional
         What the server accepts from browsers (:mod:`app.gate`); one with
         ``allowed_origins`` by default.
+    lecture : bool
+        Every browser starts in lecture mode (:mod:`app.lecture`).
     """
 
     def __init__(self, preset: str = "course", host: str = "127.0.0.1", port: int = 8080, shared: bool = False,
-                 allowed_origins=(), gate: Gate | None = None) -> None:
+                 allowed_origins=(), gate: Gate | None = None, lecture: bool = False) -> None:
         self.arm = Arm.preset(preset)
+        self.lecture = lecture
         self.links = load_links(preset)
         symbolic.load()  # read the cached derivation now rather than in the first student's callback
         self.host = host
@@ -170,7 +173,7 @@ class TeachingServer:
         shared_frames.install()
         with gated_serve(self.gate):
             self.server = viser.ViserServer(host=host, port=port, label=label, verbose=False)
-        self.server.gui.configure_theme(show_share_button=False, brand_color=JOINT_CAP_BLUE, control_width="large")
+        self.server.gui.configure_theme(show_share_button=False, brand_color=BRAND_BLUE, control_width="large")
         self.server.initial_camera.position = CAMERA_POSITION
         self.server.initial_camera.look_at = CAMERA_LOOK_AT
         self.server.initial_camera.up = (0.0, 0.0, 1.0)
@@ -223,7 +226,7 @@ class TeachingServer:
             if self.classroom is not None:
                 self.classroom.connect(client)
             else:
-                session = ClientSession(client, self.arm, self.links, self.refresher, self.drags)
+                session = ClientSession(client, self.arm, self.links, self.refresher, self.drags, lecture=self.lecture)
                 with self._sessions_lock:
                     self._sessions[client.client_id] = session
         except Exception:

@@ -25,9 +25,12 @@ from ur10core import Arm
 from ur10core.orientation import transform_from_quaternion
 
 from .ik_target import BranchesScene, IKTargetControls
+from .camera import CameraControls
+from .lecture import LectureMode
 from .feedback import guard, notify
+from .floor import FloorScene
 from .joint_panel import JointPanel
-from .meshes import LinkMesh
+from .meshes import LinkMesh, body_points
 from .metrics import LATENCY
 from .readouts import Readouts
 from .workers import DragQueue, PanelRefresher
@@ -41,7 +44,7 @@ log = logging.getLogger(__name__)
 
 @dataclasses.dataclass
 class SceneViews:
-    """The 3D part of an arm: solid arm, ghost branches, singularity geometry.
+    """The 3D part of an arm: solid arm, ghost branches, singularity geometry, floor warnings.
 
     A session builds its own on its browser's scene; the classroom builds one on the
     shared scene, which the presenter's session then drives.
@@ -50,15 +53,16 @@ class SceneViews:
     robot: RobotScene
     branches: BranchesScene
     overlay: OverlayScene
+    floor: FloorScene
 
     @classmethod
     def build(cls, scene: viser.SceneApi, links: tuple[LinkMesh, ...], first: Snapshot,
               target_marker: bool = False) -> "SceneViews":
-        return cls(RobotScene(scene, links, first), BranchesScene(scene, links, first, target_marker),
-                   OverlayScene(scene, first))
+        branches = BranchesScene(scene, links, first, target_marker)
+        return cls(RobotScene(scene, links, first), branches, OverlayScene(scene, first), FloorScene(scene, branches))
 
-    def __iter__(self):
-        return iter((self.robot, self.branches, self.overlay))
+    def __iter__(self):  # the floor after the branches: it marks the ghosts they drew
+        return iter((self.robot, self.branches, self.overlay, self.floor))
 
 
 class ClientSession:
@@ -74,6 +78,10 @@ class ClientSession:
         The server's workers: panel redraws and drag events, off viser's thread pool.
     state : ArmState, optional
         The arm to drive; a new one at the home pose by default.
+    own_camera, lecture : bool
+        Build the browser's "View" folder (camera framing, :mod:`app.camera`; lecture mode,
+        starting as ``lecture`` says); the classroom builds one per browser instead,
+        whatever its role.
     server, scene_views : viser.ViserServer, SceneViews, optional
         Where the arm is drawn: the browser's own scene by default; the classroom's
         presenter drives the views in the server's shared scene instead. Their messages
@@ -86,11 +94,11 @@ class ClientSession:
     def __init__(
         self, client: viser.ClientHandle, arm: Arm, links: tuple[LinkMesh, ...], refresher: PanelRefresher,
         drags: DragQueue, state: ArmState | None = None, server: viser.ViserServer | None = None,
-        scene_views: SceneViews | None = None,
+        scene_views: SceneViews | None = None, own_camera: bool = True, lecture: bool = False,
     ) -> None:
         self.client = client
         self.arm = arm
-        self.state = state or ArmState(arm)
+        self.state = state or ArmState(arm, body_points=body_points(links))
         self.refresher = refresher
         self.drags = drags
         self.closed = False
@@ -106,9 +114,14 @@ class ClientSession:
         self.readouts = Readouts(gui, arm, first)
         self.singularity = OverlayPanel(gui, self.scene_views.overlay, self)
         self.workspace = WorkspaceView(scene, gui, self)
-        self.views = (*self.scene_views, self.joints, self.ik_target, self.readouts, self.singularity, self.workspace)
+        self._lecture: LectureMode | None = None
+        self.camera = CameraControls(client, lambda: self.state.last, self.guard, lecture) if own_camera else None
+        if self.camera is not None:
+            self.follow_lecture_mode(self.camera.lecture)
         #: the views this session built in the browser's own panel (the scene views may be the classroom's)
-        self.own_views = (self.joints, self.ik_target, self.readouts, self.singularity, self.workspace)
+        self.own_views = (self.joints, self.ik_target, self.readouts, self.singularity, self.workspace,
+                          *([self.camera] if self.camera else []))
+        self.views = (*self.scene_views, *self.own_views)
         self.render(first)
         self.render_panel()
 
@@ -161,6 +174,12 @@ class ClientSession:
                 view.render_panel(snapshot)
         LATENCY.record("panel", time.perf_counter() - start)
 
+    def follow_lecture_mode(self, lecture: "LectureMode") -> None:
+        """Thick gizmo lines while the browser's lecture mode is on (until this session closes)."""
+        lecture.on_change.append(self.ik_target.thicken)
+        self._lecture = lecture
+        self.ik_target.thicken(lecture.on)
+
     # ------------------------------------------------------------------ safety
 
     def guard(self, handler: Callable[[Any], None]) -> Callable[[Any], None]:
@@ -171,9 +190,16 @@ class ClientSession:
         if not self.closed:
             notify(self.client, title, body, color)
 
+    def _unfollow_lecture_mode(self) -> None:
+        # the classroom's lecture switch outlives this session: it must not keep the session alive
+        if self._lecture is not None and self.ik_target.thicken in self._lecture.on_change:
+            self._lecture.on_change.remove(self.ik_target.thicken)
+        self._lecture = None
+
     def close(self) -> None:
         """The browser has gone (or handed over): stop drawing and let go of everything shared."""
         self.closed = True
+        self._unfollow_lecture_mode()
         with self.state.lock:  # not while a drag is being drawn
             for view in self.own_views:
                 view.close()
@@ -182,6 +208,7 @@ class ClientSession:
     def remove(self) -> None:
         """Close, and take this session's panel and gizmo out of a browser that stays."""
         self.closed = True
+        self._unfollow_lecture_mode()
         with self.state.lock:
             for view in self.own_views:
                 view.remove()

@@ -20,6 +20,7 @@ import numpy as np
 from ur10core import JOINT_LIMIT, Arm, IKSolution, SingularityGeometry
 from ur10core.ik import equivalent_near
 from ur10core.orientation import quaternion
+from ur10core.workspace import lowest_points
 
 from .style import JOINT_LABELS
 
@@ -32,6 +33,8 @@ COURSE_POSES = {
 #: The pose a new arm starts in: the course's arbitrary example, clear of every singularity.
 HOME = COURSE_POSES["arbitrary"]
 SINGULARITY_KINDS = ("shoulder", "elbow", "wrist")
+#: A body this far below z = 0 is through the floor (the base's own underside sits on it).
+FLOOR_TOLERANCE = 1e-3
 
 
 @dataclass(frozen=True)
@@ -50,12 +53,19 @@ class Snapshot:
     ghost_wxyz: np.ndarray  #: (8, 7, 4) rotation of each branch's frames {0}..{6}, as quaternions
     flange_wxyz: np.ndarray  #: (4,) the flange orientation as a quaternion
     factors: np.ndarray  #: (3,) shoulder, elbow, wrist factors of det J
+    lowest: np.ndarray  #: (9, 3) lowest body point of the solid arm, then of each branch (NaN where invalid)
     cause: str  #: "joints", "target" (dragged), "typed", "branch", "singularity" or "reset": what made this change
     arm: Arm
 
     @property
     def flange(self) -> np.ndarray:
         return self.frames[6]
+
+    @property
+    def through_floor(self) -> np.ndarray:
+        """(9,) bool: the solid arm, then each branch, reaches below the floor z = 0 (a real arm would hit it)."""
+        with np.errstate(invalid="ignore"):
+            return self.lowest[:, 2] < -FLOOR_TOLERANCE
 
     @functools.cached_property
     def det_j(self) -> float:
@@ -77,10 +87,14 @@ class ArmState:
         The arm's dimensions.
     q : array_like, shape (6,), optional
         Starting joints (rad); the course's arbitrary pose by default.
+    body_points : array_like, shape (7, P, 3), optional
+        Points of each link's body in its DH frame (``app.meshes.body_points``), for the
+        floor check; the frame origins alone by default.
     """
 
-    def __init__(self, arm: Arm, q=None) -> None:
+    def __init__(self, arm: Arm, q=None, body_points=None) -> None:
         self.arm = arm
+        self.body_points = np.zeros((7, 1, 3)) if body_points is None else np.asarray(body_points, dtype=float)
         self.lock = threading.RLock()
         self._q = self.check_joints(np.radians(HOME) if q is None else q)
         self._target = arm.fk(self._q)
@@ -227,6 +241,9 @@ class ArmState:
         links = arm.link_transforms(self._q)[:, :3, :3]  # T(i−1, i): the solid arm's tree
         wxyz = quaternion(np.concatenate([links, rotations[1:].reshape(-1, 3, 3), rotations[0, 6:]]), check=False)
         factors = arm.singularity_factors(self._q)
+        lowest = lowest_points(frames, self.body_points)
+        if some_invalid:
+            lowest[1:][invalid] = np.nan
         return Snapshot(
             q=self._q.copy(),
             frames=frames[0],
@@ -240,6 +257,7 @@ class ArmState:
             reachable=self._slot >= 0,
             reason=self._reason,
             factors=factors,
+            lowest=lowest,
             cause=cause,
             arm=arm,
         )

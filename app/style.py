@@ -4,21 +4,30 @@ from __future__ import annotations
 
 import numpy as np
 
-#: Light-grey aluminium of the link bodies and the dark blue of the joint caps (RGB 0-255).
+#: Light-grey aluminium of the link bodies and the charcoal of the joint caps (RGB 0-255): the
+#: solid arm is neutral, so that no ghost's colour can be mistaken for it.
 ALUMINIUM = (205, 208, 212)
-JOINT_CAP_BLUE = (28, 64, 128)
-#: One fixed colour per IK slot k = 4 i + 2 j + l (Okabe-Ito, readable by colour-blind students).
+JOINT_CAP_GREY = (70, 72, 78)
+#: The brand colour of the page (title bar, buttons).
+BRAND_BLUE = (28, 64, 128)
+#: One fixed colour per IK slot k = 4 i + 2 j + l. Chosen from the Okabe-Ito, Paul Tol and
+#: IBM colour-blind-safe sets so that every pair stays apart (CIE76 ΔE ≥ 5) for normal,
+#: protan and deutan vision, drawn at GHOST_OPACITY over the page and on a washed-out
+#: projector (tests/test_palette.py). Colour alone cannot carry eight branches for
+#: everyone: every ghost also carries its number in 3D.
 SLOT_COLORS: tuple[tuple[int, int, int], ...] = (
     (0, 114, 178),  # blue
-    (86, 180, 233),  # sky blue
-    (0, 158, 115),  # bluish green
-    (117, 112, 179),  # purple
-    (230, 159, 0),  # orange
+    (238, 119, 51),  # orange
+    (51, 187, 238),  # cyan
+    (204, 51, 17),  # brick red
     (240, 228, 66),  # yellow
-    (204, 121, 167),  # reddish purple
-    (213, 94, 0),  # vermillion
+    (68, 170, 153),  # teal
+    (100, 143, 255),  # cornflower
+    (221, 204, 119),  # sand
 )
-GHOST_OPACITY = 0.35
+GHOST_OPACITY = 0.6
+#: The page behind the ghosts (viser's light theme).
+PAGE_BACKGROUND = (235, 235, 235)
 UNREACHABLE_RED = (220, 30, 30)
 #: Singularity overlay: calm and alarming ends of the gauges, and the lit geometry.
 SAFE_GREEN = (46, 160, 67)

@@ -81,7 +81,6 @@ def canvas_pixels(page) -> np.ndarray:
 
     from PIL import Image
 
-    box = page.locator("canvas").first.bounding_box()
-    width = box["width"] - 420  # leave out the control panel on the right
-    png = page.screenshot(clip={"x": box["x"], "y": box["y"], "width": width, "height": box["height"]})
+    box = page.locator("canvas").first.bounding_box()  # the panel is docked beside it, not over it
+    png = page.screenshot(clip=box, scale="css")
     return np.asarray(Image.open(io.BytesIO(png)).convert("RGB")).astype(int)

@@ -62,3 +62,50 @@ def collect_garbage_after_server_tests(request):
         import gc
 
         gc.collect()
+
+
+@pytest.fixture(scope="module")
+def playwright():
+    from playwright.sync_api import sync_playwright
+
+    with sync_playwright() as playwright:
+        yield playwright
+
+
+@pytest.fixture
+def open_page(playwright, request):
+    """Opens the app in a fresh browser, like one student's laptop; closes them after the test.
+
+    ``open_page(known=0, viewport=VIEWPORT, zoom=1.0, server=None)`` → (page, the browser's
+    session): ``known`` sessions exist already, ``zoom`` is the browser's zoom (1.5 = 150 %),
+    and the server is the ``app`` fixture's unless given (it must be in independent mode).
+    One browser process per page: tabs of one process share its software-GPU process, and
+    a second tab starves while the first renders.
+    """
+    from tests.browser_support import CONNECTED, VIEWPORT, dom_id, launch, wait_for
+
+    browsers = []
+
+    def open_page(known: int = 0, viewport: dict = VIEWPORT, zoom: float = 1.0, server=None):
+        server = server or request.getfixturevalue("app")
+        browser = launch(playwright)
+        browsers.append(browser)
+        # the browser's zoom: fewer CSS pixels in the same window, each drawn larger
+        page = browser.new_page(viewport={"width": round(viewport["width"] / zoom), "height": round(viewport["height"] / zoom)},
+                                device_scale_factor=zoom)
+        console: list[str] = []
+        page.on("console", lambda message: console.append(message.text))
+        page.goto(f"http://127.0.0.1:{server.port}")
+        try:
+            wait_for(lambda: len(server.sessions) > known, timeout=30, what="the server to set up the client")
+            session = list(server.sessions.values())[known]
+            page.wait_for_selector(dom_id(session.joints.sliders[0]), timeout=30_000)  # the panel is drawn
+            page.wait_for_selector(CONNECTED, state="attached", timeout=10_000)
+        except Exception as error:
+            raise AssertionError(f"page never became ready ({error}); browser console: {console[-20:]}") from None
+        page.wait_for_timeout(1500)  # let the first frames render
+        return page, session
+
+    yield open_page
+    for browser in browsers:
+        browser.close()

@@ -7,7 +7,7 @@ import pytest
 import viser
 from viser import _messages
 
-from app.fast_updates import set_instances, set_orientations, stop_echo
+from app.fast_updates import set_instances, set_orientations, set_positions, stop_echo
 
 pytestmark = pytest.mark.server
 
@@ -47,6 +47,25 @@ def test_orientations_match_the_public_setter(scene, monkeypatch):
         assert a.owner == b.owner
     for p, f in zip(public, fast):
         np.testing.assert_allclose(p.wxyz, f.wxyz)
+
+
+def test_positions_match_the_public_setter(scene, monkeypatch):
+    public = [scene.add_label(f"/public/{i}", str(i)) for i in range(3)]
+    fast = [scene.add_label(f"/fast/{i}", str(i)) for i in range(3)]
+    positions = np.array([[0.1, 0.2, 0.3], [-1.0, 0.0, 2.5], [0.0, 0.0, 0.0]])
+    sent = record(scene, monkeypatch)
+    for node, p in zip(public, positions):
+        node.position = p + 1.0  # differs from the initial value, so the setter sends
+    set_positions(fast, positions + 1.0)
+    assert len(sent) == 6
+    for a, b in zip(sent[:3], sent[3:]):
+        assert type(a) is _messages.SetPositionMessage and isinstance(b, _messages.SetPositionMessage)
+        assert a.name.replace("/public/", "") == b.name.replace("/fast/", "")
+        np.testing.assert_allclose(a.position, b.position)
+        assert a.redundancy_key().replace("/public/", "") == b.redundancy_key().replace("/fast/", "")
+        assert a.as_serializable_dict() | {"name": ""} == b.as_serializable_dict() | {"name": ""}
+    for p, f in zip(public, fast):
+        np.testing.assert_allclose(p.position, f.position)
 
 
 def test_instances_match_the_public_setters(scene, monkeypatch):

@@ -37,3 +37,20 @@ def test_uniform_joint_angles(course):
     _, _, q = course.sample_workspace(200_000, seed=1, return_joints=True)
     counts, _ = np.histogram(q[:, 2], bins=10, range=(-np.pi, np.pi))
     assert counts.min() > 0.9 * 20_000 and counts.max() < 1.1 * 20_000
+
+
+def test_lowest_points_is_the_lowest_of_every_body_point_moved_in_full(course):
+    from ur10core.workspace import lowest_points
+
+    rng = np.random.default_rng(3)
+    q = rng.uniform(-np.pi, np.pi, (50, 6))
+    frames = course.frames(q)  # (50, 7, 4, 4)
+    points = rng.normal(scale=0.1, size=(7, 12, 3))
+    lowest = lowest_points(frames, points)
+    moved = np.einsum("nlij,lpj->nlpi", frames[..., :3, :3], points) + frames[:, :, None, :3, 3]
+    flat = moved.reshape(50, -1, 3)
+    expected = flat[np.arange(50), np.argmin(flat[..., 2], axis=1)]
+    np.testing.assert_allclose(lowest, expected, atol=1e-12)
+    np.testing.assert_allclose(lowest_points(frames[7], points), expected[7], atol=1e-12)  # one arm
+    with pytest.raises(ValueError, match="body_points"):
+        lowest_points(frames, points[:6])

@@ -54,3 +54,42 @@ def horizontal_section(points, height: float, thickness: float = 0.02) -> tuple[
     out = points[keep].copy()
     out[:, 2] = height
     return out, keep
+
+
+def lowest_points(frames, body_points) -> np.ndarray:
+    """The lowest point of an arm's bodies, in the base frame: is the arm through the floor (z < 0)?
+
+    Parameters
+    ----------
+    frames : array_like, shape (..., L, 4, 4)
+        Each body's frame in the base frame (:meth:`Arm.frames`: L = 7, frames {0}..{6}).
+    body_points : array_like, shape (L, P, 3)
+        P points of each body in its own frame, e.g. the corners of its convex hull
+        (repeat a point to give every body the same P).
+
+    Returns
+    -------
+    (..., 3) array
+        Per arm, the body point with the smallest base-frame z: ``min over l, p of T_l · p``.
+
+    >>> frames = np.tile(np.eye(4), (2, 1, 1))
+    >>> frames[1, :3, 3] = [1.0, 0.0, -0.25]
+    >>> lowest_points(frames, [[[0.0, 0.0, 0.1]], [[0.0, 0.0, 0.05]]]).tolist()
+    [1.0, 0.0, -0.2]
+    """
+    frames = as_float_array(frames, "frames")
+    body_points = as_float_array(body_points, "body_points")
+    if frames.shape[-2:] != (4, 4) or frames.ndim < 3:
+        raise ValueError(f"frames must have shape (..., L, 4, 4), got {frames.shape}")
+    if body_points.ndim != 3 or body_points.shape[0] != frames.shape[-3] or body_points.shape[2] != 3:
+        raise ValueError(f"body_points must have shape ({frames.shape[-3]}, P, 3), got {body_points.shape}")
+    check_finite(frames, "frames")
+    check_finite(body_points, "body_points")
+    # z of every point first (one row of each rotation): only the lowest point is turned in full
+    lead, bodies, count = frames.shape[:-3], frames.shape[-3], body_points.shape[1]
+    frames = frames.reshape(-1, bodies, 4, 4)
+    heights = (frames[:, :, 2, None, :3] @ body_points.transpose(0, 2, 1))[:, :, 0] + frames[:, :, 2, 3, None]  # (N, L, P)
+    body, point = np.divmod(heights.reshape(len(frames), -1).argmin(axis=1), count)
+    T = frames[np.arange(len(frames)), body]
+    lowest = (T[:, :3, :3] @ body_points[body, point][..., None])[..., 0] + T[:, :3, 3]
+    return lowest.reshape(lead + (3,))

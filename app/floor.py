@@ -1,0 +1,50 @@
+"""The floor check: a red disc under every arm on screen that reaches below the floor (z = 0).
+
+The core gives each arm's lowest body point (``Snapshot.lowest``); a real UR10 there would
+hit the table it stands on, so the solid arm and each ghost drawn get a warning disc, and
+their numbers in 3D and the branch table say "floor".
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import trimesh
+import viser
+
+from .fast_updates import set_instances
+from .ik_target import BranchesScene
+from .state import Snapshot
+from .style import DANGER_RED
+from .view import View
+
+DISC_RADIUS = 0.09
+#: Just above the floor grid, so the disc is not hidden in it.
+DISC_HEIGHT = 0.003
+
+
+class FloorScene(View):
+    """Instance 0 marks the solid arm, instance k + 1 the ghost of slot k."""
+
+    def __init__(self, scene: viser.SceneApi, branches: BranchesScene) -> None:
+        self._branches = branches
+        disc = trimesh.creation.cylinder(radius=DISC_RADIUS, height=0.002, sections=48)
+        self.discs = scene.add_batched_meshes_simple(
+            "/floor_hits", disc.vertices, disc.faces,
+            batched_wxyzs=np.tile([1.0, 0.0, 0.0, 0.0], (9, 1)), batched_positions=np.zeros((9, 3)),
+            batched_scales=np.zeros(9), batched_colors=np.tile(np.array(DANGER_RED, np.uint8), (9, 1)), opacity=0.75, lod="off",
+            cast_shadow=False, receive_shadow=False,
+        )
+        self._drawn = b""
+
+    def render(self, snapshot: Snapshot) -> None:
+        on_screen = np.concatenate([[True], self._branches.shown])
+        hits = snapshot.through_floor & on_screen
+        positions = np.where(hits[:, None], snapshot.lowest, 0.0)
+        positions[:, 2] = DISC_HEIGHT
+        drawn = hits.tobytes() + positions.astype(np.float32).tobytes()
+        if drawn == self._drawn:
+            return  # usually nothing is through the floor: nothing to send
+        self._drawn = drawn
+        if self.discs.batched_scales.astype(bool).tobytes() != hits.tobytes():
+            self.discs.batched_scales = hits.astype(np.float32)
+        set_instances(self.discs, np.tile([1.0, 0.0, 0.0, 0.0], (9, 1)), positions)

@@ -1,0 +1,58 @@
+"""Lecture mode: type, lines and panel sized for the back of a lecture hall.
+
+One switch per browser, in its "View" folder; ``ur10-teach --lecture`` starts every browser
+with it on (in shared mode the viewers' too). It sets the page's type to at least 20 px
+(the panel's default is about 13 px), widens the docked panel to hold it, and thickens the
+gizmo's lines; "Hide the panel" folds the panel to a strip at the edge, leaving the whole
+window to the arm (a click on the strip brings it back).
+"""
+
+from __future__ import annotations
+
+from typing import Callable
+
+import viser
+
+#: The page's root size: viser's panel text is 0.8125 rem, so this makes it 20.8 px.
+ROOT_FONT_PX = 25.6
+PANEL_WIDTH_PX = {False: 384, True: 540}  #: viser's "large" panel, and the lecture one
+STYLE = (
+    "<style>"
+    f"html {{ font-size: {ROOT_FONT_PX}px !important; }}"
+    # the sliders' tick labels and the inputs size themselves in px: bring them up too
+    ".mantine-Slider-markLabel, .mantine-Input-input, .mantine-Button-label {"
+    " font-size: 0.85rem !important; }"
+    "</style>"
+)
+
+
+class LectureMode:
+    """The lecture-mode switch and "Hide the panel" button in one browser's "View" folder.
+
+    ``on_change`` callbacks get the new state (the session thickens its gizmo's lines there).
+    """
+
+    def __init__(self, gui: viser.GuiApi, folder: viser.GuiFolderHandle, enabled: bool,
+                 guard: Callable[[Callable], Callable]) -> None:
+        self._gui = gui
+        self.on_change: list[Callable[[bool], None]] = []
+        # outside every folder: a style in a folded folder would not be on the page
+        self._style = gui.add_html(STYLE, visible=enabled, order=-1e9)
+        with folder:
+            self.enabled = gui.add_checkbox("Lecture mode", enabled, hint="Big type and thick lines, for a projector")
+            self.hide_button = gui.add_button("Hide the panel", icon=viser.Icon.LAYOUT_SIDEBAR_RIGHT_COLLAPSE,
+                                              hint="Click the strip at the edge to bring it back")
+        self.enabled.on_update(guard(lambda _: self.apply()))
+        self.hide_button.on_click(guard(lambda _: gui.main_panel.minimize()))
+        gui.main_panel.set_width(PANEL_WIDTH_PX[enabled])
+
+    @property
+    def on(self) -> bool:
+        return bool(self.enabled.value)
+
+    def apply(self) -> None:
+        on = self.on
+        self._style.visible = on
+        self._gui.main_panel.set_width(PANEL_WIDTH_PX[on])
+        for callback in self.on_change:
+            callback(on)

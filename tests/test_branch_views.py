@@ -1,0 +1,84 @@
+"""What the ghost arms show: numbers, coinciding branches, the focus choices, the floor check."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from app.ik_target import ALL_BRANCHES, FOCUS_OPTIONS, branch_labels, branch_table, flipped, focused, same_pose_groups
+from app.meshes import body_points, load_links
+from app.state import ArmState
+from ur10core import SLOTS
+
+
+@pytest.fixture(scope="module")
+def points():
+    return body_points(load_links("course"))
+
+
+def state(course, degrees, points) -> ArmState:
+    return ArmState(course, np.radians(degrees), body_points=points)
+
+
+def test_flipping_a_choice_changes_that_choice_alone():
+    for slot in SLOTS:
+        for choice in ("shoulder", "elbow", "wrist"):
+            other = SLOTS[flipped(slot.index, choice)]
+            for name in ("shoulder", "elbow", "wrist"):
+                assert (getattr(other, name) != getattr(slot, name)) == (name == choice)
+
+
+def test_focus_choices(course):
+    assert focused(ALL_BRANCHES, 4).all()
+    for k in range(8):
+        assert focused(f"Only branch {k + 1}", 4).nonzero()[0].tolist() == [k]
+    assert set(focused("Flip the wrist", 4).nonzero()[0]) == {4, flipped(4, "wrist")}
+    assert set(focused("Flip the shoulder", -1).nonzero()[0]) == {0, flipped(0, "shoulder")}  # out of reach
+    assert len(FOCUS_OPTIONS) == 12
+    with pytest.raises(ValueError, match="ghosts shown"):
+        focused("Only branch 9x", 4)
+
+
+def test_every_branch_is_numbered_where_none_coincide(course, points):
+    snapshot = state(course, [30, 45, 26, 50, 60, 80], points).last
+    groups = same_pose_groups(snapshot.ghost_frames, snapshot.solution.valid)
+    assert groups == tuple((k,) for k in range(8))
+    assert branch_labels(snapshot, groups) == ["1", "2", "3", "4", "arm: 5", "6", "7", "8"]
+
+
+def test_coinciding_branches_share_one_label(course, points):
+    """At the zero pose (elbow stretched, wrist singular) the branches that meet are drawn and named as one."""
+    snapshot = state(course, [0, 0, 0, 0, 0, 0], points).last
+    groups = same_pose_groups(snapshot.ghost_frames, snapshot.solution.valid)
+    for group in groups:  # an independent check of "coincide": the frames themselves, from FK of each branch
+        frames = course.frames(snapshot.solution.q[list(group)])[:, :, :3, 3]
+        assert np.abs(frames - frames[0]).max() < 1e-3
+    assert sorted(k for g in groups for k in g) == snapshot.solution.valid.nonzero()[0].tolist()
+    labels = branch_labels(snapshot, groups)
+    arm_group = next(g for g in groups if snapshot.slot in g)
+    assert labels[arm_group[0]] == "arm: " + " = ".join(str(k + 1) for k in arm_group)
+    assert len(arm_group) > 1
+
+
+def test_an_arm_through_the_floor_is_marked(course, points):
+    down = state(course, [0, -90, 0, -90, 0, 0], points).last  # the arm hangs below its base
+    assert down.through_floor[0] and down.lowest[0, 2] < -0.5
+    up = state(course, [30, 45, 26, 50, 60, 80], points).last
+    assert not up.through_floor.any()
+    groups = same_pose_groups(down.ghost_frames, down.solution.valid)
+    assert all(text.endswith("⚠ floor") for text in branch_labels(down, groups) if text)
+    assert "through the floor" in branch_table(down)
+    assert "through the floor" not in branch_table(up)
+
+
+def test_the_floor_check_sees_the_bodies_not_just_the_joints(course, points):
+    """The lowest joint 2 cm above the floor: every frame origin is above it, the arm's body is not."""
+    low, high = -np.pi / 2, 0.0  # tip the shoulder down from the zero pose until the lowest joint is 2 cm up
+    for _ in range(60):
+        middle = (low + high) / 2
+        low, high = (low, middle) if course.frames([0, middle, 0, 0, 0, 0])[1:, 2, 3].min() > 0.02 else (middle, high)
+    q = [0, high, 0, 0, 0, 0]
+    np.testing.assert_allclose(course.frames(q)[1:, 2, 3].min(), 0.02, atol=1e-6)
+    assert course.frames(q)[:, 2, 3].min() > -1e-9
+    assert not ArmState(course, q).last.through_floor[0]  # the frame origins alone
+    assert ArmState(course, q, body_points=points).last.through_floor[0]
