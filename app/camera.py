@@ -116,11 +116,15 @@ class CameraControls(View):
 
     def frame(self) -> None:
         """Point this browser's camera at the arm and its target, from the chosen direction."""
+        self.look_from(VIEWS[chosen(self.direction, "look from")])
+
+    def look_from(self, direction, points: np.ndarray | None = None) -> None:
+        """Frame the arm, its target and ``points`` (n, 3; a section of the workspace, say) from ``direction``."""
         if self.closed:
             return
         camera = self._client.camera
-        direction = VIEWS[chosen(self.direction, "look from")]
-        position, look_at = framing(arm_points(self._snapshot()), direction, camera.fov, camera.aspect)
+        shown = arm_points(self._snapshot()) if points is None else np.vstack([arm_points(self._snapshot()), points])
+        position, look_at = framing(shown, direction, camera.fov, camera.aspect)
         with self._client.atomic():
             camera.up_direction = (0.0, 0.0, 1.0)
             camera.position = position

@@ -204,6 +204,7 @@ class Classroom:
             )
             session.observers.append(lambda _: self.app.refresher.request(self.live))
             session.follow_lecture_mode(member.camera.lecture)
+            session.camera = member.camera  # the browser's own camera, for the workspace sections
             member.session, member.role = session, PRESENTER
             self.presenter = member
             self.live.presenter_here = True
@@ -235,6 +236,7 @@ class Classroom:
                 state=ArmState(self.app.arm, self.state.q, body_points=body_points(self.app.links)), own_camera=False,
             )
             member.session.follow_lecture_mode(member.camera.lecture)
+            member.session.camera = member.camera
             member.role = EXPLORER
         self._draw_controls(member)
 

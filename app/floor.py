@@ -2,7 +2,8 @@
 
 The core gives each arm's lowest body point (``Snapshot.lowest``); a real UR10 there would
 hit the table it stands on, so the solid arm and each ghost drawn get a warning disc, and
-their numbers in 3D and the branch table say "floor".
+their numbers in 3D and the branch table say "floor". Drawn with the panel (≤ 10 Hz), not
+on the drag path.
 """
 
 from __future__ import annotations
@@ -36,7 +37,8 @@ class FloorScene(View):
         )
         self._drawn = b""
 
-    def render(self, snapshot: Snapshot) -> None:
+    def render_panel(self, snapshot: Snapshot) -> None:
+        """At the panel's pace (≤ 10 Hz), off the drag path: the floor check is not needed 20 times a second."""
         on_screen = np.concatenate([[True], self._branches.shown])
         hits = snapshot.through_floor & on_screen
         positions = np.where(hits[:, None], snapshot.lowest, 0.0)

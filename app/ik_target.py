@@ -93,9 +93,13 @@ def same_pose_groups(ghost_frames: np.ndarray, valid: np.ndarray, tolerance: flo
     >>> same_pose_groups(frames, np.array([True, True, False, True, False, False, False, False]))
     ((0, 1), (3,))
     """
-    origins = ghost_frames[:, :, :3, 3]
+    # frames {3} and {4} alone: {0}..{2} sit on the base and {5}, {6} are fixed by the target (§4)
+    origins = ghost_frames[:, 3:5, :3, 3]
     apart = np.abs(origins[:, None] - origins[None]).max(axis=(2, 3)) > tolerance
-    groups, taken = [], ~np.asarray(valid, bool)
+    valid = np.asarray(valid, bool)
+    if apart.sum() == 56:  # no two coincide (away from singularities): every valid slot alone
+        return tuple((int(k),) for k in valid.nonzero()[0])
+    groups, taken = [], ~valid
     for k in range(8):
         if not taken[k]:
             members = (~apart[k] & ~taken).nonzero()[0]
@@ -219,12 +223,16 @@ class BranchesScene(View):
         valid = snapshot.solution.valid
         groups = same_pose_groups(snapshot.ghost_frames, valid)
         focus = focused(self.focus, snapshot.slot)
-        shown = np.zeros(8, bool)
-        for group in groups:
-            # one ghost per pose, none where the solid arm is: the arm is never tinted by a ghost
-            shown[group[0]] = self.show_ghosts and focus[list(group)].any() and snapshot.slot not in group
+        if len(groups) == valid.sum():  # none coincide (away from singularities)
+            shown = valid & focus & self.show_ghosts
+            if snapshot.slot >= 0:
+                shown[snapshot.slot] = False  # the solid arm is there already
+        else:
+            shown = np.zeros(8, bool)
+            for group in groups:
+                # one ghost per pose, none where the solid arm is: the arm is never tinted by a ghost
+                shown[group[0]] = self.show_ghosts and focus[list(group)].any() and snapshot.slot not in group
         self.shown = shown
-        self._draw_labels(snapshot, groups, focus)
         scales = shown.astype(np.float32)
         update_scales = scales.tobytes() != self._scales  # which branches exist rarely changes mid-drag
         self._scales = scales.tobytes()
@@ -241,7 +249,10 @@ class BranchesScene(View):
                 self._positions[i] = positions.tobytes()
             set_instances(ghost, all_wxyzs[i - 1], positions)
 
-    def _draw_labels(self, snapshot: Snapshot, groups, focus: np.ndarray) -> None:
+    def render_panel(self, snapshot: Snapshot) -> None:
+        """The branch numbers, at the panel's pace (≤ 10 Hz): off the drag path, which they would double."""
+        groups = same_pose_groups(snapshot.ghost_frames, snapshot.solution.valid)
+        focus = focused(self.focus, snapshot.slot)
         texts = branch_labels(snapshot, groups)
         visible = [False] * 8
         for group in groups:  # a group's label is its first slot's; the arm's is shown whatever the focus

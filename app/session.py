@@ -146,6 +146,7 @@ class ClientSession:
         """The 3D view again, unchanged state (a toggle changed what is shown), on the one path every redraw takes."""
         with self.state.lock:
             self.render(self.state.last)
+        self.refresher.request(self)  # and what the panel's pace draws (the branch numbers, say)
 
     def drag_to(self, pose) -> None:
         """The drag queue's worker solving for the gizmo's newest ``(wxyz, position)``."""

@@ -53,7 +53,7 @@ class Snapshot:
     ghost_wxyz: np.ndarray  #: (8, 7, 4) rotation of each branch's frames {0}..{6}, as quaternions
     flange_wxyz: np.ndarray  #: (4,) the flange orientation as a quaternion
     factors: np.ndarray  #: (3,) shoulder, elbow, wrist factors of det J
-    lowest: np.ndarray  #: (9, 3) lowest body point of the solid arm, then of each branch (NaN where invalid)
+    body_points: np.ndarray  #: (7, P, 3) outline points of each link's body, in its frame (ArmState's)
     cause: str  #: "joints", "target" (dragged), "typed", "branch", "singularity" or "reset": what made this change
     arm: Arm
 
@@ -61,7 +61,18 @@ class Snapshot:
     def flange(self) -> np.ndarray:
         return self.frames[6]
 
-    @property
+    @functools.cached_property
+    def lowest(self) -> np.ndarray:
+        """(9, 3) lowest body point of the solid arm, then of each branch (NaN where invalid).
+
+        Computed when first asked for (the panel's redraw, the floor markers): not on the drag path.
+        """
+        frames = np.concatenate([self.frames[None], self.ghost_frames])
+        lowest = lowest_points(frames, self.body_points)
+        lowest[1:][~self.solution.valid] = np.nan
+        return lowest
+
+    @functools.cached_property
     def through_floor(self) -> np.ndarray:
         """(9,) bool: the solid arm, then each branch, reaches below the floor z = 0 (a real arm would hit it)."""
         with np.errstate(invalid="ignore"):
@@ -241,9 +252,6 @@ class ArmState:
         links = arm.link_transforms(self._q)[:, :3, :3]  # T(i−1, i): the solid arm's tree
         wxyz = quaternion(np.concatenate([links, rotations[1:].reshape(-1, 3, 3), rotations[0, 6:]]), check=False)
         factors = arm.singularity_factors(self._q)
-        lowest = lowest_points(frames, self.body_points)
-        if some_invalid:
-            lowest[1:][invalid] = np.nan
         return Snapshot(
             q=self._q.copy(),
             frames=frames[0],
@@ -257,7 +265,7 @@ class ArmState:
             reachable=self._slot >= 0,
             reason=self._reason,
             factors=factors,
-            lowest=lowest,
+            body_points=self.body_points,
             cause=cause,
             arm=arm,
         )

@@ -9,7 +9,8 @@ class View:
     """A feature's part of the scene and of the panel.
 
     ``render`` draws the 3D scene on every change (it is on the drag path: keep it lean);
-    ``render_panel`` draws the GUI, at most ten times a second (see ``app.workers``).
+    ``render_panel`` draws the GUI, and 3D details that need not follow a drag frame by
+    frame (branch numbers, floor markers), at most ten times a second (see ``app.workers``).
     Both run one at a time per session: ``render`` under the arm's lock
     (``ClientSession.apply`` or ``redraw``), ``render_panel`` on the panel refresher.
 

@@ -2,12 +2,15 @@
 
 Sampled by ``Arm.sample_workspace`` off the event loop (in the callback's worker thread)
 and cached per (preset, size) for every client; each client is sent only the cloud it
-asked for. 200 k points (the default) is about 1.8 MB per client.
+asked for. 200 k points (the default) is about 1.8 MB per client. A vertical section turns
+every sample into the arm's plane; a horizontal one is sampled in its plane
+(``Arm.sample_horizontal_section``). The camera turns to face a section square-on.
 """
 
 from __future__ import annotations
 
 import functools
+import math
 import threading
 from typing import TYPE_CHECKING
 
@@ -15,7 +18,7 @@ import numpy as np
 import viser
 
 from ur10core import Arm
-from ur10core.workspace import horizontal_section, vertical_section
+from ur10core.workspace import vertical_section
 
 from .feedback import chosen
 from .style import hex_color
@@ -26,9 +29,13 @@ if TYPE_CHECKING:
 
 SAMPLE_COUNTS = {"10 k": 10_000, "50 k": 50_000, "100 k": 100_000, "200 k": 200_000, "500 k": 500_000, "1 M": 1_000_000}
 DEFAULT_COUNT = "200 k"
-SECTIONS = ("whole cloud", "vertical section (side view)", "horizontal section (top view)")
+SECTIONS = ("whole cloud", "vertical section (side view)", "horizontal section (top view)",
+            "cut-away (the half behind the arm's plane)")
 POINT_SIZE = 0.006
-SLAB = 0.03  # thickness of the horizontal section, m
+#: Points in a section: sampled in its plane, they cover it densely at this many.
+SECTION_POINTS = 40_000
+#: Where the camera looks from for a horizontal section: straight down (a hair off, so the orbit keeps z up).
+FROM_ABOVE = (0.0, -0.02, 1.0)
 #: Viridis, sampled at 9 stops: dark = near-singular (low |det J|), yellow = dexterous.
 VIRIDIS = np.array(
     [(68, 1, 84), (71, 44, 122), (59, 81, 139), (44, 113, 142), (33, 144, 141),
@@ -50,6 +57,18 @@ def coloured_cloud(arm: Arm, n: int) -> tuple[np.ndarray, np.ndarray, float]:
     points, manipulability = arm.sample_workspace(n, seed=0)
     top = float(np.percentile(manipulability, 99))
     return points.astype(np.float32), colormap(manipulability, top), top
+
+
+@functools.lru_cache(maxsize=8)
+def coloured_horizontal_section(arm: Arm, height: float, n: int, top: float) -> tuple[np.ndarray, np.ndarray]:
+    """(points (n, 3) float32 in the plane z = height, colours on the whole cloud's scale ``top``)."""
+    points, manipulability = arm.sample_horizontal_section(height, n, seed=0)
+    return points.astype(np.float32), colormap(manipulability, top)
+
+
+def legend_text(top: float) -> str:
+    """The legend beside the cloud in 3D, for everyone who sees the cloud (viewers included)."""
+    return f"colour = manipulability |det J|: dark violet 0 (singular) … yellow ≥ {top:.3f} m³"
 
 
 def legend_html(top: float) -> str:
@@ -74,6 +93,7 @@ class WorkspaceView(View):
         self._scene = scene
         self._session = session
         self._cloud: viser.PointCloudHandle | None = None
+        self.legend_label: viser.LabelHandle | None = None
         self._lock = threading.Lock()
         self._busy = self._again = self._closed = False
         folder = gui.add_folder("Workspace")
@@ -98,7 +118,13 @@ class WorkspaceView(View):
             self._busy = True
         try:
             while True:
-                self._update()
+                try:
+                    self._update()
+                except ValueError:
+                    with self._lock:
+                        if not self._again:
+                            raise  # the browser is told why (a section height nobody reaches, say)
+                    # a newer choice is waiting: it is what the student wants now
                 with self._lock:
                     if not self._again:
                         return
@@ -120,7 +146,7 @@ class WorkspaceView(View):
         try:
             points, colors, top = coloured_cloud(self._session.arm, count)
             self.progress.value = 60.0
-            points, colors = self._section(section, points, colors)
+            points, colors = self._section(section, points, colors, top)
             with self._lock:
                 if self._closed:
                     return
@@ -129,27 +155,54 @@ class WorkspaceView(View):
                 self._cloud = self._scene.add_point_cloud(
                     "/workspace", points, colors, point_size=POINT_SIZE, point_shape="circle"
                 )
+                # above the cloud, in the same scene: it goes with the cloud and reaches every viewer
+                self.legend_label = self._scene.add_label(
+                    "/workspace/legend", legend_text(top), position=(0.0, 0.0, float(points[:, 2].max()) + 0.12),
+                    font_screen_scale=1.3, anchor="bottom-center",
+                )
             self.legend.content = legend_html(top)
             self.legend.visible = True
+            self._look_square_on(section, points)
         finally:
             self.progress.value = 100.0
             self.progress.visible = False
 
-    def _section(self, section: str, points: np.ndarray, colors: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    def _section(self, section: str, points: np.ndarray, colors: np.ndarray, top: float) -> tuple[np.ndarray, np.ndarray]:
         if section == SECTIONS[1]:
             azimuth = float(self._session.state.q[0])  # the plane the arm moves in
             return vertical_section(points, azimuth).astype(np.float32), colors
-        if section == SECTIONS[2]:
-            kept_points, kept = horizontal_section(points, self.height.value / 1000.0, SLAB)
-            return kept_points.astype(np.float32), colors[kept]
+        if section == SECTIONS[2]:  # sampled in the plane itself: a slab of the cloud holds only a few hundred
+            return coloured_horizontal_section(self._session.arm, self.height.value / 1000.0,
+                                               min(SECTION_POINTS, len(points)), top)
+        if section == SECTIONS[3]:  # the cut face shows the inside: the hole about the base axis, the dexterous core
+            behind = points[:, :2] @ self._plane_normal()[:2] < 0
+            return points[behind], colors[behind]
         return points, colors
+
+    def _plane_normal(self) -> np.ndarray:
+        """The horizontal normal of the vertical plane the arm moves in (through the base axis, at θ1)."""
+        azimuth = float(self._session.state.q[0])
+        return np.array([-math.sin(azimuth), math.cos(azimuth), 0.0])
+
+    def _look_square_on(self, section: str, points: np.ndarray) -> None:
+        """A section is seen square-on: the camera turns to face its plane."""
+        camera = self._session.camera
+        if camera is None or section == SECTIONS[0]:
+            return
+        if section == SECTIONS[1]:
+            direction = -self._plane_normal()
+        elif section == SECTIONS[3]:
+            direction = self._plane_normal()  # from the open side, onto the cut face
+        else:
+            direction = FROM_ABOVE
+        camera.look_from(direction, points[:: max(1, len(points) // 2000)])
 
     def clear(self) -> None:
         """Take the cloud out of the scene (toggled off)."""
         with self._lock:
             if self._cloud is not None:
-                self._cloud.remove()
-                self._cloud = None
+                self._cloud.remove()  # and the legend under it
+                self._cloud = self.legend_label = None
 
     def close(self) -> None:
         """The session has gone: its cloud goes too, even from a scene everyone shares."""

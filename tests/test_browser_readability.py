@@ -203,7 +203,8 @@ def test_focus_on_one_branch_or_one_choice(open_page):
     branches = session.scene_views.branches
     choose(page, session.ik_target.focus, "Only branch 3")
     wait_for(lambda: branches.shown.nonzero()[0].tolist() == [2], what="only branch 3")
-    assert [k for k in range(8) if branches.labels[k].visible] == sorted({2, session.state.last.slot})
+    wait_for(lambda: [k for k in range(8) if branches.labels[k].visible] == sorted({2, session.state.last.slot}),
+             what="the numbers of branch 3 and the arm's alone")
     choose(page, session.ik_target.focus, "Flip the elbow")
     arm = session.state.last.slot
     from app.ik_target import flipped
@@ -248,3 +249,35 @@ def test_the_gizmo_is_sized_to_the_arm(open_page):
     u, v = project(session.client.camera, session.state.last.geometry.p5, box)
     assert np.abs(neighbourhood(everything, u, v, box, 3) - neighbourhood(no_gizmo, u, v, box, 3)).sum(axis=1).mean() < 40, \
         "the gizmo covers P5"
+
+
+# ---------------------------------------------------------------------- workspace sections
+
+
+def test_sections_are_seen_square_on_and_sampled_in_their_plane(open_page):
+    page, session = open_page()
+    workspace = session.workspace
+    page.locator(dom_id(workspace.enabled)).check()
+    wait_for(lambda: workspace._cloud is not None, timeout=60, what="the cloud")
+    choose(page, workspace.section, "horizontal section (top view)")
+    wait_for(lambda: workspace._cloud is not None and len(workspace._cloud.points) == 40_000, timeout=60,
+             what="a section sampled in its plane")
+    np.testing.assert_allclose(workspace._cloud.points[:, 2].astype(float), 0.6, atol=2e-4)  # sent as float16
+    assert "manipulability" in workspace.legend_label.text  # beside the cloud in 3D, for viewers too
+
+    def forward() -> np.ndarray:
+        camera = session.client.camera
+        f = np.asarray(camera.look_at) - np.asarray(camera.position)
+        return f / np.linalg.norm(f)
+
+    wait_for(lambda: forward()[2] < -0.95, what="the camera looking down on the section")
+    choose(page, workspace.section, "vertical section (side view)")
+    azimuth = session.state.q[0]
+    in_plane = np.array([np.cos(azimuth), np.sin(azimuth), 0.0])
+    wait_for(lambda: abs(forward()[2]) < 0.05 and abs(forward() @ in_plane) < 0.05,
+             what="the camera facing the vertical section")
+    choose(page, workspace.section, "cut-away (the half behind the arm's plane)")
+    normal = np.array([-np.sin(azimuth), np.cos(azimuth), 0.0])
+    wait_for(lambda: workspace._cloud is not None and len(workspace._cloud.points) < 150_000, timeout=60, what="the cut-away")
+    assert (workspace._cloud.points.astype(float) @ normal <= 1e-3).all()
+    wait_for(lambda: forward() @ normal < -0.95, what="the camera facing the cut face")

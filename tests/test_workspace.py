@@ -54,3 +54,37 @@ def test_lowest_points_is_the_lowest_of_every_body_point_moved_in_full(course):
     np.testing.assert_allclose(lowest_points(frames[7], points), expected[7], atol=1e-12)  # one arm
     with pytest.raises(ValueError, match="body_points"):
         lowest_points(frames, points[:6])
+
+
+def test_a_horizontal_section_is_sampled_in_its_plane(course):
+    points, manipulability, q = course.sample_horizontal_section(0.6, 5000, seed=1, return_joints=True)
+    assert (points[:, 2] == 0.6).all()
+    np.testing.assert_allclose(course.fk(q)[:, :3, 3], points, atol=1e-12)
+    np.testing.assert_allclose(manipulability, np.abs(np.linalg.det(course.jacobian(q))), atol=1e-12)
+    assert (q[:, :5] > -np.pi).all() and (q[:, :5] <= np.pi).all() and (q[:, 5] == 0).all()
+    again, _ = course.sample_horizontal_section(0.6, 5000, seed=1)
+    np.testing.assert_array_equal(points, again)
+
+
+def test_a_horizontal_section_covers_what_a_slab_of_the_cloud_covers(course):
+    """The same ring of radii as the points of a big cloud within 5 mm of the plane, and far more of them."""
+    cloud, _ = course.sample_workspace(1_000_000, seed=2)
+    slab = cloud[np.abs(cloud[:, 2] - 0.6) < 0.005]
+    section, _ = course.sample_horizontal_section(0.6, 20000, seed=2)
+    r_slab, r_section = np.hypot(*slab[:, :2].T), np.hypot(*section[:, :2].T)
+    assert len(slab) < 5000 < len(section)
+    assert abs(r_slab.min() - r_section.min()) < 0.03 and abs(r_slab.max() - r_section.max()) < 0.03
+    # and the radii in between are all filled: no ring of the slab is missing from the section
+    bins = np.linspace(r_slab.min(), r_slab.max(), 30)
+    slab_hist, _ = np.histogram(r_slab, bins)
+    section_hist, _ = np.histogram(r_section, bins)
+    assert (section_hist[slab_hist > 5] > 0).all()
+
+
+def test_a_section_nobody_reaches_is_refused(course):
+    with pytest.raises(ValueError, match="outside the workspace"):
+        course.sample_horizontal_section(2.0, 10)
+    with pytest.raises(ValueError, match="outside the workspace"):
+        course.sample_horizontal_section(float("nan"), 10)
+    with pytest.raises(ValueError, match="positive integer"):
+        course.sample_horizontal_section(0.5, 0)

@@ -433,6 +433,70 @@ class Arm:
             return points, manipulability, joints
         return points, manipulability
 
+    def sample_horizontal_section(self, height: float, n: int, seed: int = 0, return_joints: bool = False):
+        """Up to ``n`` flange positions exactly in the plane z = ``height``, and their manipulability.
+
+        A horizontal section of :meth:`sample_workspace`, sampled in the plane itself rather
+        than filtered from a cloud (a thin slab of a 200 k cloud holds a few hundred points).
+        The flange height (docs/kinematics.md §3, "The height of the flange") depends on θ2
+        only through
+
+            z = d1 + A s2 + B c2,   A = a2 + a3 c3 − d5 s34 + d6 s5 c34,
+                                    B = a3 s3 + d5 c34 + d6 s5 s34,
+
+        so for θ1, θ3, θ4, θ5 drawn uniformly, θ2 = atan2(A, B) ± acos((z − d1) / √(A² + B²))
+        puts the flange in the plane (either sign at random; draws with no solution are
+        drawn again, up to 20 rounds: fewer than ``n`` come back only for a plane at the very
+        top or bottom of the workspace). θ6 = 0. ValueError when no flange reaches it.
+
+        Returns points (m, 3), m ≤ n, with z = height, manipulability (m,) = |det J| in m³,
+        and with ``return_joints`` the joints (m, 6).
+
+        >>> points, _ = Arm.preset("course").sample_horizontal_section(0.5, 4)
+        >>> points[:, 2].round(12).tolist()
+        [0.5, 0.5, 0.5, 0.5]
+        """
+        if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < 1:
+            raise ValueError(f"n must be a positive integer number of samples, got {n!r}")
+        if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
+            raise ValueError(f"seed must be a non-negative integer, got {seed!r}")
+        height = float(as_float_array(height, "height"))
+        reach = abs(self.a2) + abs(self.a3) + abs(self.d5) + abs(self.d6)  # no √(A² + B²) is larger
+        lowest, highest = self.d1 - reach, self.d1 + reach
+        if not np.isfinite(height) or not lowest < height < highest:
+            raise ValueError(f"height {height:.3f} m is outside the workspace: the flange reaches z in "
+                             f"({lowest:.3f}, {highest:.3f}) m")
+        rng = np.random.default_rng(int(seed))
+        kept: list[np.ndarray] = []
+        count = 0
+        for _ in range(20):  # inside the workspace a round keeps a good share of its draws
+            q = -rng.uniform(-math.pi, math.pi, (5, max(2 * (n - count), 1024)))  # (−π, π]
+            c3, s3, c5, s5 = np.cos(q[2]), np.sin(q[2]), np.cos(q[4]), np.sin(q[4])
+            c34, s34 = np.cos(q[2] + q[3]), np.sin(q[2] + q[3])
+            A = self.a2 + self.a3 * c3 - self.d5 * s34 + self.d6 * s5 * c34
+            B = self.a3 * s3 + self.d5 * c34 + self.d6 * s5 * s34
+            ratio = (height - self.d1) / np.hypot(A, B)
+            ok = np.abs(ratio) <= 1.0
+            q = q[:, ok]
+            sign = np.where(rng.random(q.shape[1]) < 0.5, -1.0, 1.0)
+            q[1] = -np.remainder(-(np.arctan2(A[ok], B[ok]) + sign * np.arccos(ratio[ok])) + math.pi, 2 * math.pi) + math.pi
+            kept.append(q)
+            count += q.shape[1]
+            if count >= n:
+                break
+        q = np.concatenate(kept, axis=1)[:, :n]
+        if q.shape[1] == 0:
+            raise ValueError(f"height {height:.3f} m: no flange position found in that plane (the edge of the workspace)")
+        n = q.shape[1]
+        points, manipulability = np.empty((n, 3)), np.empty(n)
+        self._positions_and_det(q, points, manipulability)
+        points[:, 2] = height  # exact, not FK's last bit
+        if return_joints:
+            joints = np.zeros((n, 6))
+            joints[:, :5] = q.T
+            return points, manipulability, joints
+        return points, manipulability
+
     def _positions_and_det(self, q: np.ndarray, points: np.ndarray, det_out: np.ndarray) -> None:
         c = np.cos(q)
         s = np.sin(q)

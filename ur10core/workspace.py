@@ -1,4 +1,4 @@
-"""Cross-sections of a sampled workspace (the side and top views the course draws).
+"""Cross-sections of a sampled workspace (the side and top views the course draws), and the floor check.
 
 :meth:`Arm.sample_workspace` gives flange positions of random joint vectors. θ1 turns
 the whole arm about the base axis, so the workspace is a solid of revolution about z:
@@ -58,6 +58,8 @@ def horizontal_section(points, height: float, thickness: float = 0.02) -> tuple[
 
 def lowest_points(frames, body_points) -> np.ndarray:
     """The lowest point of an arm's bodies, in the base frame: is the arm through the floor (z < 0)?
+
+    docs/kinematics.md §3, "The floor".
 
     Parameters
     ----------

@@ -1,0 +1,48 @@
+"""The README's screenshots, taken in headless Chromium from Debian: python scripts/screenshots.py
+
+Writes docs/images/eight_ghosts.png (the home pose, every branch numbered) and
+docs/images/lecture_mode.png (``--lecture``: big type, the panel beside the arm).
+"""
+
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parent.parent
+sys.path.insert(0, str(ROOT))
+
+from playwright.sync_api import sync_playwright  # noqa: E402
+
+from app.server import TeachingServer  # noqa: E402
+from tests.browser_support import CONNECTED, launch, wait_for  # noqa: E402
+
+OUT = ROOT / "docs" / "images"
+WINDOW = {"width": 1280, "height": 720}
+
+
+def shoot(name: str, lecture: bool) -> None:
+    server = TeachingServer(port=0, lecture=lecture)
+    try:
+        with sync_playwright() as playwright:
+            browser = launch(playwright)
+            page = browser.new_page(viewport=WINDOW)
+            page.goto(f"http://127.0.0.1:{server.port}")
+            page.wait_for_selector(CONNECTED, state="attached", timeout=30_000)
+            wait_for(lambda: server.sessions, what="the session")
+            session = next(iter(server.sessions.values()))
+            wait_for(lambda: session.scene_views.branches.labels[0].visible, what="the numbers")
+            page.wait_for_timeout(3000)
+            for close in page.get_by_role("button").filter(has=page.locator("svg.tabler-icon-x")).all():
+                close.click()  # the software-WebGL notice
+            page.wait_for_timeout(1000)
+            page.screenshot(path=str(OUT / name))
+            browser.close()
+    finally:
+        server.stop()
+
+
+if __name__ == "__main__":
+    OUT.mkdir(parents=True, exist_ok=True)
+    shoot("eight_ghosts.png", lecture=False)
+    shoot("lecture_mode.png", lecture=True)
