@@ -120,11 +120,11 @@ class WorkspaceView(View):
             while True:
                 try:
                     self._update()
-                except ValueError:
+                except ValueError as error:
                     with self._lock:
                         if not self._again:
                             raise  # the browser is told why (a section height nobody reaches, say)
-                    # a newer choice is waiting: it is what the student wants now
+                    self._session.notify("Not accepted", str(error))  # and the newer choice waiting is drawn
                 with self._lock:
                     if not self._again:
                         return
