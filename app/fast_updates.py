@@ -72,28 +72,26 @@ class _InstancesMessage(_messages.SceneNodeUpdateMessage):
 PUBLIC_SETTERS = os.environ.get("UR10_TEACH_PUBLIC_SETTERS") == "1"
 
 
-def set_orientations(nodes: list[viser.SceneNodeHandle], wxyzs: np.ndarray) -> None:
-    """``node.wxyz = w`` for each pair, one message each, without viser's per-call checks."""
+def _set_each(nodes: list[viser.SceneNodeHandle], values: np.ndarray, field: str, message: type) -> None:
+    """``setattr(node, field, v)`` for each pair, one ``message`` each, without viser's per-call checks."""
     if PUBLIC_SETTERS:
-        for node, wxyz in zip(nodes, wxyzs):
-            node.wxyz = wxyz
+        for node, value in zip(nodes, values):
+            setattr(node, field, value)
         return
-    for node, wxyz in zip(nodes, wxyzs.tolist()):
+    for node, value in zip(nodes, values.tolist()):
         impl = node._impl
-        impl.wxyz[:] = wxyz
-        impl.api._queue_scene_message(_OrientationMessage(impl.name, tuple(wxyz)))
+        getattr(impl, field)[:] = value  # the handle reads back what was sent
+        impl.api._queue_scene_message(message(impl.name, tuple(value)))
+
+
+def set_orientations(nodes: list[viser.SceneNodeHandle], wxyzs: np.ndarray) -> None:
+    """``node.wxyz = w`` for each pair (see :func:`_set_each`)."""
+    _set_each(nodes, wxyzs, "wxyz", _OrientationMessage)
 
 
 def set_positions(nodes: list[viser.SceneNodeHandle], positions: np.ndarray) -> None:
-    """``node.position = p`` for each pair, one message each, without viser's per-call checks."""
-    if PUBLIC_SETTERS:
-        for node, position in zip(nodes, positions):
-            node.position = position
-        return
-    for node, position in zip(nodes, positions.tolist()):
-        impl = node._impl
-        impl.position[:] = position
-        impl.api._queue_scene_message(_PositionMessage(impl.name, tuple(position)))
+    """``node.position = p`` for each pair (see :func:`_set_each`)."""
+    _set_each(nodes, positions, "position", _PositionMessage)
 
 
 def set_instances(mesh: viser.BatchedMeshHandle, wxyzs: np.ndarray, positions: np.ndarray | None) -> None:
