@@ -30,7 +30,6 @@ import viser
 from .camera import CameraControls
 from .feedback import guard
 from .ik_target import branches_markdown
-from .meshes import body_points
 from .readouts import flange_markdown, joints_markdown
 from .singularity import alarm, factor_levels, gauges_html
 from .state import ArmState
@@ -124,8 +123,8 @@ class Classroom:
 
         self.app = app
         self.code = make_join_code()
-        self.state = ArmState(app.arm, body_points=body_points(app.links))
-        self.scene_views = SceneViews.build(app.server.scene, app.links, self.state.last, target_marker=True)
+        self.state = ArmState(app.arm, body_points=app.models.outline)
+        self.scene_views = SceneViews.build(app.server.scene, app.models, self.state.last, target_marker=True)
         self.live = LivePanel(app.server.gui, self.state, lambda: self.scene_views.overlay.enabled)
         self.members: dict[int, Member] = {}
         self.presenter: Member | None = None
@@ -199,7 +198,7 @@ class Classroom:
                 self._draw_controls(previous)
             self._leave_role(member)
             session = ClientSession(
-                member.client, self.app.arm, self.app.links, self.app.refresher, self.app.drags,
+                member.client, self.app.arm, self.app.models, self.app.refresher, self.app.drags,
                 state=self.state, server=self.app.server, scene_views=self.scene_views, own_camera=False,
             )
             session.observers.append(lambda _: self.app.refresher.request(self.live))
@@ -232,8 +231,8 @@ class Classroom:
                 self.stop_presenting(member)
             member.client.scene.add_frame("/target", show_axes=False, visible=False)  # hide the shared target
             member.session = ClientSession(
-                member.client, self.app.arm, self.app.links, self.app.refresher, self.app.drags,
-                state=ArmState(self.app.arm, self.state.q, body_points=body_points(self.app.links)), own_camera=False,
+                member.client, self.app.arm, self.app.models, self.app.refresher, self.app.drags,
+                state=ArmState(self.app.arm, self.state.q, body_points=self.app.models.outline), own_camera=False,
             )
             member.session.follow_lecture_mode(member.camera.lecture)
             member.session.camera = member.camera

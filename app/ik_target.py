@@ -26,7 +26,8 @@ from ur10core.orientation import quaternion, rotation_from_zyx_euler
 
 from .fast_updates import set_instances, set_positions, stop_echo
 from .feedback import chosen
-from .meshes import LinkMesh
+from .meshes import ArmModels
+from .robot import model_slug
 from .state import ArmState, Snapshot
 from .style import GHOST_OPACITY, SLOT_COLORS, UNREACHABLE_RED, number, sentence, swatch
 from .view import View
@@ -180,7 +181,7 @@ class BranchesScene(View):
     shared scene of the classroom needs that, since only the presenter has a gizmo.
     """
 
-    def __init__(self, scene: viser.SceneApi, links: tuple[LinkMesh, ...], first: Snapshot,
+    def __init__(self, scene: viser.SceneApi, models: ArmModels, first: Snapshot,
                  target_marker: bool = False) -> None:
         self.show_ghosts = True
         self.focus = ALL_BRANCHES  #: one of FOCUS_OPTIONS
@@ -193,23 +194,42 @@ class BranchesScene(View):
                                           wxyz=first.flange_wxyz, position=first.flange[:3, 3])
             self.unreachable = add_unreachable_halo(scene, "/target")
         identity = np.tile([1.0, 0.0, 0.0, 0.0], (8, 1))
-        self.ghosts = []
-        self._scales = b""
-        self._positions = {i: b"" for i in range(1, 7)}  # last sent, to skip unchanged ones
-        for link in links[1:]:  # every branch shares the fixed base with the solid arm
-            vertices, faces = link.merged
-            ghost = scene.add_batched_meshes_simple(
-                f"/ghosts/link{link.index}", vertices, faces,
-                batched_wxyzs=identity, batched_positions=np.zeros((8, 3)), batched_scales=np.zeros(8),
-                batched_colors=np.array(SLOT_COLORS, dtype=np.uint8), opacity=GHOST_OPACITY, lod="off",
-                cast_shadow=False, receive_shadow=False,
-            )
-            ghost.on_click(self._clicked)
-            self.ghosts.append(ghost)
+        #: each model's batched ghost meshes, links 1..6 (every branch shares the base with the solid arm)
+        self.models: dict[str, list[viser.BatchedMeshHandle]] = {}
+        for name, links in models.by_name.items():
+            self.models[name] = []
+            for link in links[1:]:
+                vertices, faces = link.ghost
+                ghost = scene.add_batched_meshes_simple(
+                    f"/ghosts/{model_slug(name)}/link{link.index}", vertices, faces,
+                    batched_wxyzs=identity, batched_positions=np.zeros((8, 3)), batched_scales=np.zeros(8),
+                    batched_colors=np.array(SLOT_COLORS, dtype=np.uint8), opacity=GHOST_OPACITY, lod="off",
+                    cast_shadow=False, receive_shadow=False, visible=name == models.names[0],
+                )
+                ghost.on_click(self._clicked)
+                self.models[name].append(ghost)
+        self.model = models.names[0]
+        self.ghosts = self.models[self.model]  #: the shown model's; only these follow the arm
+        self._forget_sent()
         # each branch's number by its elbow, as in the table: colours alone cannot tell eight apart for everyone
         self.labels = [scene.add_label(f"/ghosts/number{k + 1}", str(k + 1), visible=False, font_screen_scale=1.6,
                                        anchor="bottom-center") for k in range(8)]
         self._label_state: tuple = ()
+
+    def _forget_sent(self) -> None:
+        self._scales = b""
+        self._positions = {i: b"" for i in range(1, 7)}  # last sent, to skip unchanged ones
+
+    def show(self, model: str) -> None:
+        """Draw the ghosts as ``model``; the next render poses them."""
+        if model not in self.models:
+            raise ValueError(f"no arm model {model!r}; the models are {', '.join(self.models)}")
+        for ghost in self.ghosts:
+            ghost.visible = False
+        self.model, self.ghosts = model, self.models[model]
+        for ghost in self.ghosts:
+            ghost.visible = True
+        self._forget_sent()
 
     def _clicked(self, event) -> None:
         if self.on_select is not None and event.instance_index is not None:

@@ -1,4 +1,5 @@
-"""The link meshes in ``assets/meshes/<preset>/`` (built by ``scripts/build_meshes.py``)."""
+"""The link meshes: the schematic arm of ``assets/meshes/<preset>/`` (``scripts/build_meshes.py``)
+and UR's real UR10 in ``assets/meshes/real/ur10/`` (``scripts/convert_ur_meshes.py``)."""
 
 from __future__ import annotations
 
@@ -23,12 +24,19 @@ class LinkMesh:
     body_faces: np.ndarray  #: (F, 3) uint32
     cap_vertices: np.ndarray
     cap_faces: np.ndarray
+    #: a coarser single mesh for the eight translucent ghosts; None: body and cap merged
+    ghost_mesh: tuple[np.ndarray, np.ndarray] | None = None
 
     @property
     def merged(self) -> tuple[np.ndarray, np.ndarray]:
-        """Body and cap as one mesh (the single-colour ghost arms)."""
+        """Body and cap as one mesh."""
         faces = np.vstack([self.body_faces, self.cap_faces + len(self.body_vertices)])
         return np.vstack([self.body_vertices, self.cap_vertices]), faces
+
+    @property
+    def ghost(self) -> tuple[np.ndarray, np.ndarray]:
+        """The single-colour mesh each ghost arm draws for this link."""
+        return self.ghost_mesh if self.ghost_mesh is not None else self.merged
 
 
 def _read(path: Path) -> tuple[np.ndarray, np.ndarray]:
@@ -49,6 +57,59 @@ def load_links(preset: str, mesh_dir: Path = MESH_DIR) -> tuple[LinkMesh, ...]:
         cap = _read(cap_path) if cap_path.stat().st_size > 0 else (np.zeros((0, 3), np.float32), np.zeros((0, 3), np.uint32))
         links.append(LinkMesh(i, *body, *cap))
     return tuple(links)
+
+
+REAL = "Real UR10"
+SCHEMATIC = "Schematic"
+#: presets drawn with UR's UR10 meshes: the course's DH table rounds the UR10's to within 1 mm
+REAL_MESHES = {"course": "ur10", "ur10": "ur10"}
+_EMPTY = (np.zeros((0, 3), np.float32), np.zeros((0, 3), np.uint32))
+
+
+def _parts(path: Path) -> dict[str, tuple[np.ndarray, np.ndarray]]:
+    scene = trimesh.load(path, force="scene", process=False)
+    return {name: (np.asarray(mesh.vertices, np.float32), np.asarray(mesh.faces, np.uint32).reshape(-1, 3))
+            for name, mesh in scene.geometry.items()}
+
+
+@functools.lru_cache(maxsize=None)
+def load_real_links(model: str = "ur10", mesh_dir: Path = MESH_DIR) -> tuple[LinkMesh, ...]:
+    """UR's meshes of ``model``, each in its DH frame, with a coarser ghost mesh per link."""
+    folder = mesh_dir / "real" / model
+    links = []
+    for i in range(7):
+        parts = _parts(folder / f"link{i}.glb")
+        links.append(LinkMesh(i, *parts["body"], *parts.get("cap", _EMPTY), ghost_mesh=parts["ghost"]))
+    return tuple(links)
+
+
+@dataclass(frozen=True, eq=False)
+class ArmModels:
+    """The ways one arm can be drawn, by name; the first is the default."""
+
+    by_name: dict[str, tuple[LinkMesh, ...]]
+
+    @property
+    def names(self) -> tuple[str, ...]:
+        return tuple(self.by_name)
+
+    @property
+    def default(self) -> tuple[LinkMesh, ...]:
+        return next(iter(self.by_name.values()))
+
+    @property
+    def outline(self) -> np.ndarray:
+        """(7, P, 3) the default model's :func:`body_points`: the floor check tests the arm that would collide."""
+        return body_points(self.default)
+
+
+@functools.lru_cache(maxsize=None)
+def load_models(preset: str) -> ArmModels:
+    """The real UR10 where the preset is one (and the schematic beside it), else the schematic alone."""
+    schematic = load_links(preset)
+    if preset in REAL_MESHES:
+        return ArmModels({REAL: load_real_links(REAL_MESHES[preset]), SCHEMATIC: schematic})
+    return ArmModels({SCHEMATIC: schematic})
 
 
 @functools.lru_cache(maxsize=None)

@@ -22,7 +22,7 @@ from ur10core import Arm, symbolic
 from . import shared_frames
 from .classroom import Classroom
 from .gate import Gate, gated_serve
-from .meshes import load_links
+from .meshes import load_models
 from .metrics import LATENCY
 from .workers import DragQueue, PanelRefresher
 from .session import ClientSession
@@ -165,7 +165,7 @@ class TeachingServer:
                  allowed_origins=(), gate: Gate | None = None, lecture: bool = False) -> None:
         self.arm = Arm.preset(preset)
         self.lecture = lecture
-        self.links = load_links(preset)
+        self.models = load_models(preset)
         symbolic.load()  # read the cached derivation now rather than in the first student's callback
         self.host = host
         label = f"UR10 kinematics ({preset})"
@@ -226,7 +226,7 @@ class TeachingServer:
             if self.classroom is not None:
                 self.classroom.connect(client)
             else:
-                session = ClientSession(client, self.arm, self.links, self.refresher, self.drags, lecture=self.lecture)
+                session = ClientSession(client, self.arm, self.models, self.refresher, self.drags, lecture=self.lecture)
                 with self._sessions_lock:
                     self._sessions[client.client_id] = session
         except Exception:

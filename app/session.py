@@ -30,11 +30,12 @@ from .lecture import LectureMode
 from .feedback import guard, notify
 from .floor import FloorScene
 from .joint_panel import JointPanel
-from .meshes import LinkMesh, body_points
+from .meshes import ArmModels
 from .metrics import LATENCY
+from .reach_map import ReachMapView
 from .readouts import Readouts
 from .workers import DragQueue, PanelRefresher
-from .robot import RobotScene
+from .robot import ArmModelControls, RobotScene
 from .singularity import OverlayPanel, OverlayScene
 from .state import ArmState, Snapshot
 from .workspace import WorkspaceView
@@ -56,10 +57,15 @@ class SceneViews:
     floor: FloorScene
 
     @classmethod
-    def build(cls, scene: viser.SceneApi, links: tuple[LinkMesh, ...], first: Snapshot,
+    def build(cls, scene: viser.SceneApi, models: ArmModels, first: Snapshot,
               target_marker: bool = False) -> "SceneViews":
-        branches = BranchesScene(scene, links, first, target_marker)
-        return cls(RobotScene(scene, links, first), branches, OverlayScene(scene, first), FloorScene(scene, branches))
+        branches = BranchesScene(scene, models, first, target_marker)
+        return cls(RobotScene(scene, models, first), branches, OverlayScene(scene, first), FloorScene(scene, branches))
+
+    def show(self, model: str) -> None:
+        """Draw the solid arm and its ghosts as ``model`` ("Real UR10", "Schematic")."""
+        self.robot.show(model)
+        self.branches.show(model)
 
     def __iter__(self):  # the floor after the branches: it marks the ghosts they drew
         return iter((self.robot, self.branches, self.overlay, self.floor))
@@ -72,8 +78,8 @@ class ClientSession:
     ----------
     client : viser.ClientHandle
         The browser. Its panel and gizmo are always its own.
-    arm, links : Arm, tuple of LinkMesh
-        The arm's dimensions and meshes.
+    arm, models : Arm, ArmModels
+        The arm's dimensions, and the meshes it can be drawn with.
     refresher, drags : PanelRefresher, DragQueue
         The server's workers: panel redraws and drag events, off viser's thread pool.
     state : ArmState, optional
@@ -92,13 +98,13 @@ class ClientSession:
     """
 
     def __init__(
-        self, client: viser.ClientHandle, arm: Arm, links: tuple[LinkMesh, ...], refresher: PanelRefresher,
+        self, client: viser.ClientHandle, arm: Arm, models: ArmModels, refresher: PanelRefresher,
         drags: DragQueue, state: ArmState | None = None, server: viser.ViserServer | None = None,
         scene_views: SceneViews | None = None, own_camera: bool = True, lecture: bool = False,
     ) -> None:
         self.client = client
         self.arm = arm
-        self.state = state or ArmState(arm, body_points=body_points(links))
+        self.state = state or ArmState(arm, body_points=models.outline)
         self.refresher = refresher
         self.drags = drags
         self.closed = False
@@ -108,19 +114,23 @@ class ClientSession:
         self._senders: tuple[viser.ClientHandle | viser.ViserServer, ...] = (client,) if server is None else (client, server)
         gui = client.gui
         first = self.state.last
-        self.scene_views = scene_views or SceneViews.build(scene, links, first)
+        self.scene_views = scene_views or SceneViews.build(scene, models, first)
         self.joints = JointPanel(gui, self)
+        #: "Arm drawn as" (real or schematic), where the arm has more than one model
+        self.arm_model = (ArmModelControls(gui, self.joints.folders[0], self.scene_views, self)
+                          if len(self.scene_views.robot.meshes) > 1 else None)
         self.ik_target = IKTargetControls(client.scene, gui, self.scene_views.branches, self)
         self.readouts = Readouts(gui, arm, first)
         self.singularity = OverlayPanel(gui, self.scene_views.overlay, self)
         self.workspace = WorkspaceView(scene, gui, self)
+        self.reach_map = ReachMapView(scene, gui, self)
         self._lecture: LectureMode | None = None
         self.camera = CameraControls(client, lambda: self.state.last, self.guard, lecture) if own_camera else None
         if self.camera is not None:
             self.follow_lecture_mode(self.camera.lecture)
         #: the views this session built in the browser's own panel (the scene views may be the classroom's)
-        self.own_views = (self.joints, self.ik_target, self.readouts, self.singularity, self.workspace,
-                          *([self.camera] if self.camera else []))
+        self.own_views = (self.joints, *([self.arm_model] if self.arm_model else []), self.ik_target, self.readouts,
+                          self.singularity, self.workspace, self.reach_map, *([self.camera] if self.camera else []))
         self.views = (*self.scene_views, *self.own_views)
         self.render(first)
         self.render_panel()

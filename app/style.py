@@ -33,6 +33,15 @@ UNREACHABLE_RED = (220, 30, 30)
 SAFE_GREEN = (46, 160, 67)
 DANGER_RED = (220, 38, 38)
 OVERLAY_IDLE = (150, 150, 160)
+#: Branch-count map (RGB, alpha): no branch (a faint grey, so the plane's extent shows), then
+#: 2, 4, 6 and 8 branches along viridis, whose lightness rises for every kind of colour vision.
+REACH_COLORS: tuple[tuple[tuple[int, int, int], int], ...] = (
+    ((150, 150, 150), 40),
+    ((253, 231, 37), 150),
+    ((94, 201, 98), 150),
+    ((33, 145, 140), 150),
+    ((68, 1, 84), 150),
+)
 SHOULDER_COLOR = (230, 159, 0)
 ELBOW_COLOR = (0, 158, 115)
 WRIST_COLOR = (204, 121, 167)

@@ -18,8 +18,9 @@ import numpy as np
 import viser
 
 from ur10core import Arm
-from ur10core.workspace import vertical_section
+from ur10core.workspace import revolved_boundary, vertical_section
 
+from .camera import VIEWS
 from .feedback import chosen
 from .style import hex_color
 from .view import View
@@ -30,7 +31,11 @@ if TYPE_CHECKING:
 SAMPLE_COUNTS = {"10 k": 10_000, "50 k": 50_000, "100 k": 100_000, "200 k": 200_000, "500 k": 500_000, "1 M": 1_000_000}
 DEFAULT_COUNT = "200 k"
 SECTIONS = ("whole cloud", "vertical section (side view)", "horizontal section (top view)",
-            "cut-away (the half behind the arm's plane)")
+            "cut-away (the half behind the arm's plane)", "translucent hull (its outer and inner surfaces)")
+HULL = SECTIONS[4]
+HULL_COLOR = (86, 180, 233)  # Okabe-Ito sky blue: apart from the grey arm and the aluminium links
+HULL_OPACITY = 0.22
+HULL_SEGMENTS = 72
 POINT_SIZE = 0.006
 #: Points in a section: sampled in its plane, they cover it densely at this many.
 SECTION_POINTS = 40_000
@@ -64,6 +69,39 @@ def coloured_horizontal_section(arm: Arm, height: float, n: int, top: float) -> 
     """(points (n, 3) float32 in the plane z = height, colours on the whole cloud's scale ``top``)."""
     points, manipulability = arm.sample_horizontal_section(height, n, seed=0)
     return points.astype(np.float32), colormap(manipulability, top)
+
+
+def revolved_mesh(heights: np.ndarray, inner: np.ndarray, outer: np.ndarray,
+                  segments: int = HULL_SEGMENTS) -> tuple[np.ndarray, np.ndarray]:
+    """(vertices (V, 3) float32, faces (F, 3) uint32): the profile turned about z, closed top and bottom.
+
+    Rings k = 0…m−1 of the outer surface, then of the inner; quads between neighbouring
+    rings, and an annulus from the inner to the outer ring at each end.
+    """
+    m = len(heights)
+    angle = np.linspace(0.0, 2 * np.pi, segments, endpoint=False)
+    ring = np.stack([np.cos(angle), np.sin(angle)], axis=1)
+    rings = [np.column_stack([radius * ring, np.full(segments, z)])
+             for radii in (outer, inner) for radius, z in zip(radii, heights)]
+    vertices = np.vstack(rings).astype(np.float32)
+    j, k = np.meshgrid(np.arange(segments), np.arange(m - 1))
+    j, k = j.ravel(), k.ravel()
+    nxt = (j + 1) % segments
+
+    def band(first_ring: np.ndarray, second_ring: np.ndarray) -> np.ndarray:
+        a, b = first_ring * segments + j, first_ring * segments + nxt
+        c, d = second_ring * segments + j, second_ring * segments + nxt
+        return np.concatenate([np.stack([a, b, d], 1), np.stack([a, d, c], 1)])
+
+    faces = [band(k, k + 1), band(m + k + 1, m + k)]  # outer facing out, inner facing the axis
+    j, nxt = np.arange(segments), (np.arange(segments) + 1) % segments
+    k = np.zeros(segments, int)
+    faces += [band(m + k, k), band(k + m - 1, k + 2 * m - 1)]  # bottom and top annuli
+    return vertices, np.vstack(faces).astype(np.uint32)
+
+
+HULL_LEGEND = ("the workspace's boundary: the flange reaches every point between the outer surface and the "
+               "hole about the base axis")
 
 
 def legend_text(top: float) -> str:
@@ -146,21 +184,29 @@ class WorkspaceView(View):
         try:
             points, colors, top = coloured_cloud(self._session.arm, count)
             self.progress.value = 60.0
-            points, colors = self._section(section, points, colors, top)
+            if section == HULL:
+                vertices, faces = revolved_mesh(*revolved_boundary(points))
+            else:
+                points, colors = self._section(section, points, colors, top)
             with self._lock:
                 if self._closed:
                     return
                 if self._cloud is not None:
                     self._cloud.remove()
-                self._cloud = self._scene.add_point_cloud(
-                    "/workspace", points, colors, point_size=POINT_SIZE, point_shape="circle"
-                )
+                if section == HULL:  # faint, both faces drawn: the arm and the hole show through it
+                    self._cloud = self._scene.add_mesh_simple(
+                        "/workspace", vertices, faces, color=HULL_COLOR, opacity=HULL_OPACITY, side="double",
+                        cast_shadow=False, receive_shadow=False)
+                else:
+                    self._cloud = self._scene.add_point_cloud(
+                        "/workspace", points, colors, point_size=POINT_SIZE, point_shape="circle"
+                    )
                 # above the cloud, in the same scene: it goes with the cloud and reaches every viewer
                 self.legend_label = self._scene.add_label(
-                    "/workspace/legend", legend_text(top), position=(0.0, 0.0, float(points[:, 2].max()) + 0.12),
-                    font_screen_scale=1.3, anchor="bottom-center",
+                    "/workspace/legend", HULL_LEGEND if section == HULL else legend_text(top),
+                    position=(0.0, 0.0, float(points[:, 2].max()) + 0.12), font_screen_scale=1.3, anchor="bottom-center",
                 )
-            self.legend.content = legend_html(top)
+            self.legend.content = HULL_LEGEND if section == HULL else legend_html(top)
             self.legend.visible = True
             self._look_square_on(section, points)
         finally:
@@ -185,11 +231,13 @@ class WorkspaceView(View):
         return np.array([-math.sin(azimuth), math.cos(azimuth), 0.0])
 
     def _look_square_on(self, section: str, points: np.ndarray) -> None:
-        """A section is seen square-on: the camera turns to face its plane."""
+        """A section is seen square-on: the camera turns to face its plane (and frames the whole hull)."""
         camera = self._session.camera
         if camera is None or section == SECTIONS[0]:
             return
-        if section == SECTIONS[1]:
+        if section == HULL:  # the whole of it in view, from the course's three-quarter angle
+            direction = VIEWS["Course figure"]
+        elif section == SECTIONS[1]:
             direction = -self._plane_normal()
         elif section == SECTIONS[3]:
             direction = self._plane_normal()  # from the open side, onto the cut face

@@ -1,6 +1,7 @@
 """The IK-target drag handler, server side, and what one drag update costs on the wire.
 
-    python benchmarks/bench_drag.py
+    python benchmarks/bench_drag.py          # singularity overlay on
+    python benchmarks/bench_drag.py --map    # and the branch-count map too (its own section)
 
 Starts the app in its own process (``tests/app_process.py``), connects one headless client
 (``tests/viser_client.py``: the messages a browser sends), switches the singularity overlay on
@@ -18,7 +19,6 @@ Reports
 from __future__ import annotations
 
 import asyncio
-import statistics
 import sys
 import time
 from pathlib import Path
@@ -61,9 +61,11 @@ def loop_path(T0: np.ndarray, n: int) -> list[np.ndarray]:
     return path
 
 
-async def drive(url: str) -> dict:
+async def drive(url: str, map_on: bool = False) -> dict:
     client = await ViserClient(url).connect()
     await client.set_gui("Show singularity overlay", True)
+    if map_on:  # 40 000 IK poses each time the target moves, at the panel's pace, on the map's own thread
+        await client.set_gui("Show branch-count map", True)
     await asyncio.sleep(0.5)
     start_flange = client.received.flange_updates[-1][1]
     T0 = np.eye(4)
@@ -96,7 +98,7 @@ def ghost_update_bytes() -> float:
 SESSIONS = 3
 
 
-def run(backend: str) -> tuple[dict, dict, float, tuple[float, float]]:
+def run(backend: str, map_on: bool = False) -> tuple[dict, dict, float, tuple[float, float]]:
     """One drag session against the app on ``backend``.
 
     Returns the client-side result, the app's report, the host's steal during the session
@@ -107,17 +109,22 @@ def run(backend: str) -> tuple[dict, dict, float, tuple[float, float]]:
     p50, p99, _ = steady_cpu(max_wait=300.0)
     with running_app(env={"UR10CORE_BACKEND": backend}) as app:
         before = cpu_ticks()
-        result = asyncio.run(drive(app.url))
+        result = asyncio.run(drive(app.url, map_on))
         stolen = stolen_share(before, cpu_ticks())
         report = app.metrics(newer_than=time.time() + 0.1)
     return result, report, stolen, (p50, p99)
 
 
 def main() -> None:
+    import argparse
+
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--map", action="store_true", help="with the branch-count map on (section drag_map)")
+    map_on = parser.parse_args().map
     sessions: dict[str, list] = {"compiled": [], "numpy": []}
     for _ in range(SESSIONS):
         for backend in sessions:
-            sessions[backend].append(run(backend))
+            sessions[backend].append(run(backend, map_on))
     ghost = ghost_update_bytes()
     rows = []
     for backend, runs in sessions.items():
@@ -154,12 +161,14 @@ def main() -> None:
     compiled_cpu = sorted(run[1]["latency"]["drag_cpu"]["p50_ms"] for run in sessions["compiled"])[SESSIONS // 2]
     body = "\n".join(
         [
-            "## Drag handler (`benchmarks/bench_drag.py`)",
+            "## Drag handler with the branch-count map on (`benchmarks/bench_drag.py --map`)" if map_on
+            else "## Drag handler (`benchmarks/bench_drag.py`)",
             "",
             f"Run: {machine()}. The app in its own process on each backend (`UR10CORE_BACKEND`), {SESSIONS} sessions "
             "each, alternating, each after waiting for a quiet host; each backend's median session (by handler CPU p99) "
             f"is shown. A session: {handler['count']} gizmo events at {RATE_HZ:.0f} Hz from one headless client in "
-            "another process (viser's protocol, the messages a browser sends), singularity overlay on; "
+            "another process (viser's protocol, the messages a browser sends), singularity overlay on"
+            f"{' and the branch-count map (40 000 IK poses per map, on its own thread, at most 10 maps a second)' if map_on else ''}; "
             f"{result['answered']} of them answered by a 3D update (the rest folded into the next). The verdict is on the "
             "handler's CPU time, the server's own work without whatever the OS ran meanwhile on these two cores (the "
             "load generator decoding every frame, above all); the wall time is beside it. Each session starts once "
@@ -171,7 +180,7 @@ def main() -> None:
             table(["what", "measured", "target", "verdict"], rows),
         ]
     )
-    write_section("drag", body)
+    write_section("drag_map" if map_on else "drag", body)
     print(body)
 
 

@@ -1,7 +1,8 @@
 """The README's screenshots, taken in headless Chromium from Debian: python scripts/screenshots.py
 
-Writes docs/images/eight_ghosts.png (the home pose, every branch numbered) and
-docs/images/lecture_mode.png (``--lecture``: big type, the panel beside the arm).
+Writes docs/images/eight_ghosts.png (the home pose, every branch numbered),
+docs/images/lecture_mode.png (``--lecture``: big type, the panel beside the arm) and
+docs/images/branch_count_map.png (the map in the arm's plane, the ghosts hidden).
 """
 
 from __future__ import annotations
@@ -15,13 +16,20 @@ sys.path.insert(0, str(ROOT))
 from playwright.sync_api import sync_playwright  # noqa: E402
 
 from app.server import TeachingServer  # noqa: E402
-from tests.browser_support import CONNECTED, launch, wait_for  # noqa: E402
+from tests.browser_support import CONNECTED, dom_id, launch, wait_for  # noqa: E402
 
 OUT = ROOT / "docs" / "images"
 WINDOW = {"width": 1280, "height": 720}
 
 
-def shoot(name: str, lecture: bool) -> None:
+def show_the_map(page, session) -> None:
+    session.ik_target.show_ghosts.value = False
+    page.get_by_text("Reachable with this orientation", exact=True).first.click()
+    page.locator(dom_id(session.reach_map.enabled)).check()
+    wait_for(lambda: session.reach_map.image is not None, what="the map")
+
+
+def shoot(name: str, lecture: bool, prepare=None) -> None:
     server = TeachingServer(port=0, lecture=lecture)
     try:
         with sync_playwright() as playwright:
@@ -32,7 +40,9 @@ def shoot(name: str, lecture: bool) -> None:
             wait_for(lambda: server.sessions, what="the session")
             session = next(iter(server.sessions.values()))
             wait_for(lambda: session.scene_views.branches.labels[0].visible, what="the numbers")
-            page.wait_for_timeout(3000)
+            if prepare is not None:
+                prepare(page, session)
+            page.wait_for_timeout(8000)  # the real meshes take a while to draw in software WebGL
             for close in page.get_by_role("button").filter(has=page.locator("svg.tabler-icon-x")).all():
                 close.click()  # the software-WebGL notice
             page.wait_for_timeout(1000)
@@ -46,3 +56,4 @@ if __name__ == "__main__":
     OUT.mkdir(parents=True, exist_ok=True)
     shoot("eight_ghosts.png", lecture=False)
     shoot("lecture_mode.png", lecture=True)
+    shoot("branch_count_map.png", lecture=False, prepare=show_the_map)

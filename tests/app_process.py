@@ -58,16 +58,18 @@ def serving(command: list[str], cwd: Path, env: dict[str, str], timeout: float =
 
 
 @contextlib.contextmanager
-def running_app(*args: str, timeout: float = 60.0, env: dict[str, str] | None = None) -> Iterator["AppProcess"]:
+def running_app(*args: str, timeout: float = 60.0, env: dict[str, str] | None = None,
+                root: Path = ROOT) -> Iterator["AppProcess"]:
     """``python -m app --port 0 *args`` in a subprocess (a later ``--port`` wins); yields once it is serving.
 
-    ``env`` adds to the environment (``UR10CORE_BACKEND``, say).
+    ``env`` adds to the environment (``UR10CORE_BACKEND``, say); ``root`` is the checkout
+    whose app runs (another commit's, for a before-and-after benchmark).
     """
     with tempfile.TemporaryDirectory() as folder:
         metrics = Path(folder) / "metrics.json"
         environment = dict(os.environ, **(env or {}), UR10_TEACH_METRICS=str(metrics))
         command = [sys.executable, "-m", "app", "--port", "0", *args]
-        with serving(command, ROOT, environment, timeout) as (process, output):
+        with serving(command, root, environment, timeout) as (process, output):
             url = next(URL.search(line).group(1) for line in output if line.startswith("    ") and URL.search(line))
             yield AppProcess(process, url, metrics, output)
 

@@ -15,7 +15,6 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-import ur10core
 from ur10core import Arm, _numpy_kernels, ik_reference
 from ur10core._backend import configured
 from ur10core.tolerances import LENGTH_TOLERANCE

@@ -43,8 +43,9 @@ def test_dragging_the_ik_target(open_page, app):
     before = session.state.q
     box = page.locator("canvas").first.bounding_box()
     flange = session.state.last.flange
-    for axis, distance in [(0, 0.15), (0, 0.2), (1, 0.15), (2, 0.15), (0, 0.1)]:  # grab one of the arrows
-        u, v = project(session.client.camera, flange[:3, 3] + distance * flange[:3, axis], box)
+    size = session.ik_target.gizmo.scale  # the arrows' length, sized to the arm
+    for axis, share in [(0, 0.75), (0, 0.6), (1, 0.75), (2, 0.75), (0, 0.9)]:  # grab one of the arrows
+        u, v = project(session.client.camera, flange[:3, 3] + share * size * flange[:3, axis], box)
         page.mouse.move(u, v)
         page.mouse.down()
         for step in range(1, 11):

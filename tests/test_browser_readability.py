@@ -251,6 +251,34 @@ def test_the_gizmo_is_sized_to_the_arm(open_page):
         "the gizmo covers P5"
 
 
+def test_the_real_ur10_is_drawn_and_the_schematic_is_one_choice_away(open_page):
+    """The arm on screen is UR's meshes (hiding them empties it); "Schematic" draws a different outline."""
+    from app.meshes import REAL, SCHEMATIC
+
+    page, session = open_page()
+    robot = session.scene_views.robot
+    session.ik_target.show_ghosts.value = False
+    wait_for(lambda: not session.scene_views.branches.shown.any(), what="the ghosts hidden")
+    session.camera.frame()
+    page.wait_for_timeout(1500)
+    real = canvas_pixels(page)
+    for mesh in robot.meshes[REAL]:
+        mesh.visible = False
+    page.wait_for_timeout(1200)
+    empty = canvas_pixels(page)
+    choose(page, session.arm_model.dropdown, SCHEMATIC)
+    wait_for(lambda: robot.model == SCHEMATIC, what="the schematic arm")
+    page.wait_for_timeout(1200)
+    schematic = canvas_pixels(page)
+    real_arm = np.abs(real - empty).sum(axis=-1) > 60
+    schematic_arm = np.abs(schematic - empty).sum(axis=-1) > 60
+    assert real_arm.sum() > 5000, "the real meshes drew (almost) nothing"
+    assert schematic_arm.sum() > 5000, "the schematic arm drew (almost) nothing"
+    differ = (real_arm ^ schematic_arm).sum() / real_arm.sum()
+    # the schematic is built to the same sizes: 8 % of the pixels differ at the home pose
+    assert differ > 0.03, f"the two models cover the same pixels ({differ:.1%} differ)"
+
+
 # ---------------------------------------------------------------------- workspace sections
 
 
@@ -281,3 +309,52 @@ def test_sections_are_seen_square_on_and_sampled_in_their_plane(open_page):
     wait_for(lambda: workspace._cloud is not None and len(workspace._cloud.points) < 150_000, timeout=60, what="the cut-away")
     assert (workspace._cloud.points.astype(float) @ normal <= 1e-3).all()
     wait_for(lambda: forward() @ normal < -0.95, what="the camera facing the cut face")
+
+
+def test_the_hull_is_translucent_the_arm_shows_through_it(open_page):
+    from app.workspace import HULL
+
+    page, session = open_page()
+    session.ik_target.show_ghosts.value = False
+    workspace = session.workspace
+    choose(page, workspace.section, HULL)
+    page.locator(dom_id(workspace.enabled)).check()
+    wait_for(lambda: workspace._cloud is not None, what="the hull")
+    page.wait_for_timeout(1500)
+    with_hull = canvas_pixels(page)
+    workspace._cloud.visible = False
+    page.wait_for_timeout(1200)
+    without = canvas_pixels(page)
+    changed = np.abs(with_hull - without).sum(axis=-1) > 12
+    assert changed.mean() > 0.25, f"the hull covers only {changed.mean():.0%} of the view"
+    box = page.locator("canvas").first.bounding_box()
+    snapshot = session.state.last
+    for frame in (3, 4):  # the elbow and the first wrist joint: seen through the hull, barely tinted
+        u, v = project(session.client.camera, snapshot.frames[frame, :3, 3], box)
+        tint = np.abs(neighbourhood(with_hull, u, v, box, 3) - neighbourhood(without, u, v, box, 3)).sum(axis=1)
+        assert np.median(tint) < 90, f"the arm at joint {frame} is hidden by the hull (colour moved by {np.median(tint)})"
+
+
+def test_the_branch_count_map_is_drawn_and_follows_the_orientation(open_page):
+    page, session = open_page()
+    session.ik_target.show_ghosts.value = False
+    view = session.reach_map
+    before = canvas_pixels(page)
+    page.get_by_text("Reachable with this orientation", exact=True).first.click()
+    page.locator(dom_id(view.enabled)).check()
+    wait_for(lambda: view.image is not None, what="the map")
+    page.wait_for_timeout(2000)  # the camera turns square-on to the plane
+    first = canvas_pixels(page)
+    assert (np.abs(first - before).sum(axis=-1) > 30).mean() > 0.3, "the map covers little of the view"
+    assert page.get_by_text("Branches that reach each point", exact=False).count() > 0  # the legend
+    # the tool turned upside down (typed): the map is recomputed and looks different
+    field = text_field(page, session.ik_target.typed_pose)
+    field.fill("600, -200, 500, 180, 0, 0")
+    field.press("Enter")
+    page.wait_for_timeout(200)
+    page.locator(dom_id(session.ik_target.move_button)).click()
+    wait_for(lambda: view.shown_key is not None and view.shown_key[0] == session.state.last.target.tobytes()
+             and abs(session.state.last.target[0, 3] - 0.6) < 1e-9, what="the map for the typed orientation")
+    page.wait_for_timeout(1500)
+    second = canvas_pixels(page)
+    assert (np.abs(second - first).sum(axis=-1) > 30).mean() > 0.05, "the map did not change with the orientation"

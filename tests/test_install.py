@@ -65,3 +65,16 @@ def test_the_app_starts_from_another_directory(installed, tmp_path):
             assert page.status == 200 and b"<html" in page.read().lower()
         time.sleep(1.0)
         assert app.poll() is None and "Traceback" not in "".join(output), "".join(output)
+
+
+def test_the_real_ur10_meshes_and_their_licence_ship(installed, tmp_path):
+    bin_dir, env = installed
+    code = (
+        "import app.meshes as m, pathlib; models = m.load_models('course');"
+        "print(','.join(models.names), (m.MESH_DIR / 'real' / 'ur10' / 'LICENSE.md').is_file(), m.MESH_DIR)"
+    )
+    done = subprocess.run([str(bin_dir / "python"), "-c", code], cwd=tmp_path, env=env, capture_output=True, text=True)
+    assert done.returncode == 0, done.stderr
+    names, licence, location = done.stdout.split()
+    assert names == "Real UR10,Schematic" and licence == "True"
+    assert str(ROOT) not in location  # the installed copy's package data

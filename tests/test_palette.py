@@ -3,10 +3,9 @@
 from __future__ import annotations
 
 import numpy as np
-import pytest
 
 from app.style import ALUMINIUM, GHOST_OPACITY, JOINT_CAP_GREY, SLOT_COLORS
-from tests.colour_vision import MIN_DELTA_E, VISION, cielab, closest_pair, linear, seen
+from tests.colour_vision import MIN_DELTA_E, cielab, closest_pair, linear, seen
 
 def test_a_pure_colour_is_where_cielab_puts_it():
     np.testing.assert_allclose(cielab(linear([255, 255, 255])), [100, 0, 0], atol=0.05)

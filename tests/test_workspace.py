@@ -3,6 +3,9 @@
 import numpy as np
 import pytest
 
+from ur10core import Arm, flange_to_controller
+from ur10core.workspace import MAP_PLANES, branch_count_map, revolved_boundary
+
 
 def test_points_and_manipulability_come_from_fk_and_the_jacobian(course):
     points, manipulability, q = course.sample_workspace(20000, seed=3, return_joints=True)
@@ -88,3 +91,110 @@ def test_a_section_nobody_reaches_is_refused(course):
         course.sample_horizontal_section(float("nan"), 10)
     with pytest.raises(ValueError, match="positive integer"):
         course.sample_horizontal_section(0.5, 0)
+
+
+# ---------------------------------------------------------------- the branch-count map
+
+@pytest.mark.parametrize("plane", MAP_PLANES)
+def test_branch_count_map_counts_what_urs_own_solver_finds(plane):
+    """Every cell's count equals the number of solutions ur-analytic-ik (test-only, UR's numbers) returns.
+
+    The map runs our IK on the ur10 preset; the reference is asked cell by cell, through
+    the controller's convention (docs/kinematics.md §6), on a coarse grid.
+    """
+    ur_analytic_ik = pytest.importorskip("ur_analytic_ik")
+    arm = Arm.preset("ur10")
+    rng = np.random.default_rng(7)
+    for _ in range(3):
+        target = arm.fk(rng.uniform(-np.pi, np.pi, 6))
+        reach = branch_count_map(arm, target, plane, resolution=31)
+        points = reach.points().reshape(-1, 3)
+        for k, point in enumerate(points):
+            pose = target.copy()
+            pose[:3, 3] = point
+            theirs = len(ur_analytic_ik.ur10.inverse_kinematics(np.ascontiguousarray(flange_to_controller(pose))))
+            assert reach.counts.ravel()[k] == theirs, f"cell {k} at {point.round(3)}: ours {reach.counts.ravel()[k]}, theirs {theirs}"
+        assert {0, 8} <= set(reach.counts.ravel().tolist()) <= {0, 2, 4, 6, 8}
+
+
+def test_branch_count_map_lies_in_a_plane_through_the_target(course):
+    target = course.fk(np.radians([30, 45, 26, 50, 60, 80]))
+    for plane in MAP_PLANES:
+        reach = branch_count_map(course, target, plane, resolution=20)
+        np.testing.assert_allclose([reach.u @ reach.u, reach.v @ reach.v, reach.u @ reach.v], [1, 1, 0], atol=1e-12)
+        normal = np.cross(reach.u, reach.v)
+        points = reach.points()
+        np.testing.assert_allclose((points - target[:3, 3]) @ normal, 0.0, atol=1e-12)  # the target's plane
+        assert points.shape == (20, 20, 3) and reach.counts.shape == (20, 20)
+        assert (points[0, 0] - points[-1, 0]) @ reach.v > 0 and (points[0, -1] - points[0, 0]) @ reach.u > 0  # image order
+    vertical = branch_count_map(course, target, "vertical", resolution=20)
+    assert abs(np.cross(vertical.u, vertical.v) @ [0, 0, 1]) < 1e-12  # holds the base axis
+    np.testing.assert_allclose(vertical.centre, [0, 0, course.d1])
+    horizontal = branch_count_map(course, target, "horizontal", resolution=20)
+    np.testing.assert_allclose(horizontal.points()[..., 2], target[2, 3])
+
+
+def test_branch_count_map_shows_the_hole_about_the_base_axis(course):
+    """Where the wrist centre P5 would be closer than d4 to the base axis, no branch reaches (§4.2)."""
+    target = np.eye(4)  # the tool pointing up: P5 sits right under the flange
+    target[:3, 3] = (0.5, 0.0, 0.6)
+    reach = branch_count_map(course, target, "horizontal", resolution=41)
+    points = reach.points()
+    near_axis = np.hypot(points[..., 0], points[..., 1]) < 0.9 * course.d4
+    assert near_axis.any() and (reach.counts[near_axis] == 0).all()
+    assert (reach.counts == 8).any()
+
+
+@pytest.mark.parametrize("bad, message", [
+    ({"plane": "diagonal"}, "plane"),
+    ({"resolution": 1}, "resolution"),
+    ({"resolution": 10_001}, "resolution"),
+    ({"resolution": 20.0}, "resolution"),
+    ({"target": np.eye(3)}, "target"),
+    ({"target": np.tile(np.eye(4), (2, 1, 1))}, "target"),
+])
+def test_branch_count_map_refuses_bad_arguments(course, bad, message):
+    arguments = {"target": np.eye(4), "plane": "vertical", "resolution": 10, **bad}
+    with pytest.raises(ValueError, match=message):
+        branch_count_map(course, **arguments)
+
+
+# ---------------------------------------------------------------- the translucent hull
+
+def test_revolved_boundary_finds_the_hole_of_radius_d4_minus_d6(course):
+    """The flange is at least d4 − d6 from the base axis (P5 is at least d4 from it, and the flange d6 from P5)."""
+    points, _ = course.sample_workspace(200_000, seed=0)
+    heights, inner, outer = revolved_boundary(points, bins=24)
+    assert len(heights) == 24 and heights[0] == points[:, 2].min() and heights[-1] == points[:, 2].max()
+    np.testing.assert_allclose(inner, course.d4 - course.d6, atol=4e-3)
+    assert (inner >= course.d4 - course.d6 - 1e-9).all()  # samples never beat the bound
+    rho = np.hypot(points[:, 0], points[:, 1])
+    assert outer.max() == rho.max() and outer.max() <= course.a2 + course.a3 + np.hypot(course.d5, course.d4) + 1e-9
+
+
+@pytest.mark.parametrize("bad, message", [
+    ({"points": np.zeros((0, 3))}, "empty"),
+    ({"points": np.zeros((5, 2))}, "shape"),
+    ({"points": [[0, 0, 1.0], [1, 0, 1.0]]}, "height"),
+    ({"bins": 1}, "bins"),
+    ({"points": [[0, 0, np.nan], [1, 0, 1.0]]}, "finite"),
+])
+def test_revolved_boundary_refuses_bad_arguments(bad, message):
+    arguments = {"points": [[1.0, 0, 0], [0, 2.0, 1.0]], "bins": 4, **bad}
+    with pytest.raises(ValueError, match=message):
+        revolved_boundary(**arguments)
+
+
+def test_the_hull_mesh_is_closed_and_turned_from_the_profile(course):
+    trimesh = pytest.importorskip("trimesh")
+    from app.workspace import revolved_mesh
+
+    heights, inner, outer = revolved_boundary(course.sample_workspace(50_000, seed=1)[0], bins=30)
+    vertices, faces = revolved_mesh(heights, inner, outer, segments=40)
+    mesh = trimesh.Trimesh(vertices, faces, process=True)
+    assert mesh.is_watertight and mesh.is_winding_consistent and mesh.volume > 0  # closed, facing out
+    # the volume between two surfaces of revolution, by the frustum rule slice by slice
+    slices = np.diff(heights)
+    shell = lambda r: np.pi / 3 * (slices * (r[:-1] ** 2 + r[:-1] * r[1:] + r[1:] ** 2)).sum()  # noqa: E731
+    polygon = 40 / (2 * np.pi) * np.sin(2 * np.pi / 40)  # a 40-gon's area over its circle's
+    assert mesh.volume == pytest.approx(polygon * (shell(outer) - shell(inner)), rel=1e-6)

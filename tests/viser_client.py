@@ -184,7 +184,7 @@ class ViserClient:
             self.received.nodes[name] = kind
             if "position" in message.get("props", {}):
                 self.received.positions[name] = tuple(message["props"]["position"])
-        if kind == "SceneNodeUpdateMessage" and message.get("name") == "/ghosts/link6":
+        if kind == "SceneNodeUpdateMessage" and re.fullmatch(r"/ghosts/\w+/link6", str(name)):  # the shown model's
             positions = message.get("updates", {}).get("batched_positions")
             if positions is not None:
                 self.received.ghost_flanges.append((now, array(positions, buffers).reshape(-1, 3).copy()))

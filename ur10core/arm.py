@@ -471,7 +471,7 @@ class Arm:
         count = 0
         for _ in range(20):  # inside the workspace a round keeps a good share of its draws
             q = -rng.uniform(-math.pi, math.pi, (5, max(2 * (n - count), 1024)))  # (−π, π]
-            c3, s3, c5, s5 = np.cos(q[2]), np.sin(q[2]), np.cos(q[4]), np.sin(q[4])
+            c3, s3, s5 = np.cos(q[2]), np.sin(q[2]), np.sin(q[4])
             c34, s34 = np.cos(q[2] + q[3]), np.sin(q[2] + q[3])
             A = self.a2 + self.a3 * c3 - self.d5 * s34 + self.d6 * s5 * c34
             B = self.a3 * s3 + self.d5 * c34 + self.d6 * s5 * s34

@@ -8,6 +8,8 @@ the section plane, instead of the few that happen to lie in a thin slab.
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 
 from ._validate import as_float_array, check_finite
@@ -95,3 +97,140 @@ def lowest_points(frames, body_points) -> np.ndarray:
     T = frames[np.arange(len(frames)), body]
     lowest = (T[:, :3, :3] @ body_points[body, point][..., None])[..., 0] + T[:, :3, 3]
     return lowest.reshape(lead + (3,))
+
+
+MAP_PLANES = ("vertical", "horizontal")
+
+
+@dataclass(frozen=True)
+class BranchCountMap:
+    """How many IK branches reach each point of a square in a plane, the tool turned as given.
+
+    Cell (r, c) is centred at ``centre + (c − (n − 1)/2)·cell·u − (r − (n − 1)/2)·cell·v``:
+    row 0 is the square's top edge (+v), column 0 its left edge (−u), as an image is read.
+    """
+
+    centre: np.ndarray  #: (3,) the middle of the square, m
+    u: np.ndarray  #: (3,) unit vector along the rows
+    v: np.ndarray  #: (3,) unit vector up the columns
+    size: float  #: side of the square, m
+    counts: np.ndarray  #: (n, n) int8, valid IK slots at each cell's centre (0…8)
+
+    @property
+    def cell(self) -> float:
+        return self.size / self.counts.shape[0]
+
+    def points(self) -> np.ndarray:
+        """(n, n, 3) the cell centres, in the base frame."""
+        n = self.counts.shape[0]
+        offsets = (np.arange(n) - (n - 1) / 2) * self.cell
+        return self.centre + offsets[None, :, None] * self.u - offsets[:, None, None] * self.v
+
+
+def branch_count_map(arm, target, plane: str = "vertical", resolution: int = 200) -> BranchCountMap:
+    """For the orientation R of ``target``, the number of IK branches reaching each point of a plane through it.
+
+    docs/kinematics.md §4.2, "Where each orientation can be reached". Every cell of an
+    n × n grid asks :meth:`Arm.ik` for T = [R, p; 0, 1] with p the cell's centre, and
+    counts its valid slots: 0 (out of reach with this orientation), or 2 for each of the
+    four (shoulder, wrist) pairs whose elbow reaches: 2, 4, 6 or 8.
+
+    Parameters
+    ----------
+    arm : Arm
+    target : array_like, shape (4, 4)
+        The target pose: its rotation is the orientation asked for everywhere, its
+        position a point of the plane.
+    plane : {"vertical", "horizontal"}
+        "vertical": the plane holding the base axis and the target (the arm's own plane
+        when θ1 points at it), u horizontal towards the target, v = z; "horizontal": the
+        plane z = target height, u = x, v = y. Either way a square centred on the base
+        axis, as wide as the arm's longest reach each side (the vertical one centred at
+        the shoulder's height d1).
+    resolution : int
+        n, cells per side (n² IK calls, vectorised).
+
+    Returns
+    -------
+    BranchCountMap
+
+    >>> from ur10core import Arm
+    >>> arm = Arm.preset("course")
+    >>> reach = branch_count_map(arm, arm.fk(np.radians([30, 45, 26, 50, 60, 80])), resolution=9)
+    >>> np.bincount(reach.counts.ravel(), minlength=9).tolist()  # cells with 0, 1, …, 8 branches
+    [38, 0, 4, 0, 6, 0, 2, 0, 31]
+    """
+    from ._validate import homogeneous_transform
+
+    target = homogeneous_transform(target, "target")
+    if target.shape != (4, 4):
+        raise ValueError(f"target must be one pose of shape (4, 4), got {target.shape}")
+    if plane not in MAP_PLANES:
+        raise ValueError(f"plane must be one of {MAP_PLANES}, got {plane!r}")
+    if isinstance(resolution, bool) or not isinstance(resolution, (int, np.integer)) or not 2 <= resolution <= 1000:
+        raise ValueError(f"resolution must be an integer number of cells per side in [2, 1000], got {resolution!r}")
+    reach = abs(arm.a2) + abs(arm.a3) + abs(arm.d5) + abs(arm.d6)  # no flange lies farther from the shoulder
+    size = 2.0 * (reach + 0.05)
+    position = target[:3, 3]
+    if plane == "vertical":
+        towards = np.array([position[0], position[1], 0.0])
+        length = np.linalg.norm(towards)
+        u = towards / length if length > 1e-9 else np.array([1.0, 0.0, 0.0])  # on the axis: any vertical plane holds it
+        v = np.array([0.0, 0.0, 1.0])
+        centre = np.array([0.0, 0.0, arm.d1])
+    else:
+        u, v = np.array([1.0, 0.0, 0.0]), np.array([0.0, 1.0, 0.0])
+        centre = np.array([0.0, 0.0, position[2]])
+    grid = BranchCountMap(centre, u, v, size, np.zeros((resolution, resolution), np.int8))
+    poses = np.broadcast_to(target, (resolution * resolution, 4, 4)).copy()
+    poses[:, :3, 3] = grid.points().reshape(-1, 3)
+    counts = arm.ik(poses).valid.sum(axis=-1).astype(np.int8)
+    return BranchCountMap(centre, u, v, size, counts.reshape(resolution, resolution))
+
+
+def revolved_boundary(points, bins: int = 48) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The surfaces bounding a workspace that is a solid of revolution about z, from samples of it.
+
+    θ1 turns the whole arm about the base axis, so the workspace is bounded by an outer
+    surface and an inner one (the hole about the axis) that are both surfaces of
+    revolution: at each height, the largest and smallest distance ρ = √(x² + y²) of a
+    sample from the axis. Sampled, both are estimates from inside: the more samples,
+    the closer (200 k samples put the UR10's hole at 72 mm = d4 − d6 to the millimetre).
+
+    Parameters
+    ----------
+    points : array_like, shape (n, 3)
+        Samples of the workspace (:meth:`Arm.sample_workspace`).
+    bins : int
+        Height slices, from the lowest sample to the highest.
+
+    Returns
+    -------
+    heights, inner, outer : (m,) arrays, m ≤ bins
+        For each slice holding samples: its middle height (the first and last slices at
+        the lowest and highest sample instead, so the surfaces close the whole cloud),
+        the smallest and the largest ρ in it.
+
+    >>> heights, inner, outer = revolved_boundary([[1, 0, 0], [0, 2, 0], [0.5, 0, 1], [0, -3, 1]], bins=2)
+    >>> heights.tolist(), inner.tolist(), outer.tolist()
+    ([0.0, 1.0], [1.0, 0.5], [2.0, 3.0])
+    """
+    points = _points(points)
+    if isinstance(bins, bool) or not isinstance(bins, (int, np.integer)) or bins < 2:
+        raise ValueError(f"bins must be an integer ≥ 2, got {bins!r}")
+    if len(points) == 0:
+        raise ValueError("points is empty: there is no workspace to bound")
+    rho, z = np.hypot(points[:, 0], points[:, 1]), points[:, 2]
+    low, high = float(z.min()), float(z.max())
+    if high - low < 1e-12:
+        raise ValueError("the points all lie at one height: a revolved boundary needs some height")
+    slice_of = np.minimum(((z - low) / (high - low) * bins).astype(int), bins - 1)
+    count = np.bincount(slice_of, minlength=bins)
+    inner = np.full(bins, np.inf)
+    outer = np.full(bins, -np.inf)
+    np.minimum.at(inner, slice_of, rho)
+    np.maximum.at(outer, slice_of, rho)
+    heights = low + (np.arange(bins) + 0.5) * (high - low) / bins
+    heights[0], heights[-1] = low, high
+    held = count > 0
+    return heights[held], inner[held], outer[held]

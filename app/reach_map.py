@@ -1,0 +1,170 @@
+"""The branch-count map: for the tool's current orientation, how many IK branches reach each point of a plane.
+
+``ur10core.workspace.branch_count_map`` solves 200 × 200 poses in one batch; the map is
+drawn as one small PNG image lying in the plane (a few KB, where 40 000 coloured points
+would be 600 KB). It is recomputed off the drag path: the panel's pace (≤ 10 Hz) asks
+for it, a worker thread of this view computes it, and requests that come meanwhile are
+folded into one more computation with the newest target.
+"""
+
+from __future__ import annotations
+
+import threading
+from typing import TYPE_CHECKING
+
+import numpy as np
+import viser
+
+from ur10core.orientation import quaternion
+from ur10core.workspace import BranchCountMap, branch_count_map
+
+from .feedback import chosen
+from .state import Snapshot
+from .style import REACH_COLORS, hex_color
+from .view import View
+from .workspace import FROM_ABOVE
+
+if TYPE_CHECKING:
+    from .session import ClientSession
+
+PLANES = {"vertical, through the base axis and the target": "vertical", "horizontal, at the target's height": "horizontal"}
+RESOLUTION = 200  #: cells per side: 40 000 poses, about 1.4 cm each
+
+
+def map_image(counts: np.ndarray) -> np.ndarray:
+    """(n, n) branch counts → (n, n, 4) RGBA: 0 faint grey, then 2, 4, 6, 8 in REACH_COLORS (an odd count as the next even)."""
+    palette = np.array([(*rgb, alpha) for rgb, alpha in REACH_COLORS], dtype=np.uint8)
+    return palette[(counts.astype(int) + 1) // 2]
+
+
+def map_pose(reach: BranchCountMap) -> tuple[np.ndarray, np.ndarray]:
+    """(wxyz, position) of the image node: its x along u, its y along v (an image's top row is +y)."""
+    rotation = np.stack([reach.u, reach.v, np.cross(reach.u, reach.v)], axis=1)
+    return quaternion(rotation, check=False), reach.centre
+
+
+LEGEND_TEXT = "branches reaching each point, tool turned as now: yellow 2 · green 4 · teal 6 · purple 8"
+
+
+def legend_html() -> str:
+    swatches = "".join(
+        f"<span style='display:inline-block;margin-right:10px'><span style='display:inline-block;width:14px;height:14px;"
+        f"border-radius:3px;vertical-align:middle;background:{hex_color(rgb)}'></span> {count}</span>"
+        for count, (rgb, _) in zip(("none", "2", "4", "6", "8"), REACH_COLORS)
+    )
+    return f"<div style='font-size:0.85em'>Branches that reach each point with this orientation:<br>{swatches}</div>"
+
+
+class ReachMapView(View):
+    """The "Reachable with this orientation" folder and its map, in the session's scene."""
+
+    def __init__(self, scene: viser.SceneApi, gui: viser.GuiApi, session: "ClientSession") -> None:
+        self._scene = scene
+        self._session = session
+        self.image: viser.ImageHandle | None = None
+        self.shown_key: tuple | None = None  #: (target bytes, plane) of the map on screen
+        self.computed = 0  #: maps computed so far (tests and benchmarks read it)
+        self._lock = threading.Lock()
+        self._busy = self._again = self._closed = False
+        self._face_next = False  # turn the camera to face the plane once the next map is drawn
+        folder = gui.add_folder("Reachable with this orientation", expand_by_default=False)
+        self.folders = (folder,)
+        with folder:
+            gui.add_markdown("Keep the tool turned as the gizmo has it and move it anywhere in a plane: "
+                             "how many of the 8 branches get there? Turn the gizmo and watch the rings change.")
+            self.enabled = gui.add_checkbox("Show branch-count map", False)
+            self.plane = gui.add_dropdown("Plane", tuple(PLANES), initial_value=tuple(PLANES)[0])
+            self.legend = gui.add_html(legend_html(), visible=False)
+        self.enabled.on_update(session.guard(self._toggled))
+        self.plane.on_update(session.guard(self._toggled))
+
+    def _toggled(self, _: viser.GuiEvent) -> None:
+        self.legend.visible = self.enabled.value
+        if self.enabled.value:
+            self._face_next = True
+            self._request()
+        else:
+            self.clear()
+
+    def render_panel(self, snapshot: Snapshot) -> None:
+        if self.enabled.value and self._key(snapshot) != self.shown_key:
+            self._request()
+
+    def _key(self, snapshot: Snapshot) -> tuple:
+        return snapshot.target.tobytes(), PLANES[chosen(self.plane, "plane")]
+
+    def _request(self) -> None:
+        """Compute the map for the newest target, in this view's worker thread."""
+        with self._lock:
+            if self._closed:
+                return
+            if self._busy:
+                self._again = True
+                return
+            self._busy = True
+        threading.Thread(target=self._session.guard(self._work), args=(None,), name="reach-map", daemon=True).start()
+
+    def _work(self, _) -> None:
+        try:
+            while True:
+                self._draw()
+                with self._lock:
+                    if not self._again:
+                        return
+                    self._again = False
+        finally:
+            with self._lock:
+                self._busy = False
+
+    def _draw(self) -> None:
+        snapshot = self._session.state.last
+        key = self._key(snapshot)
+        if not self.enabled.value or key == self.shown_key:
+            return
+        reach = branch_count_map(self._session.arm, snapshot.target, key[1], RESOLUTION)
+        self.computed += 1
+        image, (wxyz, position) = map_image(reach.counts), map_pose(reach)
+        with self._lock:
+            if self._closed or not self.enabled.value:
+                return
+            if self.image is None:
+                self.image = self._scene.add_image(
+                    "/reach_map", image, reach.size, reach.size, format="png", wxyz=wxyz, position=position,
+                    cast_shadow=False, receive_shadow=False)
+                # in the scene beside the map, so that viewers of a shared scene can read it too
+                self._scene.add_label("/reach_map/legend", LEGEND_TEXT, position=(0.0, reach.size / 2 - 0.06, 0.0),
+                                      font_screen_scale=1.3, anchor="top-center")
+            else:
+                self.image.image = image
+                if not np.allclose(self.image.position, position) or not np.allclose(self.image.wxyz, wxyz):
+                    self.image.wxyz, self.image.position = wxyz, position
+            self.shown_key = key
+        if self._face_next:
+            self._face_next = False
+            self._face(reach)
+
+    def _face(self, reach: BranchCountMap) -> None:
+        """Turn the camera square-on to the plane, framing the part of it that some branch reaches."""
+        camera = self._session.camera
+        if camera is None:
+            return
+        reached = reach.points()[reach.counts > 0]
+        if reach.v[2] > 0.5:  # vertical: from the side of the plane the camera is on
+            normal = np.cross(reach.u, reach.v)
+            side = np.sign(normal @ (np.asarray(self._session.client.camera.position) - reach.centre)) or 1.0
+            direction = side * normal
+        else:
+            direction = FROM_ABOVE
+        camera.look_from(direction, reached[:: max(1, len(reached) // 2000)] if len(reached) else None)
+
+    def clear(self) -> None:
+        with self._lock:
+            if self.image is not None:
+                self.image.remove()
+                self.image = None
+            self.shown_key = None
+
+    def close(self) -> None:
+        with self._lock:
+            self._closed = True
+        self.clear()

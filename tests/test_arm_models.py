@@ -1,0 +1,60 @@
+"""The real UR10 and the schematic arm: one dropdown switches the solid arm and its ghosts."""
+
+from __future__ import annotations
+
+import asyncio
+
+import numpy as np
+import pytest
+
+from app.meshes import REAL, SCHEMATIC
+
+from .server_support import session_of, until, url
+from .viser_client import ViserClient
+
+pytestmark = pytest.mark.server
+
+
+def test_the_dropdown_switches_the_arm_and_its_ghosts_and_refuses_other_values(app):
+    async def scenario():
+        client = await ViserClient(url(app)).connect()
+        session = session_of(app, client)
+        robot, branches = session.scene_views.robot, session.scene_views.branches
+        assert robot.model == branches.model == REAL  # the real arm by default
+        assert all(m.visible for m in robot.meshes[REAL]) and not any(m.visible for m in robot.meshes[SCHEMATIC])
+        await client.set_gui("Arm drawn as", SCHEMATIC)
+        await until(lambda: robot.model == SCHEMATIC, what="the schematic arm")
+        assert all(m.visible for m in robot.meshes[SCHEMATIC]) and not any(m.visible for m in robot.meshes[REAL])
+        assert [g.visible for g in branches.models[SCHEMATIC]] == [True] * 6
+        assert [g.visible for g in branches.models[REAL]] == [False] * 6
+        # the newly shown ghosts were posed at once, where the branches are
+        shown = branches.shown
+        assert shown.any()
+        await until(lambda: np.array_equal(branches.ghosts[5].batched_scales.astype(bool), shown), what="the ghosts posed")
+        np.testing.assert_allclose(branches.ghosts[5].batched_positions[shown],
+                                   session.state.last.ghost_frames[shown, 6, :3, 3], atol=1e-6)
+        await client.set_gui("Arm drawn as", "Cardboard")  # not an option: refused, nothing changes
+        await until(lambda: session.arm_model.dropdown.value == SCHEMATIC, what="the value put back")
+        assert robot.model == SCHEMATIC
+        await client.close()
+
+    asyncio.run(scenario())
+
+
+def test_a_new_presenter_sees_the_classrooms_choice(classroom):
+    from .server_support import become_presenter
+
+    async def scenario():
+        first = await ViserClient(url(classroom)).connect()
+        await become_presenter(first, classroom)
+        await first.set_gui("Arm drawn as", SCHEMATIC)
+        views = classroom.classroom.scene_views
+        await until(lambda: views.robot.model == SCHEMATIC, what="the shared scene's schematic arm")
+        await first.close()
+        second = await ViserClient(url(classroom)).connect()
+        await become_presenter(second, classroom)
+        session = classroom.classroom.presenter.session
+        await until(lambda: session.arm_model.dropdown.value == SCHEMATIC, what="the dropdown showing the choice")
+        await second.close()
+
+    asyncio.run(scenario())
