@@ -87,7 +87,9 @@ class ReachMapView(View):
             self.clear()
 
     def render_panel(self, snapshot: Snapshot) -> None:
-        if self.enabled.value and self._key(snapshot) != self.shown_key:
+        # a plane not among the options is refused by the dropdown's own callback; meanwhile nothing to do
+        plane = PLANES.get(self.plane.value)
+        if self.enabled.value and plane is not None and (snapshot.target.tobytes(), plane) != self.shown_key:
             self._request()
 
     def _key(self, snapshot: Snapshot) -> tuple:

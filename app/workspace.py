@@ -4,7 +4,9 @@ Sampled by ``Arm.sample_workspace`` off the event loop (in the callback's worker
 and cached per (preset, size) for every client; each client is sent only the cloud it
 asked for. 200 k points (the default) is about 1.8 MB per client. A vertical section turns
 every sample into the arm's plane; a horizontal one is sampled in its plane
-(``Arm.sample_horizontal_section``). The camera turns to face a section square-on.
+(``Arm.sample_horizontal_section``). The camera turns to face a section square-on. The
+translucent hull is the cloud's outer surface and hole, turned about the base axis
+(``ur10core.workspace.revolved_boundary``): one light mesh instead of the points.
 """
 
 from __future__ import annotations

@@ -37,19 +37,27 @@ def wait_for(condition: Callable[[], object], timeout: float = 30.0, what: str =
 
 
 def step_slider(page, handle, key: str, target: float, limit: int = 200) -> None:
-    """Press ``key`` on a viser slider's thumb until the browser shows ``target``.
+    """Press arrow keys on a viser slider's thumb until the browser shows ``target``.
 
-    Pressing a fixed number of times is not enough on a loaded machine: a key event can land while
-    the panel is re-rendering and the thumb has lost focus. Counting on what the slider shows keeps
-    the test about the server following the browser, not about keyboard timing.
+    ``key`` is the direction to start in. Pressing a fixed number of times is not enough on a
+    loaded machine: a key event can land while the panel is re-rendering and the thumb has
+    lost focus, and a press can show a moment late. So each press waits (up to a second)
+    for the value it moves, and an overshoot is walked back with the opposite key. The test
+    stays about the server following the browser, not about keyboard timing.
     """
     thumb = page.locator(f"{dom_id(handle)} [role=slider]")
+    opposite = {"ArrowRight": "ArrowLeft", "ArrowLeft": "ArrowRight"}
+    increases = key == "ArrowRight"
     for _ in range(limit):
-        if abs(float(thumb.get_attribute("aria-valuenow")) - target) < 1e-9:
+        value = float(thumb.get_attribute("aria-valuenow"))
+        if abs(value - target) < 1e-9:
             return
         thumb.focus()
-        thumb.press(key)
-    raise AssertionError(f"slider still at {thumb.get_attribute('aria-valuenow')} after {limit} presses of {key}, wanted {target}")
+        thumb.press(key if (value < target) == increases else opposite[key])
+        deadline = time.monotonic() + 1.0
+        while float(thumb.get_attribute("aria-valuenow")) == value and time.monotonic() < deadline:
+            time.sleep(0.02)
+    raise AssertionError(f"slider still at {thumb.get_attribute('aria-valuenow')} after {limit} presses, wanted {target}")
 
 
 def dom_id(handle) -> str:

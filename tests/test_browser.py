@@ -29,9 +29,9 @@ def test_moving_a_joint_slider(open_page, app):
     thumb = page.locator(f"{dom_id(session.joints.sliders[0])} [role=slider]")
     step_slider(page, session.joints.sliders[0], "ArrowRight", 35.0)  # 0.1° steps from 30°
     wait_for(lambda: abs(np.degrees(session.state.q[0]) - 35.0) < 1e-6, what="θ1 to reach 35°")
-    snapshot = session.state.last
-    # the IK target followed the flange, and the readout shows the new pose
-    np.testing.assert_allclose(session.ik_target.gizmo.position, snapshot.flange[:3, 3], atol=1e-6)
+    # the IK target followed the flange (drawn a moment after the state changed), and the readout shows the new pose
+    wait_for(lambda: np.allclose(session.ik_target.gizmo.position, session.state.last.flange[:3, 3], atol=1e-6),
+             what="the gizmo on the new flange")
     assert thumb.get_attribute("aria-valuenow") == "35"
     wait_for(lambda: page.get_by_text("base 35.00°", exact=False).count() > 0, what="the joint summary")
 
@@ -63,8 +63,10 @@ def test_dragging_the_ik_target(open_page, app):
     np.testing.assert_allclose(session.arm.fk(snapshot.q), snapshot.target, atol=1e-9)
     # the ghosts of the new target's branches were posed from the same solution
     ghost = session.scene_views.branches.ghosts[5]  # link 6 (the ghosts start at link 1)
+    snapshot = session.state.last
     valid = snapshot.solution.valid
-    np.testing.assert_allclose(ghost.batched_positions[valid], snapshot.ghost_frames[valid, 6, :3, 3], atol=1e-5)
+    wait_for(lambda: np.allclose(ghost.batched_positions[valid], snapshot.ghost_frames[valid, 6, :3, 3], atol=1e-5),
+             what="the ghosts drawn for the drag's last solution")
 
 
 def test_switching_branch_from_the_list(open_page, app):
