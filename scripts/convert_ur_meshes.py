@@ -170,7 +170,7 @@ def convert(source: Path, output: Path = OUTPUT) -> list[Path]:
 
 
 def fingerprint(source: Path) -> str:
-    """sha256 of the seven source files, recorded in SOURCE.md so a rebuild can be checked."""
+    """sha256 of the seven source files, recorded in LICENSE.md beside the meshes so a rebuild can be checked."""
     digest = hashlib.sha256()
     for name in SOURCE_FILES:
         digest.update((source / "meshes" / "ur10" / "visual" / f"{name}.dae").read_bytes())

@@ -71,10 +71,10 @@ def test_the_real_ur10_meshes_and_their_licence_ship(installed, tmp_path):
     bin_dir, env = installed
     code = (
         "import app.meshes as m, pathlib; models = m.load_models('course');"
-        "print(','.join(models.names), (m.MESH_DIR / 'real' / 'ur10' / 'LICENSE.md').is_file(), m.MESH_DIR)"
+        "print(','.join(models.names), (m.MESH_DIR / 'real' / 'ur10' / 'LICENSE.md').is_file(), m.MESH_DIR, sep='|')"
     )
     done = subprocess.run([str(bin_dir / "python"), "-c", code], cwd=tmp_path, env=env, capture_output=True, text=True)
     assert done.returncode == 0, done.stderr
-    names, licence, location = done.stdout.split()
+    names, licence, location = done.stdout.strip().split("|")
     assert names == "Real UR10,Schematic" and licence == "True"
     assert str(ROOT) not in location  # the installed copy's package data
