@@ -98,11 +98,11 @@ def test_urdf_to_dh_mapping_is_the_controllers_convention():
     np.testing.assert_allclose(to_dh[:, 3], [[0, 0, 0, 1]] * 7, atol=1e-12)
 
 
-def _seam(vertices: np.ndarray, origin: np.ndarray, axis: np.ndarray, side: int, reach: float,
+def _seam(points: np.ndarray, origin: np.ndarray, axis: np.ndarray, side: int, reach: float,
           depth: float = 0.005, sectors: int = 24) -> tuple[float, float, float, int]:
     """Where a link's housing ends along ``axis`` (facing ``side``): (height, outline centre's distance
-    from the axis, outline radius, sectors filled), from the outermost vertex in each of ``sectors``."""
-    relative = vertices - origin
+    from the axis, outline radius, sectors filled), from the outermost point in each of ``sectors``."""
+    relative = points - origin
     height = relative @ axis
     radial = relative - np.outer(height, axis)
     near = np.linalg.norm(radial, axis=1) < reach
@@ -127,8 +127,8 @@ HOUSING_REACH = {1: 0.078, 2: 0.078, 3: 0.062, 4: 0.048, 5: 0.048, 6: 0.048}
 def test_real_links_meet_on_the_dh_joint_axes(preset, joint):
     """Each joint's housing, as both links' meshes draw it, is a circle about the DH axis z_j.
 
-    Link j−1 ends where link j begins: same height along the axis, same radius, both centred on the axis. A mesh turned or shifted against its DH
-    frame breaks one of these by far more than the few millimetres allowed here.
+    Link j−1 ends where link j begins: same height along the axis, same radius, both
+    centred on the axis. A mesh shifted 2–3 mm against its DH frame already fails one of them.
     """
     arm = Arm.preset(preset)
     links = load_models(preset).by_name[REAL]
