@@ -4,7 +4,7 @@
 drawn as one small PNG image lying in the plane (a few KB, where 40 000 coloured points
 would be 600 KB). It is recomputed off the drag path: the panel's pace (≤ 10 Hz) asks
 for it, a worker thread of this view computes it, and requests that come meanwhile are
-folded into one more computation with the newest target.
+folded into one more computation with the newest target (``app.workers.FoldedRuns``).
 """
 
 from __future__ import annotations
@@ -22,6 +22,7 @@ from .feedback import chosen
 from .state import Snapshot
 from .style import REACH_COLORS, hex_color
 from .view import View
+from .workers import FoldedRuns
 from .workspace import FROM_ABOVE
 
 if TYPE_CHECKING:
@@ -65,7 +66,8 @@ class ReachMapView(View):
         self.shown_key: tuple | None = None  #: (target bytes, plane) of the map on screen
         self.computed = 0  #: maps computed so far (tests and benchmarks read it)
         self._lock = threading.Lock()
-        self._busy = self._again = self._closed = False
+        self._closed = False
+        self._maps = FoldedRuns(self._draw)
         self._face_next = False  # turn the camera to face the plane once the next map is drawn
         folder = gui.add_folder("Reachable with this orientation", expand_by_default=False)
         self.folders = (folder,)
@@ -96,27 +98,13 @@ class ReachMapView(View):
         return snapshot.target.tobytes(), PLANES[chosen(self.plane, "plane")]
 
     def _request(self) -> None:
-        """Compute the map for the newest target, in this view's worker thread."""
+        """Compute the map for the newest target, in a worker thread of this view."""
         with self._lock:
             if self._closed:
                 return
-            if self._busy:
-                self._again = True
-                return
-            self._busy = True
-        threading.Thread(target=self._session.guard(self._work), args=(None,), name="reach-map", daemon=True).start()
-
-    def _work(self, _) -> None:
-        try:
-            while True:
-                self._draw()
-                with self._lock:
-                    if not self._again:
-                        return
-                    self._again = False
-        finally:
-            with self._lock:
-                self._busy = False
+        if self._maps.claim():
+            threading.Thread(target=self._session.guard(lambda _: self._maps.run_claimed()), args=(None,),
+                             name="reach-map", daemon=True).start()
 
     def _draw(self) -> None:
         snapshot = self._session.state.last

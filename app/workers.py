@@ -230,3 +230,56 @@ class PanelRefresher(_LoopWorker):
                     log.exception("panel redraw failed")
             spent = time.perf_counter() - started
             await asyncio.sleep(spent * (1.0 / self.duty - 1.0))
+
+
+class FoldedRuns:
+    """Runs ``run`` for the newest request: requests that come while it runs fold into one more run.
+
+    A cloud or a map takes a moment; however many widget changes or redraws ask for one
+    meanwhile, at most one run is under way and one waits, and the waiting one sees the
+    newest choices. :meth:`claim` then :meth:`run_claimed` splits the two, so that the
+    run can go to a thread of its own only when one is needed.
+    """
+
+    def __init__(self, run) -> None:
+        self._run = run
+        self._lock = threading.Lock()
+        self._busy = self._again = False
+
+    @property
+    def busy(self) -> bool:
+        """A run is under way."""
+        with self._lock:
+            return self._busy
+
+    @property
+    def waiting(self) -> bool:
+        """A newer request came during the current run (it will be served by one more)."""
+        with self._lock:
+            return self._again
+
+    def claim(self) -> bool:
+        """True: the caller must now call :meth:`run_claimed`. False: the run under way takes the request."""
+        with self._lock:
+            if self._busy:
+                self._again = True
+                return False
+            self._busy = True
+            return True
+
+    def run_claimed(self) -> None:
+        try:
+            while True:
+                self._run()
+                with self._lock:
+                    if not self._again:
+                        return
+                    self._again = False
+        finally:
+            with self._lock:
+                self._busy = False
+
+    def __call__(self) -> None:
+        """Run here, in the caller's thread, unless a run is already under way."""
+        if self.claim():
+            self.run_claimed()

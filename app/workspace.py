@@ -26,6 +26,7 @@ from .camera import VIEWS
 from .feedback import chosen
 from .style import hex_color
 from .view import View
+from .workers import FoldedRuns
 
 if TYPE_CHECKING:
     from .session import ClientSession
@@ -135,7 +136,8 @@ class WorkspaceView(View):
         self._cloud: viser.PointCloudHandle | None = None
         self.legend_label: viser.LabelHandle | None = None
         self._lock = threading.Lock()
-        self._busy = self._again = self._closed = False
+        self._closed = False
+        self._clouds = FoldedRuns(self._update_or_explain)
         folder = gui.add_folder("Workspace")
         self.folders = (folder,)
         with folder:
@@ -151,27 +153,15 @@ class WorkspaceView(View):
             widget.on_update(session.guard(self._changed))
 
     def _changed(self, _: viser.GuiEvent) -> None:
-        with self._lock:
-            if self._busy:
-                self._again = True  # the running computation picks up the newest choices
-                return
-            self._busy = True
+        self._clouds()  # the running computation, if any, picks up the newest choices
+
+    def _update_or_explain(self) -> None:
         try:
-            while True:
-                try:
-                    self._update()
-                except ValueError as error:
-                    with self._lock:
-                        if not self._again:
-                            raise  # the browser is told why (a section height nobody reaches, say)
-                    self._session.notify("Not accepted", str(error))  # and the newer choice waiting is drawn
-                with self._lock:
-                    if not self._again:
-                        return
-                    self._again = False
-        finally:
-            with self._lock:
-                self._busy = False
+            self._update()
+        except ValueError as error:
+            if not self._clouds.waiting:
+                raise  # the browser is told why (a section height nobody reaches, say)
+            self._session.notify("Not accepted", str(error))  # and the newer choice waiting is drawn
 
     def _update(self) -> None:
         section = chosen(self.section, "section")

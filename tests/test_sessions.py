@@ -280,7 +280,7 @@ def test_a_section_slider_flood_costs_one_cloud_in_the_making_and_one_waiting(ap
         for height in heights:  # 2 s at 200 Hz
             await client.set_gui("Section height (mm)", height)
             await asyncio.sleep(0.005)
-        await until(lambda: computed and computed[-1] == heights[-1] and not session.workspace._busy,
+        await until(lambda: computed and computed[-1] == heights[-1] and not session.workspace._clouds.busy,
                     what="the newest height drawn", timeout=20)
         flooding = time.monotonic() - started
         await client.close()
