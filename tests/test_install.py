@@ -46,13 +46,14 @@ def test_the_core_installs_without_a_compiler_and_runs_on_numpy(installed, tmp_p
     code = (
         "import numpy as np, ur10core, pathlib; from ur10core import Arm;"
         "a = Arm.preset('course'); q = np.radians([45, 90, 0, -90, 0, 60]); s = a.ik(a.fk(q));"
-        "print(ur10core.BACKEND, int(s.valid.sum()), ur10core.__file__,"
+        "k = Arm.preset('kr210'); kq = np.radians([10, 20, -30, 40, 50, 60]); ks = k.ik(k.fk(kq));"
+        "print(ur10core.BACKEND, int(s.valid.sum()) + 100 * int(ks.valid.sum()), ur10core.__file__,"
         " sorted(p.name for p in pathlib.Path(ur10core.__file__).parent.glob('_kernels*')))"
     )
     done = subprocess.run([str(bin_dir / "python"), "-c", code], cwd=tmp_path, env=env, capture_output=True, text=True)
     assert done.returncode == 0, done.stderr
     backend, valid, location, kernels = done.stdout.split(maxsplit=3)
-    assert backend == "numpy" and valid == "8"
+    assert backend == "numpy" and valid == "408"  # the UR10's 8 branches, the KR210's 4 (ur10core.solvers ships)
     assert str(ROOT) not in location  # the installed copy, not this checkout
     assert "_kernels.c" in kernels and ".so" not in kernels and ".pyd" not in kernels
 

@@ -112,12 +112,46 @@ class Arm:
         object.__setattr__(self, "dh_lengths", (self.d1, self.a2, self.a3, self.d4, self.d5, self.d6))
 
     @classmethod
-    def preset(cls, name: str) -> "Arm":
-        """``"course"`` (docs/kinematics.md §2), ``"ur10"`` (UR's CB3 numbers) or ``"ur10e"``."""
-        try:
+    def preset(cls, name: str):
+        """``"course"`` (docs/kinematics.md §2), ``"ur10"`` (UR's CB3 numbers) or ``"ur10e"``: an Arm;
+        the course's other arms (``"kr210"``, ``"stanford"``, ``"elbow"``, ``"scara"``,
+        ``"planar_elbow"``, ``"cylindrical"``, docs/kinematics.md §7.5): a :class:`ur10core.serial.SerialArm`.
+        """
+        if name in _PRESETS:
             return cls(name=name, **_PRESETS[name])
-        except KeyError:
-            raise ValueError(f"unknown preset {name!r}; choose one of {', '.join(_PRESETS)}") from None
+        from .serial import PRESETS, SerialArm
+
+        if name in PRESETS:
+            return SerialArm.preset(name)
+        raise ValueError(f"unknown preset {name!r}; choose one of {', '.join((*_PRESETS, *PRESETS))}")
+
+    @staticmethod
+    def from_dh(rows, convention: str = "standard", joint_types: str | None = None, limits=None, name: str = "custom"):
+        """Any arm from its DH table, with the numerical IK: see :meth:`ur10core.serial.SerialArm.from_dh`."""
+        from .serial import SerialArm
+
+        return SerialArm.from_dh(rows, convention, joint_types, limits, name)
+
+    # ------------------------------------------------------------------ as a general chain
+
+    #: The UR10's joints: six revolute ones, ±360° each (docs/kinematics.md §1).
+    joint_types: ClassVar[str] = "RRRRRR"
+    n_joints: ClassVar[int] = 6
+
+    @property
+    def limits(self) -> np.ndarray:
+        """(6, 2) joint limits in radians."""
+        return np.tile([-JOINT_LIMIT, JOINT_LIMIT], (6, 1))
+
+    @property
+    def dh(self):
+        """The course's table as a general :class:`ur10core.dh.DHTable` (modified DH, docs/kinematics.md §2).
+
+        Its FK, frames and Jacobian equal this arm's closed forms, which are its fast path.
+        """
+        from .dh import DHTable
+
+        return DHTable([(a, alpha, d, 0.0, "R") for alpha, a, d in self.dh_table], "modified")
 
     # ------------------------------------------------------------------ DH table
 

@@ -1,0 +1,105 @@
+"""IK speed of the course's other arms, and the numerical IK beside the KR210's closed form.
+
+    python benchmarks/bench_arms.py
+
+For each preset with a closed form: one-pose IK (every slot, no hint) and batch IK of
+100 000 poses, per pose. For the KR210 also the numerical solver (damped least squares
+from 48 starts, :mod:`ur10core.solvers.numerical`): its time for one pose and how often it
+finds every branch the closed form lists. These arms run on numpy only (no compiled
+kernel). Figures are medians over repeats, from one run.
+"""
+
+from __future__ import annotations
+
+import statistics
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
+
+from _report import machine, table, write_section  # noqa: E402
+
+from ur10core.serial import PRESETS, SerialArm  # noqa: E402
+
+BATCH = 100_000
+NUMERICAL_POSES = 200
+
+
+def joints(arm: SerialArm, n: int, seed: int) -> np.ndarray:
+    return np.random.default_rng(seed).uniform(arm.limits[:, 0], arm.limits[:, 1], (n, arm.n_joints))
+
+
+def one_pose_us(arm: SerialArm, poses: np.ndarray, repeats: int = 5) -> float:
+    times = []
+    for _ in range(repeats):
+        start = time.perf_counter()
+        for T in poses:
+            arm.ik(T)
+        times.append((time.perf_counter() - start) / len(poses) * 1e6)
+    return statistics.median(times)
+
+
+def batch_us(arm: SerialArm, poses: np.ndarray, repeats: int = 3) -> float:
+    times = []
+    for _ in range(repeats):
+        start = time.perf_counter()
+        arm.ik(poses)
+        times.append((time.perf_counter() - start) / len(poses) * 1e6)
+    return statistics.median(times)
+
+
+def numerical_rate(arm: SerialArm) -> tuple[float, float, float, float]:
+    """Per pose: ms of the numerical IK (one call each), share of poses with every branch found,
+    share of branches found, and how many reported solutions the closed form does not list."""
+    numerical = SerialArm(arm.dh, arm.limits, None, "kr210 (numerical)")
+    q = joints(arm, NUMERICAL_POSES, 9)
+    T = arm.fk(q)
+    analytic = arm.ik(T)
+    start = time.perf_counter()
+    found = [numerical.ik(pose) for pose in T]
+    per_pose_ms = (time.perf_counter() - start) / len(T) * 1e3
+    complete = hits_total = branches = strays = 0
+    for k, solution in enumerate(found):
+        ours = solution.q[solution.valid]
+        listed = analytic.q[k][analytic.valid[k]]
+        hits = [len(ours) and np.abs(np.where(arm.revolute, (ours - b + np.pi) % (2 * np.pi) - np.pi, ours - b)).max(-1).min() < 1e-6
+                for b in listed]
+        complete += all(hits)
+        hits_total += sum(hits)
+        branches += len(listed)
+        strays += len(ours) - sum(hits)
+    return per_pose_ms, complete / len(T), hits_total / branches, strays
+
+
+def main() -> None:
+    rows = []
+    for name in PRESETS:
+        arm = SerialArm.preset(name)
+        poses = arm.fk(joints(arm, BATCH, 1))
+        one = one_pose_us(arm, poses[:2000])
+        batch = batch_us(arm, poses)
+        rows.append([f"`{name}` ({len(arm.slot_labels)} slots)", f"{one:.0f} µs", f"{batch:.2f} µs"])
+    kr210 = SerialArm.preset("kr210")
+    ms, complete, share, strays = numerical_rate(kr210)
+    rows.append(["`kr210`, numerical IK (48 starts, damped least squares)", f"{ms * 1e3:.0f} µs",
+                 f"all branches found on {100 * complete:.1f} % of {NUMERICAL_POSES} random poses; "
+                 f"{100 * share:.1f} % of the closed form's branches found; {strays} reported that the closed form does not list"])
+    body = "\n".join([
+        "## The course's other arms (`benchmarks/bench_arms.py`)",
+        "",
+        f"Run: {machine()}. numpy only (these arms have no compiled kernel). One-pose IK: every slot of one pose "
+        f"per call, no hint, over 2 000 random poses within the joint limits; batch: {BATCH:,} such poses in one call. "
+        "Medians of repeats. The numerical row solves one pose per call and compares its solutions with the closed form's.",
+        "",
+        table(["arm", "one-pose IK", "batch IK, per pose"], rows),
+    ])
+    write_section("arms", body)
+    print(body)
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,404 @@
+"""The course's other arms (docs/kinematics.md §7): DH chains against roboticstoolbox-python,
+and every analytic IK against FK on random and near-singular joints."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from ur10core import Arm
+from ur10core.branches import INSIDE_OFFSET, ORIENTATION, OUT_OF_PLANE, TOO_CLOSE, TOO_FAR
+from ur10core.dh import DHTable
+from ur10core.serial import PRESETS, SerialArm
+
+rtb = pytest.importorskip("roboticstoolbox")
+from spatialmath import SE3  # noqa: E402  (comes with roboticstoolbox)
+
+ANALYTIC = tuple(PRESETS)
+SPHERICAL_WRIST = ("kr210", "elbow", "stanford")
+
+
+def wrapped(difference: np.ndarray, revolute: np.ndarray) -> np.ndarray:
+    return np.where(revolute, (difference + np.pi) % (2 * np.pi) - np.pi, difference)
+
+
+def random_joints(arm: SerialArm, n: int, seed: int) -> np.ndarray:
+    low, high = arm.limits.T
+    return np.random.default_rng(seed).uniform(low, high, (n, arm.n_joints))
+
+
+def rtb_robot_from_table(table: DHTable, tool: np.ndarray | None = None):
+    """roboticstoolbox's own DH robot for our rows: an FK and Jacobian written by someone else."""
+    links = []
+    fixed = np.eye(4)
+    for row in table.rows:
+        if row.joint is None:
+            continue
+        kind = {("standard", "R"): rtb.RevoluteDH, ("standard", "P"): rtb.PrismaticDH,
+                ("modified", "R"): rtb.RevoluteMDH, ("modified", "P"): rtb.PrismaticMDH}[(table.convention, row.joint)]
+        if row.joint == "R":
+            links.append(kind(a=row.a, alpha=row.alpha, d=row.d, offset=row.theta))
+        else:
+            links.append(kind(a=row.a, alpha=row.alpha, theta=row.theta, offset=row.d))
+    robot = rtb.DHRobot(links)
+    if tool is not None:
+        robot.tool = SE3(tool, check=False)
+    return robot
+
+
+# ---------------------------------------------------------------------------- DH chains
+
+
+@pytest.mark.parametrize("model", ["Puma560", "Stanford", "Cobra600", "Panda", "KR5", "IRB140"])
+def test_dh_chain_matches_roboticstoolbox_models(model):
+    """FK and the geometric Jacobian of our DHTable on roboticstoolbox's models (both conventions)."""
+    robot = getattr(rtb.models.DH, model)()
+    robot.tool = SE3()
+    robot.base = SE3()
+    rows = []
+    for link in robot.links:
+        if link.isprismatic:
+            rows.append((link.a, link.alpha, link.offset, link.theta, "P"))
+        else:
+            rows.append((link.a, link.alpha, link.d, link.offset, "R"))
+    table = DHTable(rows, "modified" if robot.mdh else "standard")
+    q = np.random.default_rng(7).uniform(-2, 2, (50, robot.n))
+    q[:, table.joint_types.find("P")] = np.abs(q[:, table.joint_types.find("P")]) if "P" in table.joint_types else 0
+    ours = table.fk(q)
+    theirs = np.array([robot.fkine(x).A for x in q])
+    np.testing.assert_allclose(ours, theirs, atol=1e-12)
+    np.testing.assert_allclose(table.jacobian(q), np.array([robot.jacob0(x) for x in q]), atol=1e-12)
+
+
+@pytest.mark.parametrize("name", ANALYTIC)
+def test_presets_fk_matches_roboticstoolbox_built_from_the_same_rows(name):
+    arm = SerialArm.preset(name)
+    tool_rows = [row for row in arm.dh.rows if row.joint is None]
+    tool = None
+    if tool_rows:  # the KR210's gripper row G: a translation along z6
+        (row,) = tool_rows
+        tool = np.eye(4)
+        tool[2, 3] = row.d
+    robot = rtb_robot_from_table(arm.dh, tool)
+    q = random_joints(arm, 100, 1)
+    np.testing.assert_allclose(arm.fk(q), np.array([robot.fkine(x).A for x in q]), atol=1e-12)
+    np.testing.assert_allclose(arm.jacobian(q), np.array([robot.jacob0(x) for x in q]), atol=1e-12)
+
+
+@pytest.mark.parametrize("name", ANALYTIC)
+def test_jacobian_matches_finite_differences(name):
+    arm = SerialArm.preset(name)
+    q = random_joints(arm, 20, 2)
+    h = 1e-6
+    J = arm.jacobian(q)
+    for k in range(arm.n_joints):
+        step = np.zeros(arm.n_joints)
+        step[k] = h
+        plus, minus = arm.fk(q + step), arm.fk(q - step)
+        v = (plus[:, :3, 3] - minus[:, :3, 3]) / (2 * h)
+        dR = (plus[:, :3, :3] - minus[:, :3, :3]) / (2 * h) @ np.swapaxes(arm.fk(q)[:, :3, :3], -1, -2)
+        w = np.stack([dR[:, 2, 1], dR[:, 0, 2], dR[:, 1, 0]], axis=-1)
+        np.testing.assert_allclose(J[:, :3, k], v, atol=1e-8)
+        np.testing.assert_allclose(J[:, 3:, k], w, atol=1e-8)
+
+
+@pytest.mark.parametrize("name", ANALYTIC + ("rtb:Panda", "rtb:Puma560"))
+def test_both_conventions_give_the_same_tool_pose(name):
+    if name.startswith("rtb:"):
+        robot = getattr(rtb.models.DH, name[4:])()
+        rows = [(l.a, l.alpha, l.d, l.offset, "R") for l in robot.links]
+        table = DHTable(rows, "modified" if robot.mdh else "standard")
+    else:
+        table = SerialArm.preset(name).dh
+    other = table.converted("modified" if table.convention == "standard" else "standard")
+    back = other.converted(table.convention)
+    q = np.random.default_rng(3).uniform(-2, 2, (30, table.n_joints))
+    np.testing.assert_allclose(other.fk(q), table.fk(q), atol=1e-12)
+    np.testing.assert_allclose(back.fk(q), table.fk(q), atol=1e-12)
+    np.testing.assert_allclose(other.jacobian(q), table.jacobian(q), atol=1e-12)
+    assert other.joint_types == table.joint_types
+
+
+def test_course_numbers():
+    """docs/kinematics.md §7.5: the KR210 at zero and the Stanford arm's default input."""
+    kr210 = SerialArm.preset("kr210")
+    # zero pose: the gripper straight out at x = a1 + d4 + dG, height d1 + a2 + a3 (a3 = −0.054), tool along x
+    T = kr210.fk(np.zeros(6))
+    np.testing.assert_allclose(T[:3, 3], [0.35 + 1.50 + 0.303, 0.0, 0.75 + 1.25 - 0.054], atol=1e-12)
+    np.testing.assert_allclose(T[:3, 2], [1.0, 0.0, 0.0], atol=1e-12)
+    stanford = SerialArm.preset("stanford")
+    q = np.radians([100, 100, 0, 100, 100, 100])
+    q[2] = 10 * 0.0254
+    p = stanford.fk(q)[:3, 3]
+    t1, t2, d2, d3 = q[0], q[1], 0.161925, q[2]
+    expected = [math.cos(t1) * math.sin(t2) * d3 - math.sin(t1) * d2,
+                math.sin(t1) * math.sin(t2) * d3 + math.cos(t1) * d2, math.cos(t2) * d3]
+    np.testing.assert_allclose(p, expected, atol=1e-12)
+
+
+# ---------------------------------------------------------------------------- analytic IK
+
+
+def near_singular_joints(arm: SerialArm, n: int, seed: int) -> np.ndarray:
+    """Joints 1e-12 … 1e-5 from each singularity of the arm's family (random otherwise)."""
+    rng = np.random.default_rng(seed)
+    q = random_joints(arm, n, seed)
+    tiny = 10.0 ** rng.uniform(-12, -5, n) * rng.choice([-1, 1], n)
+    exact = rng.random(n) < 0.2
+    tiny[exact] = 0.0
+    kind = rng.integers(0, 3, n)
+    if arm.name in SPHERICAL_WRIST:
+        wrist = kind == 0  # θ5 at 0 or π: axes 4 and 6 aligned
+        q[wrist, 4] = rng.choice([0.0, math.pi], wrist.sum()) + tiny[wrist]
+        if arm.name == "stanford":
+            stroke = kind == 1  # d3 at 0: the wrist centre on the shoulder
+            q[stroke, 2] = np.abs(tiny[stroke])
+            cylinder = kind == 2  # θ2 at 0 or π: the wrist centre on the d2 cylinder
+            q[cylinder, 1] = rng.choice([0.0, math.pi], cylinder.sum()) + tiny[cylinder]
+        else:
+            plane = arm.solver.plane
+            elbow = kind == 1  # stretched or folded: β = s3 θ3 + φ at 0 or π
+            beta = rng.choice([0.0, math.pi], elbow.sum()) + tiny[elbow]
+            q[elbow, 2] = (beta - plane["phi"]) * plane["s3"]
+            both = kind == 2
+            q[both, 4] = tiny[both]
+            q[both, 2] = (np.abs(tiny[both]) - plane["phi"]) * plane["s3"]
+    else:
+        elbow = kind < 2
+        if arm.name in ("planar_elbow", "scara"):
+            q[elbow, 1] = rng.choice([0.0, math.pi], elbow.sum()) + tiny[elbow]
+        if arm.name == "cylindrical":
+            q[elbow, 2] = np.abs(tiny[elbow])
+    return q
+
+
+@pytest.mark.parametrize("name", ANALYTIC)
+@pytest.mark.parametrize("kind", ["random", "near singular"])
+def test_fk_of_ik_and_the_generating_joints(name, kind):
+    """Every valid slot reproduces the pose to 1e-9; with the joints as hint they are among the branches;
+    without a hint the pose is still reached."""
+    arm = SerialArm.preset(name)
+    q = random_joints(arm, 3000, 11) if kind == "random" else near_singular_joints(arm, 3000, 12)
+    T = arm.fk(q)
+    for hint in (q, None):
+        sol = arm.ik(T, hint=hint)
+        assert sol.valid.any(axis=-1).all(), sol.unreachable_reason((int(np.argmin(sol.valid.any(-1))),))
+        error = arm.pose_error(np.where(sol.valid[..., None], sol.q, 0.0), T[:, None])
+        assert error[sol.valid].max() < 1e-9
+        if hint is not None:
+            distance = np.where(sol.valid, np.abs(wrapped(sol.q - q[:, None], arm.revolute)).max(axis=-1), np.inf)
+            assert distance.min(axis=-1).max() < 1e-6
+    assert len(sol.labels) == sol.q.shape[-2] == {"kr210": 8, "elbow": 8, "stanford": 4, "scara": 2,
+                                                   "planar_elbow": 2, "cylindrical": 1}[name]
+
+
+@pytest.mark.parametrize("name", ["kr210", "elbow"])
+def test_articulated_arms_have_eight_distinct_branches_inside_the_reach(name):
+    arm = SerialArm.preset(name)
+    q = random_joints(arm, 500, 4)
+    sol = arm.ik(arm.fk(q))
+    full = sol.valid.all(axis=-1)
+    assert full.mean() > 0.5
+    qs = sol.q[full]
+    pairwise = np.abs(wrapped(qs[:, :, None] - qs[:, None], arm.revolute)).max(axis=-1)
+    off_diagonal = pairwise[:, ~np.eye(8, dtype=bool)]
+    assert (off_diagonal.min(axis=-1) > 1e-6).mean() > 0.99
+
+
+@pytest.mark.parametrize("name", ["kr210", "elbow"])
+def test_elbow_up_puts_the_elbow_above_the_shoulder_wrist_line(name):
+    """The labels say what a student sees: "elbow up" has the elbow above the straight line from
+    the shoulder joint to the wrist centre (checked where the arm reaches the way its shoulder faces)."""
+    arm = SerialArm.preset(name)
+    sol = arm.ik(arm.fk(random_joints(arm, 300, 5)))
+    checked = 0
+    for slot, label in enumerate(sol.labels):
+        q = sol.q[:, slot][sol.valid[:, slot]]
+        frames = arm.frames(q)
+        _, points = arm.dh.joint_axes(frames)
+        shoulder, elbow = points[:, 1], points[:, 2]
+        centre = frames[:, arm.solver.wrist.first_row + 1, :3, 3]
+        heading = np.stack([np.cos(q[:, 0]), np.sin(q[:, 0])], axis=-1)
+        radial = lambda p: np.einsum("ni,ni->n", p[:, :2], heading)  # noqa: E731
+        ahead = radial(centre) > radial(shoulder)
+        as_labelled = ahead if "front" in label else ~ahead
+        line = shoulder[:, 2] + (centre[:, 2] - shoulder[:, 2]) * (radial(elbow) - radial(shoulder)) / (radial(centre) - radial(shoulder))
+        above = elbow[:, 2] > line
+        assert (above[as_labelled] == ("up" in label)).mean() > 0.99, label
+        checked += as_labelled.sum()
+    assert checked > 1000
+
+
+def test_wrist_singular_keeps_the_hints_theta4():
+    arm = SerialArm.preset("kr210")
+    q = np.radians([20, 10, -20, 35, 0, 50])
+    sol = arm.ik(arm.fk(q), hint=q)
+    slot = sol.nearest(q, arm.revolute)
+    np.testing.assert_allclose(sol.q[slot], q, atol=1e-12)
+    assert sol.singular[slot]
+    other = arm.ik(arm.fk(q))  # no hint: θ4 = 0, θ6 takes the whole turn
+    slot = other.nearest(q, arm.revolute)
+    assert abs(other.q[slot, 3]) < 1e-12 and math.isclose(other.q[slot, 5], math.radians(85), abs_tol=1e-9)
+
+
+def test_wrist_centre_on_axis_one_keeps_the_hints_theta1():
+    arm = SerialArm.preset("kr210")
+    T = np.eye(4)
+    T[:3, 3] = (0.0, 0.0, 2.6)  # the wrist centre straight above the base, 0.303 below the tool
+    T[:3, 3] += (0, 0, 0.303)
+    hint = np.radians([37, 0, 0, 0, 0, 0])
+    sol = arm.ik(T, hint=hint)
+    assert sol.valid.any()
+    np.testing.assert_allclose(sol.q[sol.valid][:, 0] % math.pi, math.radians(37), atol=1e-12)
+    assert sol.singular[sol.valid].all()
+    assert arm.pose_error(sol.q[sol.valid], T).max() < 1e-9
+
+
+@pytest.mark.parametrize("name, position, failure, words", [
+    ("kr210", (4.0, 0.0, 1.0), TOO_FAR, "reach at most"),
+    ("elbow", (0.0, 0.0, 0.72), TOO_CLOSE, "cannot come closer"),  # WC 20 mm above the shoulder, folded 50 mm
+    ("stanford", (0.05, 0.05, 0.3), INSIDE_OFFSET, "inside the shoulder offset"),
+    ("planar_elbow", (0.5, 0.2, 0.1), OUT_OF_PLANE, "off the plane"),
+    ("scara", (2.0, 0.0, 0.2), TOO_FAR, "reach at most"),
+])
+def test_unreachable_poses_are_explained_with_numbers(name, position, failure, words):
+    arm = SerialArm.preset(name)
+    T = np.eye(4)
+    if name == "scara":
+        T[:3, :3] = np.diag([1.0, -1.0, -1.0])
+    T[:3, 3] = position
+    sol = arm.ik(T)
+    assert not sol.valid.any()
+    assert (sol.failure == failure).any()
+    reason = sol.unreachable_reason()
+    assert words in reason and "mm" in reason
+
+
+def test_scara_refuses_a_tilted_tool_and_says_by_how_much():
+    arm = SerialArm.preset("scara")
+    T = arm.fk(np.array([0.3, 0.5, 0.1, 0.2]))
+    tilt = np.array([[1, 0, 0], [0, math.cos(0.01), -math.sin(0.01)], [0, math.sin(0.01), math.cos(0.01)]])
+    T[:3, :3] = tilt @ T[:3, :3]
+    sol = arm.ik(T)
+    assert not sol.valid.any() and (sol.failure == ORIENTATION).all()
+    assert "0.57°" in sol.unreachable_reason()
+
+
+def test_a_slot_beyond_a_joint_limit_stays_valid_and_is_flagged():
+    arm = SerialArm.preset("kr210")
+    q = random_joints(arm, 200, 6)
+    sol = arm.ik(arm.fk(q))
+    assert (sol.within_limits == sol.valid & arm.within_limits(np.where(sol.valid[..., None], sol.q, 0.0))).all()
+    beyond = sol.valid & ~sol.within_limits
+    assert beyond.any(axis=-1).mean() > 0.5  # KR210's q2 (−45…85°) and q3 (−210…65°) rule out many branches
+    assert sol.within_limits.any(axis=-1).all()  # the generating joints are inside
+
+
+def test_batches_and_hints_broadcast():
+    arm = SerialArm.preset("stanford")
+    q = random_joints(arm, 12, 8).reshape(3, 4, 6)
+    sol = arm.ik(arm.fk(q), hint=q[0])
+    assert sol.q.shape == (3, 4, 4, 6) and sol.valid.shape == (3, 4, 4)
+    one = arm.ik(arm.fk(q[1, 2]), hint=q[0, 2])
+    np.testing.assert_allclose(one.q, sol.q[1, 2], atol=1e-15)
+
+
+# ---------------------------------------------------------------------------- numerical IK
+
+
+def test_numerical_ik_finds_the_kr210s_branches():
+    """The damped-least-squares search against the closed form: every branch it reports is
+    real, and on most poses it finds all eight (the rate is printed in BENCHMARKS.md)."""
+    arm = SerialArm.preset("kr210")
+    numerical = SerialArm(arm.dh, arm.limits, None, "kr210 (numerical)")
+    q = random_joints(arm, 30, 9)
+    T = arm.fk(q)
+    analytic, found = arm.ik(T), numerical.ik(T)
+    assert found.method == "found numerically" and found.labels[0] == "found numerically 1"
+    assert numerical.pose_error(np.where(found.valid[..., None], found.q, 0), T[:, None])[found.valid].max() < 1e-9
+    complete = 0
+    for k in range(len(T)):
+        ours = found.q[k][found.valid[k]]
+        branches = analytic.q[k][analytic.valid[k]]
+        hits = [np.abs(wrapped(ours - b, arm.revolute)).max(axis=-1).min() < 1e-6 for b in branches]
+        assert len(ours) == sum(hits)  # nothing it reports is outside the closed form's list
+        complete += all(hits)
+    assert complete / len(T) >= 0.7
+
+
+def test_a_custom_arm_typed_by_a_student():
+    arm = Arm.from_dh([(0.5, 0, 0, 0), (0.4, 0, 0, 0), (0, 0, 0, 0)], convention="standard", joint_types="RRP")
+    assert arm.joint_types == "RRP" and arm.task == "position"
+    q = np.array([0.4, 0.9, 0.3])
+    sol = arm.ik(arm.fk(q), hint=q)
+    assert sol.method == "found numerically"
+    assert arm.pose_error(sol.q[sol.valid], arm.fk(q)).max() < 1e-9
+    far = np.eye(4)
+    far[:3, 3] = (3.0, 0.0, 0.0)
+    assert "numerical search found no joints" in arm.ik(far).unreachable_reason()
+
+
+def test_arm_preset_serves_every_arm():
+    assert isinstance(Arm.preset("kr210"), SerialArm)
+    assert Arm.preset("course").__class__ is Arm
+    for name in ANALYTIC:
+        arm = Arm.preset(name)
+        assert arm.dh.n_joints == arm.n_joints == len(arm.joint_names) == len(arm.limits)
+        points, manipulability = arm.sample_workspace(2000, seed=1)
+        assert points.shape == (2000, 3) and (manipulability >= 0).all()
+        np.testing.assert_allclose(points, arm.fk(arm.sample_workspace(2000, seed=1, return_joints=True)[2])[:, :3, 3])
+
+
+def test_manipulability_vanishes_at_the_singularities():
+    kr210 = SerialArm.preset("kr210")
+    assert kr210.manipulability(np.radians([10, 20, -30, 40, 0, 60])) < 1e-12
+    q = np.radians([10, 20, -30, 40, 50, 60])
+    np.testing.assert_allclose(kr210.manipulability(q), abs(np.linalg.det(kr210.jacobian(q))), rtol=1e-12)
+    stanford = SerialArm.preset("stanford")
+    assert stanford.manipulability(np.array([0.3, 0.4, 0.0, 0.2, 0.5, 0.1])) < 1e-12
+
+
+@pytest.mark.parametrize("rows, words", [
+    ([(0.5, 0, 0, 0, "X")], "joint must be 'R'"),
+    ([(0.5, 0, float("nan"), 0, "R")], "d must be a finite number"),
+    ([(0.5, 0, 0)], "must be (a, alpha, d, theta, joint)"),
+    ([], "at least one row"),
+    ([(0.5, 0, 0, 0, None)], "at least one joint"),
+])
+def test_bad_tables_are_refused_with_the_reason(rows, words):
+    with pytest.raises(ValueError, match=None) as error:
+        DHTable(rows, "standard")
+    assert words in str(error.value)
+
+
+def test_bad_values_are_refused():
+    arm = SerialArm.preset("scara")
+    with pytest.raises(ValueError, match=r"shape \(\.\.\., 4\)"):
+        arm.fk(np.zeros(6))
+    with pytest.raises(ValueError, match="complex"):
+        arm.fk(np.zeros(4, complex))
+    with pytest.raises(ValueError, match="hint"):
+        arm.ik(arm.fk(np.zeros(4)), hint=np.zeros(3))
+    with pytest.raises(ValueError, match="orthonormal"):
+        arm.ik(np.diag([2.0, 1.0, 1.0, 1.0]))
+    with pytest.raises(ValueError, match="joint_types"):
+        SerialArm.from_dh([(0.5, 0, 0, 0)], joint_types="RX")
+    with pytest.raises(ValueError, match="unknown preset"):
+        Arm.preset("kr2100")
+    with pytest.raises(ValueError, match="convention"):
+        DHTable([(0.5, 0, 0, 0, "R")], "craig")
+
+
+@pytest.mark.parametrize("name", ["course", "ur10", "ur10e"])
+def test_the_ur_family_is_the_same_chain_as_its_dh_table(name):
+    """The UR closed forms are the fast path of the general chain built from their own table."""
+    arm = Arm.preset(name)
+    q = np.random.default_rng(4).uniform(-np.pi, np.pi, (200, 6))
+    table = arm.dh
+    assert table.convention == "modified" and table.joint_types == arm.joint_types == "RRRRRR"
+    np.testing.assert_allclose(table.fk(q), arm.fk(q), atol=1e-12)
+    np.testing.assert_allclose(table.frames(q)[:, :7], arm.frames(q), atol=1e-12)
+    np.testing.assert_allclose(table.jacobian(q), arm.jacobian(q), atol=1e-12)
+    assert arm.limits.shape == (6, 2)

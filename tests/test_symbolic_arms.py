@@ -1,0 +1,69 @@
+"""det J of the course's other arms: the cached sympy derivation against a fresh one and against numbers."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+import sympy as sp
+
+from ur10core import symbolic_arms
+from ur10core.serial import PRESETS, SerialArm
+
+#: The rows of J [v; ω] whose square determinant is det J, per task (docs/kinematics.md §7.6).
+SQUARE_ROWS = {"kr210": slice(0, 6), "elbow": slice(0, 6), "stanford": slice(0, 6), "scara": [0, 1, 2, 5],
+               "planar_elbow": [0, 1], "cylindrical": [0, 1, 2]}
+
+
+@pytest.mark.slow
+def test_cache_matches_a_fresh_derivation():
+    """~35 s: derives every arm again, proving det J = constant × factors symbolically."""
+    for name in PRESETS:
+        fresh, cached = symbolic_arms.derive(name), symbolic_arms.load(name)
+        assert fresh.constant == cached.constant
+        assert [f.name for f in fresh.factors] == [f.name for f in cached.factors]
+        assert all(sp.simplify(a.expression - b.expression) == 0 for a, b in zip(fresh.factors, cached.factors))
+
+
+@pytest.mark.parametrize("name", PRESETS)
+def test_factors_multiply_to_the_numeric_det_j(name):
+    arm = SerialArm.preset(name)
+    derivation = symbolic_arms.load(name)
+    q = np.random.default_rng(2).uniform(arm.limits[:, 0], arm.limits[:, 1], (200, arm.n_joints))
+    J = arm.jacobian(q)[:, SQUARE_ROWS[name], :]
+    numeric = np.linalg.det(J)
+    factors = arm.singularity_factors(q)
+    assert factors.shape == (200, len(derivation.factors))
+    np.testing.assert_allclose(float(derivation.constant) * factors.prod(axis=-1), numeric, rtol=1e-9, atol=1e-12)
+    np.testing.assert_allclose(np.abs(numeric), arm.manipulability(q), rtol=1e-9, atol=1e-12)
+
+
+def test_each_factor_is_the_geometry_it_names():
+    kr210 = SerialArm.preset("kr210")
+    q = np.random.default_rng(3).uniform(-2, 2, (100, 6))
+    shoulder, elbow, wrist = kr210.singularity_factors(q).T
+    frames = kr210.frames(q)
+    centre = frames[:, kr210.solver.wrist.first_row + 1, :3, 3]
+    np.testing.assert_allclose(np.abs(shoulder), np.hypot(centre[:, 0], centre[:, 1]), atol=1e-12)  # WC from axis 1
+    np.testing.assert_allclose(wrist, np.sin(q[:, 4]), atol=1e-15)
+    # the elbow factor vanishes where the closed form's upper arm and forearm are in line
+    plane = kr210.solver.plane
+    stretched = q.copy()
+    stretched[:, 2] = (0.0 - plane["phi"]) * plane["s3"]
+    assert np.abs(kr210.singularity_factors(stretched)[:, 1]).max() < 1e-12
+    assert np.abs(kr210.singularity_factors(q)[:, 1]).min() > 1e-6
+    meanings = [f.meaning for f in symbolic_arms.load("stanford").factors]
+    assert "d3 = 0" in meanings[0] and "θ5 = 0" in meanings[2]
+
+
+def test_custom_arms_report_the_smallest_singular_value_instead():
+    arm = SerialArm.from_dh([(0.5, 0, 0, 0), (0.4, 0, 0, 0)], joint_types="RR")
+    with pytest.raises(ValueError, match="smallest_singular_value"):
+        arm.singularity_factors([0.1, 0.2])
+    assert arm.smallest_singular_value([0.1, 0.0]) < 1e-12 < arm.smallest_singular_value([0.1, 0.5])
+
+
+def test_a_stale_cache_is_refused(tmp_path):
+    stale = tmp_path / "stale.json"
+    stale.write_text('{"fingerprint": "0", "arms": {}}')
+    with pytest.raises(RuntimeError, match="stale"):
+        symbolic_arms._cache.__wrapped__(stale)

@@ -1,0 +1,142 @@
+"""Numerical IK for any DH table: damped least squares from many starts (docs/kinematics.md §7.4).
+
+Each pose is solved from ``starts`` joint vectors at once (the hint first, then random
+ones spread over the joint ranges), by Levenberg–Marquardt steps on the pose error
+``e = [p_target − p; log(R_target Rᵀ)]`` (position only for arms of fewer than six
+joints):
+
+    Δq = Jᵀ (J Jᵀ + λ² I)⁻¹ e
+
+λ shrinks after a step that lowers the error and grows after one that does not (the step
+is then not taken), so a start near a singularity slows down instead of jumping. Starts
+that converge to within 1e-12 of the pose, checked once more by FK to 1e-9, are the
+solutions; solutions closer than 1e-6 in every joint are one, and they are sorted so that
+the same pose always lists them in the same order, labelled "found numerically".
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from ..branches import NOT_FOUND, empty_branches, wrap
+from ..dh import DHTable
+
+#: A start has converged when its error (m and rad) is below this.
+CONVERGED = 1e-12
+#: Solutions closer than this in every joint (rad or m) are the same solution.
+SAME = 1e-6
+
+
+def rotation_log(R: np.ndarray) -> np.ndarray:
+    """The rotation vector of (..., 3, 3) rotations: axis × angle, angle in [0, π]."""
+    trace = R[..., 0, 0] + R[..., 1, 1] + R[..., 2, 2]
+    skew = np.stack([R[..., 2, 1] - R[..., 1, 2], R[..., 0, 2] - R[..., 2, 0], R[..., 1, 0] - R[..., 0, 1]], axis=-1)
+    sin2 = np.linalg.norm(skew, axis=-1)  # 2 sin(angle)
+    angle = np.arctan2(sin2, trace - 1.0)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        scale = np.where(sin2 > 1e-300, angle / sin2, 0.5)
+    vector = skew * scale[..., None]
+    # near π the skew part vanishes: take the axis from the symmetric part
+    near_pi = angle > math.pi - 1e-4
+    if near_pi.any():
+        Rn = R[near_pi]
+        B = (Rn + np.swapaxes(Rn, -1, -2)) / 2 - np.eye(3) * ((np.trace(Rn, axis1=-2, axis2=-1) - 1) / 2)[:, None, None]
+        column = np.argmax(np.diagonal(B, axis1=-2, axis2=-1), axis=-1)
+        axis = B[np.arange(len(Rn)), :, column]
+        axis /= np.linalg.norm(axis, axis=-1, keepdims=True)
+        sign = np.sign(np.einsum("ni,ni->n", axis, skew[near_pi]))
+        axis *= np.where(sign == 0, 1.0, sign)[:, None]
+        vector[near_pi] = axis * angle[near_pi][:, None]
+    return vector
+
+
+class NumericalIK:
+    """Damped least squares from ``starts`` starts; up to ``slots`` distinct solutions per pose."""
+
+    method = "found numerically"
+
+    def __init__(self, table: DHTable, limits: np.ndarray, starts: int = 48, iterations: int = 150,
+                 slots: int = 16, seed: int = 0) -> None:
+        self.table = table
+        self.limits = np.asarray(limits, dtype=float)
+        self.starts, self.iterations, self.seed = starts, iterations, seed
+        self.task = "pose" if table.n_joints >= 6 else "position"
+        self.labels = tuple(f"found numerically {k + 1}" for k in range(slots))
+        self.revolute = np.array([t == "R" for t in table.joint_types])
+
+    def explain(self, failure: int, detail: float) -> str:
+        what = "pose" if self.task == "pose" else "position"
+        return (f"the numerical search found no joints that reach this {what} from {self.starts} starts "
+                f"(the nearest came within {1000 * detail:.3g} mm / mrad)")
+
+    def _starts(self, hint: np.ndarray | None, count: int) -> np.ndarray:
+        """(count, starts, n): the hint first (if any), then the same random spread for every pose."""
+        low, high = self.limits[:, 0].copy(), self.limits[:, 1].copy()
+        low[self.revolute] = np.maximum(low[self.revolute], -math.pi)
+        high[self.revolute] = np.minimum(high[self.revolute], math.pi)
+        spread = np.random.default_rng(self.seed).uniform(low, high, (self.starts, len(low)))
+        q = np.broadcast_to(spread, (count,) + spread.shape).copy()
+        if hint is not None:
+            q[:, 0] = hint
+        return q
+
+    def _error(self, q: np.ndarray, target: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Pose error (…, 6 or 3) and the Jacobian rows that go with it (…, 6 or 3, n)."""
+        frames = self.table.frames(q)
+        tool = frames[..., -1, :, :]
+        J = self.table.jacobian_from_frames(frames)
+        position = target[..., :3, 3] - tool[..., :3, 3]
+        if self.task == "position":
+            return position, J[..., :3, :]
+        turn = rotation_log(target[..., :3, :3] @ np.swapaxes(tool[..., :3, :3], -1, -2))
+        return np.concatenate([position, turn], axis=-1), J
+
+    def solve(self, T: np.ndarray, hint: np.ndarray | None) -> dict[str, np.ndarray]:
+        N, n, slots = len(T), self.table.n_joints, len(self.labels)
+        out = empty_branches((N,), slots, n)
+        q = self._starts(hint, N)
+        target = np.broadcast_to(T[:, None], q.shape[:-1] + (4, 4))
+        damping = np.full(q.shape[:-1], 1e-2)
+        error, J = self._error(q, target)
+        size = np.linalg.norm(error, axis=-1)
+        rows = error.shape[-1]
+        for _ in range(self.iterations):
+            active = size > CONVERGED
+            if not active.any():
+                break
+            A = J[active] @ np.swapaxes(J[active], -1, -2) + (damping[active] ** 2)[:, None, None] * np.eye(rows)
+            step = np.einsum("kji,kj->ki", J[active], np.linalg.solve(A, error[active][..., None])[..., 0])
+            trial = q[active] + step
+            trial_error, trial_J = self._error(trial, target[active])
+            trial_size = np.linalg.norm(trial_error, axis=-1)
+            better = trial_size < size[active]
+            index = tuple(np.argwhere(active)[better].T)
+            q[index], error[index], J[index], size[index] = trial[better], trial_error[better], trial_J[better], trial_size[better]
+            damping[active] = np.where(better, np.maximum(damping[active] / 3, 1e-9), np.minimum(damping[active] * 4, 1e3))
+        q = np.where(self.revolute, wrap(q), q)
+        reached = np.abs(self.table.fk(q) - target)
+        if self.task == "position":
+            reached = reached[..., :3, 3]
+        ok = (size <= 1e-10) & (reached.reshape(reached.shape[:2] + (-1,)).max(axis=-1) <= 1e-9)
+        for k in range(N):
+            found = _distinct(q[k][ok[k]], self.revolute)[:slots]
+            out["q"][k, : len(found)] = found
+            out["valid"][k, : len(found)] = True
+            if not len(found):
+                out["failure"][k] = NOT_FOUND
+                out["detail"][k] = size[k].min()
+        return out
+
+
+def _distinct(q: np.ndarray, revolute: np.ndarray) -> np.ndarray:
+    """Rows of ``q`` (m, n) with near-duplicates dropped, in lexicographic order."""
+    if not len(q):
+        return q
+    q = q[np.lexsort(q.T[::-1])]
+    kept: list[np.ndarray] = []
+    for row in q:
+        if not any(np.abs(np.where(revolute, wrap(row - other), row - other)).max() <= SAME for other in kept):
+            kept.append(row)
+    return np.array(kept)

@@ -1,0 +1,318 @@
+"""Pieper's decoupling for arms with a spherical wrist (docs/kinematics.md §7.3).
+
+When the last three joint axes meet in one point, the wrist centre WC, the pose splits in
+two: joints 1–3 place WC (``WC = p − R c``, with c the fixed offset from WC to the tool
+in the tool frame), joints 4–6 then turn the tool to ``R3_6 = R0_3ᵀ R``.
+
+* :class:`Wrist` reads the wrist's axes from the DH table and writes ``R3_6`` as a ZYZ
+  Euler product; θ5 = 0 (axes 4 and 6 aligned) fixes only θ4 ± θ6, and θ4 is then the hint's.
+* :class:`ArticulatedArm` (KR210, the elbow arm): θ1 towards WC or turned by π (shoulder
+  front / back), the law of cosines in the arm's plane (elbow up / down), the wrist
+  flipped or not: 8 slots, ``k = 4 shoulder + 2 elbow + wrist``. The plane geometry —
+  shoulder, upper arm, forearm and their angles — is read from the table's own FK, so
+  the same code serves both arms and any table of their shape.
+* :class:`StanfordArm` (RRP + wrist): θ1 from the shoulder offset d2 (two choices), θ2
+  and the stroke d3 ≥ 0 to WC, the wrist flipped or not: 4 slots, ``k = 2 shoulder + wrist``.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from ..branches import (
+    INSIDE_OFFSET,
+    TOO_CLOSE,
+    TOO_FAR,
+    empty_branches,
+    wrap,
+)
+from ..dh import MODIFIED, STANDARD, DHTable
+from ..tolerances import CHOICE_TOLERANCE, LENGTH_TOLERANCE, WRIST_TURN_TOLERANCE
+
+#: |sin θ5| below which θ4 is the hint's whatever the pose says (the axes are aligned).
+WRIST_TOLERANCE = WRIST_TURN_TOLERANCE / math.pi
+
+
+def _rx(angle: float) -> np.ndarray:
+    c, s = math.cos(angle), math.sin(angle)
+    if abs(c) < 1e-15:
+        c = 0.0
+    if abs(s) < 1e-15:
+        s = 0.0
+    return np.array([[1.0, 0.0, 0.0], [0.0, c, -s], [0.0, s, c]])
+
+
+def _rz(angle: float) -> np.ndarray:
+    c, s = math.cos(angle), math.sin(angle)
+    return np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
+
+
+class Wrist:
+    """The spherical wrist of ``table``: its last three joints (revolute, consecutive rows).
+
+    ``R_pre`` is the orientation before the wrist's first row (a function of joints 1–3);
+    ``R_preᵀ R = P Rz(θ4) Rx(β1) Rz(θ5) Rx(β2) Rz(θ6) Q`` with β1, β2 = ±π/2, and since
+    ``Rx(β1) Rz(θ5) = Ry(−s θ5) Rx(β1)`` (s = sign β1) this is
+    ``P Rz(θ4) Ry(−s θ5) Rz(±θ6) Rx(β1 + β2) Q``: a ZYZ Euler product between fixed rotations.
+    """
+
+    def __init__(self, table: DHTable) -> None:
+        rows = table.rows
+        if table.n_joints < 6 or table.joint_types[-3:] != "RRR":
+            raise ValueError("a spherical wrist needs three revolute joints last")
+        j4, j5, j6 = table.joint_rows[-3:]
+        if (j5, j6) != (j4 + 1, j4 + 2):
+            raise ValueError("the wrist's three rows must follow each other")
+        self.first_row = j4
+        tool_rows = rows[j6 + 1:]
+        if table.convention == MODIFIED:
+            self.P = _rx(rows[j4].alpha)
+            beta1, beta2 = rows[j5].alpha, rows[j6].alpha
+            Q = np.eye(3)
+            for row in tool_rows:
+                Q = Q @ _rx(row.alpha) @ _rz(row.theta)
+        else:
+            self.P = np.eye(3)
+            beta1, beta2 = rows[j4].alpha, rows[j5].alpha
+            Q = _rx(rows[j6].alpha)
+            for row in tool_rows:
+                Q = Q @ _rz(row.theta) @ _rx(row.alpha)
+        if not (abs(abs(beta1) - math.pi / 2) < 1e-12 and abs(abs(beta2) - math.pi / 2) < 1e-12):
+            raise ValueError("a spherical wrist's consecutive axes must be perpendicular (twists of ±π/2)")
+        self.s5 = -math.copysign(1.0, beta1)  # Ry(s5 θ5) in the ZYZ product
+        self.s6 = 1.0 if abs(beta1 + beta2) < 1e-12 else -1.0
+        self.post = _rx(beta1 + beta2) @ Q  # W = Pᵀ R_preᵀ R postᵀ = Rz(θ4) Ry(s5 θ5) Rz(s6 θ6)
+        self.offsets = np.array([rows[j].theta for j in (j4, j5, j6)])
+
+    def solve(self, R_pre: np.ndarray, R: np.ndarray, hint4: np.ndarray, flip: bool):
+        """θ4, θ5, θ6 and whether θ4 was chosen, for (N, 3, 3) rotations; ``flip`` picks θ5 ≤ 0."""
+        W = self.P.T @ np.swapaxes(R_pre, -1, -2) @ R @ self.post.T
+        sin_b = np.hypot(W[:, 0, 2], W[:, 1, 2])
+        sign_theta5 = (-1.0 if flip else 1.0) * self.s5  # b = s5 θ5: flipped (θ5 ≤ 0) takes b of sign −s5
+        b = np.arctan2(sign_theta5 * sin_b, W[:, 2, 2])
+        a = np.arctan2(sign_theta5 * W[:, 1, 2], sign_theta5 * W[:, 0, 2])
+        row_hint = hint4 + self.offsets[0]
+        # keep the hint's θ4 wherever turning θ4 (and θ6 against it) to it changes R by less than the tolerance
+        chosen = sin_b * np.abs(wrap(a - row_hint)) <= WRIST_TURN_TOLERANCE
+        a = np.where(chosen, row_hint, a)
+        ca, sa, cb, sb = np.cos(a), np.sin(a), np.cos(b), np.sin(b)
+        # c exactly from a and b: Rz(c) = Ry(b)ᵀ Rz(a)ᵀ W
+        c = np.arctan2(-sa * W[:, 0, 0] + ca * W[:, 1, 0], cb * (ca * W[:, 0, 0] + sa * W[:, 1, 0]) - sb * W[:, 2, 0])
+        theta4 = wrap(a - self.offsets[0])
+        theta5 = wrap(b * self.s5 - self.offsets[1])
+        theta6 = wrap(c * self.s6 - self.offsets[2])
+        return theta4, theta5, theta6, chosen | (sin_b <= WRIST_TOLERANCE)
+
+
+def _wrist_offset(table: DHTable, wrist: Wrist) -> np.ndarray:
+    """c: the wrist centre in the tool frame, constant for a spherical wrist (checked at two poses)."""
+    offsets = []
+    for q in (np.zeros(table.n_joints), np.linspace(0.3, 1.9, table.n_joints)):
+        frames = table.frames(q)
+        centre = frames[wrist.first_row + 1, :3, 3]  # both conventions: the origin after the wrist's first row
+        tool = frames[-1]
+        offsets.append(tool[:3, :3].T @ (centre - tool[:3, 3]))
+    if np.abs(offsets[0] - offsets[1]).max() > 1e-12:
+        raise ValueError("the last three axes do not meet in one point: not a spherical wrist")
+    return offsets[0]
+
+
+def _pose_parts(centre_in_tool: np.ndarray, T: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The tool's rotation (N, 3, 3) and the wrist centre WC = p + R c (N, 3)."""
+    R = T[:, :3, :3]
+    return R, T[:, :3, 3] + R @ centre_in_tool
+
+
+def _wrist_slots(table: DHTable, wrist: Wrist, out: dict, R: np.ndarray, hint: np.ndarray | None) -> None:
+    """Joints 4–6 for every even slot whose joints 1–3 are set: the wrist not flipped there, flipped in the next."""
+    q, valid, singular = out["q"], out["valid"], out["singular"]
+    n = table.n_joints
+    hint4 = np.zeros(len(R)) if hint is None else hint[:, n - 3]
+    for base in range(0, q.shape[1], 2):
+        ok = valid[:, base].copy()
+        if not ok.any():
+            continue
+        q_arm = q[ok, base, : n - 3]
+        full = np.zeros((len(q_arm), n))
+        full[:, : n - 3] = q_arm
+        R_pre = table.frames(full)[:, wrist.first_row, :3, :3]
+        for flip in (False, True):
+            t4, t5, t6, chosen = wrist.solve(R_pre, R[ok], hint4[ok], flip)
+            k = base + int(flip)
+            q[ok, k, : n - 3] = q_arm
+            q[ok, k, n - 3:] = np.stack([t4, t5, t6], axis=-1)
+            valid[ok, k] = True
+            singular[ok, k] = singular[ok, base] | chosen
+
+
+def _planar_frame(table: DHTable) -> dict[str, float]:
+    """The articulated arm's plane at θ1 = 0, read from the table's FK (checked, not assumed).
+
+    In plane coordinates (u along x, w = σ z), with σ chosen so that joint 2 turns
+    counter-clockwise: the shoulder S, the upper arm ``a2 (cos(θ2 + o2), sin(θ2 + o2))``
+    and the wrist centre ``Rot(θ2 + o2) (a2 + L cos(s3 θ3 + φ), L sin(s3 θ3 + φ))``.
+    """
+    q0 = np.zeros(table.n_joints)
+    frames = table.frames(q0)
+    axes, points = table.joint_axes(frames)
+    axis1, axis2, axis3 = axes[:3]
+    if np.abs(axis1 - (0, 0, 1)).max() > 1e-12 or np.hypot(*points[0, :2]) > 1e-12:
+        raise ValueError("joint 1 must turn about the base z axis")
+    if abs(axis2[2]) > 1e-12 or abs(axis2[0]) > 1e-12 or np.abs(np.cross(axis2, axis3)).max() > 1e-12:
+        raise ValueError("joints 2 and 3 must be horizontal and parallel (along y at θ1 = 0)")
+    sigma = 1.0 if axis2[1] < 0 else -1.0  # about −y, turning x towards z is counter-clockwise in (x, z)
+    s3 = float(np.sign(axis3 @ axis2))
+    wrist_row = table.joint_rows[3] + 1
+    plane = lambda p: np.array([p[0], sigma * p[2]])  # noqa: E731
+    S = plane(points[1])
+    if abs(frames[wrist_row, 1, 3]) > 1e-12 or abs(points[1][1]) > 1e-12:
+        raise ValueError("the wrist centre must stay in the plane of axis 1 (no lateral offset)")
+    # the elbow: where axis 3 meets the plane
+    E = plane(points[2])
+    upper = E - S
+    a2 = float(np.hypot(*upper))
+    o2 = float(math.atan2(upper[1], upper[0]))
+    W = plane(frames[wrist_row, :3, 3]) - S
+    c, s = math.cos(-o2), math.sin(-o2)
+    x, y = c * W[0] - s * W[1], s * W[0] + c * W[1]
+    L = float(math.hypot(x - a2, y))
+    phi = float(math.atan2(y, x - a2))
+    return dict(u0=float(S[0]), w0=float(S[1]), sigma=sigma, a2=a2, o2=o2, L=L, phi=phi, s3=s3)
+
+
+class ArticulatedArm:
+    """RRR with a vertical axis 1, parallel axes 2 and 3, and a spherical wrist: 8 slots."""
+
+    task = "pose"
+    labels = tuple(
+        f"shoulder {shoulder}, elbow {elbow}, wrist {wrist}"
+        for shoulder in ("front", "back") for elbow in ("up", "down") for wrist in ("not flipped", "flipped")
+    )
+
+    def __init__(self, table: DHTable) -> None:
+        if table.joint_types != "RRRRRR":
+            raise ValueError("an articulated arm has six revolute joints")
+        self.table = table
+        self.wrist = Wrist(table)
+        self.centre_in_tool = _wrist_offset(table, self.wrist)
+        self.plane = _planar_frame(table)
+        p = self.plane
+        self.reach = (abs(p["a2"] - p["L"]), p["a2"] + p["L"])
+
+    def explain(self, failure: int, detail: float) -> str:
+        near, far = (1000 * r for r in self.reach)
+        if failure == TOO_FAR:
+            return (f"the wrist centre is {1000 * detail:.1f} mm from the shoulder joint; upper arm and forearm "
+                    f"reach at most {far:.1f} mm ({1000 * detail - far:.1f} mm short)")
+        if failure == TOO_CLOSE:
+            return (f"the wrist centre is {1000 * detail:.1f} mm from the shoulder joint; folded, the arm "
+                    f"cannot come closer than {near:.1f} mm")
+        return "no branch reaches this pose"
+
+    def solve(self, T: np.ndarray, hint: np.ndarray | None) -> dict[str, np.ndarray]:
+        N = len(T)
+        out = empty_branches((N,), 8, 6)
+        q, valid, singular = out["q"], out["valid"], out["singular"]
+        p = self.plane
+        R, centre = _pose_parts(self.centre_in_tool, T)
+        rho = np.hypot(centre[:, 0], centre[:, 1])
+        hint = np.zeros((N, 6)) if hint is None else hint
+        towards = np.arctan2(centre[:, 1], centre[:, 0])
+        hint_beta = wrap(p["s3"] * (hint[:, 2]) + p["phi"])
+        hint_reach = np.sqrt(p["a2"] ** 2 + p["L"] ** 2 + 2 * p["a2"] * p["L"] * np.cos(hint_beta))
+        near, far = self.reach
+        for shoulder in (0, 1):
+            theta1 = wrap(towards + shoulder * math.pi)
+            # near axis 1, θ1 barely moves WC: the hint's θ1 wherever it moves WC by at most the tolerance
+            chosen1 = rho * np.abs(wrap(theta1 - hint[:, 0])) <= CHOICE_TOLERANCE
+            theta1 = np.where(chosen1, hint[:, 0], theta1)
+            u = np.cos(theta1) * centre[:, 0] + np.sin(theta1) * centre[:, 1] - p["u0"]
+            w = p["sigma"] * centre[:, 2] - p["w0"]
+            r = np.hypot(u, w)
+            cos_beta = (r * r - p["a2"] ** 2 - p["L"] ** 2) / (2 * p["a2"] * p["L"])
+            too_far, too_close = r > far + LENGTH_TOLERANCE, r < near - LENGTH_TOLERANCE
+            ok = ~(too_far | too_close)
+            for elbow in (0, 1):
+                slot = 4 * shoulder + 2 * elbow
+                out["failure"][:, slot:slot + 2] = np.where(too_far, TOO_FAR, np.where(too_close, TOO_CLOSE, 0))[:, None]
+                out["detail"][:, slot:slot + 2] = r[:, None]
+                # elbow up: the elbow above the shoulder–wrist-centre line (sin β of sign −σ reaching forward)
+                sign = -p["sigma"] * (1.0 if (elbow == 0) == (shoulder == 0) else -1.0)
+                beta = sign * np.arccos(np.clip(cos_beta, -1.0, 1.0))
+                # stretched or folded, β is fixed only to √rounding: the hint's wherever it reaches within the tolerance
+                same_side = (sign * np.sin(hint_beta) >= 0) | (np.abs(np.sin(hint_beta)) <= 1e-6)
+                chosen3 = same_side & (np.abs(hint_reach - r) <= CHOICE_TOLERANCE)
+                beta = np.where(chosen3, hint_beta, beta)
+                x = p["a2"] + p["L"] * np.cos(beta)
+                y = p["L"] * np.sin(beta)
+                theta2 = np.arctan2(w, u) - np.arctan2(y, x) - p["o2"]
+                theta3 = (beta - p["phi"]) * p["s3"]
+                q[ok, slot, :3] = np.stack([theta1, wrap(theta2), wrap(theta3)], axis=-1)[ok]
+                valid[ok, slot] = True
+                singular[ok, slot] = (chosen1 | chosen3)[ok]
+        _wrist_slots(self.table, self.wrist, out, R, hint)
+        return out
+
+
+class StanfordArm:
+    """RRP + spherical wrist (standard DH as in docs/kinematics.md §7.5): 4 slots."""
+
+    task = "pose"
+    labels = tuple(f"shoulder {shoulder}, wrist {wrist}" for shoulder in ("right", "left")
+                   for wrist in ("not flipped", "flipped"))
+
+    def __init__(self, table: DHTable) -> None:
+        if table.joint_types != "RRPRRR" or table.convention != STANDARD:
+            raise ValueError("the Stanford solver takes the standard table of an RRP arm with a spherical wrist")
+        self.table = table
+        self.wrist = Wrist(table)
+        self.centre_in_tool = _wrist_offset(table, self.wrist)
+        self.d1 = table.rows[0].d
+        self.d2 = table.rows[1].d
+        self.stroke_offset = table.rows[2].d
+
+    def explain(self, failure: int, detail: float) -> str:
+        if failure == INSIDE_OFFSET:
+            return (f"the wrist centre is {1000 * detail:.1f} mm from the base axis, inside the shoulder offset "
+                    f"d2 = {1000 * self.d2:.1f} mm: no θ1 lines the arm up with it")
+        return "no branch reaches this pose"
+
+    def solve(self, T: np.ndarray, hint: np.ndarray | None) -> dict[str, np.ndarray]:
+        N = len(T)
+        out = empty_branches((N,), 4, 6)
+        q, valid, singular = out["q"], out["valid"], out["singular"]
+        R, centre = _pose_parts(self.centre_in_tool, T)
+        x, y, z = centre[:, 0], centre[:, 1], centre[:, 2] - self.d1
+        rho = np.hypot(x, y)
+        d2 = self.d2
+        inside = rho < abs(d2) - LENGTH_TOLERANCE
+        reach = np.sqrt(np.clip(rho * rho - d2 * d2, 0.0, None))
+        hint = np.zeros((N, 6)) if hint is None else hint
+        c1h, s1h = np.cos(hint[:, 0]), np.sin(hint[:, 0])
+        hint_u = c1h * x + s1h * y
+        # θ1 is fixed only to √rounding where WC is on the d2 cylinder: the hint's wherever it puts
+        # WC within the tolerance of the offset (−s1 x + c1 y = d2)
+        hint_fits = np.abs(-s1h * x + c1h * y - d2) <= CHOICE_TOLERANCE
+        for shoulder in (0, 1):
+            slot = 2 * shoulder
+            out["failure"][:, slot:slot + 2] = np.where(inside, INSIDE_OFFSET, 0)[:, None]
+            out["detail"][:, slot:slot + 2] = rho[:, None]
+            ok = ~inside
+            sign = 1.0 if shoulder == 0 else -1.0
+            # −s1 x + c1 y = d2 and c1 x + s1 y = ±reach
+            theta1 = np.arctan2(y, x) - np.arctan2(d2, sign * reach)
+            chosen1 = hint_fits & ((sign * hint_u >= 0) | (np.abs(hint_u) <= 1e-6))
+            theta1 = np.where(chosen1, hint[:, 0], theta1)
+            u = np.cos(theta1) * x + np.sin(theta1) * y  # = s2 d3
+            stroke = np.hypot(u, z)
+            theta2 = np.arctan2(u, z)
+            # near d3 = 0, θ2 barely moves WC: the hint's wherever it moves WC by at most the tolerance
+            chosen2 = stroke * np.abs(wrap(theta2 - hint[:, 1])) <= CHOICE_TOLERANCE
+            theta2 = np.where(chosen2, hint[:, 1], theta2)
+            q[ok, slot, :3] = np.stack([wrap(theta1), wrap(theta2), stroke - self.stroke_offset], axis=-1)[ok]
+            valid[ok, slot] = True
+            singular[ok, slot] = (chosen1 | chosen2)[ok]
+        _wrist_slots(self.table, self.wrist, out, R, hint)
+        return out
