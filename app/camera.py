@@ -60,10 +60,10 @@ def framing(points: np.ndarray, direction, fov: float, aspect: float, margin: fl
     return centre + distance * back, centre
 
 
-def arm_points(snapshot: Snapshot) -> np.ndarray:
-    """What the camera must show: the joints and the target, each with room for its body around it."""
+def arm_points(snapshot: Snapshot, body_radius: float = BODY_RADIUS) -> np.ndarray:
+    """What the camera must show: the joints and the target, each with ``body_radius`` of room around it."""
     centres = np.vstack([snapshot.frames[:, :3, 3], snapshot.target[:3, 3], snapshot.lowest[0]])
-    corners = np.array([[sx, sy, sz] for sx in (-1, 1) for sy in (-1, 1) for sz in (-1, 1)]) * BODY_RADIUS
+    corners = np.array([[sx, sy, sz] for sx in (-1, 1) for sy in (-1, 1) for sz in (-1, 1)]) * body_radius
     return (centres[:, None, :] + corners[None]).reshape(-1, 3)
 
 
@@ -79,11 +79,15 @@ class CameraControls(View):
         Wraps a handler so that nothing it raises escapes (``ClientSession.guard``, ``feedback.guard``).
     lecture : bool
         Start in lecture mode (:mod:`app.lecture`, whose switch is in this folder too).
+    body_radius : float
+        Room kept around each joint (m): the UR10's link bodies by default; a course arm's
+        rods and gizmo scale with its reach.
     """
 
     def __init__(self, client: viser.ClientHandle, snapshot: Callable[[], Snapshot],
-                 guard: Callable[[Callable], Callable], lecture: bool = False) -> None:
+                 guard: Callable[[Callable], Callable], lecture: bool = False, body_radius: float = BODY_RADIUS) -> None:
         self._client = client
+        self._body_radius = body_radius
         self._snapshot = snapshot
         self._guard = guard
         self.closed = False
@@ -123,7 +127,9 @@ class CameraControls(View):
         if self.closed:
             return
         camera = self._client.camera
-        shown = arm_points(self._snapshot()) if points is None else np.vstack([arm_points(self._snapshot()), points])
+        shown = arm_points(self._snapshot(), self._body_radius)
+        if points is not None:
+            shown = np.vstack([shown, points])
         position, look_at = framing(shown, direction, camera.fov, camera.aspect)
         with self._client.atomic():
             camera.up_direction = (0.0, 0.0, 1.0)

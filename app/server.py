@@ -17,10 +17,12 @@ from pathlib import Path
 
 import viser
 
-from ur10core import Arm, symbolic
+from ur10core import Arm, symbolic, symbolic_arms
 
 from . import shared_frames
+from .arm_picker import UR10, ARM_CHOICES, ArmPicker
 from .classroom import Classroom
+from .course_arms.session import CourseArmSession
 from .gate import Gate, gated_serve
 from .meshes import load_models
 from .metrics import LATENCY
@@ -166,7 +168,10 @@ class TeachingServer:
         self.arm = Arm.preset(preset)
         self.lecture = lecture
         self.models = load_models(preset)
-        symbolic.load()  # read the cached derivation now rather than in the first student's callback
+        symbolic.load()  # read the cached derivations now rather than in the first student's callback
+        for name in ARM_CHOICES.values():
+            if name is not None:
+                symbolic_arms.load(name)
         self.host = host
         label = f"UR10 kinematics ({preset})"
         self.gate = gate or Gate(allowed_origins)
@@ -183,7 +188,7 @@ class TeachingServer:
         loop = self.server.get_event_loop()
         self.refresher = PanelRefresher(loop)
         self.drags = DragQueue(loop)
-        self._sessions: dict[int, ClientSession] = {}
+        self._sessions: dict[int, ClientSession | CourseArmSession] = {}
         self._sessions_lock = threading.Lock()
         #: shared demo mode (``--shared``): everyone watches the presenter (``app.classroom``)
         self.classroom = Classroom(self) if shared else None
@@ -226,9 +231,7 @@ class TeachingServer:
             if self.classroom is not None:
                 self.classroom.connect(client)
             else:
-                session = ClientSession(client, self.arm, self.models, self.refresher, self.drags, lecture=self.lecture)
-                with self._sessions_lock:
-                    self._sessions[client.client_id] = session
+                self._start_session(client, UR10, self.lecture)
         except Exception:
             log.exception("could not set up client %s", client.client_id)
             try:
@@ -239,6 +242,32 @@ class TeachingServer:
         # viser runs connect and disconnect callbacks on its thread pool side by side: a
         # browser that left while its arm was being built was not here to be freed yet
         if client.client_id not in self.server.get_clients():
+            self._disconnected(client)
+
+    def _start_session(self, client: viser.ClientHandle, choice: str, lecture: bool) -> None:
+        """Build the arm ``choice`` (an ``ARM_CHOICES`` label) in this browser, with the picker above it."""
+        name = ARM_CHOICES[choice]
+        if name is None:
+            session = ClientSession(client, self.arm, self.models, self.refresher, self.drags, lecture=lecture)
+        else:
+            session = CourseArmSession(client, Arm.preset(name), self.refresher, self.drags, lecture=lecture)
+        session.arm_picker = ArmPicker(client.gui, choice, lambda label: self._switch(client, label), session.guard)
+        with self._sessions_lock:
+            self._sessions[client.client_id] = session
+
+    def _switch(self, client: viser.ClientHandle, choice: str) -> None:
+        """Take this browser's arm out (panel and scene) and build ``choice`` in its place."""
+        with self._sessions_lock:
+            old = self._sessions.pop(client.client_id, None)
+        lecture = self.lecture
+        if old is not None:
+            if old.camera is not None:
+                lecture = old.camera.lecture.on
+            old.close()
+        client.gui.reset()
+        client.scene.reset()
+        self._start_session(client, choice, lecture)
+        if client.client_id not in self.server.get_clients():  # it left meanwhile
             self._disconnected(client)
 
     def _disconnected(self, client: viser.ClientHandle) -> None:

@@ -65,6 +65,13 @@ def dom_id(handle) -> str:
     return f"[id='{handle._impl.uuid}']"
 
 
+def choose(page, dropdown, option: str) -> None:
+    """Pick ``option`` in a viser dropdown, with the mouse."""
+    page.locator(dom_id(dropdown)).click()
+    page.get_by_role("option", name=option, exact=True).click()
+    page.wait_for_timeout(200)
+
+
 def text_field(page, handle):
     """The <input> of a viser text field (its label, not the input, carries the handle's uuid)."""
     return page.locator(f"label[for='{handle._impl.uuid}']").locator("xpath=ancestor::div[2]").locator("input").first

@@ -12,7 +12,7 @@ import pytest
 from app.server import TeachingServer
 from app.style import DANGER_RED, GHOST_OPACITY
 
-from .browser_support import SMALL_VIEWPORT, canvas_pixels, dom_id, project, text_field, wait_for
+from .browser_support import SMALL_VIEWPORT, canvas_pixels, choose, dom_id, project, text_field, wait_for
 from .colour_vision import MIN_DELTA_E, closest_pair
 
 pytestmark = pytest.mark.browser
@@ -42,11 +42,6 @@ def open_view_folder(page, session) -> None:
         page.get_by_text("View", exact=True).first.click()
         page.locator(dom_id(session.camera.frame_button)).wait_for(state="visible", timeout=10_000)
 
-
-def choose(page, dropdown, option: str) -> None:
-    page.locator(dom_id(dropdown)).click()
-    page.get_by_role("option", name=option, exact=True).click()
-    page.wait_for_timeout(200)
 
 
 def font_px(locator) -> float:

@@ -402,3 +402,18 @@ def test_the_ur_family_is_the_same_chain_as_its_dh_table(name):
     np.testing.assert_allclose(table.frames(q)[:, :7], arm.frames(q), atol=1e-12)
     np.testing.assert_allclose(table.jacobian(q), arm.jacobian(q), atol=1e-12)
     assert arm.limits.shape == (6, 2)
+
+
+def test_singular_flags_only_where_the_pose_leaves_a_value_free():
+    kr210 = SerialArm.preset("kr210")
+    q = np.radians([0, 15, -30, 20, 40, 10])  # the app's home: no singularity, and θ1 = 0 equals the hint's
+    sol = kr210.ik(kr210.fk(q), hint=q)
+    assert sol.valid.any() and not sol.singular.any()
+    aligned = np.radians([0, 15, -30, 20, 0, 10])
+    wrist = kr210.ik(kr210.fk(aligned), hint=aligned)
+    # the branch with these joints has θ5 = 0; the elbow-down branches turn their wrists otherwise
+    assert wrist.singular[wrist.nearest(aligned, kr210.revolute)]
+    assert not wrist.singular[np.abs(np.sin(wrist.q[:, 4])) > 1e-6].any()
+    cylindrical = SerialArm.preset("cylindrical")
+    assert not cylindrical.ik(cylindrical.fk([0.0, 0.3, 0.3]), hint=[0.0, 0.3, 0.3]).singular.any()
+    assert cylindrical.ik(cylindrical.fk([0.5, 0.3, 0.0]), hint=[0.5, 0.3, 0.0]).singular.all()

@@ -233,17 +233,18 @@ class ViserClient:
             await asyncio.sleep(0.02)
         await self.send(messages.GuiUpdateMessage(self.gui[label]["uuid"], {"value": value}))
 
-    def drag_step(self, position, wxyz, phase: str = "update") -> DragStep:
+    def drag_step(self, position, wxyz, phase: str = "update", name: str = "/ik_target") -> DragStep:
         """The frames a browser sends for one gizmo event, encoded now so that sending costs little.
 
-        ``phase`` "start" and "end" add the drag's start and end messages around the update.
+        ``phase`` "start" and "end" add the drag's start and end messages around the update;
+        ``name`` is the gizmo's (a course arm's is ``/course_arm/target``).
         """
         owner = self.gizmo_owner or ""
         update = encode(messages.TransformControlsUpdateMessage(
-            name="/ik_target", wxyz=tuple(float(v) for v in wxyz), position=tuple(float(v) for v in position), owner=owner,
+            name=name, wxyz=tuple(float(v) for v in wxyz), position=tuple(float(v) for v in position), owner=owner,
         ))
-        before = (encode(messages.TransformControlsDragStartMessage(name="/ik_target", owner=owner)),) if phase == "start" else ()
-        after = (encode(messages.TransformControlsDragEndMessage(name="/ik_target", owner=owner)),) if phase == "end" else ()
+        before = (encode(messages.TransformControlsDragStartMessage(name=name, owner=owner)),) if phase == "start" else ()
+        after = (encode(messages.TransformControlsDragEndMessage(name=name, owner=owner)),) if phase == "end" else ()
         return DragStep(before, update, after)
 
     async def send_drag(self, step: DragStep) -> float:
@@ -257,9 +258,9 @@ class ViserClient:
             await self._websocket.send(frame)
         return sent
 
-    async def drag_target(self, position, wxyz, phase: str = "update") -> float:
+    async def drag_target(self, position, wxyz, phase: str = "update", name: str = "/ik_target") -> float:
         """One gizmo event; returns the send time."""
-        return await self.send_drag(self.drag_step(position, wxyz, phase))
+        return await self.send_drag(self.drag_step(position, wxyz, phase, name))
 
     def latencies(self, sends: list[tuple[float, Any]], tolerance: float = 1e-5) -> list[float | None]:
         """End-to-end latency of each ``(send time, target position)`` (in sending order).

@@ -136,9 +136,8 @@ class Cylindrical:
         hint1 = np.zeros(len(T)) if hint is None else hint[:, 0]
         theta1 = np.arctan2(-x, y)
         # near the column θ1 barely moves the tool: the hint's wherever it moves it by at most the tolerance
-        on_axis = rho * np.abs(wrap(theta1 - hint1)) <= CHOICE_TOLERANCE
-        theta1 = np.where(on_axis, hint1, theta1)
+        theta1 = np.where(rho * np.abs(wrap(theta1 - hint1)) <= CHOICE_TOLERANCE, hint1, theta1)
         out["q"][:, 0] = np.stack([wrap(theta1), z - self.base - self.lift_offset, rho - self.stroke_offset], axis=-1)
         out["valid"][:, 0] = True
-        out["singular"][:, 0] = on_axis
+        out["singular"][:, 0] = rho <= LENGTH_TOLERANCE
         return out

@@ -87,7 +87,7 @@ class Wrist:
         self.offsets = np.array([rows[j].theta for j in (j4, j5, j6)])
 
     def solve(self, R_pre: np.ndarray, R: np.ndarray, hint4: np.ndarray, flip: bool):
-        """θ4, θ5, θ6 and whether θ4 was chosen, for (N, 3, 3) rotations; ``flip`` picks θ5 ≤ 0."""
+        """θ4, θ5, θ6 and whether the wrist is singular (θ4 the hint's), for (N, 3, 3) rotations; ``flip`` picks θ5 ≤ 0."""
         W = self.P.T @ np.swapaxes(R_pre, -1, -2) @ R @ self.post.T
         sin_b = np.hypot(W[:, 0, 2], W[:, 1, 2])
         sign_theta5 = (-1.0 if flip else 1.0) * self.s5  # b = s5 θ5: flipped (θ5 ≤ 0) takes b of sign −s5
@@ -103,7 +103,7 @@ class Wrist:
         theta4 = wrap(a - self.offsets[0])
         theta5 = wrap(b * self.s5 - self.offsets[1])
         theta6 = wrap(c * self.s6 - self.offsets[2])
-        return theta4, theta5, theta6, chosen | (sin_b <= WRIST_TOLERANCE)
+        return theta4, theta5, theta6, sin_b <= WRIST_TOLERANCE
 
 
 def _wrist_offset(table: DHTable, wrist: Wrist) -> np.ndarray:
@@ -251,7 +251,8 @@ class ArticulatedArm:
                 theta3 = (beta - p["phi"]) * p["s3"]
                 q[ok, slot, :3] = np.stack([theta1, wrap(theta2), wrap(theta3)], axis=-1)[ok]
                 valid[ok, slot] = True
-                singular[ok, slot] = (chosen1 | chosen3)[ok]
+                # singular where the pose leaves a value free: WC on axis 1, the elbow stretched or folded
+                singular[ok, slot] = ((rho <= LENGTH_TOLERANCE) | (np.abs(np.sin(beta)) <= 1e-9))[ok]
         _wrist_slots(self.table, self.wrist, out, R, hint)
         return out
 
@@ -313,6 +314,7 @@ class StanfordArm:
             theta2 = np.where(chosen2, hint[:, 1], theta2)
             q[ok, slot, :3] = np.stack([wrap(theta1), wrap(theta2), stroke - self.stroke_offset], axis=-1)[ok]
             valid[ok, slot] = True
-            singular[ok, slot] = (chosen1 | chosen2)[ok]
+            # singular where the pose leaves a value free: WC on the d2 cylinder, or on the shoulder
+            singular[ok, slot] = ((np.abs(u) <= LENGTH_TOLERANCE) | (stroke <= LENGTH_TOLERANCE))[ok]
         _wrist_slots(self.table, self.wrist, out, R, hint)
         return out

@@ -1,0 +1,49 @@
+"""The "Arm" folder: which arm this browser drives — the UR10, or one of the course's other arms.
+
+Picking one takes the current arm out of this browser (its panel and scene) and builds the
+other's: the UR10 with every feature of the app (``app.session``), the others with theirs
+(``app.course_arms``). Each browser picks for itself; shared mode keeps the UR10.
+"""
+
+from __future__ import annotations
+
+from typing import Callable
+
+import viser
+
+from ur10core.serial import PRESETS
+
+UR10 = "UR10 (the app's arm)"
+#: What the dropdown shows → the ``Arm.preset`` name (None: the server's own UR10).
+ARM_CHOICES: dict[str, str | None] = {
+    UR10: None,
+    "KUKA KR210 (spherical wrist)": "kr210",
+    "Stanford arm (RRP + wrist)": "stanford",
+    "Elbow arm + spherical wrist": "elbow",
+    "SCARA (RRP + roll)": "scara",
+    "Planar elbow (2R)": "planar_elbow",
+    "Cylindrical arm (RPP)": "cylindrical",
+}
+assert set(ARM_CHOICES.values()) - {None} == set(PRESETS)
+
+
+class ArmPicker:
+    """The dropdown; ``on_pick(label)`` is called with a checked choice when it changes."""
+
+    def __init__(self, gui: viser.GuiApi, current: str, on_pick: Callable[[str], None],
+                 guard: Callable[[Callable], Callable]) -> None:
+        self.folder = gui.add_folder("Arm", order=0.1)
+        with self.folder:
+            self.dropdown = gui.add_dropdown("Which arm", tuple(ARM_CHOICES), initial_value=current,
+                                             hint="The course's other arms: their branches, singularities and DH frames")
+        self._current = current
+        self.dropdown.on_update(guard(lambda _: self._picked(on_pick)))
+
+    def _picked(self, on_pick: Callable[[str], None]) -> None:
+        label = self.dropdown.value
+        if label not in ARM_CHOICES:  # not from a browser: put back the arm this one drives, and refuse
+            self.dropdown.value = self._current
+            raise ValueError(f"arm: {label!r:.40} is not one of the choices")
+        if label != self._current:
+            self._current = label
+            on_pick(label)

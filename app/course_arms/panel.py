@@ -1,0 +1,187 @@
+"""The course arm's panel: joint sliders (degrees, or mm for a prismatic joint), its branches,
+the factors of det J with what each means, and its DH table in both conventions."""
+
+from __future__ import annotations
+
+import math
+from typing import TYPE_CHECKING
+
+import numpy as np
+import viser
+
+from ur10core import symbolic_arms
+from ur10core.dh import DHTable
+from ur10core.serial import SerialArm
+
+from ..style import DANGER_RED, SAFE_GREEN, SLOT_COLORS, hex_color, number, swatch
+from ..view import View
+from .state import CourseSnapshot
+
+if TYPE_CHECKING:
+    from .session import CourseArmSession
+
+
+def display_value(kind: str, value: float) -> float:
+    """A joint value as the panel shows it: degrees for R, millimetres for P."""
+    return math.degrees(value) if kind == "R" else 1000.0 * value
+
+
+def joint_text(arm: SerialArm, q: np.ndarray) -> str:
+    return ", ".join(number(display_value(kind, v), ".1f") + ("°" if kind == "R" else " mm")
+                     for kind, v in zip(arm.joint_types, q))
+
+
+class CourseJointSliders(View):
+    """One slider per joint, within its limits."""
+
+    def __init__(self, gui: viser.GuiApi, session: "CourseArmSession") -> None:
+        self._session = session
+        arm = session.arm
+        q = session.state.last.q
+        folder = gui.add_folder("Joints")
+        self.folders = (folder,)
+        with folder:
+            self.sliders = []
+            for k, (kind, name) in enumerate(zip(arm.joint_types, arm.joint_names)):
+                low, high = (display_value(kind, v) for v in arm.limits[k])
+                unit = "°" if kind == "R" else " mm"
+                self.sliders.append(gui.add_slider(
+                    f"{name} ({unit.strip()})", min=round(low, 1), max=round(high, 1), step=0.1 if kind == "R" else 1.0,
+                    initial_value=round(display_value(kind, q[k]), 1),
+                    hint=f"Joint {k + 1}: {'revolute, degrees' if kind == 'R' else 'prismatic, millimetres'}, "
+                         f"{low:.0f}…{high:.0f}{unit}"))
+        #: what each slider was last set to from the state: a slider is written only when the state
+        #: moved away from it (never just because the student's newer value differs from an older state)
+        self._shown = [slider.value for slider in self.sliders]
+        for k, slider in enumerate(self.sliders):
+            slider.on_update(session.guard(self._moved(k)))
+
+    def _moved(self, index: int):
+        def moved(event: viser.GuiEvent) -> None:
+            if event.client is None:
+                return
+            kind = self._session.arm.joint_types[index]
+            shown = float(self.sliders[index].value)
+            value = math.radians(shown) if kind == "R" else shown / 1000.0
+            self._shown[index] = shown  # what the browser shows now: if refused, the next panel redraw puts it back
+            self._session.apply(lambda state: state.set_joint(index, value))
+        return moved
+
+    def render_panel(self, snapshot: CourseSnapshot) -> None:
+        for k, (slider, kind, value) in enumerate(zip(self.sliders, self._session.arm.joint_types, snapshot.q)):
+            shown = round(display_value(kind, value), 1)
+            if not abs(self._shown[k] - shown) <= 1e-9:
+                self._shown[k] = shown
+                slider.value = shown
+
+
+def branches_markdown(arm: SerialArm, snapshot: CourseSnapshot) -> str:
+    sol = snapshot.solution
+    lines = [f"**{int(sol.valid.sum())} of {len(sol.labels)} branches reach the target** ({sol.method}; "
+             f"the arm places its {sol.task})", "",
+             "| # | branch | joints | |", "|---|---|---|---|"]
+    for k, label in enumerate(sol.labels):
+        colour = swatch(SLOT_COLORS[k % len(SLOT_COLORS)])
+        if not sol.valid[k]:
+            lines.append(f"| {colour} {k + 1} | {label} | — | out of reach |")
+            continue
+        flags = []
+        if k == snapshot.chosen:
+            flags.append("**the arm**")
+        if not sol.within_limits[k]:
+            flags.append(f"<span style='color:{hex_color(DANGER_RED)}'>beyond a joint limit</span>")
+        if sol.singular[k]:
+            flags.append("singular: a joint chosen, not fixed")
+        lines.append(f"| {colour} {k + 1} | {label} | {joint_text(arm, sol.q[k])} | {', '.join(flags)} |")
+    if snapshot.reason:
+        lines += ["", f"<span style='color:{hex_color(DANGER_RED)}'>**Out of reach:** {snapshot.reason}</span>"]
+    return "\n".join(lines)
+
+
+class CourseBranches(View):
+    """The table of branches: each slot, its joints, and whether it is beyond a limit."""
+
+    def __init__(self, gui: viser.GuiApi, arm: SerialArm) -> None:
+        self._arm = arm
+        folder = gui.add_folder("IK branches")
+        self.folders = (folder,)
+        with folder:
+            self.table = gui.add_markdown("")
+
+    def render_panel(self, snapshot: CourseSnapshot) -> None:
+        self.table.content = branches_markdown(self._arm, snapshot)
+
+
+def factors_markdown(arm: SerialArm, q: np.ndarray) -> str:
+    derivation = symbolic_arms.load(arm.name)
+    values = arm.singularity_factors(q)
+    lines = [f"det J = {derivation.constant} × the factors below (derived with sympy from the DH table)", "",
+             "| factor | value | zero when |", "|---|---|---|"]
+    for factor, value in zip(derivation.factors, values):
+        near = abs(value) < 1e-3
+        colour = hex_color(DANGER_RED if near else SAFE_GREEN)
+        lines.append(f"| {factor.name}: `{factor.expression}` | <span style='color:{colour}'>{number(value, '.4f')}</span> "
+                     f"| {factor.meaning} |")
+    lines += ["", f"manipulability {number(float(arm.manipulability(q)), '.4g')}, smallest singular value "
+              f"{number(float(arm.smallest_singular_value(q)), '.4g')}"]
+    return "\n".join(lines)
+
+
+class CourseSingularities(View):
+    def __init__(self, gui: viser.GuiApi, arm: SerialArm) -> None:
+        self._arm = arm
+        folder = gui.add_folder("Singularities")
+        self.folders = (folder,)
+        with folder:
+            self.text = gui.add_markdown("")
+
+    def render_panel(self, snapshot: CourseSnapshot) -> None:
+        self.text.content = factors_markdown(self._arm, snapshot.q)
+
+
+def _cell(value: float, kind: str, variable: bool, symbol: str, angle: bool) -> str:
+    text = number(math.degrees(value), ".0f") + "°" if angle else number(1000 * value, ".1f")
+    if variable:
+        return symbol if abs(value) < 1e-12 else f"{symbol} {'+' if value > 0 else '−'} {text.lstrip('-')}"
+    return text
+
+
+def dh_table_markdown(table: DHTable) -> str:
+    """The rows in the convention's own column order (lengths in mm, angles in degrees)."""
+    modified = table.convention == "modified"
+    header = ("| i | α<sub>i−1</sub> | a<sub>i−1</sub> (mm) | d<sub>i</sub> (mm) | θ<sub>i</sub> |" if modified
+              else "| i | θ<sub>i</sub> | d<sub>i</sub> (mm) | a<sub>i</sub> (mm) | α<sub>i</sub> |")
+    lines = [header, "|---|---|---|---|---|"]
+    joint = 0
+    for k, row in enumerate(table.rows):
+        name = str(joint + 1) if row.joint else "fixed"
+        if row.joint:
+            joint += 1
+        theta = _cell(row.theta, row.joint, row.joint == "R", f"q{joint}", True)
+        d = _cell(row.d, row.joint, row.joint == "P", f"q{joint}", False)
+        alpha, a = _cell(row.alpha, None, False, "", True), _cell(row.a, None, False, "", False)
+        cells = (alpha, a, d, theta) if modified else (theta, d, a, alpha)
+        lines.append(f"| {name} | " + " | ".join(cells) + " |")
+    return "\n".join(lines)
+
+
+class CourseDHTable(View):
+    """The DH table as the arm is defined and converted to the other convention; the frames toggle."""
+
+    def __init__(self, gui: viser.GuiApi, session: "CourseArmSession") -> None:
+        arm = session.arm
+        folder = gui.add_folder("DH table")
+        self.folders = (folder,)
+        other = arm.dh.converted("modified" if arm.convention == "standard" else "standard")
+        with folder:
+            self.show_frames = gui.add_checkbox("Show DH frames (x red, z blue)", True)
+            gui.add_markdown(f"**{arm.description}.** As defined ({arm.convention} DH):\n\n" + dh_table_markdown(arm.dh)
+                             + f"\n\nThe same chain in {other.convention} DH (the tool pose is the same; the "
+                             "frames slide to the neighbouring joint axes):\n\n" + dh_table_markdown(other))
+        self.show_frames.on_update(session.guard(self._toggled(session)))
+
+    def _toggled(self, session: "CourseArmSession"):
+        def toggled(_: viser.GuiEvent) -> None:
+            session.scene.show_frames = bool(self.show_frames.value)
+            session.redraw()
+        return toggled

@@ -1,0 +1,128 @@
+"""One browser driving one of the course's other arms."""
+
+from __future__ import annotations
+
+import contextlib
+import time
+from typing import Any, Callable
+
+import numpy as np
+import viser
+
+from ur10core.orientation import quaternion, transform_from_quaternion
+from ur10core.serial import SerialArm
+
+from ..camera import CameraControls
+from ..feedback import guard, notify
+from ..metrics import LATENCY
+from ..workers import DragQueue, PanelRefresher
+from .panel import CourseBranches, CourseDHTable, CourseJointSliders, CourseSingularities
+from .scene import ROOT, CourseArmScene
+from .state import CourseArmState, CourseSnapshot
+
+
+def reach(arm: SerialArm) -> float:
+    """How far the arm's tool gets from the base (m), from a workspace sample: sizes follow it."""
+    points, _ = arm.sample_workspace(4000, seed=0)
+    return float(max(np.linalg.norm(points, axis=-1).max(), 0.3))
+
+
+class CourseArmSession:
+    """A browser's course arm: its state, scene, gizmo and panel (the UR10's ``ClientSession`` for other arms)."""
+
+    def __init__(self, client: viser.ClientHandle, arm: SerialArm, refresher: PanelRefresher, drags: DragQueue,
+                 lecture: bool = False) -> None:
+        self.client = client
+        self.arm = arm
+        self.state = CourseArmState(arm)
+        self.refresher = refresher
+        self.drags = drags
+        self.closed = False
+        first = self.state.last
+        size = reach(arm)
+        self.scene = CourseArmScene(client.scene, arm, first, size)
+        self.gizmo = client.scene.add_transform_controls(
+            f"{ROOT}/target", scale=0.12 * size, line_width=3.0, depth_test=False,
+            disable_rotations=arm.task == "position",
+            active_axes=(True, True, arm.name != "planar_elbow"),
+            wxyz=quaternion(first.target[:3, :3], check=False), position=first.target[:3, 3])
+        self.gizmo.on_update(self._dragged)
+        gui = client.gui
+        self.joints = CourseJointSliders(gui, self)
+        self.branches = CourseBranches(gui, arm)
+        self.singularities = CourseSingularities(gui, arm)
+        self.dh_table = CourseDHTable(gui, self)
+        self.camera = CameraControls(client, lambda: self.state.last, self.guard, lecture, body_radius=0.15 * size)
+        self.panel_views = (self.joints, self.branches, self.singularities, self.dh_table, self.camera)
+        self.render(first)
+        self.render_panel()
+        self.camera.frame()
+
+    # ------------------------------------------------------------------ changes
+
+    def apply(self, change: Callable[[CourseArmState], CourseSnapshot], timed: str | None = None,
+              move_gizmo: bool = True) -> CourseSnapshot:
+        """Change the state and redraw the 3D view (the gizmo to the tool, unless the student holds it); the panel follows."""
+        start = time.perf_counter()
+        with self.state.lock:
+            snapshot = change(self.state)
+            self.render(snapshot, move_gizmo)
+        if timed:
+            LATENCY.record(timed, time.perf_counter() - start)
+        self.refresher.request(self)
+        return snapshot
+
+    def redraw(self) -> None:
+        with self.state.lock:
+            self.render(self.state.last)
+
+    def _dragged(self, event: viser.TransformControlsEvent) -> None:
+        if self.closed:
+            return
+        # the drag queue keeps only the newest pose and solves it off viser's thread pool
+        self.drags.submit(self, (np.array(self.gizmo.wxyz), np.array(self.gizmo.position), event.phase == "end"))
+
+    def drag_to(self, pose) -> None:
+        """The drag queue's worker solving for the gizmo's newest ``(wxyz, position, released)``.
+
+        While held, the gizmo stays where the student has it; once released it snaps to the
+        tool if the arm reached (a SCARA's tool turned down again), and stays put, with the
+        reason in the panel, if it did not.
+        """
+        wxyz, position, released = pose
+        self.guard(lambda _: self.apply(lambda state: state.move_target(transform_from_quaternion(wxyz, position)),
+                                        timed="course_drag", move_gizmo=released))(None)
+
+    def render(self, snapshot: CourseSnapshot, move_gizmo: bool = False) -> None:
+        if self.closed:
+            return
+        with self.client.atomic():
+            self.scene.render(snapshot)
+            if move_gizmo and not snapshot.reason:
+                self.gizmo.wxyz = quaternion(snapshot.frames[-1, :3, :3], check=False)
+                self.gizmo.position = snapshot.frames[-1, :3, 3]
+        self.client.flush()
+
+    def render_panel(self) -> None:
+        if self.closed:
+            return
+        snapshot = self.state.last
+        with self.client.atomic():
+            for view in self.panel_views:
+                view.render_panel(snapshot)
+
+    # ------------------------------------------------------------------ safety
+
+    def guard(self, handler: Callable[[Any], None]) -> Callable[[Any], None]:
+        return guard(self.client, handler, is_closed=lambda: self.closed, on_refused=lambda: self.refresher.request(self))
+
+    def notify(self, title: str, body: str, color: str = "yellow") -> None:
+        if not self.closed:
+            notify(self.client, title, body, color)
+
+    def close(self) -> None:
+        self.closed = True
+        with self.state.lock:
+            for view in self.panel_views:
+                view.close()
+        self.refresher.forget(self)

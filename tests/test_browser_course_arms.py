@@ -1,0 +1,47 @@
+"""The course's other arms in real headless Chromium: the picker, the arm with its DH frames, a slider."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from app.course_arms.session import CourseArmSession
+
+from .browser_support import canvas_pixels, choose, dom_id, step_slider, wait_for
+
+pytestmark = pytest.mark.browser
+
+
+def test_picking_the_kr210_draws_it_with_its_dh_frames_and_its_panel(open_page, app):
+    page, session = open_page()
+    client_id = next(k for k, v in app.sessions.items() if v is session)
+    before = canvas_pixels(page)
+    choose(page, session.arm_picker.dropdown, "KUKA KR210 (spherical wrist)")
+    wait_for(lambda: isinstance(app.sessions.get(client_id), CourseArmSession), what="the KR210's session")
+    course = app.sessions[client_id]
+    page.wait_for_selector(dom_id(course.joints.sliders[0]), timeout=30_000)
+    # the panel shows the branches, det J's factors with their meaning, and the DH table
+    wait_for(lambda: page.get_by_text("branches reach the target", exact=False).count() > 0, what="the branch table")
+    assert page.get_by_text("shoulder front, elbow up, wrist not flipped").count() >= 1
+    assert page.get_by_text("the wrist centre on axis 1", exact=False).count() >= 1
+    assert page.get_by_text("As defined (modified DH)", exact=False).count() >= 1
+    page.wait_for_timeout(2500)
+    with_frames = canvas_pixels(page)
+    assert (np.abs(with_frames - before).sum(axis=-1) > 60).mean() > 0.02, "the KR210 was not drawn in place of the UR10"
+    # the DH frames' x axes (red) and z axes (blue) are on screen, and go when switched off
+    page.locator(dom_id(course.dh_table.show_frames)).uncheck()
+    wait_for(lambda: not course.scene.axes.visible, what="the frames hidden")
+    page.wait_for_timeout(2500)
+    without = canvas_pixels(page)
+    assert axis_pixels(with_frames) > 3 * axis_pixels(without) + 200, "the frames' axes did not show, or did not go"
+    # the first slider turns joint 1, in degrees, and the skeleton follows
+    step_slider(page, course.joints.sliders[0], "ArrowRight", 1.0)
+    wait_for(lambda: abs(np.degrees(course.state.last.q[0]) - 1.0) < 1e-6, what="A1 at 1°")
+
+
+def axis_pixels(pixels: np.ndarray) -> int:
+    """Pixels of pure-ish red or blue: the frames' x and z axes (viser draws them (255, 0, 0) and (0, 0, 255), lit)."""
+    r, g, b = (pixels[..., k].astype(int) for k in range(3))
+    red = (r > 150) & (g < 60) & (b < 60)
+    blue = (b > 150) & (r < 60) & (g < 60)
+    return int((red | blue).sum())

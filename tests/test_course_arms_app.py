@@ -1,0 +1,121 @@
+"""The arm picker and the course's other arms in the app (server side, through viser's protocol)."""
+
+from __future__ import annotations
+
+import asyncio
+import math
+
+import numpy as np
+import pytest
+
+from app.arm_picker import ARM_CHOICES, UR10
+from app.course_arms.panel import branches_markdown, dh_table_markdown
+from app.course_arms.session import CourseArmSession
+from app.session import ClientSession
+from ur10core.serial import SerialArm
+
+from .server_support import session_of, until, url
+from .viser_client import ViserClient, wxyz_of
+
+pytestmark = pytest.mark.server
+
+KR210 = "KUKA KR210 (spherical wrist)"
+TARGET = "/course_arm/target"
+
+
+def session_for(app, client_id: int):
+    return app.sessions.get(client_id)
+
+
+async def pick(app, client: ViserClient, label: str, kind: type):
+    """Choose ``label`` in the "Arm" dropdown, as a student does, once the current dropdown has arrived."""
+    client_id = int(client.gizmo_owner)
+    await until(lambda: "Which arm" in client.gui and client.gui["Which arm"]["uuid"] not in client.received.removed_gui,
+                what="the arm picker")
+    await client.set_gui("Which arm", label)
+    await until(lambda: isinstance(session_for(app, client_id), kind)
+                and (kind is ClientSession or session_for(app, client_id).arm.name == ARM_CHOICES[label]),
+                what=f"the {label}")
+    return session_for(app, client_id)
+
+
+def test_picking_the_kr210_builds_its_arm_and_drags_it(app):
+    async def scenario():
+        client = await ViserClient(url(app)).connect()
+        first = session_of(app, client)
+        session = await pick(app, client, KR210, CourseArmSession)
+        assert first.closed
+        assert "/ik_target" in client.received.removed_nodes  # the UR10's gizmo went with its arm
+        await until(lambda: "A1 (°)" in client.gui and "/course_arm/body" in client.received.nodes, what="the KR210")
+        # drag the target to a pose of known joints: the arm takes the branch nearest where it was
+        q = np.radians([25, 10, -20, 30, 45, 15])
+        T = session.arm.fk(q)
+        await client.drag_target(T[:3, 3], wxyz_of(T), "start", name=TARGET)
+        await client.drag_target(T[:3, 3], wxyz_of(T), "end", name=TARGET)
+        await until(lambda: np.allclose(session.state.last.q, q, atol=1e-9), what="the arm at the dragged pose")
+        snapshot = session.state.last
+        assert snapshot.reason == "" and snapshot.solution.valid[snapshot.chosen]
+        # out of reach: the arm stays, and the panel says why, with the numbers
+        far = T.copy()
+        far[:3, 3] = (5.0, 0.0, 1.0)
+        await client.drag_target(far[:3, 3], wxyz_of(far), "update", name=TARGET)
+        await until(lambda: session.state.last.reason != "", what="the reason")
+        assert "reach at most" in session.state.last.reason
+        np.testing.assert_allclose(session.state.last.q, q, atol=1e-9)
+        assert "Out of reach" in branches_markdown(session.arm, session.state.last)
+        # a slider moves one joint, in degrees
+        await client.set_gui("A2 (°)", 30.0)
+        await until(lambda: math.isclose(session.state.last.q[1], math.radians(30.0), abs_tol=1e-9), what="A2 = 30°")
+        # and back to the UR10, with its whole panel
+        back = await pick(app, client, UR10, ClientSession)
+        assert session.closed and not back.closed
+        await until(lambda: "Show workspace cloud" in client.gui, what="the UR10's panel")
+        await client.close()
+
+    asyncio.run(scenario())
+
+
+def test_a_prismatic_joint_is_driven_in_millimetres(app):
+    async def scenario():
+        client = await ViserClient(url(app)).connect()
+        session = await pick(app, client, "Stanford arm (RRP + wrist)", CourseArmSession)
+        await client.set_gui("d3 (mm)", 300.0)
+        await until(lambda: math.isclose(session.state.last.q[2], 0.3, abs_tol=1e-9), what="d3 = 300 mm")
+        await client.set_gui("d3 (mm)", 5000.0)  # beyond the stroke: refused, with a message
+        await until(lambda: any("limits" in body for _, body in client.received.notifications), what="the refusal")
+        assert math.isclose(session.state.last.q[2], 0.3, abs_tol=1e-9)
+        await until(lambda: client.gui["d3 (mm)"]["value"] == 300.0, what="the slider put back")
+        await client.close()
+
+    asyncio.run(scenario())
+
+
+def test_every_arm_can_be_picked_and_an_unknown_one_is_refused(app):
+    async def scenario():
+        client = await ViserClient(url(app)).connect()
+        for label, name in ARM_CHOICES.items():
+            if name is None:
+                continue
+            session = await pick(app, client, label, CourseArmSession)
+            snapshot = session.state.last
+            assert snapshot.chosen >= 0 and snapshot.solution.valid.any()
+            np.testing.assert_allclose(session.arm.fk(snapshot.q), snapshot.target, atol=1e-9)
+        client_id = int(client.gizmo_owner)
+        await until(lambda: client.gui["Which arm"]["uuid"] not in client.received.removed_gui, what="the arm picker")
+        await client.set_gui("Which arm", "PUMA 560")
+        await until(lambda: any("not one of the choices" in body for _, body in client.received.notifications),
+                    what="the refusal")
+        assert session_for(app, client_id).arm.name == "cylindrical"
+        await client.close()
+
+    asyncio.run(scenario())
+
+
+def test_dh_tables_show_both_conventions():
+    kr210 = SerialArm.preset("kr210")
+    modified = dh_table_markdown(kr210.dh)
+    assert "α<sub>i−1</sub>" in modified and "q2 − 90°" in modified and "fixed" in modified and "303.0" in modified
+    standard = dh_table_markdown(kr210.dh.converted("standard"))
+    assert "θ<sub>i</sub> | d<sub>i</sub>" in standard
+    stanford = dh_table_markdown(SerialArm.preset("stanford").dh)
+    assert "q3" in stanford and "161.9" in stanford
