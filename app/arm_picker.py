@@ -14,7 +14,8 @@ import viser
 from ur10core.serial import PRESETS
 
 UR10 = "UR10 (the app's arm)"
-#: What the dropdown shows → the ``Arm.preset`` name (None: the server's own UR10).
+CUSTOM = "Your own DH table"
+#: What the dropdown shows → the ``Arm.preset`` name (None: the server's own UR10; "custom": the DH editor).
 ARM_CHOICES: dict[str, str | None] = {
     UR10: None,
     "KUKA KR210 (spherical wrist)": "kr210",
@@ -23,8 +24,9 @@ ARM_CHOICES: dict[str, str | None] = {
     "SCARA (RRP + roll)": "scara",
     "Planar elbow (2R)": "planar_elbow",
     "Cylindrical arm (RPP)": "cylindrical",
+    CUSTOM: "custom",
 }
-assert set(ARM_CHOICES.values()) - {None} == set(PRESETS)
+assert set(ARM_CHOICES.values()) - {None, "custom"} == set(PRESETS)
 
 
 class ArmPicker:

@@ -20,8 +20,9 @@ import viser
 from ur10core import Arm, symbolic, symbolic_arms
 
 from . import shared_frames
-from .arm_picker import UR10, ARM_CHOICES, ArmPicker
+from .arm_picker import ARM_CHOICES, CUSTOM, UR10, ArmPicker
 from .classroom import Classroom
+from .course_arms.editor import STARTING_TABLE, parse_table
 from .course_arms.session import CourseArmSession
 from .gate import Gate, gated_serve
 from .meshes import load_models
@@ -170,7 +171,7 @@ class TeachingServer:
         self.models = load_models(preset)
         symbolic.load()  # read the cached derivations now rather than in the first student's callback
         for name in ARM_CHOICES.values():
-            if name is not None:
+            if name not in (None, "custom"):
                 symbolic_arms.load(name)
         self.host = host
         label = f"UR10 kinematics ({preset})"
@@ -244,18 +245,26 @@ class TeachingServer:
         if client.client_id not in self.server.get_clients():
             self._disconnected(client)
 
-    def _start_session(self, client: viser.ClientHandle, choice: str, lecture: bool) -> None:
-        """Build the arm ``choice`` (an ``ARM_CHOICES`` label) in this browser, with the picker above it."""
+    def _start_session(self, client: viser.ClientHandle, choice: str, lecture: bool, typed=None) -> None:
+        """Build the arm ``choice`` (an ``ARM_CHOICES`` label) in this browser, with the picker above it.
+
+        ``typed``: (arm, text, convention) of a table typed in the DH editor.
+        """
         name = ARM_CHOICES[choice]
         if name is None:
             session = ClientSession(client, self.arm, self.models, self.refresher, self.drags, lecture=lecture)
+        elif name == "custom":
+            arm, text, convention = typed or (parse_table(STARTING_TABLE, "standard"), STARTING_TABLE, "standard")
+            session = CourseArmSession(
+                client, arm, self.refresher, self.drags, lecture=lecture, text=text, convention=convention,
+                rebuild=lambda new, new_text, new_convention: self._switch(client, CUSTOM, (new, new_text, new_convention)))
         else:
             session = CourseArmSession(client, Arm.preset(name), self.refresher, self.drags, lecture=lecture)
         session.arm_picker = ArmPicker(client.gui, choice, lambda label: self._switch(client, label), session.guard)
         with self._sessions_lock:
             self._sessions[client.client_id] = session
 
-    def _switch(self, client: viser.ClientHandle, choice: str) -> None:
+    def _switch(self, client: viser.ClientHandle, choice: str, typed=None) -> None:
         """Take this browser's arm out (panel and scene) and build ``choice`` in its place."""
         with self._sessions_lock:
             old = self._sessions.pop(client.client_id, None)
@@ -266,7 +275,7 @@ class TeachingServer:
             old.close()
         client.gui.reset()
         client.scene.reset()
-        self._start_session(client, choice, lecture)
+        self._start_session(client, choice, lecture, typed)
         if client.client_id not in self.server.get_clients():  # it left meanwhile
             self._disconnected(client)
 

@@ -45,3 +45,28 @@ def axis_pixels(pixels: np.ndarray) -> int:
     red = (r > 150) & (g < 60) & (b < 60)
     blue = (b > 150) & (r < 60) & (g < 60)
     return int((red | blue).sum())
+
+
+def test_typing_a_dh_table_builds_that_arm(open_page, app):
+    page, session = open_page()
+    client_id = next(k for k, v in app.sessions.items() if v is session)
+    choose(page, session.arm_picker.dropdown, "Your own DH table")
+    wait_for(lambda: isinstance(app.sessions.get(client_id), CourseArmSession), what="the editor's arm")
+    first = app.sessions[client_id]
+    label = f"label[for='{first.editor.rows._impl.uuid}']"  # a text field's label carries its uuid
+    page.wait_for_selector(label, timeout=30_000)
+    before = canvas_pixels(page)
+    rows = page.locator(label).locator("xpath=ancestor::div[2]").locator("textarea").first
+    rows.fill("400 0 300 0 R\n350 180 0 0 R\n0 0 100 0 P")  # a SCARA of the student's own
+    page.wait_for_timeout(300)
+    page.locator(dom_id(first.editor.build)).click()
+    wait_for(lambda: app.sessions.get(client_id) is not first and getattr(app.sessions.get(client_id), "arm", None) is not None
+             and app.sessions[client_id].arm.joint_types == "RRP", what="the typed arm")
+    typed = app.sessions[client_id]
+    page.wait_for_selector(dom_id(typed.joints.sliders[2]), timeout=30_000)
+    assert page.get_by_text("joint 3 (mm)", exact=True).count() == 1  # the prismatic joint, in millimetres
+    page.wait_for_timeout(2500)
+    assert (np.abs(canvas_pixels(page) - before).sum(axis=-1) > 60).mean() > 0.005, "the typed arm was not drawn"
+    page.locator(dom_id(typed.search.button)).click()
+    wait_for(lambda: typed.state.last.solution is not None, what="the numerical search")
+    wait_for(lambda: page.get_by_text("found numerically 1", exact=True).count() > 0, what="the branches in the table")

@@ -11,7 +11,7 @@ import viser
 
 from ur10core import symbolic_arms
 from ur10core.dh import DHTable
-from ur10core.serial import SerialArm
+from ur10core.serial import PRESETS, SerialArm
 
 from ..style import DANGER_RED, SAFE_GREEN, SLOT_COLORS, hex_color, number, swatch
 from ..view import View
@@ -77,6 +77,12 @@ class CourseJointSliders(View):
 
 def branches_markdown(arm: SerialArm, snapshot: CourseSnapshot) -> str:
     sol = snapshot.solution
+    if sol is None:  # a typed table: the numerical search runs when asked
+        lines = ["The arm follows the target from its own joints (damped least squares). "
+                 "**Find every branch** searches from many starts for the others."]
+        if snapshot.reason:
+            lines += ["", f"<span style='color:{hex_color(DANGER_RED)}'>**Not reached:** {snapshot.reason}</span>"]
+        return "\n".join(lines)
     lines = [f"**{int(sol.valid.sum())} of {len(sol.labels)} branches reach the target** ({sol.method}; "
              f"the arm places its {sol.task})", "",
              "| # | branch | joints | |", "|---|---|---|---|"]
@@ -113,6 +119,10 @@ class CourseBranches(View):
 
 
 def factors_markdown(arm: SerialArm, q: np.ndarray) -> str:
+    measures = (f"manipulability {number(float(arm.manipulability(q)), '.4g')}, smallest singular value "
+                f"{number(float(arm.smallest_singular_value(q)), '.4g')}")
+    if arm.name not in PRESETS:  # a typed table has no derivation: the numbers that vanish at a singularity
+        return ("A typed table's det J is not derived; these go to zero at a singularity:\n\n" + measures)
     derivation = symbolic_arms.load(arm.name)
     values = arm.singularity_factors(q)
     lines = [f"det J = {derivation.constant} × the factors below (derived with sympy from the DH table)", "",
@@ -122,8 +132,7 @@ def factors_markdown(arm: SerialArm, q: np.ndarray) -> str:
         colour = hex_color(DANGER_RED if near else SAFE_GREEN)
         lines.append(f"| {factor.name}: `{factor.expression}` | <span style='color:{colour}'>{number(value, '.4f')}</span> "
                      f"| {factor.meaning} |")
-    lines += ["", f"manipulability {number(float(arm.manipulability(q)), '.4g')}, smallest singular value "
-              f"{number(float(arm.smallest_singular_value(q)), '.4g')}"]
+    lines += ["", measures]
     return "\n".join(lines)
 
 

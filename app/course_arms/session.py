@@ -12,10 +12,14 @@ import viser
 from ur10core.orientation import quaternion, transform_from_quaternion
 from ur10core.serial import SerialArm
 
+import threading
+
 from ..camera import CameraControls
 from ..feedback import guard, notify
 from ..metrics import LATENCY
-from ..workers import DragQueue, PanelRefresher
+from ..view import View
+from ..workers import DragQueue, FoldedRuns, PanelRefresher
+from .editor import DHEditor
 from .panel import CourseBranches, CourseDHTable, CourseJointSliders, CourseSingularities
 from .scene import ROOT, CourseArmScene
 from .state import CourseArmState, CourseSnapshot
@@ -27,11 +31,41 @@ def reach(arm: SerialArm) -> float:
     return float(max(np.linalg.norm(points, axis=-1).max(), 0.3))
 
 
+class BranchSearch(View):
+    """"Find every branch": a typed table's numerical IK from many starts, on a thread of its own."""
+
+    def __init__(self, gui: viser.GuiApi, session: "CourseArmSession") -> None:
+        self._session = session
+        self._runs = FoldedRuns(self._search)
+        folder = gui.add_folder("Numerical IK", order=0.3)
+        self.folders = (folder,)
+        with folder:
+            self.button = gui.add_button("Find every branch", icon=viser.Icon.SEARCH,
+                                         hint="Damped least squares from 48 starts: every distinct solution it finds")
+        self.button.on_click(session.guard(lambda _: self._request()))
+
+    def _request(self) -> None:
+        if self._runs.claim():
+            threading.Thread(target=self._session.guard(lambda _: self._runs.run_claimed()), args=(None,),
+                             name="branch-search", daemon=True).start()
+
+    def _search(self) -> None:
+        session = self._session
+        snapshot = session.state.last
+        solution = session.state.search(snapshot)
+        session.apply(lambda state: state.with_branches(snapshot, solution), move_gizmo=False)
+
+
 class CourseArmSession:
-    """A browser's course arm: its state, scene, gizmo and panel (the UR10's ``ClientSession`` for other arms)."""
+    """A browser's course arm: its state, scene, gizmo and panel (the UR10's ``ClientSession`` for other arms).
+
+    ``rebuild(arm, text, convention)``, given for a typed table, puts a newly typed arm in
+    this one's place (the server does it); ``text`` and ``convention`` fill the editor.
+    """
 
     def __init__(self, client: viser.ClientHandle, arm: SerialArm, refresher: PanelRefresher, drags: DragQueue,
-                 lecture: bool = False) -> None:
+                 lecture: bool = False, rebuild: Callable[[SerialArm, str, str], None] | None = None,
+                 text: str = "", convention: str = "standard") -> None:
         self.client = client
         self.arm = arm
         self.state = CourseArmState(arm)
@@ -48,12 +82,15 @@ class CourseArmSession:
             wxyz=quaternion(first.target[:3, :3], check=False), position=first.target[:3, 3])
         self.gizmo.on_update(self._dragged)
         gui = client.gui
+        self.editor = DHEditor(gui, self, text, convention, rebuild) if rebuild is not None else None
+        self.search = BranchSearch(gui, self) if self.state.numerical else None
         self.joints = CourseJointSliders(gui, self)
         self.branches = CourseBranches(gui, arm)
         self.singularities = CourseSingularities(gui, arm)
         self.dh_table = CourseDHTable(gui, self)
         self.camera = CameraControls(client, lambda: self.state.last, self.guard, lecture, body_radius=0.15 * size)
-        self.panel_views = (self.joints, self.branches, self.singularities, self.dh_table, self.camera)
+        self.panel_views = (*(v for v in (self.editor, self.search) if v is not None),
+                            self.joints, self.branches, self.singularities, self.dh_table, self.camera)
         self.render(first)
         self.render_panel()
         self.camera.frame()

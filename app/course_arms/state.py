@@ -10,6 +10,7 @@ import numpy as np
 
 from ur10core.branches import BranchSet
 from ur10core.serial import SerialArm
+from ur10core.solvers.numerical import NumericalIK
 
 #: Where each arm starts: a pose away from every singularity, so that all its branches show.
 HOMES = {
@@ -29,8 +30,8 @@ class CourseSnapshot:
     q: np.ndarray  #: (n,) joints: radians and metres
     frames: np.ndarray  #: (rows + 1, 4, 4) every DH frame
     target: np.ndarray  #: (4, 4) where the student put the target (what the arm controls of it)
-    solution: BranchSet  #: the branches of ``target``
-    chosen: int  #: the slot the arm is in, −1 if none reaches
+    solution: BranchSet | None  #: the branches of ``target``; None until searched, for a numerical arm
+    chosen: int  #: the slot the arm is in, −1 if none reaches (or not searched)
     reason: str  #: why the target is out of reach ("" if it is reached)
 
     @property
@@ -59,21 +60,28 @@ def project_target(arm: SerialArm, T: np.ndarray, current: np.ndarray) -> np.nda
 
 
 class CourseArmState:
-    """The joints and target of one course arm; every change returns a new :class:`CourseSnapshot`."""
+    """The joints and target of one course arm; every change returns a new :class:`CourseSnapshot`.
+
+    An arm with a closed form gets every branch on every change. A typed table's numerical
+    IK follows the target from the current joints only (a millisecond or so a step); its
+    other branches come from :meth:`search`, many starts at once, when the student asks.
+    """
 
     def __init__(self, arm: SerialArm, q=None) -> None:
         self.arm = arm
+        self.numerical = isinstance(arm.solver, NumericalIK)
         self.lock = threading.RLock()  # the drag queue holds it while it calls drag_to, which applies under it
-        self.last = self._solved(np.array(HOMES.get(arm.name, np.zeros(arm.n_joints)) if q is None else q, dtype=float))
+        if q is None:  # a typed arm: 20° on each revolute joint (zero is often stretched out), mid-stroke otherwise
+            q = HOMES.get(arm.name, np.where(arm.revolute, np.clip(math.radians(20), *arm.limits.T), arm.limits.mean(axis=1)))
+        self.last = self._solved(np.array(q, dtype=float))
 
-    def _solved(self, q: np.ndarray, target: np.ndarray | None = None) -> CourseSnapshot:
+    def _solved(self, q: np.ndarray) -> CourseSnapshot:
         frames = self.arm.frames(q)
-        reached = target is None
-        if target is None:
-            target = frames[-1]
+        target = frames[-1]
+        if self.numerical:
+            return CourseSnapshot(q, frames, target, None, -1, "")
         solution = self.arm.ik(target, hint=q)
-        chosen = solution.nearest(q, self.arm.revolute) if reached else -1
-        return CourseSnapshot(q, frames, target, solution, chosen, "")
+        return CourseSnapshot(q, frames, target, solution, solution.nearest(q, self.arm.revolute), "")
 
     def set_joint(self, index: int, value: float) -> CourseSnapshot:
         q = self.last.q.copy()
@@ -92,6 +100,16 @@ class CourseArmState:
         """Solve for the gizmo pose ``T``: the valid branch nearest the current joints, or stay and say why."""
         previous = self.last
         target = project_target(self.arm, T, previous.frames[-1])
+        if self.numerical:
+            q, _ = self.arm.solver.follow(target, previous.q)
+            error = float(self.arm.pose_error(q, target))
+            if error <= 1e-9:
+                self.last = CourseSnapshot(q, self.arm.frames(q), target, None, -1, "")
+            else:
+                self.last = CourseSnapshot(previous.q, previous.frames, target, None, -1,
+                                           f"the search from the arm's joints came within {1000 * error:.3g} mm of it: it may be "
+                                           "out of reach, or reachable only from another branch (Find every branch)")
+            return self.last
         solution = self.arm.ik(target, hint=previous.q)
         chosen = solution.nearest(previous.q, self.arm.revolute)
         if chosen < 0:
@@ -99,4 +117,18 @@ class CourseArmState:
         else:
             q = solution.q[chosen]
             self.last = CourseSnapshot(q, self.arm.frames(q), target, solution, int(chosen), "")
+        return self.last
+
+    def search(self, snapshot: CourseSnapshot) -> BranchSet:
+        """Every branch of ``snapshot``'s target (the numerical IK's many starts): slow, call it off the drag path."""
+        return self.arm.ik(snapshot.target, hint=snapshot.q)
+
+    def with_branches(self, snapshot: CourseSnapshot, solution: BranchSet) -> CourseSnapshot:
+        """The found branches shown, if the arm has not moved since they were searched for."""
+        if self.last is not snapshot:
+            return self.last
+        reached = solution.valid.any()
+        chosen = solution.nearest(snapshot.q, self.arm.revolute) if reached else -1
+        reason = snapshot.reason if reached else solution.unreachable_reason()
+        self.last = CourseSnapshot(snapshot.q, snapshot.frames, snapshot.target, solution, chosen, reason)
         return self.last

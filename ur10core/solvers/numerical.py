@@ -93,16 +93,13 @@ class NumericalIK:
         turn = rotation_log(target[..., :3, :3] @ np.swapaxes(tool[..., :3, :3], -1, -2))
         return np.concatenate([position, turn], axis=-1), J
 
-    def solve(self, T: np.ndarray, hint: np.ndarray | None) -> dict[str, np.ndarray]:
-        N, n, slots = len(T), self.table.n_joints, len(self.labels)
-        out = empty_branches((N,), slots, n)
-        q = self._starts(hint, N)
-        target = np.broadcast_to(T[:, None], q.shape[:-1] + (4, 4))
+    def _descend(self, q: np.ndarray, target: np.ndarray, iterations: int) -> tuple[np.ndarray, np.ndarray]:
+        """Levenberg–Marquardt from the starts ``q`` (..., n) towards ``target`` (..., 4, 4): (joints, error size)."""
         damping = np.full(q.shape[:-1], 1e-2)
         error, J = self._error(q, target)
         size = np.linalg.norm(error, axis=-1)
         rows = error.shape[-1]
-        for _ in range(self.iterations):
+        for _ in range(iterations):
             active = size > CONVERGED
             if not active.any():
                 break
@@ -115,7 +112,24 @@ class NumericalIK:
             index = tuple(np.argwhere(active)[better].T)
             q[index], error[index], J[index], size[index] = trial[better], trial_error[better], trial_J[better], trial_size[better]
             damping[active] = np.where(better, np.maximum(damping[active] / 3, 1e-9), np.minimum(damping[active] * 4, 1e3))
-        q = np.where(self.revolute, wrap(q), q)
+        return np.where(self.revolute, wrap(q), q), size
+
+    def follow(self, T: np.ndarray, hint: np.ndarray, iterations: int = 30) -> tuple[np.ndarray, float]:
+        """One pose (4, 4) from the current joints ``hint`` (n,) only: (joints, their pose error).
+
+        What a drag needs: the target moves a little between events, so the arm's own
+        joints are a start that converges in a few steps, in about a millisecond per step;
+        the other branches come from :meth:`solve`'s many starts.
+        """
+        q, size = self._descend(np.array(hint, dtype=float)[None], np.asarray(T, dtype=float)[None], iterations)
+        return q[0], float(size[0])
+
+    def solve(self, T: np.ndarray, hint: np.ndarray | None) -> dict[str, np.ndarray]:
+        N, n, slots = len(T), self.table.n_joints, len(self.labels)
+        out = empty_branches((N,), slots, n)
+        starts = self._starts(hint, N)
+        target = np.broadcast_to(T[:, None], starts.shape[:-1] + (4, 4))
+        q, size = self._descend(starts, target, self.iterations)
         reached = np.abs(self.table.fk(q) - target)
         if self.task == "position":
             reached = reached[..., :3, 3]
