@@ -5,6 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from app.course_arms.scene import X_AXIS_RED, Z_AXIS_BLUE
 from app.course_arms.session import CourseArmSession
 
 from .browser_support import canvas_pixels, choose, dom_id, step_slider, wait_for
@@ -30,7 +31,7 @@ def test_picking_the_kr210_draws_it_with_its_dh_frames_and_its_panel(open_page, 
     assert (np.abs(with_frames - before).sum(axis=-1) > 60).mean() > 0.02, "the KR210 was not drawn in place of the UR10"
     # the DH frames' x axes (red) and z axes (blue) are on screen, and go when switched off
     page.locator(dom_id(course.dh_table.show_frames)).uncheck()
-    wait_for(lambda: not course.scene.axes.visible, what="the frames hidden")
+    wait_for(lambda: not course.scene.x_axes.visible and not course.scene.z_axes.visible, what="the frames hidden")
     page.wait_for_timeout(2500)
     without = canvas_pixels(page)
     assert axis_pixels(with_frames) > 3 * axis_pixels(without) + 200, "the frames' axes did not show, or did not go"
@@ -40,11 +41,8 @@ def test_picking_the_kr210_draws_it_with_its_dh_frames_and_its_panel(open_page, 
 
 
 def axis_pixels(pixels: np.ndarray) -> int:
-    """Pixels of pure-ish red or blue: the frames' x and z axes (viser draws them (255, 0, 0) and (0, 0, 255), lit)."""
-    r, g, b = (pixels[..., k].astype(int) for k in range(3))
-    red = (r > 150) & (g < 60) & (b < 60)
-    blue = (b > 150) & (r < 60) & (g < 60)
-    return int((red | blue).sum())
+    """Pixels of the frames' colours: x axes red, z axes blue (lit lines shade a little)."""
+    return coloured(pixels, X_AXIS_RED) + coloured(pixels, Z_AXIS_BLUE)
 
 
 def test_typing_a_dh_table_builds_that_arm(open_page, app):
@@ -70,3 +68,38 @@ def test_typing_a_dh_table_builds_that_arm(open_page, app):
     page.locator(dom_id(typed.search.button)).click()
     wait_for(lambda: typed.state.last.solution is not None, what="the numerical search")
     wait_for(lambda: page.get_by_text("found numerically 1", exact=True).count() > 0, what="the branches in the table")
+
+
+def test_the_dh_walkthrough_draws_each_step(open_page, app):
+    page, session = open_page()
+    client_id = next(k for k, v in app.sessions.items() if v is session)
+    choose(page, session.arm_picker.dropdown, "Elbow arm + spherical wrist")
+    wait_for(lambda: isinstance(app.sessions.get(client_id), CourseArmSession), what="the elbow arm")
+    course = app.sessions[client_id]
+    page.wait_for_selector(dom_id(course.joints.sliders[0]), timeout=30_000)
+    page.get_by_text("DH walkthrough", exact=True).first.click()  # folded by default
+    next_button = page.get_by_role("button", name="Next ▶")
+    next_button.wait_for(state="visible", timeout=10_000)
+    page.wait_for_timeout(2000)
+    frames = canvas_pixels(page)
+    next_button.click()  # step 1: the z axes alone
+    wait_for(lambda: course.walkthrough.step == 0 and not course.scene.x_axes.visible, what="step 1")
+    wait_for(lambda: page.get_by_text("Step 1 — the z axes", exact=False).count() > 0, what="step 1's text")
+    page.wait_for_timeout(2000)
+    z_only = canvas_pixels(page)
+    assert coloured(z_only, (220, 30, 30)) < coloured(frames, (220, 30, 30)) / 3, "the x axes did not go"
+    for step in (1, 2):
+        page.wait_for_timeout(200)
+        next_button.click()
+        wait_for(lambda: course.walkthrough.step == step, what=f"step {step + 1}")
+    wait_for(lambda: page.get_by_text("Row 1.", exact=False).count() > 0, what="row 1's text")
+    page.wait_for_timeout(2000)
+    row = canvas_pixels(page)
+    # row 1's θ1 arc (bluish green) and α1 arc (reddish purple) are on screen
+    assert coloured(row, (0, 158, 115)) > coloured(frames, (0, 158, 115)) + 50, "θ1's arc is not drawn"
+    assert coloured(row, (204, 121, 167)) > coloured(frames, (204, 121, 167)) + 50, "α1's arc is not drawn"
+
+
+def coloured(pixels: np.ndarray, rgb, tolerance: int = 40) -> int:
+    """Pixels within ``tolerance`` of ``rgb`` in every channel (lit lines shade a little)."""
+    return int((np.abs(pixels[..., :3].astype(int) - np.array(rgb)).max(axis=-1) <= tolerance).sum())

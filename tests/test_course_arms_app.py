@@ -189,3 +189,34 @@ def test_the_skeleton_walks_each_row_along_d_then_a(name):
     lengths = np.linalg.norm(segments[:, 1] - segments[:, 0], axis=-1)
     expected = [v for row, dv in zip(arm.dh.rows, d) for v in ((abs(dv), abs(row.a)) if arm.convention == "standard" else (abs(row.a), abs(dv)))]
     np.testing.assert_allclose(np.sort(lengths), np.sort([v for v in expected if v > 1e-9]), atol=1e-12)
+
+
+def test_a_row_shown_on_the_arm_and_the_walkthrough(app):
+    async def scenario():
+        client = await ViserClient(url(app)).connect()
+        session = await pick(app, client, "Stanford arm (RRP + wrist)", CourseArmSession)
+        scene = session.scene
+        await client.set_gui("Show a row on the arm", "row 3")  # the prismatic row: d3 is the joint
+        await until(lambda: scene.highlight_row == 3 and scene.parameters["d"].visible, what="row 3 drawn")
+        await until(lambda: scene.parameter_labels["d"].text == "d3 = 254.0 mm", what="d3's value")
+        segment = scene.parameters["d"].points[0]
+        assert np.linalg.norm(segment[1] - segment[0]) == pytest.approx(0.254, abs=1e-6)
+        await client.set_gui("Show a row on the arm", "row 99")  # not an option: refused
+        await until(lambda: any("not one of the choices" in body for _, body in client.received.notifications),
+                    what="the refusal")
+        # the walkthrough: z axes alone, then x too, then each row
+        await client.set_gui("Step", "Next ▶")
+        await until(lambda: session.walkthrough.step == 0, what="step 1")
+        assert scene.z_axes.visible and not scene.x_axes.visible and scene.highlight_row is None
+        for expected in (1, 2):
+            await asyncio.sleep(0.1)
+            await client.set_gui("Step", "Next ▶")
+            await until(lambda: session.walkthrough.step == expected, what=f"step {expected + 1}")
+        assert scene.x_axes.visible and scene.highlight_row == 1
+        assert "Row 1" in session.walkthrough.text.content and "Step 3 of 8" in session.walkthrough.text.content
+        await asyncio.sleep(0.1)
+        await client.set_gui("Step", "Stop")
+        await until(lambda: session.walkthrough.step == -1 and scene.highlight_row is None, what="the walkthrough stopped")
+        await client.close()
+
+    asyncio.run(scenario())

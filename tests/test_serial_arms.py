@@ -417,3 +417,25 @@ def test_singular_flags_only_where_the_pose_leaves_a_value_free():
     cylindrical = SerialArm.preset("cylindrical")
     assert not cylindrical.ik(cylindrical.fk([0.0, 0.3, 0.3]), hint=[0.0, 0.3, 0.3]).singular.any()
     assert cylindrical.ik(cylindrical.fk([0.5, 0.3, 0.0]), hint=[0.5, 0.3, 0.0]).singular.all()
+
+
+@pytest.mark.parametrize("name", ["kr210", "stanford", "scara", "elbow"])
+def test_row_geometry_puts_each_parameter_where_it_acts(name):
+    """Turning a turn's start by its angle about its axis lands on the next axis, and the two
+    segments have the row's lengths and lead from one frame origin to the next."""
+    arm = SerialArm.preset(name)
+    q = random_joints(arm, 1, 3)[0]
+    frames = arm.frames(q)
+    for row in range(1, len(arm.dh.rows) + 1):
+        g = arm.dh.row_geometry(q, row)
+        first, second = (g.d, g.a) if arm.convention == "standard" else (g.a, g.d)
+        np.testing.assert_allclose(first[0], frames[row - 1, :3, 3], atol=1e-12)
+        np.testing.assert_allclose(second[1], frames[row, :3, 3], atol=1e-12)
+        np.testing.assert_allclose(first[1], second[0], atol=1e-12)
+        assert np.linalg.norm(g.d[1] - g.d[0]) == pytest.approx(abs(g.values["d"]), abs=1e-12)
+        assert np.linalg.norm(g.a[1] - g.a[0]) == pytest.approx(abs(g.values["a"]), abs=1e-12)
+        theta_end = frames[row, :3, 0]
+        alpha_end = frames[row, :3, 2]
+        for turn, end in ((g.theta, theta_end), (g.alpha, alpha_end)):
+            arc = turn.points(1.0, 3)
+            np.testing.assert_allclose(arc[-1] - turn.centre, end, atol=1e-12)

@@ -29,6 +29,39 @@ CONVENTIONS = (STANDARD, MODIFIED)
 
 
 @dataclass(frozen=True)
+class Turn:
+    """A DH angle drawn as a turn: ``start`` turned about ``axis`` by ``angle`` (right hand) at ``centre``."""
+
+    centre: np.ndarray  #: (3,)
+    axis: np.ndarray  #: (3,) unit
+    start: np.ndarray  #: (3,) unit, perpendicular to axis
+    angle: float  #: radians
+
+    def points(self, radius: float, count: int = 24) -> np.ndarray:
+        """(count, 3) points of the arc of ``radius`` from ``start`` to the end of the turn (Rodrigues)."""
+        t = np.linspace(0.0, self.angle, count)[:, None]
+        side = np.cross(self.axis, self.start)
+        return self.centre + radius * (np.cos(t) * self.start + np.sin(t) * side)
+
+
+@dataclass(frozen=True)
+class RowGeometry:
+    """Where one row's four parameters are on the arm (docs/kinematics.md §7.1), base frame, metres.
+
+    ``d`` and ``a`` are segments (2, 3) from one frame origin to the next through the
+    corner between them; ``theta`` and ``alpha`` are :class:`Turn` s. Standard DH: θ about
+    z_{i−1} from x_{i−1} to x_i, d along z_{i−1}, a along x_i, α about x_i from z_{i−1} to z_i;
+    modified: a along x_{i−1}, α about x_{i−1}, d along z_i, θ about z_i.
+    """
+
+    values: dict[str, float]  #: a, alpha, d, theta of the row at these joints
+    d: np.ndarray
+    a: np.ndarray
+    theta: Turn
+    alpha: Turn
+
+
+@dataclass(frozen=True)
 class DHRow:
     """One row of a DH table. ``joint``: ``"R"``, ``"P"`` or ``None`` (a fixed row).
 
@@ -203,6 +236,35 @@ class DHTable:
         J[..., :3, :] = np.swapaxes(np.where(revolute[:, None], np.cross(z, tip - o), z), -1, -2)
         J[..., 3:, :] = np.swapaxes(np.where(revolute[:, None], z, 0.0), -1, -2)
         return J
+
+    def row_geometry(self, q, row: int) -> RowGeometry:
+        """Row ``row`` (1-based) of the table drawn on the arm at joints ``q`` (n,): see :class:`RowGeometry`.
+
+        >>> table = DHTable([(0.5, 0, 0.2, 0, "R")], "standard")
+        >>> g = table.row_geometry([np.pi / 2], 1)
+        >>> g.d.round(12).tolist(), g.a.round(12).tolist(), round(g.theta.angle, 12)
+        ([[0.0, 0.0, 0.0], [0.0, 0.0, 0.2]], [[0.0, 0.0, 0.2], [0.0, 0.5, 0.2]], 1.570796326795)
+        """
+        if not 1 <= row <= len(self.rows):
+            raise ValueError(f"row must be 1…{len(self.rows)}, got {row!r}")
+        q = self.joints(q)
+        if q.ndim != 1:
+            raise ValueError("row_geometry draws one pose: q must have shape (n,)")
+        frames = self.frames(q)
+        theta, d = (values[row - 1] for values in self.row_parameters(q))
+        spec = self.rows[row - 1]
+        before, after = frames[row - 1], frames[row]
+        o0, o1 = before[:3, 3], after[:3, 3]
+        values = {"a": spec.a, "alpha": spec.alpha, "d": float(d), "theta": float(theta)}
+        if self.convention == STANDARD:
+            corner = o0 + d * before[:3, 2]
+            return RowGeometry(values, np.array([o0, corner]), np.array([corner, o1]),
+                               Turn(o0, before[:3, 2], before[:3, 0], float(theta)),
+                               Turn(o1, after[:3, 0], before[:3, 2], spec.alpha))
+        corner = o0 + spec.a * before[:3, 0]
+        return RowGeometry(values, np.array([corner, o1]), np.array([o0, corner]),
+                           Turn(o1, after[:3, 2], before[:3, 0], float(theta)),
+                           Turn(corner, before[:3, 0], before[:3, 2], spec.alpha))
 
     # ------------------------------------------------------------------ conventions
 

@@ -13,8 +13,10 @@ from ur10core import symbolic_arms
 from ur10core.dh import DHTable
 from ur10core.serial import PRESETS, SerialArm
 
+from ..feedback import chosen
 from ..style import DANGER_RED, SAFE_GREEN, SLOT_COLORS, hex_color, number, swatch
 from ..view import View
+from .scene import FRAMES_NONE, FRAMES_XZ, FRAMES_Z
 from .state import CourseSnapshot
 
 if TYPE_CHECKING:
@@ -175,22 +177,88 @@ def dh_table_markdown(table: DHTable) -> str:
 
 
 class CourseDHTable(View):
-    """The DH table as the arm is defined and converted to the other convention; the frames toggle."""
+    """The DH table as the arm is defined and converted to the other convention; the frames and row highlight."""
 
     def __init__(self, gui: viser.GuiApi, session: "CourseArmSession") -> None:
+        self._session = session
         arm = session.arm
         folder = gui.add_folder("DH table")
         self.folders = (folder,)
         other = arm.dh.converted("modified" if arm.convention == "standard" else "standard")
+        self.row_choices = ("none",) + tuple(f"row {i}" for i in range(1, len(arm.dh.rows) + 1))
         with folder:
             self.show_frames = gui.add_checkbox("Show DH frames (x red, z blue)", True)
+            self.highlight = gui.add_dropdown("Show a row on the arm", self.row_choices, initial_value="none",
+                                              hint="Its d and a as segments, its θ and α as arcs, with their values")
             gui.add_markdown(f"**{arm.description}.** As defined ({arm.convention} DH):\n\n" + dh_table_markdown(arm.dh)
                              + f"\n\nThe same chain in {other.convention} DH (the tool pose is the same; the "
                              "frames slide to the neighbouring joint axes):\n\n" + dh_table_markdown(other))
-        self.show_frames.on_update(session.guard(self._toggled(session)))
+        self.show_frames.on_update(session.guard(lambda _: self._apply()))
+        self.highlight.on_update(session.guard(lambda _: self._apply()))
 
-    def _toggled(self, session: "CourseArmSession"):
-        def toggled(_: viser.GuiEvent) -> None:
-            session.scene.show_frames = bool(self.show_frames.value)
-            session.redraw()
-        return toggled
+    def _apply(self) -> None:
+        choice = chosen(self.highlight, "row")
+        scene = self._session.scene
+        scene.frames_shown = FRAMES_XZ if self.show_frames.value else FRAMES_NONE
+        scene.highlight_row = None if choice == "none" else int(choice.split()[1])
+        self._session.redraw()
+
+
+def walkthrough_steps(arm: SerialArm) -> list[tuple[str, str, int | None]]:
+    """The DH procedure on ``arm``: (text, which frame axes show, row highlighted) per step."""
+    standard = arm.convention == "standard"
+    steps = [
+        ("**Step 1 — the z axes.** Put z along each joint's axis: "
+         + ("z<sub>i</sub> on the axis of joint i + 1 (z<sub>0</sub> on joint 1's)." if standard
+            else "z<sub>i</sub> on the axis of joint i.")
+         + " A revolute joint turns about its z, a prismatic one slides along it.", FRAMES_Z, None),
+        ("**Step 2 — the x axes.** Each x lies along the common normal of two neighbouring z axes "
+         + ("(from z<sub>i−1</sub> to z<sub>i</sub>, x<sub>i</sub> through the origin of frame i where it meets z<sub>i</sub>)."
+            if standard else "(from z<sub>i</sub> to z<sub>i+1</sub>, x<sub>i</sub> starting on z<sub>i</sub>).")
+         + " Where two z axes meet, x is perpendicular to both; where they are parallel, any common normal will do.",
+         FRAMES_XZ, None),
+    ]
+    for row in range(1, len(arm.dh.rows) + 1):
+        if standard:
+            text = (f"**Row {row}.** θ<sub>{row}</sub>: about z<sub>{row - 1}</sub>, from x<sub>{row - 1}</sub> to x<sub>{row}</sub>; "
+                    f"d<sub>{row}</sub>: along z<sub>{row - 1}</sub>; a<sub>{row}</sub>: along x<sub>{row}</sub>; "
+                    f"α<sub>{row}</sub>: about x<sub>{row}</sub>, from z<sub>{row - 1}</sub> to z<sub>{row}</sub>.")
+        else:
+            text = (f"**Row {row}.** a<sub>{row - 1}</sub>: along x<sub>{row - 1}</sub>; α<sub>{row - 1}</sub>: about "
+                    f"x<sub>{row - 1}</sub>, from z<sub>{row - 1}</sub> to z<sub>{row}</sub>; d<sub>{row}</sub>: along "
+                    f"z<sub>{row}</sub>; θ<sub>{row}</sub>: about z<sub>{row}</sub>, from x<sub>{row - 1}</sub> to x<sub>{row}</sub>.")
+        steps.append((text, FRAMES_XZ, row))
+    return steps
+
+
+class DHWalkthrough(View):
+    """Step through the DH procedure on the arm: z axes, x axes, then each row's four parameters."""
+
+    def __init__(self, gui: viser.GuiApi, session: "CourseArmSession") -> None:
+        self._session = session
+        self.steps = walkthrough_steps(session.arm)
+        self.step = -1  #: -1: not walking through (the arm as it is)
+        folder = gui.add_folder("DH walkthrough", expand_by_default=False)
+        self.folders = (folder,)
+        with folder:
+            self.buttons = gui.add_button_group("Step", ("◀ Back", "Next ▶", "Stop"))
+            self.text = gui.add_markdown("Press **Next** to build this arm's frames the DH way, one step at a time.")
+        self.buttons.on_click(session.guard(self._clicked))
+
+    def _clicked(self, _: viser.GuiEvent) -> None:
+        choice = chosen(self.buttons, "step")
+        if choice == "Stop":
+            self.step = -1
+        elif choice == "Next ▶":
+            self.step = min(self.step + 1, len(self.steps) - 1)
+        else:
+            self.step = max(self.step - 1, -1)
+        scene = self._session.scene
+        if self.step < 0:
+            scene.frames_shown, scene.highlight_row = FRAMES_XZ, None
+            self.text.content = "Press **Next** to build this arm's frames the DH way, one step at a time."
+        else:
+            text, frames_shown, row = self.steps[self.step]
+            scene.frames_shown, scene.highlight_row = frames_shown, row
+            self.text.content = f"{text}\n\n*Step {self.step + 1} of {len(self.steps)}*"
+        self._session.redraw()

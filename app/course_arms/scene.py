@@ -20,7 +20,11 @@ from .state import CourseSnapshot
 
 ROOT = "/course_arm"
 SKELETON_GREY = (60, 62, 68)
-X_AXIS_RED, Z_AXIS_BLUE = (213, 94, 0), (0, 114, 178)  # Okabe-Ito vermilion and blue
+X_AXIS_RED, Z_AXIS_BLUE = (220, 30, 30), (30, 60, 230)
+#: A highlighted row's parameters (Okabe-Ito): d blue, a vermilion, θ bluish green, α reddish purple.
+PARAMETER_COLORS = {"d": (0, 114, 178), "a": (213, 94, 0), "theta": (0, 158, 115), "alpha": (204, 121, 167)}
+#: Which axes the frames show: none, the z axes only (the walkthrough's first step), or x and z.
+FRAMES_NONE, FRAMES_Z, FRAMES_XZ = "none", "z", "xz"
 
 
 def skeleton(table: DHTable, frames: np.ndarray) -> np.ndarray:
@@ -51,7 +55,6 @@ class CourseArmScene:
         self._scene = scene
         self._arm = arm
         self.size = size  #: the arm's reach (m): sizes of rods, axes and the gizmo follow it
-        self.show_frames = True
         segments = skeleton(arm.dh, first.frames)
         self.body = scene.add_line_segments(f"{ROOT}/body", segments, SKELETON_GREY, thickness=0.012 * size)
         self.joints = []
@@ -64,13 +67,22 @@ class CourseArmScene:
                                     dimensions=(0.03 * size, 0.03 * size, 0.06 * size))
             self.joints.append(rod)
         count = len(first.frames)
-        self.axes = scene.add_batched_axes(f"{ROOT}/frames", np.tile((1.0, 0, 0, 0), (count, 1)), np.zeros((count, 3)),
-                                           axes_length=0.12 * size, axes_radius=0.006 * size)
+        self.frames_shown = FRAMES_XZ
+        self.highlight_row: int | None = None  #: a DH row (1-based) whose parameters are drawn on the arm
+        nothing = np.zeros((count, 2, 3))
+        self.z_axes = scene.add_line_segments(f"{ROOT}/frames/z", nothing, Z_AXIS_BLUE, thickness=0.008 * size)
+        self.x_axes = scene.add_line_segments(f"{ROOT}/frames/x", nothing, X_AXIS_RED, thickness=0.008 * size)
         self.axis_labels = [
             (scene.add_label(f"{ROOT}/frame_labels/x{i}", f"x{i}", font_screen_scale=1.1, anchor="center-left"),
              scene.add_label(f"{ROOT}/frame_labels/z{i}", f"z{i}", font_screen_scale=1.1, anchor="center-left"))
             for i in range(count)
         ]
+        self.parameters = {key: scene.add_line_segments(f"{ROOT}/row/{key}", np.zeros((1, 2, 3)), colour,
+                                                        thickness=0.016 * size, visible=False)
+                           for key, colour in PARAMETER_COLORS.items()}
+        self.parameter_labels = {key: scene.add_label(f"{ROOT}/row/{key}/value", key, font_screen_scale=1.3,
+                                                      anchor="bottom-center", visible=False)
+                                 for key in PARAMETER_COLORS}
         slots = len(arm.slot_labels)
         self.ghosts = [scene.add_line_segments(f"{ROOT}/ghosts/slot{k + 1}", segments, SLOT_COLORS[k % len(SLOT_COLORS)],
                                                thickness=0.006 * size) for k in range(slots)]
@@ -79,6 +91,7 @@ class CourseArmScene:
 
     def render(self, snapshot: CourseSnapshot) -> None:
         frames = snapshot.frames
+        self._q = snapshot.q
         self.body.points = skeleton(self._arm.dh, frames)
         z, o = self._arm.dh.joint_axes(frames)
         for rod, axis, point, kind in zip(self.joints, z, o, self._arm.joint_types):
@@ -100,13 +113,45 @@ class CourseArmScene:
                 label.position = ghost_frames[-1, :3, 3]
 
     def _render_frames(self, frames: np.ndarray) -> None:
-        self.axes.visible = self.show_frames
+        shown = self.frames_shown
+        length = 0.12 * self.size
+        origins = frames[:, :3, 3]
+        self.z_axes.visible = shown != FRAMES_NONE
+        self.x_axes.visible = shown == FRAMES_XZ
+        if shown != FRAMES_NONE:
+            self.z_axes.points = np.stack([origins, origins + length * frames[:, :3, 2]], axis=1)
+        if shown == FRAMES_XZ:
+            self.x_axes.points = np.stack([origins, origins + length * frames[:, :3, 0]], axis=1)
         for i, (x_label, z_label) in enumerate(self.axis_labels):
-            x_label.visible = z_label.visible = self.show_frames
-            if self.show_frames:
+            z_label.visible = shown != FRAMES_NONE
+            x_label.visible = shown == FRAMES_XZ
+            if shown != FRAMES_NONE:
                 tip = 0.14 * self.size
-                x_label.position = frames[i, :3, 3] + tip * frames[i, :3, 0]
-                z_label.position = frames[i, :3, 3] + tip * frames[i, :3, 2]
-        if self.show_frames:
-            self.axes.batched_wxyzs = quaternion(frames[:, :3, :3], check=False)
-            self.axes.batched_positions = frames[:, :3, 3]
+                x_label.position = origins[i] + tip * frames[i, :3, 0]
+                z_label.position = origins[i] + tip * frames[i, :3, 2]
+        self._render_row()
+
+    def _render_row(self) -> None:
+        row = self.highlight_row
+        for key in PARAMETER_COLORS:
+            self.parameters[key].visible = self.parameter_labels[key].visible = row is not None
+        if row is None:
+            return
+        geometry = self._arm.dh.row_geometry(self._q, row)
+        values = geometry.values
+        radius = 0.08 * self.size
+        # the subscripts the table uses: modified DH writes a row's a and α as a_{i−1}, α_{i−1}
+        previous = row if self._arm.convention == "standard" else row - 1
+        index = {"d": row, "theta": row, "a": previous, "alpha": previous}
+        names = {"d": "d", "a": "a", "theta": "θ", "alpha": "α"}
+        for key in ("d", "a"):
+            segment = geometry.d if key == "d" else geometry.a
+            self.parameters[key].points = segment[None]
+            self.parameter_labels[key].position = segment.mean(axis=0)
+            self.parameter_labels[key].text = f"{names[key]}{index[key]} = {1000 * values[key]:.1f} mm"
+        for key in ("theta", "alpha"):
+            turn = geometry.theta if key == "theta" else geometry.alpha
+            arc = turn.points(radius)
+            self.parameters[key].points = np.stack([arc[:-1], arc[1:]], axis=1)
+            self.parameter_labels[key].position = arc[len(arc) // 2]
+            self.parameter_labels[key].text = f"{names[key]}{index[key]} = {np.degrees(values[key]):.1f}°"

@@ -20,7 +20,7 @@ from ..metrics import LATENCY
 from ..view import View
 from ..workers import DragQueue, FoldedRuns, PanelRefresher
 from .editor import DHEditor
-from .panel import CourseBranches, CourseDHTable, CourseJointSliders, CourseSingularities
+from .panel import CourseBranches, CourseDHTable, CourseJointSliders, CourseSingularities, DHWalkthrough
 from .scene import ROOT, CourseArmScene
 from .state import CourseArmState, CourseSnapshot
 
@@ -88,9 +88,10 @@ class CourseArmSession:
         self.branches = CourseBranches(gui, arm)
         self.singularities = CourseSingularities(gui, arm)
         self.dh_table = CourseDHTable(gui, self)
+        self.walkthrough = DHWalkthrough(gui, self)
         self.camera = CameraControls(client, lambda: self.state.last, self.guard, lecture, body_radius=0.15 * size)
         self.panel_views = (*(v for v in (self.editor, self.search) if v is not None),
-                            self.joints, self.branches, self.singularities, self.dh_table, self.camera)
+                            self.joints, self.branches, self.singularities, self.dh_table, self.walkthrough, self.camera)
         self.render(first)
         self.render_panel()
         self.camera.frame()
