@@ -220,3 +220,49 @@ def test_a_row_shown_on_the_arm_and_the_walkthrough(app):
         await client.close()
 
     asyncio.run(scenario())
+
+
+def test_a_course_arms_workspace_cloud(app):
+    async def scenario():
+        client = await ViserClient(url(app)).connect()
+        session = await pick(app, client, "SCARA (RRP + roll)", CourseArmSession)
+        await client.set_gui("Show workspace cloud", True)
+        await until(lambda: session.workspace._cloud is not None, what="the cloud")
+        points = session.workspace._cloud.points
+        # a SCARA's tool stays in the annulus its links sweep and below its column
+        radius = np.hypot(points[:, 0], points[:, 1])
+        assert radius.max() <= 0.6 + 1e-4 and points[:, 2].max() <= 0.387 + 1e-3
+        assert session.workspace.legend.visible
+        await client.set_gui("Show workspace cloud", False)
+        await until(lambda: session.workspace._cloud is None, what="the cloud gone")
+        await client.close()
+
+    asyncio.run(scenario())
+
+
+def test_the_kr210_gripper_pose_in_the_urdf_convention(app):
+    async def scenario():
+        from app.course_arms.gripper import parse_pose, pose_text
+        from ur10core.serial import kr210_to_urdf
+
+        client = await ViserClient(url(app)).connect()
+        session = await pick(app, client, KR210, CourseArmSession)
+        q = np.radians([20, 10, -15, 30, 40, 50])
+        T = session.arm.fk(q)
+        # typed in the simulation model's convention, the arm goes to the same gripper pose
+        await client.set_gui("ROS/Gazebo gripper convention", True)
+        await asyncio.sleep(0.1)
+        await client.set_gui("x y z (mm) roll pitch yaw (°)", pose_text(kr210_to_urdf(T)))
+        await asyncio.sleep(0.1)
+        await client.set_gui("Go to this pose", True)
+        await until(lambda: np.abs(session.arm.fk(session.state.last.q) - T).max() < 1e-3, what="the arm at the pose")
+        await until(lambda: "URDF" in session.gripper.readout.content, what="the readout in the URDF convention")
+        # a pose that is not six numbers is refused
+        await client.set_gui("x y z (mm) roll pitch yaw (°)", "1 2 3")
+        await asyncio.sleep(0.1)
+        await client.set_gui("Go to this pose", True)
+        await until(lambda: any("six numbers" in body for _, body in client.received.notifications), what="the refusal")
+        np.testing.assert_allclose(parse_pose(pose_text(T)), T, atol=1e-3)
+        await client.close()
+
+    asyncio.run(scenario())

@@ -439,3 +439,19 @@ def test_row_geometry_puts_each_parameter_where_it_acts(name):
         for turn, end in ((g.theta, theta_end), (g.alpha, alpha_end)):
             arc = turn.points(1.0, 3)
             np.testing.assert_allclose(arc[-1] - turn.centre, end, atol=1e-12)
+
+
+def test_the_kr210_urdf_gripper_convention():
+    """R_DH = R_URDF · Rz(π) · Ry(−π/2) (docs/kinematics.md §7.5), built here from the two rotations."""
+    from ur10core.serial import KR210_URDF_TURN, kr210_from_urdf, kr210_to_urdf
+
+    rz = np.diag([-1.0, -1.0, 1.0])
+    c, s = math.cos(-math.pi / 2), math.sin(-math.pi / 2)
+    ry = np.array([[c, 0, s], [0, 1, 0], [-s, 0, c]])
+    np.testing.assert_allclose(KR210_URDF_TURN, rz @ ry, atol=1e-15)
+    arm = SerialArm.preset("kr210")
+    T = arm.fk(random_joints(arm, 20, 2))
+    urdf = kr210_to_urdf(T)
+    np.testing.assert_allclose(urdf[:, :3, 0], T[:, :3, 2], atol=1e-15)  # the URDF's x is the approach z_G
+    np.testing.assert_allclose(urdf[:, :3, 3], T[:, :3, 3])
+    np.testing.assert_allclose(kr210_from_urdf(urdf), T, atol=1e-15)

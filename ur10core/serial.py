@@ -331,4 +331,29 @@ class SerialArm:
         return points, manipulability
 
 
-__all__ = ["DHRow", "DHTable", "PRESETS", "SerialArm", "wrap"]
+#: docs/kinematics.md §7.5: the KR210 simulation model (URDF, ROS/Gazebo) puts its gripper frame
+#: differently: R_DH = R_URDF · Rz(π) · Ry(−π/2). The URDF frame's x axis is the DH frame's z (the approach).
+KR210_URDF_TURN = np.array([[-1.0, 0.0, 0.0], [0.0, -1.0, 0.0], [0.0, 0.0, 1.0]]) @ np.array(
+    [[0.0, 0.0, -1.0], [0.0, 1.0, 0.0], [1.0, 0.0, 0.0]])
+
+
+def kr210_from_urdf(T) -> np.ndarray:
+    """A KR210 gripper pose read in the URDF (ROS/Gazebo) convention, as the DH table's G frame, (..., 4, 4).
+
+    >>> T = kr210_from_urdf(np.eye(4))
+    >>> T[:3, 2].tolist()   # the DH approach axis z_G is the URDF's x
+    [1.0, 0.0, 0.0]
+    """
+    T = homogeneous_transform(T).copy()
+    T[..., :3, :3] = T[..., :3, :3] @ KR210_URDF_TURN
+    return T
+
+
+def kr210_to_urdf(T) -> np.ndarray:
+    """The inverse of :func:`kr210_from_urdf`: a DH gripper pose in the URDF convention, (..., 4, 4)."""
+    T = homogeneous_transform(T).copy()
+    T[..., :3, :3] = T[..., :3, :3] @ KR210_URDF_TURN.T
+    return T
+
+
+__all__ = ["DHRow", "DHTable", "KR210_URDF_TURN", "PRESETS", "SerialArm", "kr210_from_urdf", "kr210_to_urdf", "wrap"]

@@ -20,9 +20,11 @@ from ..metrics import LATENCY
 from ..view import View
 from ..workers import DragQueue, FoldedRuns, PanelRefresher
 from .editor import DHEditor
+from .gripper import GripperPose
 from .panel import CourseBranches, CourseDHTable, CourseJointSliders, CourseSingularities, DHWalkthrough
 from .scene import ROOT, CourseArmScene
 from .state import CourseArmState, CourseSnapshot
+from .workspace import CourseWorkspace
 
 
 def reach(arm: SerialArm) -> float:
@@ -89,9 +91,12 @@ class CourseArmSession:
         self.singularities = CourseSingularities(gui, arm)
         self.dh_table = CourseDHTable(gui, self)
         self.walkthrough = DHWalkthrough(gui, self)
+        self.workspace = CourseWorkspace(client.scene, gui, self)
+        self.gripper = GripperPose(gui, self) if arm.name == "kr210" else None
         self.camera = CameraControls(client, lambda: self.state.last, self.guard, lecture, body_radius=0.15 * size)
-        self.panel_views = (*(v for v in (self.editor, self.search) if v is not None),
-                            self.joints, self.branches, self.singularities, self.dh_table, self.walkthrough, self.camera)
+        self.panel_views = (*(v for v in (self.editor, self.search, self.gripper) if v is not None),
+                            self.joints, self.branches, self.singularities, self.dh_table, self.walkthrough, self.workspace,
+                            self.camera)
         self.render(first)
         self.render_panel()
         self.camera.frame()

@@ -1,0 +1,72 @@
+"""A course arm's workspace: tool positions of random joints, coloured by manipulability (as the UR10's cloud)."""
+
+from __future__ import annotations
+
+import functools
+from typing import TYPE_CHECKING
+
+import numpy as np
+import viser
+
+from ur10core.serial import PRESETS, SerialArm
+
+from ..view import View
+from ..workers import FoldedRuns
+from ..workspace import POINT_SIZE, colormap, legend_html
+from .scene import ROOT
+
+if TYPE_CHECKING:
+    from .session import CourseArmSession
+
+POINTS = 60_000  #: within the joint limits; a few hundred ms for a six-joint arm, sent once per browser
+
+
+def cloud(arm: SerialArm, n: int = POINTS) -> tuple[np.ndarray, np.ndarray, float]:
+    """(points (n, 3) float32, colours (n, 3) uint8, colour-scale top): a preset's is computed once for every browser."""
+    if arm.name in PRESETS:
+        return _preset_cloud(arm.name, n)
+    return _cloud(arm, n)
+
+
+@functools.lru_cache(maxsize=len(PRESETS))
+def _preset_cloud(name: str, n: int) -> tuple[np.ndarray, np.ndarray, float]:
+    return _cloud(SerialArm.preset(name), n)
+
+
+def _cloud(arm: SerialArm, n: int) -> tuple[np.ndarray, np.ndarray, float]:
+    points, manipulability = arm.sample_workspace(n, seed=0)
+    top = float(np.percentile(manipulability, 99)) or 1.0
+    return points.astype(np.float32), colormap(manipulability, top), top
+
+
+class CourseWorkspace(View):
+    """The "Workspace" folder: the cloud on or off, with its legend."""
+
+    def __init__(self, scene: viser.SceneApi, gui: viser.GuiApi, session: "CourseArmSession") -> None:
+        self._scene = scene
+        self._session = session
+        self._cloud: viser.PointCloudHandle | None = None
+        self._runs = FoldedRuns(self._update)
+        folder = gui.add_folder("Workspace", expand_by_default=False)
+        self.folders = (folder,)
+        with folder:
+            self.enabled = gui.add_checkbox("Show workspace cloud", False,
+                                            hint=f"Where the tool gets to: {POINTS:,} random joint vectors within the limits")
+            self.legend = gui.add_html("", visible=False)
+        self.enabled.on_update(session.guard(lambda _: self._runs()))
+
+    def _update(self) -> None:
+        if self._session.closed:
+            return
+        if not self.enabled.value:
+            if self._cloud is not None:
+                self._cloud.remove()
+                self._cloud = None
+            self.legend.visible = False
+            return
+        points, colours, top = cloud(self._session.arm)
+        if self._cloud is None:
+            self._cloud = self._scene.add_point_cloud(f"{ROOT}/workspace", points, colours, point_size=POINT_SIZE,
+                                                      point_shape="circle")
+        self.legend.content = legend_html(top).replace(" m³", "")
+        self.legend.visible = True
