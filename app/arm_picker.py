@@ -47,5 +47,9 @@ class ArmPicker:
             self.dropdown.value = self._current
             raise ValueError(f"arm: {label!r:.40} is not one of the choices")
         if label != self._current:
+            try:
+                on_pick(label)
+            except ValueError:  # refused (too soon after the last change): show the arm this browser still drives
+                self.dropdown.value = self._current
+                raise
             self._current = label
-            on_pick(label)

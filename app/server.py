@@ -143,6 +143,10 @@ class Janitor:
             self._trim(0)
 
 
+#: Seconds between two rebuilds of one browser's arm (the picker, the DH editor's "Build").
+SWITCH_INTERVAL = 0.5
+
+
 class TeachingServer:
     """The app: a viser server giving every browser its own UR10.
 
@@ -190,6 +194,7 @@ class TeachingServer:
         self.refresher = PanelRefresher(loop)
         self.drags = DragQueue(loop)
         self._sessions: dict[int, ClientSession | CourseArmSession] = {}
+        self._last_switch: dict[int, float] = {}  # client id → when its arm was last rebuilt
         self._sessions_lock = threading.Lock()
         #: shared demo mode (``--shared``): everyone watches the presenter (``app.classroom``)
         self.classroom = Classroom(self) if shared else None
@@ -265,8 +270,17 @@ class TeachingServer:
             self._sessions[client.client_id] = session
 
     def _switch(self, client: viser.ClientHandle, choice: str, typed=None) -> None:
-        """Take this browser's arm out (panel and scene) and build ``choice`` in its place."""
+        """Take this browser's arm out (panel and scene) and build ``choice`` in its place.
+
+        Building an arm costs tens of milliseconds: one browser may start a build only
+        :data:`SWITCH_INTERVAL` seconds after its last one finished, so that flicking the
+        picker cannot load the server.
+        """
+        now = time.monotonic()
         with self._sessions_lock:
+            if now - self._last_switch.get(client.client_id, -math.inf) < SWITCH_INTERVAL:
+                raise ValueError(f"one change of arm every {SWITCH_INTERVAL:g} s, please: try again in a moment")
+            self._last_switch[client.client_id] = now
             old = self._sessions.pop(client.client_id, None)
         lecture = self.lecture
         if old is not None:
@@ -276,6 +290,8 @@ class TeachingServer:
         client.gui.reset()
         client.scene.reset()
         self._start_session(client, choice, lecture, typed)
+        with self._sessions_lock:
+            self._last_switch[client.client_id] = time.monotonic()  # the interval counts from the arm being ready
         if client.client_id not in self.server.get_clients():  # it left meanwhile
             self._disconnected(client)
 
@@ -285,6 +301,7 @@ class TeachingServer:
         else:
             with self._sessions_lock:
                 session = self._sessions.pop(client.client_id, None)
+                self._last_switch.pop(client.client_id, None)
             if session is not None:
                 session.close()
         self._janitor.soon()

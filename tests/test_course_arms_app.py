@@ -11,6 +11,7 @@ import pytest
 from app.arm_picker import ARM_CHOICES, CUSTOM, UR10
 from app.course_arms.panel import branches_markdown, dh_table_markdown
 from app.course_arms.session import CourseArmSession
+from app.server import SWITCH_INTERVAL
 from app.session import ClientSession
 from ur10core.serial import SerialArm
 
@@ -32,6 +33,7 @@ async def pick(app, client: ViserClient, label: str, kind: type):
     client_id = int(client.gizmo_owner)
     await until(lambda: "Which arm" in client.gui and client.gui["Which arm"]["uuid"] not in client.received.removed_gui,
                 what="the arm picker")
+    await asyncio.sleep(SWITCH_INTERVAL)  # one change of arm per interval
     await client.set_gui("Which arm", label)
     await until(lambda: isinstance(session_for(app, client_id), kind)
                 and (kind is ClientSession or session_for(app, client_id).arm.name == ARM_CHOICES[label]),
@@ -137,7 +139,7 @@ def test_a_typed_dh_table_becomes_an_arm_with_numerical_ik(app):
         assert session_for(app, client_id) is session
         # a planar 2R arm
         await client.set_gui("Rows", "500 0 0 0 R\n400 0 0 0 R")
-        await asyncio.sleep(0.1)
+        await asyncio.sleep(SWITCH_INTERVAL)
         await client.set_gui("Build this arm", True)
         await until(lambda: session_for(app, client_id) is not session
                     and getattr(session_for(app, client_id), "arm", None) is not None
@@ -263,6 +265,22 @@ def test_the_kr210_gripper_pose_in_the_urdf_convention(app):
         await client.set_gui("Go to this pose", True)
         await until(lambda: any("six numbers" in body for _, body in client.received.notifications), what="the refusal")
         np.testing.assert_allclose(parse_pose(pose_text(T)), T, atol=1e-3)
+        await client.close()
+
+    asyncio.run(scenario())
+
+
+def test_changing_arms_too_fast_is_refused_and_the_picker_shows_the_arm_still_driven(app):
+    async def scenario():
+        client = await ViserClient(url(app)).connect()
+        session = await pick(app, client, KR210, CourseArmSession)
+        client_id = int(client.gizmo_owner)
+        await until(lambda: client.gui["Which arm"]["uuid"] not in client.received.removed_gui, what="the new picker")
+        await client.set_gui("Which arm", "SCARA (RRP + roll)")  # at once: too soon
+        await until(lambda: any("one change of arm every" in body.lower() for _, body in client.received.notifications),
+                    what="the refusal")
+        assert session_for(app, client_id) is session and not session.closed
+        await until(lambda: session.arm_picker.dropdown.value == KR210, what="the picker put back")
         await client.close()
 
     asyncio.run(scenario())

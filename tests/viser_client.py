@@ -180,6 +180,9 @@ class ViserClient:
             self.received.visible[name] = message["visible"]
         elif kind == "GuiRemoveMessage":
             self.received.removed_gui.add(message["uuid"])
+            # a label now means the widget that replaced it (a rebuilt panel), not the removed one
+            for label in [label for label, entry in self.gui.items() if entry["uuid"] == message["uuid"]]:
+                del self.gui[label]
         elif kind.endswith("Message") and isinstance(name, str) and name.startswith("/") and "props" in message:
             self.received.nodes[name] = kind
             if "position" in message.get("props", {}):

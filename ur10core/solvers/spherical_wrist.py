@@ -126,25 +126,29 @@ def _pose_parts(centre_in_tool: np.ndarray, T: np.ndarray) -> tuple[np.ndarray, 
 
 
 def _wrist_slots(table: DHTable, wrist: Wrist, out: dict, R: np.ndarray, hint: np.ndarray | None) -> None:
-    """Joints 4–6 for every even slot whose joints 1–3 are set: the wrist not flipped there, flipped in the next."""
+    """Joints 4–6 for every even slot whose joints 1–3 are set: the wrist not flipped there, flipped in the next.
+
+    All arm slots of all poses go through the wrist at once (one FK of joints 1–3, one
+    solve per flip): a single pose then costs a few dozen array operations, not a hundred.
+    """
     q, valid, singular = out["q"], out["valid"], out["singular"]
     n = table.n_joints
     hint4 = np.zeros(len(R)) if hint is None else hint[:, n - 3]
-    for base in range(0, q.shape[1], 2):
-        ok = valid[:, base].copy()
-        if not ok.any():
-            continue
-        q_arm = q[ok, base, : n - 3]
-        full = np.zeros((len(q_arm), n))
-        full[:, : n - 3] = q_arm
-        R_pre = table.frames(full)[:, wrist.first_row, :3, :3]
-        for flip in (False, True):
-            t4, t5, t6, chosen = wrist.solve(R_pre, R[ok], hint4[ok], flip)
-            k = base + int(flip)
-            q[ok, k, : n - 3] = q_arm
-            q[ok, k, n - 3:] = np.stack([t4, t5, t6], axis=-1)
-            valid[ok, k] = True
-            singular[ok, k] = singular[ok, base] | chosen
+    arm_valid = valid[:, 0::2]  # (N, arm slots)
+    pose, arm_slot = np.nonzero(arm_valid)
+    if not len(pose):
+        return
+    base = 2 * arm_slot
+    full = np.zeros((len(pose), n))
+    full[:, : n - 3] = q[pose, base, : n - 3]
+    R_pre = table.frames(full)[:, wrist.first_row, :3, :3]
+    for flip in (False, True):
+        t4, t5, t6, aligned = wrist.solve(R_pre, R[pose], hint4[pose], flip)
+        k = base + int(flip)
+        q[pose, k, : n - 3] = full[:, : n - 3]
+        q[pose, k, n - 3:] = np.stack([t4, t5, t6], axis=-1)
+        valid[pose, k] = True
+        singular[pose, k] = singular[pose, base] | aligned
 
 
 def _planar_frame(table: DHTable) -> dict[str, float]:
