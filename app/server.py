@@ -23,6 +23,7 @@ from . import shared_frames
 from .arm_picker import ARM_CHOICES, CUSTOM, UR10, ArmPicker
 from .classroom import Classroom
 from .course_arms.editor import STARTING_TABLE, parse_table
+from .course_arms.panel import factor_scales
 from .course_arms.session import CourseArmSession
 from .gate import Gate, gated_serve
 from .meshes import load_models
@@ -177,6 +178,7 @@ class TeachingServer:
         for name in ARM_CHOICES.values():
             if name not in (None, "custom"):
                 symbolic_arms.load(name)
+                factor_scales(name)  # the gauges' scales: a few hundred ms in all, never in a callback
         self.host = host
         label = f"UR10 kinematics ({preset})"
         self.gate = gate or Gate(allowed_origins)
@@ -280,18 +282,20 @@ class TeachingServer:
         with self._sessions_lock:
             if now - self._last_switch.get(client.client_id, -math.inf) < SWITCH_INTERVAL:
                 raise ValueError(f"one change of arm every {SWITCH_INTERVAL:g} s, please: try again in a moment")
-            self._last_switch[client.client_id] = now
+            self._last_switch[client.client_id] = math.inf  # refused while this one is being built
             old = self._sessions.pop(client.client_id, None)
         lecture = self.lecture
         if old is not None:
             if old.camera is not None:
                 lecture = old.camera.lecture.on
             old.close()
-        client.gui.reset()
-        client.scene.reset()
-        self._start_session(client, choice, lecture, typed)
-        with self._sessions_lock:
-            self._last_switch[client.client_id] = time.monotonic()  # the interval counts from the arm being ready
+        try:
+            client.gui.reset()
+            client.scene.reset()
+            self._start_session(client, choice, lecture, typed)
+        finally:
+            with self._sessions_lock:
+                self._last_switch[client.client_id] = time.monotonic()  # the interval counts from the arm being ready
         if client.client_id not in self.server.get_clients():  # it left meanwhile
             self._disconnected(client)
 

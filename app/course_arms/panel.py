@@ -3,6 +3,7 @@ the factors of det J with what each means, and its DH table in both conventions.
 
 from __future__ import annotations
 
+import functools
 import math
 from typing import TYPE_CHECKING
 
@@ -14,7 +15,8 @@ from ur10core.dh import DHTable
 from ur10core.serial import PRESETS, SerialArm
 
 from ..feedback import chosen
-from ..style import DANGER_RED, SAFE_GREEN, SLOT_COLORS, hex_color, number, swatch
+from ..singularity import alarm
+from ..style import DANGER_RED, SAFE_GREEN, SLOT_COLORS, blend, hex_color, number, swatch
 from ..view import View
 from .scene import FRAMES_NONE, FRAMES_XZ, FRAMES_Z
 from .state import CourseSnapshot
@@ -120,34 +122,47 @@ class CourseBranches(View):
         self.table.content = branches_markdown(self._arm, snapshot)
 
 
-def factors_markdown(arm: SerialArm, q: np.ndarray) -> str:
+@functools.lru_cache(maxsize=len(PRESETS))
+def factor_scales(name: str) -> np.ndarray:
+    """Per factor, the 99th percentile of its size over the arm's workspace: a gauge is full there."""
+    arm = SerialArm.preset(name)
+    _, _, q = arm.sample_workspace(20_000, seed=1, return_joints=True)
+    return np.maximum(np.percentile(np.abs(arm.singularity_factors(q)), 99, axis=0), 1e-12)
+
+
+def factors_html(arm: SerialArm, q: np.ndarray) -> str:
+    """det J's factors as gauges, green far from their singularity and red at it, with what each means."""
     measures = (f"manipulability {number(float(arm.manipulability(q)), '.4g')}, smallest singular value "
                 f"{number(float(arm.smallest_singular_value(q)), '.4g')}")
     if arm.name not in PRESETS:  # a typed table has no derivation: the numbers that vanish at a singularity
-        return ("A typed table's det J is not derived; these go to zero at a singularity:\n\n" + measures)
+        return f"<div>A typed table's det J is not derived; these go to zero at a singularity: {measures}</div>"
     derivation = symbolic_arms.load(arm.name)
     values = arm.singularity_factors(q)
-    lines = [f"det J = {derivation.constant} × the factors below (derived with sympy from the DH table)", "",
-             "| factor | value | zero when |", "|---|---|---|"]
-    for factor, value in zip(derivation.factors, values):
-        near = abs(value) < 1e-3
-        colour = hex_color(DANGER_RED if near else SAFE_GREEN)
-        lines.append(f"| {factor.name}: `{factor.expression}` | <span style='color:{colour}'>{number(value, '.4f')}</span> "
-                     f"| {factor.meaning} |")
-    lines += ["", measures]
-    return "\n".join(lines)
+    levels = np.clip(np.abs(values) / factor_scales(arm.name), 0.0, 1.0)
+    parts = [f"<div>det J = {derivation.constant} × the factors (derived with sympy from the DH table)</div>"]
+    for factor, value, level in zip(derivation.factors, values, levels):
+        colour = hex_color(blend(SAFE_GREEN, DANGER_RED, alarm(level)))
+        parts.append(
+            f"<div style='margin:4px 0'><b>{factor.name}</b> <code>{factor.expression}</code> = {number(value, '+.4f')}"
+            "<div style='height:8px;background:#e9ecef;border-radius:4px'>"
+            f"<div class='gauge-{factor.name}' style='height:8px;width:{100 * level:.1f}%;border-radius:4px;"
+            f"background:{colour}'></div></div><div style='font-size:0.85em'>zero when {factor.meaning}</div></div>")
+    parts.append(f"<div>{measures}</div>")
+    return "<div style='font-size:0.9em'>" + "".join(parts) + "</div>"
 
 
 class CourseSingularities(View):
+    """det J's factors as gauges (the UR10's overlay panel, for any preset)."""
+
     def __init__(self, gui: viser.GuiApi, arm: SerialArm) -> None:
         self._arm = arm
         folder = gui.add_folder("Singularities")
         self.folders = (folder,)
         with folder:
-            self.text = gui.add_markdown("")
+            self.gauges = gui.add_html("")
 
     def render_panel(self, snapshot: CourseSnapshot) -> None:
-        self.text.content = factors_markdown(self._arm, snapshot.q)
+        self.gauges.content = factors_html(self._arm, snapshot.q)
 
 
 def _cell(value: float, kind: str, variable: bool, symbol: str, angle: bool) -> str:

@@ -84,6 +84,8 @@ class CourseArmScene:
                                                       anchor="bottom-center", visible=False)
                                  for key in PARAMETER_COLORS}
         slots = len(arm.slot_labels)
+        _, points = arm.dh.joint_axes(first.frames)
+        self._label_frame = arm.dh.joint_rows[min(2, arm.n_joints - 1)] + (0 if arm.convention == "standard" else 1)
         self.ghosts = [scene.add_line_segments(f"{ROOT}/ghosts/slot{k + 1}", segments, SLOT_COLORS[k % len(SLOT_COLORS)],
                                                thickness=0.006 * size) for k in range(slots)]
         self.ghost_labels = [scene.add_label(f"{ROOT}/ghosts/slot{k + 1}/number", str(k + 1), font_screen_scale=1.4,
@@ -110,7 +112,8 @@ class CourseArmScene:
             if shown:
                 ghost_frames = self._arm.frames(sol.q[k])
                 ghost.points = skeleton(self._arm.dh, ghost_frames)
-                label.position = ghost_frames[-1, :3, 3]
+                # at the ghost's middle joint: the branches share the tool, but not their elbows
+                label.position = ghost_frames[self._label_frame, :3, 3]
 
     def _render_frames(self, frames: np.ndarray) -> None:
         shown = self.frames_shown
