@@ -30,9 +30,11 @@ def random_joints(arm: SerialArm, n: int, seed: int) -> np.ndarray:
 
 
 def rtb_robot_from_table(table: DHTable, tool: np.ndarray | None = None):
-    """roboticstoolbox's own DH robot for our rows: an FK and Jacobian written by someone else."""
+    """roboticstoolbox's own DH robot for our rows: an FK and Jacobian written by someone else.
+
+    Fixed rows are skipped: the caller passes what they add as ``tool``.
+    """
     links = []
-    fixed = np.eye(4)
     for row in table.rows:
         if row.joint is None:
             continue

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-import contextlib
+import threading
 import time
 from typing import Any, Callable
 
@@ -11,8 +11,6 @@ import viser
 
 from ur10core.orientation import quaternion, transform_from_quaternion
 from ur10core.serial import SerialArm
-
-import threading
 
 from ..camera import CameraControls
 from ..feedback import guard, notify
