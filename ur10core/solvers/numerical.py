@@ -27,6 +27,8 @@ from ..dh import DHTable
 CONVERGED = 1e-12
 #: Solutions closer than this in every joint (rad or m) are the same solution.
 SAME = 1e-6
+#: λ never shrinks below this: λ² = 1e-12 keeps J Jᵀ + λ² I invertible in floating point.
+MIN_DAMPING = 1e-6
 
 
 def rotation_log(R: np.ndarray) -> np.ndarray:
@@ -104,14 +106,18 @@ class NumericalIK:
             if not active.any():
                 break
             A = J[active] @ np.swapaxes(J[active], -1, -2) + (damping[active] ** 2)[:, None, None] * np.eye(rows)
-            step = np.einsum("kji,kj->ki", J[active], np.linalg.solve(A, error[active][..., None])[..., 0])
+            try:
+                weights = np.linalg.solve(A, error[active][..., None])[..., 0]
+            except np.linalg.LinAlgError:  # a chain that cannot move along some direction at all: J Jᵀ has zero rows
+                weights = np.einsum("kij,kj->ki", np.linalg.pinv(A), error[active])
+            step = np.einsum("kji,kj->ki", J[active], weights)
             trial = q[active] + step
             trial_error, trial_J = self._error(trial, target[active])
             trial_size = np.linalg.norm(trial_error, axis=-1)
             better = trial_size < size[active]
             index = tuple(np.argwhere(active)[better].T)
             q[index], error[index], J[index], size[index] = trial[better], trial_error[better], trial_J[better], trial_size[better]
-            damping[active] = np.where(better, np.maximum(damping[active] / 3, 1e-9), np.minimum(damping[active] * 4, 1e3))
+            damping[active] = np.where(better, np.maximum(damping[active] / 3, MIN_DAMPING), np.minimum(damping[active] * 4, 1e3))
         return np.where(self.revolute, wrap(q), q), size
 
     def follow(self, T: np.ndarray, hint: np.ndarray, iterations: int = 30) -> tuple[np.ndarray, float]:
