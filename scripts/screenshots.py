@@ -1,8 +1,10 @@
 """The README's screenshots, taken in headless Chromium from Debian: python scripts/screenshots.py
 
 Writes docs/images/eight_ghosts.png (the home pose, every branch numbered),
-docs/images/lecture_mode.png (``--lecture``: big type, the panel beside the arm) and
-docs/images/branch_count_map.png (the map in the arm's plane, the ghosts hidden).
+docs/images/lecture_mode.png (``--lecture``: big type, the panel beside the arm),
+docs/images/branch_count_map.png (the map in the arm's plane, the ghosts hidden) and
+docs/images/kr210_dh_frames.png (the KR210 with its DH frames and row 3 drawn on it).
+``python scripts/screenshots.py kr210_dh_frames.png`` takes only the ones named.
 """
 
 from __future__ import annotations
@@ -29,8 +31,24 @@ def show_the_map(page, session) -> None:
     wait_for(lambda: session.reach_map.image is not None, what="the map")
 
 
+def show_the_kr210(page, session) -> None:
+    from app.course_arms.session import CourseArmSession
+    from tests.browser_support import choose
+
+    choose(page, session.arm_picker.dropdown, "KUKA KR210 (spherical wrist)")
+    server = SERVER["now"]
+    wait_for(lambda: any(isinstance(s, CourseArmSession) for s in server.sessions.values()), what="the KR210")
+    course = next(iter(server.sessions.values()))
+    page.wait_for_selector(dom_id(course.joints.sliders[0]), timeout=30_000)
+    course.dh_table.highlight.value = "row 3"
+
+
+#: the server of the screenshot being taken (a ``prepare`` may need it)
+SERVER: dict = {}
+
+
 def shoot(name: str, lecture: bool, prepare=None) -> None:
-    server = TeachingServer(port=0, lecture=lecture)
+    server = SERVER["now"] = TeachingServer(port=0, lecture=lecture)
     try:
         with sync_playwright() as playwright:
             browser = launch(playwright)
@@ -52,8 +70,14 @@ def shoot(name: str, lecture: bool, prepare=None) -> None:
         server.stop()
 
 
+SHOTS = {
+    "eight_ghosts.png": dict(lecture=False),
+    "lecture_mode.png": dict(lecture=True),
+    "branch_count_map.png": dict(lecture=False, prepare=show_the_map),
+    "kr210_dh_frames.png": dict(lecture=False, prepare=show_the_kr210),
+}
+
 if __name__ == "__main__":
     OUT.mkdir(parents=True, exist_ok=True)
-    shoot("eight_ghosts.png", lecture=False)
-    shoot("lecture_mode.png", lecture=True)
-    shoot("branch_count_map.png", lecture=False, prepare=show_the_map)
+    for name in sys.argv[1:] or SHOTS:
+        shoot(name, **SHOTS[name])

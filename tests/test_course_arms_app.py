@@ -203,6 +203,8 @@ def test_a_row_shown_on_the_arm_and_the_walkthrough(app):
         await until(lambda: scene.parameter_labels["d"].text == "d3 = 254.0 mm", what="d3's value")
         segment = scene.parameters["d"].points[0]
         assert np.linalg.norm(segment[1] - segment[0]) == pytest.approx(0.254, abs=1e-6)
+        assert not scene.parameters["a"].visible  # a3 = 0: nothing to draw, and the panel lists it
+        await until(lambda: "a<sub>3</sub> = 0.0 mm" in session.dh_table.row_values.content, what="row 3's values")
         await client.set_gui("Show a row on the arm", "row 99")  # not an option: refused
         await until(lambda: any("not one of the choices" in body for _, body in client.received.notifications),
                     what="the refusal")

@@ -205,6 +205,7 @@ class CourseDHTable(View):
             self.show_frames = gui.add_checkbox("Show DH frames (x red, z blue)", True)
             self.highlight = gui.add_dropdown("Show a row on the arm", self.row_choices, initial_value="none",
                                               hint="Its d and a as segments, its θ and α as arcs, with their values")
+            self.row_values = gui.add_markdown("")
             gui.add_markdown(f"**{arm.description}.** As defined ({arm.convention} DH):\n\n" + dh_table_markdown(arm.dh)
                              + f"\n\nThe same chain in {other.convention} DH (the tool pose is the same; the "
                              "frames slide to the neighbouring joint axes):\n\n" + dh_table_markdown(other))
@@ -217,6 +218,20 @@ class CourseDHTable(View):
         scene.frames_shown = FRAMES_XZ if self.show_frames.value else FRAMES_NONE
         scene.highlight_row = None if choice == "none" else int(choice.split()[1])
         self._session.redraw()
+        self._session.refresher.request(self._session)
+
+    def render_panel(self, snapshot: CourseSnapshot) -> None:
+        row = self._session.scene.highlight_row
+        self.row_values.content = "" if row is None else row_values_markdown(self._session.arm, snapshot.q, row)
+
+
+def row_values_markdown(arm: SerialArm, q: np.ndarray, row: int) -> str:
+    """One row's four values at joints ``q``, with the table's subscripts (mm and degrees)."""
+    values = arm.dh.row_geometry(q, row).values
+    previous = row if arm.convention == "standard" else row - 1
+    return (f"Row {row}: θ<sub>{row}</sub> = {number(math.degrees(values['theta']), '.1f')}°, "
+            f"d<sub>{row}</sub> = {number(1000 * values['d'], '.1f')} mm, a<sub>{previous}</sub> = "
+            f"{number(1000 * values['a'], '.1f')} mm, α<sub>{previous}</sub> = {number(math.degrees(values['alpha']), '.1f')}°")
 
 
 def walkthrough_steps(arm: SerialArm) -> list[tuple[str, str, int | None]]:
@@ -275,5 +290,6 @@ class DHWalkthrough(View):
         else:
             text, frames_shown, row = self.steps[self.step]
             scene.frames_shown, scene.highlight_row = frames_shown, row
-            self.text.content = f"{text}\n\n*Step {self.step + 1} of {len(self.steps)}*"
+            values = "" if row is None else "\n\n" + row_values_markdown(self._session.arm, self._session.state.last.q, row)
+            self.text.content = f"{text}{values}\n\n*Step {self.step + 1} of {len(self.steps)}*"
         self._session.redraw()

@@ -147,6 +147,8 @@ class CourseArmScene:
         previous = row if self._arm.convention == "standard" else row - 1
         index = {"d": row, "theta": row, "a": previous, "alpha": previous}
         names = {"d": "d", "a": "a", "theta": "θ", "alpha": "α"}
+        for key in ("d", "a", "theta", "alpha"):  # a zero parameter has nothing to draw (the panel lists it)
+            self.parameters[key].visible = self.parameter_labels[key].visible = abs(values[key]) > 1e-9
         for key in ("d", "a"):
             segment = geometry.d if key == "d" else geometry.a
             self.parameters[key].points = segment[None]
