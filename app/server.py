@@ -267,6 +267,9 @@ class TeachingServer:
                 rebuild=lambda new, new_text, new_convention: self._switch(client, CUSTOM, (new, new_text, new_convention)))
         else:
             session = CourseArmSession(client, Arm.preset(name), self.refresher, self.drags, lecture=lecture)
+        with self._sessions_lock:
+            if client.client_id in self._last_switch:  # a change of arm: the interval starts before its picker shows
+                self._last_switch[client.client_id] = time.monotonic()
         session.arm_picker = ArmPicker(client.gui, choice, lambda label: self._switch(client, label), session.guard)
         with self._sessions_lock:
             self._sessions[client.client_id] = session
@@ -275,8 +278,9 @@ class TeachingServer:
         """Take this browser's arm out (panel and scene) and build ``choice`` in its place.
 
         Building an arm costs tens of milliseconds: one browser may start a build only
-        :data:`SWITCH_INTERVAL` seconds after its last one finished, so that flicking the
-        picker cannot load the server.
+        :data:`SWITCH_INTERVAL` seconds after its last one was ready (timed just before its
+        picker is shown, so a browser that waits that long after seeing it is never refused),
+        so that flicking the picker cannot load the server.
         """
         now = time.monotonic()
         with self._sessions_lock:
@@ -295,7 +299,8 @@ class TeachingServer:
             self._start_session(client, choice, lecture, typed)
         finally:
             with self._sessions_lock:
-                self._last_switch[client.client_id] = time.monotonic()  # the interval counts from the arm being ready
+                if self._last_switch.get(client.client_id) == math.inf:  # the build failed before its picker
+                    self._last_switch[client.client_id] = time.monotonic()
         if client.client_id not in self.server.get_clients():  # it left meanwhile
             self._disconnected(client)
 

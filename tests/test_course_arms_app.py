@@ -210,14 +210,16 @@ def test_a_row_shown_on_the_arm_and_the_walkthrough(app):
                     what="the refusal")
         # the walkthrough: z axes alone, then x too, then each row
         await client.set_gui("Step", "Next ▶")
-        await until(lambda: session.walkthrough.step == 0, what="step 1")
-        assert scene.z_axes.visible and not scene.x_axes.visible and scene.highlight_row is None
+        # the step is counted before the scene is redrawn: wait for the drawing itself
+        await until(lambda: session.walkthrough.step == 0 and not scene.x_axes.visible, what="step 1")
+        assert scene.z_axes.visible and scene.highlight_row is None
         for expected in (1, 2):
             await asyncio.sleep(0.1)
             await client.set_gui("Step", "Next ▶")
             await until(lambda: session.walkthrough.step == expected, what=f"step {expected + 1}")
-        assert scene.x_axes.visible and scene.highlight_row == 1
-        assert "Row 1" in session.walkthrough.text.content and "Step 3 of 8" in session.walkthrough.text.content
+        await until(lambda: scene.x_axes.visible and scene.highlight_row == 1, what="row 1 drawn")
+        await until(lambda: "Row 1" in session.walkthrough.text.content and "Step 3 of 8" in session.walkthrough.text.content,
+                    what="row 1's text")
         await asyncio.sleep(0.1)
         await client.set_gui("Step", "Stop")
         await until(lambda: session.walkthrough.step == -1 and scene.highlight_row is None, what="the walkthrough stopped")
