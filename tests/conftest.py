@@ -100,7 +100,7 @@ def open_page(playwright, request):
             wait_for(lambda: len(server.sessions) > known, timeout=30, what="the server to set up the client")
             session = list(server.sessions.values())[known]
             page.wait_for_selector(dom_id(session.joints.sliders[0]), timeout=30_000)  # the panel is drawn
-            page.wait_for_selector(CONNECTED, state="attached", timeout=10_000)
+            page.wait_for_selector(CONNECTED, state="attached", timeout=30_000)  # a loaded CI machine has taken over 10 s
         except Exception as error:
             raise AssertionError(f"page never became ready ({error}); browser console: {console[-20:]}") from None
         page.wait_for_timeout(1500)  # let the first frames render
