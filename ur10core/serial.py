@@ -17,7 +17,7 @@ import numpy as np
 from ._validate import homogeneous_transform
 from .branches import BranchSet, wrap
 from .dh import MODIFIED, PRISMATIC, REVOLUTE, STANDARD, DHRow, DHTable
-from .solvers.numerical import NumericalIK
+from .solvers.numerical import NumericalIK, sampling_range
 from .solvers.planar import Cylindrical, PlanarElbow, Scara
 from .solvers.spherical_wrist import ArticulatedArm, StanfordArm
 
@@ -315,9 +315,7 @@ class SerialArm:
             raise ValueError(f"n must be a positive integer number of samples, got {n!r}")
         if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
             raise ValueError(f"seed must be a non-negative integer, got {seed!r}")
-        low, high = self.limits[:, 0].copy(), self.limits[:, 1].copy()
-        low[self.revolute] = np.maximum(low[self.revolute], -_PI)  # one turn is every pose
-        high[self.revolute] = np.minimum(high[self.revolute], _PI)
+        low, high = sampling_range(self.limits, self.revolute)
         q = np.random.default_rng(int(seed)).uniform(low, high, (int(n), self.n_joints))
         points = np.empty((int(n), 3))
         manipulability = np.empty(int(n))

@@ -31,6 +31,14 @@ SAME = 1e-6
 MIN_DAMPING = 1e-6
 
 
+def sampling_range(limits: np.ndarray, revolute: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(low, high) per joint to draw joint vectors from: the limits, revolute ones cut to one turn (every pose)."""
+    low, high = np.array(limits[:, 0], dtype=float), np.array(limits[:, 1], dtype=float)
+    low[revolute] = np.maximum(low[revolute], -math.pi)
+    high[revolute] = np.minimum(high[revolute], math.pi)
+    return low, high
+
+
 def rotation_log(R: np.ndarray) -> np.ndarray:
     """The rotation vector of (..., 3, 3) rotations: axis × angle, angle in [0, π]."""
     trace = R[..., 0, 0] + R[..., 1, 1] + R[..., 2, 2]
@@ -75,9 +83,7 @@ class NumericalIK:
 
     def _starts(self, hint: np.ndarray | None, count: int) -> np.ndarray:
         """(count, starts, n): the hint first (if any), then the same random spread for every pose."""
-        low, high = self.limits[:, 0].copy(), self.limits[:, 1].copy()
-        low[self.revolute] = np.maximum(low[self.revolute], -math.pi)
-        high[self.revolute] = np.minimum(high[self.revolute], math.pi)
+        low, high = sampling_range(self.limits, self.revolute)
         spread = np.random.default_rng(self.seed).uniform(low, high, (self.starts, len(low)))
         q = np.broadcast_to(spread, (count,) + spread.shape).copy()
         if hint is not None:
