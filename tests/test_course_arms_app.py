@@ -38,7 +38,19 @@ async def pick(app, client: ViserClient, label: str, kind: type):
     await until(lambda: isinstance(session_for(app, client_id), kind)
                 and (kind is ClientSession or session_for(app, client_id).arm.name == ARM_CHOICES[label]),
                 what=f"the {label}")
-    return session_for(app, client_id)
+    session = session_for(app, client_id)
+    await arrived(client, session)
+    return session
+
+
+async def arrived(client: ViserClient, session) -> None:
+    """Wait until this browser holds ``session``'s own picker, the last widget a session builds.
+
+    Messages arrive in order: by then the old arm's widgets are gone and the new ones are in,
+    so a label (the UR10 and the other arms share some) names the new arm's widget.
+    """
+    await until(lambda: (client.gui.get("Which arm") or {}).get("uuid") == session.arm_picker.dropdown._impl.uuid,
+                what="the new arm's panel")
 
 
 def test_picking_the_kr210_builds_its_arm_and_drags_it(app):
@@ -103,7 +115,6 @@ def test_every_arm_can_be_picked_and_an_unknown_one_is_refused(app):
             assert snapshot.chosen >= 0 and snapshot.solution.valid.any()
             np.testing.assert_allclose(session.arm.fk(snapshot.q), snapshot.target, atol=1e-9)
         client_id = int(client.gizmo_owner)
-        await until(lambda: "Which arm" in client.gui, what="the arm picker")  # a removed widget's label is forgotten
         await client.set_gui("Which arm", "PUMA 560")
         await until(lambda: any("not one of the choices" in body for _, body in client.received.notifications),
                     what="the refusal")
@@ -145,6 +156,7 @@ def test_a_typed_dh_table_becomes_an_arm_with_numerical_ik(app):
                     and getattr(session_for(app, client_id), "arm", None) is not None
                     and session_for(app, client_id).arm.joint_types == "RR", what="the typed arm")
         typed = session_for(app, client_id)
+        await arrived(client, typed)  # "Find every branch" was the last arm's too
         assert typed.editor.rows.value.startswith("500 0 0 0 R")
         # dragging follows the target from the arm's joints
         goal = typed.arm.fk(np.radians([40.0, 50.0]))
