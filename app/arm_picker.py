@@ -2,7 +2,8 @@
 
 Picking one takes the current arm out of this browser (its panel and scene) and builds the
 other's: the UR10 with every feature of the app (``app.session``), the others with theirs
-(``app.course_arms``). Each browser picks for itself; shared mode keeps the UR10.
+(``app.course_arms``). Each browser picks for itself; in shared mode the presenter picks the
+class's arm (``app.classroom``).
 """
 
 from __future__ import annotations
@@ -12,6 +13,10 @@ from typing import Callable
 import viser
 
 from ur10core.serial import PRESETS
+
+#: Seconds between two rebuilds of one browser's arm (the picker, the DH editor's "Build"), or of
+#: the classroom's: building an arm costs tens of milliseconds, and a flicked picker must not load the server.
+SWITCH_INTERVAL = 0.5
 
 UR10 = "UR10 (the app's arm)"
 CUSTOM = "Your own DH table"
@@ -29,21 +34,26 @@ ARM_CHOICES: dict[str, str | None] = {
 assert set(ARM_CHOICES.values()) - {None, "custom"} == set(PRESETS)
 
 
+#: What the classroom's presenter can show the class: a typed table is for one's own browser.
+CLASS_CHOICES = tuple(label for label in ARM_CHOICES if label != CUSTOM)
+
+
 class ArmPicker:
-    """The dropdown; ``on_pick(label)`` is called with a checked choice when it changes."""
+    """The dropdown; ``on_pick(label)`` is called with a checked choice (one of ``choices``) when it changes."""
 
     def __init__(self, gui: viser.GuiApi, current: str, on_pick: Callable[[str], None],
-                 guard: Callable[[Callable], Callable]) -> None:
+                 guard: Callable[[Callable], Callable], choices: tuple[str, ...] = tuple(ARM_CHOICES),
+                 hint: str = "The course's other arms: their branches, singularities and DH frames") -> None:
         self.folder = gui.add_folder("Arm", order=0.1)
         with self.folder:
-            self.dropdown = gui.add_dropdown("Which arm", tuple(ARM_CHOICES), initial_value=current,
-                                             hint="The course's other arms: their branches, singularities and DH frames")
+            self.dropdown = gui.add_dropdown("Which arm", choices, initial_value=current, hint=hint)
+        self._choices = choices
         self._current = current
         self.dropdown.on_update(guard(lambda _: self._picked(on_pick)))
 
     def _picked(self, on_pick: Callable[[str], None]) -> None:
         label = self.dropdown.value
-        if label not in ARM_CHOICES:  # not from a browser: put back the arm this one drives, and refuse
+        if label not in self._choices:  # not from a browser: put back the arm this one drives, and refuse
             self.dropdown.value = self._current
             raise ValueError(f"arm: {label!r:.40} is not one of the choices")
         if label != self._current:

@@ -87,7 +87,7 @@ class CameraControls(View):
     def __init__(self, client: viser.ClientHandle, snapshot: Callable[[], Snapshot],
                  guard: Callable[[Callable], Callable], lecture: bool = False, body_radius: float = BODY_RADIUS) -> None:
         self._client = client
-        self._body_radius = body_radius
+        self.body_radius = body_radius  #: the classroom changes it with the arm it shows
         self._snapshot = snapshot
         self._guard = guard
         self.closed = False
@@ -127,7 +127,7 @@ class CameraControls(View):
         if self.closed:
             return
         camera = self._client.camera
-        shown = arm_points(self._snapshot(), self._body_radius)
+        shown = arm_points(self._snapshot(), self.body_radius)
         if points is not None:
             shown = np.vstack([shown, points])
         position, look_at = framing(shown, direction, camera.fov, camera.aspect)

@@ -19,7 +19,9 @@ thirty students cost the server one redraw, not thirty.
 
 from __future__ import annotations
 
+import dataclasses
 import logging
+import math
 import secrets
 import threading
 import time
@@ -27,8 +29,16 @@ from typing import TYPE_CHECKING
 
 import viser
 
-from .camera import CameraControls
+from ur10core.serial import SerialArm
+
+from .arm_picker import ARM_CHOICES, CLASS_CHOICES, SWITCH_INTERVAL, UR10, ArmPicker
+from .camera import BODY_RADIUS, CameraControls
+from .course_arms import panel as course_panel
+from .course_arms.scene import EXPLORER_ROOT, ROOT as COURSE_ROOT, CourseArmScene
+from .course_arms.session import CourseArmSession, body_radius, reach
+from .course_arms.state import CourseArmState
 from .feedback import guard
+from .floor import add_floor_grid
 from .ik_target import branches_markdown
 from .readouts import flange_markdown, joints_markdown
 from .singularity import alarm, factor_levels, gauges_html
@@ -50,6 +60,8 @@ MAX_WRONG_CODES = 5
 LOCKOUT_SECONDS = 10.0
 MAX_LOCKOUT_SECONDS = 600.0
 VIEWER, PRESENTER, EXPLORER = "viewer", "presenter", "explorer"
+#: Where the shared UR10 is drawn (``SceneViews``): an explorer of another arm hides these in its browser.
+UR10_ROOTS = ("/base_frame", "/arm", "/target", "/ghosts", "/floor_hits", "/overlay")
 
 
 def make_join_code() -> str:
@@ -67,20 +79,22 @@ class LivePanel:
 
     Redrawn three times a second rather than ten: viser serialises and compresses a shared
     widget's update once per browser, and in a lecture hall of a hundred that was most of
-    the server's work (BENCHMARKS.md, *lecture hall*).
+    the server's work (BENCHMARKS.md, *lecture hall*). It closes when the presenter shows
+    the class another arm, whose own panel takes its place.
     """
 
-    closed = False  # the refresher's protocol: a shared panel never closes
     panel_interval = 0.3
 
-    def __init__(self, gui: viser.GuiApi, state: ArmState, overlay_enabled) -> None:
+    def __init__(self, gui: viser.GuiApi, state: ArmState, overlay_enabled, presenter_here: bool = False) -> None:
         self._state = state
         self._overlay_enabled = overlay_enabled
         self._reach = state.arm.a2 + state.arm.a3
-        self.presenter_here = False
+        self.presenter_here = presenter_here
+        self.closed = False  # the refresher's protocol
         first = state.last
         # last in every panel: below the presenter's or an explorer's own controls
-        with gui.add_folder("Live from the presenter", order=1e9):
+        self.folder = gui.add_folder("Live from the presenter", order=1e9)
+        with self.folder:
             self.status = gui.add_markdown(self._status())
             self.joints = gui.add_markdown(joints_markdown(first.q, with_controller=False))
             self.branches = gui.add_markdown(branches_markdown(first))
@@ -91,6 +105,10 @@ class LivePanel:
         if self.presenter_here:
             return "The presenter is moving this arm; you can turn the view as you like."
         return "No presenter yet: the teacher enters the join code to take the arm."
+
+    def remove(self) -> None:
+        self.closed = True
+        self.folder.remove()
 
     def render_panel(self) -> None:
         snapshot = self._state.last
@@ -105,13 +123,46 @@ class LivePanel:
             self.gauges.content = gauges_html(snapshot, levels, colors)
 
 
+class CourseLivePanel(LivePanel):
+    """The live panel for one of the course's other arms: the presenter's joints, branches and det J's factors."""
+
+    def __init__(self, gui: viser.GuiApi, state: CourseArmState, title: str, presenter_here: bool = False) -> None:
+        self._state = state
+        self.presenter_here = presenter_here
+        self.closed = False
+        arm, first = state.arm, state.last
+        self.folder = gui.add_folder("Live from the presenter", order=1e9)
+        with self.folder:
+            self.status = gui.add_markdown(self._status())
+            self.arm = gui.add_markdown(f"**{title}**")
+            self.joints = gui.add_markdown(course_panel.joint_text(arm, first.q))
+            self.branches = gui.add_markdown(course_panel.branches_markdown(arm, first))
+            self.gauges = gui.add_html(course_panel.factors_html(arm, first.q))
+
+    def render_panel(self) -> None:
+        snapshot, arm = self._state.last, self._state.arm
+        self.status.content = self._status()
+        self.joints.content = course_panel.joint_text(arm, snapshot.q)
+        self.branches.content = course_panel.branches_markdown(arm, snapshot)
+        self.gauges.content = course_panel.factors_html(arm, snapshot.q)
+
+
+@dataclasses.dataclass
+class ClassCourseArm:
+    """One of the course's other arms, shown to the class in the server's shared scene."""
+
+    arm: SerialArm
+    state: CourseArmState
+    scene: CourseArmScene
+
+
 class Member:
     """One browser in the classroom and its "Classroom" folder."""
 
     def __init__(self, client: viser.ClientHandle) -> None:
         self.client = client
         self.role = VIEWER
-        self.session: "ClientSession | None" = None
+        self.session: "ClientSession | CourseArmSession | None" = None
         self.folder: viser.GuiFolderHandle | None = None
         self.camera: CameraControls | None = None
         self.closed = False
@@ -123,9 +174,13 @@ class Classroom:
 
         self.app = app
         self.code = make_join_code()
+        #: the class's UR10: kept while the presenter shows another arm, so that it comes back where it was
         self.state = ArmState(app.arm, body_points=app.models.outline)
         self.scene_views = SceneViews.build(app.server.scene, app.models, self.state.last, target_marker=True)
-        self.live = LivePanel(app.server.gui, self.state, lambda: self.scene_views.overlay.enabled)
+        self.live: LivePanel = LivePanel(app.server.gui, self.state, lambda: self.scene_views.overlay.enabled)
+        self.choice = UR10  #: the arm the class is shown (an ``ARM_CHOICES`` label)
+        self.course: ClassCourseArm | None = None  #: that arm, when it is not the UR10
+        self._last_switch = -math.inf
         self.members: dict[int, Member] = {}
         self.presenter: Member | None = None
         self.wrong_codes = 0  #: since the last lock-out or the last right code
@@ -141,10 +196,20 @@ class Classroom:
             self.members[client.client_id] = member
         # one camera per browser, whatever its role: it frames the arm this browser is watching
         member.camera = CameraControls(
-            client, lambda: (member.session or self).state.last,
+            client, lambda: self._watched(member),
             lambda handler: guard(client, handler, is_closed=lambda: member.closed), lecture=self.app.lecture,
+            body_radius=self._body_radius(),
         )
         self._draw_controls(member)
+
+    def _watched(self, member: Member):
+        """The newest snapshot of the arm ``member`` looks at: its own, or the class's."""
+        if member.session is not None:
+            return member.session.state.last
+        return (self.course or self).state.last
+
+    def _body_radius(self) -> float:
+        return BODY_RADIUS if self.course is None else body_radius(self.course.scene.size)
 
     def disconnect(self, client: viser.ClientHandle) -> None:
         with self._lock:
@@ -163,7 +228,7 @@ class Classroom:
         self.app.refresher.request(self.live)
 
     @property
-    def sessions(self) -> dict[int, "ClientSession"]:
+    def sessions(self) -> dict[int, "ClientSession | CourseArmSession"]:
         """The sessions of the presenter and the explorers."""
         with self._lock:
             return {cid: m.session for cid, m in self.members.items() if m.session is not None}
@@ -172,8 +237,6 @@ class Classroom:
 
     def claim(self, member: Member, code: str) -> None:
         """Make ``member`` the presenter if ``code`` is the join code (``ValueError`` if not)."""
-        from .session import ClientSession
-
         with self._lock:  # one claim at a time, and none for a browser that has gone meanwhile
             if member.closed:
                 return
@@ -197,19 +260,76 @@ class Classroom:
                 self._leave_role(previous)
                 self._draw_controls(previous)
             self._leave_role(member)
-            session = ClientSession(
-                member.client, self.app.arm, self.app.models, self.app.refresher, self.app.drags,
-                state=self.state, server=self.app.server, scene_views=self.scene_views, own_camera=False,
-            )
-            session.observers.append(lambda _: self.app.refresher.request(self.live))
-            session.follow_lecture_mode(member.camera.lecture)
-            session.camera = member.camera  # the browser's own camera, for the workspace sections
-            member.session, member.role = session, PRESENTER
+            member.session, member.role = self._presenter_session(member), PRESENTER
             self.presenter = member
             self.live.presenter_here = True
         self._draw_controls(member)
         self.app.refresher.request(self.live)
         log.info("client %s is presenting", member.client.client_id)
+
+    def _presenter_session(self, member: Member) -> "ClientSession | CourseArmSession":
+        """The presenter's panel and gizmo, driving the class's arm in the shared scene."""
+        from .session import ClientSession
+
+        app = self.app
+        if self.course is None:
+            session = ClientSession(member.client, app.arm, app.models, app.refresher, app.drags, state=self.state,
+                                    server=app.server, scene_views=self.scene_views, own_camera=False)
+            session.follow_lecture_mode(member.camera.lecture)
+        else:
+            session = CourseArmSession(member.client, self.course.arm, app.refresher, app.drags, state=self.course.state,
+                                       scene=self.course.scene, server=app.server, own_camera=False)
+        session.observers.append(lambda _: app.refresher.request(self.live))
+        session.camera = member.camera  # the browser's own camera, for the workspace sections
+        return session
+
+    def show_arm(self, member: Member, label: str) -> None:
+        """The presenter shows the class another arm (``CLASS_CHOICES``): everyone's scene and live panel follow.
+
+        The UR10 stays where the presenter left it; another arm starts at its home pose.
+        ``ValueError`` for anyone but the presenter, or sooner than :data:`SWITCH_INTERVAL`
+        after the last change.
+        """
+        from .session import SceneViews
+
+        if label not in CLASS_CHOICES:
+            raise ValueError(f"arm: {label!r:.40} is not one of the choices")
+        app = self.app
+        with self._lock:
+            if member.closed or self.presenter is not member:
+                raise ValueError("only the presenter chooses the class's arm")
+            if label == self.choice:
+                return
+            if time.monotonic() - self._last_switch < SWITCH_INTERVAL:
+                raise ValueError(f"one change of arm every {SWITCH_INTERVAL:g} s, please: try again in a moment")
+            member.session.remove()
+            member.session = None
+            self.live.remove()
+            app.server.scene.reset()  # the class's arm and everything drawn with it
+            add_floor_grid(app.server.scene)
+            name = ARM_CHOICES[label]
+            if name is None:
+                self.course = None
+                self.scene_views = SceneViews.build(app.server.scene, app.models, self.state.last, target_marker=True)
+                self.live = LivePanel(app.server.gui, self.state, lambda: self.scene_views.overlay.enabled, True)
+            else:
+                arm = SerialArm.preset(name)
+                state = CourseArmState(arm)
+                self.course = ClassCourseArm(arm, state, CourseArmScene(app.server.scene, arm, state.last, reach(arm)))
+                self.live = CourseLivePanel(app.server.gui, state, label, True)
+            self.choice = label
+            member.session = self._presenter_session(member)
+            self._last_switch = time.monotonic()
+            members = list(self.members.values())
+        self._draw_controls(member)
+        for other in members:
+            if other.role == EXPLORER:
+                self._hide_class_arm(other)
+            elif other.camera is not None:  # the presenter and the viewers look at the new arm
+                other.camera.body_radius = self._body_radius()
+                other.camera.frame()
+        app.refresher.request(self.live)
+        log.info("the class is shown the %s", label)
 
     def stop_presenting(self, member: Member) -> None:
         with self._lock:
@@ -221,23 +341,45 @@ class Classroom:
         self.app.refresher.request(self.live)
 
     def explore(self, member: Member) -> None:
-        """A private copy of the arm, starting from the presenter's pose."""
+        """A private copy of the class's arm, starting from the presenter's pose."""
         from .session import ClientSession
 
+        app = self.app
         with self._lock:
             if member.role == EXPLORER:
                 return
             if self.presenter is member:
                 self.stop_presenting(member)
-            member.client.scene.add_frame("/target", show_axes=False, visible=False)  # hide the shared target
-            member.session = ClientSession(
-                member.client, self.app.arm, self.app.models, self.app.refresher, self.app.drags,
-                state=ArmState(self.app.arm, self.state.q, body_points=self.app.models.outline), own_camera=False,
-            )
-            member.session.follow_lecture_mode(member.camera.lecture)
+            if self.course is None:
+                member.session = ClientSession(
+                    member.client, app.arm, app.models, app.refresher, app.drags,
+                    state=ArmState(app.arm, self.state.q, body_points=app.models.outline), own_camera=False,
+                )
+                member.session.follow_lecture_mode(member.camera.lecture)
+            else:
+                arm = self.course.arm
+                member.session = CourseArmSession(member.client, arm, app.refresher, app.drags,
+                                                  state=CourseArmState(arm, self.course.state.last.q), own_camera=False,
+                                                  root=EXPLORER_ROOT)
             member.session.camera = member.camera
             member.role = EXPLORER
+            self._hide_class_arm(member)
         self._draw_controls(member)
+
+    def _hide_class_arm(self, member: Member) -> None:
+        """In an explorer's browser, hide what of the class's arm its own arm does not already cover.
+
+        A private UR10 uses the shared UR10's scene names, which hides all of it but the
+        presenter's target marker; a private course arm has a root of its own.
+        """
+        if self.course is not None:
+            hidden: tuple[str, ...] = (COURSE_ROOT,)
+        elif isinstance(member.session, CourseArmSession):
+            hidden = UR10_ROOTS
+        else:
+            hidden = ("/target",)
+        for name in hidden:
+            member.client.scene.add_frame(name, show_axes=False, visible=False)
 
     def rejoin(self, member: Member) -> None:
         """Back to watching the presenter: drop the private arm (the shared one shows again)."""
@@ -273,6 +415,8 @@ class Classroom:
                 gui.add_markdown("You are **presenting**: everyone sees your arm, target and overlays.")
                 stop = gui.add_button("Stop presenting", icon=viser.Icon.PLAYER_STOP)
                 stop.on_click(action(lambda _: self.stop_presenting(member)))
+                ArmPicker(gui, self.choice, lambda label: self.show_arm(member, label), action, CLASS_CHOICES,
+                          hint="The arm the whole class sees: its branches, singularities and DH frames")
             elif member.role == EXPLORER:
                 gui.add_markdown("You are **exploring on your own**: nobody else sees this arm.")
                 back = gui.add_button("Back to the presenter's arm", icon=viser.Icon.ARROW_BACK_UP)

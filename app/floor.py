@@ -23,6 +23,11 @@ DISC_RADIUS = 0.09
 DISC_HEIGHT = 0.003
 
 
+def add_floor_grid(scene: viser.SceneApi) -> None:
+    """The floor the arms stand on: 10 cm cells, 50 cm sections (the server's, shared by everyone)."""
+    scene.add_grid("/floor", width=3.0, height=3.0, cell_size=0.1, section_size=0.5)
+
+
 class FloorScene(View):
     """Instance 0 marks the solid arm, instance k + 1 the ghost of slot k."""
 

@@ -20,11 +20,12 @@ import viser
 from ur10core import Arm, symbolic, symbolic_arms
 
 from . import shared_frames
-from .arm_picker import ARM_CHOICES, CUSTOM, UR10, ArmPicker
+from .arm_picker import ARM_CHOICES, CUSTOM, SWITCH_INTERVAL, UR10, ArmPicker
 from .classroom import Classroom
 from .course_arms.editor import STARTING_TABLE, parse_table
 from .course_arms.panel import factor_scales
 from .course_arms.session import CourseArmSession
+from .floor import add_floor_grid
 from .gate import Gate, gated_serve
 from .meshes import load_models
 from .metrics import LATENCY
@@ -144,10 +145,6 @@ class Janitor:
             self._trim(0)
 
 
-#: Seconds between two rebuilds of one browser's arm (the picker, the DH editor's "Build").
-SWITCH_INTERVAL = 0.5
-
-
 class TeachingServer:
     """The app: a viser server giving every browser its own UR10.
 
@@ -190,8 +187,7 @@ class TeachingServer:
         self.server.initial_camera.look_at = CAMERA_LOOK_AT
         self.server.initial_camera.up = (0.0, 0.0, 1.0)
         self.server.initial_camera.fov = math.radians(CAMERA_FOV_DEGREES)
-        # the floor the arm stands on: half-metre cells, shared by everyone (it never changes)
-        self.server.scene.add_grid("/floor", width=3.0, height=3.0, cell_size=0.1, section_size=0.5)
+        add_floor_grid(self.server.scene)
         loop = self.server.get_event_loop()
         self.refresher = PanelRefresher(loop)
         self.drags = DragQueue(loop)

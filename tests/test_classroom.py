@@ -219,3 +219,79 @@ def test_a_browser_that_left_cannot_become_the_presenter(classroom):
         assert classroom.classroom.presenter is None and member.session is None
 
     asyncio.run(scenario())
+
+
+def test_the_presenter_shows_the_class_another_arm(classroom):
+    """The presenter's picker changes the class's arm: every viewer's scene and live panel follow,
+    an explorer gets a private copy of it, and the UR10 comes back where the presenter left it."""
+    from app.classroom import UR10_ROOTS
+    from app.course_arms.scene import EXPLORER_ROOT, ROOT
+    from app.course_arms.session import CourseArmSession
+    from app.arm_picker import SWITCH_INTERVAL, UR10
+    from app.session import ClientSession
+    from .viser_client import wxyz_of
+
+    stanford = "Stanford arm (RRP + wrist)"
+
+    async def scenario():
+        teacher = await ViserClient(f"http://127.0.0.1:{classroom.port}").connect()
+        student = await ViserClient(f"http://127.0.0.1:{classroom.port}").connect()
+        room = classroom.classroom
+        assert "Which arm" not in student.gui  # a viewer does not choose the class's arm
+        await become_presenter(teacher, classroom)
+        presenter = member_of(classroom, 0)
+        ur10_q = room.state.q.copy()
+        await asyncio.sleep(SWITCH_INTERVAL)
+        await teacher.set_gui("Which arm", stanford)
+        await until(lambda: room.course is not None and isinstance(presenter.session, CourseArmSession),
+                    what="the class's Stanford arm")
+        assert presenter.session.state is room.course.state and presenter.session.scene is room.course.scene
+        # every browser is sent the new arm in the shared scene, and the UR10's nodes go
+        for client in (teacher, student):
+            await until(lambda: client.received.node_owners.get(f"{ROOT}/body") == "", what="the shared Stanford arm")
+            assert f"{ROOT}/target" not in client.received.nodes or client is teacher  # the gizmo is the presenter's own
+            assert "/arm/link0" in client.received.removed_nodes
+        await until(lambda: room.live.arm.content == f"**{stanford}**", what="the Stanford arm's live panel")
+        # the presenter drags; the class's arm and the live panel follow
+        q = np.array([0.4, 1.2, 0.3, 0.2, 0.5, -0.3])
+        T = room.course.arm.fk(q)
+        await teacher.drag_target(T[:3, 3], wxyz_of(T), "start", name=f"{ROOT}/target")
+        await until(lambda: np.abs(room.course.arm.fk(room.course.state.last.q) - T).max() < 1e-9, what="the class's arm moved")
+        await until(lambda: "300.0 mm" in room.live.joints.content, what="d3 in the live panel")
+        # a student explores the same arm on their own, under a root of its own; the class's is hidden for them
+        await student.set_gui("Explore on my own", True)
+        explorer = member_of(classroom, 1)
+        await until(lambda: isinstance(explorer.session, CourseArmSession), what="the explorer's arm")
+        assert explorer.session.scene.root == EXPLORER_ROOT
+        np.testing.assert_allclose(explorer.session.state.last.q, room.course.state.last.q)
+        mine = str(explorer.client.client_id)
+        await until(lambda: student.received.node_owners.get(ROOT) == mine and student.received.visible.get(ROOT) is False,
+                    what="the class's arm hidden for the explorer")
+        goal = room.course.arm.fk(np.array([0.1, 1.0, 0.2, 0.0, 0.4, 0.1]))
+        await student.drag_target(goal[:3, 3], wxyz_of(goal), "start", name=f"{EXPLORER_ROOT}/target")
+        await until(lambda: np.abs(explorer.session.arm.fk(explorer.session.state.last.q) - goal).max() < 1e-9,
+                    what="the explorer's own arm moved")
+        assert np.abs(room.course.arm.fk(room.course.state.last.q) - T).max() < 1e-9  # the class's did not
+        # back to the UR10: where the presenter left it; the explorer now hides the shared UR10
+        await asyncio.sleep(SWITCH_INTERVAL)
+        await teacher.set_gui("Which arm", UR10)
+        await until(lambda: room.course is None and isinstance(presenter.session, ClientSession), what="the UR10 back")
+        np.testing.assert_array_equal(room.state.q, ur10_q)
+        await until(lambda: all(student.received.node_owners.get(name) == mine and student.received.visible.get(name) is False
+                                for name in UR10_ROOTS), what="the shared UR10 hidden for the explorer")
+        # at once again: too soon, refused with a message; the class keeps its arm
+        await teacher.set_gui("Which arm", stanford)
+        await until(lambda: any("one change of arm" in body.lower() for _, body in teacher.received.notifications),
+                    what="the refusal")
+        assert room.course is None
+        await teacher.close()
+        await student.close()
+
+    asyncio.run(scenario())
+
+
+def test_the_shared_ur10_lives_under_the_roots_an_explorer_hides(classroom):
+    names = [name for name in classroom.server.scene._handle_from_node_name if name not in ("/floor", "/WorldAxes")]
+    from app.classroom import UR10_ROOTS
+
+    assert names and all(name.split("/")[1] in {root.strip("/") for root in UR10_ROOTS} for name in names)

@@ -74,6 +74,7 @@ class Received:
     #: scene nodes added (name -> the message's type), removed, and each node's last position
     nodes: dict[str, str] = dataclasses.field(default_factory=dict)
     removed_nodes: list[str] = dataclasses.field(default_factory=list)
+    node_owners: dict[str, str] = dataclasses.field(default_factory=dict)  #: "" for the shared scene, else a client id
     positions: dict[str, tuple[float, float, float]] = dataclasses.field(default_factory=dict)
     visible: dict[str, bool] = dataclasses.field(default_factory=dict)
     removed_gui: set[str] = dataclasses.field(default_factory=set)
@@ -185,14 +186,15 @@ class ViserClient:
                 del self.gui[label]
         elif kind.endswith("Message") and isinstance(name, str) and name.startswith("/") and "props" in message:
             self.received.nodes[name] = kind
+            self.received.node_owners[name] = message.get("owner", "")
             if "position" in message.get("props", {}):
                 self.received.positions[name] = tuple(message["props"]["position"])
         if kind == "SceneNodeUpdateMessage" and re.fullmatch(r"/ghosts/\w+/link6", str(name)):  # the shown model's
             positions = message.get("updates", {}).get("batched_positions")
             if positions is not None:
                 self.received.ghost_flanges.append((now, array(positions, buffers).reshape(-1, 3).copy()))
-        if kind == "TransformControlsMessage" and message.get("name") == "/ik_target":
-            self.gizmo_owner = message.get("owner", "")
+        if kind == "TransformControlsMessage" and message.get("owner"):  # a gizmo of this browser's own
+            self.gizmo_owner = message["owner"]
         elif kind == "GuiMarkdownMessage" and "p (mm)" in message.get("props", {}).get("_markdown", ""):
             self._read_flange(now, message["props"]["_markdown"])
         elif kind.startswith("Gui") and kind.endswith("Message") and "props" in message:

@@ -19,6 +19,8 @@ from ..style import JOINT_CAP_GREY, SLOT_COLORS
 from .state import CourseSnapshot
 
 ROOT = "/course_arm"
+#: An explorer's own arm in a classroom, apart from the class's (which it hides in that one browser).
+EXPLORER_ROOT = "/explored_arm"
 SKELETON_GREY = (60, 62, 68)
 X_AXIS_RED, Z_AXIS_BLUE = (220, 30, 30), (30, 60, 230)
 #: A highlighted row's parameters (Okabe-Ito): d blue, a vermilion, θ bluish green, α reddish purple.
@@ -51,44 +53,46 @@ def skeleton(table: DHTable, frames: np.ndarray) -> np.ndarray:
 class CourseArmScene:
     """Everything one course arm draws in a browser's scene."""
 
-    def __init__(self, scene: viser.SceneApi, arm: SerialArm, first: CourseSnapshot, size: float) -> None:
+    def __init__(self, scene: viser.SceneApi, arm: SerialArm, first: CourseSnapshot, size: float,
+                 root: str = ROOT) -> None:
         self._scene = scene
+        self.root = root  #: every node's parent: a classroom explorer's own arm has one apart from the class's
         self._arm = arm
         self.size = size  #: the arm's reach (m): sizes of rods, axes and the gizmo follow it
         segments = skeleton(arm.dh, first.frames)
-        self.body = scene.add_line_segments(f"{ROOT}/body", segments, SKELETON_GREY, thickness=0.012 * size)
+        self.body = scene.add_line_segments(f"{root}/body", segments, SKELETON_GREY, thickness=0.012 * size)
         self.joints = []
         for k, kind in enumerate(arm.joint_types):
             if kind == "R":
-                rod = scene.add_cylinder(f"{ROOT}/joint{k + 1}", radius=0.018 * size, height=0.06 * size,
+                rod = scene.add_cylinder(f"{root}/joint{k + 1}", radius=0.018 * size, height=0.06 * size,
                                          color=JOINT_CAP_GREY)
             else:
-                rod = scene.add_box(f"{ROOT}/joint{k + 1}", color=JOINT_CAP_GREY,
+                rod = scene.add_box(f"{root}/joint{k + 1}", color=JOINT_CAP_GREY,
                                     dimensions=(0.03 * size, 0.03 * size, 0.06 * size))
             self.joints.append(rod)
         count = len(first.frames)
         self.frames_shown = FRAMES_XZ
         self.highlight_row: int | None = None  #: a DH row (1-based) whose parameters are drawn on the arm
         nothing = np.zeros((count, 2, 3))
-        self.z_axes = scene.add_line_segments(f"{ROOT}/frames/z", nothing, Z_AXIS_BLUE, thickness=0.008 * size)
-        self.x_axes = scene.add_line_segments(f"{ROOT}/frames/x", nothing, X_AXIS_RED, thickness=0.008 * size)
+        self.z_axes = scene.add_line_segments(f"{root}/frames/z", nothing, Z_AXIS_BLUE, thickness=0.008 * size)
+        self.x_axes = scene.add_line_segments(f"{root}/frames/x", nothing, X_AXIS_RED, thickness=0.008 * size)
         self.axis_labels = [
-            (scene.add_label(f"{ROOT}/frame_labels/x{i}", f"x{i}", font_screen_scale=1.1, anchor="center-left"),
-             scene.add_label(f"{ROOT}/frame_labels/z{i}", f"z{i}", font_screen_scale=1.1, anchor="center-left"))
+            (scene.add_label(f"{root}/frame_labels/x{i}", f"x{i}", font_screen_scale=1.1, anchor="center-left"),
+             scene.add_label(f"{root}/frame_labels/z{i}", f"z{i}", font_screen_scale=1.1, anchor="center-left"))
             for i in range(count)
         ]
-        self.parameters = {key: scene.add_line_segments(f"{ROOT}/row/{key}", np.zeros((1, 2, 3)), colour,
+        self.parameters = {key: scene.add_line_segments(f"{root}/row/{key}", np.zeros((1, 2, 3)), colour,
                                                         thickness=0.016 * size, visible=False)
                            for key, colour in PARAMETER_COLORS.items()}
-        self.parameter_labels = {key: scene.add_label(f"{ROOT}/row/{key}/value", key, font_screen_scale=1.3,
+        self.parameter_labels = {key: scene.add_label(f"{root}/row/{key}/value", key, font_screen_scale=1.3,
                                                       anchor="bottom-center", visible=False)
                                  for key in PARAMETER_COLORS}
         slots = len(arm.slot_labels)
         _, points = arm.dh.joint_axes(first.frames)
         self._label_frame = arm.dh.joint_rows[min(2, arm.n_joints - 1)] + (0 if arm.convention == "standard" else 1)
-        self.ghosts = [scene.add_line_segments(f"{ROOT}/ghosts/slot{k + 1}", segments, SLOT_COLORS[k % len(SLOT_COLORS)],
+        self.ghosts = [scene.add_line_segments(f"{root}/ghosts/slot{k + 1}", segments, SLOT_COLORS[k % len(SLOT_COLORS)],
                                                thickness=0.006 * size) for k in range(slots)]
-        self.ghost_labels = [scene.add_label(f"{ROOT}/ghosts/slot{k + 1}/number", str(k + 1), font_screen_scale=1.4,
+        self.ghost_labels = [scene.add_label(f"{root}/ghosts/slot{k + 1}/number", str(k + 1), font_screen_scale=1.4,
                                              anchor="bottom-center") for k in range(slots)]
 
     def render(self, snapshot: CourseSnapshot) -> None:

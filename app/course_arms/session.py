@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import contextlib
 import threading
 import time
 from typing import Any, Callable
@@ -23,6 +24,11 @@ from .panel import CourseBranches, CourseDHTable, CourseJointSliders, CourseSing
 from .scene import ROOT, CourseArmScene
 from .state import CourseArmState, CourseSnapshot
 from .workspace import CourseWorkspace
+
+
+def body_radius(size: float) -> float:
+    """Room the camera keeps around each joint of an arm that reaches ``size`` m (its rods and gizmo scale so)."""
+    return 0.15 * size
 
 
 def reach(arm: SerialArm) -> float:
@@ -61,22 +67,31 @@ class CourseArmSession:
 
     ``rebuild(arm, text, convention)``, given for a typed table, puts a newly typed arm in
     this one's place (the server does it); ``text`` and ``convention`` fill the editor.
+
+    ``state``, ``scene`` and ``server``: the classroom's presenter drives an arm drawn in the
+    server's shared scene (``app.classroom``); its panel and gizmo stay its own. A browser
+    draws its own arm by default, under ``root``. ``own_camera`` as for ``ClientSession``.
     """
 
     def __init__(self, client: viser.ClientHandle, arm: SerialArm, refresher: PanelRefresher, drags: DragQueue,
                  lecture: bool = False, rebuild: Callable[[SerialArm, str, str], None] | None = None,
-                 text: str = "", convention: str = "standard") -> None:
+                 text: str = "", convention: str = "standard", state: CourseArmState | None = None,
+                 scene: CourseArmScene | None = None, server: viser.ViserServer | None = None,
+                 own_camera: bool = True, root: str = ROOT) -> None:
         self.client = client
         self.arm = arm
-        self.state = CourseArmState(arm)
+        self.state = state or CourseArmState(arm)
         self.refresher = refresher
         self.drags = drags
         self.closed = False
+        #: called after every change (the classroom refreshes its live panel)
+        self.observers: list[Callable[[CourseSnapshot], None]] = []
+        self._senders: tuple[viser.ClientHandle | viser.ViserServer, ...] = (client,) if server is None else (client, server)
         first = self.state.last
         size = reach(arm)
-        self.scene = CourseArmScene(client.scene, arm, first, size)
+        self.scene = scene or CourseArmScene(client.scene, arm, first, size, root)
         self.gizmo = client.scene.add_transform_controls(
-            f"{ROOT}/target", scale=0.12 * size, line_width=3.0, depth_test=False,
+            f"{self.scene.root}/target", scale=0.12 * size, line_width=3.0, depth_test=False,
             disable_rotations=arm.task == "position",
             active_axes=(True, True, arm.name != "planar_elbow"),
             wxyz=quaternion(first.target[:3, :3], check=False), position=first.target[:3, 3])
@@ -89,15 +104,16 @@ class CourseArmSession:
         self.singularities = CourseSingularities(gui, arm)
         self.dh_table = CourseDHTable(gui, self)
         self.walkthrough = DHWalkthrough(gui, self)
-        self.workspace = CourseWorkspace(client.scene, gui, self)
+        self.workspace = CourseWorkspace(client.scene if server is None else server.scene, gui, self)
         self.gripper = GripperPose(gui, self) if arm.name == "kr210" else None
-        self.camera = CameraControls(client, lambda: self.state.last, self.guard, lecture, body_radius=0.15 * size)
-        self.panel_views = (*(v for v in (self.editor, self.search, self.gripper) if v is not None),
-                            self.joints, self.branches, self.singularities, self.dh_table, self.walkthrough, self.workspace,
-                            self.camera)
+        self.camera = (CameraControls(client, lambda: self.state.last, self.guard, lecture, body_radius=body_radius(size))
+                       if own_camera else None)
+        self.panel_views = (*(v for v in (self.editor, self.search, self.gripper, self.camera) if v is not None),
+                            self.joints, self.branches, self.singularities, self.dh_table, self.walkthrough, self.workspace)
         self.render(first)
         self.render_panel()
-        self.camera.frame()
+        if self.camera is not None:
+            self.camera.frame()
 
     # ------------------------------------------------------------------ changes
 
@@ -111,6 +127,8 @@ class CourseArmSession:
         if timed:
             LATENCY.record(timed, time.perf_counter() - start)
         self.refresher.request(self)
+        for observer in self.observers:
+            observer(snapshot)
         return snapshot
 
     def redraw(self) -> None:
@@ -137,12 +155,15 @@ class CourseArmSession:
     def render(self, snapshot: CourseSnapshot, move_gizmo: bool = False) -> None:
         if self.closed:
             return
-        with self.client.atomic():
+        with contextlib.ExitStack() as batch:  # the arm and the gizmo arrive together, as in ClientSession.render
+            for sender in self._senders:
+                batch.enter_context(sender.atomic())
             self.scene.render(snapshot)
             if move_gizmo and not snapshot.reason:
                 self.gizmo.wxyz = quaternion(snapshot.frames[-1, :3, :3], check=False)
                 self.gizmo.position = snapshot.frames[-1, :3, 3]
-        self.client.flush()
+        for sender in self._senders:
+            sender.flush()
 
     def render_panel(self) -> None:
         if self.closed:
@@ -162,8 +183,18 @@ class CourseArmSession:
             notify(self.client, title, body, color)
 
     def close(self) -> None:
+        """The browser has gone (or handed over): stop drawing and let go of everything shared."""
         self.closed = True
         with self.state.lock:
             for view in self.panel_views:
                 view.close()
+        self.refresher.forget(self)
+
+    def remove(self) -> None:
+        """Close, and take this session's panel and gizmo out of a browser that stays."""
+        self.closed = True
+        with self.state.lock:
+            for view in self.panel_views:
+                view.remove()
+            self.gizmo.remove()
         self.refresher.forget(self)

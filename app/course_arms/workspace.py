@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import functools
+import threading
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -13,7 +14,6 @@ from ur10core.serial import PRESETS, SerialArm
 from ..view import View
 from ..workers import FoldedRuns
 from ..workspace import POINT_SIZE, colormap, legend_html
-from .scene import ROOT
 
 if TYPE_CHECKING:
     from .session import CourseArmSession
@@ -46,6 +46,7 @@ class CourseWorkspace(View):
         self._scene = scene
         self._session = session
         self._cloud: viser.PointCloudHandle | None = None
+        self._lock = threading.Lock()
         self._runs = FoldedRuns(self._update)
         folder = gui.add_folder("Workspace", expand_by_default=False)
         self.folders = (folder,)
@@ -55,18 +56,29 @@ class CourseWorkspace(View):
             self.legend = gui.add_html("", visible=False)
         self.enabled.on_update(session.guard(lambda _: self._runs()))
 
+    def close(self) -> None:
+        """The session has gone: its cloud goes too (the presenter's is in the scene everyone shares)."""
+        with self._lock:  # not while a cloud is being added: it would outlive the session
+            if self._cloud is not None:
+                self._cloud.remove()
+                self._cloud = None
+
     def _update(self) -> None:
-        if self._session.closed:
-            return
-        if not self.enabled.value:
+        shown = cloud(self._session.arm) if self.enabled.value else None  # the slow part, outside the lock
+        with self._lock:
+            if not self._session.closed:
+                self._show(shown)
+
+    def _show(self, shown: tuple[np.ndarray, np.ndarray, float] | None) -> None:
+        if shown is None:
             if self._cloud is not None:
                 self._cloud.remove()
                 self._cloud = None
             self.legend.visible = False
             return
-        points, colours, top = cloud(self._session.arm)
+        points, colours, top = shown
         if self._cloud is None:
-            self._cloud = self._scene.add_point_cloud(f"{ROOT}/workspace", points, colours, point_size=POINT_SIZE,
+            self._cloud = self._scene.add_point_cloud(f"{self._session.scene.root}/workspace", points, colours, point_size=POINT_SIZE,
                                                       point_shape="circle")
         self.legend.content = legend_html(top).replace(" m³", "")
         self.legend.visible = True
