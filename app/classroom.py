@@ -164,6 +164,7 @@ class Member:
         self.role = VIEWER
         self.session: "ClientSession | CourseArmSession | None" = None
         self.folder: viser.GuiFolderHandle | None = None
+        self.picker: ArmPicker | None = None  #: the presenter's: which arm the class sees
         self.camera: CameraControls | None = None
         self.closed = False
 
@@ -415,8 +416,8 @@ class Classroom:
                 gui.add_markdown("You are **presenting**: everyone sees your arm, target and overlays.")
                 stop = gui.add_button("Stop presenting", icon=viser.Icon.PLAYER_STOP)
                 stop.on_click(action(lambda _: self.stop_presenting(member)))
-                ArmPicker(gui, self.choice, lambda label: self.show_arm(member, label), action, CLASS_CHOICES,
-                          hint="The arm the whole class sees: its branches, singularities and DH frames")
+                member.picker = ArmPicker(gui, self.choice, lambda label: self.show_arm(member, label), action,
+                                          CLASS_CHOICES, hint="The arm the whole class sees: its branches, singularities and DH frames")
             elif member.role == EXPLORER:
                 gui.add_markdown("You are **exploring on your own**: nobody else sees this arm.")
                 back = gui.add_button("Back to the presenter's arm", icon=viser.Icon.ARROW_BACK_UP)

@@ -70,3 +70,58 @@ def test_presenter_and_student(tmp_path):
             student_browser.close()
     finally:
         app.stop()
+
+
+def test_the_class_is_shown_a_scara_and_an_explorer_keeps_their_own(tmp_path):
+    """The presenter picks the SCARA: the student's screen shows it in place of the UR10, with its
+    live panel. Exploring it, the student keeps their own arm on screen when the class goes back
+    to the UR10 (the shared UR10 is hidden in that one browser)."""
+    from app.arm_picker import SWITCH_INTERVAL, UR10
+    from app.course_arms.session import CourseArmSession
+
+    from .browser_support import canvas_pixels, choose
+    from .test_browser_course_arms import changed
+
+    app = TeachingServer(port=0, shared=True)
+    try:
+        with sync_playwright() as playwright:
+            teacher_browser, student_browser = launch(playwright), launch(playwright)
+            teacher = teacher_browser.new_page(viewport=SMALL_VIEWPORT)
+            teacher.goto(f"http://127.0.0.1:{app.port}")
+            teacher.wait_for_selector(CONNECTED, timeout=30_000)
+            student = student_browser.new_page(viewport=SMALL_VIEWPORT)
+            student.goto(f"http://127.0.0.1:{app.port}")
+            student.wait_for_selector(CONNECTED, timeout=30_000)
+            wait_for(lambda: len(app.classroom.members) == 2, what="both browsers")
+            teacher_member, student_member = list(app.classroom.members.values())
+            field(teacher, "Join code").fill(app.classroom.code)
+            teacher.wait_for_timeout(200)
+            teacher.get_by_role("button", name="Become presenter").click()
+            wait_for(lambda: teacher_member.picker is not None, what="the presenter's picker")
+            student.wait_for_timeout(2500)
+            watching_ur10 = canvas_pixels(student)
+
+            teacher.wait_for_timeout(1000 * SWITCH_INTERVAL)
+            choose(teacher, teacher_member.picker.dropdown, "SCARA (RRP + roll)")
+            wait_for(lambda: isinstance(teacher_member.session, CourseArmSession), what="the class's SCARA")
+            wait_for(lambda: student.get_by_text("SCARA (RRP + roll)").count() > 0, what="the student's live panel")
+            student.wait_for_timeout(2500)
+            watching_scara = canvas_pixels(student)
+            assert changed(watching_ur10, watching_scara) > 0.02, "the student's screen did not change arm"
+
+            student.get_by_role("button", name="Explore on my own").click()
+            wait_for(lambda: isinstance(student_member.session, CourseArmSession), what="the student's own SCARA")
+            student.wait_for_timeout(2500)
+            exploring = canvas_pixels(student)
+            wait_for(lambda: teacher_member.picker.dropdown.value == "SCARA (RRP + roll)", what="the picker")
+            choose(teacher, teacher_member.picker.dropdown, UR10)
+            wait_for(lambda: app.classroom.course is None, what="the class's UR10")
+            student.wait_for_timeout(2500)
+            still_exploring = canvas_pixels(student)
+            student.screenshot(path=str(tmp_path / "explorer.png"))
+            # the class's UR10 would cover a good part of the view; the explorer's stays as it was
+            assert changed(exploring, still_exploring) < 0.005, "the class's UR10 showed over the explorer's own arm"
+            teacher_browser.close()
+            student_browser.close()
+    finally:
+        app.stop()
