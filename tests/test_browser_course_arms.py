@@ -39,6 +39,14 @@ def test_picking_the_kr210_draws_it_with_its_dh_frames_and_its_panel(open_page, 
     # the first slider turns joint 1, in degrees, and the skeleton follows
     step_slider(page, course.joints.sliders[0], "ArrowRight", 1.0)
     wait_for(lambda: abs(np.degrees(course.state.last.q[0]) - 1.0) < 1e-6, what="A1 at 1°")
+    # det J's factors drawn on the arm: axis 1, the links, axes 4 and 6, each named in 3D
+    page.wait_for_timeout(2500)
+    plain = canvas_pixels(page)
+    page.locator(dom_id(course.singularities.show)).check()
+    wait_for(lambda: course.scene.overlay.lines["wrist"].visible, what="the factors drawn")
+    page.wait_for_timeout(2500)
+    assert changed(plain, canvas_pixels(page)) > 0.003, "the singular geometry did not show"
+    assert page.get_by_text("shoulder", exact=True).count() >= 1  # the 3D label
 
 
 def changed(before: np.ndarray, after: np.ndarray) -> float:

@@ -348,3 +348,30 @@ def test_any_table_a_student_types_can_be_built_driven_and_searched():
             assert arm.pose_error(solution.q[solution.valid], moved.target).max() <= 1e-9
     assert built >= 30
 
+
+
+def test_singularities_shown_on_the_arm_turn_red_at_the_singularity(app):
+    async def scenario():
+        from app.course_arms.overlay import FACTOR_COLORS
+        from app.style import DANGER_RED
+
+        client = await ViserClient(url(app)).connect()
+        session = await pick(app, client, KR210, CourseArmSession)
+        overlay = session.scene.overlay
+        assert not overlay.lines["wrist"].visible  # off until asked for
+        await client.set_gui("Show them on the arm", True)
+        await until(lambda: overlay.enabled and overlay.lines["wrist"].visible and overlay.labels["elbow"].visible,
+                    what="the factors drawn")
+        assert tuple(overlay.lines["wrist"].colors) == FACTOR_COLORS["wrist"]  # far from s5 = 0 at home
+        # A5 to 0: axes 4 and 6 in line, drawn parallel and red
+        await client.set_gui("A5 (°)", 0.0)
+        await until(lambda: session.state.last.q[4] == 0.0, what="A5 = 0")
+        await until(lambda: tuple(overlay.lines["wrist"].colors) == DANGER_RED, what="the wrist axes red")
+        axes = overlay.lines["wrist"].points
+        directions = [(b - a) / np.linalg.norm(b - a) for a, b in axes]
+        assert np.linalg.norm(np.cross(*directions)) < 1e-6
+        await client.set_gui("Show them on the arm", False)
+        await until(lambda: not overlay.lines["wrist"].visible, what="the factors hidden")
+        await client.close()
+
+    asyncio.run(scenario())

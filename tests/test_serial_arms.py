@@ -457,3 +457,23 @@ def test_the_kr210_urdf_gripper_convention():
     np.testing.assert_allclose(urdf[:, :3, 0], T[:, :3, 2], atol=1e-15)  # the URDF's x is the approach z_G
     np.testing.assert_allclose(urdf[:, :3, 3], T[:, :3, 3])
     np.testing.assert_allclose(kr210_from_urdf(urdf), T, atol=1e-15)
+
+
+@pytest.mark.parametrize("name", ["kr210", "elbow", "stanford"])
+def test_the_wrist_centre_is_on_the_last_three_axes_and_behind_the_tool(name):
+    """Every spherical wrist's centre lies on its last three joint axes, also at s5 = 0 (axes 4 and 6
+    in line), and sits back from the tool along its z axis by the table's last d (KR210: d_G = 303 mm)."""
+    arm = SerialArm.preset(name)
+    rng = np.random.default_rng(3)
+    q = rng.uniform(arm.limits[:, 0], arm.limits[:, 1], (2000, 6))
+    q[::4, 4] = 0.0  # wrist singular
+    centre = arm.wrist_centre(q)
+    z, o = arm.dh.joint_axes(arm.frames(q))
+    for k in (3, 4, 5):
+        assert np.linalg.norm(np.cross(centre - o[:, k], z[:, k]), axis=-1).max() < 1e-12
+    T = arm.fk(q)
+    behind = {"kr210": 0.303, "elbow": 0.1, "stanford": 0.0}[name]
+    np.testing.assert_allclose(centre, T[:, :3, 3] - behind * T[:, :3, 2], atol=1e-12)
+    assert arm.wrist_centre(q[0]).shape == (3,)
+    with pytest.raises(ValueError, match="no wrist"):
+        SerialArm.preset("scara").wrist_centre(np.zeros(4))

@@ -286,6 +286,31 @@ class SerialArm:
             raise ValueError(f"{self.name!r} has no derived factors (a custom table): use smallest_singular_value or manipulability")
         return symbolic_arms.load(self.name).evaluate(self.dh.joints(q))
 
+    def wrist_centre(self, q) -> np.ndarray:
+        """The point nearest the last three joint axes at joints ``q`` (..., n), shape (..., 3).
+
+        For a spherical wrist (the KR210, the elbow arm, the Stanford arm) the three axes meet
+        there: it is the wrist centre Pieper's decoupling solves for (docs/kinematics.md §7.3),
+        and the point the shoulder and elbow singularities are about (§7.6). ``ValueError``
+        for an arm whose last three joints are not all revolute.
+
+        Example: the Stanford arm's d6 = 0 puts its tool frame at the wrist centre.
+
+        >>> arm = SerialArm.preset("stanford")
+        >>> q = np.array([0.3, 1.0, 0.4, 0.2, 0.5, 0.1])
+        >>> bool(np.allclose(arm.wrist_centre(q), arm.fk(q)[:3, 3]))
+        True
+        """
+        if self.n_joints < 3 or self.joint_types[-3:] != "RRR":
+            raise ValueError(f"{self.name!r} has no wrist of three revolute joints: no wrist centre")
+        z, o = self.dh.joint_axes(self.frames(q))
+        z, o = z[..., -3:, :], o[..., -3:, :]
+        # least squares: Σ (I − z zᵀ)(c − o) = 0 over the three axes
+        projector = np.eye(3) - z[..., :, None] * z[..., None, :]
+        A = projector.sum(axis=-3)
+        b = (projector @ o[..., None]).sum(axis=-3)
+        return np.linalg.solve(A, b)[..., 0]
+
     def smallest_singular_value(self, q) -> np.ndarray:
         """σ_min of the rows of J the arm controls, shape (...): how close to losing a direction."""
         J = self.jacobian(q)[..., _TASK_ROWS[self.task], :]

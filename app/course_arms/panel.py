@@ -152,14 +152,24 @@ def factors_html(arm: SerialArm, q: np.ndarray) -> str:
 
 
 class CourseSingularities(View):
-    """det J's factors as gauges (the UR10's overlay panel, for any preset)."""
+    """det J's factors as gauges (the UR10's overlay panel, for any preset), and in 3D on the arm."""
 
-    def __init__(self, gui: viser.GuiApi, arm: SerialArm) -> None:
-        self._arm = arm
+    def __init__(self, gui: viser.GuiApi, session: "CourseArmSession") -> None:
+        self._arm = session.arm
         folder = gui.add_folder("Singularities")
         self.folders = (folder,)
+        overlay = session.scene.overlay
         with folder:
+            self.show = (gui.add_checkbox("Show them on the arm", overlay.enabled,
+                                          hint="The geometry each factor measures, red as it nears zero")
+                         if overlay is not None else None)
             self.gauges = gui.add_html("")
+        if self.show is not None:
+            def toggled(_) -> None:
+                overlay.enabled = bool(self.show.value)
+                session.redraw()
+
+            self.show.on_update(session.guard(toggled))
 
     def render_panel(self, snapshot: CourseSnapshot) -> None:
         self.gauges.content = factors_html(self._arm, snapshot.q)

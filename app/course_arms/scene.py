@@ -16,6 +16,7 @@ from ur10core.dh import DHTable
 from ur10core.serial import SerialArm
 
 from ..style import JOINT_CAP_GREY, SLOT_COLORS
+from .overlay import CourseOverlay, has_overlay
 from .state import CourseSnapshot
 
 ROOT = "/course_arm"
@@ -94,6 +95,8 @@ class CourseArmScene:
                                                thickness=0.006 * size) for k in range(slots)]
         self.ghost_labels = [scene.add_label(f"{root}/ghosts/slot{k + 1}/number", str(k + 1), font_screen_scale=1.4,
                                              anchor="bottom-center") for k in range(slots)]
+        #: det J's factors in 3D (a preset's; a typed table's det J is not derived)
+        self.overlay = CourseOverlay(scene, arm, first, size, root) if has_overlay(arm) else None
 
     def render(self, snapshot: CourseSnapshot) -> None:
         frames = snapshot.frames
@@ -109,6 +112,8 @@ class CourseArmScene:
             rod.wxyz = quaternion(rotation, check=False)
             rod.position = point
         self._render_frames(frames)
+        if self.overlay is not None:
+            self.overlay.render(snapshot)
         sol = snapshot.solution
         for k, (ghost, label) in enumerate(zip(self.ghosts, self.ghost_labels)):
             shown = sol is not None and bool(sol.valid[k]) and k != snapshot.chosen

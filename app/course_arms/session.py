@@ -101,7 +101,7 @@ class CourseArmSession:
         self.search = BranchSearch(gui, self) if self.state.numerical else None
         self.joints = CourseJointSliders(gui, self)
         self.branches = CourseBranches(gui, arm)
-        self.singularities = CourseSingularities(gui, arm)
+        self.singularities = CourseSingularities(gui, self)
         self.dh_table = CourseDHTable(gui, self)
         self.walkthrough = DHWalkthrough(gui, self)
         self.workspace = CourseWorkspace(client.scene if server is None else server.scene, gui, self)

@@ -1,0 +1,71 @@
+"""A course arm's singularities in 3D: each factor's drawing degenerates exactly where the factor vanishes."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from app.course_arms.overlay import factor_geometry
+from app.course_arms.state import HOMES
+from ur10core.serial import PRESETS, SerialArm
+
+
+def _unit(v: np.ndarray) -> np.ndarray:
+    return v / np.linalg.norm(v)
+
+
+#: Drawings that close a distance (the last segment's length goes to zero); the others show two
+#: lines that become parallel (wrist axes 4 and 6; the Stanford arm's boom and axis 1) or in line (the links).
+DISTANCES = {("kr210", "shoulder"), ("elbow", "shoulder"), ("stanford", "stroke"), ("cylindrical", "reach")}
+
+
+def degeneracy(arm: str, factor: str, segments: np.ndarray) -> float:
+    """0 when the drawing shows the singularity."""
+    if (arm, factor) in DISTANCES:
+        start, end = segments[-1]
+        return float(np.linalg.norm(end - start))
+    first, second = (_unit(b - a) for a, b in segments)
+    return float(np.linalg.norm(np.cross(first, second)))
+
+
+def singular_joints(arm: SerialArm, factor: int, q0: np.ndarray) -> np.ndarray:
+    """``q0`` with one joint moved so that factor ``factor`` of det J is zero (bisection on a sign change).
+
+    Limits aside: the geometry holds beyond them (the cylindrical arm's stroke stops short of its axis).
+    """
+    for joint in range(arm.n_joints):
+        grid = np.linspace(-np.pi, np.pi, 2001) if arm.joint_types[joint] == "R" else np.linspace(-1.0, 1.0, 2001)
+        q = np.repeat(q0[None], len(grid), axis=0)
+        q[:, joint] = grid
+        values = arm.singularity_factors(q)[:, factor]
+        exact = np.flatnonzero(values == 0.0)
+        if len(exact):
+            return q[exact[0]]
+        changes = np.flatnonzero(np.sign(values[:-1]) != np.sign(values[1:]))
+        if len(changes):
+            low, high = grid[changes[0]], grid[changes[0] + 1]
+            for _ in range(80):
+                middle = 0.5 * (low + high)
+                q_mid = q0.copy()
+                q_mid[joint] = middle
+                if np.sign(arm.singularity_factors(q_mid)[factor]) == np.sign(values[changes[0]]):
+                    low = middle
+                else:
+                    high = middle
+            q_mid[joint] = 0.5 * (low + high)
+            return q_mid
+    raise AssertionError(f"no joint makes factor {factor} of {arm.name} vanish")
+
+
+@pytest.mark.parametrize("name", sorted(PRESETS))
+def test_each_drawing_degenerates_where_its_factor_vanishes(name):
+    arm = SerialArm.preset(name)
+    home = np.array(HOMES[name])
+    drawn = factor_geometry(arm, home, arm.frames(home), 1.0)
+    assert len(drawn) == len(arm.singularity_factors(home))
+    for k, (factor, segments) in enumerate(drawn.items()):
+        assert degeneracy(name, factor, segments) > 1e-2, f"{name} {factor}: degenerate at home"
+        q = singular_joints(arm, k, home)
+        assert abs(arm.singularity_factors(q)[k]) < 1e-9
+        singular = factor_geometry(arm, q, arm.frames(q), 1.0)[factor]
+        assert degeneracy(name, factor, singular) < 1e-6, f"{name} {factor}: the drawing does not show the singularity"
