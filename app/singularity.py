@@ -87,8 +87,9 @@ def gauges_html(snapshot: Snapshot, levels: np.ndarray, colors: list[tuple[int, 
     return "<div style='font-size:0.85em'>" + "".join(bars) + "</div>"
 
 
-def _segment_colors(rgb: tuple[int, int, int], count: int) -> np.ndarray:
-    return np.broadcast_to(np.array(rgb, dtype=np.uint8), (count, 2, 3)).copy()
+def line_color(rgb: tuple[int, int, int]) -> np.ndarray:
+    """One colour for a whole line-segments node: viser's browser reads per-vertex uint8 colours as 0…1 floats (white)."""
+    return np.array(rgb, dtype=np.uint8)
 
 
 class OverlayScene(View):
@@ -121,14 +122,14 @@ class OverlayScene(View):
         x1, z1 = np.eye(3)[0], np.eye(3)[2]
         circles = np.concatenate([circle_segments(centre, x1, z1, r) for r in g.elbow_radii]).astype(np.float32)
         self.circles = scene.add_line_segments(f"{node_name(1)}/elbow_circles", circles,
-                                               _segment_colors(OVERLAY_IDLE, len(circles)), thickness=0.006,
+                                               line_color(OVERLAY_IDLE), thickness=0.006,
                                                visible=False)
         self.axes = []
         for frame, point, axis in ((4, g.p4, g.axis4), (6, g.flange, g.axis6)):
             start = local(frame, point - AXIS_HALF_LENGTH * axis)
             end = local(frame, point + AXIS_HALF_LENGTH * axis)
             self.axes.append(scene.add_line_segments(f"{node_name(frame)}/axis{frame}", np.array([[start, end]], np.float32),
-                                                     _segment_colors(WRIST_COLOR, 1), thickness=0.01, visible=False))
+                                                     line_color(WRIST_COLOR), thickness=0.01, visible=False))
 
     def set_enabled(self, enabled: bool) -> None:
         """Show or hide the overlay; the next render colours it (the session redraws at once)."""
@@ -149,11 +150,11 @@ class OverlayScene(View):
             self.cylinder.color = blend(SHOULDER_COLOR, DANGER_RED, shoulder)
             self.p5.color = blend(SHOULDER_COLOR, DANGER_RED, shoulder)
         if elbow != drawn[1]:
-            self.circles.colors = _segment_colors(blend(OVERLAY_IDLE, DANGER_RED, elbow), len(self.circles.points))
+            self.circles.colors = line_color(blend(OVERLAY_IDLE, DANGER_RED, elbow))
             self.p4.color = blend(ELBOW_COLOR, DANGER_RED, elbow)
         if wrist != drawn[2]:
             for axis in self.axes:
-                axis.colors = _segment_colors(blend(WRIST_COLOR, DANGER_RED, wrist), 1)
+                axis.colors = line_color(blend(WRIST_COLOR, DANGER_RED, wrist))
 
 
 class OverlayPanel(View):

@@ -7,6 +7,7 @@ import math
 
 import numpy as np
 import pytest
+import viser
 
 from app.arm_picker import ARM_CHOICES, CUSTOM, UR10
 from app.course_arms.panel import branches_markdown, dh_table_markdown
@@ -372,6 +373,27 @@ def test_singularities_shown_on_the_arm_turn_red_at_the_singularity(app):
         assert np.linalg.norm(np.cross(*directions)) < 1e-6
         await client.set_gui("Show them on the arm", False)
         await until(lambda: not overlay.lines["wrist"].visible, what="the factors hidden")
+        await client.close()
+
+    asyncio.run(scenario())
+
+
+def test_every_line_is_drawn_in_one_colour_a_browser_can_read(app):
+    """viser's browser reads per-vertex uint8 line colours as 0…1 floats: every colour above 1 shows
+    white. So each line-segments node of the UR10 and of a course arm, overlays on, has one (3,) colour."""
+    async def scenario():
+        client = await ViserClient(url(app)).connect()
+        ur10 = session_of(app, client)
+        await client.set_gui("Show singularity overlay", True)
+        await until(lambda: ur10.scene_views.overlay.enabled, what="the UR10 overlay")
+        kr210 = await pick(app, client, KR210, CourseArmSession)
+        await client.set_gui("Show them on the arm", True)
+        await until(lambda: kr210.scene.overlay.enabled, what="the KR210 overlay")
+        for session in (ur10, kr210):
+            lines = [h for h in session.client.scene._handle_from_node_name.values() if isinstance(h, viser.LineSegmentsHandle)]
+            if session is ur10:  # its scene was reset when the KR210 came: check the handles it kept
+                lines = [session.scene_views.overlay.circles, *session.scene_views.overlay.axes]
+            assert lines and all(np.asarray(h.colors).shape == (3,) for h in lines), [h.name for h in lines]
         await client.close()
 
     asyncio.run(scenario())

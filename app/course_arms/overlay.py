@@ -19,7 +19,7 @@ import viser
 from ur10core import symbolic_arms
 from ur10core.serial import PRESETS, SerialArm
 
-from ..singularity import ALARM_STEPS, alarm
+from ..singularity import ALARM_STEPS, line_color, alarm
 from ..style import DANGER_RED, ELBOW_COLOR, SHOULDER_COLOR, WRIST_COLOR, blend
 from .state import CourseSnapshot
 
@@ -103,8 +103,7 @@ class CourseOverlay:
             step = round(ALARM_STEPS * alarm(float(level)))
             if self._steps.get(name) != step:
                 self._steps[name] = step
-                # one colour for the whole node: viser's browser reads per-vertex uint8 colours as 0…1 floats (white)
-                self.lines[name].colors = np.array(blend(FACTOR_COLORS[name], DANGER_RED, step / ALARM_STEPS), dtype=np.uint8)
+                self.lines[name].colors = line_color(blend(FACTOR_COLORS[name], DANGER_RED, step / ALARM_STEPS))
 
 
 def has_overlay(arm: SerialArm) -> bool:
