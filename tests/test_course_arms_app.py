@@ -180,11 +180,17 @@ def test_parse_table_refuses_what_is_not_a_table():
 
     for text, words in (("", "empty"), ("1 2 3 4 X", "type must be"), ("a b c d R", "must be numbers"),
                         ("9000 0 0 0 R", "lengths up to"), ("1 0 0 0 F", "at least one joint"),
-                        ("\n".join(["100 0 0 0 R"] * 11), "at most 10 rows"), ("nan 0 0 0 R", "finite")):
+                        ("\n".join(["100 0 0 0 R"] * 11), "at most 10 rows"), ("nan 0 0 0 R", "finite"),
+                        ("1 0 0 0 R 90 -90", "min < max"), ("1 0 0 0 R -400 0", "±360°"), ("1 0 0 0 P 0 9000", "±5000 mm"),
+                        ("1 0 0 0 R 10", "five entries"), ("1 0 0 0 R\n1 0 0 0 F 0 1", "fixed row has no limits"),
+                        ("1 0 0 0 R x 1", "must be numbers")):
         with pytest.raises(ValueError, match=words):
             parse_table(text, "standard")
     arm = parse_table("# a comment\n0, 90, 400, 0, R  # base\n400 0 0 0 r\n0 0 100 0 P", "modified")
     assert arm.joint_types == "RRP" and arm.convention == "modified" and arm.task == "position"
+    np.testing.assert_allclose(arm.limits, [[-math.pi, math.pi]] * 2 + [[0.0, 1.0]])  # none typed: the defaults
+    limited = parse_table("0 90 400 0 R -170 170\n400 0 0 0 R, -45, 135\n0 0 100 0 P 50 300", "standard")
+    np.testing.assert_allclose(limited.limits, [np.radians([-170, 170]), np.radians([-45, 135]), [0.05, 0.3]])
 
 
 @pytest.mark.parametrize("name", ["scara", "kr210", "stanford"])
