@@ -23,6 +23,13 @@ most every :data:`PANEL_INTERVAL` seconds, always with its newest state, and res
 between redraws so that it never takes more than :data:`DUTY` of the time. A burst of
 drag events costs one panel redraw, a click is answered at once, and thirty students
 dragging at once slow the panels down rather than the arms.
+
+**Slow one-off jobs** (:data:`HEAVY`). A typed arm's branch search or workspace cloud takes
+tens of milliseconds to over a second, on a thread of its own (:meth:`FoldedRuns.start`).
+At most one such job runs at a time in the whole server, so the drags always keep the
+other core, and each browser's jobs take at most :data:`HEAVY_DUTY` of the time: a
+student clicking "Find every branch" over and over, or rebuilding an arm to recompute its
+cloud, waits between runs instead of keeping a core busy.
 """
 
 from __future__ import annotations
@@ -47,6 +54,9 @@ PANEL_INTERVAL = 0.1
 #: the panels slow down (each still shows the newest state) before the 3D view does.
 #: ``UR10_TEACH_PANEL_DUTY=1`` lets them take all of it (the classroom benchmark measures both).
 DUTY = float(os.environ.get("UR10_TEACH_PANEL_DUTY", "0.15"))
+
+#: Largest share of the time one browser's slow one-off jobs may take (:class:`HeavyWork`).
+HEAVY_DUTY = 0.25
 
 
 #: The drag worker serves waiting sessions for this long (s) before the sockets get a turn.
@@ -283,3 +293,53 @@ class FoldedRuns:
         """Run here, in the caller's thread, unless a run is already under way."""
         if self.claim():
             self.run_claimed()
+
+    def start(self, name: str, wrap=lambda handler: handler) -> None:
+        """Run on a thread of its own (named ``name``), unless a run is already under way.
+
+        ``wrap`` wraps the thread's work as it does a callback (``session.guard``): nothing escapes.
+        """
+        if self.claim():
+            threading.Thread(target=wrap(lambda _: self.run_claimed()), args=(None,), name=name, daemon=True).start()
+
+
+class HeavyWork:
+    """Slow one-off jobs: one at a time in the server, each browser's at most ``duty`` of the time.
+
+    A job of a browser starts no sooner than its last one's duration × (1/duty − 1) after
+    that one ended; the rest is kept per browser (client id), so a rebuilt arm does not
+    start afresh. Call :meth:`run` from a thread of the job's own: it may wait.
+    """
+
+    def __init__(self, duty: float = HEAVY_DUTY) -> None:
+        self.duty = duty
+        self._slot = threading.Lock()
+        self._lock = threading.Lock()
+        self._next: dict[int, float] = {}  #: client id → when its next job may start (monotonic)
+
+    def run(self, client_id: int, job):
+        while True:
+            wait = self._rest(client_id)
+            if wait > 0:
+                time.sleep(wait)
+                continue
+            with self._slot:
+                if self._rest(client_id) > 0:  # another job of this browser ran while this one waited for the slot
+                    continue
+                start = time.monotonic()
+                try:
+                    return job()
+                finally:
+                    end = time.monotonic()
+                    with self._lock:
+                        self._next[client_id] = end + (end - start) * (1.0 / self.duty - 1.0)
+
+    def _rest(self, client_id: int) -> float:
+        """How long this browser must still wait before its next job (s)."""
+        with self._lock:
+            now = time.monotonic()
+            self._next = {k: t for k, t in self._next.items() if t > now}  # only browsers still resting
+            return self._next.get(client_id, now) - now
+
+
+HEAVY = HeavyWork()

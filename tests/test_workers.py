@@ -71,3 +71,35 @@ def test_thirty_waiting_students_are_served_in_a_few_turns_of_the_loop():
     finally:
         loop.call_soon_threadsafe(loop.stop)
         thread.join(5)
+
+
+def test_slow_jobs_run_one_at_a_time_and_each_browser_rests_between_its_own():
+    from app.workers import HeavyWork
+
+    heavy = HeavyWork(duty=0.25)
+    spans: list[tuple[int, float, float]] = []  # (client, start, end)
+    running, overlaps = [], []
+
+    def job(client: int):
+        def work():
+            running.append(client)
+            if len(running) > 1:
+                overlaps.append(tuple(running))
+            start = time.monotonic()
+            time.sleep(0.05)
+            spans.append((client, start, time.monotonic()))
+            running.remove(client)
+        return work
+
+    threads = [threading.Thread(target=heavy.run, args=(client, job(client))) for client in (1, 1, 2)]
+    for thread in threads:
+        thread.start()
+        time.sleep(0.005)  # in this order: client 1, client 1 again, client 2
+    for thread in threads:
+        thread.join()
+    assert not overlaps and len(spans) == 3
+    ones = sorted(s for s in spans if s[0] == 1)
+    # client 1's second job waited three times its first's length (duty 1/4); client 2 did not wait for that
+    assert ones[1][1] - ones[0][2] >= 3 * (ones[0][2] - ones[0][1]) - 1e-3
+    two = next(s for s in spans if s[0] == 2)
+    assert two[1] < ones[1][1]

@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import contextlib
-import threading
 import time
 from typing import Any, Callable
 
@@ -17,7 +16,7 @@ from ..camera import CameraControls
 from ..feedback import guard, notify
 from ..metrics import LATENCY
 from ..view import View
-from ..workers import DragQueue, FoldedRuns, PanelRefresher
+from ..workers import HEAVY, DragQueue, FoldedRuns, PanelRefresher
 from .editor import DHEditor
 from .gripper import GripperPose
 from .panel import CourseBranches, CourseDHTable, CourseJointSliders, CourseSingularities, DHWalkthrough
@@ -51,15 +50,14 @@ class BranchSearch(View):
         self.button.on_click(session.guard(lambda _: self._request()))
 
     def _request(self) -> None:
-        if self._runs.claim():
-            threading.Thread(target=self._session.guard(lambda _: self._runs.run_claimed()), args=(None,),
-                             name="branch-search", daemon=True).start()
+        self._runs.start("branch-search", self._session.guard)
 
     def _search(self) -> None:
         session = self._session
         snapshot = session.state.last
-        solution = session.state.search(snapshot)
-        session.apply(lambda state: state.with_branches(snapshot, solution), move_gizmo=False)
+        solution = HEAVY.run(session.client.client_id, lambda: session.state.search(snapshot))
+        if not session.closed:
+            session.apply(lambda state: state.with_branches(snapshot, solution), move_gizmo=False)
 
 
 class CourseArmSession:

@@ -12,7 +12,7 @@ import viser
 from ur10core.serial import PRESETS, SerialArm
 
 from ..view import View
-from ..workers import FoldedRuns
+from ..workers import HEAVY, FoldedRuns
 from ..workspace import POINT_SIZE, colormap, legend_html
 
 if TYPE_CHECKING:
@@ -54,7 +54,8 @@ class CourseWorkspace(View):
             self.enabled = gui.add_checkbox("Show workspace cloud", False,
                                             hint=f"Where the tool gets to: {POINTS:,} random joint vectors within the limits")
             self.legend = gui.add_html("", visible=False)
-        self.enabled.on_update(session.guard(lambda _: self._runs()))
+        self.enabled.on_update(session.guard(lambda _: self._runs.start("course-cloud", session.guard)))
+        self._computed: tuple[np.ndarray, np.ndarray, float] | None = None  #: this arm's cloud, once computed
 
     def close(self) -> None:
         """The session has gone: its cloud goes too (the presenter's is in the scene everyone shares)."""
@@ -64,7 +65,12 @@ class CourseWorkspace(View):
                 self._cloud = None
 
     def _update(self) -> None:
-        shown = cloud(self._session.arm) if self.enabled.value else None  # the slow part, outside the lock
+        shown = None
+        if self.enabled.value:  # the slow part, outside the lock
+            if self._computed is None:
+                session = self._session
+                self._computed = HEAVY.run(session.client.client_id, lambda: cloud(session.arm))
+            shown = self._computed
         with self._lock:
             if not self._session.closed:
                 self._show(shown)
