@@ -19,6 +19,7 @@ import viser
 from ur10core import symbolic_arms
 from ur10core.serial import PRESETS, SerialArm
 
+from ..fast_updates import set_positions
 from ..singularity import ALARM_STEPS, line_color, alarm
 from ..style import DANGER_RED, ELBOW_COLOR, SHOULDER_COLOR, WRIST_COLOR, blend
 from .state import CourseSnapshot
@@ -97,9 +98,9 @@ class CourseOverlay:
         if not self.enabled or not self.lines:
             return
         geometry = factor_geometry(self._arm, snapshot.q, snapshot.frames, self._size)
+        set_positions(list(self.labels.values()), np.array([segments[-1].mean(axis=0) for segments in geometry.values()]))
         for (name, segments), level in zip(geometry.items(), self.levels(snapshot.q)):
             self.lines[name].points = segments
-            self.labels[name].position = segments[-1].mean(axis=0)
             step = round(ALARM_STEPS * alarm(float(level)))
             if self._steps.get(name) != step:
                 self._steps[name] = step

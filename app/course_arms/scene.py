@@ -15,6 +15,7 @@ from ur10core.orientation import quaternion
 from ur10core.dh import DHTable
 from ur10core.serial import SerialArm
 
+from ..fast_updates import set_orientations, set_positions
 from ..style import JOINT_CAP_GREY, SLOT_COLORS
 from .overlay import CourseOverlay, has_overlay
 from .state import CourseSnapshot
@@ -49,6 +50,20 @@ def skeleton(table: DHTable, frames: np.ndarray) -> np.ndarray:
     segments = np.stack([points[:-1], points[1:]], axis=-2)
     long = np.linalg.norm(segments[:, 1] - segments[:, 0], axis=-1) > 1e-9
     return segments[long] if long.any() else segments[:1]
+
+
+def rod_rotations(axes: np.ndarray) -> np.ndarray:
+    """(n, 3, 3) rotations whose z columns are the unit ``axes`` (n, 3): how each joint's rod is turned."""
+    helper = np.where(np.abs(axes[:, :1]) < 0.9, [[1.0, 0.0, 0.0]], [[0.0, 1.0, 0.0]])
+    x = np.cross(helper, axes)
+    x /= np.linalg.norm(x, axis=-1, keepdims=True)
+    return np.stack([x, np.cross(axes, x), axes], axis=-1)
+
+
+def show(node: viser.SceneNodeHandle, visible) -> None:
+    """Set a node's visibility only when it changes (viser's setter costs tens of µs even then)."""
+    if node.visible != bool(visible):
+        node.visible = bool(visible)
 
 
 class CourseArmScene:
@@ -103,44 +118,45 @@ class CourseArmScene:
         self._q = snapshot.q
         self.body.points = skeleton(self._arm.dh, frames)
         z, o = self._arm.dh.joint_axes(frames)
-        for rod, axis, point, kind in zip(self.joints, z, o, self._arm.joint_types):
-            rotation = np.eye(3)
-            rotation[:, 2] = axis
-            helper = np.array([1.0, 0, 0]) if abs(axis[0]) < 0.9 else np.array([0, 1.0, 0])
-            rotation[:, 0] = np.cross(helper, axis) / np.linalg.norm(np.cross(helper, axis))
-            rotation[:, 1] = np.cross(axis, rotation[:, 0])
-            rod.wxyz = quaternion(rotation, check=False)
-            rod.position = point
+        set_orientations(self.joints, quaternion(rod_rotations(z), check=False))
+        set_positions(self.joints, o)
         self._render_frames(frames)
         if self.overlay is not None:
             self.overlay.render(snapshot)
         sol = snapshot.solution
+        shown = np.zeros(len(self.ghosts), bool)
+        if sol is not None:
+            shown[:] = sol.valid
+            if snapshot.chosen >= 0:
+                shown[snapshot.chosen] = False  # the arm itself
+        ghost_frames = dict(zip(np.flatnonzero(shown), self._arm.frames(sol.q[shown]))) if shown.any() else {}  # one call
         for k, (ghost, label) in enumerate(zip(self.ghosts, self.ghost_labels)):
-            shown = sol is not None and bool(sol.valid[k]) and k != snapshot.chosen
-            ghost.visible = label.visible = shown
-            if shown:
-                ghost_frames = self._arm.frames(sol.q[k])
-                ghost.points = skeleton(self._arm.dh, ghost_frames)
-                # at the ghost's middle joint: the branches share the tool, but not their elbows
-                label.position = ghost_frames[self._label_frame, :3, 3]
+            show(ghost, shown[k])
+            show(label, shown[k])
+            if shown[k]:
+                ghost.points = skeleton(self._arm.dh, ghost_frames[k])
+        labelled = np.flatnonzero(shown)  # at each ghost's middle joint: the branches share the tool, not their elbows
+        set_positions([self.ghost_labels[k] for k in labelled],
+                      np.array([ghost_frames[k][self._label_frame, :3, 3] for k in labelled]).reshape(-1, 3))
 
     def _render_frames(self, frames: np.ndarray) -> None:
         shown = self.frames_shown
         length = 0.12 * self.size
         origins = frames[:, :3, 3]
-        self.z_axes.visible = shown != FRAMES_NONE
-        self.x_axes.visible = shown == FRAMES_XZ
+        show(self.z_axes, shown != FRAMES_NONE)
+        show(self.x_axes, shown == FRAMES_XZ)
         if shown != FRAMES_NONE:
             self.z_axes.points = np.stack([origins, origins + length * frames[:, :3, 2]], axis=1)
         if shown == FRAMES_XZ:
             self.x_axes.points = np.stack([origins, origins + length * frames[:, :3, 0]], axis=1)
-        for i, (x_label, z_label) in enumerate(self.axis_labels):
-            z_label.visible = shown != FRAMES_NONE
-            x_label.visible = shown == FRAMES_XZ
-            if shown != FRAMES_NONE:
-                tip = 0.14 * self.size
-                x_label.position = origins[i] + tip * frames[i, :3, 0]
-                z_label.position = origins[i] + tip * frames[i, :3, 2]
+        for x_label, z_label in self.axis_labels:
+            show(z_label, shown != FRAMES_NONE)
+            show(x_label, shown == FRAMES_XZ)
+        if shown != FRAMES_NONE:
+            tip = 0.14 * self.size
+            x_labels, z_labels = zip(*self.axis_labels)
+            set_positions(list(x_labels) + list(z_labels),
+                          np.concatenate([origins + tip * frames[:, :3, 0], origins + tip * frames[:, :3, 2]]))
         self._render_row()
 
     def _render_row(self) -> None:
