@@ -30,6 +30,7 @@ from . import ik as _ik
 from . import ik_reference
 from ._backend import kernels
 from ._validate import as_float_array, check_finite, homogeneous_transform, joint_vector
+from .differential import JacobianUses
 
 #: alpha_{i-1} of the course's DH table, rows i = 1..6.
 DH_ALPHA = (0.0, math.pi / 2, 0.0, 0.0, -math.pi / 2, math.pi / 2)
@@ -75,7 +76,7 @@ class SingularityGeometry:
 
 
 @dataclass(frozen=True)
-class Arm:
+class Arm(JacobianUses):
     """A UR-type 6R arm with the course's DH structure and its own link lengths.
 
     Example
@@ -328,6 +329,24 @@ class Arm:
         J[..., :3, :] = np.swapaxes(np.cross(z, o[..., 5:6, :] - o), -1, -2)
         J[..., 3:, :] = np.swapaxes(z, -1, -2)
         return J
+
+    def gravity_torques(self, q, payload_kg: float = 0.0) -> np.ndarray:
+        """The joint torques (N·m) that hold the arm still against gravity at joints ``q``, (..., 6).
+
+        From UR's published link masses and centres of mass (docs/kinematics.md §8.5; ``ur10``
+        and ``course`` presets), ``payload_kg`` at the flange; the sense of
+        roboticstoolbox-python's ``gravload``. ``ValueError`` for an arm without them (``ur10e``).
+
+        Example: stretched out horizontally, the shoulder holds the most.
+
+        >>> arm = Arm.preset("ur10")
+        >>> tau = arm.gravity_torques(np.radians([0, 0, 0, -90, 0, 0]))
+        >>> int(np.argmax(np.abs(tau))), bool(100 < abs(tau[1]) < 200)
+        (1, True)
+        """
+        from . import dynamics
+
+        return dynamics.gravity_torques(self, joint_vector(q), payload_kg)
 
     def singularity_factors(self, q) -> np.ndarray:
         """The three factors of det J, (..., 3): shoulder, elbow, wrist (docs/kinematics.md §5).

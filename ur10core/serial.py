@@ -16,6 +16,7 @@ import numpy as np
 
 from ._validate import homogeneous_transform
 from .branches import BranchSet, wrap
+from .differential import JacobianUses
 from .dh import MODIFIED, PRISMATIC, REVOLUTE, STANDARD, DHRow, DHTable
 from .solvers.numerical import NumericalIK, sampling_range
 from .solvers.planar import Cylindrical, PlanarElbow, Scara
@@ -82,7 +83,7 @@ PRESETS: dict[str, _Preset] = {
 }
 
 
-class SerialArm:
+class SerialArm(JacobianUses):
     """A serial arm: its DH table, joint limits and an IK solver (analytic or numerical).
 
     Parameters
@@ -310,6 +311,13 @@ class SerialArm:
         A = projector.sum(axis=-3)
         b = (projector @ o[..., None]).sum(axis=-3)
         return np.linalg.solve(A, b)[..., 0]
+
+    def gravity_torques(self, q, payload_kg: float = 0.0) -> np.ndarray:
+        """Gravity loads need link masses: the course gives them for the UR10 only (``ValueError`` here)."""
+        from . import dynamics
+
+        dynamics.link_masses(self)  # raises, naming the arms that have them
+        raise AssertionError("unreachable")  # pragma: no cover
 
     def smallest_singular_value(self, q) -> np.ndarray:
         """σ_min of the rows of J the arm controls, shape (...): how close to losing a direction."""

@@ -1,0 +1,148 @@
+"""What J does (docs/kinematics.md §8): each checked against an independent construction."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from ur10core import Arm
+from ur10core.differential import DAMPING_THRESHOLD, MAX_DAMPING
+from ur10core.serial import PRESETS
+
+ARMS = ["course", "ur10", *PRESETS]
+
+
+def random_joints(arm, n: int, seed: int) -> np.ndarray:
+    low, high = arm.limits.T
+    return np.random.default_rng(seed).uniform(np.maximum(low, -np.pi), np.minimum(high, np.pi), (n, arm.n_joints))
+
+
+def skew_vector(S: np.ndarray) -> np.ndarray:
+    return 0.5 * np.array([S[2, 1] - S[1, 2], S[0, 2] - S[2, 0], S[1, 0] - S[0, 1]])
+
+
+@pytest.mark.parametrize("name", ARMS)
+def test_the_tool_twist_is_the_rate_of_change_of_the_tool_pose(name):
+    """v = dp/dt and [ω]× = Ṙ Rᵀ, by central differences of FK along q + t q̇."""
+    arm = Arm.preset(name)
+    rng = np.random.default_rng(2)
+    h = 1e-6
+    for q in random_joints(arm, 50, 1):
+        qdot = rng.normal(size=arm.n_joints)
+        twist = arm.tool_twist(q, qdot)
+        ahead, behind = arm.fk(q + h * qdot), arm.fk(q - h * qdot)
+        np.testing.assert_allclose(twist[:3], (ahead[:3, 3] - behind[:3, 3]) / (2 * h), atol=1e-7)
+        omega = skew_vector((ahead[:3, :3] - behind[:3, :3]) / (2 * h) @ arm.fk(q)[:3, :3].T)
+        np.testing.assert_allclose(twist[3:], omega, atol=1e-7)
+
+
+@pytest.mark.parametrize("name", ["course", "kr210", "stanford", "elbow"])
+def test_joint_rates_give_the_twist_back_away_from_singularities(name):
+    arm = Arm.preset(name)
+    q = random_joints(arm, 400, 3)
+    qdot = np.random.default_rng(4).normal(size=q.shape)
+    twist = arm.tool_twist(q, qdot)
+    rates = arm.joint_rates(q, twist)
+    calm = np.linalg.svd(arm.jacobian(q), compute_uv=False)[:, -1] > DAMPING_THRESHOLD
+    assert calm.mean() > 0.5
+    np.testing.assert_array_equal(rates.damping[calm], 0.0)
+    np.testing.assert_allclose(rates.qdot[calm], qdot[calm], atol=1e-9)
+    np.testing.assert_allclose(rates.achieved[calm], twist[calm], atol=1e-9)
+
+
+def test_near_the_wrist_singularity_the_rates_blow_up_unless_damped():
+    """A tool twist along the direction the arm is losing at s5 = ε needs joint rates ~ 1/ε undamped;
+    damped, they stay within |twist|/(2λ), the bound of σ/(σ² + λ²)."""
+    arm = Arm.preset("course")
+    for epsilon in (1e-2, 1e-4, 1e-6):
+        q = np.radians([10, -60, 80, -110, 0, 30])
+        q[4] = epsilon
+        U, sigma, _ = np.linalg.svd(arm.jacobian(q))
+        twist = 0.1 * U[:, -1]
+        undamped = np.linalg.pinv(arm.jacobian(q)) @ twist
+        rates = arm.joint_rates(q, twist)
+        assert np.linalg.norm(undamped) > 0.01 / epsilon
+        assert 0 < rates.damping <= MAX_DAMPING
+        assert np.linalg.norm(rates.qdot) <= np.linalg.norm(twist) / (2 * rates.damping) + 1e-12
+
+
+def test_an_arm_with_fewer_joints_gets_the_least_squares_rates():
+    """A SCARA cannot roll its tool about x: it gets the rates of the closest twist it can give."""
+    arm = Arm.preset("scara")
+    q = np.array([0.3, 1.0, 0.1, 0.2])
+    twist = np.array([0.05, -0.02, 0.01, 0.2, 0.0, 0.1])
+    rates = arm.joint_rates(q, twist)
+    J = arm.jacobian(q)
+    np.testing.assert_allclose(rates.qdot, np.linalg.lstsq(J, twist, rcond=None)[0], atol=1e-12)
+    np.testing.assert_allclose(rates.achieved[3], 0.0, atol=1e-12)  # no roll
+
+
+@pytest.mark.parametrize("name", ARMS)
+def test_static_torques_are_each_axis_moment_of_the_wrench(name):
+    """τ_i = z_i · ((p − o_i) × F + M) for a revolute joint, z_i · F for a prismatic one (the moment of
+    the wrench about joint i's axis), and τ · q̇ equals the power of the wrench for any rates."""
+    arm = Arm.preset(name)
+    rng = np.random.default_rng(5)
+    for q in random_joints(arm, 20, 6):
+        force, moment = rng.normal(size=3) * 100, rng.normal(size=3) * 10
+        tau = arm.static_torques(q, force, moment)
+        frames = arm.frames(q)
+        if name in ("course", "ur10"):
+            axes, points = frames[1:, :3, 2], frames[1:, :3, 3]
+        else:
+            axes, points = arm.dh.joint_axes(frames)
+        tool = arm.fk(q)[:3, 3]
+        for i, kind in enumerate(arm.joint_types):
+            expected = axes[i] @ (np.cross(tool - points[i], force) + moment) if kind == "R" else axes[i] @ force
+            assert tau[i] == pytest.approx(expected, abs=1e-9)
+        qdot = rng.normal(size=arm.n_joints)
+        assert tau @ qdot == pytest.approx(np.concatenate([force, moment]) @ arm.tool_twist(q, qdot), abs=1e-9)
+
+
+@pytest.mark.parametrize("name", ["course", "kr210", "scara", "planar_elbow"])
+def test_ellipsoid_axes_are_the_eigenvectors_of_j_jt(name):
+    arm = Arm.preset(name)
+    q = random_joints(arm, 100, 7)
+    translation, rotation = arm.ellipsoids(q)
+    J = arm.jacobian(q)
+    for ellipsoid, rows in ((translation, slice(0, 3)), (rotation, slice(3, 6))):
+        A = J[:, rows, :] @ np.swapaxes(J[:, rows, :], -1, -2)
+        np.testing.assert_allclose(np.swapaxes(ellipsoid.axes, -1, -2) @ ellipsoid.axes, np.broadcast_to(np.eye(3), A.shape), atol=1e-12)
+        # A u_k = σ_k² u_k, and the eigenvalues of A are the σ² (independent of the SVD)
+        np.testing.assert_allclose(A @ ellipsoid.axes, ellipsoid.axes * ellipsoid.velocity[:, None, :] ** 2, atol=1e-9)
+        np.testing.assert_allclose(np.sort(np.linalg.eigvalsh(A), axis=-1), np.sort(ellipsoid.velocity**2, axis=-1), atol=1e-9)
+        finite = ellipsoid.velocity > 1e-12
+        np.testing.assert_allclose(ellipsoid.force[finite] * ellipsoid.velocity[finite], 1.0)
+
+
+@pytest.mark.parametrize("name, joint", [("planar_elbow", 1), ("scara", 1)])
+def test_the_velocity_ellipsoid_flattens_as_the_elbow_stretches(name, joint):
+    """Stretched, the links cannot move the tool along themselves: the thinnest velocity axis goes to zero
+    along the arm, and the force ellipsoid grows without bound there (the links hold that force alone)."""
+    arm = Arm.preset(name)
+    q = np.array([0.4, 0.0, 0.1, 0.0][: arm.n_joints])
+    thinnest = []
+    for angle in (1.0, 0.3, 0.03, 1e-5):
+        q[joint] = angle
+        translation, _ = arm.ellipsoids(q)
+        thinnest.append(translation.velocity[translation.velocity > 0].min())  # the planar arm has no z at all
+    assert all(a > b for a, b in zip(thinnest, thinnest[1:])) and thinnest[-1] < 1e-4
+    radial = arm.fk(q)[:3, 3] * [1, 1, 0]
+    axis = translation.axes[:, list(translation.velocity).index(thinnest[-1])]
+    assert abs(axis @ radial) / np.linalg.norm(radial) > 1 - 1e-6
+    assert translation.force[list(translation.velocity).index(thinnest[-1])] > 1e4
+
+
+def test_shapes_broadcast_and_bad_input_is_refused():
+    arm = Arm.preset("course")
+    q = np.zeros((4, 6))
+    assert arm.tool_twist(q, np.ones(6)).shape == (4, 6)
+    assert arm.joint_rates(q[0], np.ones((3, 6))).qdot.shape == (3, 6)
+    assert arm.static_torques(q, [0, 0, -10]).shape == (4, 6)
+    assert arm.ellipsoids(q)[0].axes.shape == (4, 3, 3)
+    for call, words in ((lambda: arm.tool_twist(np.zeros(6), np.ones(5)), "qdot must have shape"),
+                        (lambda: arm.joint_rates(np.zeros(6), [0, 0, np.nan, 0, 0, 0]), "twist contains a non-finite"),
+                        (lambda: arm.static_torques(np.zeros(6), [1, 2]), "force must have shape"),
+                        (lambda: arm.static_torques(np.zeros(6), [1, 2, 3], [1j, 0, 0]), "moment must be real")):
+        with pytest.raises(ValueError, match=words):
+            call()

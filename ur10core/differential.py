@@ -1,0 +1,193 @@
+"""What the Jacobian does: tool velocities, the joint rates a velocity needs, torques for a tool
+wrench, and the manipulability ellipsoids (docs/kinematics.md §8).
+
+Every arm of the core (``Arm`` and ``SerialArm``) has these as methods through
+:class:`JacobianUses`, from its own geometric Jacobian ``J(q)`` (6 × n, rows [v; ω], at the
+tool origin, in the base frame).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ._validate import as_float_array, check_finite
+
+#: Below this smallest singular value (of the rows J maps joint rates into, in m/rad or rad/rad)
+#: the joint rates are damped (docs/kinematics.md §8.2).
+DAMPING_THRESHOLD = 0.01
+#: The damping λ at a singularity itself; it fades to zero at :data:`DAMPING_THRESHOLD`.
+MAX_DAMPING = 0.02
+
+
+@dataclass(frozen=True)
+class JointRates:
+    """Joint rates for a tool twist, and what the damping cost (docs/kinematics.md §8.2).
+
+    Attributes
+    ----------
+    qdot : ndarray, shape (..., n)
+        rad/s for revolute joints, m/s for prismatic ones.
+    damping : ndarray, shape (...)
+        λ used: 0 away from a singularity.
+    achieved : ndarray, shape (..., 6)
+        ``J q̇``: the twist the rates really give. It differs from the one asked for where
+        damping trades accuracy for bounded rates, or where the arm cannot move that way at all.
+    """
+
+    qdot: np.ndarray
+    damping: np.ndarray
+    achieved: np.ndarray
+
+
+@dataclass(frozen=True)
+class Ellipsoid:
+    """The manipulability ellipsoid of one half of J (translation or rotation), docs/kinematics.md §8.4.
+
+    Attributes
+    ----------
+    axes : ndarray, shape (..., 3, 3)
+        Unit principal directions as columns (base frame), longest velocity axis first.
+    velocity : ndarray, shape (..., 3)
+        Semi-axis lengths of {J q̇ : ‖q̇‖ ≤ 1}: the singular values σ (m/s or rad/s per unit of joint rate).
+    force : ndarray, shape (..., 3)
+        Semi-axis lengths of {F : ‖Jᵀ F‖ ≤ 1} along the same axes: 1/σ, infinite where σ = 0.
+    """
+
+    axes: np.ndarray
+    velocity: np.ndarray
+    force: np.ndarray
+
+
+def _vectors(value, name: str, size: int) -> np.ndarray:
+    array = as_float_array(value, name)
+    if array.ndim == 0 or array.shape[-1] != size:
+        raise ValueError(f"{name} must have shape (..., {size}), got shape {array.shape}")
+    check_finite(array, name)
+    return array
+
+
+def damping(smallest_singular_value: np.ndarray) -> np.ndarray:
+    """λ for a smallest singular value σ_min: 0 from :data:`DAMPING_THRESHOLD` up, growing to
+    :data:`MAX_DAMPING` at σ_min = 0 as λ² = (1 − (σ_min/ε)²) λ_max² (docs/kinematics.md §8.2)."""
+    share = np.clip(smallest_singular_value / DAMPING_THRESHOLD, 0.0, 1.0)
+    return MAX_DAMPING * np.sqrt(1.0 - share**2)
+
+
+def _ellipsoid(J: np.ndarray) -> Ellipsoid:
+    U, sigma, _ = np.linalg.svd(J, full_matrices=True)  # J (..., 3, n): U (..., 3, 3)
+    lengths = np.zeros(J.shape[:-2] + (3,))
+    lengths[..., : sigma.shape[-1]] = sigma[..., :3]
+    with np.errstate(divide="ignore"):
+        force = np.where(lengths > 0.0, 1.0 / np.where(lengths > 0.0, lengths, 1.0), np.inf)
+    return Ellipsoid(U, lengths, force)
+
+
+class JacobianUses:
+    """Tool twists, joint rates, static torques and ellipsoids from ``self.jacobian(q)``.
+
+    The class using it has ``jacobian(q) -> (..., 6, n)`` and ``n_joints``.
+    """
+
+    def _joints(self, q) -> np.ndarray:
+        return _vectors(q, "q", self.n_joints)
+
+    def tool_twist(self, q, qdot) -> np.ndarray:
+        """The tool's twist (v, ω) in the base frame for joint rates ``qdot``: ``J(q) q̇``, (..., 6).
+
+        docs/kinematics.md §8.1. ``q``, ``qdot``: (..., n), broadcast together; rad and
+        rad/s (m and m/s for a prismatic joint). v is the tool origin's velocity (m/s), ω
+        the tool's angular velocity (rad/s).
+
+        Example: the course's UR10 turning its base at 1 rad/s with the arm stretched out
+        along x moves the flange along y at its distance from the axis.
+
+        >>> import numpy as np
+        >>> from ur10core import Arm
+        >>> arm = Arm.preset("course")
+        >>> q = np.radians([0, -90, 0, -90, 0, 0])
+        >>> v = arm.tool_twist(q, [1, 0, 0, 0, 0, 0])[:3]
+        >>> bool(np.isclose(v[1], arm.fk(q)[0, 3]))
+        True
+        """
+        J = self.jacobian(self._joints(q))
+        qdot = _vectors(qdot, "qdot", self.n_joints)
+        return np.einsum("...ij,...j->...i", J, qdot)
+
+    def joint_rates(self, q, twist) -> JointRates:
+        """The joint rates that give the tool ``twist`` (v, ω), by a damped pseudo-inverse (docs/kinematics.md §8.2).
+
+        ``q̇ = Σ σ_k / (σ_k² + λ²) · v_k u_kᵀ · twist`` over J's singular triplets: the least-squares
+        rates away from a singularity (λ = 0), bounded near one, where λ grows as
+        :func:`damping` says from the smallest singular value. An arm with fewer than six
+        joints gets the least-squares rates of what it can do; ``achieved`` says what that is.
+
+        Parameters
+        ----------
+        q : array_like, shape (..., n)
+        twist : array_like, shape (..., 6)
+            (vx, vy, vz) in m/s, (ωx, ωy, ωz) in rad/s, base frame.
+
+        Example: near the wrist singularity a small tool rotation needs fast wrist joints,
+        and the damping keeps them bounded.
+
+        >>> import numpy as np
+        >>> from ur10core import Arm
+        >>> arm = Arm.preset("course")
+        >>> rates = arm.joint_rates(np.radians([0, -60, 80, -110, 0.01, 0]), [0, 0, 0, 0.1, 0, 0])
+        >>> float(rates.damping) > 0 and bool(np.abs(rates.qdot).max() < 100)
+        True
+        """
+        J = self.jacobian(self._joints(q))
+        twist = _vectors(twist, "twist", 6)
+        U, sigma, Vt = np.linalg.svd(J, full_matrices=False)  # (..., 6, r), (..., r), (..., r, n)
+        lam = damping(sigma[..., -1] if J.shape[-1] <= 6 else sigma[..., 5])
+        gain = sigma / (sigma**2 + lam[..., None] ** 2)
+        gain = np.where(sigma > 0.0, gain, 0.0)
+        components = np.einsum("...ki,...k->...i", U, twist) * gain
+        qdot = np.einsum("...ij,...i->...j", Vt, components)
+        return JointRates(qdot, lam, np.einsum("...ij,...j->...i", J, qdot))
+
+    def static_torques(self, q, force, moment=(0.0, 0.0, 0.0)) -> np.ndarray:
+        """The joint torques that hold a wrench at the tool: ``τ = Jᵀ [F; M]``, (..., n) (docs/kinematics.md §8.3).
+
+        ``force`` (N) and ``moment`` (N·m) are what the tool must exert on its surroundings,
+        in the base frame; τ is in N·m (N for a prismatic joint), the torques the joints
+        must supply. By virtual work, τ · q̇ equals the power [F; M] · J q̇ for any rates.
+
+        Example: pushing down with 100 N at the stretched UR10's flange loads the shoulder
+        with 100 N times the flange's horizontal distance from the shoulder axis.
+
+        >>> import numpy as np
+        >>> from ur10core import Arm
+        >>> arm = Arm.preset("course")
+        >>> q = np.radians([0, -90, 0, -90, 0, 0])
+        >>> tau = arm.static_torques(q, [0, 0, -100])
+        >>> bool(np.isclose(abs(tau[1]), 100 * arm.fk(q)[0, 3]))
+        True
+        """
+        J = self.jacobian(self._joints(q))
+        wrench = np.concatenate(np.broadcast_arrays(_vectors(force, "force", 3), _vectors(moment, "moment", 3)), axis=-1)
+        return np.einsum("...ij,...i->...j", J, wrench)
+
+    def ellipsoids(self, q) -> tuple[Ellipsoid, Ellipsoid]:
+        """The translational and rotational manipulability ellipsoids at the tool (docs/kinematics.md §8.4).
+
+        Velocity ellipsoid: the tool velocities of unit-norm joint rates, {J q̇ : ‖q̇‖ ≤ 1},
+        whose semi-axes are the singular values of J_v (J_ω), along its left singular
+        vectors. Force ellipsoid: the tool forces (moments) the joints hold with unit-norm
+        torques, {F : ‖Jᵀ F‖ ≤ 1}, the same axes with lengths 1/σ. As the arm nears a
+        singularity one velocity axis shrinks to zero and the force ellipsoid stretches
+        without bound along it.
+
+        Example: the course's planar elbow arm cannot move its tool along z.
+
+        >>> import numpy as np
+        >>> from ur10core import Arm
+        >>> translation, _ = Arm.preset("planar_elbow").ellipsoids(np.radians([30, 60]))
+        >>> float(translation.velocity[-1]), bool(np.isinf(translation.force[-1]))
+        (0.0, True)
+        """
+        J = self.jacobian(self._joints(q))
+        return _ellipsoid(J[..., :3, :]), _ellipsoid(J[..., 3:, :])
