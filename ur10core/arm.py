@@ -116,7 +116,8 @@ class Arm(JacobianUses):
     def preset(cls, name: str):
         """``"course"`` (docs/kinematics.md §2), ``"ur10"`` (UR's CB3 numbers) or ``"ur10e"``: an Arm;
         the course's other arms (``"kr210"``, ``"stanford"``, ``"elbow"``, ``"scara"``,
-        ``"planar_elbow"``, ``"cylindrical"``, docs/kinematics.md §7.5): a :class:`ur10core.serial.SerialArm`.
+        ``"planar_elbow"``, ``"cylindrical"``, docs/kinematics.md §7.5): a :class:`ur10core.serial.SerialArm`;
+        the course's 3-DOF desktop arm (``"three_dof"``, §8.6): a :class:`ur10core.three_dof.ThreeDofArm`.
         """
         if name in _PRESETS:
             return cls(name=name, **_PRESETS[name])
@@ -124,7 +125,11 @@ class Arm(JacobianUses):
 
         if name in PRESETS:
             return SerialArm.preset(name)
-        raise ValueError(f"unknown preset {name!r}; choose one of {', '.join((*_PRESETS, *PRESETS))}")
+        if name == "three_dof":
+            from .three_dof import ThreeDofArm
+
+            return ThreeDofArm()
+        raise ValueError(f"unknown preset {name!r}; choose one of {', '.join((*_PRESETS, *PRESETS, 'three_dof'))}")
 
     @staticmethod
     def from_dh(rows, convention: str = "standard", joint_types: str | None = None, limits=None, name: str = "custom"):

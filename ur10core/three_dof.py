@@ -1,0 +1,156 @@
+"""The course's 3-DOF desktop arm: its position map, its Jacobian, and the course's two exercises
+with it (docs/kinematics.md §8.6).
+
+Joint 3 drives the forearm through a parallelogram, so θ3 is the forearm's *absolute* angle,
+not its angle to the upper arm. The base frame has **y vertical**. The tool position is
+
+    p = Ry(θ1) · (l1 c3 − l5 c2,  l1 s3 − l5 s2,  0)
+
+and the tool turns as R = Ry(θ1) Rz(θ2), which is what the course's J_ω integrates to:
+ω = (s1 θ̇2, θ̇1, c1 θ̇2).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from ._validate import as_float_array, check_finite
+from .differential import JacobianUses
+
+#: The course's lengths (its simulation's numbers; read here as metres): upper arm l5, forearm l1.
+UPPER_ARM, FOREARM = 1.35, 1.28
+#: Joint ranges assumed for the statics search (the course gives none): the base turns ±90°, the
+#: upper arm ±90° about the horizontal, the forearm 0…180°. They hold the course's path.
+LIMITS = np.radians([[-90.0, 90.0], [-90.0, 90.0], [0.0, 180.0]])
+
+
+def _ry(angle: np.ndarray) -> np.ndarray:
+    c, s = np.cos(angle), np.sin(angle)
+    zero, one = np.zeros_like(angle), np.ones_like(angle)
+    return np.stack([np.stack([c, zero, s], -1), np.stack([zero, one, zero], -1), np.stack([-s, zero, c], -1)], -2)
+
+
+def _rz(angle: np.ndarray) -> np.ndarray:
+    c, s = np.cos(angle), np.sin(angle)
+    zero, one = np.zeros_like(angle), np.ones_like(angle)
+    return np.stack([np.stack([c, -s, zero], -1), np.stack([s, c, zero], -1), np.stack([zero, zero, one], -1)], -2)
+
+
+class ThreeDofArm(JacobianUses):
+    """The course's 3-DOF desktop arm (docs/kinematics.md §8.6): ``Arm.preset("three_dof")``.
+
+    Example: upper arm straight up (θ2 = −90°), forearm level (θ3 = 0): the tool is l1 out, l5 up.
+
+    >>> arm = ThreeDofArm()
+    >>> arm.fk(np.radians([0, -90, 0]))[:3, 3].round(6).tolist()
+    [1.28, 1.35, 0.0]
+    """
+
+    name = "three_dof"
+    description = "the course's 3-DOF desktop arm (parallelogram forearm, y vertical)"
+    joint_types = "RRR"
+    n_joints = 3
+    joint_names = ("θ1", "θ2", "θ3")
+    task = "position"
+
+    def __init__(self, upper_arm: float = UPPER_ARM, forearm: float = FOREARM) -> None:
+        self.upper_arm, self.forearm = upper_arm, forearm
+        self.limits = LIMITS.copy()
+
+    def _joints(self, q) -> np.ndarray:
+        q = as_float_array(q, "q")
+        if q.ndim == 0 or q.shape[-1] != 3:
+            raise ValueError(f"q must have shape (..., 3) (θ1, θ2, θ3), got shape {q.shape}")
+        check_finite(q, "q")
+        return q
+
+    def _planar(self, q: np.ndarray) -> np.ndarray:
+        """(..., 3) the tool in the arm's vertical plane, before the base turns it."""
+        reach = self.forearm * np.cos(q[..., 2]) - self.upper_arm * np.cos(q[..., 1])
+        height = self.forearm * np.sin(q[..., 2]) - self.upper_arm * np.sin(q[..., 1])
+        return np.stack([reach, height, np.zeros_like(reach)], axis=-1)
+
+    def fk(self, q) -> np.ndarray:
+        """Base → tool, (..., 4, 4): position p(q) and the orientation R = Ry(θ1) Rz(θ2)."""
+        q = self._joints(q)
+        T = np.zeros(q.shape[:-1] + (4, 4))
+        base = _ry(q[..., 0])
+        T[..., :3, :3] = base @ _rz(q[..., 1])
+        T[..., :3, 3] = np.einsum("...ij,...j->...i", base, self._planar(q))
+        T[..., 3, 3] = 1.0
+        return T
+
+    def frames(self, q) -> np.ndarray:
+        """(..., 3, 4, 4): the shoulder (base turned by θ1), the elbow and the tool, for drawing."""
+        q = self._joints(q)
+        base = _ry(q[..., 0])
+        elbow = np.einsum("...ij,...j->...i", base, np.stack(
+            [-self.upper_arm * np.cos(q[..., 1]), -self.upper_arm * np.sin(q[..., 1]), np.zeros(q.shape[:-1])], -1))
+        out = np.zeros(q.shape[:-1] + (3, 4, 4))
+        out[..., :, :3, :3] = base[..., None, :, :]
+        out[..., 1, :3, 3] = elbow
+        out[..., 2, :, :] = self.fk(q)
+        out[..., :, 3, 3] = 1.0
+        return out
+
+    def jacobian(self, q) -> np.ndarray:
+        """The course's J = [J_v; J_ω], (..., 6, 3): J_v = ∂p/∂θ, J_ω = [[0, s1, 0], [1, 0, 0], [0, c1, 0]]."""
+        q = self._joints(q)
+        s1, c1 = np.sin(q[..., 0]), np.cos(q[..., 0])
+        s2, c2 = np.sin(q[..., 1]), np.cos(q[..., 1])
+        s3, c3 = np.sin(q[..., 2]), np.cos(q[..., 2])
+        reach = self.forearm * c3 - self.upper_arm * c2
+        J = np.zeros(q.shape[:-1] + (6, 3))
+        # p = (c1·reach, l1 s3 − l5 s2, −s1·reach)
+        J[..., 0, 0], J[..., 2, 0] = -s1 * reach, -c1 * reach
+        J[..., 0, 1], J[..., 1, 1], J[..., 2, 1] = c1 * self.upper_arm * s2, -self.upper_arm * c2, -s1 * self.upper_arm * s2
+        J[..., 0, 2], J[..., 1, 2], J[..., 2, 2] = -c1 * self.forearm * s3, self.forearm * c3, s1 * self.forearm * s3
+        J[..., 3, 1], J[..., 4, 0], J[..., 5, 1] = s1, 1.0, c1
+        return J
+
+
+def course_path(t) -> tuple[np.ndarray, np.ndarray]:
+    """The course's joint path: q(t) and q̇(t), each (..., 3), for times ``t`` (s).
+
+    θ̇ = (π/6 cos t, π/6 cos t, π/8 cos t), starting from (0, 0, 3π/4): so θ1 = θ2 = (π/6) sin t
+    and θ3 = 3π/4 + (π/8) sin t, as the course drives it.
+    """
+    t = as_float_array(t, "t")
+    check_finite(t, "t")
+    rates = np.array([math.pi / 6, math.pi / 6, math.pi / 8])
+    q = np.array([0.0, 0.0, 3 * math.pi / 4]) + np.sin(t)[..., None] * rates
+    return q, np.cos(t)[..., None] * rates
+
+
+@dataclass(frozen=True)
+class WorstPose:
+    """Where in the joint ranges a tool force needs the largest joint torques (docs/kinematics.md §8.6)."""
+
+    q: np.ndarray  #: (3,) the joints there
+    torques: np.ndarray  #: (3,) τ = J_vᵀ F there (N·m)
+    norm: float  #: ‖τ‖ there
+    samples: int  #: joint vectors searched
+
+
+def largest_torque(arm: ThreeDofArm, force, steps: int = 41) -> WorstPose:
+    """Search a grid of ``steps`` values per joint over ``arm.limits`` for the largest ‖J_vᵀ F‖.
+
+    The course's statics exercise: which configuration needs the most torque to hold
+    ``force`` (N, base frame) at the tool. A grid, not an optimiser: the answer is easy to
+    check and to draw over the workspace.
+    """
+    force = as_float_array(force, "force")
+    if force.shape != (3,):
+        raise ValueError(f"force must be three numbers (N), got shape {force.shape}")
+    check_finite(force, "force")
+    if not 2 <= steps <= 201:
+        raise ValueError(f"steps must be from 2 to 201, got {steps}")
+    axes = [np.linspace(low, high, steps) for low, high in arm.limits]
+    q = np.stack(np.meshgrid(*axes, indexing="ij"), axis=-1).reshape(-1, 3)
+    torques = arm.static_torques(q, force)
+    norms = np.linalg.norm(torques, axis=-1)
+    worst = int(np.argmax(norms))
+    return WorstPose(q[worst], torques[worst], float(norms[worst]), len(q))
