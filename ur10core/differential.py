@@ -75,6 +75,19 @@ def damping(smallest_singular_value: np.ndarray) -> np.ndarray:
     return MAX_DAMPING * np.sqrt(1.0 - share**2)
 
 
+#: The rows of [v; ω] each kind of task controls: a SCARA keeps its tool vertical, a 3-DOF arm places a point.
+TASK_ROWS = {"pose": [0, 1, 2, 3, 4, 5], "position and yaw": [0, 1, 2, 5], "position": [0, 1, 2]}
+
+
+def damped_inverse(J: np.ndarray, twist: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(q̇, λ): ``Σ σ_k / (σ_k² + λ²) · v_k u_kᵀ twist`` for J (..., m, n) and twist (..., m), λ from :func:`damping`."""
+    U, sigma, Vt = np.linalg.svd(J, full_matrices=False)
+    lam = damping(sigma[..., -1])
+    gain = np.where(sigma > 0.0, sigma / (sigma**2 + lam[..., None] ** 2), 0.0)
+    components = np.einsum("...ki,...k->...i", U, twist) * gain
+    return np.einsum("...ij,...i->...j", Vt, components), lam
+
+
 def _ellipsoid(J: np.ndarray) -> Ellipsoid:
     U, sigma, _ = np.linalg.svd(J, full_matrices=True)  # J (..., 3, n): U (..., 3, 3)
     lengths = np.zeros(J.shape[:-2] + (3,))
@@ -141,12 +154,8 @@ class JacobianUses:
         """
         J = self.jacobian(self._joints(q))
         twist = _vectors(twist, "twist", 6)
-        U, sigma, Vt = np.linalg.svd(J, full_matrices=False)  # (..., 6, r), (..., r), (..., r, n)
-        lam = damping(sigma[..., -1] if J.shape[-1] <= 6 else sigma[..., 5])
-        gain = sigma / (sigma**2 + lam[..., None] ** 2)
-        gain = np.where(sigma > 0.0, gain, 0.0)
-        components = np.einsum("...ki,...k->...i", U, twist) * gain
-        qdot = np.einsum("...ij,...i->...j", Vt, components)
+        J = np.broadcast_to(J, np.broadcast_shapes(J.shape[:-2], twist.shape[:-1]) + J.shape[-2:])
+        qdot, lam = damped_inverse(J, twist)
         return JointRates(qdot, lam, np.einsum("...ij,...j->...i", J, qdot))
 
     def static_torques(self, q, force, moment=(0.0, 0.0, 0.0)) -> np.ndarray:

@@ -16,7 +16,7 @@ import numpy as np
 
 from ._validate import homogeneous_transform
 from .branches import BranchSet, wrap
-from .differential import JacobianUses
+from .differential import TASK_ROWS, JacobianUses
 from .dh import MODIFIED, PRISMATIC, REVOLUTE, STANDARD, DHRow, DHTable
 from .solvers.numerical import NumericalIK, sampling_range
 from .solvers.planar import Cylindrical, PlanarElbow, Scara
@@ -37,7 +37,6 @@ class _Preset:
 
 
 #: The rows of J [v; ω] that each task controls.
-_TASK_ROWS = {"pose": slice(0, 6), "position and yaw": [0, 1, 2, 5], "position": slice(0, 3)}
 
 
 def _degrees(*pairs) -> tuple:
@@ -321,7 +320,7 @@ class SerialArm(JacobianUses):
 
     def smallest_singular_value(self, q) -> np.ndarray:
         """σ_min of the rows of J the arm controls, shape (...): how close to losing a direction."""
-        J = self.jacobian(q)[..., _TASK_ROWS[self.task], :]
+        J = self.jacobian(q)[..., TASK_ROWS[self.task], :]
         return np.linalg.svd(J, compute_uv=False)[..., -1]
 
     # ------------------------------------------------------------------ workspace
@@ -331,7 +330,7 @@ class SerialArm(JacobianUses):
 
         For a square J (six joints, or a SCARA's four) it is |det J|; it is zero exactly at a singularity.
         """
-        J = self.jacobian(q)[..., _TASK_ROWS[self.task], :]
+        J = self.jacobian(q)[..., TASK_ROWS[self.task], :]
         if J.shape[-2] == J.shape[-1]:  # as accurate as det J itself (the square root would lift rounding to ~1e-10)
             return np.abs(np.linalg.det(J))
         if J.shape[-2] > J.shape[-1]:  # fewer joints than task rows: the measure of Jᵀ J
