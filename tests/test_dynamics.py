@@ -60,3 +60,64 @@ def test_gravity_needs_published_masses_and_a_sensible_payload():
         with pytest.raises(ValueError, match="payload_kg"):
             Arm.preset("ur10").gravity_torques(np.zeros(6), payload)
     assert Arm.preset("ur10").gravity_torques(np.zeros((4, 3, 6))).shape == (4, 3, 6)
+
+
+def random_motion(n: int, seed: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    rng = np.random.default_rng(seed)
+    return rng.uniform(-np.pi, np.pi, (n, 6)), rng.normal(size=(n, 6)), rng.normal(size=(n, 6))
+
+
+@pytest.mark.parametrize("payload", [0.0, 3.0])
+def test_newton_euler_matches_roboticstoolbox(payload):
+    """τ = M q̈ + C q̇ + g against rtb's rne, M against its inertia, C q̇ against its coriolis, q̈ against its accel."""
+    from ur10core import dynamics
+
+    robot = rtb.models.DH.UR10()
+    robot.payload(payload, [0.0, 0.0, 0.0])
+    arm = Arm.preset("ur10")
+    q, qd, qdd = random_motion(60, 4)
+    controller = q + CONTROLLER_OFFSET
+    np.testing.assert_allclose(dynamics.inverse_dynamics(arm, q, qd, qdd, payload_kg=payload),
+                               [robot.rne(a, b, c) for a, b, c in zip(controller, qd, qdd)], atol=1e-9)
+    np.testing.assert_allclose(dynamics.mass_matrix(arm, q, payload), [robot.inertia(a) for a in controller], atol=1e-9)
+    np.testing.assert_allclose(dynamics.coriolis_torques(arm, q, qd, payload),
+                               [robot.coriolis(a, b) @ b for a, b in zip(controller, qd)], atol=1e-9)
+    tau = qdd * 20.0
+    np.testing.assert_allclose(dynamics.forward_dynamics(arm, q, qd, tau, payload),
+                               [robot.accel(a, b, c) for a, b, c in zip(controller, qd, tau)], atol=1e-8)
+
+
+def test_the_mass_matrix_is_symmetric_positive_definite_and_gravity_is_its_static_part():
+    from ur10core import dynamics
+
+    arm = Arm.preset("course")
+    q, qd, _ = random_motion(100, 5)
+    M = dynamics.mass_matrix(arm, q)
+    np.testing.assert_allclose(M, np.swapaxes(M, -1, -2), atol=1e-12)
+    assert (np.linalg.eigvalsh(M)[:, 0] > 0).all()
+    np.testing.assert_allclose(dynamics.inverse_dynamics(arm, q, 0 * q, 0 * q), arm.gravity_torques(q), atol=1e-9)
+    # the kinetic energy's rate: q̇ · (M q̈ + C q̇) − ½ q̇ · Ṁ q̇ = q̇ · M q̈ (skew-symmetry of Ṁ − 2C), by differences
+    h = 1e-6
+    for k in range(10):
+        dM = (dynamics.mass_matrix(arm, q[k] + h * qd[k]) - dynamics.mass_matrix(arm, q[k] - h * qd[k])) / (2 * h)
+        assert qd[k] @ dynamics.coriolis_torques(arm, q[k], qd[k]) == pytest.approx(0.5 * qd[k] @ dM @ qd[k], abs=1e-6)
+
+
+def test_a_released_arm_keeps_its_energy():
+    """Let go with no friction, the arm swings: kinetic plus potential energy stays what it was."""
+    from ur10core import dynamics
+
+    arm = Arm.preset("course")
+    motion = dynamics.release(arm, np.radians([0, -60, 0, -90, 0, 0]), duration=1.0, dt=0.01)
+    table = ur_standard_table(arm)
+
+    def energy(q: np.ndarray, qd: np.ndarray) -> float:
+        frames = table.frames(q)
+        centres = np.einsum("jab,jb->ja", frames[1:, :3, :3], UR10_MASSES.centres) + frames[1:, :3, 3]
+        return 0.5 * qd @ dynamics.mass_matrix(arm, q) @ qd + GRAVITY * UR10_MASSES.masses @ centres[:, 2]
+
+    energies = [energy(q, qd) for q, qd in zip(motion.q[::10], motion.qd[::10])]
+    assert np.ptp(energies) < 1e-3
+    assert np.abs(motion.q[-1] - motion.q[0]).max() > 0.3  # and it did fall
+    with pytest.raises(ValueError, match="dt must be"):
+        dynamics.release(arm, np.zeros(6), dt=1.0)

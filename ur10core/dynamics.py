@@ -1,4 +1,5 @@
-"""Gravity loads of the UR10 from UR's published link masses and centres of mass (docs/kinematics.md §8.5).
+"""The UR10's dynamics: gravity loads (docs/kinematics.md §8.5), and the recursive Newton–Euler
+equations with the mass matrix, Coriolis terms and forward dynamics (§8.8).
 
 UR gives each link's mass and centre of mass in its *standard-DH* link frame, the
 controller's convention (docs/kinematics.md §6). :func:`ur_standard_table` builds that chain
@@ -25,15 +26,25 @@ class LinkMasses:
 
     masses: np.ndarray  #: (6,) kg
     centres: np.ndarray  #: (6, 3) m, in the link's standard-DH frame (UR's convention)
+    inertias: np.ndarray  #: (6, 3, 3) kg·m², about the centre of mass, axes of the link frame
     source: str
 
 
-#: UR's published parameters for the UR10 (CB3): also roboticstoolbox-python's ``UR10`` model.
+#: UR's published masses and centres of mass for the UR10 (CB3), with the inertias of
+#: roboticstoolbox-python's DH ``UR10`` model (UR publishes none), so both describe one arm.
 UR10_MASSES = LinkMasses(
     masses=np.array([7.1, 12.7, 4.27, 2.0, 2.0, 0.365]),
     centres=np.array([[0.021, 0.0, 0.027], [0.38, 0.0, 0.158], [0.24, 0.0, 0.068],
                       [0.0, 0.007, 0.018], [0.0, 0.007, 0.018], [0.0, 0.0, -0.026]]),
-    source="UR's published masses and centres of mass for the UR10",
+    inertias=np.array([
+        [[0.0341, 0.0, -0.0043], [0.0, 0.0353, 0.0001], [-0.0043, 0.0001, 0.0216]],
+        [[0.0281, 0.0001, -0.0156], [0.0001, 0.7707, 0.0], [-0.0156, 0.0, 0.7694]],
+        [[0.0101, 0.0001, 0.0092], [0.0001, 0.3093, 0.0], [0.0092, 0.0, 0.3065]],
+        [[0.003, 0.0, 0.0], [0.0, 0.0022, -0.0002], [0.0, -0.0002, 0.0026]],
+        [[0.003, 0.0, 0.0], [0.0, 0.0022, -0.0002], [0.0, -0.0002, 0.0026]],
+        [[0.0, 0.0, 0.0], [0.0, 0.0004, 0.0], [0.0, 0.0, 0.0003]],
+    ]),
+    source="UR's published masses and centres of mass for the UR10; inertias of roboticstoolbox-python's UR10",
 )
 
 #: Per preset. The course's arm has UR10 link lengths to within a millimetre: it carries the
@@ -72,8 +83,7 @@ def gravity_torques(arm, q: np.ndarray, payload_kg: float = 0.0) -> np.ndarray:
     joint about z through o, ∂p/∂q = z × (p − o). ``payload_kg`` sits at the flange origin.
     The same sense as roboticstoolbox-python's ``gravload``.
     """
-    if not (isinstance(payload_kg, (int, float)) and math.isfinite(payload_kg) and 0.0 <= payload_kg <= 1000.0):
-        raise ValueError(f"payload_kg must be a number of kilograms from 0 to 1000, got {payload_kg!r:.40}")
+    payload_kg = _check_payload(payload_kg)
     masses = link_masses(arm)
     frames = ur_standard_table(arm).frames(q)  # (..., 7, 4, 4)
     centres = np.einsum("...jab,jb->...ja", frames[..., 1:, :3, :3], masses.centres) + frames[..., 1:, :3, 3]
@@ -88,3 +98,160 @@ def gravity_torques(arm, q: np.ndarray, payload_kg: float = 0.0) -> np.ndarray:
         lift = np.cross(axes[..., i:i + 1, :], lever)[..., 2]  # ∂z_c/∂q_i
         tau[..., i] = (lift * weights[i:]).sum(axis=-1)
     return tau
+
+
+def _check_payload(payload_kg) -> float:
+    if not (isinstance(payload_kg, (int, float)) and math.isfinite(payload_kg) and 0.0 <= payload_kg <= 1000.0):
+        raise ValueError(f"payload_kg must be a number of kilograms from 0 to 1000, got {payload_kg!r:.40}")
+    return float(payload_kg)
+
+
+def with_payload(masses: LinkMasses, payload_kg: float) -> LinkMasses:
+    """Link 6 with a point mass at the flange origin: combined mass, centre and inertia (parallel axes)."""
+    if payload_kg == 0.0:
+        return masses
+    m, r, inertia = masses.masses[5], masses.centres[5], masses.inertias[5]
+    total = m + payload_kg
+    centre = m * r / total  # the payload sits at the origin of frame 6
+
+    def shifted(mass: float, offset: np.ndarray) -> np.ndarray:
+        return mass * (offset @ offset * np.eye(3) - np.outer(offset, offset))
+
+    combined = inertia + shifted(m, r - centre) + shifted(payload_kg, -centre)
+    return LinkMasses(np.append(masses.masses[:5], total), np.vstack([masses.centres[:5], centre]),
+                      np.concatenate([masses.inertias[:5], combined[None]]), masses.source)
+
+
+def _cross(u: np.ndarray, v: np.ndarray) -> np.ndarray:
+    """u × v over the last axis: np.cross spends most of its time moving axes for three-vectors."""
+    u0, u1, u2 = u[..., 0], u[..., 1], u[..., 2]
+    v0, v1, v2 = v[..., 0], v[..., 1], v[..., 2]
+    return np.stack([u1 * v2 - u2 * v1, u2 * v0 - u0 * v2, u0 * v1 - u1 * v0], axis=-1)
+
+
+def inverse_dynamics(arm, q, qd, qdd, gravity=GRAVITY, payload_kg: float = 0.0) -> np.ndarray:
+    """τ = M(q) q̈ + C(q, q̇) q̇ + g(q), (..., 6) N·m, by the recursive Newton–Euler equations (docs/kinematics.md §8.8).
+
+    Outward, each link's angular velocity and acceleration and its centre's acceleration
+    (gravity enters as an upward acceleration of the base); inward, the force and moment each
+    link passes to the one before it, whose component along the joint axis is τ. In UR's
+    standard-DH link frames (:func:`ur_standard_table`), with the course's angles.
+    ``gravity`` (m/s², along −z) may differ per pose: an array broadcast with the leading shape.
+    """
+    table = ur_standard_table(arm)
+    q, qd, qdd = np.broadcast_arrays(*(np.asarray(v, dtype=float) for v in (q, qd, qdd)))
+    q, qd, qdd = (np.broadcast_to(v, np.broadcast_shapes(q.shape, np.shape(gravity) + (6,))) for v in (q, qd, qdd))
+    links = with_payload(link_masses(arm), _check_payload(payload_kg))
+    rows = table.rows
+    alpha = np.array([row.alpha for row in rows])
+    a = np.array([row.a for row in rows])
+    d = np.array([row.d for row in rows])
+    theta = q + np.array([row.theta for row in rows])
+    c, s = np.cos(theta), np.sin(theta)
+    ca, sa = np.cos(alpha), np.sin(alpha)
+    # R_i = Rz(θ_i) Rx(α_i): frame i in frame i−1
+    R = np.stack([np.stack([c, -s * ca, s * sa], -1), np.stack([s, c * ca, -c * sa], -1),
+                  np.stack([np.zeros_like(c), np.broadcast_to(sa, c.shape), np.broadcast_to(ca, c.shape)], -1)], -2)
+    Rt = np.swapaxes(R, -1, -2)
+    pstar = np.stack([a, d * sa, d * ca], -1)  # frame i's origin from frame i−1's, in frame i
+    z = np.array([0.0, 0.0, 1.0])
+    batch = q.shape[:-1]
+    w, wd = np.zeros(batch + (3,)), np.zeros(batch + (3,))
+    vd = np.broadcast_to(np.asarray(gravity, dtype=float)[..., None] * z, batch + (3,))
+    forces, moments = [], []
+
+    def rotate(M: np.ndarray, v: np.ndarray) -> np.ndarray:
+        return np.einsum("...ij,...j->...i", M, v)
+
+    for i in range(6):
+        wd = rotate(Rt[..., i, :, :], wd + z * qdd[..., i:i + 1] + _cross(w, z * qd[..., i:i + 1]))
+        w = rotate(Rt[..., i, :, :], w + z * qd[..., i:i + 1])
+        vd = _cross(wd, pstar[i]) + _cross(w, _cross(w, pstar[i])) + rotate(Rt[..., i, :, :], vd)
+        r = links.centres[i]
+        centre_acceleration = _cross(wd, r) + _cross(w, _cross(w, r)) + vd
+        inertia = links.inertias[i]
+        forces.append(links.masses[i] * centre_acceleration)
+        moments.append(rotate(inertia, wd) + _cross(w, rotate(inertia, w)))
+    tau = np.empty(batch + (6,))
+    f, n = np.zeros(batch + (3,)), np.zeros(batch + (3,))
+    for i in reversed(range(6)):
+        if i == 5:
+            n = _cross(pstar[i] + links.centres[i], forces[i]) + moments[i]
+            f = forces[i]
+        else:
+            Rn = R[..., i + 1, :, :]
+            n = rotate(Rn, n + _cross(rotate(np.swapaxes(Rn, -1, -2), pstar[i]), f)) \
+                + _cross(pstar[i] + links.centres[i], forces[i]) + moments[i]
+            f = rotate(Rn, f) + forces[i]
+        tau[..., i] = np.einsum("...i,...i->...", n, rotate(Rt[..., i, :, :], z))
+    return tau
+
+
+def mass_matrix(arm, q, payload_kg: float = 0.0) -> np.ndarray:
+    """M(q), (..., 6, 6): column j is the torque for q̈ = e_j at rest without gravity (docs/kinematics.md §8.8)."""
+    q = np.asarray(q, dtype=float)
+    unit = np.eye(6)
+    columns = inverse_dynamics(arm, q[..., None, :], np.zeros(6), unit, gravity=0.0, payload_kg=payload_kg)
+    return np.swapaxes(columns, -1, -2)
+
+
+def coriolis_torques(arm, q, qd, payload_kg: float = 0.0) -> np.ndarray:
+    """C(q, q̇) q̇, (..., 6): the centrifugal and Coriolis torques of moving joints (docs/kinematics.md §8.8)."""
+    return inverse_dynamics(arm, q, qd, np.zeros(6), gravity=0.0, payload_kg=payload_kg)
+
+
+def forward_dynamics(arm, q, qd, tau, payload_kg: float = 0.0) -> np.ndarray:
+    """q̈ = M⁻¹ (τ − C q̇ − g), (..., 6): how the joints accelerate under torques ``tau``.
+
+    One Newton–Euler pass over seven problems at once: M's six columns (q̈ = e_j, at rest,
+    no gravity) and the bias C q̇ + g (q̈ = 0).
+    """
+    q, qd = np.broadcast_arrays(np.asarray(q, dtype=float), np.asarray(qd, dtype=float))
+    rates = np.concatenate([np.zeros(q.shape[:-1] + (6, 6)), qd[..., None, :]], axis=-2)
+    accelerations = np.concatenate([np.eye(6), np.zeros((1, 6))])
+    gravity = np.append(np.zeros(6), GRAVITY)
+    torques = inverse_dynamics(arm, q[..., None, :], rates, accelerations, gravity, payload_kg)
+    M, bias = np.swapaxes(torques[..., :6, :], -1, -2), torques[..., 6, :]
+    return np.linalg.solve(M, (np.asarray(tau, dtype=float) - bias)[..., None])[..., 0]
+
+
+@dataclass(frozen=True)
+class Motion:
+    """A simulated motion: times (m,), joints and joint rates (m, 6)."""
+
+    t: np.ndarray
+    q: np.ndarray
+    qd: np.ndarray
+
+
+def release(arm, q0, duration: float = 2.0, dt: float = 0.01, payload_kg: float = 0.0) -> Motion:
+    """The arm let go at rest at ``q0``, every joint free (no torque, no friction), under gravity.
+
+    The course's gravity-drop simulation (docs/kinematics.md §8.8), integrated with the
+    classical fourth-order Runge–Kutta method at step ``dt``.
+    """
+    if not (isinstance(duration, (int, float)) and 0.0 < duration <= 60.0):
+        raise ValueError(f"duration must be from 0 to 60 s, got {duration!r:.40}")
+    if not (isinstance(dt, (int, float)) and 1e-4 <= dt <= 0.05):
+        raise ValueError(f"dt must be from 0.0001 to 0.05 s, got {dt!r:.40}")
+    q = np.array(q0, dtype=float)
+    if q.shape != (6,) or not np.isfinite(q).all():
+        raise ValueError(f"q0 must be six finite joint angles, got {q0!r:.80}")
+    steps = int(round(duration / dt))
+    qs, qds = np.empty((steps + 1, 6)), np.empty((steps + 1, 6))
+    qd = np.zeros(6)
+    qs[0], qds[0] = q, qd
+    rest = np.zeros(6)
+
+    def rates(position: np.ndarray, velocity: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        return velocity, forward_dynamics(arm, position, velocity, rest, payload_kg)
+
+    for k in range(steps):
+        k1 = rates(q, qd)
+        k2 = rates(q + dt / 2 * k1[0], qd + dt / 2 * k1[1])
+        k3 = rates(q + dt / 2 * k2[0], qd + dt / 2 * k2[1])
+        k4 = rates(q + dt * k3[0], qd + dt * k3[1])
+        q = q + dt / 6 * (k1[0] + 2 * k2[0] + 2 * k3[0] + k4[0])
+        qd = qd + dt / 6 * (k1[1] + 2 * k2[1] + 2 * k3[1] + k4[1])
+        qs[k + 1], qds[k + 1] = q, qd
+    return Motion(np.arange(steps + 1) * dt, qs, qds)
