@@ -1,0 +1,110 @@
+"""Forces and gravity: the torques each joint must hold, as bars against its capacity (docs/kinematics.md §8.3, §8.5).
+
+A force the flange pushes with (its size in N, its direction from a list) is drawn as an
+arrow; the panel shows, per joint, τ = Jᵀ F for that force, the gravity torque of the arm
+and its payload, and their sum against what the joint can give. The bars are drawn with the
+panel (≤ 10 Hz), the arrow with the arm.
+"""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
+import numpy as np
+import viser
+
+from .feedback import chosen
+from .state import Snapshot
+from .style import DANGER_RED, SAFE_GREEN, JOINT_LABELS, blend, hex_color, number
+from .view import View
+
+if TYPE_CHECKING:
+    from .session import ClientSession
+
+#: Each joint's rated torque (N·m): UR's joint sizes for the UR10 (base and shoulder size 4,
+#: elbow size 3, wrists size 2).
+TORQUE_CAPACITY = np.array([330.0, 330.0, 150.0, 56.0, 56.0, 56.0])
+#: Where the force at the flange points (base frame), or "tool z" for the flange's own z axis.
+DIRECTIONS = {"down (−z)": (0.0, 0.0, -1.0), "up (+z)": (0.0, 0.0, 1.0), "+x": (1.0, 0.0, 0.0), "−x": (-1.0, 0.0, 0.0),
+              "+y": (0.0, 1.0, 0.0), "−y": (0.0, -1.0, 0.0), "along the flange's z": None}
+MAX_FORCE_N = 200.0
+MAX_PAYLOAD_KG = 10.0  #: the UR10's rated payload (docs/kinematics.md §1)
+ARROW_METRES_PER_N = 0.002
+FORCE_COLOR = (0, 114, 178)
+
+
+def force_vector(direction: str, newtons: float, flange: np.ndarray) -> np.ndarray:
+    """(3,) the force in the base frame, N."""
+    unit = DIRECTIONS[direction]
+    return newtons * (flange[:3, 2] if unit is None else np.array(unit))
+
+
+def bars_html(force_torques: np.ndarray, gravity: np.ndarray, capacity: np.ndarray = TORQUE_CAPACITY) -> str:
+    """Per joint: a bar of |τ_force + τ_gravity| against its capacity, green to red, with the three numbers."""
+    rows = []
+    for label, f, g, cap in zip(JOINT_LABELS, force_torques, gravity, capacity):
+        total = f + g
+        share = min(abs(total) / cap, 1.0)
+        colour = hex_color(blend(SAFE_GREEN, DANGER_RED, share))
+        over = " <b style='color:#dc2626'>over its rating</b>" if abs(total) > cap else ""
+        rows.append(
+            f"<div style='margin:4px 0'><b>{label}</b> {number(total, '+.1f')} N·m "
+            f"<span style='font-size:0.85em'>(force {number(f, '+.1f')}, gravity {number(g, '+.1f')}; "
+            f"rated {cap:.0f}){over}</span>"
+            "<div style='height:10px;background:#e9ecef;border-radius:4px'>"
+            f"<div class='torque-bar' style='height:10px;width:{100 * share:.1f}%;border-radius:4px;background:{colour}'>"
+            "</div></div></div>")
+    return "<div style='font-size:0.9em'>" + "".join(rows) + "</div>"
+
+
+class StaticsView(View):
+    """The "Forces and gravity" folder and the force arrow at the flange."""
+
+    def __init__(self, scene: viser.SceneApi, gui: viser.GuiApi, session: "ClientSession") -> None:
+        self._session = session
+        folder = gui.add_folder("Forces and gravity", expand_by_default=False)
+        self.folders = (folder,)
+        with folder:
+            gui.add_markdown("The torques the joints must hold: τ = Jᵀ F for a force the tool pushes with, "
+                             "plus the arm's own weight and its payload.")
+            self.enabled = gui.add_checkbox("Show the torques", False)
+            self.newtons = gui.add_slider("Force at the flange (N)", min=0.0, max=MAX_FORCE_N, step=5.0, initial_value=50.0)
+            self.direction = gui.add_dropdown("Force direction", tuple(DIRECTIONS), initial_value="down (−z)")
+            self.payload = gui.add_slider("Payload (kg)", min=0.0, max=MAX_PAYLOAD_KG, step=0.5, initial_value=0.0)
+            self.bars = gui.add_html("", visible=False)
+        self.arrow = scene.add_arrows("/statics/force", np.zeros((1, 2, 3)), FORCE_COLOR, shaft_radius=0.008,
+                                      head_radius=0.02, head_length=0.04, visible=False)
+        for widget in (self.enabled, self.newtons, self.direction, self.payload):
+            widget.on_update(session.guard(lambda _: session.redraw()))
+
+    def loads(self, snapshot: Snapshot) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(force (3,), τ of the force (6,), τ of gravity and payload (6,)) at this snapshot, from the widgets."""
+        arm = snapshot.arm
+        force = force_vector(chosen(self.direction, "force direction"), float(self.newtons.value), snapshot.flange)
+        payload = float(self.payload.value)
+        if not 0.0 <= payload <= MAX_PAYLOAD_KG:
+            raise ValueError(f"payload: from 0 to {MAX_PAYLOAD_KG:g} kg, got {payload:g}")
+        try:
+            gravity = arm.gravity_torques(snapshot.q, payload)
+        except ValueError:  # an arm without published masses (the UR10e): the force's torques alone
+            gravity = np.zeros(6)
+        return force, arm.static_torques(snapshot.q, force), gravity
+
+    def render(self, snapshot: Snapshot) -> None:
+        shown = bool(self.enabled.value) and float(self.newtons.value) > 0.0
+        if self.arrow.visible != shown:
+            self.arrow.visible = shown
+        if shown:
+            force = force_vector(chosen(self.direction, "force direction"), float(self.newtons.value), snapshot.flange)
+            tip = snapshot.flange[:3, 3]
+            self.arrow.points = np.array([[tip, tip + ARROW_METRES_PER_N * force]])  # the way the tool pushes
+
+    def render_panel(self, snapshot: Snapshot) -> None:
+        self.bars.visible = bool(self.enabled.value)
+        if self.bars.visible:
+            _, force_torques, gravity = self.loads(snapshot)
+            self.bars.content = bars_html(force_torques, gravity)
+
+    def close(self) -> None:
+        """The session has gone: so does its arrow, even from a scene everyone shares."""
+        self.arrow.remove()

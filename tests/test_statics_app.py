@@ -1,0 +1,53 @@
+"""Forces and gravity in the app: the torque bars and the force arrow, through viser's protocol."""
+
+from __future__ import annotations
+
+import asyncio
+
+import numpy as np
+import pytest
+
+from app.statics import TORQUE_CAPACITY, bars_html
+
+from .server_support import session_of, until, url
+from .viser_client import ViserClient
+
+pytestmark = pytest.mark.server
+
+
+def test_the_torque_bars_add_the_force_and_the_weight(app):
+    async def scenario():
+        client = await ViserClient(url(app)).connect()
+        session = session_of(app, client)
+        statics = session.statics
+        assert not statics.bars.visible and not statics.arrow.visible  # off until asked for
+        await client.set_gui("Show the torques", True)
+        await until(lambda: statics.bars.visible and statics.arrow.visible, what="the bars and the arrow")
+        snapshot = session.state.last
+        arm = snapshot.arm
+        expected = bars_html(arm.static_torques(snapshot.q, [0, 0, -50.0]), arm.gravity_torques(snapshot.q))
+        await until(lambda: statics.bars.content == expected, what="50 N down and the arm's weight")
+        # the arrow starts at the flange and points the way the tool pushes: 50 N down is 10 cm down
+        start, end = statics.arrow.points[0]
+        np.testing.assert_allclose(start, snapshot.flange[:3, 3], atol=1e-6)
+        np.testing.assert_allclose(end - start, [0, 0, -0.1], atol=1e-6)
+        # a payload adds its weight; a force along +x turns the arrow
+        await client.set_gui("Payload (kg)", 5.0)
+        await asyncio.sleep(0.1)
+        await client.set_gui("Force direction", "+x")
+        expected = bars_html(arm.static_torques(snapshot.q, [50.0, 0, 0]), arm.gravity_torques(snapshot.q, 5.0))
+        await until(lambda: statics.bars.content == expected, what="the payload and the new direction")
+        await until(lambda: np.allclose(np.diff(statics.arrow.points[0], axis=0), [[0.1, 0, 0]], atol=1e-6), what="the arrow along +x")
+        # a direction that is not offered is refused, and nothing changes
+        await client.set_gui("Force direction", "sideways")
+        await until(lambda: any("not one of" in body.lower() for _, body in client.received.notifications), what="the refusal")
+        await client.close()
+
+    asyncio.run(scenario())
+
+
+def test_a_joint_over_its_rating_is_flagged():
+    """360 N·m at the shoulder is over its 330; 120 of the elbow's 150 fills 80 % of its bar."""
+    html = bars_html(np.array([0.0, 300.0, -100.0, 10.0, 0.0, 0.0]), np.array([0.0, 60.0, -20.0, 0.0, 0.0, 0.0]))
+    assert html.count("over its rating") == 1 and "+360.0 N·m" in html and "rated 330" in html
+    assert "width:100.0%" in html and "width:80.0%" in html and TORQUE_CAPACITY[2] == 150.0
