@@ -28,6 +28,7 @@ from .ik_target import BranchesScene, IKTargetControls
 from .camera import CameraControls
 from .lecture import LectureMode
 from .feedback import guard, notify
+from .ellipsoids import EllipsoidsView
 from .floor import FloorScene
 from .joint_panel import JointPanel
 from .meshes import ArmModels
@@ -126,13 +127,14 @@ class ClientSession:
         self.workspace = WorkspaceView(scene, gui, self)
         self.reach_map = ReachMapView(scene, gui, self)
         self.statics = StaticsView(scene, gui, self)
+        self.ellipsoids = EllipsoidsView(scene, gui, self)
         self._lecture: LectureMode | None = None
         self.camera = CameraControls(client, lambda: self.state.last, self.guard, lecture) if own_camera else None
         if self.camera is not None:
             self.follow_lecture_mode(self.camera.lecture)
         #: the views this session built in the browser's own panel (the scene views may be the classroom's)
         self.own_views = (self.joints, *([self.arm_model] if self.arm_model else []), self.ik_target, self.readouts,
-                          self.singularity, self.workspace, self.reach_map, self.statics, *([self.camera] if self.camera else []))
+                          self.singularity, self.workspace, self.reach_map, self.statics, self.ellipsoids, *([self.camera] if self.camera else []))
         self.views = (*self.scene_views, *self.own_views)
         self.render(first)
         self.render_panel()

@@ -51,3 +51,37 @@ def test_a_joint_over_its_rating_is_flagged():
     html = bars_html(np.array([0.0, 300.0, -100.0, 10.0, 0.0, 0.0]), np.array([0.0, 60.0, -20.0, 0.0, 0.0, 0.0]))
     assert html.count("over its rating") == 1 and "+360.0 N·m" in html and "rated 330" in html
     assert "width:100.0%" in html and "width:80.0%" in html and TORQUE_CAPACITY[2] == 150.0
+
+
+def test_the_ellipsoids_follow_the_arm_and_flatten_towards_the_elbow_singularity(app):
+    async def scenario():
+        from app.ellipsoids import FORCE_METRES, VELOCITY_METRES, ellipsoid_pose
+        from ur10core.orientation import rotation_from_quaternion
+
+        client = await ViserClient(url(app)).connect()
+        session = session_of(app, client)
+        view = session.ellipsoids
+        assert not view.velocity.visible
+        await client.set_gui("Show at the flange", True)
+        await until(lambda: view.velocity.visible and view.force.visible and view.lengths.visible, what="the ellipsoids")
+        snapshot = session.state.last
+        translation, _ = snapshot.arm.ellipsoids(snapshot.q)
+        np.testing.assert_allclose(view.velocity.position, snapshot.flange[:3, 3], atol=1e-6)
+        np.testing.assert_allclose(view.velocity.scale, VELOCITY_METRES * translation.velocity, rtol=1e-6)
+        np.testing.assert_allclose(view.force.scale, FORCE_METRES * translation.force, rtol=1e-6)
+        # the drawn axes are the ellipsoid's (up to each axis's sign)
+        drawn = rotation_from_quaternion(ellipsoid_pose(translation.axes))
+        np.testing.assert_allclose(np.abs(drawn), np.abs(translation.axes), atol=1e-6)
+        # the elbow straightens: the thinnest velocity axis shrinks, the force ellipsoid grows along it
+        thinnest = min(view.velocity.scale)
+        await client.set_gui("θ3 elbow", 2.0)
+        await until(lambda: abs(np.degrees(session.state.last.q[2]) - 2.0) < 1e-6, what="the elbow at 2°")
+        await until(lambda: min(view.velocity.scale) < 0.7 * thinnest, what="a flatter velocity ellipsoid")
+        longest = min(FORCE_METRES * VELOCITY_METRES / min(view.velocity.scale), 0.8)  # 1/σ, drawn at most 0.8 m
+        assert max(view.force.scale) == pytest.approx(longest, rel=1e-6)
+        await until(lambda: "Velocity ellipsoid" in view.lengths.content, what="the lengths")
+        await client.set_gui("Ellipsoid", "velocity")
+        await until(lambda: view.velocity.visible and not view.force.visible, what="the velocity one alone")
+        await client.close()
+
+    asyncio.run(scenario())

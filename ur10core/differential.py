@@ -88,6 +88,11 @@ def damped_inverse(J: np.ndarray, twist: np.ndarray) -> tuple[np.ndarray, np.nda
     return np.einsum("...ij,...i->...j", Vt, components), lam
 
 
+def _null_projector(A: np.ndarray) -> np.ndarray:
+    """(..., n, n) the orthogonal projector onto the null space of A (..., m, n): I − A⁺ A."""
+    return np.eye(A.shape[-1]) - np.linalg.pinv(A) @ A
+
+
 def _ellipsoid(J: np.ndarray) -> Ellipsoid:
     U, sigma, _ = np.linalg.svd(J, full_matrices=True)  # J (..., 3, n): U (..., 3, 3)
     lengths = np.zeros(J.shape[:-2] + (3,))
@@ -183,12 +188,15 @@ class JacobianUses:
     def ellipsoids(self, q) -> tuple[Ellipsoid, Ellipsoid]:
         """The translational and rotational manipulability ellipsoids at the tool (docs/kinematics.md §8.4).
 
-        Velocity ellipsoid: the tool velocities of unit-norm joint rates, {J q̇ : ‖q̇‖ ≤ 1},
-        whose semi-axes are the singular values of J_v (J_ω), along its left singular
-        vectors. Force ellipsoid: the tool forces (moments) the joints hold with unit-norm
-        torques, {F : ‖Jᵀ F‖ ≤ 1}, the same axes with lengths 1/σ. As the arm nears a
-        singularity one velocity axis shrinks to zero and the force ellipsoid stretches
-        without bound along it.
+        Velocity ellipsoid: the tool velocities of unit-norm joint rates, {J_v q̇ : ‖q̇‖ ≤ 1},
+        whose semi-axes are the singular values σ of the map along its left singular vectors.
+        Force ellipsoid: the forces the joints hold with unit-norm torques, the same axes with
+        lengths 1/σ. An arm that controls its tool's whole pose keeps the other half still:
+        the translational ellipsoid is that of the rates that do not turn the tool (J_v on the
+        null space of J_ω), the rotational one that of the rates that do not move it. So at
+        every singularity one of them flattens (the lost twist direction) and its force
+        ellipsoid stretches without bound; a wrist can no longer hide it by swinging the
+        flange. A SCARA keeps its yaw for the translational one; a positioning arm has J_v as it is.
 
         Example: the course's planar elbow arm cannot move its tool along z.
 
@@ -199,4 +207,10 @@ class JacobianUses:
         (0.0, True)
         """
         J = self.jacobian(self._joints(q))
-        return _ellipsoid(J[..., :3, :]), _ellipsoid(J[..., 3:, :])
+        task = getattr(self, "task", "pose")
+        J_v, J_w = J[..., :3, :], J[..., 3:, :]
+        if task == "pose":
+            return _ellipsoid(J_v @ _null_projector(J_w)), _ellipsoid(J_w @ _null_projector(J_v))
+        if task == "position and yaw":
+            return _ellipsoid(J_v @ _null_projector(J[..., 5:, :])), _ellipsoid(J_w)
+        return _ellipsoid(J_v), _ellipsoid(J_w)

@@ -1,0 +1,100 @@
+"""The manipulability ellipsoids at the flange (docs/kinematics.md §8.4).
+
+The velocity ellipsoid (sky blue) holds the flange velocities of all joint rates of unit
+norm that keep the tool's orientation; the force ellipsoid (vermilion) the forces the joints
+hold with torques of unit norm. Same axes, reciprocal lengths: near a singularity that costs
+the flange a direction of travel, the first flattens and the second stretches along it.
+Both follow the drag; their axis lengths are in the panel.
+"""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
+import numpy as np
+import viser
+
+from ur10core.orientation import quaternion
+
+from .feedback import chosen
+from .state import Snapshot
+from .style import number
+from .view import View
+
+if TYPE_CHECKING:
+    from .session import ClientSession
+
+VELOCITY_COLOR, FORCE_COLOR = (86, 180, 233), (213, 94, 0)
+#: Drawn size: metres per unit of σ (m/s per rad/s) and of 1/σ (N per N·m).
+VELOCITY_METRES, FORCE_METRES = 0.3, 0.05
+#: The force ellipsoid's drawn semi-axes stop here (m): it grows without bound at a singularity.
+LONGEST_DRAWN = 0.8
+SHOWN = {"velocity": (True, False), "force": (False, True), "both": (True, True)}
+
+
+def ellipsoid_pose(axes: np.ndarray) -> np.ndarray:
+    """(4,) wxyz of a rotation whose columns are the ellipsoid's axes (one flipped if they are left-handed)."""
+    rotation = axes.copy()
+    if np.linalg.det(rotation) < 0:
+        rotation[:, 2] *= -1.0
+    return quaternion(rotation, check=False)
+
+
+def lengths_markdown(velocity: np.ndarray, force: np.ndarray) -> str:
+    def listed(values: np.ndarray) -> str:
+        return ", ".join("∞" if not np.isfinite(v) else number(v, ".3g") for v in values)
+
+    return ("The flange's ellipsoids with the tool's orientation held (docs §8.4).  \n"
+            f"**Velocity ellipsoid** semi-axes (m/s per rad/s of joint rate): {listed(velocity)}  \n"
+            f"**Force ellipsoid** semi-axes (N per N·m of joint torque): {listed(force)}  \n"
+            "Same axes; each force axis is 1 / the velocity axis. Drag towards a singularity and watch "
+            "one velocity axis shrink while its force axis grows.")
+
+
+class EllipsoidsView(View):
+    """The "Manipulability ellipsoids" folder and the two ellipsoids at the flange."""
+
+    def __init__(self, scene: viser.SceneApi, gui: viser.GuiApi, session: "ClientSession") -> None:
+        folder = gui.add_folder("Manipulability ellipsoids", expand_by_default=False)
+        self.folders = (folder,)
+        with folder:
+            self.enabled = gui.add_checkbox("Show at the flange", False)
+            self.which = gui.add_dropdown("Ellipsoid", tuple(SHOWN), initial_value="both")
+            self.lengths = gui.add_markdown("", visible=False)
+        self.velocity = scene.add_icosphere("/ellipsoids/velocity", radius=1.0, color=VELOCITY_COLOR, opacity=0.35,
+                                            subdivisions=3, cast_shadow=False, receive_shadow=False, visible=False)
+        self.force = scene.add_icosphere("/ellipsoids/force", radius=1.0, color=FORCE_COLOR, opacity=0.3,
+                                         subdivisions=3, cast_shadow=False, receive_shadow=False, visible=False)
+        def changed(_) -> None:
+            chosen(self.which, "ellipsoid")  # refuses a value that is not offered, with a message
+            session.redraw()
+
+        for widget in (self.enabled, self.which):
+            widget.on_update(session.guard(changed))
+
+    def render(self, snapshot: Snapshot) -> None:
+        show_velocity, show_force = SHOWN.get(self.which.value, (False, False)) if self.enabled.value else (False, False)
+        for node, shown in ((self.velocity, show_velocity), (self.force, show_force)):
+            if node.visible != shown:
+                node.visible = shown
+        if not (show_velocity or show_force):
+            return
+        translation, _ = snapshot.arm.ellipsoids(snapshot.q)
+        wxyz, centre = ellipsoid_pose(translation.axes), snapshot.flange[:3, 3]
+        sizes = ((self.velocity, show_velocity, VELOCITY_METRES * translation.velocity),
+                 (self.force, show_force, np.minimum(FORCE_METRES * translation.force, LONGEST_DRAWN)))
+        for node, shown, size in sizes:
+            if shown:
+                node.wxyz, node.position = wxyz, centre
+                node.scale = tuple(float(v) for v in np.maximum(size, 1e-4))  # a zero axis: a flat disc
+
+    def render_panel(self, snapshot: Snapshot) -> None:
+        self.lengths.visible = bool(self.enabled.value)
+        if self.lengths.visible:
+            translation, _ = snapshot.arm.ellipsoids(snapshot.q)
+            self.lengths.content = lengths_markdown(translation.velocity, translation.force)
+
+    def close(self) -> None:
+        """The session has gone: so do its ellipsoids, even from a scene everyone shares."""
+        self.velocity.remove()
+        self.force.remove()
