@@ -39,6 +39,7 @@ from .workers import DragQueue, PanelRefresher
 from .robot import ArmModelControls, RobotScene
 from .singularity import OverlayPanel, OverlayScene
 from .statics import StaticsView
+from .velocity import VelocityView
 from .state import ArmState, Snapshot
 from .workspace import WorkspaceView
 
@@ -128,13 +129,14 @@ class ClientSession:
         self.reach_map = ReachMapView(scene, gui, self)
         self.statics = StaticsView(scene, gui, self)
         self.ellipsoids = EllipsoidsView(scene, gui, self)
+        self.velocity = VelocityView(scene, gui, self)
         self._lecture: LectureMode | None = None
         self.camera = CameraControls(client, lambda: self.state.last, self.guard, lecture) if own_camera else None
         if self.camera is not None:
             self.follow_lecture_mode(self.camera.lecture)
         #: the views this session built in the browser's own panel (the scene views may be the classroom's)
         self.own_views = (self.joints, *([self.arm_model] if self.arm_model else []), self.ik_target, self.readouts,
-                          self.singularity, self.workspace, self.reach_map, self.statics, self.ellipsoids, *([self.camera] if self.camera else []))
+                          self.singularity, self.workspace, self.reach_map, self.statics, self.ellipsoids, self.velocity, *([self.camera] if self.camera else []))
         self.views = (*self.scene_views, *self.own_views)
         self.render(first)
         self.render_panel()

@@ -85,3 +85,59 @@ def test_the_ellipsoids_follow_the_arm_and_flatten_towards_the_elbow_singularity
         await client.close()
 
     asyncio.run(scenario())
+
+
+def test_joint_rates_draw_the_flange_velocity_and_a_typed_velocity_gets_its_rates(app):
+    async def scenario():
+        from app.velocity import METRES_PER_SPEED, METRES_PER_TURN_RATE, parse_twist, rates_markdown
+
+        client = await ViserClient(url(app)).connect()
+        session = session_of(app, client)
+        view = session.velocity
+        assert not view.linear.visible
+        await client.set_gui("θ̇1 base (°/s)", 30.0)
+        await until(lambda: view.linear.visible and view.angular.visible, what="the arrows")
+        snapshot = session.state.last
+        twist = snapshot.arm.tool_twist(snapshot.q, np.radians([30.0, 0, 0, 0, 0, 0]))
+        start, end = view.linear.points[0]
+        np.testing.assert_allclose(start, snapshot.flange[:3, 3], atol=1e-6)
+        np.testing.assert_allclose(end - start, METRES_PER_SPEED * twist[:3], atol=1e-6)
+        np.testing.assert_allclose(np.diff(view.angular.points[0], axis=0)[0], METRES_PER_TURN_RATE * twist[3:], atol=1e-6)
+        await until(lambda: f"{1000 * np.linalg.norm(twist[:3]):.1f} mm/s" in view.readout.content, what="the readout")
+        # a typed velocity: its joint rates, and J q̇ gives it back (away from singularities)
+        await client.set_gui("vx vy vz (mm/s) ωx ωy ωz (°/s)", "0 0 200 0 0 0")
+        await asyncio.sleep(0.1)
+        await client.set_gui("Find the joint rates", True)
+        asked = parse_twist("0 0 200 0 0 0")
+        rates = snapshot.arm.joint_rates(snapshot.q, asked)
+        await until(lambda: view.rates.content == rates_markdown(rates.qdot, float(rates.damping), asked, rates.achieved),
+                    what="the joint rates")
+        assert float(rates.damping) == 0.0 and np.allclose(rates.achieved, asked)
+        await client.set_gui("vx vy vz (mm/s) ωx ωy ωz (°/s)", "1 2 3")
+        await asyncio.sleep(0.1)
+        await client.set_gui("Find the joint rates", True)
+        await until(lambda: any("six numbers" in body.lower() for _, body in client.received.notifications), what="the refusal")
+        await client.close()
+
+    asyncio.run(scenario())
+
+
+def test_near_a_singularity_the_needed_rates_are_red_and_on_it_damped():
+    """3° from the wrist singularity, turning the flange at 30 °/s about z needs a wrist far over its
+    180 °/s (undamped); 0.06° from it the damping keeps every joint within its limit, and says what
+    that costs."""
+    from app.velocity import parse_twist, rates_markdown
+    from ur10core import Arm
+
+    arm = Arm.preset("course")
+    singular = arm.singular_configuration("wrist", np.radians([30, 45, 26, 50, 60, 80]))
+    asked = parse_twist("0 0 0 0 0 30")
+    for offset, red, damped in ((0.05, True, False), (1e-3, False, True)):
+        q = singular.copy()
+        q[4] += offset
+        rates = arm.joint_rates(q, asked)
+        text = rates_markdown(rates.qdot, float(rates.damping), asked, rates.achieved)
+        assert ("color:#dc2626" in text) == red and ("over the limit" in text) == red
+        assert ("damped (λ =" in text) == damped
+    with pytest.raises(ValueError, match="up to 2000 mm/s"):
+        parse_twist("5000 0 0 0 0 0")

@@ -1,0 +1,129 @@
+"""Velocities: joint rates to the flange's velocity arrows, and a tool velocity to the joint rates it needs
+(docs/kinematics.md §8.1, §8.2).
+
+Six joint-rate sliders draw v (blue) and ω (reddish purple) at the flange, live with the
+drag. A typed tool velocity gets its joint rates from the damped inverse, each in red where
+it exceeds the UR10's joint speed (docs/kinematics.md §1), with the damping it took.
+"""
+
+from __future__ import annotations
+
+import math
+import re
+from typing import TYPE_CHECKING
+
+import numpy as np
+import viser
+
+from .state import Snapshot
+from .style import JOINT_LABELS, number
+from .view import View
+
+if TYPE_CHECKING:
+    from .session import ClientSession
+
+#: The UR10's joint speed limits (°/s): base and shoulder 120, elbow and wrists 180 (docs/kinematics.md §1).
+SPEED_LIMITS = np.array([120.0, 120.0, 180.0, 180.0, 180.0, 180.0])
+LINEAR_COLOR, ANGULAR_COLOR = (0, 114, 178), (204, 121, 167)
+#: Drawn length: metres per m/s of the flange, and per rad/s of its turning.
+METRES_PER_SPEED, METRES_PER_TURN_RATE = 0.5, 0.15
+MAX_TYPED = (2000.0, 360.0)  #: the largest typed speed (mm/s) and turning rate (°/s)
+
+
+def parse_twist(text: str) -> np.ndarray:
+    """``vx vy vz ωx ωy ωz`` in mm/s and °/s → (6,) in m/s and rad/s; ``ValueError`` saying what is wrong."""
+    fields = [f for f in re.split(r"[,\s]+", text.strip()) if f]
+    if len(fields) != 6:
+        raise ValueError(f"type six numbers, vx vy vz (mm/s) then ωx ωy ωz (°/s); got {len(fields)}")
+    try:
+        values = np.array([float(f) for f in fields])
+    except ValueError:
+        raise ValueError(f"the tool velocity must be numbers, got {text!r:.60}") from None
+    if not np.isfinite(values).all():
+        raise ValueError("the tool velocity must be finite numbers")
+    if np.abs(values[:3]).max() > MAX_TYPED[0] or np.abs(values[3:]).max() > MAX_TYPED[1]:
+        raise ValueError(f"speeds up to {MAX_TYPED[0]:.0f} mm/s and turning rates up to {MAX_TYPED[1]:.0f} °/s, please")
+    return np.concatenate([values[:3] / 1000.0, np.radians(values[3:])])
+
+
+def rates_markdown(qdot: np.ndarray, damping: float, asked: np.ndarray, achieved: np.ndarray) -> str:
+    """The joint rates in °/s, red where over the joint's speed limit, and what the damping cost."""
+    degrees = np.degrees(qdot)
+    cells = []
+    for label, rate, limit in zip(JOINT_LABELS, degrees, SPEED_LIMITS):
+        text = f"{number(rate, '+.1f')}°/s"
+        cells.append(f"| {label} | " + (f"<b style='color:#dc2626'>{text} (limit {limit:.0f})</b>" if abs(rate) > limit
+                                        else f"{text}") + " |")
+    lines = ["| joint | rate |", "|---|---:|", *cells]
+    over = int((np.abs(degrees) > SPEED_LIMITS).sum())
+    lines.append("")
+    lines.append(f"**{over} joint{'s' if over != 1 else ''} over the limit.**" if over else "Every joint within its speed limit.")
+    if damping > 0:
+        miss_v = 1000 * np.linalg.norm(achieved[:3] - asked[:3])
+        miss_w = math.degrees(np.linalg.norm(achieved[3:] - asked[3:]))
+        lines.append(f"Near a singularity: damped (λ = {damping:.3f}), so the arm gives this velocity to within "
+                     f"{miss_v:.1f} mm/s and {miss_w:.1f} °/s rather than turn its joints without bound.")
+    return "\n".join(lines)
+
+
+class VelocityView(View):
+    """The "Velocities" folder and the two arrows at the flange."""
+
+    def __init__(self, scene: viser.SceneApi, gui: viser.GuiApi, session: "ClientSession") -> None:
+        self._session = session
+        folder = gui.add_folder("Velocities", expand_by_default=False)
+        self.folders = (folder,)
+        with folder:
+            gui.add_markdown("Turn the joints at these rates: the arrows are the flange's velocity v (blue) and "
+                             "its turning rate ω (purple), v = J q̇.")
+            self.sliders = [gui.add_slider(f"θ̇{i + 1} {name} (°/s)", min=-180.0, max=180.0, step=1.0, initial_value=0.0)
+                            for i, name in enumerate(JOINT_LABELS)]
+            self.readout = gui.add_markdown("")
+            gui.add_markdown("Or ask for a flange velocity and see the joint rates it needs, q̇ = J⁻¹ v:")
+            self.typed = gui.add_text("vx vy vz (mm/s) ωx ωy ωz (°/s)", "100 0 0 0 0 0")
+            self.solve = gui.add_button("Find the joint rates")
+            self.rates = gui.add_markdown("")
+        self.linear = scene.add_arrows("/velocity/linear", np.zeros((1, 2, 3)), LINEAR_COLOR, shaft_radius=0.008,
+                                       head_radius=0.02, head_length=0.04, visible=False)
+        self.angular = scene.add_arrows("/velocity/angular", np.zeros((1, 2, 3)), ANGULAR_COLOR, shaft_radius=0.008,
+                                        head_radius=0.02, head_length=0.04, visible=False)
+        for slider in self.sliders:
+            slider.on_update(session.guard(lambda _: session.redraw()))
+        self.solve.on_click(session.guard(lambda _: self._solve()))
+
+    def joint_rates(self) -> np.ndarray:
+        """(6,) the sliders' joint rates, rad/s."""
+        degrees = np.array([float(s.value) for s in self.sliders])
+        if not np.isfinite(degrees).all() or np.abs(degrees).max() > 180.0:
+            raise ValueError("joint rates: from −180 to 180 °/s")
+        return np.radians(degrees)
+
+    def _solve(self) -> None:
+        twist = parse_twist(str(self.typed.value))
+        snapshot = self._session.state.last
+        rates = snapshot.arm.joint_rates(snapshot.q, twist)
+        self.rates.content = rates_markdown(rates.qdot, float(rates.damping), twist, rates.achieved)
+
+    def render(self, snapshot: Snapshot) -> None:
+        qdot = self.joint_rates()
+        moving = bool(np.any(qdot))
+        for arrow in (self.linear, self.angular):
+            if arrow.visible != moving:
+                arrow.visible = moving
+        if moving:
+            twist = snapshot.arm.tool_twist(snapshot.q, qdot)
+            tip = snapshot.flange[:3, 3]
+            self.linear.points = np.array([[tip, tip + METRES_PER_SPEED * twist[:3]]])
+            self.angular.points = np.array([[tip, tip + METRES_PER_TURN_RATE * twist[3:]]])
+
+    def render_panel(self, snapshot: Snapshot) -> None:
+        qdot = self.joint_rates()
+        twist = snapshot.arm.tool_twist(snapshot.q, qdot)
+        self.readout.content = (f"v = ({', '.join(number(1000 * v, '+.1f') for v in twist[:3])}) mm/s, "
+                                f"|v| = {number(1000 * np.linalg.norm(twist[:3]), '.1f')} mm/s  \n"
+                                f"ω = ({', '.join(number(math.degrees(w), '+.1f') for w in twist[3:])}) °/s")
+
+    def close(self) -> None:
+        """The session has gone: so do its arrows, even from a scene everyone shares."""
+        self.linear.remove()
+        self.angular.remove()
