@@ -61,10 +61,13 @@ class EllipsoidsView(View):
             self.enabled = gui.add_checkbox("Show at the flange", False)
             self.which = gui.add_dropdown("Ellipsoid", tuple(SHOWN), initial_value="both")
             self.lengths = gui.add_markdown("", visible=False)
+        # a unit sphere scaled per axis; tiny until first sized, so it never shows a metre wide
         self.velocity = scene.add_icosphere("/ellipsoids/velocity", radius=1.0, color=VELOCITY_COLOR, opacity=0.35,
-                                            subdivisions=3, cast_shadow=False, receive_shadow=False, visible=False)
+                                            subdivisions=3, cast_shadow=False, receive_shadow=False, visible=False,
+                                            scale=(1e-4, 1e-4, 1e-4))
         self.force = scene.add_icosphere("/ellipsoids/force", radius=1.0, color=FORCE_COLOR, opacity=0.3,
-                                         subdivisions=3, cast_shadow=False, receive_shadow=False, visible=False)
+                                         subdivisions=3, cast_shadow=False, receive_shadow=False, visible=False,
+                                         scale=(1e-4, 1e-4, 1e-4))
         def changed(_) -> None:
             chosen(self.which, "ellipsoid")  # refuses a value that is not offered, with a message
             session.redraw()
@@ -74,19 +77,18 @@ class EllipsoidsView(View):
 
     def render(self, snapshot: Snapshot) -> None:
         show_velocity, show_force = SHOWN.get(self.which.value, (False, False)) if self.enabled.value else (False, False)
+        if show_velocity or show_force:
+            translation, _ = snapshot.arm.ellipsoids(snapshot.q)
+            wxyz, centre = ellipsoid_pose(translation.axes), snapshot.flange[:3, 3]
+            sizes = ((self.velocity, show_velocity, VELOCITY_METRES * translation.velocity),
+                     (self.force, show_force, np.minimum(FORCE_METRES * translation.force, LONGEST_DRAWN)))
+            for node, shown, size in sizes:
+                if shown:  # sized and placed before it shows
+                    node.scale = tuple(float(v) for v in np.maximum(size, 1e-4))  # a zero axis: a flat disc
+                    node.wxyz, node.position = wxyz, centre
         for node, shown in ((self.velocity, show_velocity), (self.force, show_force)):
             if node.visible != shown:
                 node.visible = shown
-        if not (show_velocity or show_force):
-            return
-        translation, _ = snapshot.arm.ellipsoids(snapshot.q)
-        wxyz, centre = ellipsoid_pose(translation.axes), snapshot.flange[:3, 3]
-        sizes = ((self.velocity, show_velocity, VELOCITY_METRES * translation.velocity),
-                 (self.force, show_force, np.minimum(FORCE_METRES * translation.force, LONGEST_DRAWN)))
-        for node, shown, size in sizes:
-            if shown:
-                node.wxyz, node.position = wxyz, centre
-                node.scale = tuple(float(v) for v in np.maximum(size, 1e-4))  # a zero axis: a flat disc
 
     def render_panel(self, snapshot: Snapshot) -> None:
         self.lengths.visible = bool(self.enabled.value)

@@ -72,8 +72,9 @@ class StaticsView(View):
             self.direction = gui.add_dropdown("Force direction", tuple(DIRECTIONS), initial_value="down (−z)")
             self.payload = gui.add_slider("Payload (kg)", min=0.0, max=MAX_PAYLOAD_KG, step=0.5, initial_value=0.0)
             self.bars = gui.add_html("", visible=False)
-        self.arrow = scene.add_arrows("/statics/force", np.zeros((1, 2, 3)), FORCE_COLOR, shaft_radius=0.008,
-                                      head_radius=0.02, head_length=0.04, visible=False)
+        self.arrow = scene.add_arrows("/statics/force", np.zeros((1, 2, 3)), FORCE_COLOR, shaft_radius=0.012,
+                                      head_radius=0.03, head_length=0.05, visible=False)
+        self.label = scene.add_label("/statics/force_label", "F", font_screen_scale=1.4, anchor="center-left", visible=False)
         for widget in (self.enabled, self.newtons, self.direction, self.payload):
             widget.on_update(session.guard(lambda _: session.redraw()))
 
@@ -92,12 +93,16 @@ class StaticsView(View):
 
     def render(self, snapshot: Snapshot) -> None:
         shown = bool(self.enabled.value) and float(self.newtons.value) > 0.0
-        if self.arrow.visible != shown:
-            self.arrow.visible = shown
         if shown:
-            force = force_vector(chosen(self.direction, "force direction"), float(self.newtons.value), snapshot.flange)
+            newtons = float(self.newtons.value)
+            force = force_vector(chosen(self.direction, "force direction"), newtons, snapshot.flange)
             tip = snapshot.flange[:3, 3]
             self.arrow.points = np.array([[tip, tip + ARROW_METRES_PER_N * force]])  # the way the tool pushes
+            self.label.position = tip + ARROW_METRES_PER_N * force
+            self.label.text = f"F = {newtons:.0f} N"
+        for node in (self.arrow, self.label):
+            if node.visible != shown:
+                node.visible = shown
 
     def render_panel(self, snapshot: Snapshot) -> None:
         self.bars.visible = bool(self.enabled.value)
@@ -108,3 +113,4 @@ class StaticsView(View):
     def close(self) -> None:
         """The session has gone: so does its arrow, even from a scene everyone shares."""
         self.arrow.remove()
+        self.label.remove()

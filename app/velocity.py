@@ -87,6 +87,8 @@ class VelocityView(View):
                                        head_radius=0.02, head_length=0.04, visible=False)
         self.angular = scene.add_arrows("/velocity/angular", np.zeros((1, 2, 3)), ANGULAR_COLOR, shaft_radius=0.008,
                                         head_radius=0.02, head_length=0.04, visible=False)
+        self.labels = (scene.add_label("/velocity/linear_label", "v", font_screen_scale=1.4, anchor="center-left", visible=False),
+                       scene.add_label("/velocity/angular_label", "ω", font_screen_scale=1.4, anchor="center-left", visible=False))
         for slider in self.sliders:
             slider.on_update(session.guard(lambda _: session.redraw()))
         self.solve.on_click(session.guard(lambda _: self._solve()))
@@ -107,14 +109,16 @@ class VelocityView(View):
     def render(self, snapshot: Snapshot) -> None:
         qdot = self.joint_rates()
         moving = bool(np.any(qdot))
-        for arrow in (self.linear, self.angular):
-            if arrow.visible != moving:
-                arrow.visible = moving
         if moving:
             twist = snapshot.arm.tool_twist(snapshot.q, qdot)
             tip = snapshot.flange[:3, 3]
-            self.linear.points = np.array([[tip, tip + METRES_PER_SPEED * twist[:3]]])
-            self.angular.points = np.array([[tip, tip + METRES_PER_TURN_RATE * twist[3:]]])
+            ends = (tip + METRES_PER_SPEED * twist[:3], tip + METRES_PER_TURN_RATE * twist[3:])
+            for arrow, label, end in zip((self.linear, self.angular), self.labels, ends):
+                arrow.points = np.array([[tip, end]])
+                label.position = end
+        for node in (self.linear, self.angular, *self.labels):
+            if node.visible != moving:
+                node.visible = moving
 
     def render_panel(self, snapshot: Snapshot) -> None:
         qdot = self.joint_rates()
@@ -125,5 +129,5 @@ class VelocityView(View):
 
     def close(self) -> None:
         """The session has gone: so do its arrows, even from a scene everyone shares."""
-        self.linear.remove()
-        self.angular.remove()
+        for node in (self.linear, self.angular, *self.labels):
+            node.remove()
