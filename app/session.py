@@ -33,6 +33,7 @@ from .floor import FloorScene
 from .joint_panel import JointPanel
 from .meshes import ArmModels
 from .metrics import LATENCY
+from .motion_lessons import MotionLessons
 from .reach_map import ReachMapView
 from .readouts import Readouts
 from .workers import DragQueue, PanelRefresher
@@ -130,13 +131,14 @@ class ClientSession:
         self.statics = StaticsView(scene, gui, self)
         self.ellipsoids = EllipsoidsView(scene, gui, self)
         self.velocity = VelocityView(scene, gui, self)
+        self.motion = MotionLessons(gui, self)
         self._lecture: LectureMode | None = None
         self.camera = CameraControls(client, lambda: self.state.last, self.guard, lecture) if own_camera else None
         if self.camera is not None:
             self.follow_lecture_mode(self.camera.lecture)
         #: the views this session built in the browser's own panel (the scene views may be the classroom's)
         self.own_views = (self.joints, *([self.arm_model] if self.arm_model else []), self.ik_target, self.readouts,
-                          self.singularity, self.workspace, self.reach_map, self.statics, self.ellipsoids, self.velocity, *([self.camera] if self.camera else []))
+                          self.singularity, self.workspace, self.reach_map, self.statics, self.ellipsoids, self.velocity, self.motion, *([self.camera] if self.camera else []))
         self.views = (*self.scene_views, *self.own_views)
         self.render(first)
         self.render_panel()

@@ -54,7 +54,7 @@ class Snapshot:
     flange_wxyz: np.ndarray  #: (4,) the flange orientation as a quaternion
     factors: np.ndarray  #: (3,) shoulder, elbow, wrist factors of det J
     body_points: np.ndarray  #: (7, P, 3) outline points of each link's body, in its frame (ArmState's)
-    cause: str  #: "joints", "target" (dragged), "typed", "branch", "singularity" or "reset": what made this change
+    cause: str  #: "joints", "target" (dragged), "typed", "branch", "singularity", "reset" or "motion" (a played path): what made this change
     arm: Arm
 
     @property

@@ -141,3 +141,49 @@ def test_near_a_singularity_the_needed_rates_are_red_and_on_it_damped():
         assert ("damped (λ =" in text) == damped
     with pytest.raises(ValueError, match="up to 2000 mm/s"):
         parse_twist("5000 0 0 0 0 0")
+
+
+def test_the_released_arm_falls_as_the_dynamics_say(app):
+    async def scenario():
+        from ur10core import dynamics
+        from ur10core.branches import wrap
+
+        client = await ViserClient(url(app)).connect()
+        session = session_of(app, client)
+        start = session.state.last.q.copy()
+        await client.set_gui("Release the arm", True)
+        await until(lambda: session.motion.player.playing, what="the drop to start")
+        await until(lambda: not np.allclose(session.state.last.q, start), what="the arm to move")
+        await until(lambda: not session.motion.player.playing, timeout=30, what="the drop to end")
+        expected = wrap(dynamics.release(session.arm, start, duration=3.0).q[-1])
+        np.testing.assert_allclose(session.state.last.q, expected, atol=1e-9)
+        assert session.state.last.cause == "motion"
+        await client.close()
+
+    asyncio.run(scenario())
+
+
+@pytest.mark.parametrize("kind", ["straight tool line", "joints interpolated"])
+def test_moving_from_a_remembered_pose_along_a_path(app, kind):
+    async def scenario():
+        client = await ViserClient(url(app)).connect()
+        session = session_of(app, client)
+        await client.set_gui("Go from the start to here along", kind)  # no start yet: refused, with the reason
+        await until(lambda: any("remember a start pose" in body.lower() for _, body in client.received.notifications),
+                    what="the refusal")
+        start = session.state.last.q.copy()
+        await client.set_gui("Remember this pose as the start", True)
+        await until(lambda: session.motion.start is not None, what="the start remembered")
+        await client.set_gui("θ1 base", float(np.degrees(start[0]) + 25.0))
+        await until(lambda: abs(session.state.last.q[0] - start[0] - np.radians(25.0)) < 1e-6, what="the arm moved on")
+        goal = session.state.last.frames[6].copy()
+        await asyncio.sleep(0.1)
+        await client.set_gui("Go from the start to here along", kind)
+        await until(lambda: session.motion.player.playing, what="the path to start")
+        await until(lambda: np.abs(session.state.last.q - start).max() < 0.05, what="the arm back near the start")
+        await until(lambda: not session.motion.player.playing, timeout=30, what="the path to end")
+        assert session.motion.plot.visible and kind.capitalize() in session.motion.summary.content
+        np.testing.assert_allclose(session.state.last.frames[6], goal, atol=1e-5)
+        await client.close()
+
+    asyncio.run(scenario())
