@@ -1,7 +1,8 @@
 """The IK-target drag handler, server side, and what one drag update costs on the wire.
 
-    python benchmarks/bench_drag.py          # singularity overlay on
-    python benchmarks/bench_drag.py --map    # and the branch-count map too (its own section)
+    python benchmarks/bench_drag.py              # singularity overlay on
+    python benchmarks/bench_drag.py --map        # and the branch-count map too (its own section)
+    python benchmarks/bench_drag.py --jacobian   # and the ellipsoids, force arrow and torque bars (its own section)
 
 Starts the app in its own process (``tests/app_process.py``), connects one headless client
 (``tests/viser_client.py``: the messages a browser sends), switches the singularity overlay on
@@ -61,11 +62,16 @@ def loop_path(T0: np.ndarray, n: int) -> list[np.ndarray]:
     return path
 
 
-async def drive(url: str, map_on: bool = False) -> dict:
+async def drive(url: str, map_on: bool = False, jacobian: bool = False) -> dict:
     client = await ViserClient(url).connect()
     await client.set_gui("Show singularity overlay", True)
     if map_on:  # 40 000 IK poses each time the target moves, at the panel's pace, on the map's own thread
         await client.set_gui("Show branch-count map", True)
+    if jacobian:  # the ellipsoids and the force arrow on the drag path, the torque bars at the panel's pace
+        await asyncio.sleep(0.1)
+        await client.set_gui("Show at the flange", True)
+        await asyncio.sleep(0.1)
+        await client.set_gui("Show the torques", True)
     await asyncio.sleep(0.5)
     start_flange = client.received.flange_updates[-1][1]
     T0 = np.eye(4)
@@ -98,7 +104,7 @@ def ghost_update_bytes() -> float:
 SESSIONS = 3
 
 
-def run(backend: str, map_on: bool = False) -> tuple[dict, dict, float, tuple[float, float]]:
+def run(backend: str, map_on: bool = False, jacobian: bool = False) -> tuple[dict, dict, float, tuple[float, float]]:
     """One drag session against the app on ``backend``.
 
     Returns the client-side result, the app's report, the host's steal during the session
@@ -109,7 +115,7 @@ def run(backend: str, map_on: bool = False) -> tuple[dict, dict, float, tuple[fl
     p50, p99, _ = steady_cpu(max_wait=300.0)
     with running_app(env={"UR10CORE_BACKEND": backend}) as app:
         before = cpu_ticks()
-        result = asyncio.run(drive(app.url, map_on))
+        result = asyncio.run(drive(app.url, map_on, jacobian))
         stolen = stolen_share(before, cpu_ticks())
         report = app.metrics(newer_than=time.time() + 0.1)
     return result, report, stolen, (p50, p99)
@@ -120,11 +126,14 @@ def main() -> None:
 
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--map", action="store_true", help="with the branch-count map on (section drag_map)")
-    map_on = parser.parse_args().map
+    parser.add_argument("--jacobian", action="store_true",
+                        help="with the ellipsoids, force arrow and torque bars on (section drag_jacobian)")
+    arguments = parser.parse_args()
+    map_on, jacobian = arguments.map, arguments.jacobian
     sessions: dict[str, list] = {"compiled": [], "numpy": []}
     for _ in range(SESSIONS):
         for backend in sessions:
-            sessions[backend].append(run(backend, map_on))
+            sessions[backend].append(run(backend, map_on, jacobian))
     ghost = ghost_update_bytes()
     rows = []
     for backend, runs in sessions.items():
@@ -162,13 +171,15 @@ def main() -> None:
     body = "\n".join(
         [
             "## Drag handler with the branch-count map on (`benchmarks/bench_drag.py --map`)" if map_on
+            else "## Drag handler with the ellipsoids and torque bars on (`benchmarks/bench_drag.py --jacobian`)" if jacobian
             else "## Drag handler (`benchmarks/bench_drag.py`)",
             "",
             f"Run: {machine()}. The app in its own process on each backend (`UR10CORE_BACKEND`), {SESSIONS} sessions "
             "each, alternating, each after waiting for a quiet host; each backend's median session (by handler CPU p99) "
             f"is shown. A session: {handler['count']} gizmo events at {RATE_HZ:.0f} Hz from one headless client in "
             "another process (viser's protocol, the messages a browser sends), singularity overlay on"
-            f"{' and the branch-count map (40 000 IK poses per map, on its own thread, at most 10 maps a second)' if map_on else ''}; "
+            f"{' and the branch-count map (40 000 IK poses per map, on its own thread, at most 10 maps a second)' if map_on else ''}"
+            f"{', the manipulability ellipsoids and the force arrow (on the drag path) and the torque bars (with the panel)' if jacobian else ''}; "
             f"{result['answered']} of them answered by a 3D update (the rest folded into the next). The verdict is on the "
             "handler's CPU time, the server's own work without whatever the OS ran meanwhile on these two cores (the "
             "load generator decoding every frame, above all); the wall time is beside it. Each session starts once "
@@ -180,7 +191,7 @@ def main() -> None:
             table(["what", "measured", "target", "verdict"], rows),
         ]
     )
-    write_section("drag_map" if map_on else "drag", body)
+    write_section("drag_map" if map_on else "drag_jacobian" if jacobian else "drag", body)
     print(body)
 
 
