@@ -409,8 +409,8 @@ class Classroom:
             return guard(member.client, handler, is_closed=lambda: member.closed)
 
         if member.folder is not None:
-            member.folder.remove()
-        member.folder = gui.add_folder("Classroom", order=0.0)
+            member.folder.remove()  # and the picker in it
+        member.folder, member.picker = gui.add_folder("Classroom", order=0.0), None
         with member.folder:
             if member.role == PRESENTER:
                 gui.add_markdown("You are **presenting**: everyone sees your arm, target and overlays.")

@@ -16,6 +16,7 @@ import viser
 
 from ur10core.orientation import quaternion
 
+from .fast_updates import set_orientations, set_positions
 from .feedback import chosen
 from .state import Snapshot
 from .style import number
@@ -78,14 +79,16 @@ class EllipsoidsView(View):
     def render(self, snapshot: Snapshot) -> None:
         show_velocity, show_force = SHOWN.get(self.which.value, (False, False)) if self.enabled.value else (False, False)
         if show_velocity or show_force:
-            translation, _ = snapshot.arm.ellipsoids(snapshot.q)
+            translation = snapshot.arm.translation_ellipsoid(snapshot.q)
             wxyz, centre = ellipsoid_pose(translation.axes), snapshot.flange[:3, 3]
             sizes = ((self.velocity, show_velocity, VELOCITY_METRES * translation.velocity),
                      (self.force, show_force, np.minimum(FORCE_METRES * translation.force, LONGEST_DRAWN)))
+            nodes = [node for node, shown, _ in sizes if shown]
             for node, shown, size in sizes:
                 if shown:  # sized and placed before it shows
                     node.scale = tuple(float(v) for v in np.maximum(size, 1e-4))  # a zero axis: a flat disc
-                    node.wxyz, node.position = wxyz, centre
+            set_orientations(nodes, np.tile(wxyz, (len(nodes), 1)))
+            set_positions(nodes, np.tile(centre, (len(nodes), 1)))
         for node, shown in ((self.velocity, show_velocity), (self.force, show_force)):
             if node.visible != shown:
                 node.visible = shown
@@ -93,7 +96,7 @@ class EllipsoidsView(View):
     def render_panel(self, snapshot: Snapshot) -> None:
         self.lengths.visible = bool(self.enabled.value)
         if self.lengths.visible:
-            translation, _ = snapshot.arm.ellipsoids(snapshot.q)
+            translation = snapshot.arm.translation_ellipsoid(snapshot.q)
             self.lengths.content = lengths_markdown(translation.velocity, translation.force)
 
     def close(self) -> None:

@@ -8,15 +8,19 @@ panel (≤ 10 Hz), the arrow with the arm.
 
 from __future__ import annotations
 
+import threading
 from typing import TYPE_CHECKING
 
 import numpy as np
 import viser
 
+from .fast_updates import set_positions
 from .feedback import chosen
 from .state import Snapshot
 from .style import DANGER_RED, SAFE_GREEN, JOINT_LABELS, blend, hex_color, number
 from .view import View
+from .workers import HEAVY, FoldedRuns
+from .workspace import POINT_SIZE, colormap
 
 if TYPE_CHECKING:
     from .session import ClientSession
@@ -31,6 +35,19 @@ MAX_FORCE_N = 200.0
 MAX_PAYLOAD_KG = 10.0  #: the UR10's rated payload (docs/kinematics.md §1)
 ARROW_METRES_PER_N = 0.002
 FORCE_COLOR = (0, 114, 178)
+#: Joint vectors sampled for the torque map: the worst of them is marked.
+TORQUE_MAP_POINTS = 20_000
+
+
+def torque_map(arm, force: np.ndarray, n: int = TORQUE_MAP_POINTS) -> tuple[np.ndarray, np.ndarray, int]:
+    """(flange positions (n, 3), ‖Jᵀ F‖ at each (n,), index of the largest) over random joints (docs/kinematics.md §8.3).
+
+    The course's statics exercise for its 3-DOF arm, on the UR10: where in its workspace does
+    holding ``force`` at the flange need the most joint torque?
+    """
+    points, _, q = arm.sample_workspace(n, seed=3, return_joints=True)
+    norms = np.linalg.norm(arm.static_torques(q, force), axis=-1)
+    return points, norms, int(np.argmax(norms))
 
 
 def force_vector(direction: str, newtons: float, flange: np.ndarray) -> np.ndarray:
@@ -72,11 +89,21 @@ class StaticsView(View):
             self.direction = gui.add_dropdown("Force direction", tuple(DIRECTIONS), initial_value="down (−z)")
             self.payload = gui.add_slider("Payload (kg)", min=0.0, max=MAX_PAYLOAD_KG, step=0.5, initial_value=0.0)
             self.bars = gui.add_html("", visible=False)
+            self.mapped = gui.add_checkbox("Colour the workspace by ‖τ‖ for this force", False,
+                                           hint=f"{TORQUE_MAP_POINTS:,} random joint vectors; the worst one is marked")
+            self.map_legend = gui.add_markdown("", visible=False)
         self.arrow = scene.add_arrows("/statics/force", np.zeros((1, 2, 3)), FORCE_COLOR, shaft_radius=0.012,
                                       head_radius=0.03, head_length=0.05, visible=False)
         self.label = scene.add_label("/statics/force_label", "F", font_screen_scale=1.4, anchor="center-left", visible=False)
+        self._scene = scene
+        self._map: viser.PointCloudHandle | None = None
+        self._worst: tuple[viser.IcosphereHandle, viser.LabelHandle] | None = None
+        self._map_lock = threading.Lock()
+        self._maps = FoldedRuns(self._draw_map)
         for widget in (self.enabled, self.newtons, self.direction, self.payload):
             widget.on_update(session.guard(lambda _: session.redraw()))
+        for widget in (self.mapped, self.newtons, self.direction):
+            widget.on_update(session.guard(lambda _: self._maps.start("torque-map", session.guard)))
 
     def loads(self, snapshot: Snapshot) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """(force (3,), τ of the force (6,), τ of gravity and payload (6,)) at this snapshot, from the widgets."""
@@ -98,8 +125,10 @@ class StaticsView(View):
             force = force_vector(chosen(self.direction, "force direction"), newtons, snapshot.flange)
             tip = snapshot.flange[:3, 3]
             self.arrow.points = np.array([[tip, tip + ARROW_METRES_PER_N * force]])  # the way the tool pushes
-            self.label.position = tip + ARROW_METRES_PER_N * force
-            self.label.text = f"F = {newtons:.0f} N"
+            set_positions([self.label], (tip + ARROW_METRES_PER_N * force)[None])
+            text = f"F = {newtons:.0f} N"
+            if self.label.text != text:
+                self.label.text = text
         for node in (self.arrow, self.label):
             if node.visible != shown:
                 node.visible = shown
@@ -110,7 +139,44 @@ class StaticsView(View):
             _, force_torques, gravity = self.loads(snapshot)
             self.bars.content = bars_html(force_torques, gravity)
 
+    def _draw_map(self) -> None:
+        session = self._session
+        shown = None
+        if self.mapped.value and not session.closed:
+            snapshot = session.state.last
+            direction = chosen(self.direction, "force direction")
+            if DIRECTIONS[direction] is None:
+                raise ValueError("the map needs a force fixed in the base frame: pick a direction other than the flange's z")
+            force = force_vector(direction, float(self.newtons.value), snapshot.flange)
+            shown = force, HEAVY.run(session.client.client_id, lambda: torque_map(snapshot.arm, force))
+        with self._map_lock:
+            if session.closed:
+                return
+            self._clear_map()
+            self.map_legend.visible = shown is not None
+            if shown is None:
+                return
+            force, (points, norms, worst) = shown
+            top = float(norms[worst]) or 1.0
+            self._map = self._scene.add_point_cloud("/statics/torque_map", points.astype(np.float32), colormap(norms, top),
+                                                    point_size=POINT_SIZE, point_shape="circle")
+            marker = self._scene.add_icosphere("/statics/worst", radius=0.04, color=DANGER_RED, position=points[worst])
+            label = self._scene.add_label("/statics/worst/label", f"largest ‖τ‖ = {top:.0f} N·m", font_screen_scale=1.4,
+                                          anchor="bottom-center")
+            self._worst = (marker, label)
+            self.map_legend.content = (f"Colour: ‖Jᵀ F‖ for {np.linalg.norm(force):.0f} N, from 0 (purple) to "
+                                       f"{top:.0f} N·m (yellow), the largest of {len(norms):,} random joint vectors (red ball).")
+
+    def _clear_map(self) -> None:
+        if self._map is not None:
+            self._map.remove()
+        if self._worst is not None:
+            self._worst[0].remove()  # its label goes with it
+        self._map, self._worst = None, None
+
     def close(self) -> None:
-        """The session has gone: so does its arrow, even from a scene everyone shares."""
+        """The session has gone: so do its arrow and map, even from a scene everyone shares."""
         self.arrow.remove()
         self.label.remove()
+        with self._map_lock:
+            self._clear_map()

@@ -187,3 +187,28 @@ def test_moving_from_a_remembered_pose_along_a_path(app, kind):
         await client.close()
 
     asyncio.run(scenario())
+
+
+def test_the_workspace_coloured_by_the_torque_a_force_needs(app):
+    async def scenario():
+        from app.statics import torque_map
+
+        client = await ViserClient(url(app)).connect()
+        session = session_of(app, client)
+        statics = session.statics
+        await client.set_gui("Colour the workspace by ‖τ‖ for this force", True)
+        await until(lambda: statics._map is not None and statics.map_legend.visible, what="the torque map")
+        points, norms, worst = torque_map(session.arm, np.array([0.0, 0.0, -50.0]))
+        marker, label = statics._worst
+        np.testing.assert_allclose(marker.position, points[worst], atol=1e-6)
+        assert label.text == f"largest ‖τ‖ = {norms[worst]:.0f} N·m"
+        # the worst pose is where the arm reaches furthest out: Jᵀ F of a vertical force is its lever
+        assert np.hypot(*points[worst][:2]) > 0.9 * np.hypot(points[:, 0], points[:, 1]).max()
+        await client.set_gui("Force direction", "along the flange's z")  # not fixed in space: refused, with a reason
+        await until(lambda: any("fixed in the base frame" in body for _, body in client.received.notifications),
+                    what="the refusal")
+        await client.set_gui("Colour the workspace by ‖τ‖ for this force", False)
+        await until(lambda: statics._map is None and not statics.map_legend.visible, what="the map gone")
+        await client.close()
+
+    asyncio.run(scenario())

@@ -207,10 +207,17 @@ class JacobianUses:
         (0.0, True)
         """
         J = self.jacobian(self._joints(q))
+        return self._translation(J), self._rotation(J)
+
+    def translation_ellipsoid(self, q) -> Ellipsoid:
+        """The translational half of :meth:`ellipsoids` alone (what the app draws at the flange, on every drag)."""
+        return self._translation(self.jacobian(self._joints(q)))
+
+    def _translation(self, J: np.ndarray) -> Ellipsoid:
         task = getattr(self, "task", "pose")
-        J_v, J_w = J[..., :3, :], J[..., 3:, :]
-        if task == "pose":
-            return _ellipsoid(J_v @ _null_projector(J_w)), _ellipsoid(J_w @ _null_projector(J_v))
-        if task == "position and yaw":
-            return _ellipsoid(J_v @ _null_projector(J[..., 5:, :])), _ellipsoid(J_w)
-        return _ellipsoid(J_v), _ellipsoid(J_w)
+        held = {"pose": J[..., 3:, :], "position and yaw": J[..., 5:, :]}.get(task)
+        return _ellipsoid(J[..., :3, :] if held is None else J[..., :3, :] @ _null_projector(held))
+
+    def _rotation(self, J: np.ndarray) -> Ellipsoid:
+        held = J[..., :3, :] if getattr(self, "task", "pose") == "pose" else None
+        return _ellipsoid(J[..., 3:, :] if held is None else J[..., 3:, :] @ _null_projector(held))
