@@ -28,7 +28,7 @@ if TYPE_CHECKING:
 #: Each joint's rated torque (N·m): UR's joint sizes for the UR10 (base and shoulder size 4,
 #: elbow size 3, wrists size 2).
 TORQUE_CAPACITY = np.array([330.0, 330.0, 150.0, 56.0, 56.0, 56.0])
-#: Where the force at the flange points (base frame), or "tool z" for the flange's own z axis.
+#: Where the force at the flange points (base frame); None: along the flange's own z axis.
 DIRECTIONS = {"down (−z)": (0.0, 0.0, -1.0), "up (+z)": (0.0, 0.0, 1.0), "+x": (1.0, 0.0, 0.0), "−x": (-1.0, 0.0, 0.0),
               "+y": (0.0, 1.0, 0.0), "−y": (0.0, -1.0, 0.0), "along the flange's z": None}
 MAX_FORCE_N = 200.0
