@@ -54,6 +54,15 @@ def check_finite(array: np.ndarray, name: str) -> None:
         )
 
 
+def vectors(value, name: str, size: int) -> np.ndarray:
+    """Validate a float array of shape ``(..., size)`` with finite entries; returns it."""
+    array = as_float_array(value, name)
+    if array.ndim == 0 or array.shape[-1] != size:
+        raise ValueError(f"{name} must have shape (..., {size}), got shape {array.shape}")
+    check_finite(array, name)
+    return array
+
+
 def joint_vector(q, name: str = "q") -> np.ndarray:
     """Validate joint angles of shape ``(..., 6)`` in radians; returns a float array."""
     q = as_float_array(q, name)

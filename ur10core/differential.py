@@ -12,7 +12,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ._validate import as_float_array, check_finite
+from ._validate import vectors
 
 #: Below this smallest singular value (of the rows J maps joint rates into, in m/rad or rad/rad)
 #: the joint rates are damped (docs/kinematics.md §8.2).
@@ -60,14 +60,6 @@ class Ellipsoid:
     force: np.ndarray
 
 
-def _vectors(value, name: str, size: int) -> np.ndarray:
-    array = as_float_array(value, name)
-    if array.ndim == 0 or array.shape[-1] != size:
-        raise ValueError(f"{name} must have shape (..., {size}), got shape {array.shape}")
-    check_finite(array, name)
-    return array
-
-
 def damping(smallest_singular_value: np.ndarray) -> np.ndarray:
     """λ for a smallest singular value σ_min: 0 from :data:`DAMPING_THRESHOLD` up, growing to
     :data:`MAX_DAMPING` at σ_min = 0 as λ² = (1 − (σ_min/ε)²) λ_max² (docs/kinematics.md §8.2)."""
@@ -109,7 +101,7 @@ class JacobianUses:
     """
 
     def _joints(self, q) -> np.ndarray:
-        return _vectors(q, "q", self.n_joints)
+        return vectors(q, "q", self.n_joints)
 
     def tool_twist(self, q, qdot) -> np.ndarray:
         """The tool's twist (v, ω) in the base frame for joint rates ``qdot``: ``J(q) q̇``, (..., 6).
@@ -130,7 +122,7 @@ class JacobianUses:
         True
         """
         J = self.jacobian(self._joints(q))
-        qdot = _vectors(qdot, "qdot", self.n_joints)
+        qdot = vectors(qdot, "qdot", self.n_joints)
         return np.einsum("...ij,...j->...i", J, qdot)
 
     def joint_rates(self, q, twist) -> JointRates:
@@ -158,7 +150,7 @@ class JacobianUses:
         True
         """
         J = self.jacobian(self._joints(q))
-        twist = _vectors(twist, "twist", 6)
+        twist = vectors(twist, "twist", 6)
         J = np.broadcast_to(J, np.broadcast_shapes(J.shape[:-2], twist.shape[:-1]) + J.shape[-2:])
         qdot, lam = damped_inverse(J, twist)
         return JointRates(qdot, lam, np.einsum("...ij,...j->...i", J, qdot))
@@ -182,7 +174,7 @@ class JacobianUses:
         True
         """
         J = self.jacobian(self._joints(q))
-        wrench = np.concatenate(np.broadcast_arrays(_vectors(force, "force", 3), _vectors(moment, "moment", 3)), axis=-1)
+        wrench = np.concatenate(np.broadcast_arrays(vectors(force, "force", 3), vectors(moment, "moment", 3)), axis=-1)
         return np.einsum("...ij,...i->...j", J, wrench)
 
     def ellipsoids(self, q) -> tuple[Ellipsoid, Ellipsoid]:

@@ -27,7 +27,7 @@ import math
 import numpy as np
 
 from ._backend import kernels
-from ._validate import as_float_array, check_finite, rotation_matrix
+from ._validate import as_float_array, check_finite, rotation_matrix, vectors
 
 #: Below this cos β the Z-Y-X angles are at gimbal lock (β = ±90°): α is set to 0.
 GIMBAL_TOLERANCE = 1e-10
@@ -45,24 +45,16 @@ def _rot(axis: int, angle: np.ndarray) -> np.ndarray:
     return R
 
 
-def _angles(value, name: str, count: int) -> np.ndarray:
-    value = as_float_array(value, name)
-    if value.ndim == 0 or value.shape[-1] != count:
-        raise ValueError(f"{name} must have shape (..., {count}), got shape {value.shape}")
-    check_finite(value, name)
-    return value
-
-
 def rotation_from_zyx_euler(angles) -> np.ndarray:
     """``R = Rz(α) Ry(β) Rx(γ)`` from Z-Y-X Euler angles ``(α, β, γ)`` (..., 3)."""
-    alpha, beta, gamma = np.moveaxis(_angles(angles, "angles", 3), -1, 0)
+    alpha, beta, gamma = np.moveaxis(vectors(angles, "angles", 3), -1, 0)
     # intrinsic: each rotation about the axes of the frame the previous ones produced
     return _rot(2, alpha) @ _rot(1, beta) @ _rot(0, gamma)
 
 
 def rotation_from_xyz_fixed(angles) -> np.ndarray:
     """R from X-Y-Z fixed angles ``(γ, β, α)`` (..., 3): about fixed X by γ, Y by β, Z by α."""
-    gamma, beta, alpha = np.moveaxis(_angles(angles, "angles", 3), -1, 0)
+    gamma, beta, alpha = np.moveaxis(vectors(angles, "angles", 3), -1, 0)
     R = _rot(0, gamma)
     R = _rot(1, beta) @ R  # extrinsic: each later rotation pre-multiplies
     return _rot(2, alpha) @ R
@@ -119,7 +111,7 @@ def quaternion(R, check: bool = True) -> np.ndarray:
 
 def rotation_from_quaternion(q) -> np.ndarray:
     """R from a quaternion ``(w, x, y, z)`` (..., 4); it is normalised first."""
-    q = _angles(q, "q", 4)
+    q = vectors(q, "q", 4)
     norm = np.linalg.norm(q, axis=-1, keepdims=True)
     if (norm == 0).any() or not np.isfinite(norm).all():
         raise ValueError("q must not be the zero quaternion (nor overflow)")
@@ -149,8 +141,8 @@ def transform_from_quaternion(wxyz, position) -> np.ndarray:
         (w, x, y, z), (px, py, pz) = wxyz, position
         norm = math.sqrt(w * w + x * x + y * y + z * z)
         if not (0.0 < norm < math.inf and all(map(math.isfinite, position))):
-            _angles(wxyz, "wxyz", 4)  # words what is wrong
-            _angles(position, "position", 3)
+            vectors(wxyz, "wxyz", 4)  # words what is wrong
+            vectors(position, "position", 3)
             raise ValueError(f"wxyz {wxyz} is not a rotation (its norm is {norm})")
         w, x, y, z = w / norm, x / norm, y / norm, z / norm
         return np.array([
@@ -160,7 +152,7 @@ def transform_from_quaternion(wxyz, position) -> np.ndarray:
             [0.0, 0.0, 0.0, 1.0],
         ])
     R = rotation_from_quaternion(wxyz)
-    position = _angles(position, "position", 3)
+    position = vectors(position, "position", 3)
     T = np.zeros(np.broadcast_shapes(R.shape[:-2], position.shape[:-1]) + (4, 4))
     T[..., :3, :3] = R
     T[..., :3, 3] = position
@@ -175,7 +167,7 @@ def in_frame(T, points) -> np.ndarray:
     [1.0, 0.0, 0.0]
     """
     T = as_float_array(T, "T")
-    points = _angles(points, "points", 3)
+    points = vectors(points, "points", 3)
     return (points - T[:3, 3]) @ T[:3, :3]
 
 
@@ -192,7 +184,7 @@ def angle_axis(R, check: bool = True) -> tuple[np.ndarray, np.ndarray]:
 
 def angle_axis_from_quaternion(q) -> tuple[np.ndarray, np.ndarray]:
     """``(θ, k̂)`` of a unit quaternion ``(w, x, y, z)`` with w ≥ 0 (as :func:`quaternion` returns)."""
-    q = _angles(q, "q", 4)
+    q = vectors(q, "q", 4)
     vector = q[..., 1:]
     length = np.linalg.norm(vector, axis=-1)
     theta = 2.0 * np.arctan2(length, q[..., 0])
@@ -205,7 +197,7 @@ def rotation_from_angle_axis(theta, axis) -> np.ndarray:
     """Rodrigues: ``R = I + sin θ [k]x + (1 − cos θ) [k]x²`` (Craig 2.80); k̂ is normalised."""
     theta = as_float_array(theta, "theta")
     check_finite(theta, "theta")
-    axis = _angles(axis, "axis", 3)
+    axis = vectors(axis, "axis", 3)
     norm = np.linalg.norm(axis, axis=-1, keepdims=True)
     if (norm == 0).any():
         raise ValueError("axis must not be the zero vector")
