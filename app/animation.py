@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import threading
 import time
-from typing import TYPE_CHECKING, Callable
+from typing import TYPE_CHECKING, Any, Callable
 
 import numpy as np
 
@@ -28,17 +28,26 @@ class Player:
     def playing(self) -> bool:
         return self._thread is not None and self._thread.is_alive()
 
-    def play(self, compute: Callable[[], tuple[np.ndarray, np.ndarray]], cause: str, done: Callable[[], None] = lambda: None) -> None:
-        """Compute ``(t (m,), q (m, 6))`` on the thread, then move the arm along it in real time."""
+    def play(self, compute: Callable[[], tuple[np.ndarray, np.ndarray]], cause: str, done: Callable[[], None] = lambda: None,
+             show: Callable[[Any, np.ndarray], Any] | None = None) -> None:
+        """Compute ``(t (m,), q (m, n))`` on the thread, then move the arm along it in real time.
+
+        ``show(state, q[k])`` is the change that puts each frame on the arm (by default
+        ``state.set_joints(q[k], cause=cause)``). Once :meth:`stop` has returned, no frame is
+        applied: a change the caller then applies is the last word.
+        """
         self.stop()
+        if show is None:
+            def show(state, joints: np.ndarray):
+                return state.set_joints(joints, cause=cause)
         with self._lock:
             self._stop = threading.Event()
             stop = self._stop
-            self._thread = threading.Thread(target=self._session.guard(lambda _: self._run(compute, cause, stop, done)),
+            self._thread = threading.Thread(target=self._session.guard(lambda _: self._run(compute, show, stop, done)),
                                             args=(None,), name="animation", daemon=True)
             self._thread.start()
 
-    def _run(self, compute, cause: str, stop: threading.Event, done: Callable[[], None]) -> None:
+    def _run(self, compute, show: Callable[[Any, np.ndarray], Any], stop: threading.Event, done: Callable[[], None]) -> None:
         t, q = compute()
         start = time.monotonic()
         shown = -1.0
@@ -50,7 +59,8 @@ class Player:
             wait = start + t[k] - time.monotonic()
             if wait > 0 and stop.wait(wait):
                 return
-            self._session.apply(lambda state, joints=q[k]: state.set_joints(joints, cause=cause))
+            # checked under the arm's lock, where stop()'s caller applies its own change
+            self._session.apply(lambda state, row=q[k]: state.last if stop.is_set() else show(state, row))
             shown = t[k]
         done()
 

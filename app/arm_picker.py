@@ -20,7 +20,9 @@ SWITCH_INTERVAL = 0.5
 
 UR10 = "UR10 (the app's arm)"
 CUSTOM = "Your own DH table"
-#: What the dropdown shows → the ``Arm.preset`` name (None: the server's own UR10; "custom": the DH editor).
+DESKTOP = "The course's 3-DOF desktop arm"
+#: What the dropdown shows → the ``Arm.preset`` name (None: the server's own UR10; "custom": the DH editor;
+#: "three_dof": the course's desktop arm, ``app.course_arms.desktop_arm``).
 ARM_CHOICES: dict[str, str | None] = {
     UR10: None,
     "KUKA KR210 (spherical wrist)": "kr210",
@@ -29,13 +31,15 @@ ARM_CHOICES: dict[str, str | None] = {
     "SCARA (RRP + roll)": "scara",
     "Planar elbow (2R)": "planar_elbow",
     "Cylindrical arm (RPP)": "cylindrical",
+    DESKTOP: "three_dof",
     CUSTOM: "custom",
 }
-assert set(ARM_CHOICES.values()) - {None, "custom"} == set(PRESETS)
+assert set(ARM_CHOICES.values()) - {None, "custom", "three_dof"} == set(PRESETS)
 
 
-#: What the classroom's presenter can show the class: a typed table is for one's own browser.
-CLASS_CHOICES = tuple(label for label in ARM_CHOICES if label != CUSTOM)
+#: What the classroom's presenter can show the class: a typed table is for one's own browser, and the
+#: desktop arm (not a DH chain: no IK target, no branches) has lessons of its own rather than the class's live panel.
+CLASS_CHOICES = tuple(label for label in ARM_CHOICES if label not in (CUSTOM, DESKTOP))
 
 
 class ArmPicker:

@@ -24,6 +24,7 @@ from .arm_picker import ARM_CHOICES, CUSTOM, SWITCH_INTERVAL, UR10, ArmPicker
 from .classroom import Classroom
 from .course_arms.editor import STARTING_TABLE, parse_table
 from .course_arms.panel import factor_scales
+from .course_arms.desktop_arm import DesktopArmSession
 from .course_arms.session import CourseArmSession
 from .floor import add_floor_grid
 from .gate import Gate, gated_serve
@@ -173,7 +174,7 @@ class TeachingServer:
         self.models = load_models(preset)
         symbolic.load()  # read the cached derivations now rather than in the first student's callback
         for name in ARM_CHOICES.values():
-            if name not in (None, "custom"):
+            if name not in (None, "custom", "three_dof"):
                 symbolic_arms.load(name)
                 factor_scales(name)  # the gauges' scales: a few hundred ms in all, never in a callback
         self.host = host
@@ -191,7 +192,7 @@ class TeachingServer:
         loop = self.server.get_event_loop()
         self.refresher = PanelRefresher(loop)
         self.drags = DragQueue(loop)
-        self._sessions: dict[int, ClientSession | CourseArmSession] = {}
+        self._sessions: dict[int, ClientSession | CourseArmSession | DesktopArmSession] = {}
         self._last_switch: dict[int, float] = {}  # client id → when its arm was last rebuilt
         self._sessions_lock = threading.Lock()
         #: shared demo mode (``--shared``): everyone watches the presenter (``app.classroom``)
@@ -261,6 +262,8 @@ class TeachingServer:
             session = CourseArmSession(
                 client, arm, self.refresher, self.drags, lecture=lecture, text=text, convention=convention,
                 rebuild=lambda new, new_text, new_convention: self._switch(client, CUSTOM, (new, new_text, new_convention)))
+        elif name == "three_dof":
+            session = DesktopArmSession(client, Arm.preset(name), self.refresher, lecture=lecture)
         else:
             session = CourseArmSession(client, Arm.preset(name), self.refresher, self.drags, lecture=lecture)
         with self._sessions_lock:

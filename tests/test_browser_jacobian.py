@@ -43,3 +43,37 @@ def test_forces_ellipsoids_and_velocities_show_in_the_browser(open_page):
     page.locator(dom_id(session.velocity.solve)).click()
     wait_for(lambda: page.get_by_text("within its speed limit", exact=False).count() > 0, what="the joint rates")
     assert np.isfinite(session.velocity.joint_rates()).all()
+
+
+def test_the_desktop_arm_plays_the_courses_path_and_finds_its_worst_pose(open_page, app, tmp_path):
+    """The 3-DOF arm from the picker: drawn with its parallelogram, its velocity plots, the path's
+    arrows while it plays, and the torque map with its worst pose."""
+    from app.arm_picker import DESKTOP
+    from app.course_arms.desktop_arm import DesktopArmSession
+
+    from .browser_support import choose
+
+    page, session = open_page()
+    client_id = next(k for k, v in app.sessions.items() if v is session)
+    before = canvas_pixels(page)
+    choose(page, session.arm_picker.dropdown, DESKTOP)
+    wait_for(lambda: isinstance(app.sessions.get(client_id), DesktopArmSession), what="the desktop arm's session")
+    desktop = app.sessions[client_id]
+    page.wait_for_selector(dom_id(desktop.joints.sliders[0]), timeout=30_000)
+    wait_for(lambda: page.get_by_text("upper arm and forearm in one line", exact=False).count() > 0, what="det J_v's factors")
+    assert page.locator(".u-legend").count() >= 2 or page.locator("canvas").count() >= 3, "the velocity plots are missing"
+    page.wait_for_timeout(2500)
+    still = canvas_pixels(page)
+    assert changed(before, still) > 0.02, "the desktop arm was not drawn in place of the UR10"
+    page.locator(dom_id(desktop.path.play)).click()
+    wait_for(lambda: desktop.scene.velocity[0].visible, what="the path playing")
+    page.wait_for_timeout(1500)
+    playing = canvas_pixels(page)
+    assert changed(still, playing) > 0.003, "the arm did not move along the path"
+    page.screenshot(path=str(tmp_path / "desktop_arm_playing.png"))
+    page.locator(dom_id(desktop.path.stop)).click()
+    wait_for(lambda: not desktop.scene.velocity[0].visible, what="the path stopped")
+    unfold(page, "Forces", desktop.forces.search)
+    page.locator(dom_id(desktop.forces.search)).click()
+    wait_for(lambda: page.get_by_text("Largest ‖τ‖", exact=False).count() > 0, what="the worst pose")
+    wait_for(lambda: page.get_by_text("largest ‖τ‖ =", exact=False).count() > 0, what="its label in 3D")

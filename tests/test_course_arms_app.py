@@ -109,7 +109,7 @@ def test_every_arm_can_be_picked_and_an_unknown_one_is_refused(app):
     async def scenario():
         client = await ViserClient(url(app)).connect()
         for label, name in ARM_CHOICES.items():
-            if name in (None, "custom"):  # the DH editor's arm has its own test
+            if name in (None, "custom", "three_dof"):  # the DH editor's arm and the desktop arm have their own tests
                 continue
             session = await pick(app, client, label, CourseArmSession)
             snapshot = session.state.last

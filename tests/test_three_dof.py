@@ -40,6 +40,18 @@ def test_j_is_the_derivative_of_the_pose():
             np.testing.assert_allclose(J[3:, i], [S[2, 1], S[0, 2], S[1, 0]], atol=1e-8)
 
 
+def test_det_jv_is_the_product_of_its_two_factors():
+    """det J_v from numpy against −l1 l5 · reach · sin(θ2 − θ3), and each factor at a pose the course names."""
+    arm = Arm.preset("three_dof")
+    q = np.random.default_rng(4).uniform(-math.pi, math.pi, (500, 3))
+    reach, fold = np.moveaxis(arm.singularity_factors(q), -1, 0)
+    np.testing.assert_allclose(np.linalg.det(arm.jacobian(q)[:, :3]), -FOREARM * UPPER_ARM * reach * fold, atol=1e-12)
+    np.testing.assert_allclose(reach, np.hypot(arm.fk(q)[:, 0, 3], arm.fk(q)[:, 2, 3]) * np.sign(reach), atol=1e-12)
+    stretched = np.radians([10.0, 200.0, 20.0])  # the upper arm points along the forearm: one straight line
+    assert arm.singularity_factors(stretched)[1] == pytest.approx(0.0, abs=1e-12)
+    assert np.linalg.matrix_rank(arm.jacobian(stretched)[:3], tol=1e-9) == 2
+
+
 def test_tool_velocities_along_the_courses_path():
     """The course plots J q̇ along its path and checks it against a simulation: here against the time
     derivative of the tool's position and orientation along the same path."""

@@ -111,6 +111,20 @@ class ThreeDofArm(JacobianUses):
         J[..., 3, 1], J[..., 4, 0], J[..., 5, 1] = s1, 1.0, c1
         return J
 
+    def singularity_factors(self, q) -> np.ndarray:
+        """(..., 2) the factors of det J_v = −l1 l5 · (l1 c3 − l5 c2) · sin(θ2 − θ3) (docs/kinematics.md §8.6).
+
+        The first is the tool's distance from the base's vertical axis (m, signed): at zero the
+        base turns the tool in place. The second is zero when the upper arm and the forearm lie
+        along one line, stretched or folded: then neither can move the tool along that line.
+
+        >>> ThreeDofArm().singularity_factors(np.radians([0, -90, 0])).round(6).tolist()
+        [1.28, -1.0]
+        """
+        q = self._joints(q)
+        reach = self.forearm * np.cos(q[..., 2]) - self.upper_arm * np.cos(q[..., 1])
+        return np.stack([reach, np.sin(q[..., 1] - q[..., 2])], axis=-1)
+
 
 def course_path(t) -> tuple[np.ndarray, np.ndarray]:
     """The course's joint path: q(t) and q̇(t), each (..., 3), for times ``t`` (s).
@@ -135,12 +149,11 @@ class WorstPose:
     samples: int  #: joint vectors searched
 
 
-def largest_torque(arm: ThreeDofArm, force, steps: int = 41) -> WorstPose:
-    """Search a grid of ``steps`` values per joint over ``arm.limits`` for the largest ‖J_vᵀ F‖.
+def torque_grid(arm: ThreeDofArm, force, steps: int = 41) -> tuple[np.ndarray, np.ndarray]:
+    """(q (steps³, 3), ‖J_vᵀ F‖ at each (steps³,)) on a grid of ``steps`` values per joint over ``arm.limits``.
 
-    The course's statics exercise: which configuration needs the most torque to hold
-    ``force`` (N, base frame) at the tool. A grid, not an optimiser: the answer is easy to
-    check and to draw over the workspace.
+    ``force`` (3,) is in N, in the base frame. The tool positions, for drawing the map the
+    course draws over the workspace, are ``arm.fk(q)[..., :3, 3]``.
     """
     force = as_float_array(force, "force")
     if force.shape != (3,):
@@ -150,7 +163,16 @@ def largest_torque(arm: ThreeDofArm, force, steps: int = 41) -> WorstPose:
         raise ValueError(f"steps must be from 2 to 201, got {steps}")
     axes = [np.linspace(low, high, steps) for low, high in arm.limits]
     q = np.stack(np.meshgrid(*axes, indexing="ij"), axis=-1).reshape(-1, 3)
-    torques = arm.static_torques(q, force)
-    norms = np.linalg.norm(torques, axis=-1)
+    return q, np.linalg.norm(arm.static_torques(q, force), axis=-1)
+
+
+def largest_torque(arm: ThreeDofArm, force, steps: int = 41) -> WorstPose:
+    """Search :func:`torque_grid` for the largest ‖J_vᵀ F‖.
+
+    The course's statics exercise: which configuration needs the most torque to hold
+    ``force`` (N, base frame) at the tool. A grid, not an optimiser: the answer is easy to
+    check and to draw over the workspace.
+    """
+    q, norms = torque_grid(arm, force, steps)
     worst = int(np.argmax(norms))
-    return WorstPose(q[worst], torques[worst], float(norms[worst]), len(q))
+    return WorstPose(q[worst], arm.static_torques(q[worst], force), float(norms[worst]), len(q))

@@ -1,0 +1,86 @@
+"""The course's 3-DOF desktop arm in the app (docs/kinematics.md §8.6): picked, driven, played, searched."""
+
+from __future__ import annotations
+
+import asyncio
+import math
+
+import numpy as np
+import pytest
+
+from app.arm_picker import DESKTOP, UR10
+from app.course_arms.desktop_arm import COURSE_TO_WORLD, SHOULDER_HEIGHT, DesktopArmSession, factors_markdown
+from app.session import ClientSession
+from ur10core import Arm
+from ur10core.three_dof import FOREARM, UPPER_ARM
+
+from .server_support import until, url
+from .test_course_arms_app import pick
+from .viser_client import ViserClient
+
+
+def test_the_readout_names_each_factor_and_flags_the_one_near_zero():
+    from app.course_arms.desktop_arm import DesktopArmState
+
+    arm = Arm.preset("three_dof")
+    state = DesktopArmState(arm)
+    level = factors_markdown(arm, state.set_joints(np.radians([0.0, -90.0, 0.0])))
+    assert "Tool p = (1280, 1350, 0) mm" in level and "singular" not in level
+    folded = factors_markdown(arm, state.set_joints(np.radians([0.0, 30.0, 30.0])))  # the forearm back along the upper arm
+    assert "upper arm and forearm in one line" in folded and folded.count("(singular)") == 1
+    with pytest.raises(ValueError, match="θ3 forearm: from 0° to 180°, got 200.0°"):
+        state.set_joints(np.radians([0.0, 0.0, 200.0]))
+
+
+def test_the_world_stands_the_courses_y_up():
+    np.testing.assert_allclose(COURSE_TO_WORLD @ (0.0, 1.0, 0.0), (0.0, 0.0, 1.0))
+    assert np.linalg.det(COURSE_TO_WORLD) == pytest.approx(1.0)
+    # the lowest the tool gets in the joint ranges stays above the floor
+    arm = Arm.preset("three_dof")
+    grid = np.stack(np.meshgrid(*(np.linspace(lo, hi, 19) for lo, hi in arm.limits), indexing="ij"), -1).reshape(-1, 3)
+    assert SHOULDER_HEIGHT + arm.fk(grid)[:, 1, 3].min() > 0.1
+
+
+@pytest.mark.server
+def test_the_desktop_arm_is_picked_driven_played_and_searched(app):
+    async def scenario():
+        client = await ViserClient(url(app)).connect()
+        session = await pick(app, client, DESKTOP, DesktopArmSession)
+        await until(lambda: "/desktop_arm/links" in client.received.nodes and "θ2 upper arm (°)" in client.gui,
+                    what="the desktop arm")
+        # sliders: upper arm straight up, forearm level → the tool is l1 out and l5 up (the course's frame)
+        await client.set_gui("θ2 upper arm (°)", -90.0)
+        await client.set_gui("θ3 forearm (°)", 0.0)
+        await until(lambda: np.allclose(session.state.last.q, np.radians([0.0, -90.0, 0.0])), what="the sliders")
+        np.testing.assert_allclose(session.state.last.tool[:3, 3], (FOREARM, UPPER_ARM, 0.0), atol=1e-12)
+        np.testing.assert_allclose(session.state.last.points[3], (FOREARM, 0.0, SHOULDER_HEIGHT + UPPER_ARM), atol=1e-12)
+        await client.set_gui("θ3 forearm (°)", 200.0)  # beyond its range: refused, with the range
+        await until(lambda: any("from 0° to 180°" in body for _, body in client.received.notifications), what="the refusal")
+        assert session.state.last.q[2] == 0.0
+
+        # the course's path: while it plays the arm is on it (θ1 = θ2, θ3 = 3π/4 + ¾ θ1) and the arrows show
+        await client.set_gui("Play the course's path", True)
+        await until(lambda: np.any(session.state.last.rates) and abs(session.state.last.q[0]) > 0.05, what="the path playing")
+        q = session.state.last.q
+        assert q[0] == pytest.approx(q[1]) and q[2] == pytest.approx(3 * math.pi / 4 + 0.75 * q[0])
+        await until(lambda: client.received.visible.get("/desktop_arm/linear") is True, what="the velocity arrow")
+        await client.set_gui("Stop", True)
+        await until(lambda: not np.any(session.state.last.rates), what="the path stopped")
+        await until(lambda: client.received.visible.get("/desktop_arm/linear") is False, what="the arrow hidden")
+
+        # the statics search: 10 N down, the worst pose has both links level, and the map is drawn
+        await client.set_gui("Force at the tool (N)", 10.0)
+        await client.set_gui("Find the pose that needs the largest ‖τ‖", True)
+        await until(lambda: "/desktop_arm/torque_map" in client.received.nodes, what="the torque map")
+        await until(lambda: abs(math.cos(session.state.last.q[1])) > 0.999, what="the arm at the worst pose")
+        worst = session.state.last.q
+        assert abs(math.cos(worst[2])) == pytest.approx(1.0)
+        torques = session.arm.static_torques(worst, (0.0, -10.0, 0.0))
+        assert np.linalg.norm(torques) == pytest.approx(10.0 * math.hypot(UPPER_ARM, FOREARM), rel=1e-9)
+
+        back = await pick(app, client, UR10, ClientSession)
+        assert session.closed and not back.closed
+        assert "/desktop_arm/links" not in client.received.nodes
+        await client.close()
+
+    asyncio.run(scenario())
