@@ -33,6 +33,39 @@ PATH_STEPS = 240
 PATHS = ("straight tool line", "joints interpolated")
 
 
+#: Shading of the rate charts: where the resolved rates were damped, and where a joint went over its speed limit.
+SINGULAR_FILL, OVER_FILL = "rgba(90, 90, 100, 0.22)", "rgba(220, 38, 38, 0.22)"
+
+
+def rate_chart_data(path: paths.Path) -> tuple[np.ndarray, ...]:
+    """The columns of a path's chart: t, each joint's speed |q̇| (°/s), the two speed limits,
+    and the two marks (the chart's top where they hold, 0 elsewhere, drawn as shading)."""
+    speeds = np.degrees(np.abs(path.qdot))
+    top = 1.1 * max(float(speeds.max()), float(SPEED_LIMITS.max()))
+    ones = np.ones_like(path.t)
+    singular = np.where(path.damping > 0, top, 0.0)
+    over = np.where((speeds > SPEED_LIMITS).any(axis=1), top, 0.0)
+    columns = (path.t, *speeds.T, SPEED_LIMITS[0] * ones, SPEED_LIMITS[2] * ones, singular, over)
+    return tuple(np.asarray(c, dtype=np.float32) for c in columns)
+
+
+def rate_chart(gui: viser.GuiApi, kind: str) -> viser.GuiUplotHandle:
+    """An empty chart for the joint speeds along one kind of path, hidden until a path fills it."""
+    empty = np.zeros(2, np.float32)
+    return gui.add_uplot(
+        data=(empty,) * 11,
+        series=(viser.uplot.Series(label="time (s)"),
+                *(viser.uplot.Series(label=label, stroke=hex_color(colour), width=2)
+                  for label, colour in zip(JOINT_LABELS, SLOT_COLORS)),
+                viser.uplot.Series(label="limit, base and shoulder", stroke="#333333", width=1.5, dash=(8.0, 4.0)),
+                viser.uplot.Series(label="limit, elbow and wrists", stroke="#777777", width=1.5, dash=(3.0, 3.0)),
+                viser.uplot.Series(label="near a singularity", stroke="rgba(0, 0, 0, 0)", width=0.0, fill=SINGULAR_FILL),
+                viser.uplot.Series(label="over a speed limit", stroke="rgba(0, 0, 0, 0)", width=0.0, fill=OVER_FILL)),
+        scales={"x": viser.uplot.Scale(time=False)},  # seconds, not dates
+        axes=(viser.uplot.Axis(label="seconds"), viser.uplot.Axis(label="|q̇| (°/s)")),
+        title=f"{kind.capitalize()}: joint speeds", aspect=2.0, visible=False)
+
+
 def path_summary(path: paths.Path, kind: str) -> str:
     """What a student should notice: each joint's fastest rate against its limit, and where damping acted."""
     fastest = np.degrees(np.abs(path.qdot).max(axis=0))
@@ -69,13 +102,11 @@ class MotionLessons(View):
             self.path = gui.add_button_group("Go from the start to here along", PATHS)
             self.stop = gui.add_button("Stop", icon=viser.Icon.PLAYER_STOP)
             self.summary = gui.add_markdown("")
-            self.plot = gui.add_uplot(
-                data=(np.zeros(2, np.float32), *(np.zeros(2, np.float32) for _ in range(6))),
-                series=(viser.uplot.Series(label="time (s)"),
-                        *(viser.uplot.Series(label=label, stroke=hex_color(colour), width=2)
-                          for label, colour in zip(JOINT_LABELS, SLOT_COLORS))),
-                axes=(viser.uplot.Axis(label="seconds"), viser.uplot.Axis(label="joint rate (°/s)")),
-                title="Joint rates along the last path (UR10 limits: 120 and 180 °/s)", aspect=2.0, visible=False)
+            gui.add_markdown("Both ways between the same two poses, the one played first. Shaded: grey where the "
+                             "straight line passed near a singularity (the rates were damped), red where a joint "
+                             "went over its speed limit (the dashed lines).")
+            #: one chart per kind of path, side by side in time: the same endpoints both ways
+            self.charts = {kind: rate_chart(gui, kind) for kind in PATHS}
         self.start: np.ndarray | None = None  #: the remembered start pose (rad)
         self.remember.on_click(session.guard(lambda _: self._remember()))
         self.release.on_click(session.guard(lambda _: self._release()))
@@ -104,15 +135,15 @@ class MotionLessons(View):
         arm, start, goal = session.arm, self.start.copy(), session.state.last.q.copy()
 
         def compute() -> tuple[np.ndarray, np.ndarray]:
-            if kind == PATHS[0]:
-                path = HEAVY.run(session.client.client_id,
-                                 lambda: paths.straight_line(arm, start, arm.fk(goal), PATH_SECONDS, PATH_STEPS))
-            else:
-                path = paths.joint_interpolation(arm, start, goal, PATH_SECONDS, PATH_STEPS)
-            self.summary.content = path_summary(path, kind)
-            self.plot.data = (path.t.astype(np.float32), *np.degrees(path.qdot.T).astype(np.float32))
-            self.plot.visible = True
-            return path.t, path.q
+            both = {PATHS[0]: HEAVY.run(session.client.client_id,
+                                        lambda: paths.straight_line(arm, start, arm.fk(goal), PATH_SECONDS, PATH_STEPS)),
+                    PATHS[1]: paths.joint_interpolation(arm, start, goal, PATH_SECONDS, PATH_STEPS)}
+            self.summary.content = "\n\n".join(path_summary(both[k], k) for k in (kind, *(k for k in PATHS if k != kind)))
+            with session.client.atomic():
+                for name, path in both.items():
+                    self.charts[name].data = rate_chart_data(path)
+                    self.charts[name].visible = True
+            return both[kind].t, both[kind].q
 
         self.player.play(compute, "motion")
 

@@ -143,6 +143,27 @@ def test_near_a_singularity_the_needed_rates_are_red_and_on_it_damped():
         parse_twist("5000 0 0 0 0 0")
 
 
+def test_the_rate_charts_mark_the_singularity_and_the_speed_limits():
+    """A straight line across s5 = 0 is shaded where it was damped and where a wrist went over
+    180°/s; joint interpolation between the same poses needs neither mark."""
+    from app.motion_lessons import rate_chart_data
+    from ur10core import Arm
+    from ur10core.paths import joint_interpolation, straight_line
+
+    arm = Arm.preset("course")
+    start, goal = np.radians([10, -60, 80, -110, 20, 20]), np.radians([10, -60, 80, -110, -20, 20])
+    line = rate_chart_data(straight_line(arm, start, arm.fk(goal), 4.0, 240))
+    t, speeds, limits, singular, over = line[0], np.stack(line[1:7]), line[7:9], line[9], line[10]
+    assert len(line) == 11 and all(len(c) == len(t) for c in line)
+    np.testing.assert_allclose(limits, [np.full_like(t, 120.0), np.full_like(t, 180.0)])
+    top = singular.max()
+    assert top >= speeds.max() and set(np.unique(singular)) == {0.0, top} and set(np.unique(over)) == {0.0, top}
+    assert (speeds[3:].max(axis=0)[over > 0] > 180.0).all() and (speeds[3:].max(axis=0)[over == 0] <= 180.0).all()
+    assert singular[0] == 0.0 and singular[-1] == 0.0
+    joints = rate_chart_data(joint_interpolation(arm, start, goal, 4.0, 240))
+    assert not joints[9].any() and not joints[10].any()
+
+
 def test_the_released_arm_falls_as_the_dynamics_say(app):
     async def scenario():
         from ur10core import dynamics
@@ -182,7 +203,9 @@ def test_moving_from_a_remembered_pose_along_a_path(app, kind):
         await until(lambda: session.motion.player.playing, what="the path to start")
         await until(lambda: np.abs(session.state.last.q - start).max() < 0.05, what="the arm back near the start")
         await until(lambda: not session.motion.player.playing, timeout=30, what="the path to end")
-        assert session.motion.plot.visible and kind.capitalize() in session.motion.summary.content
+        charts = session.motion.charts
+        assert all(chart.visible for chart in charts.values()) and session.motion.summary.content.startswith(f"**{kind.capitalize()}**")
+        assert len(charts[kind].data[0]) == len(charts["straight tool line"].data[0])  # both ways, over the same time
         np.testing.assert_allclose(session.state.last.frames[6], goal, atol=1e-5)
         await client.close()
 

@@ -257,6 +257,7 @@ class CoursePathLesson(View):
                 series=(viser.uplot.Series(label="t (s)"),
                         *(viser.uplot.Series(label=f"v{a} (mm/s)", stroke=hex_color(c), width=2)
                           for a, c in zip(xyz, SLOT_COLORS[:3]))),
+                scales={"x": viser.uplot.Scale(time=False)},  # seconds, not dates
                 axes=(viser.uplot.Axis(label="t (s)"), viser.uplot.Axis(label="mm/s")),
                 title="Tool velocity v", aspect=2.0)
             gui.add_uplot(
@@ -264,6 +265,7 @@ class CoursePathLesson(View):
                 series=(viser.uplot.Series(label="t (s)"),
                         *(viser.uplot.Series(label=f"ω{a} (°/s)", stroke=hex_color(c), width=2)
                           for a, c in zip(xyz, SLOT_COLORS[3:6]))),
+                scales={"x": viser.uplot.Scale(time=False)},  # seconds, not dates
                 axes=(viser.uplot.Axis(label="t (s)"), viser.uplot.Axis(label="°/s")),
                 title="Tool turning rate ω", aspect=2.0)
         self.play.on_click(session.guard(lambda _: self.start()))
