@@ -1,7 +1,7 @@
 """Forces and gravity: the torques each joint must hold, as bars against its capacity (docs/kinematics.md §8.3, §8.5).
 
-A force the flange pushes with (its size in N, its direction from a list) is drawn as an
-arrow; the panel shows, per joint, τ = Jᵀ F for that force, the gravity torque of the arm
+A force the flange pushes with (its size in N, its direction from a list or set by dragging
+a handle at the arrow's head) is drawn as an arrow; the panel shows, per joint, τ = Jᵀ F for that force, the gravity torque of the arm
 and its payload, and their sum against what the joint can give. The bars are drawn with the
 panel (≤ 10 Hz), the arrow with the arm.
 """
@@ -14,7 +14,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 import viser
 
-from .fast_updates import set_positions
+from .fast_updates import set_positions, stop_echo
 from .feedback import chosen
 from .state import Snapshot
 from .style import DANGER_RED, SAFE_GREEN, JOINT_LABELS, blend, hex_color, number
@@ -28,9 +28,13 @@ if TYPE_CHECKING:
 #: Each joint's rated torque (N·m): UR's joint sizes for the UR10 (base and shoulder size 4,
 #: elbow size 3, wrists size 2).
 TORQUE_CAPACITY = np.array([330.0, 330.0, 150.0, 56.0, 56.0, 56.0])
-#: Where the force at the flange points (base frame); None: along the flange's own z axis.
+DRAGGED = "drag the handle"
+#: Where the force at the flange points (base frame); None: along the flange's own z axis;
+#: DRAGGED: where the student dragged the handle, from the flange.
 DIRECTIONS = {"down (−z)": (0.0, 0.0, -1.0), "up (+z)": (0.0, 0.0, 1.0), "+x": (1.0, 0.0, 0.0), "−x": (-1.0, 0.0, 0.0),
-              "+y": (0.0, 1.0, 0.0), "−y": (0.0, -1.0, 0.0), "along the flange's z": None}
+              "+y": (0.0, 1.0, 0.0), "−y": (0.0, -1.0, 0.0), "along the flange's z": None, DRAGGED: DRAGGED}
+#: How far from the flange the direction handle sits (m), and the gizmo's size there.
+HANDLE_DISTANCE, HANDLE_SCALE = 0.35, 0.12
 MAX_FORCE_N = 200.0
 MAX_PAYLOAD_KG = 10.0  #: the UR10's rated payload (docs/kinematics.md §1)
 ARROW_METRES_PER_N = 0.002
@@ -50,9 +54,11 @@ def torque_map(arm, force: np.ndarray, n: int = TORQUE_MAP_POINTS) -> tuple[np.n
     return points, norms, int(np.argmax(norms))
 
 
-def force_vector(direction: str, newtons: float, flange: np.ndarray) -> np.ndarray:
-    """(3,) the force in the base frame, N."""
+def force_vector(direction: str, newtons: float, flange: np.ndarray, dragged=(0.0, 0.0, -1.0)) -> np.ndarray:
+    """(3,) the force in the base frame, N; ``dragged`` (3,) is the unit direction the handle was dragged to."""
     unit = DIRECTIONS[direction]
+    if unit == DRAGGED:
+        unit = dragged
     return newtons * (flange[:3, 2] if unit is None else np.array(unit))
 
 
@@ -95,6 +101,13 @@ class StaticsView(View):
         self.arrow = scene.add_arrows("/statics/force", np.zeros((1, 2, 3)), FORCE_COLOR, shaft_radius=0.012,
                                       head_radius=0.03, head_length=0.05, visible=False)
         self.label = scene.add_label("/statics/force_label", "F", font_screen_scale=1.4, anchor="center-left", visible=False)
+        #: the direction handle: this browser's own, like the IK target
+        self.handle = session.client.scene.add_transform_controls(
+            "/statics/force_handle", scale=HANDLE_SCALE, disable_rotations=True, depth_test=False, visible=False)
+        stop_echo(self.handle)
+        self.dragged = np.array([0.0, 0.0, -1.0])  #: the unit direction the handle was last dragged to (base frame)
+        self._holding = False
+        self.handle.on_update(session.guard(self._handle_moved))
         self._scene = scene
         self._map: viser.PointCloudHandle | None = None
         self._worst: tuple[viser.IcosphereHandle, viser.LabelHandle] | None = None
@@ -105,10 +118,24 @@ class StaticsView(View):
         for widget in (self.mapped, self.newtons, self.direction):
             widget.on_update(session.guard(lambda _: self._maps.start("torque-map", session.guard)))
 
+    def _handle_moved(self, event: viser.TransformControlsEvent) -> None:
+        """The student dragged the handle: the force points from the flange towards it."""
+        self._holding = event.phase != "end"
+        position = np.array(self.handle.position, dtype=float)
+        offset = position - self._session.state.last.flange[:3, 3]
+        length = float(np.linalg.norm(offset))
+        if not np.isfinite(length):
+            raise ValueError("force direction: the handle's position must be finite")
+        if length > 1e-3:  # on the flange itself it names no direction: keep the last one
+            self.dragged = offset / length
+        self._session.redraw()
+        if not self._holding:
+            self._maps.start("torque-map", self._session.guard)
+
     def loads(self, snapshot: Snapshot) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """(force (3,), τ of the force (6,), τ of gravity and payload (6,)) at this snapshot, from the widgets."""
         arm = snapshot.arm
-        force = force_vector(chosen(self.direction, "force direction"), float(self.newtons.value), snapshot.flange)
+        force = force_vector(chosen(self.direction, "force direction"), float(self.newtons.value), snapshot.flange, self.dragged)
         payload = float(self.payload.value)
         if not 0.0 <= payload <= MAX_PAYLOAD_KG:
             raise ValueError(f"payload: from 0 to {MAX_PAYLOAD_KG:g} kg, got {payload:g}")
@@ -119,11 +146,17 @@ class StaticsView(View):
         return force, arm.static_torques(snapshot.q, force), gravity
 
     def render(self, snapshot: Snapshot) -> None:
+        direction = chosen(self.direction, "force direction")
         shown = bool(self.enabled.value) and float(self.newtons.value) > 0.0
+        handled = bool(self.enabled.value) and direction == DRAGGED
+        tip = snapshot.flange[:3, 3]
+        if handled and not self._holding:  # the handle rides with the flange, unless the student holds it
+            set_positions([self.handle], (tip + HANDLE_DISTANCE * self.dragged)[None])
+        if self.handle.visible != handled:
+            self.handle.visible = handled
         if shown:
             newtons = float(self.newtons.value)
-            force = force_vector(chosen(self.direction, "force direction"), newtons, snapshot.flange)
-            tip = snapshot.flange[:3, 3]
+            force = force_vector(direction, newtons, snapshot.flange, self.dragged)
             self.arrow.points = np.array([[tip, tip + ARROW_METRES_PER_N * force]])  # the way the tool pushes
             set_positions([self.label], (tip + ARROW_METRES_PER_N * force)[None])
             text = f"F = {newtons:.0f} N"
@@ -147,7 +180,7 @@ class StaticsView(View):
             direction = chosen(self.direction, "force direction")
             if DIRECTIONS[direction] is None:
                 raise ValueError("the map needs a force fixed in the base frame: pick a direction other than the flange's z")
-            force = force_vector(direction, float(self.newtons.value), snapshot.flange)
+            force = force_vector(direction, float(self.newtons.value), snapshot.flange, self.dragged)
             shown = force, HEAVY.run(session.client.client_id, lambda: torque_map(snapshot.arm, force))
         with self._map_lock:
             if session.closed:
@@ -178,5 +211,6 @@ class StaticsView(View):
         """The session has gone: so do its arrow and map, even from a scene everyone shares."""
         self.arrow.remove()
         self.label.remove()
+        self.handle.remove()
         with self._map_lock:
             self._clear_map()

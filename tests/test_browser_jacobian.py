@@ -18,7 +18,7 @@ def unfold(page, title: str, widget) -> None:
         page.locator(dom_id(widget)).wait_for(state="visible", timeout=10_000)
 
 
-def test_forces_ellipsoids_and_velocities_show_in_the_browser(open_page):
+def test_forces_ellipsoids_and_velocities_show_in_the_browser(open_page, tmp_path):
     page, session = open_page()
     # forces and gravity: the bars, with each joint's rating, and the arrow on the canvas
     unfold(page, "Forces and gravity", session.statics.enabled)
@@ -30,6 +30,16 @@ def test_forces_ellipsoids_and_velocities_show_in_the_browser(open_page):
     page.wait_for_timeout(2000)
     with_force = canvas_pixels(page)
     assert changed(before, with_force) > 0.0003, "the force arrow and its label did not show"
+    # the direction by a handle: it shows at the arrow's end, this browser's own
+    from app.statics import DRAGGED
+
+    from .browser_support import choose
+
+    choose(page, session.statics.direction, DRAGGED)
+    wait_for(lambda: session.statics.handle.visible, what="the direction handle")
+    page.wait_for_timeout(2000)
+    assert changed(with_force, canvas_pixels(page)) > 0.0003, "the direction handle did not show"
+    page.screenshot(path=str(tmp_path / "force_handle.png"))
     # the ellipsoids at the flange
     unfold(page, "Manipulability ellipsoids", session.ellipsoids.enabled)
     page.locator(dom_id(session.ellipsoids.enabled)).check()

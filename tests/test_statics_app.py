@@ -46,6 +46,45 @@ def test_the_torque_bars_add_the_force_and_the_weight(app):
     asyncio.run(scenario())
 
 
+def test_the_force_points_where_its_handle_is_dragged(app):
+    """"Drag the handle": the force points from the flange to the handle, the arrow and the bars follow,
+    and the handle rides with the flange when the arm moves."""
+    async def scenario():
+        from app.statics import DRAGGED, HANDLE_DISTANCE
+
+        client = await ViserClient(url(app)).connect()
+        session = session_of(app, client)
+        statics = session.statics
+        handle = "/statics/force_handle"
+        await client.set_gui("Show the torques", True)
+        await client.set_gui("Force direction", DRAGGED)
+        await until(lambda: client.received.visible.get(handle) is True, what="the handle")
+        snapshot = session.state.last
+        tip = snapshot.flange[:3, 3]
+        np.testing.assert_allclose(client.received.positions[handle], tip + HANDLE_DISTANCE * np.array([0, 0, -1.0]), atol=1e-6)
+        # dragged out along +y and a little up: 50 N that way
+        direction = np.array([0.0, 0.8, 0.6])
+        for phase in ("start", "update", "end"):
+            await client.drag_target(tip + 0.5 * direction, (1.0, 0, 0, 0), phase, name=handle)
+        await until(lambda: np.allclose(statics.dragged, direction, atol=1e-6), what="the dragged direction")
+        arm = snapshot.arm
+        expected = bars_html(arm.static_torques(snapshot.q, 50.0 * direction), arm.gravity_torques(snapshot.q))
+        await until(lambda: statics.bars.content == expected, what="the bars for the dragged force")
+        await until(lambda: np.allclose(np.diff(statics.arrow.points[0], axis=0), [0.1 * direction], atol=1e-6), what="the arrow")
+        # the arm moves: the handle keeps its direction from the new flange
+        await client.set_gui("θ1 base", float(np.degrees(snapshot.q[0]) + 20.0))
+        await until(lambda: abs(session.state.last.q[0] - snapshot.q[0] - np.radians(20.0)) < 1e-6, what="the arm moved")
+        new_tip = session.state.last.flange[:3, 3]
+        await until(lambda: np.allclose(client.received.positions[handle], new_tip + HANDLE_DISTANCE * direction, atol=1e-5),
+                    what="the handle at the new flange")
+        # another direction hides the handle
+        await client.set_gui("Force direction", "+x")
+        await until(lambda: client.received.visible.get(handle) is False, what="the handle hidden")
+        await client.close()
+
+    asyncio.run(scenario())
+
+
 def test_a_joint_over_its_rating_is_flagged():
     """360 N·m at the shoulder is over its 330; 120 of the elbow's 150 fills 80 % of its bar."""
     html = bars_html(np.array([0.0, 300.0, -100.0, 10.0, 0.0, 0.0]), np.array([0.0, 60.0, -20.0, 0.0, 0.0, 0.0]))
