@@ -2,9 +2,10 @@
 
 from __future__ import annotations
 
+import contextlib
 import os
 import time
-from typing import Callable
+from typing import Callable, Iterator
 
 import numpy as np
 import pytest
@@ -99,3 +100,40 @@ def canvas_pixels(page) -> np.ndarray:
     box = page.locator("canvas").first.bounding_box()  # the panel is docked beside it, not over it
     png = page.screenshot(clip=box, scale="css")
     return np.asarray(Image.open(io.BytesIO(png)).convert("RGB")).astype(int)
+
+
+def labelled_input(page, label: str):
+    """The <input> of the text field whose label reads ``label``."""
+    return page.locator("label", has_text=label).locator("xpath=ancestor::div[2]").locator("input").first
+
+
+@contextlib.contextmanager
+def teacher_and_student(app) -> Iterator[tuple]:
+    """Two browsers on a classroom server (``--shared``), each in a process of its own.
+
+    Yields (teacher page, student page, teacher's member, student's member), the members
+    being ``app.classroom``'s, both still watching; closes both browsers after.
+    """
+    from playwright.sync_api import sync_playwright
+
+    with sync_playwright() as playwright:
+        browsers = [launch(playwright), launch(playwright)]
+        try:
+            pages = []
+            for browser in browsers:
+                page = browser.new_page(viewport=SMALL_VIEWPORT)
+                page.goto(f"http://127.0.0.1:{app.port}")
+                page.wait_for_selector(CONNECTED, timeout=30_000)
+                pages.append(page)
+            wait_for(lambda: len(app.classroom.members) == 2, what="both browsers")
+            yield (*pages, *app.classroom.members.values())
+        finally:
+            for browser in browsers:
+                browser.close()
+
+
+def ask_to_present(page, code: str) -> None:
+    """Type the join code and press "Become presenter", as a teacher does."""
+    labelled_input(page, "Join code").fill(code)
+    page.wait_for_timeout(200)
+    page.get_by_role("button", name="Become presenter").click()
