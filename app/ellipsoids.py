@@ -1,4 +1,4 @@
-"""The manipulability ellipsoids at the flange (docs/kinematics.md §8.4).
+"""The manipulability ellipsoids at the tool (the UR10's flange; docs/kinematics.md §8.4).
 
 The velocity ellipsoid (sky blue) holds the flange velocities of all joint rates of unit
 norm that keep the tool's orientation; the force ellipsoid (vermilion) the forces the joints
@@ -9,7 +9,7 @@ Both follow the drag; their axis lengths are in the panel.
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any, Callable
 
 import numpy as np
 import viser
@@ -41,32 +41,43 @@ def ellipsoid_pose(axes: np.ndarray) -> np.ndarray:
     return quaternion(rotation, check=False)
 
 
-def lengths_markdown(velocity: np.ndarray, force: np.ndarray) -> str:
+def lengths_markdown(velocity: np.ndarray, force: np.ndarray, place: str = "flange", held: str = "the tool's orientation held") -> str:
     def listed(values: np.ndarray) -> str:
         return ", ".join("∞" if not np.isfinite(v) else number(v, ".3g") for v in values)
 
-    return ("The flange's ellipsoids with the tool's orientation held (docs §8.4).  \n"
+    return (f"The {place}'s ellipsoids{' with ' + held if held else ''} (docs §8.4).  \n"
             f"**Velocity ellipsoid** semi-axes (m/s per rad/s of joint rate): {listed(velocity)}  \n"
             f"**Force ellipsoid** semi-axes (N per N·m of joint torque): {listed(force)}  \n"
             "Same axes; each force axis is 1 / the velocity axis. Drag towards a singularity and watch "
             "one velocity axis shrink while its force axis grows.")
 
 
-class EllipsoidsView(View):
-    """The "Manipulability ellipsoids" folder and the two ellipsoids at the flange."""
+#: What an arm keeps still for its translational ellipsoid, by what it controls (``arm.task``).
+HELD = {"pose": "the tool's orientation held", "position and yaw": "the tool's yaw held", "position": ""}
 
-    def __init__(self, scene: viser.SceneApi, gui: viser.GuiApi, session: "ClientSession") -> None:
+
+class EllipsoidsView(View):
+    """The "Manipulability ellipsoids" folder and the two ellipsoids at the tool.
+
+    ``root``, ``tool`` and ``place`` as for ``app.velocity.VelocityView``: the UR10's flange by default.
+    """
+
+    def __init__(self, scene: viser.SceneApi, gui: viser.GuiApi, session: "ClientSession", root: str = "/ellipsoids",
+                 tool: Callable[[Any], np.ndarray] = lambda snapshot: snapshot.flange, place: str = "flange") -> None:
+        self._arm = session.arm
+        self._tool = tool
+        self._place = place
         folder = gui.add_folder("Manipulability ellipsoids", expand_by_default=False)
         self.folders = (folder,)
         with folder:
-            self.enabled = gui.add_checkbox("Show at the flange", False)
+            self.enabled = gui.add_checkbox(f"Show at the {place}", False)
             self.which = gui.add_dropdown("Ellipsoid", tuple(SHOWN), initial_value="both")
             self.lengths = gui.add_markdown("", visible=False)
         # a unit sphere scaled per axis; tiny until first sized, so it never shows a metre wide
-        self.velocity = scene.add_icosphere("/ellipsoids/velocity", radius=1.0, color=VELOCITY_COLOR, opacity=0.35,
+        self.velocity = scene.add_icosphere(f"{root}/velocity", radius=1.0, color=VELOCITY_COLOR, opacity=0.35,
                                             subdivisions=3, cast_shadow=False, receive_shadow=False, visible=False,
                                             scale=(1e-4, 1e-4, 1e-4))
-        self.force = scene.add_icosphere("/ellipsoids/force", radius=1.0, color=FORCE_COLOR, opacity=0.3,
+        self.force = scene.add_icosphere(f"{root}/force", radius=1.0, color=FORCE_COLOR, opacity=0.3,
                                          subdivisions=3, cast_shadow=False, receive_shadow=False, visible=False,
                                          scale=(1e-4, 1e-4, 1e-4))
         def changed(_) -> None:
@@ -79,8 +90,8 @@ class EllipsoidsView(View):
     def render(self, snapshot: Snapshot) -> None:
         show_velocity, show_force = SHOWN.get(self.which.value, (False, False)) if self.enabled.value else (False, False)
         if show_velocity or show_force:
-            translation = snapshot.arm.translation_ellipsoid(snapshot.q)
-            wxyz, centre = ellipsoid_pose(translation.axes), snapshot.flange[:3, 3]
+            translation = self._arm.translation_ellipsoid(snapshot.q)
+            wxyz, centre = ellipsoid_pose(translation.axes), self._tool(snapshot)[:3, 3]
             sizes = ((self.velocity, show_velocity, VELOCITY_METRES * translation.velocity),
                      (self.force, show_force, np.minimum(FORCE_METRES * translation.force, LONGEST_DRAWN)))
             nodes = [node for node, shown, _ in sizes if shown]
@@ -96,8 +107,9 @@ class EllipsoidsView(View):
     def render_panel(self, snapshot: Snapshot) -> None:
         self.lengths.visible = bool(self.enabled.value)
         if self.lengths.visible:
-            translation = snapshot.arm.translation_ellipsoid(snapshot.q)
-            self.lengths.content = lengths_markdown(translation.velocity, translation.force)
+            translation = self._arm.translation_ellipsoid(snapshot.q)
+            self.lengths.content = lengths_markdown(translation.velocity, translation.force, self._place,
+                                                    HELD.get(getattr(self._arm, "task", "pose"), ""))
 
     def close(self) -> None:
         """The session has gone: so do its ellipsoids, even from a scene everyone shares."""

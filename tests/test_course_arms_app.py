@@ -403,3 +403,43 @@ def test_every_line_is_drawn_in_one_colour_a_browser_can_read(app):
         await client.close()
 
     asyncio.run(scenario())
+
+
+def test_a_course_arms_velocities_ellipsoids_and_forces(app):
+    """The Stanford arm (a sliding joint): joint rates to v and ω at its tool, a typed twist to joint rates
+    (mm/s for d3, no speed limits), the ellipsoids' lengths, and τ = Jᵀ F for a force at the tool."""
+    async def scenario():
+        from app.course_arms.forces import torques_markdown
+        from app.velocity import METRES_PER_SPEED, parse_twist, rates_markdown
+
+        client = await ViserClient(url(app)).connect()
+        session = await pick(app, client, "Stanford arm (RRP + wrist)", CourseArmSession)
+        arm, root = session.arm, session.scene.root
+        await client.set_gui("ḋ3 d3 (mm/s)", 100.0)  # the boom slides out at 0.1 m/s
+        await until(lambda: session.velocity.linear.visible, what="the velocity arrow")
+        snapshot = session.state.last
+        tip = snapshot.frames[-1, :3, 3]
+        expected = tip + METRES_PER_SPEED * arm.tool_twist(snapshot.q, [0, 0, 0.1, 0, 0, 0])[:3]
+        np.testing.assert_allclose(session.velocity.linear.points[0], [tip, expected], atol=1e-6)
+        assert f"{root}/velocity/linear" in client.received.nodes
+        # a typed tool velocity: the rates it needs, d3's in mm/s, with no limits to flag
+        await client.set_gui("Find the joint rates", True)
+        asked = parse_twist("100 0 0 0 0 0")
+        rates = arm.joint_rates(snapshot.q, asked)
+        text = rates_markdown(rates.qdot, float(rates.damping), asked, rates.achieved, arm.joint_names, "RRPRRR", None)
+        await until(lambda: session.velocity.rates.content == text, what="the joint rates")
+        assert " mm/s |" in text and "limit" not in text
+        # the ellipsoids' lengths, with the tool's orientation held
+        await client.set_gui("Show at the tool", True)
+        await until(lambda: session.ellipsoids.velocity.visible and "orientation held" in session.ellipsoids.lengths.content,
+                    what="the ellipsoids")
+        # a force at the tool: the joints' torques, d3's as a force along its axis
+        await client.set_gui("Show the force at the tool", True)
+        await client.set_gui("Force direction", "+x")
+        torques = arm.static_torques(snapshot.q, [50.0, 0, 0])
+        await until(lambda: session.forces.torques.content == torques_markdown(torques, arm.joint_names, "RRPRRR", 50.0),
+                    what="the torques")
+        assert session.forces.arrow.visible and f"{torques[2]:+.2f} N |" in session.forces.torques.content
+        await client.close()
+
+    asyncio.run(scenario())

@@ -15,9 +15,12 @@ from ur10core.serial import SerialArm
 from ..camera import CameraControls
 from ..feedback import guard, notify
 from ..metrics import LATENCY
+from ..ellipsoids import EllipsoidsView
+from ..velocity import VelocityView
 from ..view import View
 from ..workers import HEAVY, DragQueue, FoldedRuns, PanelRefresher
 from .editor import DHEditor
+from .forces import CourseForces
 from .gripper import GripperPose
 from .panel import CourseBranches, CourseDHTable, CourseJointSliders, CourseSingularities, DHWalkthrough
 from .scene import ROOT, CourseArmScene
@@ -102,12 +105,25 @@ class CourseArmSession:
         self.singularities = CourseSingularities(gui, self)
         self.dh_table = CourseDHTable(gui, self)
         self.walkthrough = DHWalkthrough(gui, self)
-        self.workspace = CourseWorkspace(client.scene if server is None else server.scene, gui, self)
+        drawn_in = client.scene if server is None else server.scene
+        self.workspace = CourseWorkspace(drawn_in, gui, self)
+        # what J does at the tool (docs/kinematics.md §8): the UR10's folders, for this arm's joints and tool
+        tool = self.scene.root
+
+        def at_tool(snapshot: CourseSnapshot):
+            return snapshot.frames[-1]
+
+        self.velocity = VelocityView(drawn_in, gui, self, root=f"{tool}/velocity", tool=at_tool, place="tool",
+                                     labels=arm.joint_names, limits=None)
+        self.ellipsoids = EllipsoidsView(drawn_in, gui, self, root=f"{tool}/ellipsoids", tool=at_tool, place="tool")
+        self.forces = CourseForces(drawn_in, gui, self, f"{tool}/statics")
+        self.at_tool_views = (self.velocity, self.ellipsoids, self.forces)
         self.gripper = GripperPose(gui, self) if arm.name == "kr210" else None
         self.camera = (CameraControls(client, lambda: self.state.last, self.guard, lecture, body_radius=body_radius(size))
                        if own_camera else None)
         self.panel_views = (*(v for v in (self.editor, self.search, self.gripper, self.camera) if v is not None),
-                            self.joints, self.branches, self.singularities, self.dh_table, self.walkthrough, self.workspace)
+                            self.joints, self.branches, self.singularities, self.dh_table, self.walkthrough, self.workspace,
+                            *self.at_tool_views)
         self.render(first)
         self.render_panel()
         if self.camera is not None:
@@ -130,8 +146,10 @@ class CourseArmSession:
         return snapshot
 
     def redraw(self) -> None:
+        """The 3D view again, unchanged state (a toggle changed what is shown), and the panel after it."""
         with self.state.lock:
             self.render(self.state.last)
+        self.refresher.request(self)
 
     def _dragged(self, event: viser.TransformControlsEvent) -> None:
         if self.closed:
@@ -157,6 +175,8 @@ class CourseArmSession:
             for sender in self._senders:
                 batch.enter_context(sender.atomic())
             self.scene.render(snapshot)
+            for view in self.at_tool_views:
+                view.render(snapshot)
             if move_gizmo and not snapshot.reason:
                 self.gizmo.wxyz = quaternion(snapshot.frames[-1, :3, :3], check=False)
                 self.gizmo.position = snapshot.frames[-1, :3, 3]
