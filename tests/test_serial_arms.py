@@ -196,6 +196,33 @@ def test_fk_of_ik_and_the_generating_joints(name, kind):
                                                    "planar_elbow": 2, "cylindrical": 1}[name]
 
 
+@pytest.mark.parametrize("name", ["kr210", "elbow", "stanford"])
+@pytest.mark.parametrize("kind", ["random", "near singular", "out of reach"])
+def test_one_pose_in_floats_decides_as_the_batch_does(name, kind):
+    """The one-pose path (``_solve_one``, plain floats) against the batch path on the same poses and
+    hints: the same slots valid, singular and failing, with the same numbers to rounding."""
+    arm = SerialArm.preset(name)
+    n = 1500
+    q = random_joints(arm, n, 21) if kind != "near singular" else near_singular_joints(arm, n, 22)
+    T = arm.fk(q)
+    if kind == "out of reach":
+        T[:, :3, 3] *= np.random.default_rng(23).choice([0.05, 3.0], n)[:, None]
+    hints = (None, q, random_joints(arm, n, 24))
+    for hint in hints:
+        batch = arm.solver.solve(T, hint)
+        for k in range(n):
+            one = arm.solver.solve(T[k:k + 1], None if hint is None else hint[k:k + 1])
+            # near a singularity "singular" itself is decided on a value fixed only to √rounding
+            for key in ("valid", "failure") if kind == "near singular" else ("valid", "singular", "failure"):
+                np.testing.assert_array_equal(one[key][0], batch[key][k], err_msg=f"{key}, pose {k}")
+            np.testing.assert_allclose(one["detail"][0], batch["detail"][k], rtol=1e-12, atol=1e-15)
+            valid = batch["valid"][k]
+            if kind != "near singular":
+                np.testing.assert_allclose(wrapped(one["q"][0][valid] - batch["q"][k][valid], arm.revolute), 0.0, atol=1e-9)
+            assert arm.pose_error(one["q"][0][valid], T[k]).max(initial=0.0) < 1e-9
+    assert kind != "out of reach" or not arm.ik(T).valid.all()
+
+
 @pytest.mark.parametrize("name", ["kr210", "elbow"])
 def test_articulated_arms_have_eight_distinct_branches_inside_the_reach(name):
     arm = SerialArm.preset(name)

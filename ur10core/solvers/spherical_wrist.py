@@ -33,6 +33,12 @@ from ..tolerances import CHOICE_TOLERANCE, LENGTH_TOLERANCE, WRIST_TURN_TOLERANC
 
 #: |sin θ5| below which θ4 is the hint's whatever the pose says (the axes are aligned).
 WRIST_TOLERANCE = WRIST_TURN_TOLERANCE / math.pi
+_TAU = 2.0 * math.pi
+
+
+def _wrap1(angle: float) -> float:
+    """One angle in (−π, π], as :func:`ur10core.branches.wrap` (Python's % is numpy's remainder)."""
+    return -((-angle + math.pi) % _TAU) + math.pi
 
 
 def _rx(angle: float) -> np.ndarray:
@@ -85,6 +91,7 @@ class Wrist:
         self.s6 = 1.0 if abs(beta1 + beta2) < 1e-12 else -1.0
         self.post = _rx(beta1 + beta2) @ Q  # W = Pᵀ R_preᵀ R postᵀ = Rz(θ4) Ry(s5 θ5) Rz(s6 θ6)
         self.offsets = np.array([rows[j].theta for j in (j4, j5, j6)])
+        self._offsets = self.offsets.tolist()
 
     def solve(self, R_pre: np.ndarray, R: np.ndarray, hint4: np.ndarray, flip: bool):
         """θ4, θ5, θ6 and whether the wrist is singular (θ4 the hint's), for (N, 3, 3) rotations; ``flip`` picks θ5 ≤ 0."""
@@ -104,6 +111,25 @@ class Wrist:
         theta5 = wrap(b * self.s5 - self.offsets[1])
         theta6 = wrap(c * self.s6 - self.offsets[2])
         return theta4, theta5, theta6, sin_b <= WRIST_TOLERANCE
+
+    def solve_one(self, R_pre: np.ndarray, R: np.ndarray, hint4: float) -> list[tuple[float, float, float, bool]]:
+        """:meth:`solve` for one (3, 3) pair, in floats: (θ4, θ5, θ6, singular) not flipped, then flipped."""
+        W = (self.P.T @ R_pre.T @ R @ self.post.T).tolist()
+        sin_b = math.hypot(W[0][2], W[1][2])
+        aligned = sin_b <= WRIST_TOLERANCE
+        row_hint = hint4 + self._offsets[0]
+        out = []
+        for flip in (False, True):
+            sign = (-1.0 if flip else 1.0) * self.s5
+            b = math.atan2(sign * sin_b, W[2][2])
+            a = math.atan2(sign * W[1][2], sign * W[0][2])
+            if sin_b * abs(_wrap1(a - row_hint)) <= WRIST_TURN_TOLERANCE:
+                a = row_hint
+            ca, sa, cb, sb = math.cos(a), math.sin(a), math.cos(b), math.sin(b)
+            c = math.atan2(-sa * W[0][0] + ca * W[1][0], cb * (ca * W[0][0] + sa * W[1][0]) - sb * W[2][0])
+            out.append((_wrap1(a - self._offsets[0]), _wrap1(b * self.s5 - self._offsets[1]),
+                        _wrap1(c * self.s6 - self._offsets[2]), aligned))
+        return out
 
 
 def _wrist_offset(table: DHTable, wrist: Wrist) -> np.ndarray:
@@ -149,6 +175,24 @@ def _wrist_slots(table: DHTable, wrist: Wrist, out: dict, R: np.ndarray, hint: n
         q[pose, k, n - 3:] = np.stack([t4, t5, t6], axis=-1)
         valid[pose, k] = True
         singular[pose, k] = singular[pose, base] | aligned
+
+
+def _wrist_slots_one(table: DHTable, wrist: Wrist, out: dict, R: np.ndarray, hint: list[float] | None) -> None:
+    """:func:`_wrist_slots` for one pose (``out`` of batch 1, R (3, 3)): the wrist in floats, slot by slot."""
+    q, valid, singular = out["q"][0], out["valid"][0], out["singular"][0]
+    n = table.n_joints
+    bases = [k for k in range(0, len(valid), 2) if valid[k]]
+    if not bases:
+        return
+    hint4 = 0.0 if hint is None else hint[n - 3]
+    full = np.zeros((len(bases), n))
+    full[:, : n - 3] = q[bases, : n - 3]
+    for base, R_pre in zip(bases, table.frames(full)[:, wrist.first_row, :3, :3]):
+        for flip, (t4, t5, t6, aligned) in enumerate(wrist.solve_one(R_pre, R, hint4)):
+            q[base + flip, n - 3:] = (t4, t5, t6)
+            q[base + flip, : n - 3] = q[base, : n - 3]
+            valid[base + flip] = True
+            singular[base + flip] = singular[base] or aligned
 
 
 def _planar_frame(table: DHTable) -> dict[str, float]:
@@ -216,6 +260,8 @@ class ArticulatedArm:
         return "no branch reaches this pose"
 
     def solve(self, T: np.ndarray, hint: np.ndarray | None) -> dict[str, np.ndarray]:
+        if len(T) == 1:
+            return self._solve_one(T[0], None if hint is None else hint[0].tolist())
         N = len(T)
         out = empty_branches((N,), 8, 6)
         q, valid, singular = out["q"], out["valid"], out["singular"]
@@ -260,6 +306,51 @@ class ArticulatedArm:
         _wrist_slots(self.table, self.wrist, out, R, hint)
         return out
 
+    def _solve_one(self, T: np.ndarray, hint: list[float] | None) -> dict[str, np.ndarray]:
+        """:meth:`solve` for one pose in floats: a drag's IK without a hundred small array operations.
+
+        Step for step the same decisions (tests/test_serial_arms.py holds the two to each other).
+        """
+        out = empty_branches((1,), 8, 6)
+        q, valid, singular, failure, detail = (out[key][0] for key in ("q", "valid", "singular", "failure", "detail"))
+        p = self.plane
+        a2, L = p["a2"], p["L"]
+        R = T[:3, :3]
+        cx, cy, cz = (T[:3, 3] + R @ self.centre_in_tool).tolist()
+        rho = math.hypot(cx, cy)
+        h = hint or [0.0] * 6
+        towards = math.atan2(cy, cx)
+        hint_beta = _wrap1(p["s3"] * h[2] + p["phi"])
+        hint_reach = math.sqrt(a2 ** 2 + L ** 2 + 2 * a2 * L * math.cos(hint_beta))
+        near, far = self.reach
+        for shoulder in (0, 1):
+            theta1 = _wrap1(towards + shoulder * math.pi)
+            if rho * abs(_wrap1(theta1 - h[0])) <= CHOICE_TOLERANCE:
+                theta1 = h[0]
+            u = math.cos(theta1) * cx + math.sin(theta1) * cy - p["u0"]
+            w = p["sigma"] * cz - p["w0"]
+            r = math.hypot(u, w)
+            cos_beta = (r * r - a2 ** 2 - L ** 2) / (2 * a2 * L)
+            too_far, too_close = r > far + LENGTH_TOLERANCE, r < near - LENGTH_TOLERANCE
+            for elbow in (0, 1):
+                slot = 4 * shoulder + 2 * elbow
+                failure[slot:slot + 2] = TOO_FAR if too_far else TOO_CLOSE if too_close else 0
+                detail[slot:slot + 2] = r
+                if too_far or too_close:
+                    continue
+                sign = -p["sigma"] * (1.0 if (elbow == 0) == (shoulder == 0) else -1.0)
+                beta = sign * math.acos(min(max(cos_beta, -1.0), 1.0))
+                same_side = sign * math.sin(hint_beta) >= 0 or abs(math.sin(hint_beta)) <= 1e-6
+                if same_side and abs(hint_reach - r) <= CHOICE_TOLERANCE:
+                    beta = hint_beta
+                x, y = a2 + L * math.cos(beta), L * math.sin(beta)
+                theta2 = math.atan2(w, u) - math.atan2(y, x) - p["o2"]
+                q[slot, :3] = (theta1, _wrap1(theta2), _wrap1((beta - p["phi"]) * p["s3"]))
+                valid[slot] = True
+                singular[slot] = rho <= LENGTH_TOLERANCE or abs(math.sin(beta)) <= 1e-9
+        _wrist_slots_one(self.table, self.wrist, out, R, hint)
+        return out
+
 
 class StanfordArm:
     """RRP + spherical wrist (standard DH as in docs/kinematics.md §7.5): 4 slots."""
@@ -285,6 +376,8 @@ class StanfordArm:
         return "no branch reaches this pose"
 
     def solve(self, T: np.ndarray, hint: np.ndarray | None) -> dict[str, np.ndarray]:
+        if len(T) == 1:
+            return self._solve_one(T[0], None if hint is None else hint[0].tolist())
         N = len(T)
         out = empty_branches((N,), 4, 6)
         q, valid, singular = out["q"], out["valid"], out["singular"]
@@ -321,4 +414,40 @@ class StanfordArm:
             # singular where the pose leaves a value free: WC on the d2 cylinder, or on the shoulder
             singular[ok, slot] = ((np.abs(u) <= LENGTH_TOLERANCE) | (stroke <= LENGTH_TOLERANCE))[ok]
         _wrist_slots(self.table, self.wrist, out, R, hint)
+        return out
+
+    def _solve_one(self, T: np.ndarray, hint: list[float] | None) -> dict[str, np.ndarray]:
+        """:meth:`solve` for one pose in floats, step for step the same decisions."""
+        out = empty_branches((1,), 4, 6)
+        q, valid, singular, failure, detail = (out[key][0] for key in ("q", "valid", "singular", "failure", "detail"))
+        R = T[:3, :3]
+        x, y, z = (T[:3, 3] + R @ self.centre_in_tool).tolist()
+        z -= self.d1
+        rho = math.hypot(x, y)
+        d2 = self.d2
+        inside = rho < abs(d2) - LENGTH_TOLERANCE
+        reach = math.sqrt(max(rho * rho - d2 * d2, 0.0))
+        h = hint or [0.0] * 6
+        c1h, s1h = math.cos(h[0]), math.sin(h[0])
+        hint_u = c1h * x + s1h * y
+        hint_fits = abs(-s1h * x + c1h * y - d2) <= CHOICE_TOLERANCE
+        for shoulder in (0, 1):
+            slot = 2 * shoulder
+            failure[slot:slot + 2] = INSIDE_OFFSET if inside else 0
+            detail[slot:slot + 2] = rho
+            if inside:
+                continue
+            sign = 1.0 if shoulder == 0 else -1.0
+            theta1 = math.atan2(y, x) - math.atan2(d2, sign * reach)
+            if hint_fits and (sign * hint_u >= 0 or abs(hint_u) <= 1e-6):
+                theta1 = h[0]
+            u = math.cos(theta1) * x + math.sin(theta1) * y
+            stroke = math.hypot(u, z)
+            theta2 = math.atan2(u, z)
+            if stroke * abs(_wrap1(theta2 - h[1])) <= CHOICE_TOLERANCE:
+                theta2 = h[1]
+            q[slot, :3] = (_wrap1(theta1), _wrap1(theta2), stroke - self.stroke_offset)
+            valid[slot] = True
+            singular[slot] = abs(u) <= LENGTH_TOLERANCE or stroke <= LENGTH_TOLERANCE
+        _wrist_slots_one(self.table, self.wrist, out, R, hint)
         return out
