@@ -37,9 +37,8 @@ ARM_CHOICES: dict[str, str | None] = {
 assert set(ARM_CHOICES.values()) - {None, "custom", "three_dof"} == set(PRESETS)
 
 
-#: What the classroom's presenter can show the class: a typed table is for one's own browser, and the
-#: desktop arm (not a DH chain: no IK target, no branches) has lessons of its own rather than the class's live panel.
-CLASS_CHOICES = tuple(label for label in ARM_CHOICES if label not in (CUSTOM, DESKTOP))
+#: What the classroom's presenter can show the class: a typed table is for one's own browser.
+CLASS_CHOICES = tuple(label for label in ARM_CHOICES if label != CUSTOM)
 
 
 class ArmPicker:

@@ -295,3 +295,52 @@ def test_the_shared_ur10_lives_under_the_roots_an_explorer_hides(classroom):
     from app.classroom import UR10_ROOTS
 
     assert names and all(name.split("/")[1] in {root.strip("/") for root in UR10_ROOTS} for name in names)
+
+
+def test_the_class_is_shown_the_desktop_arm_played_and_explored(classroom):
+    """The presenter shows the 3-DOF desktop arm: the class sees it move along the course's path
+    with its live panel; an explorer drives a copy of it and the class's stays hidden for them."""
+    from app.arm_picker import DESKTOP, SWITCH_INTERVAL, UR10
+    from app.course_arms.desktop_arm import EXPLORER_ROOT, ROOT, DesktopArmSession
+    from app.session import ClientSession
+
+    async def scenario():
+        teacher = await ViserClient(f"http://127.0.0.1:{classroom.port}").connect()
+        student = await ViserClient(f"http://127.0.0.1:{classroom.port}").connect()
+        room = classroom.classroom
+        await become_presenter(teacher, classroom)
+        presenter = member_of(classroom, 0)
+        await asyncio.sleep(SWITCH_INTERVAL)
+        await teacher.set_gui("Which arm", DESKTOP)
+        await until(lambda: isinstance(presenter.session, DesktopArmSession), what="the class's desktop arm")
+        assert presenter.session.state is room.course.state and presenter.session.scene is room.course.scene
+        for client in (teacher, student):
+            await until(lambda: client.received.node_owners.get(f"{ROOT}/links") == "", what="the shared desktop arm")
+        await until(lambda: room.live.arm.content == f"**{DESKTOP}**", what="the desktop arm's live panel")
+        # the presenter plays the course's path: the class's arm moves and the live panel follows
+        await teacher.set_gui("Play the course's path", True)
+        await until(lambda: abs(room.course.state.last.q[0]) > 0.05, what="the class's arm on the path")
+        await until(lambda: "θ1 0.0°" not in room.live.joints.content, what="the live joints")
+        await teacher.set_gui("Stop", True)
+        await until(lambda: not np.any(room.course.state.last.rates), what="the path stopped")
+        # a student explores a copy of it, from the class's pose, under a root of its own
+        await student.set_gui("Explore on my own", True)
+        explorer = member_of(classroom, 1)
+        await until(lambda: isinstance(explorer.session, DesktopArmSession), what="the explorer's desktop arm")
+        assert explorer.session.scene.root == EXPLORER_ROOT
+        np.testing.assert_allclose(explorer.session.state.last.q, room.course.state.last.q)
+        mine = str(explorer.client.client_id)
+        await until(lambda: student.received.node_owners.get(ROOT) == mine and student.received.visible.get(ROOT) is False,
+                    what="the class's arm hidden for the explorer")
+        class_q = room.course.state.last.q.copy()
+        await student.set_gui("θ3 forearm (°)", 90.0)
+        await until(lambda: abs(explorer.session.state.last.q[2] - np.pi / 2) < 1e-9, what="the explorer's own arm moved")
+        np.testing.assert_array_equal(room.course.state.last.q, class_q)  # the class's did not
+        # and back to the UR10
+        await asyncio.sleep(SWITCH_INTERVAL)
+        await teacher.set_gui("Which arm", UR10)
+        await until(lambda: room.course is None and isinstance(presenter.session, ClientSession), what="the UR10 back")
+        await teacher.close()
+        await student.close()
+
+    asyncio.run(scenario())

@@ -7,6 +7,7 @@ joint sliders instead of an IK target, and the course's two exercises as lessons
 
 from __future__ import annotations
 
+import contextlib
 import math
 import threading
 from dataclasses import dataclass
@@ -29,6 +30,8 @@ from ..workers import HEAVY, FoldedRuns, PanelRefresher
 from ..workspace import colormap
 
 ROOT = "/desktop_arm"
+#: A classroom explorer's own desktop arm, apart from the class's (which it hides in that one browser).
+EXPLORER_ROOT = "/explored_desktop_arm"
 #: The course's y = 0 (the shoulder) stands this high above the floor, so that every reach stays above it.
 SHOULDER_HEIGHT = 1.5
 #: The course's base frame (y up) turned into the app's world (z up): Rx(90°), so x stays, y → z, z → −y.
@@ -85,10 +88,10 @@ class DesktopSnapshot:
 class DesktopArmState:
     """The arm's joints; every change returns a new :class:`DesktopSnapshot`."""
 
-    def __init__(self, arm: ThreeDofArm) -> None:
+    def __init__(self, arm: ThreeDofArm, q=None) -> None:
         self.arm = arm
         self.lock = threading.RLock()
-        self.last = self._snapshot(course_path(0.0)[0], np.zeros(3))
+        self.last = self._snapshot(course_path(0.0)[0] if q is None else np.array(q, dtype=float), np.zeros(3))
 
     def _snapshot(self, q: np.ndarray, rates: np.ndarray) -> DesktopSnapshot:
         frames = self.arm.frames(q)
@@ -117,23 +120,25 @@ class DesktopArmState:
 class DesktopArmScene(View):
     """The arm in 3D: pedestal, upper arm and forearm, the parallelogram drive, the course's base frame, the arrows."""
 
-    def __init__(self, scene: viser.SceneApi, arm: ThreeDofArm, first: DesktopSnapshot) -> None:
+    def __init__(self, scene: viser.SceneApi, arm: ThreeDofArm, first: DesktopSnapshot, root: str = ROOT) -> None:
         self._arm = arm
-        self.links = scene.add_line_segments(f"{ROOT}/links", self._links(first), LINK_GREY, thickness=0.06)
-        self.drive = scene.add_line_segments(f"{ROOT}/drive", self._drive(first), DRIVE_COLOR, thickness=0.025)
-        self.joints = [scene.add_icosphere(f"{ROOT}/joint_{k}", radius=0.07, color=JOINT_CAP_GREY, position=p)
+        self.root = root  #: every node's parent: a classroom explorer's own arm has one apart from the class's
+        self.size = arm.upper_arm + arm.forearm  #: the arm's reach (m)
+        self.links = scene.add_line_segments(f"{root}/links", self._links(first), LINK_GREY, thickness=0.06)
+        self.drive = scene.add_line_segments(f"{root}/drive", self._drive(first), DRIVE_COLOR, thickness=0.025)
+        self.joints = [scene.add_icosphere(f"{root}/joint_{k}", radius=0.07, color=JOINT_CAP_GREY, position=p)
                        for k, p in enumerate(first.points[1:3])]
         wxyz = quaternion(COURSE_TO_WORLD, check=False)
-        scene.add_frame(f"{ROOT}/base_frame", wxyz=wxyz, position=first.points[1], axes_length=0.45, axes_radius=0.012)
+        scene.add_frame(f"{root}/base_frame", wxyz=wxyz, position=first.points[1], axes_length=0.45, axes_radius=0.012)
         for name, axis in (("x₀", (0.5, 0, 0)), ("y₀ (up)", (0, 0.5, 0)), ("z₀", (0, 0, 0.5))):
-            scene.add_label(f"{ROOT}/base_frame/{name}", name, font_screen_scale=1.3, position=axis)
-        self.tool = scene.add_frame(f"{ROOT}/tool", axes_length=0.3, axes_radius=0.01)
-        self.labels = [scene.add_label(f"{ROOT}/label_{k}", text, font_screen_scale=1.4, anchor="bottom-left")
+            scene.add_label(f"{root}/base_frame/{name}", name, font_screen_scale=1.3, position=axis)
+        self.tool = scene.add_frame(f"{root}/tool", axes_length=0.3, axes_radius=0.01)
+        self.labels = [scene.add_label(f"{root}/label_{k}", text, font_screen_scale=1.4, anchor="bottom-left")
                        for k, text in enumerate(("θ2", "θ3 (absolute)", "tool"))]
-        self.velocity = [scene.add_arrows(f"{ROOT}/{name}", np.zeros((1, 2, 3)), colour, shaft_radius=0.015,
+        self.velocity = [scene.add_arrows(f"{root}/{name}", np.zeros((1, 2, 3)), colour, shaft_radius=0.015,
                                           head_radius=0.04, head_length=0.08, visible=False)
                          for name, colour in (("linear", LINEAR_COLOR), ("angular", ANGULAR_COLOR))]
-        self.velocity_labels = [scene.add_label(f"{ROOT}/{name}_label", text, font_screen_scale=1.4, anchor="center-left",
+        self.velocity_labels = [scene.add_label(f"{root}/{name}_label", text, font_screen_scale=1.4, anchor="center-left",
                                                 visible=False) for name, text in (("linear", "v"), ("angular", "ω"))]
         self.render(first)
 
@@ -297,9 +302,10 @@ class CoursePathLesson(View):
 class DesktopForces(View):
     """The course's statics exercise: τ = J_vᵀ F for a tool force, and the pose in the joint ranges that needs the most."""
 
-    def __init__(self, scene: viser.SceneApi, gui: viser.GuiApi, session: "DesktopArmSession") -> None:
+    def __init__(self, scene: viser.SceneApi, gui: viser.GuiApi, session: "DesktopArmSession", root: str) -> None:
         self._session = session
         self._scene = scene
+        self._root = root
         folder = gui.add_folder("Forces", order=3.0, expand_by_default=False)
         self.folders = (folder,)
         with folder:
@@ -312,9 +318,9 @@ class DesktopForces(View):
                                          hint=f"Every joint over its range, {GRID_STEPS} values each: "
                                               f"{GRID_STEPS ** 3:,} poses, coloured by ‖τ‖")
             self.result = gui.add_markdown("")
-        self.arrow = scene.add_arrows(f"{ROOT}/force", np.zeros((1, 2, 3)), LINEAR_COLOR, shaft_radius=0.02,
+        self.arrow = scene.add_arrows(f"{root}/force", np.zeros((1, 2, 3)), LINEAR_COLOR, shaft_radius=0.02,
                                       head_radius=0.05, head_length=0.1, visible=False)
-        self.label = scene.add_label(f"{ROOT}/force/label", "F", font_screen_scale=1.4, visible=False)
+        self.label = scene.add_label(f"{root}/force/label", "F", font_screen_scale=1.4, visible=False)
         self._map: tuple[viser.SceneNodeHandle, ...] = ()
         self._map_lock = threading.Lock()
         self._searches = FoldedRuns(self._search)
@@ -360,10 +366,10 @@ class DesktopForces(View):
                 return
             self._clear()
             top = float(norms[worst]) or 1.0
-            cloud = self._scene.add_point_cloud(f"{ROOT}/torque_map", points.astype(np.float32), colormap(norms, top),
+            cloud = self._scene.add_point_cloud(f"{self._root}/torque_map", points.astype(np.float32), colormap(norms, top),
                                                 point_size=0.025, point_shape="circle")
-            marker = self._scene.add_icosphere(f"{ROOT}/worst", radius=0.08, color=DANGER_RED, position=points[worst])
-            self._scene.add_label(f"{ROOT}/worst/label", f"largest ‖τ‖ = {top:.1f} N·m", font_screen_scale=1.4,
+            marker = self._scene.add_icosphere(f"{self._root}/worst", radius=0.08, color=DANGER_RED, position=points[worst])
+            self._scene.add_label(f"{self._root}/worst/label", f"largest ‖τ‖ = {top:.1f} N·m", font_screen_scale=1.4,
                                   anchor="bottom-center")
             self._map = (cloud, marker)
         self.result.content = (
@@ -386,33 +392,42 @@ class DesktopForces(View):
 
 
 class DesktopArmSession:
-    """A browser driving the course's 3-DOF desktop arm (``Arm.preset("three_dof")``), as ``CourseArmSession`` does a DH arm."""
+    """A browser driving the course's 3-DOF desktop arm (``Arm.preset("three_dof")``), as ``CourseArmSession`` does a DH arm.
 
-    def __init__(self, client: viser.ClientHandle, arm: ThreeDofArm, refresher: PanelRefresher, lecture: bool = False) -> None:
+    ``state``, ``scene``, ``server``, ``own_camera`` and ``root`` as for ``CourseArmSession``: the
+    classroom's presenter drives an arm drawn in the server's shared scene, an explorer its own.
+    """
+
+    def __init__(self, client: viser.ClientHandle, arm: ThreeDofArm, refresher: PanelRefresher, lecture: bool = False,
+                 state: DesktopArmState | None = None, scene: DesktopArmScene | None = None,
+                 server: viser.ViserServer | None = None, own_camera: bool = True, root: str = ROOT) -> None:
         self.client = client
         self.arm = arm
         self.refresher = refresher
         self.closed = False
-        self.state = DesktopArmState(arm)
+        self.state = state or DesktopArmState(arm)
+        #: called after every change (the classroom refreshes its live panel)
+        self.observers: list[Callable[[DesktopSnapshot], None]] = []
+        self._senders: tuple[viser.ClientHandle | viser.ViserServer, ...] = (client,) if server is None else (client, server)
         first = self.state.last
-        self.scene = DesktopArmScene(client.scene, arm, first)
+        self.scene = scene or DesktopArmScene(client.scene, arm, first, root)
         gui = client.gui
         self.joints = DesktopJoints(gui, self)
         self.path = CoursePathLesson(gui, self)
-        self.forces = DesktopForces(client.scene, gui, self)
-        reach = arm.upper_arm + arm.forearm
-        self.camera = CameraControls(client, lambda: self._framed(), self.guard, lecture, body_radius=0.15 * reach)
-        self.panel_views = (self.camera, self.joints, self.path, self.forces)
+        self.forces = DesktopForces(client.scene if server is None else server.scene, gui, self, self.scene.root)
+        self.camera = (CameraControls(client, self._framed, self.guard, lecture, body_radius=0.15 * self.scene.size)
+                       if own_camera else None)
+        self.panel_views = (*((self.camera,) if self.camera is not None else ()), self.joints, self.path, self.forces)
         self.render(first)
         self.render_panel()
-        self.camera.frame()
+        if self.camera is not None:
+            self.camera.frame()
 
     def _framed(self) -> DesktopSnapshot:
-        """What the camera frames: the arm as it is, and its reach above the shoulder in every direction."""
+        """What the camera frames: the arm as it is, and its reach about the shoulder level and above."""
         snapshot = self.state.last
-        reach = self.arm.upper_arm + self.arm.forearm
         shoulder = snapshot.points[1]
-        ends = shoulder + reach * np.array([[1.0, 0, 0], [-1.0, 0, 0], [0, 1.0, 0], [0, -1.0, 0], [0, 0, 1.0]])
+        ends = shoulder + self.scene.size * np.array([[1.0, 0, 0], [-1.0, 0, 0], [0, 1.0, 0], [0, -1.0, 0], [0, 0, 1.0]])
         return DesktopSnapshot(snapshot.q, snapshot.rates, snapshot.tool, np.vstack([snapshot.points, ends]))
 
     def apply(self, change: Callable[[DesktopArmState], DesktopSnapshot]) -> DesktopSnapshot:
@@ -420,6 +435,8 @@ class DesktopArmSession:
             snapshot = change(self.state)
             self.render(snapshot)
         self.refresher.request(self)
+        for observer in self.observers:
+            observer(snapshot)
         return snapshot
 
     def redraw(self) -> None:
@@ -430,9 +447,13 @@ class DesktopArmSession:
     def render(self, snapshot: DesktopSnapshot) -> None:
         if self.closed:
             return
-        with self.client.atomic():
+        with contextlib.ExitStack() as batch:  # the arm and its arrows arrive together
+            for sender in self._senders:
+                batch.enter_context(sender.atomic())
             self.scene.render(snapshot)
             self.forces.render(snapshot)
+        for sender in self._senders:
+            sender.flush()
 
     def render_panel(self) -> None:
         if self.closed:
@@ -450,8 +471,17 @@ class DesktopArmSession:
             notify(self.client, title, body, color)
 
     def close(self) -> None:
+        """The browser has gone (or handed over): stop drawing and let go of everything shared."""
         self.closed = True
         with self.state.lock:
             for view in self.panel_views:
                 view.close()
+        self.refresher.forget(self)
+
+    def remove(self) -> None:
+        """Close, and take this session's panel out of a browser that stays."""
+        self.closed = True
+        with self.state.lock:
+            for view in self.panel_views:
+                view.remove()
         self.refresher.forget(self)
