@@ -37,7 +37,9 @@ from .arm_picker import ARM_CHOICES, CLASS_CHOICES, SWITCH_INTERVAL, UR10, ArmPi
 from .camera import BODY_RADIUS, CameraControls
 from .course_arms import panel as course_panel
 from .course_arms.desktop_arm import EXPLORER_ROOT as DESKTOP_EXPLORER_ROOT
-from .course_arms.desktop_arm import DesktopArmScene, DesktopArmSession, DesktopArmState, factors_markdown
+from .course_arms.desktop_arm import DesktopArmScene, DesktopArmSession
+from .course_arms.desktop_lessons import factors_markdown
+from .course_arms.desktop_state import DesktopArmState
 from .course_arms.scene import EXPLORER_ROOT, CourseArmScene
 from .course_arms.session import CourseArmSession, body_radius, reach
 from .course_arms.state import CourseArmState

@@ -1,9 +1,10 @@
 """Forces and gravity: the torques each joint must hold, as bars against its capacity (docs/kinematics.md §8.3, §8.5).
 
-A force the flange pushes with (its size in N, its direction from a list or set by dragging
-a handle at the arrow's head) is drawn as an arrow; the panel shows, per joint, τ = Jᵀ F for that force, the gravity torque of the arm
-and its payload, and their sum against what the joint can give. The bars are drawn with the
-panel (≤ 10 Hz), the arrow with the arm.
+A force the flange pushes with (its size in N; its direction from a list, or set by
+dragging a handle that rides beside the flange) is drawn as an arrow. The panel shows, per
+joint, τ = Jᵀ F for that force, the gravity torque of the arm and its payload, and their
+sum against what the joint can give. The bars are drawn with the panel (≤ 10 Hz), the arrow
+with the arm.
 """
 
 from __future__ import annotations

@@ -9,7 +9,9 @@ import numpy as np
 import pytest
 
 from app.arm_picker import DESKTOP, UR10
-from app.course_arms.desktop_arm import COURSE_TO_WORLD, SHOULDER_HEIGHT, DesktopArmSession, factors_markdown
+from app.course_arms.desktop_arm import DesktopArmSession
+from app.course_arms.desktop_lessons import factors_markdown
+from app.course_arms.desktop_state import COURSE_TO_WORLD, SHOULDER_HEIGHT, DesktopArmState
 from app.session import ClientSession
 from ur10core import Arm
 from ur10core.three_dof import FOREARM, UPPER_ARM
@@ -20,8 +22,6 @@ from .viser_client import ViserClient
 
 
 def test_the_readout_names_each_factor_and_flags_the_one_near_zero():
-    from app.course_arms.desktop_arm import DesktopArmState
-
     arm = Arm.preset("three_dof")
     state = DesktopArmState(arm)
     level = factors_markdown(arm, state.set_joints(np.radians([0.0, -90.0, 0.0])))

@@ -53,7 +53,7 @@ class ThreeDofArm(JacobianUses):
     description = "the course's 3-DOF desktop arm (parallelogram forearm, y vertical)"
     joint_types = "RRR"
     n_joints = 3
-    joint_names = ("θ1", "θ2", "θ3")
+    joint_names = ("θ1 base", "θ2 upper arm", "θ3 forearm")
     task = "position"
 
     def __init__(self, upper_arm: float = UPPER_ARM, forearm: float = FOREARM) -> None:

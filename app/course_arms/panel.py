@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import functools
 import math
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Callable
 
 import numpy as np
 import viser
@@ -36,13 +36,15 @@ def joint_text(arm: SerialArm, q: np.ndarray) -> str:
 
 
 class CourseJointSliders(View):
-    """One slider per joint, within its limits."""
+    """One slider per joint, within its limits; ``before()`` runs before a slider moves the arm (stop a motion, say)."""
 
-    def __init__(self, gui: viser.GuiApi, session: "CourseArmSession") -> None:
+    def __init__(self, gui: viser.GuiApi, session: "CourseArmSession", before: Callable[[], None] = lambda: None,
+                 order: float | None = None) -> None:
         self._session = session
+        self._before = before
         arm = session.arm
         q = session.state.last.q
-        folder = gui.add_folder("Joints")
+        folder = gui.add_folder("Joints", order=order)
         self.folders = (folder,)
         with folder:
             self.sliders = []
@@ -68,6 +70,7 @@ class CourseJointSliders(View):
             shown = float(self.sliders[index].value)
             value = math.radians(shown) if kind == "R" else shown / 1000.0
             self._shown[index] = shown  # what the browser shows now: if refused, the next panel redraw puts it back
+            self._before()
             self._session.apply(lambda state: state.set_joint(index, value))
         return moved
 
