@@ -396,8 +396,9 @@ class Classroom:
                 member.session.follow_lecture_mode(member.camera.lecture)
             elif isinstance(self.course.state, DesktopArmState):
                 arm = self.course.arm
-                member.session = DesktopArmSession(member.client, arm, app.refresher, state=DesktopArmState(arm, self.course.state.last.q),
-                                                   own_camera=False, root=DESKTOP_EXPLORER_ROOT)
+                member.session = DesktopArmSession(member.client, arm, app.refresher,
+                                                   state=DesktopArmState(arm, self.course.state.last.q), own_camera=False,
+                                                   root=DESKTOP_EXPLORER_ROOT)
             else:
                 arm = self.course.arm
                 member.session = CourseArmSession(member.client, arm, app.refresher, app.drags,

@@ -77,6 +77,13 @@ def test_the_desktop_arm_is_picked_driven_played_and_searched(app):
         assert abs(math.cos(worst[2])) == pytest.approx(1.0)
         torques = session.arm.static_torques(worst, (0.0, -10.0, 0.0))
         assert np.linalg.norm(torques) == pytest.approx(10.0 * math.hypot(UPPER_ARM, FOREARM), rel=1e-9)
+        await until(lambda: "F √(l5² + l1²) = 18.60 N·m" in session.forces.result.content, what="the course's closed form")
+        # sideways the closed form does not hold, and the result does not claim it
+        await client.set_gui("Force direction", "+x")
+        await asyncio.sleep(0.1)
+        await client.set_gui("Find the pose that needs the largest ‖τ‖", True)
+        await until(lambda: "Largest ‖τ‖" in session.forces.result.content and "√" not in session.forces.result.content,
+                    what="the sideways search")
 
         back = await pick(app, client, UR10, ClientSession)
         assert session.closed and not back.closed

@@ -213,9 +213,12 @@ class DesktopForces(View):
         self.result.content = (
             f"Largest ‖τ‖ = **{norms[worst]:.2f} N·m** for {np.linalg.norm(force):.0f} N, at θ = ("
             + ", ".join(number(v, ".0f") for v in np.degrees(q[worst])) + f")° (red ball), of {len(q):,} poses "
-            "coloured from 0 (purple) to it (yellow). For a vertical force the parallelogram decouples the links: "
-            "joint 2 holds F l5 cos θ2 and joint 3 F l1 cos θ3, so the worst pose has both links level, "
-            f"‖τ‖ = F √(l5² + l1²) = {np.linalg.norm(force) * math.hypot(arm.upper_arm, arm.forearm):.2f} N·m.")
+            "coloured from 0 (purple) to it (yellow).")
+        if not force[[0, 2]].any():  # vertical: the course's closed form to check the search against
+            self.result.content += (
+                " For a vertical force the parallelogram decouples the links: joint 2 holds F l5 cos θ2 and "
+                "joint 3 F l1 cos θ3, so the worst pose has both links level, "
+                f"‖τ‖ = F √(l5² + l1²) = {np.linalg.norm(force) * math.hypot(arm.upper_arm, arm.forearm):.2f} N·m.")
         session.path.player.stop()
         session.apply(lambda state: state.set_joints(q[worst]))
 
@@ -225,5 +228,7 @@ class DesktopForces(View):
         self._map = ()
 
     def close(self) -> None:
+        """The session has gone: so do its arrow and map, even from a scene everyone shares."""
+        self.arrow.remove()  # its label hangs under it
         with self._map_lock:
             self._clear()

@@ -13,9 +13,9 @@ from ur10core.orientation import quaternion, transform_from_quaternion
 from ur10core.serial import SerialArm
 
 from ..camera import CameraControls
+from ..ellipsoids import EllipsoidsView
 from ..feedback import guard, notify
 from ..metrics import LATENCY
-from ..ellipsoids import EllipsoidsView
 from ..velocity import VelocityView
 from ..view import View
 from ..workers import HEAVY, DragQueue, FoldedRuns, PanelRefresher
@@ -108,15 +108,15 @@ class CourseArmSession:
         drawn_in = client.scene if server is None else server.scene
         self.workspace = CourseWorkspace(drawn_in, gui, self)
         # what J does at the tool (docs/kinematics.md §8): the UR10's folders, for this arm's joints and tool
-        tool = self.scene.root
+        nodes = self.scene.root
 
         def at_tool(snapshot: CourseSnapshot):
             return snapshot.frames[-1]
 
-        self.velocity = VelocityView(drawn_in, gui, self, root=f"{tool}/velocity", tool=at_tool, place="tool",
+        self.velocity = VelocityView(drawn_in, gui, self, root=f"{nodes}/velocity", tool=at_tool, place="tool",
                                      labels=arm.joint_names, limits=None)
-        self.ellipsoids = EllipsoidsView(drawn_in, gui, self, root=f"{tool}/ellipsoids", tool=at_tool, place="tool")
-        self.forces = CourseForces(drawn_in, gui, self, f"{tool}/statics")
+        self.ellipsoids = EllipsoidsView(drawn_in, gui, self, root=f"{nodes}/ellipsoids", tool=at_tool, place="tool")
+        self.forces = CourseForces(drawn_in, gui, self, f"{nodes}/statics")
         self.at_tool_views = (self.velocity, self.ellipsoids, self.forces)
         self.gripper = GripperPose(gui, self) if arm.name == "kr210" else None
         self.camera = (CameraControls(client, lambda: self.state.last, self.guard, lecture, body_radius=body_radius(size))
