@@ -39,8 +39,7 @@ HANDLE_DISTANCE, HANDLE_SCALE = 0.35, 0.12
 MAX_FORCE_N = 200.0
 MAX_PAYLOAD_KG = 10.0  #: the UR10's rated payload (docs/kinematics.md §1)
 ARROW_METRES_PER_N = 0.002
-#: Vermilion, as the force ellipsoid: the flange's velocity arrow is blue, and both can show at once.
-FORCE_COLOR = (213, 94, 0)
+FORCE_COLOR = (0, 114, 178)
 #: Joint vectors sampled for the torque map: the worst of them is marked.
 TORQUE_MAP_POINTS = 20_000
 

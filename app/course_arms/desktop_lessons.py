@@ -15,8 +15,8 @@ from ur10core.three_dof import ThreeDofArm, course_path, torque_grid
 
 from ..animation import Player
 from ..feedback import chosen
-from ..statics import FORCE_COLOR
 from ..style import DANGER_RED, SLOT_COLORS, hex_color, number
+from ..velocity import LINEAR_COLOR
 from ..view import View
 from ..workers import HEAVY, FoldedRuns
 from ..workspace import colormap
@@ -156,7 +156,7 @@ class DesktopForces(View):
                                          hint=f"Every joint over its range, {GRID_STEPS} values each: "
                                               f"{GRID_STEPS ** 3:,} poses, coloured by ‖τ‖")
             self.result = gui.add_markdown("")
-        self.arrow = scene.add_arrows(f"{root}/force", np.zeros((1, 2, 3)), FORCE_COLOR, shaft_radius=0.02,
+        self.arrow = scene.add_arrows(f"{root}/force", np.zeros((1, 2, 3)), LINEAR_COLOR, shaft_radius=0.02,
                                       head_radius=0.05, head_length=0.1, visible=False)
         self.label = scene.add_label(f"{root}/force/label", "F", font_screen_scale=1.4, visible=False)
         self._map: tuple[viser.SceneNodeHandle, ...] = ()
