@@ -8,8 +8,7 @@ joint sliders instead of an IK target, and the course's two exercises as lessons
 
 from __future__ import annotations
 
-import contextlib
-from typing import Any, Callable
+from typing import Callable
 
 import numpy as np
 import viser
@@ -18,13 +17,13 @@ from ur10core.orientation import quaternion
 from ur10core.three_dof import ThreeDofArm
 
 from ..camera import CameraControls
-from ..feedback import guard, notify
 from ..style import JOINT_CAP_GREY, SHOULDER_COLOR
 from ..velocity import ANGULAR_COLOR, LINEAR_COLOR
 from ..view import View
 from ..workers import PanelRefresher
 from .desktop_lessons import CoursePathLesson, DesktopAbout, DesktopForces
 from .panel import CourseJointSliders
+from .session import ArmSessionBasics
 from .desktop_state import COURSE_TO_WORLD, DesktopArmState, DesktopSnapshot
 
 ROOT = "/desktop_arm"
@@ -99,7 +98,7 @@ class DesktopArmScene(View):
                 node.visible = moving
 
 
-class DesktopArmSession:
+class DesktopArmSession(ArmSessionBasics):
     """A browser driving the course's 3-DOF desktop arm (``Arm.preset("three_dof")``), as ``CourseArmSession`` does a DH arm.
 
     ``state``, ``scene``, ``server``, ``own_camera`` and ``root`` as for ``CourseArmSession``: the
@@ -149,49 +148,9 @@ class DesktopArmSession:
             observer(snapshot)
         return snapshot
 
-    def redraw(self) -> None:
-        with self.state.lock:
-            self.render(self.state.last)
-        self.refresher.request(self)
-
     def render(self, snapshot: DesktopSnapshot) -> None:
         if self.closed:
             return
-        with contextlib.ExitStack() as batch:  # the arm and its arrows arrive together
-            for sender in self._senders:
-                batch.enter_context(sender.atomic())
+        with self._batch():  # the arm and its arrows arrive together
             self.scene.render(snapshot)
             self.forces.render(snapshot)
-        for sender in self._senders:
-            sender.flush()
-
-    def render_panel(self) -> None:
-        if self.closed:
-            return
-        snapshot = self.state.last
-        with self.client.atomic():
-            for view in self.panel_views:
-                view.render_panel(snapshot)
-
-    def guard(self, handler: Callable[[Any], None]) -> Callable[[Any], None]:
-        return guard(self.client, handler, is_closed=lambda: self.closed, on_refused=lambda: self.refresher.request(self))
-
-    def notify(self, title: str, body: str, color: str = "yellow") -> None:
-        if not self.closed:
-            notify(self.client, title, body, color)
-
-    def close(self) -> None:
-        """The browser has gone (or handed over): stop drawing and let go of everything shared."""
-        self.closed = True
-        with self.state.lock:
-            for view in self.panel_views:
-                view.close()
-        self.refresher.forget(self)
-
-    def remove(self) -> None:
-        """Close, and take this session's panel out of a browser that stays."""
-        self.closed = True
-        with self.state.lock:
-            for view in self.panel_views:
-                view.remove()
-        self.refresher.forget(self)

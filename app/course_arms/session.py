@@ -63,7 +63,63 @@ class BranchSearch(View):
             session.apply(lambda state: state.with_branches(snapshot, solution), move_gizmo=False)
 
 
-class CourseArmSession:
+class ArmSessionBasics:
+    """What every course-arm session does alike: batched redraws, the panel, guarded callbacks, leaving.
+
+    The class using it has ``render(snapshot)`` and sets ``client``, ``state`` (with a ``lock``
+    and ``last``), ``refresher``, ``closed``, ``panel_views`` and ``_senders`` (the browser, and
+    the server when it draws in the shared scene).
+    """
+
+    @contextlib.contextmanager
+    def _batch(self):
+        """One redraw's messages, sent together to every sender."""
+        with contextlib.ExitStack() as batch:
+            for sender in self._senders:
+                batch.enter_context(sender.atomic())
+            yield
+        for sender in self._senders:
+            sender.flush()
+
+    def redraw(self) -> None:
+        """The 3D view again, unchanged state (a toggle changed what is shown), and the panel after it."""
+        with self.state.lock:
+            self.render(self.state.last)
+        self.refresher.request(self)
+
+    def render_panel(self) -> None:
+        if self.closed:
+            return
+        snapshot = self.state.last
+        with self.client.atomic():
+            for view in self.panel_views:
+                view.render_panel(snapshot)
+
+    def guard(self, handler: Callable[[Any], None]) -> Callable[[Any], None]:
+        return guard(self.client, handler, is_closed=lambda: self.closed, on_refused=lambda: self.refresher.request(self))
+
+    def notify(self, title: str, body: str, color: str = "yellow") -> None:
+        if not self.closed:
+            notify(self.client, title, body, color)
+
+    def close(self) -> None:
+        """The browser has gone (or handed over): stop drawing and let go of everything shared."""
+        self.closed = True
+        with self.state.lock:
+            for view in self.panel_views:
+                view.close()
+        self.refresher.forget(self)
+
+    def remove(self) -> None:
+        """Close, and take this session's panel out of a browser that stays."""
+        self.closed = True
+        with self.state.lock:
+            for view in self.panel_views:
+                view.remove()
+        self.refresher.forget(self)
+
+
+class CourseArmSession(ArmSessionBasics):
     """A browser's course arm: its state, scene, gizmo and panel (the UR10's ``ClientSession`` for other arms).
 
     ``rebuild(arm, text, convention)``, given for a typed table, puts a newly typed arm in
@@ -145,12 +201,6 @@ class CourseArmSession:
             observer(snapshot)
         return snapshot
 
-    def redraw(self) -> None:
-        """The 3D view again, unchanged state (a toggle changed what is shown), and the panel after it."""
-        with self.state.lock:
-            self.render(self.state.last)
-        self.refresher.request(self)
-
     def _dragged(self, event: viser.TransformControlsEvent) -> None:
         if self.closed:
             return
@@ -171,48 +221,15 @@ class CourseArmSession:
     def render(self, snapshot: CourseSnapshot, move_gizmo: bool = False) -> None:
         if self.closed:
             return
-        with contextlib.ExitStack() as batch:  # the arm and the gizmo arrive together, as in ClientSession.render
-            for sender in self._senders:
-                batch.enter_context(sender.atomic())
+        with self._batch():  # the arm and the gizmo arrive together, as in ClientSession.render
             self.scene.render(snapshot)
             for view in self.at_tool_views:
                 view.render(snapshot)
             if move_gizmo and not snapshot.reason:
                 self.gizmo.wxyz = quaternion(snapshot.frames[-1, :3, :3], check=False)
                 self.gizmo.position = snapshot.frames[-1, :3, 3]
-        for sender in self._senders:
-            sender.flush()
-
-    def render_panel(self) -> None:
-        if self.closed:
-            return
-        snapshot = self.state.last
-        with self.client.atomic():
-            for view in self.panel_views:
-                view.render_panel(snapshot)
-
-    # ------------------------------------------------------------------ safety
-
-    def guard(self, handler: Callable[[Any], None]) -> Callable[[Any], None]:
-        return guard(self.client, handler, is_closed=lambda: self.closed, on_refused=lambda: self.refresher.request(self))
-
-    def notify(self, title: str, body: str, color: str = "yellow") -> None:
-        if not self.closed:
-            notify(self.client, title, body, color)
-
-    def close(self) -> None:
-        """The browser has gone (or handed over): stop drawing and let go of everything shared."""
-        self.closed = True
-        with self.state.lock:
-            for view in self.panel_views:
-                view.close()
-        self.refresher.forget(self)
 
     def remove(self) -> None:
         """Close, and take this session's panel and gizmo out of a browser that stays."""
-        self.closed = True
-        with self.state.lock:
-            for view in self.panel_views:
-                view.remove()
-            self.gizmo.remove()
-        self.refresher.forget(self)
+        super().remove()
+        self.gizmo.remove()
