@@ -16,7 +16,7 @@ import viser
 
 from ur10core.orientation import quaternion
 
-from .fast_updates import set_orientations, set_positions
+from .fast_updates import set_orientations, set_positions, set_scales
 from .feedback import chosen
 from .state import Snapshot
 from .style import number
@@ -73,7 +73,9 @@ class EllipsoidsView(View):
             self.enabled = gui.add_checkbox(f"Show at the {place}", False)
             self.which = gui.add_dropdown("Ellipsoid", tuple(SHOWN), initial_value="both")
             self.lengths = gui.add_markdown("", visible=False)
-        # a unit sphere scaled per axis; tiny until first sized, so it never shows a metre wide
+        # one frame at the tool, turned to the ellipsoids' axes (they share them), so a drag moves one node;
+        # in it, a unit sphere per ellipsoid scaled per axis, tiny until first sized, so it never shows a metre wide
+        self.frame = scene.add_frame(root, show_axes=False)
         self.velocity = scene.add_icosphere(f"{root}/velocity", radius=1.0, color=VELOCITY_COLOR, opacity=0.35,
                                             subdivisions=3, cast_shadow=False, receive_shadow=False, visible=False,
                                             scale=(1e-4, 1e-4, 1e-4))
@@ -91,15 +93,12 @@ class EllipsoidsView(View):
         show_velocity, show_force = SHOWN.get(self.which.value, (False, False)) if self.enabled.value else (False, False)
         if show_velocity or show_force:
             translation = self._arm.translation_ellipsoid(snapshot.q)
-            wxyz, centre = ellipsoid_pose(translation.axes), self._tool(snapshot)[:3, 3]
-            sizes = ((self.velocity, show_velocity, VELOCITY_METRES * translation.velocity),
-                     (self.force, show_force, np.minimum(FORCE_METRES * translation.force, LONGEST_DRAWN)))
-            nodes = [node for node, shown, _ in sizes if shown]
-            for node, shown, size in sizes:
-                if shown:  # sized and placed before it shows
-                    node.scale = tuple(float(v) for v in np.maximum(size, 1e-4))  # a zero axis: a flat disc
-            set_orientations(nodes, np.tile(wxyz, (len(nodes), 1)))
-            set_positions(nodes, np.tile(centre, (len(nodes), 1)))
+            set_orientations([self.frame], ellipsoid_pose(translation.axes)[None])
+            set_positions([self.frame], self._tool(snapshot)[None, :3, 3])
+            sizes = np.maximum([VELOCITY_METRES * translation.velocity,
+                                np.minimum(FORCE_METRES * translation.force, LONGEST_DRAWN)], 1e-4)
+            shown = [show_velocity, show_force]  # sized before they show; a zero axis makes a flat disc
+            set_scales([node for node, on in zip((self.velocity, self.force), shown) if on], sizes[shown])
         for node, shown in ((self.velocity, show_velocity), (self.force, show_force)):
             if node.visible != shown:
                 node.visible = shown
@@ -113,5 +112,4 @@ class EllipsoidsView(View):
 
     def close(self) -> None:
         """The session has gone: so do its ellipsoids, even from a scene everyone shares."""
-        self.velocity.remove()
-        self.force.remove()
+        self.frame.remove()  # and the ellipsoids in it

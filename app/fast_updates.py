@@ -54,13 +54,15 @@ class _PositionMessage(_messages.SetPositionMessage):
         return f"scene:{self.name}:update:SetPositionMessage"
 
 
-class _InstancesMessage(_messages.SceneNodeUpdateMessage):
-    """A ``SceneNodeUpdateMessage`` whose updates are C-contiguous float32 arrays."""
+class _UpdateMessage(_messages.SceneNodeUpdateMessage):
+    """A ``SceneNodeUpdateMessage`` whose updates are C-contiguous float32 arrays or tuples of Python floats."""
 
     def as_serializable_dict(self, binary_buffers: list | None = None) -> dict:
         updates = {}
         for name, array in self.updates.items():
-            if binary_buffers is None:
+            if isinstance(array, tuple):
+                updates[name] = array
+            elif binary_buffers is None:
                 updates[name] = array.data
             else:
                 updates[name] = {"__binary_index": len(binary_buffers), "dtype": array.dtype.str}
@@ -94,6 +96,18 @@ def set_positions(nodes: list[viser.SceneNodeHandle], positions: np.ndarray) -> 
     _set_each(nodes, positions, "position", _PositionMessage)
 
 
+def set_scales(nodes: list[viser.SceneNodeHandle], scales: np.ndarray) -> None:
+    """``node.scale = (sx, sy, sz)`` for each pair (see :func:`_set_each`)."""
+    if PUBLIC_SETTERS:
+        for node, value in zip(nodes, scales):
+            node.scale = tuple(value)
+        return
+    for node, value in zip(nodes, scales.tolist()):
+        impl = node._impl
+        impl.props.scale = tuple(value)  # the handle reads back what was sent
+        impl.api._queue_scene_message(_UpdateMessage(impl.name, {"scale": tuple(value)}))
+
+
 def set_instances(mesh: viser.BatchedMeshHandle, wxyzs: np.ndarray, positions: np.ndarray | None) -> None:
     """``mesh.batched_wxyzs = wxyzs`` and (unless None) ``mesh.batched_positions = positions`` in one message."""
     if PUBLIC_SETTERS:
@@ -108,7 +122,7 @@ def set_instances(mesh: viser.BatchedMeshHandle, wxyzs: np.ndarray, positions: n
         updates["batched_positions"] = np.ascontiguousarray(positions, dtype=np.float32)
     for name, value in updates.items():
         np.copyto(getattr(impl.props, name), value)  # the handle reads back what was sent
-    impl.api._queue_scene_message(_InstancesMessage(impl.name, updates))
+    impl.api._queue_scene_message(_UpdateMessage(impl.name, updates))
 
 
 def stop_echo(gizmo: viser.TransformControlsHandle) -> None:

@@ -101,7 +101,10 @@ class StaticsView(View):
             self.map_legend = gui.add_markdown("", visible=False)
         self.arrow = scene.add_arrows("/statics/force", np.zeros((1, 2, 3)), FORCE_COLOR, shaft_radius=0.012,
                                       head_radius=0.03, head_length=0.05, visible=False)
-        self.label = scene.add_label("/statics/force_label", "F", font_screen_scale=1.4, anchor="center-left", visible=False)
+        # the arrow's node rides at the flange and its label at the arrow's tip, in it: a drag moves one node,
+        # and the arrow's shape is sent again only when the force itself turns or grows
+        self.label = scene.add_label("/statics/force/label", "F", font_screen_scale=1.4, anchor="center-left", visible=False)
+        self._drawn_force: np.ndarray | None = None
         #: the direction handle: this browser's own, like the IK target
         self.handle = session.client.scene.add_transform_controls(
             "/statics/force_handle", scale=HANDLE_SCALE, disable_rotations=True, depth_test=False, visible=False)
@@ -158,8 +161,12 @@ class StaticsView(View):
         if shown:
             newtons = float(self.newtons.value)
             force = force_vector(direction, newtons, snapshot.flange, self.dragged)
-            self.arrow.points = np.array([[tip, tip + ARROW_METRES_PER_N * force]])  # the way the tool pushes
-            set_positions([self.label], (tip + ARROW_METRES_PER_N * force)[None])
+            if self._drawn_force is None or not np.array_equal(force, self._drawn_force):
+                end = ARROW_METRES_PER_N * force
+                self.arrow.points = np.array([[np.zeros(3), end]])  # the way the tool pushes
+                set_positions([self.label], end[None])
+                self._drawn_force = force
+            set_positions([self.arrow], tip[None])
             text = f"F = {newtons:.0f} N"
             if self.label.text != text:
                 self.label.text = text
@@ -210,8 +217,8 @@ class StaticsView(View):
 
     def close(self) -> None:
         """The session has gone: so do its arrow and map, even from a scene everyone shares."""
-        self.arrow.remove()
         self.label.remove()
+        self.arrow.remove()
         self.handle.remove()
         with self._map_lock:
             self._clear_map()

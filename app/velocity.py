@@ -135,9 +135,9 @@ class VelocityView(View):
                                             self._labels, self._kinds, self._limits)
 
     def render(self, snapshot: Snapshot) -> None:
-        qdot = self.joint_rates()
-        moving = bool(np.any(qdot))
+        moving = any(slider.value != 0.0 for slider in self.sliders)  # on every drag: no arrays while all are still
         if moving:
+            qdot = self.joint_rates()
             twist = self._arm.tool_twist(snapshot.q, qdot)
             tip = self._tool(snapshot)[:3, 3]
             ends = (tip + METRES_PER_SPEED * twist[:3], tip + METRES_PER_TURN_RATE * twist[3:])

@@ -195,6 +195,17 @@ def test_frames_fk_and_quaternions_agree(course):
     compiled.quaternions(R, w_c)
     _numpy_kernels.quaternions(R, w_n)
     np.testing.assert_allclose(w_c, w_n, rtol=0, atol=1e-15)
+    # one at a time (the drag's calls take the numpy kernel's float path)
+    for k in range(0, len(q), 10):
+        one_c, one_n = np.empty((1, 7, 4, 4)), np.empty((1, 7, 4, 4))
+        compiled.frames(q[k:k + 1], course.dh_lengths, one_c)
+        _numpy_kernels.frames(q[k:k + 1], course.dh_lengths, one_n)
+        np.testing.assert_allclose(one_c, one_n, rtol=0, atol=1e-14)
+    for k in [*range(0, len(R) - 3, 50), *range(len(R) - 3, len(R))]:
+        one_c, one_n = np.empty((1, 4)), np.empty((1, 4))
+        compiled.quaternions(R[k:k + 1], one_c)
+        _numpy_kernels.quaternions(R[k:k + 1], one_n)
+        np.testing.assert_allclose(one_c, one_n, rtol=0, atol=1e-15)
 
 
 def test_nearest_one_agrees(course):

@@ -146,6 +146,20 @@ def test_at_each_ur10_singularity_one_ellipsoid_flattens(kind):
     assert max(translation.force.max(), rotation.force.max()) > 1e5
 
 
+@pytest.mark.parametrize("kind", ["shoulder", "elbow", "wrist"])
+def test_at_a_singularity_the_ellipsoids_are_still_those_of_the_held_map(kind):
+    """Where the held rows lose rank too (the rank decision is the core's own, from one SVD), the
+    lengths still match the eigenvalues of the independently built held map."""
+    arm = Arm.preset("course")
+    on = arm.singular_configuration(kind, np.radians([30, 45, 26, 50, 60, 80]))[None]
+    J = arm.jacobian(on)
+    translation, rotation = arm.ellipsoids(on)
+    for ellipsoid, M in zip((translation, rotation), (held_map(J, slice(0, 3), slice(3, 6)), held_map(J, slice(3, 6), slice(0, 3)))):
+        A = M @ np.swapaxes(M, -1, -2)
+        np.testing.assert_allclose(np.sort(np.linalg.eigvalsh(A), axis=-1), np.sort(ellipsoid.velocity**2, axis=-1), atol=1e-8)
+        np.testing.assert_allclose(A @ ellipsoid.axes, ellipsoid.axes * ellipsoid.velocity[:, None, :] ** 2, atol=1e-8)
+
+
 @pytest.mark.parametrize("name, joint", [("planar_elbow", 1), ("scara", 1)])
 def test_the_velocity_ellipsoid_flattens_as_the_elbow_stretches(name, joint):
     """Stretched, the links cannot move the tool along themselves: the thinnest velocity axis goes to zero

@@ -7,7 +7,7 @@ import pytest
 import viser
 from viser import _messages
 
-from app.fast_updates import set_instances, set_orientations, set_positions, stop_echo
+from app.fast_updates import set_instances, set_orientations, set_positions, set_scales, stop_echo
 
 pytestmark = pytest.mark.server
 
@@ -68,6 +68,24 @@ def test_positions_match_the_public_setter(scene, monkeypatch):
         np.testing.assert_allclose(p.position, f.position)
 
 
+def test_scales_match_the_public_setter(scene, monkeypatch):
+    public = [scene.add_icosphere(f"/public/{i}", radius=1.0, color=(0, 0, 0)) for i in range(2)]
+    fast = [scene.add_icosphere(f"/fast/{i}", radius=1.0, color=(0, 0, 0)) for i in range(2)]
+    scales = np.array([[0.1, 0.2, 0.3], [1e-4, 2.0, 0.5]])
+    sent = record(scene, monkeypatch)
+    for node, s in zip(public, scales):
+        node.scale = tuple(s)
+    set_scales(fast, scales)
+    assert len(sent) == 4
+    for a, b in zip(sent[:2], sent[2:]):
+        assert type(a) is _messages.SceneNodeUpdateMessage and isinstance(b, _messages.SceneNodeUpdateMessage)
+        assert a.updates == b.updates and all(type(v) is float for v in b.updates["scale"])
+        assert a.redundancy_key().replace("/public/", "") == b.redundancy_key().replace("/fast/", "")
+        assert wire(a)[0] | {"name": ""} == wire(b)[0] | {"name": ""}  # the same on the wire, but for the name
+    for p, f in zip(public, fast):
+        assert p.scale == f.scale
+
+
 def test_instances_match_the_public_setters(scene, monkeypatch):
     vertices = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0]], np.float32)
     faces = np.array([[0, 1, 2]], np.uint32)
@@ -115,12 +133,14 @@ def test_fast_wire_encoding_is_vipers_own(scene, monkeypatch):
         "/mesh", vertices, np.array([[0, 1, 2]], np.uint32),
         batched_wxyzs=np.tile([1.0, 0, 0, 0], (8, 1)), batched_positions=np.zeros((8, 3)), lod="off",
     )
+    sphere = scene.add_icosphere("/sphere", radius=1.0, color=(0, 0, 0))
     sent = record(scene, monkeypatch)
     set_orientations([frame], np.array([[np.cos(0.3), 0.0, np.sin(0.3), 0.0]]))
     rng = np.random.default_rng(1)
     set_instances(mesh, rng.normal(size=(8, 4)), rng.normal(size=(8, 3)))
     set_instances(mesh, rng.normal(size=(8, 4)), None)
-    assert len(sent) == 3
+    set_scales([sphere], np.array([[0.5, 0.25, 2.0]]))
+    assert len(sent) == 4
     for message in sent:
         assert type(plain(message)) is not type(message)  # the fast path is really being compared
         assert wire(message) == wire(plain(message))

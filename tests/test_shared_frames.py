@@ -14,7 +14,7 @@ from viser.infra import _infra
 from viser.infra._async_message_buffer import AsyncMessageBuffer
 
 from app import shared_frames
-from app.fast_updates import _InstancesMessage
+from app.fast_updates import _UpdateMessage
 from tests.viser_client import decode_frame
 
 #: viser 1.1.1's ``_message_producer``, which shared_frames.shared_message_producer copies.
@@ -35,7 +35,7 @@ def a_window() -> list[_messages.Message]:
     return [
         _messages.SetOrientationMessage("/arm/link0/link1", (0.5, 0.5, 0.5, 0.5)),
         _messages.SetPositionMessage("/target", (0.1, -0.2, 0.3)),
-        _InstancesMessage("/ghosts/link3", {
+        _UpdateMessage("/ghosts/link3", {
             "batched_wxyzs": np.arange(32, dtype=np.float32).reshape(8, 4),
             "batched_positions": np.linspace(0, 1, 24, dtype=np.float32).reshape(8, 3),
         }),

@@ -28,9 +28,10 @@ def test_the_torque_bars_add_the_force_and_the_weight(app):
         expected = bars_html(arm.static_torques(snapshot.q, [0, 0, -50.0]), arm.gravity_torques(snapshot.q))
         await until(lambda: statics.bars.content == expected, what="50 N down and the arm's weight")
         # the arrow starts at the flange and points the way the tool pushes: 50 N down is 10 cm down
-        start, end = statics.arrow.points[0]
+        start, end = statics.arrow.points[0] + statics.arrow.position
         np.testing.assert_allclose(start, snapshot.flange[:3, 3], atol=1e-6)
         np.testing.assert_allclose(end - start, [0, 0, -0.1], atol=1e-6)
+        np.testing.assert_allclose(statics.label.position, end - start, atol=1e-6)  # the label at the tip (in the arrow)
         # a payload adds its weight; a force along +x turns the arrow
         await client.set_gui("Payload (kg)", 5.0)
         await asyncio.sleep(0.1)
@@ -77,6 +78,8 @@ def test_the_force_points_where_its_handle_is_dragged(app):
         new_tip = session.state.last.flange[:3, 3]
         await until(lambda: np.allclose(client.received.positions[handle], new_tip + HANDLE_DISTANCE * direction, atol=1e-5),
                     what="the handle at the new flange")
+        await until(lambda: np.allclose(client.received.positions["/statics/force"], new_tip, atol=1e-5),
+                    what="the arrow at the new flange")
         # another direction hides the handle
         await client.set_gui("Force direction", "+x")
         await until(lambda: client.received.visible.get(handle) is False, what="the handle hidden")
@@ -94,7 +97,7 @@ def test_a_joint_over_its_rating_is_flagged():
 
 def test_the_ellipsoids_follow_the_arm_and_flatten_towards_the_elbow_singularity(app):
     async def scenario():
-        from app.ellipsoids import FORCE_METRES, VELOCITY_METRES, ellipsoid_pose
+        from app.ellipsoids import FORCE_METRES, VELOCITY_METRES
         from ur10core.orientation import rotation_from_quaternion
 
         client = await ViserClient(url(app)).connect()
@@ -105,11 +108,11 @@ def test_the_ellipsoids_follow_the_arm_and_flatten_towards_the_elbow_singularity
         await until(lambda: view.velocity.visible and view.force.visible and view.lengths.visible, what="the ellipsoids")
         snapshot = session.state.last
         translation, _ = snapshot.arm.ellipsoids(snapshot.q)
-        np.testing.assert_allclose(view.velocity.position, snapshot.flange[:3, 3], atol=1e-6)
+        np.testing.assert_allclose(view.frame.position, snapshot.flange[:3, 3], atol=1e-6)
         np.testing.assert_allclose(view.velocity.scale, VELOCITY_METRES * translation.velocity, rtol=1e-6)
         np.testing.assert_allclose(view.force.scale, FORCE_METRES * translation.force, rtol=1e-6)
         # the drawn axes are the ellipsoid's (up to each axis's sign)
-        drawn = rotation_from_quaternion(ellipsoid_pose(translation.axes))
+        drawn = rotation_from_quaternion(view.frame.wxyz)
         np.testing.assert_allclose(np.abs(drawn), np.abs(translation.axes), atol=1e-6)
         # the elbow straightens: the thinnest velocity axis shrinks, the force ellipsoid grows along it
         thinnest = min(view.velocity.scale)

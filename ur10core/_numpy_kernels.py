@@ -70,6 +70,9 @@ _SIN_ALPHA = np.array([0.0, 1.0, 0.0, 0.0, -1.0, 1.0])
 
 def frames(q: np.ndarray, params, out: np.ndarray) -> None:
     """Frames {0}..{6} of n joint vectors (n, 6) into ``out`` (n, 7, 4, 4): T0i = T01 ... T(i-1,i)."""
+    if len(q) == 1 and all(map(math.isfinite, q[0].tolist())):
+        _frames_one(q[0].tolist(), params, out[0])
+        return
     d1, a2, a3, d4, d5, d6 = params
     a = np.array([0.0, 0.0, a2, a3, 0.0, 0.0])
     d = np.array([d1, 0.0, 0.0, d4, d5, d6])
@@ -82,6 +85,22 @@ def frames(q: np.ndarray, params, out: np.ndarray) -> None:
     out[:, 0] = np.eye(4)
     for i in range(6):
         np.matmul(out[:, i], link[:, i], out=out[:, i + 1])
+
+
+def _frames_one(q: list[float], params, out: np.ndarray) -> None:
+    """:func:`frames` of one joint vector: each link's matrix from floats, six 4 × 4 products (the drag's call)."""
+    d1, a2, a3, d4, d5, d6 = params
+    T = _EYE4
+    out[0] = T
+    for i, (t, a, d, ca, sa) in enumerate(zip(q, (0.0, 0.0, a2, a3, 0.0, 0.0), (d1, 0.0, 0.0, d4, d5, d6),
+                                             _COS_ALPHA.tolist(), _SIN_ALPHA.tolist())):
+        ct, st = math.cos(t), math.sin(t)
+        T = T @ np.array([[ct, -st, 0.0, a], [st * ca, ct * ca, -sa, -sa * d], [st * sa, ct * sa, ca, ca * d],
+                          [0.0, 0.0, 0.0, 1.0]])
+        out[i + 1] = T
+
+
+_EYE4 = np.eye(4)
 
 
 #: Shepperd's method: row k of the symmetric matrix below is 4 q_k q; entry (a, b) is
@@ -98,12 +117,28 @@ for (a, b), terms in {
 
 def quaternions(R: np.ndarray, out: np.ndarray) -> None:
     """Unit quaternions (w, x, y, z), w ≥ 0, of n rotations (n, 3, 3), by Shepperd's method."""
+    if len(R) == 1:
+        out[0] = _quaternion_one(R[0].tolist())
+        return
     rows = _SHEPPERD @ R.reshape(-1, 1, 9, 1)  # (n, 4, 4, 1)
     rows = rows[..., 0] + np.eye(4)  # the diagonal's 1 + ...
     largest = np.argmax(np.diagonal(rows, axis1=-2, axis2=-1), axis=-1)  # divide by the largest q_k
     v = np.take_along_axis(rows, largest[:, None, None], axis=1)[:, 0]
     norm = np.sqrt((v * v).sum(axis=-1, keepdims=True))
     out[:] = v / np.where(v[:, :1] < 0.0, -norm, norm)
+
+
+def _quaternion_one(R: list[list[float]]) -> list[float]:
+    """:func:`quaternions` of one rotation, in floats: the same four rows, the same choice."""
+    (r11, r12, r13), (r21, r22, r23), (r31, r32, r33) = R
+    rows = ((r11 + r22 + r33 + 1.0, r32 - r23, r13 - r31, r21 - r12),
+            (r32 - r23, r11 - r22 - r33 + 1.0, r12 + r21, r13 + r31),
+            (r13 - r31, r12 + r21, -r11 + r22 - r33 + 1.0, r23 + r32),
+            (r21 - r12, r13 + r31, r23 + r32, -r11 - r22 + r33 + 1.0))
+    v = rows[max(range(4), key=lambda k: rows[k][k])]  # the first of equal largest, as np.argmax
+    norm = math.sqrt(sum(x * x for x in v))
+    norm = -norm if v[0] < 0.0 else norm
+    return [x / norm for x in v]
 
 
 # --------------------------------------------------------------------------- nearest branch

@@ -30,7 +30,7 @@ from . import ik as _ik
 from . import ik_reference
 from ._backend import kernels
 from ._validate import as_float_array, check_finite, homogeneous_transform, joint_vector
-from .differential import JacobianUses
+from .differential import JacobianUses, cross
 
 #: alpha_{i-1} of the course's DH table, rows i = 1..6.
 DH_ALPHA = (0.0, math.pi / 2, 0.0, 0.0, -math.pi / 2, math.pi / 2)
@@ -331,7 +331,7 @@ class Arm(JacobianUses):
         z = frames[..., 1:, :3, 2]  # (..., 6, 3)
         o = frames[..., 1:, :3, 3]
         J = np.empty(frames.shape[:-3] + (6, 6))
-        J[..., :3, :] = np.swapaxes(np.cross(z, o[..., 5:6, :] - o), -1, -2)
+        J[..., :3, :] = np.swapaxes(cross(z, o[..., 5:6, :] - o), -1, -2)
         J[..., 3:, :] = np.swapaxes(z, -1, -2)
         return J
 

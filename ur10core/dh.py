@@ -20,6 +20,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ._validate import as_float_array, check_finite
+from .differential import cross
 
 STANDARD = "standard"
 MODIFIED = "modified"
@@ -233,7 +234,7 @@ class DHTable:
         tip = frames[..., -1:, :3, 3]
         revolute = np.array([self.rows[k].joint == REVOLUTE for k in self.joint_rows])
         J = np.zeros(frames.shape[:-3] + (6, self.n_joints))
-        J[..., :3, :] = np.swapaxes(np.where(revolute[:, None], np.cross(z, tip - o), z), -1, -2)
+        J[..., :3, :] = np.swapaxes(np.where(revolute[:, None], cross(z, tip - o), z), -1, -2)
         J[..., 3:, :] = np.swapaxes(np.where(revolute[:, None], z, 0.0), -1, -2)
         return J
 

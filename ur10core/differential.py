@@ -80,17 +80,36 @@ def damped_inverse(J: np.ndarray, twist: np.ndarray) -> tuple[np.ndarray, np.nda
     return np.einsum("...ij,...i->...j", Vt, components), lam
 
 
-def _null_projector(A: np.ndarray) -> np.ndarray:
-    """(..., n, n) the orthogonal projector onto the null space of A (..., m, n): I − A⁺ A."""
-    return np.eye(A.shape[-1]) - np.linalg.pinv(A) @ A
+def cross(u: np.ndarray, v: np.ndarray) -> np.ndarray:
+    """u × v over the last axis, (..., 3): ``np.cross`` spends most of its time moving axes for three-vectors."""
+    u0, u1, u2 = u[..., 0], u[..., 1], u[..., 2]
+    v0, v1, v2 = v[..., 0], v[..., 1], v[..., 2]
+    return np.stack([u1 * v2 - u2 * v1, u2 * v0 - u0 * v2, u0 * v1 - u1 * v0], axis=-1)
+
+
+#: A singular value of the held rows at most this share of their largest counts as zero (``np.linalg.pinv``'s default).
+NULL_SPACE_RCOND = 1e-15
+
+
+def _on_null_space(M: np.ndarray, held: np.ndarray) -> np.ndarray:
+    """M (..., k, n) acting on the null space of ``held`` (..., m, n) alone, as a (..., k, n) matrix.
+
+    ``M (I − held⁺ held)`` has the singular values and left singular vectors of ``M Vᵀ W``,
+    V from held's SVD and W keeping the columns of its null directions (V is orthogonal):
+    one SVD instead of a pseudo-inverse, a projector and their products.
+    """
+    _, sigma, Vt = np.linalg.svd(held, full_matrices=True)
+    free = np.ones(sigma.shape[:-1] + (Vt.shape[-1],), dtype=bool)
+    free[..., : sigma.shape[-1]] = sigma <= NULL_SPACE_RCOND * sigma[..., :1]
+    return (M @ np.swapaxes(Vt, -1, -2)) * free[..., None, :]
 
 
 def _ellipsoid(J: np.ndarray) -> Ellipsoid:
-    U, sigma, _ = np.linalg.svd(J, full_matrices=True)  # J (..., 3, n): U (..., 3, 3)
-    lengths = np.zeros(J.shape[:-2] + (3,))
-    lengths[..., : sigma.shape[-1]] = sigma[..., :3]
-    with np.errstate(divide="ignore"):
-        force = np.where(lengths > 0.0, 1.0 / np.where(lengths > 0.0, lengths, 1.0), np.inf)
+    """The ellipsoid of J (..., 3, n): left singular vectors, singular values (0 past n) and their inverses."""
+    U, sigma, _ = np.linalg.svd(J, full_matrices=J.shape[-1] < 3)  # U (..., 3, 3) either way
+    lengths = sigma if sigma.shape[-1] == 3 else np.concatenate(
+        [sigma, np.zeros(sigma.shape[:-1] + (3 - sigma.shape[-1],))], axis=-1)
+    force = np.divide(1.0, lengths, out=np.full_like(lengths, np.inf), where=lengths > 0.0)
     return Ellipsoid(U, lengths, force)
 
 
@@ -208,8 +227,8 @@ class JacobianUses:
     def _translation(self, J: np.ndarray) -> Ellipsoid:
         task = getattr(self, "task", "pose")
         held = {"pose": J[..., 3:, :], "position and yaw": J[..., 5:, :]}.get(task)
-        return _ellipsoid(J[..., :3, :] if held is None else J[..., :3, :] @ _null_projector(held))
+        return _ellipsoid(J[..., :3, :] if held is None else _on_null_space(J[..., :3, :], held))
 
     def _rotation(self, J: np.ndarray) -> Ellipsoid:
         held = J[..., :3, :] if getattr(self, "task", "pose") == "pose" else None
-        return _ellipsoid(J[..., 3:, :] if held is None else J[..., 3:, :] @ _null_projector(held))
+        return _ellipsoid(J[..., 3:, :] if held is None else _on_null_space(J[..., 3:, :], held))

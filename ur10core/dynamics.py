@@ -15,6 +15,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .dh import DHRow, DHTable
+from .differential import cross
 
 #: Standard gravity (m/s²), acting along −z of the base frame.
 GRAVITY = 9.81
@@ -95,7 +96,7 @@ def gravity_torques(arm, q: np.ndarray, payload_kg: float = 0.0) -> np.ndarray:
     tau = np.zeros(frames.shape[:-3] + (6,))
     for i in range(6):
         lever = centres[..., i:, :] - origins[..., i:i + 1, :]  # only the links beyond joint i move with it
-        lift = np.cross(axes[..., i:i + 1, :], lever)[..., 2]  # ∂z_c/∂q_i
+        lift = cross(axes[..., i:i + 1, :], lever)[..., 2]  # ∂z_c/∂q_i
         tau[..., i] = (lift * weights[i:]).sum(axis=-1)
     return tau
 
@@ -120,13 +121,6 @@ def with_payload(masses: LinkMasses, payload_kg: float) -> LinkMasses:
     combined = inertia + shifted(m, r - centre) + shifted(payload_kg, -centre)
     return LinkMasses(np.append(masses.masses[:5], total), np.vstack([masses.centres[:5], centre]),
                       np.concatenate([masses.inertias[:5], combined[None]]), masses.source)
-
-
-def _cross(u: np.ndarray, v: np.ndarray) -> np.ndarray:
-    """u × v over the last axis: np.cross spends most of its time moving axes for three-vectors."""
-    u0, u1, u2 = u[..., 0], u[..., 1], u[..., 2]
-    v0, v1, v2 = v[..., 0], v[..., 1], v[..., 2]
-    return np.stack([u1 * v2 - u2 * v1, u2 * v0 - u0 * v2, u0 * v1 - u1 * v0], axis=-1)
 
 
 def inverse_dynamics(arm, q, qd, qdd, gravity=GRAVITY, payload_kg: float = 0.0) -> np.ndarray:
@@ -164,24 +158,24 @@ def inverse_dynamics(arm, q, qd, qdd, gravity=GRAVITY, payload_kg: float = 0.0) 
         return np.einsum("...ij,...j->...i", M, v)
 
     for i in range(6):
-        wd = rotate(Rt[..., i, :, :], wd + z * qdd[..., i:i + 1] + _cross(w, z * qd[..., i:i + 1]))
+        wd = rotate(Rt[..., i, :, :], wd + z * qdd[..., i:i + 1] + cross(w, z * qd[..., i:i + 1]))
         w = rotate(Rt[..., i, :, :], w + z * qd[..., i:i + 1])
-        vd = _cross(wd, pstar[i]) + _cross(w, _cross(w, pstar[i])) + rotate(Rt[..., i, :, :], vd)
+        vd = cross(wd, pstar[i]) + cross(w, cross(w, pstar[i])) + rotate(Rt[..., i, :, :], vd)
         r = links.centres[i]
-        centre_acceleration = _cross(wd, r) + _cross(w, _cross(w, r)) + vd
+        centre_acceleration = cross(wd, r) + cross(w, cross(w, r)) + vd
         inertia = links.inertias[i]
         forces.append(links.masses[i] * centre_acceleration)
-        moments.append(rotate(inertia, wd) + _cross(w, rotate(inertia, w)))
+        moments.append(rotate(inertia, wd) + cross(w, rotate(inertia, w)))
     tau = np.empty(batch + (6,))
     f, n = np.zeros(batch + (3,)), np.zeros(batch + (3,))
     for i in reversed(range(6)):
         if i == 5:
-            n = _cross(pstar[i] + links.centres[i], forces[i]) + moments[i]
+            n = cross(pstar[i] + links.centres[i], forces[i]) + moments[i]
             f = forces[i]
         else:
             Rn = R[..., i + 1, :, :]
-            n = rotate(Rn, n + _cross(rotate(np.swapaxes(Rn, -1, -2), pstar[i]), f)) \
-                + _cross(pstar[i] + links.centres[i], forces[i]) + moments[i]
+            n = rotate(Rn, n + cross(rotate(np.swapaxes(Rn, -1, -2), pstar[i]), f)) \
+                + cross(pstar[i] + links.centres[i], forces[i]) + moments[i]
             f = rotate(Rn, f) + forces[i]
         tau[..., i] = np.einsum("...i,...i->...", n, rotate(Rt[..., i, :, :], z))
     return tau
