@@ -97,7 +97,14 @@ def test_the_desktop_arm_plays_the_courses_path_and_finds_its_worst_pose(open_pa
     assert "Largest ‖τ‖" in desktop.forces.result.content, "the search never ran"
     wait_for(lambda: page.get_by_text(re.compile(r"^Largest ‖τ‖ = ")).count() > 0, what="the result in the page")
     marker = desktop.forces._map[1]  # the red ball at the worst pose, with its label under it
-    assert f"{marker.name}/label" in desktop.forces._scene._handle_from_node_name
+    label = desktop.forces._scene._handle_from_node_name[f"{marker.name}/label"]
+    # viser draws 3D labels on the canvas, not as page text: the label shows if hiding it changes the picture
+    page.wait_for_timeout(2000)
+    shown = canvas_pixels(page)
+    page.screenshot(path=str(tmp_path / "desktop_arm_worst.png"))
+    label.visible = False
+    page.wait_for_timeout(2000)
+    assert changed(canvas_pixels(page), shown) > 0.0005, "the worst pose's label was not drawn"
 
 
 def test_a_path_is_charted_both_ways_with_its_marks(open_page, tmp_path):

@@ -35,6 +35,8 @@ MAX_FORCE_N = 50.0
 ARROW_METRES_PER_N = 0.03
 #: Joint values per range in the torque search: 31³ = 29,791 poses, a few tens of milliseconds.
 GRID_STEPS = 31
+#: How far above the worst pose's ball its label sits (m, up in the scene): clear of the base frame's labels.
+WORST_LABEL_RISE = 0.8
 
 
 def factors_markdown(arm: ThreeDofArm, snapshot: DesktopSnapshot) -> str:
@@ -207,8 +209,11 @@ class DesktopForces(View):
             cloud = self._scene.add_point_cloud(f"{self._root}/torque_map", points.astype(np.float32), colormap(norms, top),
                                                 point_size=0.025, point_shape="circle")
             marker = self._scene.add_icosphere(f"{self._root}/worst", radius=0.08, color=DANGER_RED, position=points[worst])
+            # raised on a red stalk: at the ball it sat on the base frame's and the joints' labels
+            rise = np.array([[[0.0, 0.0, 0.0], [0.0, 0.0, WORST_LABEL_RISE]]], np.float32)
+            self._scene.add_line_segments(f"{self._root}/worst/stalk", rise, DANGER_RED, thickness=0.015)
             self._scene.add_label(f"{self._root}/worst/label", f"largest ‖τ‖ = {top:.1f} N·m", font_screen_scale=1.4,
-                                  anchor="bottom-center")
+                                  anchor="bottom-center", position=(0.0, 0.0, WORST_LABEL_RISE))
             self._map = (cloud, marker)
         self.result.content = (
             f"Largest ‖τ‖ = **{norms[worst]:.2f} N·m** for {np.linalg.norm(force):.0f} N, at θ = ("
