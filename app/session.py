@@ -112,6 +112,10 @@ class ClientSession:
         self.refresher = refresher
         self.drags = drags
         self.closed = False
+        # a widget's callback can run before this constructor ends (the widgets reach the browser as
+        # they are made, and a quick click is handled on viser's thread pool): until then it draws
+        # nothing, and the first render below draws what that click chose
+        self.views: tuple = ()
         #: called after every change, e.g. to refresh the classroom's live panel
         self.observers: list[Callable[[Snapshot], None]] = []
         scene = client.scene if server is None else server.scene
@@ -140,7 +144,7 @@ class ClientSession:
         self.own_views = (self.joints, *([self.arm_model] if self.arm_model else []), self.ik_target, self.readouts,
                           self.singularity, self.workspace, self.reach_map, self.statics, self.ellipsoids, self.velocity, self.motion, *([self.camera] if self.camera else []))
         self.views = (*self.scene_views, *self.own_views)
-        self.render(first)
+        self.render(self.state.last)  # as a click during the build may have left it
         self.render_panel()
 
     # ------------------------------------------------------------------ changes

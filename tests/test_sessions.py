@@ -125,6 +125,43 @@ def test_every_redraw_holds_the_arms_lock(app):
     asyncio.run(scenario())
 
 
+def test_a_click_while_the_session_is_being_built_is_not_an_error(app, monkeypatch):
+    """A widget reaches the browser as soon as it is made: a click before the session's constructor
+    had finished redrew a session without its views yet ("Something went wrong", AttributeError).
+    The UR10's session and a course arm's, with the click made while their velocity folder is built."""
+    from app import velocity
+    from app.course_arms.session import CourseArmSession
+
+    from .test_course_arms_app import pick
+
+    original = velocity.VelocityView.__init__
+    built = []
+
+    def init(self, scene, gui, session, *args, **kwargs):
+        original(self, scene, gui, session, *args, **kwargs)
+        # the checkboxes made before this folder are in the browser: a quick student clicks one now
+        session.guard(lambda _: session.redraw())(None)
+        session.guard(lambda _: session.render_panel())(None)
+        built.append(session)
+
+    monkeypatch.setattr(velocity.VelocityView, "__init__", init)
+
+    async def scenario():
+        client = await ViserClient(url(app)).connect()
+        session = session_of(app, client)
+        await until(lambda: built, what="the session")
+        await drag_a_little(client, session, steps=2)
+        course = await pick(app, client, "Stanford arm (RRP + wrist)", CourseArmSession)
+        assert built[-1] is course and course.panel_views  # built in full after the click
+        await asyncio.sleep(0.3)
+        assert not any("Something went wrong" in title for title, _ in client.received.notifications), \
+            client.received.notifications
+        assert session.views
+        await client.close()
+
+    asyncio.run(scenario())
+
+
 def test_a_failing_drag_worker_starts_again_and_says_so(app, monkeypatch, caplog):
     """If the loop worker raised, drags stopped for every student and the only trace was one log line."""
 

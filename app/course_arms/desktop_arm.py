@@ -127,7 +127,8 @@ class DesktopArmSession(ArmSessionBasics):
         self.camera = (CameraControls(client, self._framed, self.guard, lecture, body_radius=0.15 * self.scene.size)
                        if own_camera else None)
         self.panel_views = (*((self.camera,) if self.camera is not None else ()), self.about, self.joints, self.path, self.forces)
-        self.render(first)
+        self.built = True
+        self.render(self.state.last)
         self.render_panel()
         if self.camera is not None:
             self.camera.frame()
@@ -149,7 +150,7 @@ class DesktopArmSession(ArmSessionBasics):
         return snapshot
 
     def render(self, snapshot: DesktopSnapshot) -> None:
-        if self.closed:
+        if self.closed or not self.built:
             return
         with self._batch():  # the arm and its arrows arrive together
             self.scene.render(snapshot)

@@ -69,7 +69,14 @@ class ArmSessionBasics:
     The class using it has ``render(snapshot)`` and sets ``client``, ``state`` (with a ``lock``
     and ``last``), ``refresher``, ``closed``, ``panel_views`` and ``_senders`` (the browser, and
     the server when it draws in the shared scene).
+
+    Its widgets reach the browser as they are made, so a quick click can run a callback before
+    the constructor ends: until the constructor sets ``built``, nothing is drawn, and the first
+    render then draws the state as that click left it.
     """
+
+    built = False
+    panel_views: tuple = ()
 
     @contextlib.contextmanager
     def _batch(self):
@@ -88,7 +95,7 @@ class ArmSessionBasics:
         self.refresher.request(self)
 
     def render_panel(self) -> None:
-        if self.closed:
+        if self.closed or not self.built:
             return
         snapshot = self.state.last
         with self.client.atomic():
@@ -180,7 +187,8 @@ class CourseArmSession(ArmSessionBasics):
         self.panel_views = (*(v for v in (self.editor, self.search, self.gripper, self.camera) if v is not None),
                             self.joints, self.branches, self.singularities, self.dh_table, self.walkthrough, self.workspace,
                             *self.at_tool_views)
-        self.render(first)
+        self.built = True
+        self.render(self.state.last)
         self.render_panel()
         if self.camera is not None:
             self.camera.frame()
@@ -219,7 +227,7 @@ class CourseArmSession(ArmSessionBasics):
                                         timed="course_drag", move_gizmo=released))(None)
 
     def render(self, snapshot: CourseSnapshot, move_gizmo: bool = False) -> None:
-        if self.closed:
+        if self.closed or not self.built:
             return
         with self._batch():  # the arm and the gizmo arrive together, as in ClientSession.render
             self.scene.render(snapshot)
