@@ -14,6 +14,7 @@ and the GUI. One module per feature:
 * ``lecture``      — lecture mode: big type, thick lines, the panel folded away
 * ``state``        — what one arm is doing (no viser: unit-tested on its own)
 * ``session``      — one browser's arm, panel and target
+* ``session_basics`` — what every arm's session does alike (batched redraws, the panel, leaving)
 * ``classroom``    — shared demo mode: the presenter, viewers, explorers
 * ``shared_frames`` — a shared redraw encoded once for every browser
 * ``server``       — the viser server, clients coming and going

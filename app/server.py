@@ -317,20 +317,22 @@ class TeachingServer:
     def _write_metrics(self, path: Path) -> None:
         """Once a second: clients, handler latencies, CPU and memory of this process (for benchmarks)."""
         while not self._metrics_stop.wait(1.0):
-            clients = len(self.server.get_clients())
-            report = {
-                "time": time.time(),
-                "clients": clients,
-                "sessions": len(self.sessions),
-                "latency": LATENCY.summary(),
-                "cpu_seconds": sum(os.times()[:2]),
-                "rss_bytes": _resident_bytes(),
-                "threads": threading.active_count(),
-                "thread_cpu_seconds": _thread_cpu_seconds(),
-            }
-            partial = path.with_suffix(".tmp")
-            partial.write_text(json.dumps(report))
-            partial.replace(path)  # readers never see half a file
+            try:
+                report = {
+                    "time": time.time(),
+                    "clients": len(self.server.get_clients()),
+                    "sessions": len(self.sessions),
+                    "latency": LATENCY.summary(),
+                    "cpu_seconds": sum(os.times()[:2]),
+                    "rss_bytes": _resident_bytes(),
+                    "threads": threading.active_count(),
+                    "thread_cpu_seconds": _thread_cpu_seconds(),
+                }
+                partial = path.with_suffix(".tmp")
+                partial.write_text(json.dumps(report))
+                partial.replace(path)  # readers never see half a file
+            except Exception:  # one failed report must not end the reports (a benchmark waits on them)
+                log.exception("metrics report failed")
 
     def stop(self) -> None:
         self._metrics_stop.set()

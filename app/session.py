@@ -13,7 +13,6 @@ Each view has ``render(snapshot)`` (the 3D scene, on every change) and
 
 from __future__ import annotations
 
-import contextlib
 import dataclasses
 import logging
 import time
@@ -27,7 +26,6 @@ from ur10core.orientation import transform_from_quaternion
 from .ik_target import BranchesScene, IKTargetControls
 from .camera import CameraControls
 from .lecture import LectureMode
-from .feedback import guard, notify
 from .ellipsoids import EllipsoidsView
 from .floor import FloorScene
 from .joint_panel import JointPanel
@@ -38,6 +36,7 @@ from .reach_map import ReachMapView
 from .readouts import Readouts
 from .workers import DragQueue, PanelRefresher
 from .robot import ArmModelControls, RobotScene
+from .session_basics import SessionBasics
 from .singularity import OverlayPanel, OverlayScene
 from .statics import StaticsView
 from .velocity import VelocityView
@@ -75,7 +74,7 @@ class SceneViews:
         return iter((self.robot, self.branches, self.overlay, self.floor))
 
 
-class ClientSession:
+class ClientSession(SessionBasics):
     """One browser's controls on an arm.
 
     Parameters
@@ -101,6 +100,8 @@ class ClientSession:
         its ghosts not yet.
     """
 
+    _lecture: LectureMode | None = None  #: the lecture switch it follows, once it follows one
+
     def __init__(
         self, client: viser.ClientHandle, arm: Arm, models: ArmModels, refresher: PanelRefresher,
         drags: DragQueue, state: ArmState | None = None, server: viser.ViserServer | None = None,
@@ -112,10 +113,6 @@ class ClientSession:
         self.refresher = refresher
         self.drags = drags
         self.closed = False
-        # a widget's callback can run before this constructor ends (the widgets reach the browser as
-        # they are made, and a quick click is handled on viser's thread pool): until then it draws
-        # nothing, and the first render below draws what that click chose
-        self.views: tuple = ()
         #: called after every change, e.g. to refresh the classroom's live panel
         self.observers: list[Callable[[Snapshot], None]] = []
         scene = client.scene if server is None else server.scene
@@ -136,14 +133,14 @@ class ClientSession:
         self.ellipsoids = EllipsoidsView(scene, gui, self)
         self.velocity = VelocityView(scene, gui, self)
         self.motion = MotionLessons(gui, self)
-        self._lecture: LectureMode | None = None
         self.camera = CameraControls(client, lambda: self.state.last, self.guard, lecture) if own_camera else None
         if self.camera is not None:
             self.follow_lecture_mode(self.camera.lecture)
         #: the views this session built in the browser's own panel (the scene views may be the classroom's)
-        self.own_views = (self.joints, *([self.arm_model] if self.arm_model else []), self.ik_target, self.readouts,
-                          self.singularity, self.workspace, self.reach_map, self.statics, self.ellipsoids, self.velocity, self.motion, *([self.camera] if self.camera else []))
-        self.views = (*self.scene_views, *self.own_views)
+        self.panel_views = (self.joints, *([self.arm_model] if self.arm_model else []), self.ik_target, self.readouts,
+                            self.singularity, self.workspace, self.reach_map, self.statics, self.ellipsoids, self.velocity, self.motion, *([self.camera] if self.camera else []))
+        self.views = (*self.scene_views, *self.panel_views)
+        self.built = True
         self.render(self.state.last)  # as a click during the build may have left it
         self.render_panel()
 
@@ -164,36 +161,26 @@ class ClientSession:
             observer(snapshot)
         return snapshot
 
-    def redraw(self) -> None:
-        """The 3D view again, unchanged state (a toggle changed what is shown), on the one path every redraw takes."""
-        with self.state.lock:
-            self.render(self.state.last)
-        self.refresher.request(self)  # and what the panel's pace draws (the branch numbers, say)
-
     def drag_to(self, pose) -> None:
         """The drag queue's worker solving for the gizmo's newest ``(wxyz, position)``."""
         self.guard(lambda _: self.apply(lambda state: state.move_target(transform_from_quaternion(*pose)), timed="drag"))(None)
 
     def render(self, snapshot: Snapshot) -> None:
         """The 3D scene, atomically."""
-        if self.closed:
+        if self.closed or not self.built:
             return
-        with contextlib.ExitStack() as batch:
-            for sender in self._senders:
-                batch.enter_context(sender.atomic())
+        with self._batch():
             for view in self.views:
                 view.render(snapshot)
-        for sender in self._senders:
-            sender.flush()
 
     def render_panel(self) -> None:
         """The side panel, from the newest state (called by the refresher, one thread at a time)."""
-        if self.closed:
+        if self.closed or not self.built:
             return
         start = time.perf_counter()
         snapshot = self.state.last
         with self.client.atomic():
-            for view in self.views:
+            for view in self.views:  # the scene views' panel parts too (the branch numbers, say)
                 view.render_panel(snapshot)
         LATENCY.record("panel", time.perf_counter() - start)
 
@@ -203,36 +190,12 @@ class ClientSession:
         self._lecture = lecture
         self.ik_target.thicken(lecture.on)
 
-    # ------------------------------------------------------------------ safety
-
-    def guard(self, handler: Callable[[Any], None]) -> Callable[[Any], None]:
-        """Wrap a viser callback so that nothing it raises escapes (see ``app.feedback``)."""
-        return guard(self.client, handler, is_closed=lambda: self.closed, on_refused=lambda: self.refresher.request(self))
-
-    def notify(self, title: str, body: str, color: str = "yellow") -> None:
-        if not self.closed:
-            notify(self.client, title, body, color)
-
     def _unfollow_lecture_mode(self) -> None:
         # the classroom's lecture switch outlives this session: it must not keep the session alive
         if self._lecture is not None and self.ik_target.thicken in self._lecture.on_change:
             self._lecture.on_change.remove(self.ik_target.thicken)
         self._lecture = None
 
-    def close(self) -> None:
-        """The browser has gone (or handed over): stop drawing and let go of everything shared."""
-        self.closed = True
+    def _leave(self, how: Callable[[Any], None]) -> None:
         self._unfollow_lecture_mode()
-        with self.state.lock:  # not while a drag is being drawn
-            for view in self.own_views:
-                view.close()
-        self.refresher.forget(self)
-
-    def remove(self) -> None:
-        """Close, and take this session's panel and gizmo out of a browser that stays."""
-        self.closed = True
-        self._unfollow_lecture_mode()
-        with self.state.lock:
-            for view in self.own_views:
-                view.remove()
-        self.refresher.forget(self)
+        super()._leave(how)

@@ -66,6 +66,27 @@ def dom_id(handle) -> str:
     return f"[id='{handle._impl.uuid}']"
 
 
+def set_checkbox(page, handle, value: bool, timeout: float = 15.0) -> None:
+    """Click a viser checkbox, as a student does, until the server holds ``value``.
+
+    A click can land while the panel is still moving (sliding back from its folded strip, a
+    folder unfolding) and miss the box; playwright's ``check()`` then fails although nothing
+    in the app is wrong (seen once in CI). So a box the browser still shows unchanged after
+    a second is clicked again; a box that shows the new value is never clicked twice. What
+    counts is the value the server received, not the box's look.
+    """
+    box = page.locator(dom_id(handle))
+    deadline = time.monotonic() + timeout
+    while handle.value != value:
+        if time.monotonic() > deadline:
+            raise AssertionError(f"the server still holds {handle.value!r} for {handle.label!r} after {timeout} s of clicks")
+        if box.is_checked() != value:
+            box.click()
+        settle = time.monotonic() + 1.0
+        while handle.value != value and time.monotonic() < settle:
+            time.sleep(0.02)
+
+
 def choose(page, dropdown, option: str) -> None:
     """Pick ``option`` in a viser dropdown, with the mouse."""
     page.locator(dom_id(dropdown)).click()

@@ -8,7 +8,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from .browser_support import SMALL_VIEWPORT, canvas_pixels, dom_id, project, step_slider, text_field, wait_for
+from .browser_support import SMALL_VIEWPORT, canvas_pixels, dom_id, project, set_checkbox, step_slider, text_field, wait_for
 
 pytestmark = pytest.mark.browser
 
@@ -80,7 +80,7 @@ def test_switching_branch_from_the_list(open_page, app):
 
 def test_singularity_overlay(open_page, app):
     page, session = open_page()
-    page.locator(dom_id(session.singularity.enabled)).check()
+    set_checkbox(page, session.singularity.enabled, True)
     wait_for(lambda: session.singularity.enabled.value and session.scene_views.overlay.cylinder.visible, what="the overlay")
     wait_for(lambda: page.locator("math").count() > 0 and page.locator("math").first.is_visible(), what="det J as MathML")
     assert "234" in page.locator("math").first.text_content()
@@ -97,7 +97,7 @@ def test_singularity_overlay(open_page, app):
 def test_workspace_cloud(open_page, app):
     page, session = open_page()
     before = canvas_pixels(page)
-    page.locator(dom_id(session.workspace.enabled)).check()
+    set_checkbox(page, session.workspace.enabled, True)
     wait_for(lambda: session.workspace._cloud is not None, timeout=30, what="the cloud")
     assert len(session.workspace._cloud.points) == 200_000
     page.wait_for_timeout(2500)
@@ -105,7 +105,7 @@ def test_workspace_cloud(open_page, app):
     changed = np.abs(after - before).sum(axis=-1) > 60
     assert changed.mean() > 0.05, "the point cloud did not show up"
     wait_for(lambda: page.get_by_text("Colour = manipulability |det J|").count() > 0, what="the legend")
-    page.locator(dom_id(session.workspace.enabled)).uncheck()
+    set_checkbox(page, session.workspace.enabled, False)
     wait_for(lambda: session.workspace._cloud is None, what="the cloud to go")
 
 

@@ -7,7 +7,7 @@ import pytest
 
 from app.course_arms.session import CourseArmSession
 
-from .browser_support import canvas_pixels, choose, dom_id, step_slider, wait_for
+from .browser_support import canvas_pixels, choose, dom_id, set_checkbox, step_slider, wait_for
 
 pytestmark = pytest.mark.browser
 
@@ -29,7 +29,7 @@ def test_picking_the_kr210_draws_it_with_its_dh_frames_and_its_panel(open_page, 
     with_frames = canvas_pixels(page)
     assert (np.abs(with_frames - before).sum(axis=-1) > 60).mean() > 0.02, "the KR210 was not drawn in place of the UR10"
     # the DH frames' x axes (red) and z axes (blue) are on screen, and go when switched off
-    page.locator(dom_id(course.dh_table.show_frames)).uncheck()
+    set_checkbox(page, course.dh_table.show_frames, False)
     wait_for(lambda: not course.scene.x_axes.visible and not course.scene.z_axes.visible, what="the frames hidden")
     page.wait_for_timeout(2500)
     without = canvas_pixels(page)
@@ -42,7 +42,7 @@ def test_picking_the_kr210_draws_it_with_its_dh_frames_and_its_panel(open_page, 
     # det J's factors drawn on the arm: axis 1, the links, axes 4 and 6, each named in 3D
     page.wait_for_timeout(2500)
     plain = canvas_pixels(page)
-    page.locator(dom_id(course.singularities.show)).check()
+    set_checkbox(page, course.singularities.show, True)
     wait_for(lambda: course.scene.overlay.lines["wrist"].visible, what="the factors drawn")
     page.wait_for_timeout(2500)
     with_factors = canvas_pixels(page)

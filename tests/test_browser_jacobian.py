@@ -7,7 +7,7 @@ import re
 import numpy as np
 import pytest
 
-from .browser_support import canvas_pixels, dom_id, wait_for
+from .browser_support import canvas_pixels, dom_id, set_checkbox, wait_for
 from .test_browser_course_arms import changed
 
 pytestmark = pytest.mark.browser
@@ -25,7 +25,7 @@ def test_forces_ellipsoids_and_velocities_show_in_the_browser(open_page, tmp_pat
     # forces and gravity: the bars, with each joint's rating, and the arrow on the canvas
     unfold(page, "Forces and gravity", session.statics.enabled)
     before = canvas_pixels(page)
-    page.locator(dom_id(session.statics.enabled)).check()
+    set_checkbox(page, session.statics.enabled, True)
     wait_for(lambda: session.statics.bars.visible, what="the torque bars")
     wait_for(lambda: page.get_by_text("rated 330", exact=False).count() >= 2, what="the bars in the page")
     assert page.locator(".torque-bar").count() == 6
@@ -44,7 +44,7 @@ def test_forces_ellipsoids_and_velocities_show_in_the_browser(open_page, tmp_pat
     page.screenshot(path=str(tmp_path / "force_handle.png"))
     # the ellipsoids at the flange
     unfold(page, "Manipulability ellipsoids", session.ellipsoids.enabled)
-    page.locator(dom_id(session.ellipsoids.enabled)).check()
+    set_checkbox(page, session.ellipsoids.enabled, True)
     wait_for(lambda: session.ellipsoids.velocity.visible, what="the ellipsoids")
     wait_for(lambda: page.get_by_text("Velocity ellipsoid", exact=False).count() > 0, what="their lengths")
     page.wait_for_timeout(2000)

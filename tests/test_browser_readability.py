@@ -12,7 +12,7 @@ import pytest
 from app.server import TeachingServer
 from app.style import DANGER_RED, GHOST_OPACITY
 
-from .browser_support import SMALL_VIEWPORT, canvas_pixels, choose, dom_id, project, text_field, wait_for
+from .browser_support import SMALL_VIEWPORT, canvas_pixels, choose, dom_id, project, set_checkbox, text_field, wait_for
 from .colour_vision import MIN_DELTA_E, closest_pair
 
 pytestmark = pytest.mark.browser
@@ -110,7 +110,7 @@ def test_lecture_mode(open_page):
         page.locator("[data-dock-collapsed]").first.click()  # the folded strip brings it back
         wait_for(lambda: page.locator("[data-dock-collapsed]").count() == 0, what="the panel back")
         open_view_folder(page, session)
-        page.locator(dom_id(session.camera.lecture.enabled)).uncheck()
+        set_checkbox(page, session.camera.lecture.enabled, False)
         wait_for(lambda: font_px(text) < 16, what="normal type again")
         assert session.ik_target.gizmo.line_width < 6
     finally:
@@ -235,7 +235,7 @@ def test_the_gizmo_is_sized_to_the_arm(open_page):
     """The gizmo, drawn over everything, is small beside the arm and leaves the overlay's P5 visible."""
     page, session = open_page()
     session.ik_target.show_ghosts.value = False
-    page.locator(dom_id(session.singularity.enabled)).check()
+    set_checkbox(page, session.singularity.enabled, True)
     wait_for(lambda: session.scene_views.overlay.p5.visible, what="the overlay")
     page.wait_for_timeout(1200)
     box = page.locator("canvas").first.bounding_box()
@@ -289,7 +289,7 @@ def test_the_real_ur10_is_drawn_and_the_schematic_is_one_choice_away(open_page):
 def test_sections_are_seen_square_on_and_sampled_in_their_plane(open_page):
     page, session = open_page()
     workspace = session.workspace
-    page.locator(dom_id(workspace.enabled)).check()
+    set_checkbox(page, workspace.enabled, True)
     wait_for(lambda: workspace._cloud is not None, timeout=60, what="the cloud")
     choose(page, workspace.section, "horizontal section (top view)")
     wait_for(lambda: workspace._cloud is not None and len(workspace._cloud.points) == 40_000, timeout=60,
@@ -322,7 +322,7 @@ def test_the_hull_is_translucent_the_arm_shows_through_it(open_page):
     session.ik_target.show_ghosts.value = False
     workspace = session.workspace
     choose(page, workspace.section, HULL)
-    page.locator(dom_id(workspace.enabled)).check()
+    set_checkbox(page, workspace.enabled, True)
     wait_for(lambda: workspace._cloud is not None, what="the hull")
     page.wait_for_timeout(1500)
     with_hull = canvas_pixels(page)
@@ -345,7 +345,7 @@ def test_the_branch_count_map_is_drawn_and_follows_the_orientation(open_page):
     view = session.reach_map
     before = canvas_pixels(page)
     page.get_by_text("Reachable with this orientation", exact=True).first.click()
-    page.locator(dom_id(view.enabled)).check()
+    set_checkbox(page, view.enabled, True)
     wait_for(lambda: view.image is not None, what="the map")
     page.wait_for_timeout(2000)  # the camera turns square-on to the plane
     first = canvas_pixels(page)

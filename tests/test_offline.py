@@ -9,7 +9,7 @@ from playwright.sync_api import sync_playwright
 
 from app.server import TeachingServer
 
-from .browser_support import CONNECTED, VIEWPORT, dom_id, launch, wait_for
+from .browser_support import CONNECTED, VIEWPORT, dom_id, launch, set_checkbox, wait_for
 
 pytestmark = pytest.mark.browser
 
@@ -32,9 +32,9 @@ def test_every_request_stays_on_the_app_host(shared):
                 wait_for(lambda: len(app.sessions) == 1, what="the session")
                 session = next(iter(app.sessions.values()))
                 page.wait_for_selector(dom_id(session.singularity.enabled), timeout=30_000)
-                page.locator(dom_id(session.singularity.enabled)).check()
+                set_checkbox(page, session.singularity.enabled, True)
                 wait_for(lambda: page.locator("math").count() > 0, what="the formula")
-                page.locator(dom_id(session.workspace.enabled)).check()
+                set_checkbox(page, session.workspace.enabled, True)
                 wait_for(lambda: session.workspace._cloud is not None, timeout=30, what="the cloud")
             page.wait_for_timeout(3000)
             browser.close()

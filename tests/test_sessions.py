@@ -54,7 +54,7 @@ def test_explore_and_back_leaves_nothing_behind(classroom):
             await student.set_gui("Explore on my own", True)
             await until(lambda: member.session is not None, what="the private arm")
             session = member.session
-            folders = [v.folders for v in session.own_views]
+            folders = [v.folders for v in session.panel_views]
             uuids = {folder._impl.uuid for group in folders for folder in group}
             # joints, IK target, pose, DH table, singularities, workspace, reach map, forces and gravity,
             # ellipsoids, velocities, motion

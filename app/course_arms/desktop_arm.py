@@ -17,13 +17,13 @@ from ur10core.orientation import quaternion
 from ur10core.three_dof import ThreeDofArm
 
 from ..camera import CameraControls
+from ..session_basics import SessionBasics
 from ..style import JOINT_CAP_GREY, SHOULDER_COLOR
 from ..velocity import ANGULAR_COLOR, LINEAR_COLOR
 from ..view import View
 from ..workers import PanelRefresher
 from .desktop_lessons import CoursePathLesson, DesktopAbout, DesktopForces
 from .panel import CourseJointSliders
-from .session import ArmSessionBasics
 from .desktop_state import COURSE_TO_WORLD, DesktopArmState, DesktopSnapshot
 
 ROOT = "/desktop_arm"
@@ -98,7 +98,7 @@ class DesktopArmScene(View):
                 node.visible = moving
 
 
-class DesktopArmSession(ArmSessionBasics):
+class DesktopArmSession(SessionBasics):
     """A browser driving the course's 3-DOF desktop arm (``Arm.preset("three_dof")``), as ``CourseArmSession`` does a DH arm.
 
     ``state``, ``scene``, ``server``, ``own_camera`` and ``root`` as for ``CourseArmSession``: the

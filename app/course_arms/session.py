@@ -2,9 +2,8 @@
 
 from __future__ import annotations
 
-import contextlib
 import time
-from typing import Any, Callable
+from typing import Callable
 
 import numpy as np
 import viser
@@ -14,8 +13,8 @@ from ur10core.serial import SerialArm
 
 from ..camera import CameraControls
 from ..ellipsoids import EllipsoidsView
-from ..feedback import guard, notify
 from ..metrics import LATENCY
+from ..session_basics import SessionBasics
 from ..velocity import VelocityView
 from ..view import View
 from ..workers import HEAVY, DragQueue, FoldedRuns, PanelRefresher
@@ -63,70 +62,7 @@ class BranchSearch(View):
             session.apply(lambda state: state.with_branches(snapshot, solution), move_gizmo=False)
 
 
-class ArmSessionBasics:
-    """What every course-arm session does alike: batched redraws, the panel, guarded callbacks, leaving.
-
-    The class using it has ``render(snapshot)`` and sets ``client``, ``state`` (with a ``lock``
-    and ``last``), ``refresher``, ``closed``, ``panel_views`` and ``_senders`` (the browser, and
-    the server when it draws in the shared scene).
-
-    Its widgets reach the browser as they are made, so a quick click can run a callback before
-    the constructor ends: until the constructor sets ``built``, nothing is drawn, and the first
-    render then draws the state as that click left it.
-    """
-
-    built = False
-    panel_views: tuple = ()
-
-    @contextlib.contextmanager
-    def _batch(self):
-        """One redraw's messages, sent together to every sender."""
-        with contextlib.ExitStack() as batch:
-            for sender in self._senders:
-                batch.enter_context(sender.atomic())
-            yield
-        for sender in self._senders:
-            sender.flush()
-
-    def redraw(self) -> None:
-        """The 3D view again, unchanged state (a toggle changed what is shown), and the panel after it."""
-        with self.state.lock:
-            self.render(self.state.last)
-        self.refresher.request(self)
-
-    def render_panel(self) -> None:
-        if self.closed or not self.built:
-            return
-        snapshot = self.state.last
-        with self.client.atomic():
-            for view in self.panel_views:
-                view.render_panel(snapshot)
-
-    def guard(self, handler: Callable[[Any], None]) -> Callable[[Any], None]:
-        return guard(self.client, handler, is_closed=lambda: self.closed, on_refused=lambda: self.refresher.request(self))
-
-    def notify(self, title: str, body: str, color: str = "yellow") -> None:
-        if not self.closed:
-            notify(self.client, title, body, color)
-
-    def close(self) -> None:
-        """The browser has gone (or handed over): stop drawing and let go of everything shared."""
-        self.closed = True
-        with self.state.lock:
-            for view in self.panel_views:
-                view.close()
-        self.refresher.forget(self)
-
-    def remove(self) -> None:
-        """Close, and take this session's panel out of a browser that stays."""
-        self.closed = True
-        with self.state.lock:
-            for view in self.panel_views:
-                view.remove()
-        self.refresher.forget(self)
-
-
-class CourseArmSession(ArmSessionBasics):
+class CourseArmSession(SessionBasics):
     """A browser's course arm: its state, scene, gizmo and panel (the UR10's ``ClientSession`` for other arms).
 
     ``rebuild(arm, text, convention)``, given for a typed table, puts a newly typed arm in
