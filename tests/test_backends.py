@@ -259,3 +259,29 @@ def test_one_tolerance_source():
     source = (ROOT / "ur10core" / "_kernels.c").read_text()
     assert "1e-9" not in source and "1e-6" not in source and "1e-7" not in source
     assert LENGTH_TOLERANCE == 1e-9
+
+
+def test_the_kernel_is_iso_c99_that_msvc_also_compiles():
+    """No MSVC here, so hold the C to what MSVC's C compiler takes: strict ISO C99 (gcc's
+    extensions are errors, no variable-length arrays, which MSVC never had), and none of the
+    POSIX or gcc names MSVC lacks. Python.h defines M_PI on Linux, so a compile alone would
+    not catch it."""
+    import shutil
+    import sysconfig
+    import re
+
+    source = (ROOT / "ur10core" / "_kernels.c").read_text()
+    # the comments and docstrings may name what the code avoids
+    code = re.sub(r'/\*.*?\*/|"(?:[^"\\]|\\.)*"', "", source, flags=re.S)
+    for name in (r"M_\w+", r"__attribute__", r"__builtin_\w+", r"typeof", r"_Complex", r"alloca", r"sincos"):
+        found = re.search(rf"\b{name}\b", code)
+        assert found is None, f"_kernels.c uses {found.group()}, which MSVC does not have"
+    compiler = shutil.which("gcc")
+    if compiler is None:
+        pytest.skip("no gcc to check the C with")
+    done = subprocess.run(
+        [compiler, "-std=c99", "-pedantic-errors", "-Werror=vla", "-Wall", "-Werror",
+         "-fsyntax-only", "-isystem", sysconfig.get_paths()["include"], "-isystem", np.get_include(),
+         str(ROOT / "ur10core" / "_kernels.c")],
+        capture_output=True, text=True, timeout=120)
+    assert done.returncode == 0, done.stderr
