@@ -377,7 +377,13 @@ def test_arm_preset_serves_every_arm():
         assert arm.dh.n_joints == arm.n_joints == len(arm.joint_names) == len(arm.limits)
         points, manipulability = arm.sample_workspace(2000, seed=1)
         assert points.shape == (2000, 3) and (manipulability >= 0).all()
-        np.testing.assert_allclose(points, arm.fk(arm.sample_workspace(2000, seed=1, return_joints=True)[2])[:, :3, 3])
+        q = arm.sample_workspace(2000, seed=1, return_joints=True)[2]
+        np.testing.assert_allclose(points, arm.fk(q)[:, :3, 3])
+        np.testing.assert_array_equal(arm.sample_joints(2000, seed=1), q)
+        assert arm.within_limits(q).all() and not np.array_equal(arm.sample_joints(2000, seed=2), q)
+        for bad in ({"n": 0}, {"n": 2.5}, {"n": 10, "seed": -1}):
+            with pytest.raises(ValueError, match="must be a"):
+                arm.sample_joints(**bad)
 
 
 def test_manipulability_vanishes_at_the_singularities():

@@ -337,18 +337,26 @@ class SerialArm(JacobianUses):
             J = np.swapaxes(J, -1, -2)
         return np.sqrt(np.clip(np.linalg.det(J @ np.swapaxes(J, -1, -2)), 0.0, None))
 
-    def sample_workspace(self, n: int, seed: int = 0, return_joints: bool = False):
-        """Tool positions of ``n`` joint vectors drawn uniformly within the limits, and their manipulability.
+    def sample_joints(self, n: int, seed: int = 0) -> np.ndarray:
+        """``n`` joint vectors drawn uniformly within the limits, (n, n_joints).
 
-        Returns points (n, 3) in metres, manipulability (n,) and, with ``return_joints``,
-        the joints (n, n_joints). The same ``n`` and ``seed`` give the same cloud.
+        The joints behind :meth:`sample_workspace`'s cloud, without its forward kinematics:
+        the same ``n`` and ``seed`` give the same vectors.
         """
         if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < 1:
             raise ValueError(f"n must be a positive integer number of samples, got {n!r}")
         if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
             raise ValueError(f"seed must be a non-negative integer, got {seed!r}")
         low, high = sampling_range(self.limits, self.revolute)
-        q = np.random.default_rng(int(seed)).uniform(low, high, (int(n), self.n_joints))
+        return np.random.default_rng(int(seed)).uniform(low, high, (int(n), self.n_joints))
+
+    def sample_workspace(self, n: int, seed: int = 0, return_joints: bool = False):
+        """Tool positions of ``n`` joint vectors drawn uniformly within the limits, and their manipulability.
+
+        Returns points (n, 3) in metres, manipulability (n,) and, with ``return_joints``,
+        the joints (n, n_joints) (:meth:`sample_joints`). The same ``n`` and ``seed`` give the same cloud.
+        """
+        q = self.sample_joints(n, seed)
         points = np.empty((int(n), 3))
         manipulability = np.empty(int(n))
         for start in range(0, int(n), 65536):

@@ -129,7 +129,7 @@ class CourseBranches(View):
 def factor_scales(name: str) -> np.ndarray:
     """Per factor, the 99th percentile of its size over the arm's workspace: a gauge is full there."""
     arm = SerialArm.preset(name)
-    _, _, q = arm.sample_workspace(20_000, seed=1, return_joints=True)
+    q = arm.sample_joints(20_000, seed=1)
     return np.maximum(np.percentile(np.abs(arm.singularity_factors(q)), 99, axis=0), 1e-12)
 
 
