@@ -9,8 +9,11 @@ from pathlib import Path
 
 import pytest
 
+import websockets
+from websockets.frames import Close
+
 from benchmarks.bench_classroom import (
-    FLAT_MIB, TARGET_P99_MS, WARMUP_S, competing_load, sample_server, settled_growth, verdict,
+    FLAT_MIB, TARGET_P99_MS, WARMUP_S, competing_load, drag_loop, sample_server, settled_growth, verdict,
 )
 
 MIB = 2**20
@@ -42,6 +45,26 @@ def test_a_steady_creep_fails_on_memory():
     assert verdict(10.0, run) == "FAIL (memory)"
     assert verdict(TARGET_P99_MS + 1, run) == "FAIL (p99, memory)"
     assert verdict(TARGET_P99_MS + 1, warm_then(lambda t: 0.0)) == "FAIL (p99)"
+
+
+def test_a_dropped_student_fails_the_run_without_ending_it():
+    class DroppedAfterTwo:
+        sent = 0
+
+        async def send_drag(self, step):
+            if self.sent == 2:
+                raise websockets.ConnectionClosedError(Close(1011, "keepalive ping timeout"), None)
+            self.sent += 1
+            return time.perf_counter()
+
+    sends, dropped = [], []
+    steps = [(None, k) for k in range(5)]
+    asyncio.run(drag_loop(DroppedAfterTwo(), steps, sends, 0.0, dropped))
+    assert [position for _, position in sends] == [0, 1]
+    assert len(dropped) == 1 and "keepalive ping timeout" in dropped[0]
+    run = warm_then(lambda t: 0.0)
+    assert verdict(10.0, run, dropped) == "FAIL (dropped)"
+    assert verdict(10.0, run, []) == "PASS"
 
 
 def test_a_run_shorter_than_the_warm_up_is_judged_from_its_last_sample():

@@ -56,6 +56,10 @@ def test_viewers_watch_and_the_code_makes_a_presenter(classroom):
         # (an update of the arm as it was may still be on its way: wait for one showing the target)
         await until(lambda: any((np.abs(flanges - target[:3, 3]).max(axis=-1) < 1e-5).any()
                                 for _, flanges in student.received.ghost_flanges[before:]), what="the student to see it")
+        # each update's arrival (the classroom benchmark's end to end) is stamped before it is read
+        arrived = [at for at, _ in student.received.ghost_flanges]
+        assert len(arrived) == len(student.received.ghost_flanges_read) > before
+        assert all(a <= r for a, r in zip(arrived, student.received.ghost_flanges_read)) and arrived == sorted(arrived)
         # a student's forged drag on the presenter's gizmo name does nothing
         forged = target.copy()
         forged[:3, 3] += 0.1

@@ -14,6 +14,7 @@ Wire format (viser 1.1, ``viser/infra/_infra.py``): client → server frames are
 from __future__ import annotations
 
 import asyncio
+import collections
 import dataclasses
 import re
 import time
@@ -25,8 +26,10 @@ import viser
 import websockets
 import zstandard
 from viser import _messages as messages
+from websockets.frames import DATA_OPCODES, Frame
 
 FLANGE_MM = re.compile(r"\*\*([+-]?[0-9]+\.[0-9])\*\*")
+GHOST_FLANGE = re.compile(r"/ghosts/\w+/link6")
 #: What a browser reports for its camera; any plausible camera will do.
 CAMERA = messages.ViewerCameraMessage(
     wxyz=(0.0, 0.0, 0.0, 1.0), position=(2.1, -1.9, 1.4), fov=0.87, near=0.01, far=100.0,
@@ -60,7 +63,7 @@ def array(placeholder: dict[str, Any], buffers: list[memoryview]) -> np.ndarray:
 
 @dataclasses.dataclass
 class Received:
-    """What this client has been sent, by the server's clock of arrival."""
+    """What this client has been sent, by the clock of its arrival (:class:`StampedConnection`)."""
 
     frames: int = 0
     bytes: int = 0
@@ -70,6 +73,9 @@ class Received:
     #: (arrival time, (8, 3) flange positions of the ghost arms) each time the branches moved:
     #: every valid branch ends at the IK target, so this is the 3D view answering a drag
     ghost_flanges: list[tuple[float, np.ndarray]] = dataclasses.field(default_factory=list)
+    #: when this client's reader got to each of ``ghost_flanges``: its arrival plus the wait
+    #: behind the other clients of this process decoding theirs (a load generator's own delay)
+    ghost_flanges_read: list[float] = dataclasses.field(default_factory=list)
     notifications: list[tuple[str, str]] = dataclasses.field(default_factory=list)
     #: scene nodes added (name -> the message's type), removed, and each node's last position
     nodes: dict[str, str] = dataclasses.field(default_factory=dict)
@@ -78,8 +84,27 @@ class Received:
     positions: dict[str, tuple[float, float, float]] = dataclasses.field(default_factory=dict)
     visible: dict[str, bool] = dataclasses.field(default_factory=dict)
     removed_gui: set[str] = dataclasses.field(default_factory=set)
-    #: seconds from the server sending a frame (its perf_counter, the same clock) to our reading it
+    #: seconds from the server sending a frame (its perf_counter, the same clock) to its arrival here
     delivery_lag: list[float] = dataclasses.field(default_factory=list)
+
+
+class StampedConnection(websockets.ClientConnection):
+    """A websocket connection that notes when each message has arrived in full.
+
+    A hundred clients in one process read their messages one after another, each decoding
+    its own, so the last one reads a frame long after it arrived. Stamped as the socket's
+    bytes complete a message, a client's times no longer include the others' decoding:
+    in a classroom each browser decodes on its own machine.
+    """
+
+    def __init__(self, *args: Any, **kwargs: Any) -> None:
+        super().__init__(*args, **kwargs)
+        self.arrivals: collections.deque[float] = collections.deque()
+
+    def process_event(self, event: Any) -> None:
+        if isinstance(event, Frame) and event.opcode in DATA_OPCODES and event.fin:
+            self.arrivals.append(time.perf_counter())
+        super().process_event(event)
 
 
 class DragStep(NamedTuple):
@@ -101,14 +126,15 @@ class ViserClient:
         self.gizmo_owner: str | None = None
         self.owners_seen: set[str] = set()  # scene scopes this client was sent messages for
         self.ready = asyncio.Event()
-        self._websocket: websockets.ClientConnection | None = None
+        self._websocket: StampedConnection | None = None
         self._reader: asyncio.Task | None = None
         self._decompressor = zstandard.ZstdDecompressor()
+        self._read_at = 0.0  # when the frame being handled was read (after its arrival)
 
     async def connect(self, timeout: float = 30.0) -> "ViserClient":
         self._websocket = await websockets.connect(
             self.url.replace("http://", "ws://"), subprotocols=[f"viser-v{viser.__version__}"],
-            max_size=None, compression=None, open_timeout=timeout,
+            max_size=None, compression=None, open_timeout=timeout, create_connection=StampedConnection,
         )
         await self.send(CAMERA)  # the server counts a client as connected from its first camera
         if self.read:
@@ -130,6 +156,11 @@ class ViserClient:
             self._reader.cancel()
         if self._websocket is not None:
             await self._websocket.close()
+
+    @property
+    def closed_by_server(self) -> bool:
+        """The server closed this connection (before :meth:`close`)."""
+        return self._websocket is not None and self._websocket.close_code is not None
 
     def freeze(self) -> None:
         """Stop reading the socket altogether (a frozen laptop): not even pings are answered."""
@@ -156,8 +187,10 @@ class ViserClient:
 
     async def _read_frames(self) -> None:
         assert self._websocket is not None
+        arrivals = self._websocket.arrivals
         async for raw in self._websocket:
-            now = time.perf_counter()
+            self._read_at = time.perf_counter()
+            now = arrivals.popleft()
             self.received.frames += 1
             self.received.bytes += len(raw)
             self.received.byte_log.append((now, len(raw)))
@@ -189,10 +222,11 @@ class ViserClient:
             self.received.node_owners[name] = message.get("owner", "")
             if "position" in message.get("props", {}):
                 self.received.positions[name] = tuple(message["props"]["position"])
-        if kind == "SceneNodeUpdateMessage" and re.fullmatch(r"/ghosts/\w+/link6", str(name)):  # the shown model's
+        if kind == "SceneNodeUpdateMessage" and GHOST_FLANGE.fullmatch(str(name)):  # the shown model's
             positions = message.get("updates", {}).get("batched_positions")
             if positions is not None:
                 self.received.ghost_flanges.append((now, array(positions, buffers).reshape(-1, 3).copy()))
+                self.received.ghost_flanges_read.append(self._read_at)
         if kind == "TransformControlsMessage" and message.get("owner"):  # a gizmo of this browser's own
             self.gizmo_owner = message["owner"]
         elif kind == "GuiMarkdownMessage" and "p (mm)" in message.get("props", {}).get("_markdown", ""):
