@@ -25,7 +25,11 @@ class LatencyLog:
 
     def __init__(self, capacity: int = CAPACITY) -> None:
         self._capacity = capacity
-        self._lock = threading.Lock()
+        # re-entrant: the garbage collector's callback (``app.server``, with metrics on) records
+        # its pause on whichever thread allocated, which may be inside record() or summary();
+        # with a plain lock that thread waited on itself and every thread recording after it
+        # (the event loop's included) waited too: the whole server froze
+        self._lock = threading.RLock()
         self._rings: dict[str, np.ndarray] = {}
         self._counts: collections.Counter = collections.Counter()
 

@@ -42,3 +42,30 @@ def test_filling_the_ring_takes_no_more_memory():
         log.record("drag", 0.001)
     grown = _resident_bytes() - before
     assert grown < 1_000_000, f"resident memory grew by {grown / 1e6:.1f} MB while the ring filled"
+
+
+def test_a_collection_while_the_log_is_held_does_not_freeze_the_server():
+    """With metrics on, the garbage collector's callback records its pause on whichever thread
+    allocated; inside summary() a plain lock made that thread wait on itself, and every thread
+    recording after it (viser's event loop too) waited forever: a classroom benchmark froze."""
+    import gc
+    import threading
+
+    from app.metrics import LATENCY
+    from app.server import _watch_garbage_collector
+
+    callbacks = list(gc.callbacks)
+    threshold = gc.get_threshold()
+    _watch_garbage_collector()
+    gc.set_threshold(1)  # a collection at (nearly) every allocation, summary()'s own included
+    try:
+        LATENCY.record("drag", 0.001)
+        worker = threading.Thread(target=lambda: [LATENCY.summary() for _ in range(50)], daemon=True)
+        worker.start()
+        worker.join(timeout=20)
+        assert not worker.is_alive(), "summary() waited on its own lock"
+        gc.set_threshold(*threshold)
+        assert LATENCY.summary()["gc0"]["count"] > 0  # the pauses were recorded meanwhile
+    finally:
+        gc.set_threshold(*threshold)
+        gc.callbacks[:] = callbacks
