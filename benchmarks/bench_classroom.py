@@ -46,6 +46,7 @@ from __future__ import annotations
 
 import argparse
 import asyncio
+import collections
 import contextlib
 import os
 import re
@@ -196,7 +197,9 @@ async def _drive(app: AppProcess, name: str, seconds: float, idle: tuple) -> dic
         await asyncio.sleep(2.0)
         draggers = [presenter, *explorers]
     await asyncio.sleep(2.0)
-    plans = [planned_drag(c, seconds, 7 * k) for k, c in enumerate(draggers)]
+    # in a thread: a 10-minute plan for thirty students took this loop long enough that the
+    # server's keepalive closed every client before the first drag (the 2026-11-30 soak)
+    plans = [await asyncio.to_thread(planned_drag, c, seconds, 7 * k) for k, c in enumerate(draggers)]
 
     before = await asyncio.to_thread(app.metrics, time.time())
     bytes_before = [c.received.bytes for c in clients]
@@ -323,7 +326,8 @@ def describe(name: str, result: dict) -> tuple[list[str], list[list[str]]]:
     p50, p99 = result["latency_ms"]
     busy = f"; {result['competing']} busy processes" if result["competing"] else ""
     if result["dropped"]:
-        busy += f"; dropped by the server: {', '.join(result['dropped'])}"
+        grouped = collections.Counter(result["dropped"])
+        busy += "; dropped by the server: " + ", ".join(f"{n} × {why}" for why, n in grouped.items())
     summary = [
         name,
         str(result["clients"]),
