@@ -26,6 +26,8 @@ import viser
 import websockets
 import zstandard
 from viser import _messages as messages
+from websockets.asyncio.client import ClientConnection
+from websockets.asyncio.client import connect as websocket_connect
 from websockets.frames import DATA_OPCODES, Frame
 
 FLANGE_MM = re.compile(r"\*\*([+-]?[0-9]+\.[0-9])\*\*")
@@ -88,7 +90,7 @@ class Received:
     delivery_lag: list[float] = dataclasses.field(default_factory=list)
 
 
-class StampedConnection(websockets.ClientConnection):
+class StampedConnection(ClientConnection):
     """A websocket connection that notes when each message has arrived in full.
 
     A hundred clients in one process read their messages one after another, each decoding
@@ -132,7 +134,7 @@ class ViserClient:
         self._read_at = 0.0  # when the frame being handled was read (after its arrival)
 
     async def connect(self, timeout: float = 30.0) -> "ViserClient":
-        self._websocket = await websockets.connect(
+        self._websocket = await websocket_connect(
             self.url.replace("http://", "ws://"), subprotocols=[f"viser-v{viser.__version__}"],
             max_size=None, compression=None, open_timeout=timeout, create_connection=StampedConnection,
         )
