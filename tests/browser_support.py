@@ -123,6 +123,43 @@ def canvas_pixels(page) -> np.ndarray:
     return np.asarray(Image.open(io.BytesIO(png)).convert("RGB")).astype(int)
 
 
+def changed(before: np.ndarray, after: np.ndarray) -> float:
+    """The share of the canvas that changed visibly between two pictures."""
+    return float(changed_mask(before, after).mean())
+
+
+def changed_mask(before: np.ndarray, after: np.ndarray) -> np.ndarray:
+    return np.abs(after.astype(int) - before.astype(int)).sum(axis=-1) > 60
+
+
+def where_changed(before: np.ndarray, after: np.ndarray) -> str:
+    """Where two pictures differ, for an assertion message: the share and the box around it."""
+    mask = changed_mask(before, after)
+    if not mask.any():
+        return "nothing changed"
+    rows, cols = np.nonzero(mask)
+    return (f"{mask.mean():.2%} of the canvas changed, within x {cols.min()}–{cols.max()}, "
+            f"y {rows.min()}–{rows.max()} of {mask.shape[1]} × {mask.shape[0]}")
+
+
+def settled_canvas(page, timeout: float = 30.0, interval_ms: int = 1000) -> np.ndarray:
+    """The 3D view once it stops changing: two screenshots ``interval_ms`` apart that agree.
+
+    A fixed wait is not enough on a loaded machine (the whole browser suite shares two
+    cores of software WebGL): a scene still arriving would show up as a change later.
+    """
+    deadline = time.monotonic() + timeout
+    last = canvas_pixels(page)
+    while True:
+        page.wait_for_timeout(interval_ms)
+        now = canvas_pixels(page)
+        if changed(last, now) < 0.0005:
+            return now
+        if time.monotonic() > deadline:
+            raise AssertionError(f"the 3D view did not settle in {timeout} s: {where_changed(last, now)}")
+        last = now
+
+
 def labelled_input(page, label: str):
     """The <input> of the text field whose label reads ``label``."""
     return page.locator("label", has_text=label).locator("xpath=ancestor::div[2]").locator("input").first

@@ -7,7 +7,7 @@ import pytest
 
 from app.course_arms.session import CourseArmSession
 
-from .browser_support import canvas_pixels, choose, dom_id, set_checkbox, step_slider, wait_for
+from .browser_support import canvas_pixels, changed, choose, dom_id, set_checkbox, step_slider, wait_for
 
 pytestmark = pytest.mark.browser
 
@@ -51,11 +51,6 @@ def test_picking_the_kr210_draws_it_with_its_dh_frames_and_its_panel(open_page, 
     course.scene.overlay.labels["shoulder"].visible = False
     page.wait_for_timeout(2500)
     assert changed(with_factors, canvas_pixels(page)) > 0.0003, "the shoulder factor's 3D label was not drawn"
-
-
-def changed(before: np.ndarray, after: np.ndarray) -> float:
-    """The share of the canvas that changed visibly between two pictures."""
-    return float((np.abs(after.astype(int) - before.astype(int)).sum(axis=-1) > 60).mean())
 
 
 def test_typing_a_dh_table_builds_that_arm(open_page, app):

@@ -7,8 +7,7 @@ import re
 import numpy as np
 import pytest
 
-from .browser_support import canvas_pixels, dom_id, set_checkbox, wait_for
-from .test_browser_course_arms import changed
+from .browser_support import canvas_pixels, changed, dom_id, set_checkbox, wait_for
 
 pytestmark = pytest.mark.browser
 
