@@ -112,3 +112,41 @@ def test_a_late_report_from_a_running_app_is_recorded_and_sampling_goes_on():
 def test_a_late_report_from_an_app_that_exited_ends_the_run():
     with pytest.raises(TimeoutError):
         asyncio.run(sample_server(StallingApp(exit_code=1), time.time() + 0.5, [], []))
+
+
+def test_end_to_end_matches_each_update_to_the_newest_event_it_could_answer():
+    """The x-sorted search gives what a brute-force match of every update against every event does,
+    on a looping path (each position sent many times) with folded events and stray updates."""
+    import numpy as np
+
+    from tests.viser_client import staleness
+
+    rng = np.random.default_rng(3)
+    loop = rng.uniform(-1, 1, (40, 3)).astype(np.float32)  # one lap; the path goes round it 10 times
+    sends = [(0.05 * k, loop[k % 40]) for k in range(400)]
+    updates = []
+    for k in range(400):
+        if rng.random() < 0.3:
+            continue  # folded into a later event
+        flanges = np.zeros((8, 3), np.float32)
+        flanges[rng.integers(0, 8):] = loop[k % 40]  # branches before it invalid (at the origin)
+        updates.append((0.05 * k + rng.uniform(0.001, 0.12), flanges))
+    updates.append((30.0, np.zeros((8, 3), np.float32)))  # nothing valid: answers nothing
+    updates.append((30.0, np.full((8, 3), 5.0, np.float32)))  # a target nobody sent
+    updates.sort(key=lambda u: u[0])
+
+    def brute_force():
+        first = np.full(len(sends), np.inf)
+        for arrival, flanges in updates:
+            valid = np.abs(flanges).sum(axis=-1) > 0
+            if not valid.any():
+                continue
+            hits = [k for k, (t, p) in enumerate(sends) if t <= arrival and np.abs(p - flanges[valid][0]).max() < 1e-5]
+            if hits:
+                first[hits[-1]] = min(first[hits[-1]], arrival)
+        shown = np.minimum.accumulate(first[::-1])[::-1]
+        return [float(a - t) if np.isfinite(a) else None for (t, _), a in zip(sends, shown)]
+
+    expected = brute_force()
+    assert sum(v is not None for v in expected) > 300
+    assert staleness(sends, updates) == expected

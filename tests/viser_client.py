@@ -317,17 +317,22 @@ class ViserClient:
 def staleness(sends, updates, tolerance: float = 1e-5) -> list[float | None]:
     """See :meth:`ViserClient.latencies`; ``updates`` are (arrival, (8, 3) ghost flanges)."""
     targets = np.array([np.asarray(p, dtype=np.float32) for _, p in sends]) if sends else np.zeros((0, 3))
+    sent_at = np.array([t for t, _ in sends])
+    # events sorted by x, so each update looks only at the few within tolerance of its x
+    # (a 10-minute soak has 12 000 events and as many updates per student)
+    by_x = np.argsort(targets[:, 0], kind="stable")
+    xs = targets[by_x, 0]
     answered = []  # (arrival, index of the event it answers)
     for arrival, flanges in updates:
         valid = np.abs(flanges).sum(axis=-1) > 0  # invalid branches sit at the origin
         if not valid.any():
             continue
         position = flanges[valid][0]
-        matches = np.flatnonzero(np.abs(targets - position).max(axis=-1) < tolerance)
-        if len(matches):
-            earlier = matches[[sends[m][0] <= arrival for m in matches]]
-            if len(earlier):
-                answered.append((arrival, int(earlier[-1])))
+        near = by_x[np.searchsorted(xs, position[0] - tolerance):np.searchsorted(xs, position[0] + tolerance, "right")]
+        matches = np.sort(near[np.abs(targets[near] - position).max(axis=-1) < tolerance])
+        earlier = matches[sent_at[matches] <= arrival]
+        if len(earlier):
+            answered.append((arrival, int(earlier[-1])))
     first_answer = np.full(len(sends), np.inf)  # earliest arrival answering each event
     for arrival, index in answered:
         first_answer[index] = min(first_answer[index], arrival)
