@@ -328,7 +328,8 @@ def staleness(sends, updates, tolerance: float = 1e-5) -> list[float | None]:
         if not valid.any():
             continue
         position = flanges[valid][0]
-        near = by_x[np.searchsorted(xs, position[0] - tolerance):np.searchsorted(xs, position[0] + tolerance, "right")]
+        # a window twice the tolerance, so float32 rounding at its edges cannot leave a match out
+        near = by_x[np.searchsorted(xs, position[0] - 2 * tolerance):np.searchsorted(xs, position[0] + 2 * tolerance, "right")]
         matches = np.sort(near[np.abs(targets[near] - position).max(axis=-1) < tolerance])
         earlier = matches[sent_at[matches] <= arrival]
         if len(earlier):
