@@ -8,7 +8,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from .browser_support import SMALL_VIEWPORT, canvas_pixels, dom_id, project, set_checkbox, step_slider, text_field, wait_for
+from .browser_support import SMALL_VIEWPORT, canvas_pixels, changed, dom_id, project, set_checkbox, step_slider, text_field, wait_for
 
 pytestmark = pytest.mark.browser
 
@@ -102,8 +102,7 @@ def test_workspace_cloud(open_page, app):
     assert len(session.workspace._cloud.points) == 200_000
     page.wait_for_timeout(2500)
     after = canvas_pixels(page)
-    changed = np.abs(after - before).sum(axis=-1) > 60
-    assert changed.mean() > 0.05, "the point cloud did not show up"
+    assert changed(before, after) > 0.05, "the point cloud did not show up"
     wait_for(lambda: page.get_by_text("Colour = manipulability |det J|").count() > 0, what="the legend")
     set_checkbox(page, session.workspace.enabled, False)
     wait_for(lambda: session.workspace._cloud is None, what="the cloud to go")

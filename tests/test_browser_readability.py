@@ -12,7 +12,7 @@ import pytest
 from app.server import TeachingServer
 from app.style import DANGER_RED, GHOST_OPACITY
 
-from .browser_support import SMALL_VIEWPORT, canvas_pixels, choose, dom_id, project, set_checkbox, text_field, wait_for
+from .browser_support import SMALL_VIEWPORT, canvas_pixels, changed_mask, choose, dom_id, project, set_checkbox, text_field, wait_for
 from .colour_vision import MIN_DELTA_E, closest_pair
 
 pytestmark = pytest.mark.browser
@@ -247,8 +247,8 @@ def test_the_gizmo_is_sized_to_the_arm(open_page):
         node.visible = False
     page.wait_for_timeout(1200)
     no_arm = canvas_pixels(page)
-    gizmo = (np.abs(everything - no_gizmo).sum(axis=-1) > 60).sum()
-    arm = (np.abs(no_gizmo - no_arm).sum(axis=-1) > 60).sum()
+    gizmo = changed_mask(no_gizmo, everything).sum()
+    arm = changed_mask(no_arm, no_gizmo).sum()
     assert gizmo < GIZMO_MAX_SHARE * arm, f"the gizmo covers {gizmo / arm:.0%} as much of the view as the arm"
     u, v = project(session.client.camera, session.state.last.geometry.p5, box)
     assert np.abs(neighbourhood(everything, u, v, box, 3) - neighbourhood(no_gizmo, u, v, box, 3)).sum(axis=1).mean() < 40, \
@@ -274,8 +274,8 @@ def test_the_real_ur10_is_drawn_and_the_schematic_is_one_choice_away(open_page):
     wait_for(lambda: robot.model == SCHEMATIC, what="the schematic arm")
     page.wait_for_timeout(1200)
     schematic = canvas_pixels(page)
-    real_arm = np.abs(real - empty).sum(axis=-1) > 60
-    schematic_arm = np.abs(schematic - empty).sum(axis=-1) > 60
+    real_arm = changed_mask(empty, real)
+    schematic_arm = changed_mask(empty, schematic)
     assert real_arm.sum() > 5000, "the real meshes drew (almost) nothing"
     assert schematic_arm.sum() > 5000, "the schematic arm drew (almost) nothing"
     differ = (real_arm ^ schematic_arm).sum() / real_arm.sum()
