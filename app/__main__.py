@@ -24,6 +24,9 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
     parser.add_argument("--lecture", action="store_true",
                         help="lecture mode in every browser: type of 20 px and more, thick lines (each browser "
                              "can switch it in its View folder)")
+    parser.add_argument("--light", action="store_true",
+                        help="a light view for laptops without a graphics driver (software WebGL): the arm and "
+                             "its ghosts toon-shaded, no shadows, no environment lighting; drawn several times faster")
     parser.add_argument("--allow-origin", action="append", default=[], metavar="URL",
                         help="a web page besides the app's own that may connect, e.g. http://course-site:8000 "
                              "(repeat for more; by default only the app's own page can)")
@@ -40,7 +43,7 @@ def main(argv: list[str] | None = None) -> None:
     from .server import TeachingServer
 
     app = TeachingServer(preset=args.preset, host=args.host, port=args.port, shared=args.shared,
-                         allowed_origins=args.allow_origin, lecture=args.lecture)
+                         allowed_origins=args.allow_origin, lecture=args.lecture, light=args.light)
     moved = "" if args.port in (0, app.port) else f" (port {args.port} was busy)"
     mode = "shared demo mode" if args.shared else "every browser has its own arm"
     print(f"\nUR10 teaching app ({args.preset}, {mode}) is running{moved}. Open:", flush=True)

@@ -195,6 +195,7 @@ class Member:
         self.folder: viser.GuiFolderHandle | None = None
         self.picker: ArmPicker | None = None  #: the presenter's: which arm the class sees
         self.camera: CameraControls | None = None
+        self.join_code: viser.GuiInputHandle | None = None  #: a viewer's box for the presenter's code
         self.closed = False
 
 
@@ -316,6 +317,10 @@ class Classroom:
         session.camera = member.camera  # the browser's own camera, for the workspace sections
         return session
 
+    def can_switch(self) -> bool:
+        """Whether the class's arm may change now (:data:`SWITCH_INTERVAL` after the last change)."""
+        return time.monotonic() - self._last_switch >= SWITCH_INTERVAL
+
     def show_arm(self, member: Member, label: str) -> None:
         """The presenter shows the class another arm (``CLASS_CHOICES``): everyone's scene and live panel follow.
 
@@ -333,7 +338,7 @@ class Classroom:
                 raise ValueError("only the presenter chooses the class's arm")
             if label == self.choice:
                 return
-            if time.monotonic() - self._last_switch < SWITCH_INTERVAL:
+            if not self.can_switch():
                 raise ValueError(f"one change of arm every {SWITCH_INTERVAL:g} s, please: try again in a moment")
             member.session.remove()
             member.session = None
@@ -468,6 +473,6 @@ class Classroom:
                 gui.add_markdown("You are **watching** the presenter's arm.")
                 explore = gui.add_button("Explore on my own", icon=viser.Icon.ROBOT)
                 explore.on_click(action(lambda _: self.explore(member)))
-                code = gui.add_text("Join code", "", hint="The code on the teacher's screen makes this browser the presenter")
+                code = member.join_code = gui.add_text("Join code", "", hint="The code on the teacher's screen makes this browser the presenter")
                 claim = gui.add_button("Become presenter", icon=viser.Icon.PRESENTATION)
                 claim.on_click(action(lambda _: self.claim(member, code.value)))

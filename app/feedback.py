@@ -58,11 +58,14 @@ def chosen(handle, what: str) -> str:
     """The value of a dropdown or button group, or ``ValueError`` when a client sent one not among its options.
 
     A browser only ever sends one of the options it was given; anything else came from
-    something else, and is put back (for a dropdown, to its first option) before it is refused.
+    something else. A dropdown is put back to the last choice it accepted (its first option
+    if none), before the refusal: viser runs its callback again at once for that, which then
+    applies the choice that stands, not another.
     """
     value, options = handle.value, tuple(handle.options)
     if value in options:
+        handle._accepted_choice = value
         return value
     if isinstance(handle, viser.GuiDropdownHandle):  # a button group holds no choice to show
-        handle.value = options[0]
+        handle.value = getattr(handle, "_accepted_choice", options[0])
     raise ValueError(f"{what}: {value!r:.40} is not one of the choices")

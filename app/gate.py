@@ -72,14 +72,17 @@ _LONGEST_LIST = 16
 
 
 class TokenBucket:
-    """``rate`` tokens a second up to ``burst``; :meth:`take` says whether one was there."""
+    """``rate`` tokens a second up to ``burst``; :meth:`take` says whether one was there.
 
-    def __init__(self, rate: float, burst: float) -> None:
-        self.rate, self.burst = rate, burst
-        self.tokens, self.stamp = float(burst), time.monotonic()
+    ``clock`` gives the time in seconds (a test passes its own).
+    """
+
+    def __init__(self, rate: float, burst: float, clock=time.monotonic) -> None:
+        self.rate, self.burst, self._clock = rate, burst, clock
+        self.tokens, self.stamp = float(burst), clock()
 
     def _fill(self) -> None:
-        now = time.monotonic()
+        now = self._clock()
         self.tokens = min(self.burst, self.tokens + (now - self.stamp) * self.rate)
         self.stamp = now
 
@@ -143,6 +146,7 @@ class Gate:
         self.local_names = {"localhost", socket.gethostname().lower()}
         self.local_names |= {f"{name}.local" for name in list(self.local_names)}
         self.dropped: collections.Counter = collections.Counter()  # message kind -> how many
+        self.passed: collections.Counter = collections.Counter()  # message kind -> how many were handed to viser
         self.refused: collections.Counter = collections.Counter()  # reason -> how many connections
         self._open: collections.Counter = collections.Counter()  # address -> open websockets
         self._arrivals: dict[str, TokenBucket] = {}
@@ -217,6 +221,10 @@ class Gate:
             return self._open[address]
 
     # ------------------------------------------------------------------ messages
+
+    def note_passed(self, kind: str) -> None:
+        with self._lock:
+            self.passed[kind] += 1
 
     def note_dropped(self, kind: str) -> None:
         with self._lock:
@@ -294,6 +302,7 @@ class GatedConnection:
                     continue
                 self._rate.take()
                 key = next(iter(self._waiting))
+                self._gate.note_passed(key[0])
                 return self._waiting.pop(key)
             if self._ended is not None:
                 raise self._ended

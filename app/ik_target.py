@@ -204,7 +204,7 @@ class BranchesScene(View):
                     f"/ghosts/{model_slug(name)}/link{link.index}", vertices, faces,
                     batched_wxyzs=identity, batched_positions=np.zeros((8, 3)), batched_scales=np.zeros(8),
                     batched_colors=np.array(SLOT_COLORS, dtype=np.uint8), opacity=GHOST_OPACITY, lod="off",
-                    cast_shadow=False, receive_shadow=False, visible=name == models.names[0],
+                    material=models.material, cast_shadow=False, receive_shadow=False, visible=name == models.names[0],
                 )
                 ghost.on_click(self._clicked)
                 self.models[name].append(ghost)

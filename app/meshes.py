@@ -85,9 +85,25 @@ def load_real_links(model: str = "ur10", mesh_dir: Path = MESH_DIR) -> tuple[Lin
 
 @dataclass(frozen=True, eq=False)
 class ArmModels:
-    """The ways one arm can be drawn, by name; the first is the default."""
+    """The ways one arm can be drawn, by name (the first is the default), and how they are shaded.
+
+    ``light`` (``--light``): toon shading and no shadows (the server also turns off the shadow
+    maps and the environment map). Software WebGL, on a laptop without a graphics driver,
+    draws the arm and its translucent ghosts with physically based shading, shadows and
+    image-based lighting several times more slowly.
+    """
 
     by_name: dict[str, tuple[LinkMesh, ...]]
+    light: bool = False
+
+    @property
+    def material(self) -> str:
+        """viser's material for the arm and its ghosts."""
+        return "toon3" if self.light else "standard"
+
+    @property
+    def shadows(self) -> bool:
+        return not self.light
 
     @property
     def names(self) -> tuple[str, ...]:
@@ -104,12 +120,13 @@ class ArmModels:
 
 
 @functools.lru_cache(maxsize=None)
-def load_models(preset: str) -> ArmModels:
-    """The real UR10 where the preset is one (and the schematic beside it), else the schematic alone."""
+def load_models(preset: str, light: bool = False) -> ArmModels:
+    """The real UR10 where the preset is one (and the schematic beside it), else the schematic alone;
+    ``light`` shades them for software WebGL (:class:`ArmModels`)."""
     schematic = load_links(preset)
     if preset in REAL_MESHES:
-        return ArmModels({REAL: load_real_links(REAL_MESHES[preset]), SCHEMATIC: schematic})
-    return ArmModels({SCHEMATIC: schematic})
+        return ArmModels({REAL: load_real_links(REAL_MESHES[preset]), SCHEMATIC: schematic}, light)
+    return ArmModels({SCHEMATIC: schematic}, light)
 
 
 @functools.lru_cache(maxsize=None)

@@ -55,11 +55,12 @@ class RobotScene(View):
         for name, links in models.by_name.items():
             for link in links:
                 parent, visible = f"{node_name(link.index)}/{model_slug(name)}", name == self.model
+                shading = {"material": models.material, "cast_shadow": models.shadows, "receive_shadow": models.shadows}
                 self.meshes[name].append(scene.add_mesh_simple(
-                    f"{parent}/body", link.body_vertices, link.body_faces, color=ALUMINIUM, visible=visible))
+                    f"{parent}/body", link.body_vertices, link.body_faces, color=ALUMINIUM, visible=visible, **shading))
                 if len(link.cap_faces):
                     self.meshes[name].append(scene.add_mesh_simple(
-                        f"{parent}/cap", link.cap_vertices, link.cap_faces, color=JOINT_CAP_GREY, visible=visible))
+                        f"{parent}/cap", link.cap_vertices, link.cap_faces, color=JOINT_CAP_GREY, visible=visible, **shading))
         scene.add_frame(f"{node_name(6)}/flange_frame", axes_length=0.15, axes_radius=0.005, origin_radius=0.01)
 
     def show(self, model: str) -> None:

@@ -125,6 +125,7 @@ class Janitor:
     DELAY = 3.0
 
     def __init__(self) -> None:
+        self.sweeps = 0  #: how many times it has swept (the memory tests wait for one)
         self._timer: threading.Timer | None = None
         self._lock = threading.Lock()
         try:
@@ -144,6 +145,7 @@ class Janitor:
         gc.collect()
         if self._trim is not None:
             self._trim(0)
+        self.sweeps += 1
 
 
 class TeachingServer:
@@ -165,13 +167,16 @@ class TeachingServer:
         ``allowed_origins`` by default.
     lecture : bool
         Every browser starts in lecture mode (:mod:`app.lecture`).
+    light : bool
+        The arm and its ghosts shaded for laptops without a graphics driver (``--light``,
+        :class:`app.meshes.ArmModels`).
     """
 
     def __init__(self, preset: str = "course", host: str = "127.0.0.1", port: int = 8080, shared: bool = False,
-                 allowed_origins=(), gate: Gate | None = None, lecture: bool = False) -> None:
+                 allowed_origins=(), gate: Gate | None = None, lecture: bool = False, light: bool = False) -> None:
         self.arm = Arm.preset(preset)
         self.lecture = lecture
-        self.models = load_models(preset)
+        self.models = load_models(preset, light)
         symbolic.load()  # read the cached derivations now rather than in the first student's callback
         for name in ARM_CHOICES.values():
             if name not in (None, "custom", "three_dof"):
@@ -189,6 +194,9 @@ class TeachingServer:
         self.server.initial_camera.up = (0.0, 0.0, 1.0)
         self.server.initial_camera.fov = math.radians(CAMERA_FOV_DEGREES)
         add_floor_grid(self.server.scene)
+        if light:  # shadow maps and image-based lighting cost software WebGL more than the scene itself
+            self.server.scene.configure_default_lights(enabled=True, cast_shadow=False)
+            self.server.scene.configure_environment_map(hdri=None)
         loop = self.server.get_event_loop()
         self.refresher = PanelRefresher(loop)
         self.drags = DragQueue(loop)
@@ -281,9 +289,8 @@ class TeachingServer:
         picker is shown, so a browser that waits that long after seeing it is never refused),
         so that flicking the picker cannot load the server.
         """
-        now = time.monotonic()
         with self._sessions_lock:
-            if now - self._last_switch.get(client.client_id, -math.inf) < SWITCH_INTERVAL:
+            if not self.can_switch(client.client_id):
                 raise ValueError(f"one change of arm every {SWITCH_INTERVAL:g} s, please: try again in a moment")
             self._last_switch[client.client_id] = math.inf  # refused while this one is being built
             old = self._sessions.pop(client.client_id, None)
@@ -302,6 +309,10 @@ class TeachingServer:
                     self._last_switch[client.client_id] = time.monotonic()
         if client.client_id not in self.server.get_clients():  # it left meanwhile
             self._disconnected(client)
+
+    def can_switch(self, client_id: int) -> bool:
+        """Whether this browser may change its arm now (:data:`SWITCH_INTERVAL` after its last change was ready)."""
+        return time.monotonic() - self._last_switch.get(client_id, -math.inf) >= SWITCH_INTERVAL
 
     def _disconnected(self, client: viser.ClientHandle) -> None:
         if self.classroom is not None:
@@ -322,6 +333,7 @@ class TeachingServer:
                     "time": time.time(),
                     "clients": len(self.server.get_clients()),
                     "sessions": len(self.sessions),
+                    "janitor_sweeps": self._janitor.sweeps,
                     "latency": LATENCY.summary(),
                     "cpu_seconds": sum(os.times()[:2]),
                     "rss_bytes": _resident_bytes(),

@@ -89,7 +89,7 @@ class _LoopWorker:
         self._stopped = False
         self._wake: asyncio.Event | None = None
         self._started = threading.Event()
-        asyncio.run_coroutine_threadsafe(self._main(), loop)
+        self.done = asyncio.run_coroutine_threadsafe(self._main(), loop)  #: resolves once stopped
         self._started.wait(timeout=10.0)
 
     async def _main(self) -> None:
@@ -128,12 +128,16 @@ class _LoopWorker:
 
 
 class DragQueue(_LoopWorker):
-    """The newest drag target of each session, solved and drawn session by session."""
+    """The newest drag target of each session, solved and drawn session by session.
 
-    def __init__(self, loop: asyncio.AbstractEventLoop) -> None:
+    ``clock`` times the turns (:data:`DRAG_TURN`); a test passes its own.
+    """
+
+    def __init__(self, loop: asyncio.AbstractEventLoop, clock=time.perf_counter) -> None:
         self._ready: collections.deque[int] = collections.deque()  # session ids, oldest request first
         self._pending: dict[int, tuple[HasDrags, object, float]] = {}  # session, target, filed at
         self._serving: HasDrags | None = None
+        self._clock = clock
         super().__init__(loop)
 
     def submit(self, session: HasDrags, target) -> None:
@@ -153,11 +157,11 @@ class DragQueue(_LoopWorker):
         while not self._stopped:
             await self._wake.wait()
             self._wake.clear()
-            turn = time.perf_counter()
+            turn = self._clock()
             while self._ready and not self._stopped:
-                if time.perf_counter() - turn > DRAG_TURN:
+                if self._clock() - turn > DRAG_TURN:
                     await asyncio.sleep(0)  # let the sockets have a turn
-                    turn = time.perf_counter()
+                    turn = self._clock()
                 key = self._ready.popleft()
                 session, target, filed = self._pending.pop(key)
                 if session.closed:
@@ -308,11 +312,13 @@ class HeavyWork:
 
     A job of a browser starts no sooner than its last one's duration × (1/duty − 1) after
     that one ended; the rest is kept per browser (client id), so a rebuilt arm does not
-    start afresh. Call :meth:`run` from a thread of the job's own: it may wait.
+    start afresh. Call :meth:`run` from a thread of the job's own: it may wait. ``clock`` and
+    ``sleep`` are the time and the wait (a test passes its own).
     """
 
-    def __init__(self, duty: float = HEAVY_DUTY) -> None:
+    def __init__(self, duty: float = HEAVY_DUTY, clock=time.monotonic, sleep=time.sleep) -> None:
         self.duty = duty
+        self._clock, self._sleep = clock, sleep
         self._slot = threading.Lock()
         self._lock = threading.Lock()
         self._next: dict[int, float] = {}  #: client id → when its next job may start (monotonic)
@@ -321,23 +327,23 @@ class HeavyWork:
         while True:
             wait = self._rest(client_id)
             if wait > 0:
-                time.sleep(wait)
+                self._sleep(wait)
                 continue
             with self._slot:
                 if self._rest(client_id) > 0:  # another job of this browser ran while this one waited for the slot
                     continue
-                start = time.monotonic()
+                start = self._clock()
                 try:
                     return job()
                 finally:
-                    end = time.monotonic()
+                    end = self._clock()
                     with self._lock:
                         self._next[client_id] = end + (end - start) * (1.0 / self.duty - 1.0)
 
     def _rest(self, client_id: int) -> float:
         """How long this browser must still wait before its next job (s)."""
         with self._lock:
-            now = time.monotonic()
+            now = self._clock()
             self._next = {k: t for k, t in self._next.items() if t > now}  # only browsers still resting
             return self._next.get(client_id, now) - now
 

@@ -2,8 +2,8 @@
 
     python benchmarks/bench_classroom.py [--seconds 180] [--repeat 3] [--soak 900]
 
-The app runs in its own process (``tests/app_process.py``); thirty headless clients
-(``tests/viser_client.py``, viser's own websocket protocol: the messages a browser sends, and
+The app runs in its own process (``ur10dev/app_process.py``); thirty headless clients
+(``ur10dev/viser_client.py``, viser's own websocket protocol: the messages a browser sends, and
 every frame received and decoded) run in this one. Scenarios:
 
 * **independent** — 30 students, each dragging their own IK target at 20 Hz (each
@@ -62,8 +62,8 @@ sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
 from benchmarks._report import cpu_ticks, machine, quiet_machine, stolen_share, table, write_section  # noqa: E402
 from benchmarks.bench_drag import HOME_ROTATION, loop_path  # noqa: E402
-from tests.app_process import METRICS_TIMEOUT_S, AppProcess, running_app  # noqa: E402
-from tests.viser_client import DragStep, ViserClient, staleness, wxyz_of  # noqa: E402
+from ur10dev.app_process import METRICS_TIMEOUT_S, AppProcess, running_app  # noqa: E402
+from ur10dev.viser_client import DragStep, ViserClient, staleness, wxyz_of  # noqa: E402
 
 #: Browsers in a class; the lecture hall has LECTURE_HALL.
 CLIENTS = 30
@@ -122,8 +122,8 @@ async def drag_loop(client: ViserClient, steps: list[tuple[DragStep, np.ndarray]
         dropped.append(f"{error} after {time.perf_counter() - start:.0f} s")
 
 
-async def sample_server(app: AppProcess, until: float, samples: list, late: list[str]) -> None:
-    """A server report every 5 s into ``samples``; one not written within ``METRICS_TIMEOUT_S``
+async def sample_server(app: AppProcess, until: float, samples: list, late: list[str], interval: float = 5.0) -> None:
+    """A server report every ``interval`` s into ``samples``; one not written within ``METRICS_TIMEOUT_S``
     goes into ``late`` (why, as seen).
 
     A late report with the app still running loses one sample, not the run: in one of three
@@ -141,7 +141,7 @@ async def sample_server(app: AppProcess, until: float, samples: list, late: list
             continue
         report["machine_ticks"] = cpu_ticks()
         samples.append(report)
-        await asyncio.sleep(5.0)
+        await asyncio.sleep(interval)
 
 
 async def watch_own_loop(until: float, lags: list) -> None:

@@ -4,8 +4,8 @@
     python benchmarks/bench_drag.py --map        # and the branch-count map too (its own section)
     python benchmarks/bench_drag.py --jacobian   # and the ellipsoids, force arrow and torque bars (its own section)
 
-Starts the app in its own process (``tests/app_process.py``), connects one headless client
-(``tests/viser_client.py``: the messages a browser sends), switches the singularity overlay on
+Starts the app in its own process (``ur10dev/app_process.py``), connects one headless client
+(``ur10dev/viser_client.py``: the messages a browser sends), switches the singularity overlay on
 and drags the IK target at 20 Hz along a loop around the flange, as a student would.
 Reports
 
@@ -37,8 +37,8 @@ from benchmarks._report import (  # noqa: E402
     table,
     write_section,
 )
-from tests.app_process import running_app  # noqa: E402
-from tests.viser_client import ViserClient, wxyz_of  # noqa: E402
+from ur10dev.app_process import running_app  # noqa: E402
+from ur10dev.viser_client import ViserClient, wxyz_of  # noqa: E402
 from ur10core import Arm  # noqa: E402
 
 #: The app starts on the course's arbitrary pose; the drag keeps its orientation.

@@ -2,7 +2,7 @@
 
     python benchmarks/bench_hostile.py
 
-The app runs in its own process (``tests/app_process.py``). A student drags the IK
+The app runs in its own process (``ur10dev/app_process.py``). A student drags the IK
 target at 20 Hz for the whole run while another client, once the drag is under way:
 
 * sends one 10 MB message (10 million empty msgpack arrays: decoded, the security review
@@ -29,8 +29,8 @@ sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
 from benchmarks._report import machine, quiet_machine, table, write_section  # noqa: E402
 from benchmarks.bench_drag import HOME_ROTATION, loop_path  # noqa: E402
-from tests.app_process import running_app  # noqa: E402
-from tests.viser_client import ViserClient, encode, wxyz_of  # noqa: E402
+from ur10dev.app_process import running_app  # noqa: E402
+from ur10dev.viser_client import ViserClient, encode, wxyz_of  # noqa: E402
 from viser import _messages as messages  # noqa: E402
 
 SECONDS = 12.0

@@ -3,7 +3,7 @@
     python benchmarks/bench_page.py --against PATH     # PATH: a checkout of the reference commit
 
 Starts the app of this checkout and of the reference, each in its own process
-(``tests/app_process.py``), and opens each in headless Chromium from Debian (1280×720, the
+(``ur10dev/app_process.py``), and opens each in headless Chromium from Debian (1280×720, the
 software WebGL of a laptop without a GPU driver) three times, alternating. Reports the
 median run of each:
 
@@ -29,8 +29,8 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
 from benchmarks._report import machine, quiet_machine, table, write_section  # noqa: E402
-from tests.app_process import ROOT, running_app  # noqa: E402
-from tests.browser_support import CONNECTED, launch  # noqa: E402
+from ur10dev.app_process import ROOT, running_app  # noqa: E402
+from ur10dev.browser import CONNECTED, launch  # noqa: E402
 
 RUNS = 3
 WINDOW = {"width": 1280, "height": 720}

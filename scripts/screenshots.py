@@ -18,7 +18,7 @@ sys.path.insert(0, str(ROOT))
 from playwright.sync_api import sync_playwright  # noqa: E402
 
 from app.server import TeachingServer  # noqa: E402
-from tests.browser_support import CONNECTED, dom_id, launch, wait_for  # noqa: E402
+from ur10dev.browser import CONNECTED, dom_id, launch, wait_for  # noqa: E402
 
 OUT = ROOT / "docs" / "images"
 WINDOW = {"width": 1280, "height": 720}
@@ -33,7 +33,7 @@ def show_the_map(page, session) -> None:
 
 def show_the_kr210(page, session) -> None:
     from app.course_arms.session import CourseArmSession
-    from tests.browser_support import choose
+    from ur10dev.browser import choose
 
     choose(page, session.arm_picker.dropdown, "KUKA KR210 (spherical wrist)")
     server = SERVER["now"]

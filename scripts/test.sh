@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Install what the tests need, then run every test on both backends of ur10core.
+# Install what the tests need, then run every test once, and the core's tests on its other backend.
 #   - Debian's chromium for the browser tests (playwright drives it; it never downloads one)
 #   - a virtual environment ($UR10_TEST_VENV, default .venv-test) with the project and its
 #     test extras; .ci/run points it at a new, empty folder every time
@@ -7,16 +7,20 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 VENV="${UR10_TEST_VENV:-.venv-test}"
+STARTED=$SECONDS
+stage() {  # stage NAME: prints how long the previous stage took, then the new one's name
+    echo "== ($((SECONDS - STARTED)) s so far) $1"
+}
 
 if ! command -v chromium >/dev/null 2>&1; then
-    echo "== installing Debian's chromium for the browser tests"
+    stage "installing Debian's chromium for the browser tests"
     SUDO=""
     if [ "$(id -u)" != "0" ]; then SUDO="sudo"; fi
     $SUDO apt-get update -qq
     $SUDO env DEBIAN_FRONTEND=noninteractive apt-get install -y -qq chromium
 fi
 
-echo "== installing ur10-teach with its test dependencies into $VENV"
+stage "installing ur10-teach with its test dependencies into $VENV"
 python3 -m venv "$VENV"
 PYTHON="$VENV/bin/python"
 "$PYTHON" -m pip install --quiet --disable-pip-version-check -e ".[test]"
@@ -31,16 +35,17 @@ if [ $# -gt 0 ]; then
 fi
 
 BACKEND="$("$PYTHON" -c 'import ur10core; print(ur10core.BACKEND)')"
-if [ "$BACKEND" = "compiled" ]; then
-    echo "== the compiled backend: every test, the install on a laptop without a compiler included"
-    "$PYTHON" -m pytest -m ""
-elif [ -n "${UR10_REQUIRE_COMPILED:-}" ]; then
+if [ "$BACKEND" != "compiled" ] && [ -n "${UR10_REQUIRE_COMPILED:-}" ]; then
     echo "the compiled kernel did not build (see pip's output with --verbose); CI requires it" >&2
     exit 1
-else
-    echo "== no C compiler here: the compiled backend is not built, its comparison tests are skipped"
-    "$PYTHON" -m pytest -m "browser or install"
 fi
-echo "== the numpy backend (UR10CORE_BACKEND=numpy): every test but the browser and install ones"
-UR10CORE_BACKEND=numpy "$PYTHON" -c 'import ur10core; print("backend:", ur10core.BACKEND)'
-UR10CORE_BACKEND=numpy "$PYTHON" -m pytest -m "not browser and not install"
+stage "every test once, on the $BACKEND backend: core, app, server, browser, install on a laptop without a compiler"
+"$PYTHON" -m pytest -m "" --durations=15
+if [ "$BACKEND" = "compiled" ]; then
+    stage "the core's tests again on the numpy backend (what a laptop without a C compiler runs)"
+    UR10CORE_BACKEND=numpy "$PYTHON" -c 'import ur10core; print("backend:", ur10core.BACKEND)'
+    UR10CORE_BACKEND=numpy "$PYTHON" -m pytest -m core
+else
+    echo "no C compiler here: the compiled backend is not built, its comparison tests are skipped"
+fi
+stage "done"

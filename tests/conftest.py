@@ -8,6 +8,13 @@ import pytest
 from ur10core import Arm
 
 
+def pytest_collection_modifyitems(config, items):
+    """ur10core's doctests are core tests: their numbers come from its backend."""
+    for item in items:
+        if isinstance(item, pytest.DoctestItem):
+            item.add_marker(pytest.mark.core)
+
+
 @pytest.fixture(scope="session")
 def course() -> Arm:
     return Arm.preset("course")
@@ -34,6 +41,21 @@ def app():
     from app.server import TeachingServer
 
     server = TeachingServer(port=0)
+    yield server
+    server.stop()
+
+
+@pytest.fixture
+def light_app():
+    """A server in independent mode with the light view (``--light``): what the browser tests open.
+
+    Software WebGL draws the default shading at one or two frames a second on two cores,
+    the light view at 15–35: the browser suite checks what is drawn, and the screenshots
+    come many times faster.
+    """
+    from app.server import TeachingServer
+
+    server = TeachingServer(port=0, light=True)
     yield server
     server.stop()
 
@@ -76,36 +98,40 @@ def playwright():
 def open_page(playwright, request):
     """Opens the app in a fresh browser, like one student's laptop; closes them after the test.
 
-    ``open_page(known=0, viewport=VIEWPORT, zoom=1.0, server=None)`` → (page, the browser's
-    session): ``known`` sessions exist already, ``zoom`` is the browser's zoom (1.5 = 150 %),
-    and the server is the ``app`` fixture's unless given (it must be in independent mode).
-    One browser process per page: tabs of one process share its software-GPU process, and
-    a second tab starves while the first renders.
+    ``open_page(known=0, viewport=SMALL_VIEWPORT, zoom=1.0, server=None, drawn=True)`` → (page, the
+    browser's session), once the panel is drawn and (``drawn``) the 3D view has settled:
+    ``known`` sessions exist already, ``zoom`` is the browser's zoom (1.5 = 150 %), and the
+    server is the ``light_app`` fixture's unless given (it must be in independent mode). One browser process per page:
+    tabs of one process share its software-GPU process, and a second tab starves while the
+    first renders. Every page must stay offline: a request to any other host fails the test.
     """
-    from tests.browser_support import CONNECTED, VIEWPORT, dom_id, launch, wait_for
+    from ur10dev.browser import (
+        HANG_TIMEOUT_MS, SMALL_VIEWPORT, dismiss_software_notice, dom_id, foreign_requests, launch, open_app, settled_canvas,
+    )
+    from ur10dev.waiting import wait_for
 
-    browsers = []
+    opened = []
 
-    def open_page(known: int = 0, viewport: dict = VIEWPORT, zoom: float = 1.0, server=None):
-        server = server or request.getfixturevalue("app")
+    def open_page(known: int = 0, viewport: dict = SMALL_VIEWPORT, zoom: float = 1.0, server=None, drawn: bool = True):
+        server = server or request.getfixturevalue("light_app")
+        url = f"http://127.0.0.1:{server.port}"
         browser = launch(playwright)
-        browsers.append(browser)
-        # the browser's zoom: fewer CSS pixels in the same window, each drawn larger
-        page = browser.new_page(viewport={"width": round(viewport["width"] / zoom), "height": round(viewport["height"] / zoom)},
-                                device_scale_factor=zoom)
-        console: list[str] = []
-        page.on("console", lambda message: console.append(message.text))
-        page.goto(f"http://127.0.0.1:{server.port}")
+        page = open_app(browser, url, viewport, zoom)
+        opened.append((browser, page, url))
         try:
-            wait_for(lambda: len(server.sessions) > known, timeout=30, what="the server to set up the client")
+            wait_for(lambda: len(server.sessions) > known, what="the server to set up the client")
             session = list(server.sessions.values())[known]
-            page.wait_for_selector(dom_id(session.joints.sliders[0]), timeout=30_000)  # the panel is drawn
-            page.wait_for_selector(CONNECTED, state="attached", timeout=30_000)  # a loaded CI machine has taken over 10 s
+            page.wait_for_selector(dom_id(session.joints.sliders[0]), timeout=HANG_TIMEOUT_MS)  # the panel is drawn
+            if drawn:
+                settled_canvas(page)
+                dismiss_software_notice(page)
+                settled_canvas(page)
         except Exception as error:
-            raise AssertionError(f"page never became ready ({error}); browser console: {console[-20:]}") from None
-        page.wait_for_timeout(1500)  # let the first frames render
+            raise AssertionError(f"page never became ready ({error}); browser console: {page.console[-20:]}") from None
         return page, session
 
     yield open_page
-    for browser in browsers:
+    foreign = [r for _, page, url in opened for r in foreign_requests(page, url)]
+    for browser, _, _ in opened:
         browser.close()
+    assert not foreign, f"requests that leave the app's host: {foreign}"

@@ -3,26 +3,18 @@
 from __future__ import annotations
 
 import asyncio
-import time
 
 import numpy as np
 
 from app.server import TeachingServer
+from ur10dev.viser_client import BROWSER_SEND_INTERVAL, ViserClient, wxyz_of
+from ur10dev.waiting import until, wait_for
 
-from .viser_client import ViserClient, wxyz_of
+__all__ = ["become_presenter", "drag_a_little", "member_of", "session_of", "until", "url", "wait_for"]
 
 
 def url(server: TeachingServer) -> str:
     return f"http://127.0.0.1:{server.port}"
-
-
-async def until(condition, timeout: float = 15.0, what: str = "condition"):
-    deadline = time.monotonic() + timeout
-    while time.monotonic() < deadline:
-        if condition():
-            return
-        await asyncio.sleep(0.05)
-    raise AssertionError(f"timed out waiting for {what}")
 
 
 def member_of(server: TeachingServer, index: int):
@@ -31,27 +23,33 @@ def member_of(server: TeachingServer, index: int):
 
 
 def session_of(server: TeachingServer, client: ViserClient):
-    """The server's session for ``client`` (registered a moment after the page is drawn)."""
+    """The server's session for ``client``, once built (registered a moment after the page is drawn)."""
     client_id = int(client.gizmo_owner)  # a client-scoped node's owner is its client id
-    deadline = time.monotonic() + 15.0
-    while client_id not in server.sessions and time.monotonic() < deadline:
-        time.sleep(0.01)
-    return server.sessions[client_id]
+
+    def built():
+        session = server.sessions.get(client_id)
+        return session if session is not None and session.built else None
+
+    return wait_for(built, what=f"client {client_id}'s session")
 
 
 async def drag_a_little(client: ViserClient, session, steps: int = 10, offset=(0.0, 0.0, 0.0)) -> np.ndarray:
+    """Drag ``session``'s target in ``steps`` small moves at a browser's pace; returns the last target.
+
+    Nothing here waits for the server: a test waits for the target it returns.
+    """
     T = session.state.last.flange.copy()
     for k in range(steps):
         T[:3, 3] += np.array([0.004, -0.003, 0.002]) + offset
         await client.drag_target(T[:3, 3], wxyz_of(T), "start" if k == 0 else "update")
-        await asyncio.sleep(0.05)
+        await asyncio.sleep(BROWSER_SEND_INTERVAL)
     return T
 
 
 async def become_presenter(client: ViserClient, server: TeachingServer) -> None:
     """Enter the join code and press "Become presenter", as the teacher does; returns once it has the gizmo."""
     await client.set_gui("Join code", server.classroom.code)
-    await asyncio.sleep(0.1)
-    await client.set_gui("Become presenter", True)
-    await until(lambda: client.gizmo_owner is not None and server.classroom.presenter is not None,
-                what="the presenter's gizmo")
+    await client.set_gui("Become presenter", True)  # one connection's messages are handled in order
+    await until(lambda: client.gizmo_owner is not None and server.classroom.presenter is not None
+                and server.classroom.presenter.session is not None and server.classroom.presenter.session.built,
+                what="the presenter's gizmo and panel")

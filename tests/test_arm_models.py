@@ -10,7 +10,7 @@ import pytest
 from app.meshes import REAL, SCHEMATIC
 
 from .server_support import session_of, until, url
-from .viser_client import ViserClient
+from ur10dev.viser_client import ViserClient
 
 pytestmark = pytest.mark.server
 
@@ -23,10 +23,11 @@ def test_the_dropdown_switches_the_arm_and_its_ghosts_and_refuses_other_values(a
         assert robot.model == branches.model == REAL  # the real arm by default
         assert all(m.visible for m in robot.meshes[REAL]) and not any(m.visible for m in robot.meshes[SCHEMATIC])
         await client.set_gui("Arm drawn as", SCHEMATIC)
-        await until(lambda: robot.model == SCHEMATIC, what="the schematic arm")
-        assert all(m.visible for m in robot.meshes[SCHEMATIC]) and not any(m.visible for m in robot.meshes[REAL])
-        assert [g.visible for g in branches.models[SCHEMATIC]] == [True] * 6
-        assert [g.visible for g in branches.models[REAL]] == [False] * 6
+        # the model is named before it is drawn: wait for the drawing, arm and ghosts
+        await until(lambda: robot.model == SCHEMATIC and branches.model == SCHEMATIC
+                    and all(m.visible for m in robot.meshes[SCHEMATIC]) and not any(m.visible for m in robot.meshes[REAL])
+                    and [g.visible for g in branches.models[SCHEMATIC]] == [True] * 6
+                    and [g.visible for g in branches.models[REAL]] == [False] * 6, what="the schematic arm and ghosts")
         # the newly shown ghosts were posed at once, where the branches are
         shown = branches.shown
         assert shown.any()

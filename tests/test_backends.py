@@ -17,11 +17,20 @@ import pytest
 
 from ur10core import Arm, _numpy_kernels, ik_reference
 from ur10core._backend import configured
-from ur10core.tolerances import LENGTH_TOLERANCE
+
+from ur10dev.waiting import HANG_TIMEOUT
 
 from .conftest import random_joints
 
-compiled = configured(pytest.importorskip("ur10core._kernels", reason="the compiled kernel was not built (no C compiler)"))
+pytestmark = pytest.mark.core
+
+try:
+    from ur10core import _kernels
+except ImportError:
+    if os.environ.get("UR10_REQUIRE_COMPILED"):  # CI has a compiler: a kernel that did not build is a failure
+        raise
+    pytest.skip("the compiled kernel was not built (no C compiler)", allow_module_level=True)
+compiled = configured(_kernels)
 ROOT = Path(__file__).resolve().parent.parent
 FIELDS = ("q", "valid", "wrist_singular", "elbow_singular", "shoulder_singular", "failure", "rho", "elbow_distance")
 
@@ -165,16 +174,20 @@ def test_wrap_is_exact_and_the_same_everywhere(angle):
     assert _numpy_kernels.ik_one(T, angle, math.nan, math.nan, arm.dh_lengths)[0][4, 5] == expected
 
 
-def test_a_huge_hint_returns_at_once():
-    """The old C wrap() subtracted 2π in a loop: 0.26 s at 1e9, forever (holding the GIL) from 1e16."""
+def test_a_huge_hint_returns():
+    """The old C wrap() subtracted 2π in a loop: 0.26 s at 1e9, forever (holding the GIL) from 1e16.
+
+    In a process of its own, so that a hang is caught by the timeout (which only a hang
+    reaches); how long a huge hint takes is a row of bench_core.
+    """
     code = (
-        "import numpy as np, time; from ur10core import Arm; a = Arm.preset('course'); T = a.fk(np.zeros(6));"
-        "t = time.perf_counter(); [a.ik(T, hint=[0, 0, 0, 0, 0, h]) for h in (1e9, 1e16, 1e300)];"
-        "print(time.perf_counter() - t)"
+        "import numpy as np; from ur10core import Arm; a = Arm.preset('course'); T = a.fk(np.zeros(6));"
+        "s = [a.ik(T, hint=[0, 0, 0, 0, 0, h]) for h in (1e9, 1e16, 1e300)];"
+        "print(all(x.valid.any() and np.isfinite(x.q[x.valid]).all() for x in s))"
     )
-    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=60, cwd=ROOT)
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=HANG_TIMEOUT, cwd=ROOT)
     assert done.returncode == 0, done.stderr
-    assert float(done.stdout) < 0.1
+    assert done.stdout.strip() == "True"
 
 
 def test_frames_fk_and_quaternions_agree(course):
@@ -255,10 +268,22 @@ def test_a_misspelt_backend_is_refused():
 
 
 def test_one_tolerance_source():
-    """The C file holds no tolerance of its own: every value comes from ur10core/tolerances.py."""
+    """No tolerance is written twice: the C file holds no literal of its own, and every other
+    module of the core that names one takes it from ur10core/tolerances.py."""
+    import re
+
+    from ur10core import tolerances
+
     source = (ROOT / "ur10core" / "_kernels.c").read_text()
-    assert "1e-9" not in source and "1e-6" not in source and "1e-7" not in source
-    assert LENGTH_TOLERANCE == 1e-9
+    assert not re.search(r"\b\d(\.\d+)?e-\d+\b", re.sub(r"/\*.*?\*/", "", source, flags=re.S)), "a literal tolerance in _kernels.c"
+    names = [name for name in dir(tolerances) if name.isupper()]
+    for module in (ROOT / "ur10core").rglob("*.py"):
+        if module.name == "tolerances.py":
+            continue
+        for name in names:
+            assert not re.search(rf"^\s*{name}\s*[:=]", module.read_text(), flags=re.M), f"{module.name} defines {name} again"
+        own = re.findall(r"^(\w*TOLERANCE)\s*=", module.read_text(), flags=re.M)
+        assert not own, f"{module.name} defines {own}: every tolerance belongs in tolerances.py"
 
 
 def test_the_kernel_is_iso_c99_that_msvc_also_compiles():

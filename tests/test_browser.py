@@ -1,6 +1,6 @@
-"""End to end in real headless Chromium: the page a student opens, driven by mouse and keyboard.
+"""End to end in real headless Chromium: a student's first visit, driven by mouse and keyboard.
 
-Each test checks both sides: what the server's state became, and what the page shows.
+Each step checks both sides: what the server's state became, and what the page shows.
 """
 
 from __future__ import annotations
@@ -8,80 +8,103 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from .browser_support import SMALL_VIEWPORT, canvas_pixels, changed, dom_id, project, set_checkbox, step_slider, text_field, wait_for
+from ur10dev.browser import (
+    canvas_changed, canvas_pixels, dom_id, drawn_frames, foreign_requests, project, set_checkbox, settled_canvas,
+    step_slider, type_text,
+)
+from ur10dev.waiting import wait_for
 
 pytestmark = pytest.mark.browser
 
 
-def test_page_shows_the_arm_and_its_panel(open_page, app):
-    page, session = open_page()
-    assert page.get_by_text("UR10 kinematics (course)").count() == 1
-    assert page.get_by_text("shoulder right, elbow down, wrist not flipped").count() >= 1
-    pixels = canvas_pixels(page)
-    # the charcoal joint caps and the aluminium arm are on screen, not just the white page
-    charcoal = (pixels.max(axis=-1) < 110) & (pixels.max(axis=-1) - pixels.min(axis=-1) < 20)
-    assert charcoal.sum() > 500, "no charcoal joint caps rendered"
-    np.testing.assert_allclose(np.degrees(session.state.q), [30, 45, 26, 50, 60, 80])
-
-
-def test_moving_a_joint_slider(open_page, app):
-    page, session = open_page()
-    thumb = page.locator(f"{dom_id(session.joints.sliders[0])} [role=slider]")
-    step_slider(page, session.joints.sliders[0], "ArrowRight", 35.0)  # 0.1° steps from 30°
-    wait_for(lambda: abs(np.degrees(session.state.q[0]) - 35.0) < 1e-6, what="θ1 to reach 35°")
-    # the IK target followed the flange (drawn a moment after the state changed), and the readout shows the new pose
-    wait_for(lambda: np.allclose(session.ik_target.gizmo.position, session.state.last.flange[:3, 3], atol=1e-6),
-             what="the gizmo on the new flange")
-    assert thumb.get_attribute("aria-valuenow") == "35"
-    wait_for(lambda: page.get_by_text("base 35.00°", exact=False).count() > 0, what="the joint summary")
-
-
-def test_dragging_the_ik_target(open_page, app):
-    page, session = open_page()
-    session.ik_target.show_ghosts.value = False  # nothing between the mouse and the gizmo
-    page.wait_for_timeout(300)
-    before = session.state.q
+def drag_the_gizmo(page, session) -> None:
+    """Grab one of the gizmo's arrows with the mouse and pull, until a drag reaches the server."""
     box = page.locator("canvas").first.bounding_box()
     flange = session.state.last.flange
     size = session.ik_target.gizmo.scale  # the arrows' length, sized to the arm
-    for axis, share in [(0, 0.75), (0, 0.6), (1, 0.75), (2, 0.75), (0, 0.9)]:  # grab one of the arrows
-        u, v = project(session.client.camera, flange[:3, 3] + share * size * flange[:3, axis], box)
-        page.mouse.move(u, v)
-        page.mouse.down()
-        for step in range(1, 11):
-            page.mouse.move(u - 3 * step, v + 2 * step)
-            page.wait_for_timeout(60)
-        page.mouse.up()
-        page.wait_for_timeout(300)
-        if session.state.last.cause == "target":
-            break
-    wait_for(lambda: session.state.last.cause == "target", what="the drag to reach the server")
+
+    def dragged() -> bool:
+        for axis, share in [(0, 0.75), (0, 0.6), (1, 0.75), (2, 0.75), (0, 0.9)]:
+            u, v = project(session.client.camera, flange[:3, 3] + share * size * flange[:3, axis], box)
+            # the gizmo reads the pointer once a frame: each move is given a drawn frame
+            page.mouse.move(u, v)
+            drawn_frames(page, 2)
+            page.mouse.down()
+            drawn_frames(page, 2)
+            for step in range(1, 11):
+                page.mouse.move(u - 3 * step, v + 2 * step)
+                drawn_frames(page, 1)
+            page.mouse.up()
+            try:
+                wait_for(lambda: session.state.last.cause == "target", timeout=5.0)
+                return True
+            except AssertionError:
+                continue  # that arrow was not under the mouse: another
+        return False
+
+    wait_for(dragged, what="a drag of the gizmo to reach the server")
+
+
+def test_a_students_first_visit(open_page, light_app):
+    """The page, a joint slider, a drag of the IK target, another branch, typed angles, the
+    singularity overlay and the workspace cloud: all in one browser, one after the other."""
+    page, session = open_page()
+
+    # the page shows the arm and its panel
+    assert page.get_by_text("UR10 kinematics (course)").count() == 1
+    assert page.get_by_text("shoulder right, elbow down, wrist not flipped").count() >= 1
+    np.testing.assert_allclose(np.degrees(session.state.q), [30, 45, 26, 50, 60, 80])
+
+    def charcoal_caps() -> int:  # the charcoal joint caps and the aluminium arm, not just the white page
+        pixels = canvas_pixels(page)
+        return int(((pixels.max(axis=-1) < 110) & (pixels.max(axis=-1) - pixels.min(axis=-1) < 20)).sum())
+
+    wait_for(lambda: charcoal_caps() > 500, what="the arm's charcoal joint caps on screen")
+
+    # a joint slider: the arm follows, the gizmo sits on the new flange, the readout says so
+    thumb = page.locator(f"{dom_id(session.joints.sliders[0])} [role=slider]")
+    step_slider(page, session.joints.sliders[0], "ArrowRight", 32.0)  # 0.1° steps from 30°
+    wait_for(lambda: abs(np.degrees(session.state.q[0]) - 32.0) < 1e-6, what="θ1 to reach 32°")
+    wait_for(lambda: np.allclose(session.ik_target.gizmo.position, session.state.last.flange[:3, 3], atol=1e-6),
+             what="the gizmo on the new flange")
+    assert thumb.get_attribute("aria-valuenow") == "32"
+    wait_for(lambda: page.get_by_text("base 32.00°", exact=False).count() > 0, what="the joint summary")
+
+    # a drag of the IK target: the arm follows on its own branch, the ghosts with it
+    session.ik_target.show_ghosts.value = False  # nothing between the mouse and the gizmo
+    settled_canvas(page)
+    before = session.state.q
+    drag_the_gizmo(page, session)
     snapshot = session.state.last
     assert snapshot.reachable
     assert np.abs(snapshot.q - before).max() > 1e-3, "the arm did not follow the target"
-    assert snapshot.slot == 4, "the arm jumped to another branch"
+    assert snapshot.slot == 4, f"the arm jumped to another branch: {snapshot.slot}, {np.degrees(before)}, {np.degrees(snapshot.q)}"
     np.testing.assert_allclose(session.arm.fk(snapshot.q), snapshot.target, atol=1e-9)
-    # the ghosts of the new target's branches were posed from the same solution
+    session.ik_target.show_ghosts.value = True
     ghost = session.scene_views.branches.ghosts[5]  # link 6 (the ghosts start at link 1)
-    snapshot = session.state.last
-    valid = snapshot.solution.valid
-    wait_for(lambda: np.allclose(ghost.batched_positions[valid], snapshot.ghost_frames[valid, 6, :3, 3], atol=1e-5),
-             what="the ghosts drawn for the drag's last solution")
+    wait_for(lambda: (lambda s: np.allclose(ghost.batched_positions[s.solution.valid], s.ghost_frames[s.solution.valid, 6, :3, 3],
+                                            atol=1e-5))(session.state.last), what="the ghosts drawn for the drag's last solution")
 
-
-def test_switching_branch_from_the_list(open_page, app):
-    page, session = open_page()
+    # another branch from the list
     page.get_by_role("button", name="3", exact=True).click()
     wait_for(lambda: session.state.last.slot == 2, what="branch 3")
-    snapshot = session.state.last
-    np.testing.assert_allclose(session.arm.fk(snapshot.q), snapshot.target, atol=1e-9)
+    np.testing.assert_allclose(session.arm.fk(session.state.last.q), session.state.last.target, atol=1e-9)
     wait_for(lambda: page.get_by_text("3: shoulder left, elbow up, wrist flipped").count() > 0, what="the status line")
 
+    # typed angles: a bad one is refused in the browser and changes nothing; good ones are applied
+    before = session.state.q
+    type_text(page, session.joints.typed, "30, 45, abc, 50, 60, 80")
+    page.locator(dom_id(session.joints.apply_typed)).click()
+    wait_for(lambda: page.get_by_text("'abc' is not a number").count() > 0, what="the refusal message")
+    assert page.get_by_text("Not accepted").count() > 0
+    np.testing.assert_array_equal(session.state.q, before)
+    type_text(page, session.joints.typed, "10, 20, 30, 40, 50, 60")
+    page.locator(dom_id(session.joints.apply_typed)).click()
+    wait_for(lambda: np.allclose(np.degrees(session.state.q), [10, 20, 30, 40, 50, 60]), what="the typed angles")
 
-def test_singularity_overlay(open_page, app):
-    page, session = open_page()
+    # the singularity overlay: det J as MathML, and the wrist button puts the arm on s5 = 0
     set_checkbox(page, session.singularity.enabled, True)
-    wait_for(lambda: session.singularity.enabled.value and session.scene_views.overlay.cylinder.visible, what="the overlay")
+    wait_for(lambda: session.scene_views.overlay.cylinder.visible, what="the overlay")
     wait_for(lambda: page.locator("math").count() > 0 and page.locator("math").first.is_visible(), what="det J as MathML")
     assert "234" in page.locator("math").first.text_content()
     page.get_by_role("button", name="wrist", exact=True).click()
@@ -90,50 +113,30 @@ def test_singularity_overlay(open_page, app):
     assert session.singularity.colors[2] == (220, 38, 38)
     wait_for(lambda: page.get_by_text("s5 = +0.0000").count() > 0, what="the wrist factor readout")
     bar = page.locator(".gauge-wrist").first
-    assert bar.evaluate("e => getComputedStyle(e).backgroundColor") == "rgb(220, 38, 38)"
+    wait_for(lambda: bar.evaluate("e => getComputedStyle(e).backgroundColor") == "rgb(220, 38, 38)", what="a red wrist gauge")
     assert bar.evaluate("e => e.style.width") in ("0%", "0.0%")
 
-
-def test_workspace_cloud(open_page, app):
-    page, session = open_page()
-    before = canvas_pixels(page)
+    # the workspace cloud, and its legend
+    before = settled_canvas(page)
     set_checkbox(page, session.workspace.enabled, True)
-    wait_for(lambda: session.workspace._cloud is not None, timeout=30, what="the cloud")
+    wait_for(lambda: session.workspace._cloud is not None, what="the cloud")
     assert len(session.workspace._cloud.points) == 200_000
-    page.wait_for_timeout(2500)
-    after = canvas_pixels(page)
-    assert changed(before, after) > 0.05, "the point cloud did not show up"
+    canvas_changed(page, before, 0.05, "the point cloud to show")
     wait_for(lambda: page.get_by_text("Colour = manipulability |det J|").count() > 0, what="the legend")
     set_checkbox(page, session.workspace.enabled, False)
     wait_for(lambda: session.workspace._cloud is None, what="the cloud to go")
 
+    # all of it without a byte from any other host (the open_page fixture checks every page so)
+    url = f"http://127.0.0.1:{light_app.port}"
+    assert not foreign_requests(page, url) and any(r.startswith("ws://") for r in page.requests)
 
-def test_bad_typed_angles_are_refused_in_the_browser(open_page, app):
-    page, session = open_page()
-    before = session.state.q
-    field = text_field(page, session.joints.typed)
-    field.fill("30, 45, abc, 50, 60, 80")
-    field.press("Enter")
-    page.wait_for_timeout(200)
-    page.locator(dom_id(session.joints.apply_typed)).click()
-    wait_for(lambda: page.get_by_text("'abc' is not a number").count() > 0, what="the refusal message")
-    assert page.get_by_text("Not accepted").count() > 0
-    np.testing.assert_array_equal(session.state.q, before)
-    # and the app still works for this student
-    field.fill("10, 20, 30, 40, 50, 60")
-    field.press("Enter")
-    page.wait_for_timeout(200)
-    page.locator(dom_id(session.joints.apply_typed)).click()
-    wait_for(lambda: np.allclose(np.degrees(session.state.q), [10, 20, 30, 40, 50, 60]), what="the typed angles")
-
-
-def test_two_students_have_their_own_arms(open_page, app):
-    page_a, session_a = open_page(viewport=SMALL_VIEWPORT)
-    page_b, session_b = open_page(known=1, viewport=SMALL_VIEWPORT)
-    assert session_a is not session_b
-    step_slider(page_a, session_a.joints.sliders[1], "ArrowLeft", 43.0)
-    wait_for(lambda: abs(np.degrees(session_a.state.q[1]) - 43.0) < 1e-6, what="student A's shoulder")
-    np.testing.assert_allclose(np.degrees(session_b.state.q), [30, 45, 26, 50, 60, 80])
-    page_b.close()
-    wait_for(lambda: len(app.sessions) == 1, what="student B's session to be freed")
-    assert session_b.closed
+    # a second student, next to the first: an arm of their own; closing the tab frees it
+    mine = session.state.q
+    other_page, other = open_page(known=1, drawn=False)
+    assert other is not session
+    step_slider(other_page, other.joints.sliders[1], "ArrowLeft", 44.0)
+    wait_for(lambda: abs(np.degrees(other.state.q[1]) - 44.0) < 1e-6, what="the second student's shoulder")
+    np.testing.assert_array_equal(session.state.q, mine)  # the first's arm did not move
+    other_page.close()
+    wait_for(lambda: len(light_app.sessions) == 1, what="the second student's session to be freed")
+    assert other.closed and not session.closed

@@ -1,6 +1,7 @@
-"""Readable in a lecture hall, in real headless Chromium: framing, lecture mode, ghosts a student can tell apart.
+"""Readable in a lecture hall, in real headless Chromium: framing, lecture mode, ghosts a student can tell apart,
+the workspace's sections and the branch-count map.
 
-Each test fails on the app before issue 15 (the panel floated over the arm, the type was
+Each check failed on the app before issue 15 (the panel floated over the arm, the type was
 13 px, the ghosts had no numbers and a deutan pair of colours, nothing marked the floor).
 """
 
@@ -11,14 +12,20 @@ import pytest
 
 from app.server import TeachingServer
 from app.style import DANGER_RED, GHOST_OPACITY
-
-from .browser_support import SMALL_VIEWPORT, canvas_pixels, changed_mask, choose, dom_id, project, set_checkbox, text_field, wait_for
-from .colour_vision import MIN_DELTA_E, closest_pair
+from ur10dev.browser import (
+    HANG_TIMEOUT_MS, canvas_changed, changed_mask, choose, click, dom_id, neighbourhood, project, set_checkbox,
+    settled_canvas, type_text,
+)
+from ur10dev.colour_vision import MIN_DELTA_E, closest_pair
+from ur10dev.waiting import wait_for
 
 pytestmark = pytest.mark.browser
 
 #: The gizmo's pixels over the solid arm's (home pose, overlay on). At its old 0.3 m: 0.15; now 0.04.
 GIZMO_MAX_SHARE = 0.08
+#: The window sizes a lecturer meets: a laptop, a projector's 1024 × 768, and 1280 × 720 at 150 % zoom
+#: (853 × 480 CSS pixels: what the page lays out and the camera frames).
+WINDOWS = ({"width": 1400, "height": 900}, {"width": 1024, "height": 768}, {"width": 853, "height": 480})
 
 
 def in_canvas(page, session, points) -> bool:
@@ -40,66 +47,61 @@ def open_view_folder(page, session) -> None:
     """Unfold the "View" folder (folded by default) unless it is open already."""
     if not page.locator(dom_id(session.camera.frame_button)).is_visible():
         page.get_by_text("View", exact=True).first.click()
-        page.locator(dom_id(session.camera.frame_button)).wait_for(state="visible", timeout=10_000)
-
+        page.locator(dom_id(session.camera.frame_button)).wait_for(state="visible", timeout=HANG_TIMEOUT_MS)
 
 
 def font_px(locator) -> float:
     return float(locator.evaluate("e => parseFloat(getComputedStyle(e).fontSize)"))
 
 
-def neighbourhood(pixels: np.ndarray, u: float, v: float, box: dict, radius: int = 4) -> np.ndarray:
-    """The (2r+1)² pixels around page point (u, v), from a canvas screenshot."""
-    x, y = int(round(u - box["x"])), int(round(v - box["y"]))
-    return pixels[max(y - radius, 0): y + radius + 1, max(x - radius, 0): x + radius + 1].reshape(-1, 3)
+def forward(session) -> np.ndarray:
+    camera = session.client.camera
+    f = np.asarray(camera.look_at) - np.asarray(camera.position)
+    return f / np.linalg.norm(f)
 
 
-# ---------------------------------------------------------------------- framing
-
-
-@pytest.mark.parametrize("viewport, zoom", [
-    ({"width": 1400, "height": 900}, 1.0),
-    ({"width": 1024, "height": 768}, 1.0),
-    ({"width": 1280, "height": 720}, 1.5),
-], ids=["1400x900", "1024x768", "1280x720-at-150%"])
-def test_the_arm_is_framed_beside_the_panel(open_page, viewport, zoom):
-    page, session = open_page(viewport=viewport, zoom=zoom)
-    canvas = page.locator("canvas").first.bounding_box()
-    slider = page.locator(dom_id(session.joints.sliders[0])).bounding_box()
-    assert slider["x"] >= canvas["x"] + canvas["width"] - 1, "the panel covers part of the 3D view"
-    wait_for(lambda: in_canvas(page, session, key_points(session)), what="the arm and target framed in the canvas")
+def test_the_arm_is_framed_beside_the_panel_in_any_window(open_page):
+    """At each window size the panel sits beside the 3D view, not over it, and the camera frames the
+    arm and its target in what is left; "Frame the arm" and the standard views do too."""
+    page, session = open_page(viewport=WINDOWS[0], drawn=False)
+    for window in WINDOWS:
+        page.set_viewport_size(window)
+        wait_for(lambda: abs(page.locator("canvas").first.bounding_box()["width"] - session.client.camera.image_width) <= 1,
+                 what=f"the browser to report its new canvas at {window}")
+        canvas = page.locator("canvas").first.bounding_box()
+        slider = page.locator(dom_id(session.joints.sliders[0])).bounding_box()
+        assert slider["x"] >= canvas["x"] + canvas["width"] - 1, f"the panel covers part of the 3D view at {window}"
+        wait_for(lambda: in_canvas(page, session, key_points(session)), what=f"the arm and target framed at {window}")
     # the stretched pose reaches highest: "Frame the arm" brings the target (the gizmo) back in view
     page.get_by_role("button", name="Stretched", exact=True).click()
     wait_for(lambda: np.allclose(np.degrees(session.state.q), [45, 90, 0, -90, 0, 60]), what="the stretched pose")
     open_view_folder(page, session)
     page.locator(dom_id(session.camera.frame_button)).click()
     wait_for(lambda: in_canvas(page, session, key_points(session)), what="the stretched arm framed")
-
-
-def test_camera_presets(open_page):
-    page, session = open_page()
-    open_view_folder(page, session)
+    # the standard views
     choose(page, session.camera.direction, "Top (x–y plane)")
-
-    def looking_down() -> bool:
-        camera = session.client.camera
-        forward = np.asarray(camera.look_at) - np.asarray(camera.position)
-        return forward[2] / np.linalg.norm(forward) < -0.95
-
-    wait_for(looking_down, what="the camera to look down on the arm")
+    wait_for(lambda: forward(session)[2] < -0.95, what="the camera to look down on the arm")
     wait_for(lambda: in_canvas(page, session, key_points(session)), what="the arm framed from above")
     choose(page, session.camera.direction, "Front (x–z plane)")
     wait_for(lambda: abs(np.asarray(session.client.camera.position)[2] - np.asarray(session.client.camera.look_at)[2]) < 1e-3,
              what="a level view from the front")
 
 
-# ---------------------------------------------------------------------- lecture mode
+def test_lecture_mode_for_the_presenter_and_the_class(open_page, playwright):
+    """``--lecture``: 20 px type and thick gizmo lines in the teacher's browser, the panel folds away
+    and comes back, each browser can switch it off; the class's browsers get it too. (This server
+    draws the default view, not the light one: the real UR10 with its shading and shadows.)"""
+    from ur10dev.browser import SMALL_VIEWPORT, canvas_pixels, launch, open_app
 
-
-def test_lecture_mode(open_page):
     server = TeachingServer(port=0, lecture=True)
     try:
-        page, session = open_page(server=server)
+        page, session = open_page(server=server, drawn=False)
+
+        def charcoal_caps() -> int:  # the charcoal joint caps and the aluminium arm, not just the white page
+            pixels = canvas_pixels(page)
+            return int(((pixels.max(axis=-1) < 110) & (pixels.max(axis=-1) - pixels.min(axis=-1) < 20)).sum())
+
+        wait_for(lambda: charcoal_caps() > 500, what="the default view's arm on screen")
         text = page.get_by_text("Drag the gizmo at the flange", exact=False).first
         assert font_px(text) >= 20, "lecture mode's panel type is under 20 px"
         assert session.ik_target.gizmo.line_width >= 6
@@ -115,50 +117,45 @@ def test_lecture_mode(open_page):
         assert session.ik_target.gizmo.line_width < 6
     finally:
         server.stop()
-
-
-def test_lecture_mode_reaches_the_viewers(playwright):
-    from .browser_support import CONNECTED, launch
-
-    server = TeachingServer(port=0, shared=True, lecture=True)
+    server = TeachingServer(port=0, shared=True, lecture=True, light=True)
+    browser = launch(playwright)
     try:
-        browser = launch(playwright)
-        page = browser.new_page(viewport=SMALL_VIEWPORT)
-        page.goto(f"http://127.0.0.1:{server.port}")
-        page.wait_for_selector(CONNECTED, state="attached", timeout=30_000)
+        page = open_app(browser, f"http://127.0.0.1:{server.port}", SMALL_VIEWPORT)
         watching = page.get_by_text("You are watching", exact=False).first
-        watching.wait_for(timeout=30_000)
-        assert font_px(watching) >= 20
-        browser.close()
+        watching.wait_for(timeout=HANG_TIMEOUT_MS)
+        assert font_px(watching) >= 20, "a viewer's type is under 20 px in lecture mode"
     finally:
+        browser.close()
         server.stop()
 
 
-# ---------------------------------------------------------------------- ghosts
+def test_the_ghosts_the_floor_and_the_gizmo_as_a_student_sees_them(open_page):
+    """Numbers by the elbows, colours a colour-blind student tells apart, one branch or one choice at a
+    time, a solid arm no ghost tints, a red mark under an arm through the floor, a gizmo that hides
+    nothing, and the real UR10 with the schematic one choice away."""
+    from app.ik_target import flipped
+    from app.meshes import REAL, SCHEMATIC
 
-
-def test_every_ghost_has_its_number_by_its_elbow(open_page):
     page, session = open_page()
     branches = session.scene_views.branches
+    box = page.locator("canvas").first.bounding_box()
+
+    # every ghost has its number by its elbow (viser draws 3D labels on the canvas: hiding them must change it there)
     snapshot = session.state.last
     valid = snapshot.solution.valid.nonzero()[0]
     wait_for(lambda: all(branches.labels[k].visible for k in valid), what="the numbers")
     assert [branches.labels[k].text for k in valid] == [("arm: " if k == snapshot.slot else "") + str(k + 1) for k in valid]
-    page.wait_for_timeout(800)
-    box = page.locator("canvas").first.bounding_box()
-    with_numbers = canvas_pixels(page)
+    with_numbers = settled_canvas(page)
     for label in branches.labels:
         label.visible = False
-    page.wait_for_timeout(1200)
-    without = canvas_pixels(page)
+    without = canvas_changed(page, with_numbers, 0.001, "the numbers to go")
     for k in valid:
         u, v = project(session.client.camera, branches.labels[k].position, box)
-        changed = np.abs(neighbourhood(with_numbers, u, v - 12, box, 10) - neighbourhood(without, u, v - 12, box, 10)).sum(axis=1)
-        assert (changed > 60).sum() > 8, f"no number drawn above branch {k + 1}'s elbow"
+        differ = np.abs(neighbourhood(with_numbers, u, v - 12, box, 10) - neighbourhood(without, u, v - 12, box, 10)).sum(axis=1)
+        assert (differ > 60).sum() > 8, f"no number drawn above branch {k + 1}'s elbow"
+    session.redraw()  # the numbers back
 
-
-def test_the_table_shows_colours_a_colour_blind_student_can_tell_apart(open_page):
-    page, _ = open_page()
+    # the branch table's colours stay apart for protan, deutan and normal vision, and washed out
     swatches = page.locator("span[style*='border-radius']")
     wait_for(lambda: swatches.count() >= 8, what="the branch table's swatches")
     colours = []
@@ -168,18 +165,67 @@ def test_the_table_shows_colours_a_colour_blind_student_can_tell_apart(open_page
     distance, a, b, vision, washed = closest_pair(colours, GHOST_OPACITY)
     assert distance >= MIN_DELTA_E, f"branches {a} and {b} look alike ({vision}, washed {washed}): ΔE {distance:.1f}"
 
+    # one branch, or the branch one choice away
+    choose(page, session.ik_target.focus, "Only branch 3")
+    wait_for(lambda: branches.shown.nonzero()[0].tolist() == [2], what="only branch 3")
+    wait_for(lambda: [k for k in range(8) if branches.labels[k].visible] == sorted({2, session.state.last.slot}),
+             what="the numbers of branch 3 and the arm's alone")
+    choose(page, session.ik_target.focus, "Flip the elbow")
+    arm = session.state.last.slot
+    wait_for(lambda: branches.shown.nonzero()[0].tolist() == [flipped(arm, "elbow")], what="the elbow's other branch")
+    choose(page, session.ik_target.focus, session.ik_target.focus.options[0])
+    wait_for(lambda: branches.shown.sum() > 1, what="every branch again")
 
-def test_the_solid_arm_is_never_tinted_by_a_ghost(open_page):
-    """At the zero pose three branches coincide with the arm; shown alone, the arm still looks like the arm."""
-    page, session = open_page()
+    # the gizmo, drawn over everything, is small beside the arm and leaves the overlay's P5 visible
+    session.ik_target.show_ghosts.value = False
+    set_checkbox(page, session.singularity.enabled, True)
+    wait_for(lambda: session.scene_views.overlay.p5.visible, what="the overlay")
+    everything = settled_canvas(page)
+    session.ik_target.gizmo.visible = False
+    no_gizmo = canvas_changed(page, everything, 0.0005, "the gizmo to go")
+    for node in session.scene_views.robot.links:
+        node.visible = False
+    no_arm = canvas_changed(page, no_gizmo, 0.01, "the arm to go")
+    gizmo = changed_mask(no_gizmo, everything).sum()
+    arm_pixels = changed_mask(no_arm, no_gizmo).sum()
+    assert gizmo < GIZMO_MAX_SHARE * arm_pixels, f"the gizmo covers {gizmo / arm_pixels:.0%} as much of the view as the arm"
+    u, v = project(session.client.camera, session.state.last.geometry.p5, box)
+    assert np.abs(neighbourhood(everything, u, v, box, 3) - neighbourhood(no_gizmo, u, v, box, 3)).sum(axis=1).mean() < 40, \
+        "the gizmo covers P5"
+    for node in session.scene_views.robot.links:
+        node.visible = True
+    session.ik_target.gizmo.visible = True
+    set_checkbox(page, session.singularity.enabled, False)
+
+    # the arm on screen is UR's meshes (hiding them empties it); "Schematic" draws a different outline
+    robot = session.scene_views.robot
+    session.camera.frame()
+    real = settled_canvas(page)
+    for mesh in robot.meshes[REAL]:
+        mesh.visible = False
+    empty = canvas_changed(page, real, 0.01, "the real meshes to go")
+    choose(page, session.arm_model.dropdown, SCHEMATIC)
+    wait_for(lambda: robot.model == SCHEMATIC, what="the schematic arm")
+    schematic = canvas_changed(page, empty, 0.01, "the schematic arm to show")
+    real_arm, schematic_arm = changed_mask(empty, real), changed_mask(empty, schematic)
+    assert real_arm.sum() > 5000, "the real meshes drew (almost) nothing"
+    assert schematic_arm.sum() > 5000, "the schematic arm drew (almost) nothing"
+    differ = (real_arm ^ schematic_arm).sum() / real_arm.sum()
+    # the schematic is built to the same sizes: 8 % of the pixels differ at the home pose
+    assert differ > 0.03, f"the two models cover the same pixels ({differ:.1%} differ)"
+    choose(page, session.arm_model.dropdown, REAL)
+    wait_for(lambda: all(m.visible for m in robot.meshes[REAL]), what="the real arm back")
+
+    # at the zero pose three branches coincide with the arm; shown alone, the arm still looks like the arm
     page.get_by_role("button", name="Zero", exact=True).click()
     wait_for(lambda: np.allclose(session.state.q, 0.0), what="the zero pose")
-    snapshot = session.state.last
+    session.ik_target.show_ghosts.value = True
 
     def twins_of(snapshot) -> list[int]:
         return [k for k in snapshot.solution.valid.nonzero()[0] if k != snapshot.slot
                 and np.abs(snapshot.ghost_frames[k, :, :3, 3] - snapshot.frames[:, :3, 3]).max() < 1e-3]
 
+    snapshot = session.state.last
     if not twins_of(snapshot):  # the branch the arm came from decides its branch here: take one that has twins
         grouped = next(k for k in snapshot.solution.valid.nonzero()[0]
                        if sum(np.abs(snapshot.ghost_frames[j, :, :3, 3] - snapshot.ghost_frames[k, :, :3, 3]).max() < 1e-3
@@ -192,173 +238,83 @@ def test_the_solid_arm_is_never_tinted_by_a_ghost(open_page):
     wait_for(lambda: session.scene_views.branches.focus == f"Only branch {twins[0] + 1}", what="the focus")
     assert not session.scene_views.branches.shown.any()
     session.camera.frame()
-    page.wait_for_timeout(1500)
-    pixels = canvas_pixels(page)
-    box = page.locator("canvas").first.bounding_box()
+    pixels = settled_canvas(page)
     for frame in (3, 4):  # the elbow and the first wrist joint, in the middle of the arm
         u, v = project(session.client.camera, snapshot.frames[frame, :3, 3], box)
         patch = neighbourhood(pixels, u, v, box, 3)
         chroma = patch.max(axis=1) - patch.min(axis=1)
         assert np.median(chroma) < 25, f"the arm at joint {frame} is tinted: median chroma {np.median(chroma)}"
+    choose(page, session.ik_target.focus, session.ik_target.focus.options[0])
 
-
-def test_focus_on_one_branch_or_one_choice(open_page):
-    page, session = open_page()
-    branches = session.scene_views.branches
-    choose(page, session.ik_target.focus, "Only branch 3")
-    wait_for(lambda: branches.shown.nonzero()[0].tolist() == [2], what="only branch 3")
-    wait_for(lambda: [k for k in range(8) if branches.labels[k].visible] == sorted({2, session.state.last.slot}),
-             what="the numbers of branch 3 and the arm's alone")
-    choose(page, session.ik_target.focus, "Flip the elbow")
-    arm = session.state.last.slot
-    from app.ik_target import flipped
-
-    wait_for(lambda: branches.shown.nonzero()[0].tolist() == [flipped(arm, "elbow")], what="the elbow's other branch")
-
-
-def test_an_arm_through_the_floor_is_marked(open_page):
-    page, session = open_page()
-    field = text_field(page, session.joints.typed)
-    field.fill("0, -90, 0, -90, 0, 0")  # hanging down below its base
-    field.press("Enter")
-    page.wait_for_timeout(200)
+    # an arm through the floor gets a red disc under its lowest point
+    type_text(page, session.joints.typed, "0, -90, 0, -90, 0, 0")  # hanging down below its base
     page.locator(dom_id(session.joints.apply_typed)).click()
     wait_for(lambda: session.state.last.through_floor[0], what="the arm below the floor")
     wait_for(lambda: page.get_by_text("through the floor", exact=False).count() > 0, what="the table's warning")
-    page.wait_for_timeout(1200)
-    pixels = canvas_pixels(page)
-    red = (np.abs(pixels - np.array(DANGER_RED)).sum(axis=-1) < 90)
-    assert red.sum() > 150, "no red floor marker on screen"
+
+    def red_pixels() -> int:
+        return int((np.abs(settled_canvas(page) - np.array(DANGER_RED)).sum(axis=-1) < 90).sum())
+
+    wait_for(lambda: red_pixels() > 150, what="a red floor marker on screen")
 
 
-def test_the_gizmo_is_sized_to_the_arm(open_page):
-    """The gizmo, drawn over everything, is small beside the arm and leaves the overlay's P5 visible."""
-    page, session = open_page()
-    session.ik_target.show_ghosts.value = False
-    set_checkbox(page, session.singularity.enabled, True)
-    wait_for(lambda: session.scene_views.overlay.p5.visible, what="the overlay")
-    page.wait_for_timeout(1200)
-    box = page.locator("canvas").first.bounding_box()
-    everything = canvas_pixels(page)
-    session.ik_target.gizmo.visible = False
-    page.wait_for_timeout(1200)
-    no_gizmo = canvas_pixels(page)
-    for node in session.scene_views.robot.links:
-        node.visible = False
-    page.wait_for_timeout(1200)
-    no_arm = canvas_pixels(page)
-    gizmo = changed_mask(no_gizmo, everything).sum()
-    arm = changed_mask(no_arm, no_gizmo).sum()
-    assert gizmo < GIZMO_MAX_SHARE * arm, f"the gizmo covers {gizmo / arm:.0%} as much of the view as the arm"
-    u, v = project(session.client.camera, session.state.last.geometry.p5, box)
-    assert np.abs(neighbourhood(everything, u, v, box, 3) - neighbourhood(no_gizmo, u, v, box, 3)).sum(axis=1).mean() < 40, \
-        "the gizmo covers P5"
-
-
-def test_the_real_ur10_is_drawn_and_the_schematic_is_one_choice_away(open_page):
-    """The arm on screen is UR's meshes (hiding them empties it); "Schematic" draws a different outline."""
-    from app.meshes import REAL, SCHEMATIC
-
-    page, session = open_page()
-    robot = session.scene_views.robot
-    session.ik_target.show_ghosts.value = False
-    wait_for(lambda: not session.scene_views.branches.shown.any(), what="the ghosts hidden")
-    session.camera.frame()
-    page.wait_for_timeout(1500)
-    real = canvas_pixels(page)
-    for mesh in robot.meshes[REAL]:
-        mesh.visible = False
-    page.wait_for_timeout(1200)
-    empty = canvas_pixels(page)
-    choose(page, session.arm_model.dropdown, SCHEMATIC)
-    wait_for(lambda: robot.model == SCHEMATIC, what="the schematic arm")
-    page.wait_for_timeout(1200)
-    schematic = canvas_pixels(page)
-    real_arm = changed_mask(empty, real)
-    schematic_arm = changed_mask(empty, schematic)
-    assert real_arm.sum() > 5000, "the real meshes drew (almost) nothing"
-    assert schematic_arm.sum() > 5000, "the schematic arm drew (almost) nothing"
-    differ = (real_arm ^ schematic_arm).sum() / real_arm.sum()
-    # the schematic is built to the same sizes: 8 % of the pixels differ at the home pose
-    assert differ > 0.03, f"the two models cover the same pixels ({differ:.1%} differ)"
-
-
-# ---------------------------------------------------------------------- workspace sections
-
-
-def test_sections_are_seen_square_on_and_sampled_in_their_plane(open_page):
-    page, session = open_page()
-    workspace = session.workspace
-    set_checkbox(page, workspace.enabled, True)
-    wait_for(lambda: workspace._cloud is not None, timeout=60, what="the cloud")
-    choose(page, workspace.section, "horizontal section (top view)")
-    wait_for(lambda: workspace._cloud is not None and len(workspace._cloud.points) == 40_000, timeout=60,
-             what="a section sampled in its plane")
-    np.testing.assert_allclose(workspace._cloud.points[:, 2].astype(float), 0.6, atol=2e-4)  # sent as float16
-    assert "manipulability" in workspace.legend_label.text  # beside the cloud in 3D, for viewers too
-
-    def forward() -> np.ndarray:
-        camera = session.client.camera
-        f = np.asarray(camera.look_at) - np.asarray(camera.position)
-        return f / np.linalg.norm(f)
-
-    wait_for(lambda: forward()[2] < -0.95, what="the camera looking down on the section")
-    choose(page, workspace.section, "vertical section (side view)")
-    azimuth = session.state.q[0]
-    in_plane = np.array([np.cos(azimuth), np.sin(azimuth), 0.0])
-    wait_for(lambda: abs(forward()[2]) < 0.05 and abs(forward() @ in_plane) < 0.05,
-             what="the camera facing the vertical section")
-    choose(page, workspace.section, "cut-away (the half behind the arm's plane)")
-    normal = np.array([-np.sin(azimuth), np.cos(azimuth), 0.0])
-    wait_for(lambda: workspace._cloud is not None and len(workspace._cloud.points) < 150_000, timeout=60, what="the cut-away")
-    assert (workspace._cloud.points.astype(float) @ normal <= 1e-3).all()
-    wait_for(lambda: forward() @ normal < -0.95, what="the camera facing the cut face")
-
-
-def test_the_hull_is_translucent_the_arm_shows_through_it(open_page):
+def test_the_workspace_seen_square_on_through_its_sections_and_the_branch_count_map(open_page):
+    """Sections sampled in their plane and faced square-on, a translucent hull the arm shows through,
+    and the branch-count map drawn for the gizmo's orientation."""
     from app.workspace import HULL
 
     page, session = open_page()
-    session.ik_target.show_ghosts.value = False
-    workspace = session.workspace
-    choose(page, workspace.section, HULL)
-    set_checkbox(page, workspace.enabled, True)
-    wait_for(lambda: workspace._cloud is not None, what="the hull")
-    page.wait_for_timeout(1500)
-    with_hull = canvas_pixels(page)
-    workspace._cloud.visible = False
-    page.wait_for_timeout(1200)
-    without = canvas_pixels(page)
-    changed = np.abs(with_hull - without).sum(axis=-1) > 12
-    assert changed.mean() > 0.25, f"the hull covers only {changed.mean():.0%} of the view"
     box = page.locator("canvas").first.bounding_box()
+    workspace = session.workspace
+    session.ik_target.show_ghosts.value = False
+
+    # the sections: sampled in their plane, and the camera turns to face each
+    choose(page, workspace.count, "50 k")  # more than a section's 40 000 points: the section is capped
+    set_checkbox(page, workspace.enabled, True)
+    wait_for(lambda: workspace._cloud is not None, what="the cloud")
+    choose(page, workspace.section, "horizontal section (top view)")
+    wait_for(lambda: workspace._cloud is not None and len(workspace._cloud.points) == 40_000, what="a section sampled in its plane")
+    np.testing.assert_allclose(workspace._cloud.points[:, 2].astype(float), 0.6, atol=2e-4)  # sent as float16
+    assert "manipulability" in workspace.legend_label.text  # beside the cloud in 3D, for viewers too
+    wait_for(lambda: forward(session)[2] < -0.95, what="the camera looking down on the section")
+    choose(page, workspace.section, "vertical section (side view)")
+    azimuth = session.state.q[0]
+    in_plane = np.array([np.cos(azimuth), np.sin(azimuth), 0.0])
+    wait_for(lambda: abs(forward(session)[2]) < 0.05 and abs(forward(session) @ in_plane) < 0.05,
+             what="the camera facing the vertical section")
+    choose(page, workspace.section, "cut-away (the half behind the arm's plane)")
+    normal = np.array([-np.sin(azimuth), np.cos(azimuth), 0.0])
+    wait_for(lambda: workspace._cloud is not None and not workspace._clouds.busy
+             and (workspace._cloud.points.astype(float) @ normal <= 1e-3).all(), what="the cut-away: the half behind the plane")
+    wait_for(lambda: forward(session) @ normal < -0.95, what="the camera facing the cut face")
+
+    # the hull is translucent: the arm shows through it
+    choose(page, workspace.section, HULL)
+    wait_for(lambda: workspace._cloud is not None and workspace.section.value == HULL and not workspace._clouds.busy,
+             what="the hull")
+    session.camera.frame()
+    with_hull = settled_canvas(page)
+    workspace._cloud.visible = False
+    without = canvas_changed(page, with_hull, 0.1, "the hull to go")
+    assert (np.abs(with_hull - without).sum(axis=-1) > 12).mean() > 0.25, "the hull covers little of the view"
     snapshot = session.state.last
     for frame in (3, 4):  # the elbow and the first wrist joint: seen through the hull, barely tinted
         u, v = project(session.client.camera, snapshot.frames[frame, :3, 3], box)
         tint = np.abs(neighbourhood(with_hull, u, v, box, 3) - neighbourhood(without, u, v, box, 3)).sum(axis=1)
         assert np.median(tint) < 90, f"the arm at joint {frame} is hidden by the hull (colour moved by {np.median(tint)})"
+    set_checkbox(page, workspace.enabled, False)
+    wait_for(lambda: workspace._cloud is None, what="the hull to go")
 
-
-def test_the_branch_count_map_is_drawn_and_follows_the_orientation(open_page):
-    page, session = open_page()
-    session.ik_target.show_ghosts.value = False
+    # the branch-count map covers the view, and changes when the tool turns upside down
     view = session.reach_map
-    before = canvas_pixels(page)
+    before = settled_canvas(page)
     page.get_by_text("Reachable with this orientation", exact=True).first.click()
     set_checkbox(page, view.enabled, True)
     wait_for(lambda: view.image is not None, what="the map")
-    page.wait_for_timeout(2000)  # the camera turns square-on to the plane
-    first = canvas_pixels(page)
-    assert (np.abs(first - before).sum(axis=-1) > 30).mean() > 0.3, "the map covers little of the view"
+    first = canvas_changed(page, before, 0.3, "the map to cover the view")  # the camera turns square-on to the plane
     assert page.get_by_text("Branches that reach each point", exact=False).count() > 0  # the legend
-    # the tool turned upside down (typed): the map is recomputed and looks different
-    field = text_field(page, session.ik_target.typed_pose)
-    field.fill("600, -200, 500, 180, 0, 0")
-    field.press("Enter")
-    page.wait_for_timeout(200)
-    page.locator(dom_id(session.ik_target.move_button)).click()
-    wait_for(lambda: view.shown_key is not None and view.shown_key[0] == session.state.last.target.tobytes()
-             and abs(session.state.last.target[0, 3] - 0.6) < 1e-9, what="the map for the typed orientation")
-    page.wait_for_timeout(1500)
-    second = canvas_pixels(page)
-    assert (np.abs(second - first).sum(axis=-1) > 30).mean() > 0.05, "the map did not change with the orientation"
+    type_text(page, session.ik_target.typed_pose, "600, -200, 500, 180, 0, 0")
+    click(page, session.ik_target.move_button, lambda: abs(session.state.last.target[0, 3] - 0.6) < 1e-9, "the typed target")
+    wait_for(lambda: view.shown_key is not None and view.shown_key[0] == session.state.last.target.tobytes(),
+             what="the map for the typed orientation")
+    canvas_changed(page, first, 0.05, "the map to change with the orientation")

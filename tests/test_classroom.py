@@ -11,7 +11,7 @@ import pytest
 
 from app.classroom import EXPLORER, LOCKOUT_SECONDS, MAX_WRONG_CODES, PRESENTER, VIEWER, make_join_code, normalise_code
 from .server_support import become_presenter, member_of, until
-from .viser_client import ViserClient
+from ur10dev.viser_client import ViserClient
 
 pytestmark = pytest.mark.server
 
@@ -33,13 +33,11 @@ def test_viewers_watch_and_the_code_makes_a_presenter(classroom):
         assert member_of(classroom, 0).role == VIEWER
         # a wrong code is refused, with a message, and changes nothing
         await student.set_gui("Join code", "AAA-AAA")
-        await asyncio.sleep(0.1)
-        await student.set_gui("Become presenter", True)
+        await student.set_gui("Become presenter", True)  # one connection's messages are handled in order
         await until(lambda: any("not the join code" in body for _, body in student.received.notifications), what="refusal")
         assert classroom.classroom.presenter is None
         # the right code (lower case, no dash) makes the teacher the presenter
         await teacher.set_gui("Join code", classroom.classroom.code.lower().replace("-", ""))
-        await asyncio.sleep(0.1)
         await teacher.set_gui("Become presenter", True)
         await until(lambda: teacher.gizmo_owner is not None, what="the presenter's gizmo")
         await until(lambda: member_of(classroom, 0).role == PRESENTER, what="the presenter's role")
@@ -48,7 +46,7 @@ def test_viewers_watch_and_the_code_makes_a_presenter(classroom):
         state = classroom.classroom.state
         target = state.last.flange.copy()
         target[:3, 3] += (0.05, -0.04, 0.03)
-        from .viser_client import wxyz_of
+        from ur10dev.viser_client import wxyz_of
 
         before = len(student.received.ghost_flanges)
         await teacher.drag_target(target[:3, 3], wxyz_of(target), "start")
@@ -65,7 +63,12 @@ def test_viewers_watch_and_the_code_makes_a_presenter(classroom):
         forged[:3, 3] += 0.1
         student.gizmo_owner = teacher.gizmo_owner
         await student.drag_target(forged[:3, 3], wxyz_of(forged), "start")
-        await asyncio.sleep(0.5)
+        # the next message on the student's connection is handled after the forged drag: once
+        # its answer is back, the drag has been dispatched (and dropped)
+        refusals = len(student.received.notifications)
+        await student.set_gui("Join code", "BBB-BBB")
+        await student.set_gui("Become presenter", True)
+        await until(lambda: len(student.received.notifications) > refusals, what="the student's next message answered")
         assert np.allclose(state.last.target, target, atol=1e-9)
         for client in (teacher, student):
             await client.close()
@@ -93,7 +96,6 @@ def test_a_viewer_gets_each_presenter_update_whole(classroom, monkeypatch):
         teacher = await ViserClient(f"http://127.0.0.1:{classroom.port}").connect()
         student = await ViserClient(f"http://127.0.0.1:{classroom.port}").connect()
         await become_presenter(teacher, classroom)
-        await asyncio.sleep(0.5)
         frames: dict[float, set[str]] = collections.defaultdict(set)  # arrival time -> scene nodes updated
         handle = student._handle
 
@@ -103,12 +105,15 @@ def test_a_viewer_gets_each_presenter_update_whole(classroom, monkeypatch):
             handle(now, message, buffers)
 
         student._handle = record
+        state = classroom.classroom.state
         for k in range(12):  # typed targets: a click, handled on viser's thread pool, not the drag worker
             await teacher.set_gui("Target x y z (mm), α β γ (°)", f"{600 + 10 * k}, -200, 500, 180, 0, 0")
-            await asyncio.sleep(0.05)
             await teacher.set_gui("Move target here", True)
-            await asyncio.sleep(0.15)
-        await asyncio.sleep(0.5)
+            x = (600 + 10 * k) / 1000
+            await until(lambda x=x: abs(state.last.target[0, 3] - x) < 1e-9, what=f"typed target {k + 1}")
+            # and the viewer has been sent its redraw: the ghosts' flanges at the new target
+            await until(lambda x=x: any(abs(flanges[:, 0] - x).min() < 1e-5 for _, flanges in student.received.ghost_flanges[-3:]),
+                        what=f"the viewer's redraw {k + 1}")
         for client in (teacher, student):
             await client.close()
         return list(frames.values())
@@ -156,8 +161,7 @@ def test_handing_over_and_leaving(classroom):
         second = await ViserClient(f"http://127.0.0.1:{classroom.port}").connect()
         for client in (first, second):
             await client.set_gui("Join code", classroom.classroom.code)
-        await asyncio.sleep(0.1)
-        await first.set_gui("Become presenter", True)
+        await first.set_gui("Become presenter", True)  # after its own code: one connection's messages are handled in order
         await until(lambda: member_of(classroom, 0).role == PRESENTER, what="first presenter")
         await second.set_gui("Become presenter", True)
         await until(lambda: member_of(classroom, 1).role == PRESENTER, what="hand-over")
@@ -177,10 +181,12 @@ def test_wrong_codes_lock_the_code_for_everyone_with_backoff(classroom, caplog):
     """The lock-out was per connection: a reload reset it, and 396 guesses/s were possible across fresh connections."""
 
     async def guess(client, code):
+        """One try, as a student types it; returns once the server has answered it."""
+        answers = len(client.received.notifications)
         await client.set_gui("Join code", code)
-        await asyncio.sleep(0.05)
         await client.set_gui("Become presenter", True)
-        await asyncio.sleep(0.1)
+        await until(lambda: len(client.received.notifications) > answers or classroom.classroom.presenter is not None,
+                    what="the server's answer to a guess")
 
     async def scenario():
         url = f"http://127.0.0.1:{classroom.port}"
@@ -192,12 +198,10 @@ def test_wrong_codes_lock_the_code_for_everyone_with_backoff(classroom, caplog):
         await guess(second, classroom.classroom.code)  # even the right code, for a while, from anyone
         await until(lambda: any("too many wrong codes" in body.lower() for _, body in second.received.notifications), what="lock-out")
         assert classroom.classroom.presenter is None
-        assert 0 < classroom.classroom.locked_until - time.monotonic() <= LOCKOUT_SECONDS
-        # the next lock-out lasts twice as long
+        # the next lock-out lasts twice as long (the lengths are checked in the log below)
         classroom.classroom.locked_until = 0.0
         for _ in range(MAX_WRONG_CODES):
             await guess(second, "WRONG2")
-        assert LOCKOUT_SECONDS < classroom.classroom.locked_until - time.monotonic() <= 2 * LOCKOUT_SECONDS
         # once it is over, the right code works and the backoff starts again
         classroom.classroom.locked_until = 0.0
         await guess(second, classroom.classroom.code)
@@ -208,7 +212,8 @@ def test_wrong_codes_lock_the_code_for_everyone_with_backoff(classroom, caplog):
     with caplog.at_level("WARNING", logger="app.classroom"):
         asyncio.run(scenario())
     assert sum("a wrong join code from browser" in r.getMessage() for r in caplog.records) == 2 * MAX_WRONG_CODES
-    assert sum("the join code is locked" in r.getMessage() for r in caplog.records) == 2
+    locks = [r.args[0] for r in caplog.records if "the join code is locked" in r.getMessage()]
+    assert locks == [LOCKOUT_SECONDS, 2 * LOCKOUT_SECONDS]
 
 
 def test_a_browser_that_left_cannot_become_the_presenter(classroom):
@@ -231,9 +236,9 @@ def test_the_presenter_shows_the_class_another_arm(classroom):
     from app.classroom import UR10_ROOTS
     from app.course_arms.scene import EXPLORER_ROOT, ROOT
     from app.course_arms.session import CourseArmSession
-    from app.arm_picker import SWITCH_INTERVAL, UR10
+    from app.arm_picker import UR10
     from app.session import ClientSession
-    from .viser_client import wxyz_of
+    from ur10dev.viser_client import wxyz_of
 
     stanford = "Stanford arm (RRP + wrist)"
 
@@ -245,7 +250,7 @@ def test_the_presenter_shows_the_class_another_arm(classroom):
         await become_presenter(teacher, classroom)
         presenter = member_of(classroom, 0)
         ur10_q = room.state.q.copy()
-        await asyncio.sleep(SWITCH_INTERVAL)
+        await until(room.can_switch, what="the class's arm to be ready for a change")
         await teacher.set_gui("Which arm", stanford)
         await until(lambda: room.course is not None and isinstance(presenter.session, CourseArmSession),
                     what="the class's Stanford arm")
@@ -277,7 +282,7 @@ def test_the_presenter_shows_the_class_another_arm(classroom):
                     what="the explorer's own arm moved")
         assert np.abs(room.course.arm.fk(room.course.state.last.q) - T).max() < 1e-9  # the class's did not
         # back to the UR10: where the presenter left it; the explorer now hides the shared UR10
-        await asyncio.sleep(SWITCH_INTERVAL)
+        await until(room.can_switch, what="the class's arm to be ready for a change")
         await teacher.set_gui("Which arm", UR10)
         await until(lambda: room.course is None and isinstance(presenter.session, ClientSession), what="the UR10 back")
         np.testing.assert_array_equal(room.state.q, ur10_q)
@@ -304,7 +309,7 @@ def test_the_shared_ur10_lives_under_the_roots_an_explorer_hides(classroom):
 def test_the_class_is_shown_the_desktop_arm_played_and_explored(classroom):
     """The presenter shows the 3-DOF desktop arm: the class sees it move along the course's path
     with its live panel; an explorer drives a copy of it and the class's stays hidden for them."""
-    from app.arm_picker import DESKTOP, SWITCH_INTERVAL, UR10
+    from app.arm_picker import DESKTOP, UR10
     from app.course_arms.desktop_arm import EXPLORER_ROOT, ROOT, DesktopArmSession
     from app.session import ClientSession
 
@@ -314,7 +319,7 @@ def test_the_class_is_shown_the_desktop_arm_played_and_explored(classroom):
         room = classroom.classroom
         await become_presenter(teacher, classroom)
         presenter = member_of(classroom, 0)
-        await asyncio.sleep(SWITCH_INTERVAL)
+        await until(room.can_switch, what="the class's arm to be ready for a change")
         await teacher.set_gui("Which arm", DESKTOP)
         await until(lambda: isinstance(presenter.session, DesktopArmSession), what="the class's desktop arm")
         assert presenter.session.state is room.course.state and presenter.session.scene is room.course.scene
@@ -341,7 +346,7 @@ def test_the_class_is_shown_the_desktop_arm_played_and_explored(classroom):
         await until(lambda: abs(explorer.session.state.last.q[2] - np.pi / 2) < 1e-9, what="the explorer's own arm moved")
         np.testing.assert_array_equal(room.course.state.last.q, class_q)  # the class's did not
         # and back to the UR10
-        await asyncio.sleep(SWITCH_INTERVAL)
+        await until(room.can_switch, what="the class's arm to be ready for a change")
         await teacher.set_gui("Which arm", UR10)
         await until(lambda: room.course is None and isinstance(presenter.session, ClientSession), what="the UR10 back")
         await teacher.close()

@@ -15,8 +15,9 @@ from viser import _messages as messages
 
 from app.__main__ import parse_args
 from app.server import lan_addresses
-from .app_process import running_app
-from .viser_client import ViserClient
+from ur10dev.app_process import running_app
+from ur10dev.viser_client import ViserClient
+from ur10dev.waiting import until
 
 pytestmark = pytest.mark.server
 
@@ -66,14 +67,14 @@ def _children(pid: int) -> list[int]:
 @pytest.mark.skipif(not Path("/proc/self/task").exists(), reason="reads /proc")
 def test_the_app_starts_no_helpers_and_frees_its_port_when_killed():
     """A share request used to start two tunnel processes that outlived the app and kept its port."""
-    async def visit(url: str) -> None:
+    async def visit(url: str, app) -> None:
         client = await ViserClient(url).connect()
         await client.send(messages.ShareUrlRequest())
-        await asyncio.sleep(0.5)
+        await until(lambda: any("ignored a ShareUrlRequest" in line for line in app.output), what="the request to be dropped")
         await client.close()
 
     with running_app("--shared") as app:
-        asyncio.run(visit(app.url))
+        asyncio.run(visit(app.url, app))
         assert _children(app.process.pid) == []
         port = int(re.search(r":(\d+)", app.url).group(1))
         app.process.send_signal(signal.SIGKILL)

@@ -8,6 +8,8 @@ from ur10core import FLANGE_TURN, Arm, flange_from_controller, flange_to_control
 
 from .conftest import random_joints, wrapped_difference
 
+pytestmark = pytest.mark.core
+
 REFERENCES = {"ur10": ur_analytic_ik.ur10, "ur10e": ur_analytic_ik.ur10e}
 
 

@@ -12,12 +12,11 @@ import viser
 from app.arm_picker import ARM_CHOICES, CUSTOM, UR10
 from app.course_arms.panel import branches_markdown, dh_table_markdown
 from app.course_arms.session import CourseArmSession
-from app.server import SWITCH_INTERVAL
 from app.session import ClientSession
 from ur10core.serial import SerialArm
 
 from .server_support import session_of, until, url
-from .viser_client import ViserClient, wxyz_of
+from ur10dev.viser_client import ViserClient, wxyz_of
 
 pytestmark = pytest.mark.server
 
@@ -34,7 +33,7 @@ async def pick(app, client: ViserClient, label: str, kind: type):
     client_id = int(client.gizmo_owner)
     await until(lambda: "Which arm" in client.gui and client.gui["Which arm"]["uuid"] not in client.received.removed_gui,
                 what="the arm picker")
-    await asyncio.sleep(SWITCH_INTERVAL)  # one change of arm per interval
+    await until(lambda: app.can_switch(client_id), what="the arm to be ready for a change")  # one change per interval
     await client.set_gui("Which arm", label)
     await until(lambda: isinstance(session_for(app, client_id), kind)
                 and (kind is ClientSession or session_for(app, client_id).arm.name == ARM_CHOICES[label]),
@@ -144,14 +143,13 @@ def test_a_typed_dh_table_becomes_an_arm_with_numerical_ik(app):
         # a bad row is refused, naming the line
         await until(lambda: "Rows" in client.gui, what="the editor")
         await client.set_gui("Rows", "500 0 0 0 R\n400 0 0 R")
-        await asyncio.sleep(0.1)
-        await client.set_gui("Build this arm", True)
+        await client.set_gui("Build this arm", True)  # one connection's messages are handled in order
         await until(lambda: any("line 2: a row is five entries" in body.lower() for _, body in client.received.notifications),
                     what="the refusal")
         assert session_for(app, client_id) is session
         # a planar 2R arm
         await client.set_gui("Rows", "500 0 0 0 R\n400 0 0 0 R")
-        await asyncio.sleep(SWITCH_INTERVAL)
+        await until(lambda: app.can_switch(client_id), what="the arm to be ready for a change")
         await client.set_gui("Build this arm", True)
         await until(lambda: session_for(app, client_id) is not session
                     and getattr(session_for(app, client_id), "arm", None) is not None
@@ -233,13 +231,11 @@ def test_a_row_shown_on_the_arm_and_the_walkthrough(app):
         await until(lambda: session.walkthrough.step == 0 and not scene.x_axes.visible, what="step 1")
         assert scene.z_axes.visible and scene.highlight_row is None
         for expected in (1, 2):
-            await asyncio.sleep(0.1)
             await client.set_gui("Step", "Next ▶")
             await until(lambda: session.walkthrough.step == expected, what=f"step {expected + 1}")
         await until(lambda: scene.x_axes.visible and scene.highlight_row == 1, what="row 1 drawn")
         await until(lambda: "Row 1" in session.walkthrough.text.content and "Step 3 of 8" in session.walkthrough.text.content,
                     what="row 1's text")
-        await asyncio.sleep(0.1)
         await client.set_gui("Step", "Stop")
         await until(lambda: session.walkthrough.step == -1 and scene.highlight_row is None, what="the walkthrough stopped")
         await client.close()
@@ -276,15 +272,15 @@ def test_the_kr210_gripper_pose_in_the_urdf_convention(app):
         T = session.arm.fk(q)
         # typed in the simulation model's convention, the arm goes to the same gripper pose
         await client.set_gui("ROS/Gazebo gripper convention", True)
-        await asyncio.sleep(0.1)
+        # the box is rewritten in the new convention: a student types once it has been
+        await until(lambda: session.gripper.typed.value == pose_text(kr210_to_urdf(session.state.last.target)),
+                    what="the box in the URDF convention")
         await client.set_gui("x y z (mm) roll pitch yaw (°)", pose_text(kr210_to_urdf(T)))
-        await asyncio.sleep(0.1)
         await client.set_gui("Go to this pose", True)
         await until(lambda: np.abs(session.arm.fk(session.state.last.q) - T).max() < 1e-3, what="the arm at the pose")
         await until(lambda: "URDF" in session.gripper.readout.content, what="the readout in the URDF convention")
         # a pose that is not six numbers is refused
         await client.set_gui("x y z (mm) roll pitch yaw (°)", "1 2 3")
-        await asyncio.sleep(0.1)
         await client.set_gui("Go to this pose", True)
         await until(lambda: any("six numbers" in body for _, body in client.received.notifications), what="the refusal")
         np.testing.assert_allclose(parse_pose(pose_text(T)), T, atol=1e-3)

@@ -18,7 +18,7 @@ from ur10core.three_dof import FOREARM, UPPER_ARM
 
 from .server_support import until, url
 from .test_course_arms_app import pick
-from .viser_client import ViserClient
+from ur10dev.viser_client import ViserClient
 
 
 def test_the_readout_names_each_factor_and_flags_the_one_near_zero():
@@ -80,7 +80,6 @@ def test_the_desktop_arm_is_picked_driven_played_and_searched(app):
         await until(lambda: "F √(l5² + l1²) = 18.60 N·m" in session.forces.result.content, what="the course's closed form")
         # sideways the closed form does not hold, and the result does not claim it
         await client.set_gui("Force direction", "+x")
-        await asyncio.sleep(0.1)
         await client.set_gui("Find the pose that needs the largest ‖τ‖", True)
         await until(lambda: "Largest ‖τ‖" in session.forces.result.content and "√" not in session.forces.result.content,
                     what="the sideways search")

@@ -9,6 +9,8 @@ from ur10core import Arm
 from ur10core.differential import DAMPING_THRESHOLD, MAX_DAMPING
 from ur10core.serial import PRESETS
 
+pytestmark = pytest.mark.core
+
 ARMS = ["course", "ur10", *PRESETS]
 
 

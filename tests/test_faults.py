@@ -1,6 +1,6 @@
 """Faults and bad input: the server keeps serving everyone else and frees what the departed held.
 
-Headless clients speak viser's own protocol (``tests/viser_client.py``), so a test can
+Headless clients speak viser's own protocol (``ur10dev/viser_client.py``), so a test can
 do what a browser never would: vanish mid-drag, stop reading, send garbage.
 """
 
@@ -14,11 +14,10 @@ import numpy as np
 import pytest
 from viser import _messages as messages
 
-from app.server import Janitor
-
-from .app_process import running_app
-from .server_support import drag_a_little, session_of, until, url
-from .viser_client import ViserClient, wxyz_of
+from ur10dev.app_process import running_app
+from .server_support import drag_a_little, session_of, until, url, wait_for
+from ur10dev.viser_client import BROWSER_SEND_INTERVAL, ViserClient, encode, wxyz_of
+from ur10dev.waiting import HANG_TIMEOUT
 
 pytestmark = pytest.mark.server
 
@@ -33,7 +32,7 @@ def test_clients_vanishing_mid_drag(app):
             T[:3, 3] += (0.003, 0.0, 0.0)
             for c in clients:
                 await c.drag_target(T[:3, 3], wxyz_of(T), "start" if k == 0 else "update")
-            await asyncio.sleep(0.05)
+            await asyncio.sleep(BROWSER_SEND_INTERVAL)
         for c in leaving:  # ...when three laptops drop off the network
             c.abort()
         targets = await asyncio.gather(*(drag_a_little(c, s) for c, s in zip(staying, sessions[3:])))
@@ -94,17 +93,16 @@ def test_a_client_that_stops_reading_does_not_hold_up_the_others(app):
         # ...while a student next to it drags and is answered promptly
         active = await ViserClient(url(app)).connect()
         session = session_of(app, active)
-        sends = []
         T = session.state.last.flange.copy()
         for k in range(40):
             T[:3, 3] += (0.002, 0.001, 0.0)
-            sends.append((await active.drag_target(T[:3, 3], wxyz_of(T), "start" if k == 0 else "update"), T[:3, 3].copy()))
-            await asyncio.sleep(0.05)
-        await asyncio.sleep(0.5)
-        latencies = [x for x in active.latencies(sends) if x is not None]
-        assert len(latencies) > 35 and np.percentile(latencies, 90) < 0.5
+            await active.drag_target(T[:3, 3], wxyz_of(T), "start" if k == 0 else "update")
+            await asyncio.sleep(BROWSER_SEND_INTERVAL)
+        # answered: the student's screen shows the last target (how fast, beside a frozen client, is bench_hostile's)
+        await until(lambda: any((np.abs(flanges - T[:3, 3]).max(axis=-1) < 1e-5).any()
+                                for _, flanges in active.received.ghost_flanges[-3:]), what="the drag's last target on screen")
         # the server gives up on the frozen client (websocket pings go unanswered) and frees it
-        await until(lambda: frozen_session.closed, timeout=90, what="the frozen client to be dropped")
+        await until(lambda: frozen_session.closed, what="the frozen client to be dropped")
         assert len(app.sessions) == 1
         await active.close()
 
@@ -118,9 +116,15 @@ def test_garbage_and_out_of_range_input_is_refused(app):
         bad_session, good_session = session_of(app, bad), session_of(app, good)
         before = bad_session.state.q
         slider = bad.gui["θ1 base"]["uuid"]
+
+        async def one_by_one(kind: str, frame: bytes) -> None:
+            """Send, and wait until the gate has handed it on: it would fold back-to-back values for one widget into the last."""
+            passed = app.gate.passed[kind]
+            await bad.send_raw(frame)
+            await until(lambda: app.gate.passed[kind] > passed, what=f"the gate to pass a {kind}")
+
         for value in (float("nan"), float("inf"), 1e9, -725.0):
-            await bad.send(messages.GuiUpdateMessage(slider, {"value": value}))
-            await asyncio.sleep(0.05)  # (the gate would fold back-to-back values for one slider into the last)
+            await one_by_one("GuiUpdateMessage", encode(messages.GuiUpdateMessage(slider, {"value": value})))
         await bad.send(messages.GuiUpdateMessage(slider, {"value": "forty"}))  # viser cannot even cast it
         await bad.send(messages.GuiUpdateMessage(bad.gui["Use branch"]["uuid"], {"value": "99"}))
         await bad.send(messages.GuiUpdateMessage(bad.gui["All six (°)"]["uuid"], {"value": "1, 2, x, 4, 5, 6"}))
@@ -131,14 +135,13 @@ def test_garbage_and_out_of_range_input_is_refused(app):
             ((1e300, 1e300, 1e300), (1.0, 0.0, 0.0, 0.0)),
             ((0.5, 0.2, 0.5), (np.inf, 0.0, 0.0, 0.0)),
         ):
-            await bad.drag_target(position, wxyz, "update")
-            await asyncio.sleep(0.05)
-        await asyncio.sleep(1.0)
+            await one_by_one("TransformControlsUpdateMessage", bad.drag_step(position, wxyz).update)
         # nothing of it reached the arm, and the student was told
+        await until(lambda: [title for title, _ in bad.received.notifications].count("Not accepted") >= 5,
+                    what="the refusals")
         np.testing.assert_array_equal(bad_session.state.q, before)
         assert np.isfinite(bad_session.state.last.target).all()
         titles = [title for title, _ in bad.received.notifications]
-        assert titles.count("Not accepted") >= 5, bad.received.notifications
         assert not any(title == "Something went wrong" for title in titles)
         # the slider was put back on the arm's angle, on the server and in the student's browser
         await until(lambda: bad_session.joints.sliders[0].value == 30.0, what="the slider to be restored")
@@ -169,7 +172,9 @@ def test_students_never_see_each_others_arms(app):
         bob_owner = bob.gizmo_owner
         alice_target = await drag_a_little(alice, session_of(app, alice), steps=8, offset=(0.01, 0.0, 0.0))
         await until(lambda: np.allclose(session_of(app, alice).state.last.target, alice_target, atol=1e-9), what="alice")
-        await asyncio.sleep(0.3)
+        # alice's screen has her last drag: a leak to bob would have been sent with it
+        await until(lambda: any((np.abs(flanges - alice_target[:3, 3]).max(axis=-1) < 1e-5).any()
+                                for _, flanges in alice.received.ghost_flanges[-3:]), what="alice's screen")
         # every scene message bob received is his own or the shared, unchanging scene
         assert bob.owners_seen <= {bob_owner, ""}
         for _, flanges in bob.received.ghost_flanges:
@@ -187,9 +192,9 @@ def test_memory_returns_to_baseline_after_a_class_leaves():
 
     async def one_class(app) -> None:
         try:
-            clients = await asyncio.gather(*(ViserClient(app.url).connect(timeout=120) for _ in range(30)))
+            clients = await asyncio.gather(*(ViserClient(app.url).connect() for _ in range(30)))
         except TimeoutError:  # seen once under a CI run's load: what was the server doing?
-            raise AssertionError("a student was not served within 120 s; the app's last output:\n"
+            raise AssertionError("a student was not served; the app's last output:\n"
                                  + "".join(app.output[-40:])) from None
         T0 = np.eye(4)
         for k in range(20):
@@ -198,23 +203,26 @@ def test_memory_returns_to_baseline_after_a_class_leaves():
                 T = T0.copy()
                 T[:3, 3] = (0.6 + 0.01 * k, 0.1 + 0.005 * i, 0.6)
                 await c.drag_target(T[:3, 3], wxyz_of(T), "update")
-            await asyncio.sleep(0.05)
+            await asyncio.sleep(BROWSER_SEND_INTERVAL)
         await asyncio.gather(*(c.close() for c in clients))
+
+    def swept_after(app, sweeps: int) -> dict:
+        """The server's first report showing nobody left and a sweep of the janitor after ``sweeps``:
+        the memory of those who left has been handed back (reading before that raced it, and the
+        figure swung by tens of MiB)."""
+        return wait_for(lambda: (lambda r: r if r["clients"] == 0 and r["sessions"] == 0 and r["janitor_sweeps"] > sweeps
+                                 else None)(app.metrics(time.time(), timeout=HANG_TIMEOUT)), what="the janitor's sweep after everyone left")
 
     with running_app() as app:
         async def run():
             warm = await ViserClient(app.url).connect()  # first client: caches, imports, the lot
             await warm.close()
-            await asyncio.sleep(2)
-            baseline = await asyncio.to_thread(app.metrics, time.time())
+            baseline = await asyncio.to_thread(swept_after, app, 0)
             rss = []
             for _ in range(3):
+                before = (await asyncio.to_thread(app.metrics, time.time(), HANG_TIMEOUT))["janitor_sweeps"]
                 await one_class(app)
-                # the janitor returns the memory Janitor.DELAY s after the last departure is handled:
-                # read after it has (reading at 3 s raced it, and the figure swung by tens of MiB)
-                await asyncio.sleep(Janitor.DELAY + 2.0)
-                report = await asyncio.to_thread(app.metrics, time.time())
-                assert report["sessions"] == 0 and report["clients"] == 0
+                report = await asyncio.to_thread(swept_after, app, before)
                 rss.append(report["rss_bytes"])
             return baseline["rss_bytes"], rss
 

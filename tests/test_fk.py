@@ -7,6 +7,8 @@ from ur10core import Arm
 
 from .conftest import random_joints
 
+pytestmark = pytest.mark.core
+
 
 def test_zero_state_matches_course_example(course):
     # docs/kinematics.md §3: all joints 0°.

@@ -2,7 +2,7 @@
 
 Each test here was a finding of the security review against the app before the gate
 (``app/gate.py``) and fails without it. The clients are headless and speak viser's own
-protocol (``tests/viser_client.py``), so they can send what no browser would.
+protocol (``ur10dev/viser_client.py``), so they can send what no browser would.
 """
 
 from __future__ import annotations
@@ -25,7 +25,7 @@ from app.gate import MAX_MESSAGE_BYTES, MESSAGE_BURST, Gate, TokenBucket, gated_
 from app.server import TeachingServer
 
 from .server_support import drag_a_little, session_of, until, url
-from .viser_client import ViserClient, encode
+from ur10dev.viser_client import ViserClient, encode
 
 pytestmark = pytest.mark.server
 
@@ -38,13 +38,11 @@ def resident_mib() -> float:
     raise RuntimeError("no VmRSS")
 
 
-async def click_latency(client: ViserClient, session) -> float:
-    """Seconds from a student's slider change to the server having applied it."""
+async def click_is_applied(client: ViserClient, session) -> None:
+    """A student's slider change reaches their arm (how fast, beside an attack, is bench_hostile's)."""
     before = session.state.q[0]
-    start = time.perf_counter()
     await client.set_gui("θ1 base", float(np.degrees(before)) + 1.0)
-    await until(lambda: abs(session.state.q[0] - before) > 1e-6, timeout=30, what="the slider change")
-    return time.perf_counter() - start
+    await until(lambda: abs(session.state.q[0] - before) > 1e-6, what="the slider change")
 
 
 # ---------------------------------------------------------------------------- messages, by kind
@@ -82,11 +80,16 @@ def test_garbage_is_dropped(raw):
 
 
 def test_token_bucket():
-    bucket = TokenBucket(rate=10.0, burst=3)
+    now = [100.0]
+    bucket = TokenBucket(rate=10.0, burst=3, clock=lambda: now[0])
     assert [bucket.take() for _ in range(4)] == [True, True, True, False]
-    assert 0.05 < bucket.wait_time() <= 0.1
-    time.sleep(0.11)
-    assert bucket.take()
+    assert bucket.wait_time() == pytest.approx(0.1)
+    now[0] += 0.06
+    assert not bucket.take() and bucket.wait_time() == pytest.approx(0.04)
+    now[0] += 0.05
+    assert bucket.take() and not bucket.take()
+    now[0] += 3600
+    assert [bucket.take() for _ in range(4)] == [True, True, True, False]  # never more than the burst
 
 
 # ---------------------------------------------------------------------------- against a server
@@ -101,15 +104,12 @@ def test_a_huge_message_closes_its_connection_before_it_is_decoded(app):
         attacker = await ViserClient(url(app)).connect()
         session_of(app, attacker)  # its arm is built: what follows is the bomb alone
         bomb = b"\xdd" + (10_000_000).to_bytes(4, "big") + b"\x90" * 10_000_000  # array32 of 10 M empty arrays
-        await asyncio.sleep(0.5)
         before = resident_mib()  # the bomb's own 10 MB in this process (the test's) counted already
-        started = time.perf_counter()
         await attacker.send_raw(bomb)
-        await until(lambda: attacker._websocket.close_code is not None, timeout=30, what="the attacker's connection to close")
+        await until(lambda: attacker._websocket.close_code is not None, what="the attacker's connection to close")
         assert attacker._websocket.close_code == 1009  # message too big
-        assert time.perf_counter() - started < 2.0
         assert resident_mib() - before < 30  # the frame is refused as it arrives, never decoded
-        assert await click_latency(student, session) < 1.0  # everyone else carries on
+        await click_is_applied(student, session)  # everyone else carries on
         await student.close()
 
     asyncio.run(scenario())
@@ -121,7 +121,7 @@ def test_the_limit_is_what_the_app_needs(app):
     async def scenario():
         client = await ViserClient(url(app)).connect()
         await client.send_raw(msgspec.msgpack.encode({"type": "Nothing", "pad": "x" * (MAX_MESSAGE_BYTES - 100)}))
-        await asyncio.sleep(0.3)
+        await until(lambda: app.gate.dropped["Nothing"] == 1, what="the message to be read, and dropped by kind")
         assert client._websocket.close_code is None
         await client.send_raw(msgspec.msgpack.encode({"type": "Nothing", "pad": "x" * MAX_MESSAGE_BYTES}))
         await until(lambda: client._websocket.close_code == 1009, what="the connection to close")
@@ -147,7 +147,8 @@ def test_no_client_can_open_a_public_tunnel(app, monkeypatch):
         for _ in range(3):
             await client.send(messages.ShareUrlRequest())
             await client.send(messages.ShareUrlDisconnect())
-        await asyncio.sleep(0.5)
+        await until(lambda: app.gate.dropped["ShareUrlRequest"] == app.gate.dropped["ShareUrlDisconnect"] == 3,
+                    what="the requests to be dropped")
         assert client._websocket.close_code is None  # dropped quietly: the rest of the page still works
         await client.close()
 
@@ -166,7 +167,7 @@ def test_form_broadcasts_are_not_replayed_to_the_class(app):
         uuid = next(iter(sender.gui.values()))["uuid"]
         for _ in range(50):
             await sender.send(messages.GuiFormDirtyMessage(uuid))
-        await asyncio.sleep(0.5)
+        await until(lambda: app.gate.dropped["GuiFormDirtyMessage"] == 50, what="the broadcasts to be dropped")
         assert len(app.server._websock_server._broadcast_buffer.message_from_id) == persistent
         assert app.gate.dropped["GuiFormDirtyMessage"] == 50
         await sender.close()
@@ -184,7 +185,7 @@ def test_uploads_are_refused(app):
         for k in range(5):
             await client.send(messages.FileTransferStartUpload(uuid, f"t{k}", "f.bin", "x", 1000, 49_000_000))
             await client.send(messages.FileTransferPart(uuid, f"t{k}", 0, b"x" * 1000))
-        await asyncio.sleep(0.3)
+        await until(lambda: app.gate.dropped["FileTransferPart"] == 5, what="the uploads to be dropped")
         assert app.gate.dropped["FileTransferStartUpload"] == 5 and app.gate.dropped["FileTransferPart"] == 5
         assert not getattr(app.server.gui, "_current_file_upload_states", {})
         await client.close()
@@ -261,16 +262,16 @@ def test_a_slider_flood_costs_one_update_per_tick(app):
         applied = []
         flooded.observers.append(lambda snapshot: applied.append(snapshot.q[1]))
         frames = [encode(messages.GuiUpdateMessage(uuid, {"value": float(k % 90)})) for k in range(20_000)]
-        started = time.perf_counter()
+        started = time.monotonic()
         for frame in frames:
             await flooder.send_raw(frame)
-        sent = time.perf_counter() - started
-        latency = await click_latency(student, session)
-        await asyncio.sleep(1.0)
-        assert latency < 0.5, f"a click took {latency:.2f} s during the flood"
-        # at most the burst plus the rate while the flood lasted, and the newest value last
-        assert len(applied) <= MESSAGE_BURST + gate_module.MESSAGES_PER_SECOND * (sent + 1.5)
+        await click_is_applied(student, session)  # the student next to the flood is served
         await until(lambda: abs(np.degrees(flooded.state.q[1]) - (19_999 % 90)) < 1e-6, what="the newest value")
+        lasted = time.monotonic() - started
+        # The gate passed at most its burst plus its rate for as long as the flood was being
+        # handled: 20 000 would have been applied without it. (A slow machine only makes
+        # the bound looser, never the test fail: this is a count, not a timing.)
+        assert len(applied) <= MESSAGE_BURST + gate_module.MESSAGES_PER_SECOND * lasted + 1, (len(applied), lasted)
         await flooder.close()
         await student.close()
 
@@ -289,9 +290,8 @@ def test_a_drag_flood_does_not_slow_the_others(app):
         for step in steps[1:]:
             await flooder._websocket.send(step.update)
         target = await drag_a_little(student, session, steps=5)
-        started = time.perf_counter()
+        # served beside the flood (how fast is bench_hostile's flood row)
         await until(lambda: np.allclose(session.state.last.target, target, atol=1e-9), what="the student's drag")
-        assert time.perf_counter() - started < 1.0
         await flooder.close()
         await student.close()
 

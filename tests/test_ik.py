@@ -16,6 +16,8 @@ from ur10core.ik import solve_reference
 
 from .conftest import random_joints, wrapped_difference
 
+pytestmark = pytest.mark.core
+
 N_ROUND_TRIP = 5000
 
 

@@ -11,6 +11,8 @@ from ur10core.tolerances import WRIST_TOLERANCE
 
 from .conftest import random_joints, wrapped_difference
 
+pytestmark = pytest.mark.core
+
 
 def near_singular_joints(arm: Arm, n: int, seed: int) -> tuple[np.ndarray, np.ndarray]:
     """n joint vectors near the singularities, and which: bit 1 elbow, 2 wrist, 4 shoulder.
@@ -227,7 +229,7 @@ def test_regular_wrist_beyond_reach_keeps_the_plain_reason(course):
 @pytest.mark.parametrize("name", ["ur10", "ur10e"])
 def test_ur_analytic_ik_finds_nothing_we_miss_on_wrist_singular_poses(name):
     """Where UR's own solver (ur-analytic-ik, test-only) finds a solution, so do we; and ours are exact."""
-    ur_analytic_ik = pytest.importorskip("ur_analytic_ik")
+    import ur_analytic_ik
     arm = Arm.preset(name)
     solver = getattr(ur_analytic_ik, name)
     q = _exactly_wrist_singular(arm, 2000, seed=32)
@@ -249,6 +251,26 @@ def test_ur_analytic_ik_finds_nothing_we_miss_on_wrist_singular_poses(name):
                 assert sol.valid[k, pair] or sol.valid[k, pair ^ 2]  # at s5 = 0 the two wrist slots coincide
     assert theirs_found > 100
     assert np.abs(arm.fk(np.where(sol.valid[..., None], sol.q, 0.0)) - T[:, None]).max(axis=(-2, -1))[sol.valid].max() < 1e-9
+
+
+@pytest.mark.parametrize("name", ["course", "ur10"])
+def test_a_target_a_nanometre_beyond_the_stretched_elbow(name):
+    """docs/kinematics.md §4.3: a wrist centre up to 1 nm beyond the elbow's reach is put on the
+    boundary (the pose moves by at most that much); 5 nm beyond is out of reach, "too far"."""
+    arm = Arm.preset(name)
+    q = np.array([0.3, -0.7, 0.0, 0.4, 1.0, 0.2])  # θ3 = 0: stretched, slots 5 and 6
+    frames = arm.frames(q)
+    outward = frames[4, :3, 3] - frames[1, :3, 3]
+    outward /= np.linalg.norm(outward)
+    for beyond, reached in ((0.5e-9, True), (5e-9, False)):
+        T = arm.fk(q)
+        T[:3, 3] += beyond * outward
+        sol = arm.ik(T, hint=q)
+        assert sol.valid[4] == sol.valid[5] == reached, beyond
+        if reached:
+            assert np.abs(arm.fk(sol.q[4]) - T).max() <= 1e-9
+        else:
+            assert sol.failure[4] == sol.failure[5] == ELBOW_TOO_FAR
 
 
 def test_wrist_tolerance_follows_from_the_turn_tolerance():

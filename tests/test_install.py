@@ -15,7 +15,7 @@ from pathlib import Path
 
 import pytest
 
-from .app_process import serving
+from ur10dev.app_process import serving
 
 ROOT = Path(__file__).resolve().parent.parent
 pytestmark = pytest.mark.install

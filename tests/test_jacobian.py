@@ -5,6 +5,8 @@ import pytest
 
 from .conftest import random_joints
 
+pytestmark = pytest.mark.core
+
 
 def _finite_difference_jacobian(arm, q: np.ndarray, h: float = 1e-6) -> np.ndarray:
     """Central differences: linear part dp/dq, angular part from (dR/dq) R^T = [w]x."""

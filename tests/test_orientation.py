@@ -14,6 +14,8 @@ from ur10core.orientation import (
     zyx_euler,
 )
 
+pytestmark = pytest.mark.core
+
 
 def _rx(a):
     return np.array([[1, 0, 0], [0, np.cos(a), -np.sin(a)], [0, np.sin(a), np.cos(a)]])

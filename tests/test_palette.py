@@ -1,11 +1,11 @@
-"""The eight ghost colours stay apart for colour-blind students and on a washed-out projector (tests/colour_vision.py)."""
+"""The eight ghost colours stay apart for colour-blind students and on a washed-out projector (ur10dev/colour_vision.py)."""
 
 from __future__ import annotations
 
 import numpy as np
 
 from app.style import ALUMINIUM, GHOST_OPACITY, JOINT_CAP_GREY, SLOT_COLORS
-from tests.colour_vision import MIN_DELTA_E, cielab, closest_pair, linear, seen
+from ur10dev.colour_vision import MIN_DELTA_E, cielab, closest_pair, linear, seen
 
 def test_a_pure_colour_is_where_cielab_puts_it():
     np.testing.assert_allclose(cielab(linear([255, 255, 255])), [100, 0, 0], atol=0.05)

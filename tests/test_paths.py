@@ -8,6 +8,8 @@ import pytest
 from ur10core import Arm
 from ur10core.paths import joint_interpolation, straight_line
 
+pytestmark = pytest.mark.core
+
 
 def distance_from_line(points: np.ndarray, start: np.ndarray, end: np.ndarray) -> np.ndarray:
     direction = (end - start) / np.linalg.norm(end - start)

@@ -1,13 +1,14 @@
 """One browser's session against a real server: the state bugs a first tour of the app found.
 
-Each test failed before its fix. The clients are headless (``tests/viser_client.py``).
+Each test failed before its fix. The clients are headless (``ur10dev/viser_client.py``).
 """
 
 from __future__ import annotations
 
 import asyncio
 import gc
-import time
+import threading
+import types
 import weakref
 
 import numpy as np
@@ -17,7 +18,8 @@ from app import joint_panel, workers
 from app.style import number, sentence
 
 from .server_support import become_presenter, drag_a_little, member_of, session_of, until, url
-from .viser_client import ViserClient
+from ur10dev.viser_client import ViserClient
+from ur10dev.waiting import HANG_TIMEOUT
 
 pytestmark = pytest.mark.server
 
@@ -30,8 +32,7 @@ def test_a_typed_target_moves_the_gizmo_and_the_red_halo_there(app):
         session = session_of(app, client)
         for typed, reachable in (("600, -200, 500, 180, 0, 0", True), ("0, 0, 0, 0, 0, 0", False), ("2500, 0, 400, 0, 0, 0", False)):
             await client.set_gui("Target x y z (mm), α β γ (°)", typed)
-            await asyncio.sleep(0.1)
-            await client.set_gui("Move target here", True)
+            await client.set_gui("Move target here", True)  # one connection's messages are handled in order
             point = np.array([float(v) for v in typed.split(",")[:3]]) / 1000
             await until(lambda p=point: np.allclose(session.state.last.target[:3, 3], p), what="the typed target")
             assert session.state.last.reachable == reachable
@@ -70,12 +71,7 @@ def test_explore_and_back_leaves_nothing_behind(classroom):
             assert session.workspace._cloud is None and "/workspace" in student.received.removed_nodes
             dead = weakref.ref(session)
             del session
-            for _ in range(20):
-                gc.collect()
-                if dead() is None:
-                    break
-                await asyncio.sleep(0.05)
-            assert dead() is None, "the closed session is still alive"
+            await until(lambda: gc.collect() is not None and dead() is None, what="the closed session to be freed")
         await student.close()
 
     asyncio.run(scenario())
@@ -88,7 +84,6 @@ def test_a_presenter_who_leaves_takes_the_cloud_with_them(classroom):
         presenter = await ViserClient(url(classroom)).connect()
         viewer = await ViserClient(url(classroom)).connect()
         await become_presenter(presenter, classroom)
-        await asyncio.sleep(0.5)
         await presenter.set_gui("Show workspace cloud", True)
         await until(lambda: "/workspace" in viewer.received.nodes, timeout=60, what="the cloud on the viewer's screen")
         presenter.abort()  # the tab closes
@@ -114,11 +109,19 @@ def test_every_redraw_holds_the_arms_lock(app):
                 original(snapshot)
 
             view.render = checked
+        redraws = []
+        redraw = session.redraw
+        session.redraw = lambda: (redraw(), redraws.append(1))
+        toggles = 0
+        shown = {"Show ghost arms": session.ik_target.show_ghosts.value, "Show singularity overlay": session.singularity.enabled.value}
         for value in (False, True, False, True):
-            await client.set_gui("Show ghost arms", value)
-            await client.set_gui("Show singularity overlay", value)
-            await drag_a_little(client, session, steps=3)
-        await asyncio.sleep(0.5)
+            for label in shown:
+                toggles += shown[label] != value  # a change: one redraw, from viser's thread pool
+                shown[label] = value
+                await client.set_gui(label, value)
+            target = await drag_a_little(client, session, steps=3)
+        await until(lambda: len(redraws) == toggles and np.allclose(session.state.last.target, target, atol=1e-9),
+                    what="every toggle's redraw and the last drag")
         assert not unlocked, f"rendered without the lock: {set(unlocked)}"
         await client.close()
 
@@ -153,7 +156,9 @@ def test_a_click_while_the_session_is_being_built_is_not_an_error(app, monkeypat
         await drag_a_little(client, session, steps=2)
         course = await pick(app, client, "Stanford arm (RRP + wrist)", CourseArmSession)
         assert built[-1] is course and course.panel_views  # built in full after the click
-        await asyncio.sleep(0.3)
+        # a failure's notice would have reached the browser before the arm's panel (one client, one queue)
+        await until(lambda: course.joints.sliders[0]._impl.uuid in {w["uuid"] for w in client.gui.values()},
+                    what="the Stanford arm's panel in the browser")
         assert not any("Something went wrong" in title for title, _ in client.received.notifications), \
             client.received.notifications
         assert session.views
@@ -195,26 +200,63 @@ def test_a_failing_drag_worker_starts_again_and_says_so(app, monkeypatch, caplog
     assert any("starts again" in r.getMessage() for r in caplog.records)
 
 
-def test_typing_into_a_slider_box_applies_the_number_not_each_keystroke(app):
+class HeldTimers:
+    """Stands in for ``threading.Timer`` in one module: a timer goes off when the test says, not after its delay."""
+
+    class Timer:
+        def __init__(self, function, args) -> None:
+            self.function, self.args = function, args
+            self.cancelled = self.fired = False
+            self.daemon = True
+
+        def start(self) -> None:
+            pass
+
+        def cancel(self) -> None:
+            self.cancelled = True
+
+    def __init__(self) -> None:
+        self.timers: list[HeldTimers.Timer] = []
+
+    def __call__(self, interval, function, args=()):
+        self.timers.append(self.Timer(function, args))
+        return self.timers[-1]
+
+    @property
+    def pending(self) -> list["HeldTimers.Timer"]:
+        return [timer for timer in self.timers if not (timer.cancelled or timer.fired)]
+
+    def fire(self) -> None:
+        (timer,) = self.pending
+        timer.fired = True
+        timer.function(*timer.args)
+
+
+def test_typing_into_a_slider_box_applies_the_number_not_each_keystroke(app, monkeypatch):
     """Typing 200 moved the arm through 2° and 20°."""
+    typing_pause = HeldTimers()
+    monkeypatch.setattr(joint_panel, "threading", types.SimpleNamespace(Timer=typing_pause, Lock=threading.Lock))
 
     async def scenario():
         client = await ViserClient(url(app)).connect()
         session = session_of(app, client)
         seen = []
         session.observers.append(lambda snapshot: seen.append(round(float(np.degrees(snapshot.q[0])), 6)))
+        panel = session.joints
         for keystrokes in ("2", "20", "200"):
             await client.set_gui("θ1 base", float(keystrokes))
-            await asyncio.sleep(0.05)
+            await until(lambda k=keystrokes: panel._received[0] == float(k), what=f"the keystroke {keystrokes}")
+        assert not seen  # each keystroke waits for the next
+        await asyncio.to_thread(typing_pause.fire)  # the student stops typing
         await until(lambda: seen and seen[-1] == 200.0, what="200°")
         assert 2.0 not in seen and 20.0 not in seen
         # a dragged slider moves in small steps, and each is applied as it comes
         seen.clear()
         for value in (201.0, 202.5, 204.0, 205.0):
             await client.set_gui("θ1 base", value)
-            await asyncio.sleep(0.05)
-        await until(lambda: seen[-1:] == [205.0], what="the drag's last value")
+            await until(lambda v=value: seen[-1:] == [v], what=f"the dragged value {value}")
         assert seen == [201.0, 202.5, 204.0, 205.0]
+        assert not typing_pause.pending
         await client.close()
 
     asyncio.run(scenario())
@@ -241,11 +283,13 @@ def test_the_branch_table_shows_the_angles_the_sliders_show(app):
         client = await ViserClient(url(app)).connect()
         session = session_of(app, client)
         await client.set_gui("θ1 base", 300.0)
-        await until(lambda: abs(np.degrees(session.state.q[0]) - 300.0) < 1e-9, timeout=5, what="300°")
-        await asyncio.sleep(0.3)
-        table = session.ik_target.branches.content
-        row = next(line for line in table.splitlines() if "← arm" in line)
-        assert row.split("|")[-2].strip().startswith("300.0,")
+        await until(lambda: abs(np.degrees(session.state.q[0]) - 300.0) < 1e-9, what="300°")
+
+        def arm_row() -> str:
+            return next((line for line in session.ik_target.branches.content.splitlines() if "← arm" in line), "")
+
+        await until(lambda: "300.0," in arm_row(), what="the branch table to show the new pose")
+        assert arm_row().split("|")[-2].strip().startswith("300.0,")
         await client.close()
 
     asyncio.run(scenario())
@@ -261,7 +305,6 @@ def test_choices_outside_a_widgets_options_are_refused(app):
         for label, value in (("Samples", "999 M"), ("Pose", "Upside down"), ("Use branch", "9"),
                              ("Put the arm on the", "knee"), ("Section", "diagonal")):
             await client.set_gui(label, value)
-            await asyncio.sleep(0.1)
         await until(lambda: sum(title == "Not accepted" for title, _ in client.received.notifications) >= 4,
                     what="the refusals")
         bodies = [body for title, body in client.received.notifications if title == "Not accepted"]
@@ -295,18 +338,24 @@ def test_the_singularity_plot_says_seconds(app):
 
 
 def test_a_section_slider_flood_costs_one_cloud_in_the_making_and_one_waiting(app, monkeypatch):
-    """The section height at 200 Hz with a slow (1 M point) cloud queued a recomputation per message."""
+    """The section height at 200 Hz with a slow (1 M point) cloud queued a recomputation per message.
+
+    The first cloud of the flood is held until every height has reached the server: the
+    400 messages that came meanwhile must fold into one more cloud, of the newest height.
+    """
     from app.workspace import WorkspaceView
 
     computed: list[float] = []
+    held = threading.Event()
     original = WorkspaceView._update
 
-    def slow_update(self):
+    def held_update(self):
         computed.append(self.height.value)
-        time.sleep(0.3)  # what a big cloud costs
+        if self.height.value != 600.0:  # the flood has begun: this cloud takes until the test lets it go
+            held.wait(HANG_TIMEOUT)
         original(self)
 
-    monkeypatch.setattr(WorkspaceView, "_update", slow_update)
+    monkeypatch.setattr(WorkspaceView, "_update", held_update)
 
     async def scenario():
         client = await ViserClient(url(app)).connect()
@@ -314,17 +363,18 @@ def test_a_section_slider_flood_costs_one_cloud_in_the_making_and_one_waiting(ap
         await client.set_gui("Samples", "10 k")
         await client.set_gui("Section", "horizontal section (top view)")
         await client.set_gui("Show workspace cloud", True)
+        await until(lambda: session.workspace._cloud is not None and not session.workspace._clouds.busy, what="the first section")
+        before = len(computed)
         heights = [-500.0 + 5.0 * k for k in range(400)]
-        started = time.monotonic()
-        for height in heights:  # 2 s at 200 Hz
+        for height in heights:
             await client.set_gui("Section height (mm)", height)
-            await asyncio.sleep(0.005)
+        await until(lambda: session.workspace.height.value == heights[-1], what="every height to reach the server")
+        held.set()
         await until(lambda: computed and computed[-1] == heights[-1] and not session.workspace._clouds.busy,
-                    what="the newest height drawn", timeout=20)
-        flooding = time.monotonic() - started
+                    what="the newest height drawn")
         await client.close()
-        return len(computed), flooding
+        return computed[before:]
 
-    calls, flooding = asyncio.run(scenario())
-    # one cloud at a time, each folding in whatever came meanwhile (and the three set-up changes)
-    assert calls <= flooding / 0.3 + 5, f"{calls} clouds computed for 400 slider messages in {flooding:.1f} s"
+    flood = asyncio.run(scenario())
+    # the one held while the flood came, and one more for everything that came meanwhile
+    assert len(flood) == 2 and flood[-1] == 1495.0, flood  # the newest height: -500 + 5 × 399

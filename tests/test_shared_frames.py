@@ -15,7 +15,7 @@ from viser.infra._async_message_buffer import AsyncMessageBuffer
 
 from app import shared_frames
 from app.fast_updates import _UpdateMessage
-from tests.viser_client import decode_frame
+from ur10dev.viser_client import decode_frame
 
 #: viser 1.1.1's ``_message_producer``, which shared_frames.shared_message_producer copies.
 VISER_PRODUCER_SHA256 = "8283328d06cfa014576888930c49a857a2d79892dc89f9694444895945018ea3"

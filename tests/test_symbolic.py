@@ -11,6 +11,8 @@ from ur10core.symbolic import LENGTHS, THETA
 
 from .conftest import random_joints
 
+pytestmark = pytest.mark.core
+
 
 @pytest.fixture(scope="module")
 def cached():

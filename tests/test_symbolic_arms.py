@@ -9,6 +9,8 @@ import sympy as sp
 from ur10core import symbolic_arms
 from ur10core.serial import PRESETS, SerialArm
 
+pytestmark = pytest.mark.core
+
 #: The rows of J [v; ω] whose square determinant is det J, per task (docs/kinematics.md §7.6).
 SQUARE_ROWS = {"kr210": slice(0, 6), "elbow": slice(0, 6), "stanford": slice(0, 6), "scara": [0, 1, 2, 5],
                "planar_elbow": [0, 1], "cylindrical": [0, 1, 2]}

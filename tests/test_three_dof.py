@@ -10,6 +10,8 @@ import pytest
 from ur10core import Arm
 from ur10core.three_dof import FOREARM, UPPER_ARM, course_path, largest_torque
 
+pytestmark = pytest.mark.core
+
 
 def course_position(q: np.ndarray) -> np.ndarray:
     """The course's map, written out as it gives it: p = (c1(l1c3 − l5c2), l1s3 − l5s2, −s1(l1c3 − l5c2))."""

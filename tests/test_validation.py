@@ -7,6 +7,8 @@ from ur10core import Arm, from_controller, to_controller
 
 from .conftest import random_joints
 
+pytestmark = pytest.mark.core
+
 
 @pytest.fixture
 def pose(course):

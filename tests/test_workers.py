@@ -1,13 +1,33 @@
-"""The drag queue on an event loop of its own: who waits, and for how many turns of the loop."""
+"""The workers' scheduling, in virtual time: who waits, and for how many turns of the loop.
+
+Each drag or job here costs virtual time (a clock the test advances), never wall-clock
+time, so the answers are the same on an idle machine and on a loaded one.
+"""
 
 from __future__ import annotations
 
 import asyncio
+import contextlib
 import threading
-import time
+
+import pytest
 
 from app import workers
-from app.workers import DragQueue
+from app.workers import DragQueue, HeavyWork
+from ur10dev.waiting import wait_for
+
+
+class Clock:
+    """Virtual seconds: they pass only when :meth:`advance` says so."""
+
+    def __init__(self) -> None:
+        self.now = 1000.0
+
+    def __call__(self) -> float:
+        return self.now
+
+    def advance(self, seconds: float) -> None:
+        self.now += seconds
 
 
 class Arm:
@@ -16,30 +36,39 @@ class Arm:
 
 
 class Student:
-    """A session whose drag takes ``cost`` seconds of the loop."""
+    """A session whose drag costs ``cost`` virtual seconds of the loop."""
 
     closed = False
 
-    def __init__(self, cost: float, served: list) -> None:
-        self.state, self.cost, self.served = Arm(), cost, served
+    def __init__(self, clock: Clock, cost: float, served: list) -> None:
+        self.state, self.clock, self.cost, self.served = Arm(), clock, cost, served
 
     def drag_to(self, target) -> None:
-        end = time.perf_counter() + self.cost
-        while time.perf_counter() < end:
-            pass
+        self.clock.advance(self.cost)
         self.served.append(target)
 
     def notify(self, *args) -> None:
         pass
 
 
-def test_thirty_waiting_students_are_served_in_a_few_turns_of_the_loop():
-    """A turn of the loop after every student made the thirtieth wait thirty turns (48 ms p99 in a classroom)."""
+@contextlib.contextmanager
+def running_loop():
     loop = asyncio.new_event_loop()
     thread = threading.Thread(target=loop.run_forever, daemon=True)
     thread.start()
     try:
-        queue = DragQueue(loop)
+        yield loop
+    finally:
+        loop.call_soon_threadsafe(loop.stop)
+        thread.join()
+        loop.close()
+
+
+def serve_thirty(cost: float) -> list[int]:
+    """Thirty waiting students, each drag ``cost`` virtual seconds; returns how many had been served at each turn of the loop."""
+    clock = Clock()
+    with running_loop() as loop:
+        queue = DragQueue(loop, clock=clock)
         served: list = []
         turns: list[int] = []
 
@@ -50,7 +79,7 @@ def test_thirty_waiting_students_are_served_in_a_few_turns_of_the_loop():
                 turns.append(len(served))
                 await asyncio.sleep(0)
 
-        students = [Student(0.0001, served) for _ in range(30)]
+        students = [Student(clock, cost, served) for _ in range(30)]
 
         def submit_all():
             for k, student in enumerate(students):
@@ -58,48 +87,79 @@ def test_thirty_waiting_students_are_served_in_a_few_turns_of_the_loop():
             asyncio.ensure_future(other_sockets())
 
         loop.call_soon_threadsafe(submit_all)
-        deadline = time.monotonic() + 10
-        while len(served) < 30 and time.monotonic() < deadline:
-            time.sleep(0.01)
+        wait_for(lambda: len(served) == 30, what="thirty students served")
         assert served == list(range(30))  # oldest first, each once
-        # 30 × 0.1 ms = 3 ms of drags: the sockets get a turn every few ms, not after each student
-        assert workers.DRAG_TURN <= 0.005  # no student is kept from the sockets for long either
-        interruptions = len(set(turns)) - 1
-        assert interruptions <= 5, f"the loop turned {interruptions} times while serving 30 students: {turns}"
         queue.stop()
-        time.sleep(0.05)  # its task ends
-    finally:
-        loop.call_soon_threadsafe(loop.stop)
-        thread.join(5)
+        wait_for(queue.done.done, what="the drag task to end")
+    return turns
 
 
-def test_slow_jobs_run_one_at_a_time_and_each_browser_rests_between_its_own():
-    from app.workers import HeavyWork
+def test_thirty_waiting_students_are_served_in_a_few_turns_of_the_loop():
+    """A turn of the loop after every student made the thirtieth wait thirty turns (48 ms p99 in a classroom)."""
+    cheap = workers.DRAG_TURN / 40  # thirty of them fit in one turn
+    turns = serve_thirty(cheap)
+    assert len(set(turns)) - 1 <= 1, f"the loop turned while serving thirty cheap drags: {turns}"
 
-    heavy = HeavyWork(duty=0.25)
-    spans: list[tuple[int, float, float]] = []  # (client, start, end)
-    running, overlaps = [], []
 
-    def job(client: int):
-        def work():
-            running.append(client)
-            if len(running) > 1:
-                overlaps.append(tuple(running))
-            start = time.monotonic()
-            time.sleep(0.05)
-            spans.append((client, start, time.monotonic()))
-            running.remove(client)
-        return work
+def test_the_sockets_get_a_turn_every_drag_turn():
+    """No student is kept from the sockets for longer than a turn: slow drags share the loop."""
+    slow = workers.DRAG_TURN / 3.5  # four of them are more than a turn
+    turns = serve_thirty(slow)
+    served_per_turn = [b - a for a, b in zip(sorted(set(turns)), sorted(set(turns))[1:])]
+    assert served_per_turn and max(served_per_turn) <= 4, f"students served between two turns of the loop: {served_per_turn}"
 
-    threads = [threading.Thread(target=heavy.run, args=(client, job(client))) for client in (1, 1, 2)]
-    for thread in threads:
-        thread.start()
-        time.sleep(0.005)  # in this order: client 1, client 1 again, client 2
-    for thread in threads:
-        thread.join()
-    assert not overlaps and len(spans) == 3
-    ones = sorted(s for s in spans if s[0] == 1)
-    # client 1's second job waited three times its first's length (duty 1/4); client 2 did not wait for that
-    assert ones[1][1] - ones[0][2] >= 3 * (ones[0][2] - ones[0][1]) - 1e-3
-    two = next(s for s in spans if s[0] == 2)
-    assert two[1] < ones[1][1]
+
+def test_a_browsers_slow_jobs_rest_between_them_and_others_do_not_wait_for_that():
+    """With duty 1/4, a job of 50 ms makes that browser's next one wait 150 ms; another browser's starts at once."""
+    clock, waits = Clock(), []
+
+    def sleep(seconds: float) -> None:
+        waits.append(seconds)
+        clock.advance(seconds)
+
+    heavy = HeavyWork(duty=0.25, clock=clock, sleep=sleep)
+    job = lambda: clock.advance(0.05)  # noqa: E731
+    heavy.run(1, job)
+    assert waits == []
+    heavy.run(2, job)  # another browser: no rest of its own
+    assert waits == []
+    heavy.run(1, job)  # 50 ms after its first ended: rests the other 100 ms of its 150
+    assert waits == [pytest.approx(0.1)]
+
+
+class WatchedLock:
+    """A lock that says when a second thread has come to wait for it."""
+
+    def __init__(self) -> None:
+        self._lock = threading.Lock()
+        self.contended = threading.Event()
+
+    def __enter__(self):
+        if not self._lock.acquire(blocking=False):
+            self.contended.set()
+            self._lock.acquire()
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self._lock.release()
+
+
+def test_slow_jobs_run_one_at_a_time():
+    """A second browser's job waits at the slot until the first job has ended."""
+    heavy = HeavyWork(duty=1.0)  # no rest: only the one-at-a-time rule applies
+    heavy._slot = slot = WatchedLock()
+    order: list[str] = []
+
+    def first():
+        order.append("first starts")
+        wait_for(slot.contended.is_set, what="the second job to wait for the slot")
+        order.append("first ends")
+
+    one = threading.Thread(target=heavy.run, args=(1, first))
+    one.start()
+    wait_for(lambda: order, what="the first job")
+    two = threading.Thread(target=heavy.run, args=(2, lambda: order.append("second starts")))
+    two.start()
+    one.join()
+    two.join()
+    assert order == ["first starts", "first ends", "second starts"]

@@ -6,6 +6,8 @@ import pytest
 from ur10core import Arm, flange_to_controller
 from ur10core.workspace import MAP_PLANES, branch_count_map, revolved_boundary
 
+pytestmark = pytest.mark.core
+
 
 def test_points_and_manipulability_come_from_fk_and_the_jacobian(course):
     points, manipulability, q = course.sample_workspace(20000, seed=3, return_joints=True)
@@ -102,7 +104,7 @@ def test_branch_count_map_counts_what_urs_own_solver_finds(plane):
     The map runs our IK on the ur10 preset; the reference is asked cell by cell, through
     the controller's convention (docs/kinematics.md §6), on a coarse grid.
     """
-    ur_analytic_ik = pytest.importorskip("ur_analytic_ik")
+    import ur_analytic_ik
     arm = Arm.preset("ur10")
     rng = np.random.default_rng(7)
     for _ in range(3):
@@ -186,7 +188,7 @@ def test_revolved_boundary_refuses_bad_arguments(bad, message):
 
 
 def test_the_hull_mesh_is_closed_and_turned_from_the_profile(course):
-    trimesh = pytest.importorskip("trimesh")
+    import trimesh
     from app.workspace import revolved_mesh
 
     heights, inner, outer = revolved_boundary(course.sample_workspace(50_000, seed=1)[0], bins=30)

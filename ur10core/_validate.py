@@ -11,10 +11,7 @@ import math
 
 import numpy as np
 
-#: A rotation part may deviate from orthonormal by this much (max |R^T R - I|).
-ROTATION_TOLERANCE = 1e-6
-#: The bottom row of a homogeneous transform must equal [0, 0, 0, 1] to this tolerance.
-BOTTOM_ROW_TOLERANCE = 1e-9
+from .tolerances import BOTTOM_ROW_TOLERANCE, ROTATION_TOLERANCE
 
 
 def _first_index(mask: np.ndarray) -> tuple[int, ...]:

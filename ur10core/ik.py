@@ -62,7 +62,7 @@ from . import _numpy_kernels, ik_reference
 from ._backend import kernels
 from ._validate import as_float_array, homogeneous_transform, joint_vector
 from .ik_reference import ELBOW_TOO_CLOSE, ELBOW_TOO_FAR, REACHABLE, WRIST_INSIDE_CYLINDER
-from .tolerances import LENGTH_TOLERANCE, WRIST_TOLERANCE, WRIST_TURN_TOLERANCE
+from .tolerances import LENGTH_TOLERANCE, TIE_TOLERANCE, WRIST_TOLERANCE, WRIST_TURN_TOLERANCE
 
 if TYPE_CHECKING:
     from .arm import Arm
@@ -212,10 +212,6 @@ class IKSolution:
         if failure[k] == ELBOW_TOO_FAR:
             return f"unreachable: elbow reach — {where}, {1e3 * excess[k]:.1f} mm beyond a2 + a3 = {1e3 * outer:.1f} mm"
         return f"unreachable: elbow reach — {where}, {1e3 * excess[k]:.1f} mm closer than |a2 − a3| = {1e3 * inner:.1f} mm"
-
-
-#: Squared joint distances (rad²) closer than this count as a tie in :func:`nearest_branch`.
-TIE_TOLERANCE = 1e-10
 
 
 def nearest_branch(solution: IKSolution, q_current, joint_limit: float = _TAU, prefer=None) -> Branch:

@@ -28,9 +28,7 @@ import numpy as np
 
 from ._backend import kernels
 from ._validate import as_float_array, check_finite, rotation_matrix, vectors
-
-#: Below this cos β the Z-Y-X angles are at gimbal lock (β = ±90°): α is set to 0.
-GIMBAL_TOLERANCE = 1e-10
+from .tolerances import GIMBAL_TOLERANCE
 
 
 def _rot(axis: int, angle: np.ndarray) -> np.ndarray:

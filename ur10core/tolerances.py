@@ -44,3 +44,11 @@ ROTATION_TOLERANCE = 1e-6
 
 #: A pose's bottom row must equal [0, 0, 0, 1] to this tolerance.
 BOTTOM_ROW_TOLERANCE = 1e-9
+
+#: Below this cos β the Z-Y-X angles are at gimbal lock (β = ±90°): α is set to 0
+#: (:mod:`ur10core.orientation`).
+GIMBAL_TOLERANCE = 1e-10
+
+#: Squared joint distances (rad²) closer than this count as a tie when the nearest branch
+#: is chosen (:func:`ur10core.ik.nearest_branch`).
+TIE_TOLERANCE = 1e-10

@@ -29,10 +29,8 @@ from ..branches import (
     wrap,
 )
 from ..dh import MODIFIED, STANDARD, DHTable
-from ..tolerances import CHOICE_TOLERANCE, LENGTH_TOLERANCE, WRIST_TURN_TOLERANCE
+from ..tolerances import CHOICE_TOLERANCE, LENGTH_TOLERANCE, WRIST_TOLERANCE, WRIST_TURN_TOLERANCE
 
-#: |sin θ5| below which θ4 is the hint's whatever the pose says (the axes are aligned).
-WRIST_TOLERANCE = WRIST_TURN_TOLERANCE / math.pi
 _TAU = 2.0 * math.pi
 
 

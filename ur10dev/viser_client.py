@@ -30,8 +30,13 @@ from websockets.asyncio.client import ClientConnection
 from websockets.asyncio.client import connect as websocket_connect
 from websockets.frames import DATA_OPCODES, Frame
 
+from .waiting import HANG_TIMEOUT, until
+
 FLANGE_MM = re.compile(r"\*\*([+-]?[0-9]+\.[0-9])\*\*")
 GHOST_FLANGE = re.compile(r"/ghosts/\w+/link6")
+#: A browser sends a gizmo's or a panel's updates at most this often (viser throttles them to 50 ms):
+#: a client that stands in for a student paces its drags so.
+BROWSER_SEND_INTERVAL = 0.05
 #: What a browser reports for its camera; any plausible camera will do.
 CAMERA = messages.ViewerCameraMessage(
     wxyz=(0.0, 0.0, 0.0, 1.0), position=(2.1, -1.9, 1.4), fov=0.87, near=0.01, far=100.0,
@@ -133,7 +138,7 @@ class ViserClient:
         self._decompressor = zstandard.ZstdDecompressor()
         self._read_at = 0.0  # when the frame being handled was read (after its arrival)
 
-    async def connect(self, timeout: float = 30.0) -> "ViserClient":
+    async def connect(self, timeout: float = HANG_TIMEOUT) -> "ViserClient":
         self._websocket = await websocket_connect(
             self.url.replace("http://", "ws://"), subprotocols=[f"viser-v{viser.__version__}"],
             max_size=None, compression=None, open_timeout=timeout, create_connection=StampedConnection,
@@ -262,16 +267,12 @@ class ViserClient:
 
     # ------------------------------------------------------------------ acting
 
-    async def set_gui(self, label: str, value: Any, timeout: float = 15.0) -> None:
+    async def set_gui(self, label: str, value: Any, timeout: float = HANG_TIMEOUT) -> None:
         """What the browser sends when a student changes a widget (or clicks a button: value True).
 
         The panel arrives a moment after the page: a widget not seen yet is waited for.
         """
-        deadline = time.monotonic() + timeout
-        while label not in self.gui:
-            if time.monotonic() > deadline:
-                raise KeyError(f"no widget {label!r} arrived within {timeout:.0f} s")
-            await asyncio.sleep(0.02)
+        await until(lambda: label in self.gui, timeout, what=f"the widget {label!r}")
         await self.send(messages.GuiUpdateMessage(self.gui[label]["uuid"], {"value": value}))
 
     def drag_step(self, position, wxyz, phase: str = "update", name: str = "/ik_target") -> DragStep:

@@ -1,0 +1,331 @@
+"""Headless Chromium from Debian, driven by playwright (never a downloaded browser).
+
+Everything here waits on a condition: the value the server holds, text on the page, or a
+3D view that has settled or changed. A loaded machine (both cores held by busy loops,
+software WebGL) only makes the waits longer; :data:`~ur10dev.waiting.HANG_TIMEOUT` is
+reached by a hang alone.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import io
+import os
+from typing import Iterator
+from urllib.parse import urlparse
+
+import numpy as np
+import pytest
+
+from .waiting import HANG_TIMEOUT, wait_for
+
+CHROMIUM = os.environ.get("UR10_TEACH_CHROMIUM", "/usr/bin/chromium")
+ARGS = [
+    "--no-sandbox", "--use-angle=swiftshader", "--enable-unsafe-swiftshader", "--disable-quic",
+    "--no-first-run", "--disable-background-networking", "--disable-component-update", "--disable-sync",
+]
+VIEWPORT = {"width": 1280, "height": 800}
+#: Several live tabs share two cores of software WebGL: keep them small.
+SMALL_VIEWPORT = {"width": 900, "height": 640}
+CONNECTED = "svg.tabler-icon-cloud-check"
+#: Playwright's own waits take milliseconds.
+HANG_TIMEOUT_MS = int(1000 * HANG_TIMEOUT)
+#: Seconds after which a key press that has not shown on a slider is taken as lost.
+LOST_PRESS = 10.0
+#: Below this share of changed pixels two pictures of the 3D view are the same picture.
+SAME_PICTURE = 0.0005
+#: Frames a second a test page draws while nothing asks for more. viser redraws the 3D view every
+#: frame, changed or not, and software WebGL spends about 0.2 s of CPU on each: at the display's
+#: rate a page would hold both cores, and the server and the test with them. A check that needs
+#: the newest picture asks for frames (:func:`drawn_frames`), which are drawn at once.
+IDLE_FPS = 1
+_FRAMES_ON_DEMAND = f"""(() => {{
+    const frame = window.requestAnimationFrame.bind(window), cancel = window.cancelAnimationFrame.bind(window);
+    const interval = {1000 / IDLE_FPS}, waiting = new Map();
+    let drawn = -1, next = 0, ids = 0;
+    window.__framesAsked = 0;
+    window.requestAnimationFrame = callback => {{
+        const id = ++ids;
+        const tick = now => {{
+            if (now !== drawn) {{
+                if (now < next && window.__framesAsked <= 0) {{ waiting.set(id, frame(tick)); return; }}
+                drawn = now;
+                next = now + interval;
+                window.__framesAsked -= 1;
+            }}
+            waiting.delete(id);
+            callback(now);
+        }};
+        waiting.set(id, frame(tick));
+        return id;
+    }};
+    window.cancelAnimationFrame = id => {{ if (waiting.has(id)) {{ cancel(waiting.get(id)); waiting.delete(id); }} }};
+}})();"""
+
+
+def launch(playwright):
+    if not os.path.exists(CHROMIUM):
+        pytest.fail(f"{CHROMIUM} not found: install Debian's chromium (apt-get install -y chromium; scripts/test.sh does)")
+    return playwright.chromium.launch(executable_path=CHROMIUM, headless=True, args=ARGS)
+
+
+def open_app(browser, url: str, viewport: dict = VIEWPORT, zoom: float = 1.0):
+    """A page of the app in a fresh context of ``browser``, recording every request it makes (``page.requests``).
+
+    ``zoom`` is the browser's zoom (1.5 = 150 %): fewer CSS pixels in the same window, each drawn larger.
+    """
+    page = browser.new_page(viewport={"width": round(viewport["width"] / zoom), "height": round(viewport["height"] / zoom)},
+                            device_scale_factor=zoom)
+    page.requests, page.console = [], []
+    page.on("request", lambda request: page.requests.append(request.url))
+    page.on("websocket", lambda socket: page.requests.append(socket.url))
+    page.on("console", lambda message: page.console.append(message.text))
+    page.add_init_script(_FRAMES_ON_DEMAND)
+    page.goto(url)
+    wait_for(lambda: page.locator(CONNECTED).count() > 0, what="the page to connect")
+    return page
+
+
+def dismiss_software_notice(page) -> None:
+    """Close viser's "Software WebGL rendering detected" notice, which covers the 3D view's top left corner."""
+    notice = page.locator(".mantine-Notification-root", has_text="Software WebGL")
+    if notice.count():
+        notice.locator("button").first.click()
+        wait_for(lambda: notice.count() == 0, what="the software-rendering notice to close")
+
+
+def foreign_requests(page, url: str) -> list[str]:
+    """What ``page`` asked of any host but the app's own (the app works offline: this must be empty)."""
+    own = urlparse(url).netloc
+    return [r for r in page.requests if urlparse(r).netloc != own and not r.startswith(("data:", "blob:"))]
+
+
+def dom_id(handle) -> str:
+    """The DOM id viser gives a GUI element (its uuid)."""
+    return f"[id='{handle._impl.uuid}']"
+
+
+def step_slider(page, handle, key: str, target: float, limit: int = 200) -> None:
+    """Press arrow keys on a viser slider's thumb until the browser shows ``target``, then wait for the server.
+
+    ``key`` is the direction to start in. Each press is waited for before the next; a press
+    that has not shown after :data:`LOST_PRESS` s was lost (the thumb lost focus while the
+    panel re-rendered) and is made again; an overshoot is walked back.
+    """
+    thumb = page.locator(f"{dom_id(handle)} [role=slider]")
+    opposite = {"ArrowRight": "ArrowLeft", "ArrowLeft": "ArrowRight"}
+    increases = key == "ArrowRight"
+    for _ in range(limit):
+        value = float(thumb.get_attribute("aria-valuenow"))
+        if abs(value - target) < 1e-9:
+            wait_for(lambda: abs(handle.value - target) < 1e-9, what=f"the server to hold {target} for {handle.label!r}")
+            return
+        thumb.focus()
+        thumb.press(key if (value < target) == increases else opposite[key])
+        with contextlib.suppress(AssertionError):  # not shown: the press was lost, and is made again
+            wait_for(lambda: float(thumb.get_attribute("aria-valuenow")) != value, timeout=LOST_PRESS, what="the press")
+    raise AssertionError(f"slider still at {thumb.get_attribute('aria-valuenow')} after {limit} presses, wanted {target}")
+
+
+def set_checkbox(page, handle, value: bool) -> None:
+    """Click a viser checkbox, as a student does, until the server holds ``value``.
+
+    A click can land while the panel is still moving (sliding back from its folded strip, a
+    folder unfolding) and miss the box. So a box the browser still shows unchanged a moment
+    later is clicked again; a box that shows the new value is never clicked twice. What
+    counts is the value the server received, not the box's look.
+    """
+    box = page.locator(dom_id(handle))
+
+    def clicked_through() -> bool:
+        if handle.value == value:
+            return True
+        if box.is_checked() != value:
+            box.click()
+        with contextlib.suppress(AssertionError):
+            wait_for(lambda: handle.value == value, timeout=1.0)
+        return handle.value == value
+
+    wait_for(clicked_through, what=f"the server to hold {value!r} for {handle.label!r}")
+
+
+def choose(page, dropdown, option: str) -> None:
+    """Pick ``option`` in a viser dropdown, with the mouse, and wait until the server holds it."""
+    page.locator(dom_id(dropdown)).click()
+    page.get_by_role("option", name=option, exact=True).click()
+    wait_for(lambda: dropdown.value == option, what=f"the server to hold {option!r}")
+
+
+def text_field(page, handle):
+    """The <input> of a viser text field (its label, not the input, carries the handle's uuid)."""
+    return page.locator(f"label[for='{handle._impl.uuid}']").locator("xpath=ancestor::div[2]").locator("input").first
+
+
+def type_text(page, handle, text: str) -> None:
+    """Type ``text`` into a text field, as a student does, and wait until the server holds it.
+
+    (viser's panel sends one message per 50 ms and keeps only the newest: a button pressed
+    at once after typing could carry the typing away.)
+    """
+    field = text_field(page, handle)
+    field.fill(text)
+    field.press("Enter")
+    wait_for(lambda: handle.value == text, what=f"the server to hold {text!r} for {handle.label!r}")
+
+
+def click(page, button, done, what: str) -> None:
+    """Click ``button`` until ``done()`` holds: a click may land while its folder is still opening."""
+
+    def clicked() -> bool:
+        if done():
+            return True
+        page.locator(dom_id(button)).click()
+        with contextlib.suppress(AssertionError):
+            wait_for(done, timeout=10.0)
+        return bool(done())
+
+    wait_for(clicked, what=what)
+
+
+def unfold(page, title: str, widget) -> None:
+    """Open a folded folder by its title, as a student does, until ``widget`` shows."""
+    if not page.locator(dom_id(widget)).is_visible():
+        page.get_by_text(title, exact=True).first.click()
+        page.locator(dom_id(widget)).wait_for(state="visible", timeout=HANG_TIMEOUT_MS)
+
+
+def project(camera, point, box) -> tuple[float, float]:
+    """Pixel of a world point in the canvas, from the camera the browser reported (OpenCV convention)."""
+    w, x, y, z = camera.wxyz
+    R = np.array([
+        [1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)],
+        [2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)],
+        [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)],
+    ])
+    p = R.T @ (np.asarray(point) - camera.position)
+    focal = (box["height"] / 2) / np.tan(camera.fov / 2)
+    return box["x"] + box["width"] / 2 + focal * p[0] / p[2], box["y"] + box["height"] / 2 + focal * p[1] / p[2]
+
+
+def neighbourhood(pixels: np.ndarray, u: float, v: float, box: dict, radius: int = 4) -> np.ndarray:
+    """The (2r+1)² pixels around page point (u, v), from a canvas screenshot."""
+    x, y = int(round(u - box["x"])), int(round(v - box["y"]))
+    return pixels[max(y - radius, 0): y + radius + 1, max(x - radius, 0): x + radius + 1].reshape(-1, 3)
+
+
+# ---------------------------------------------------------------------------- the 3D view
+
+
+def canvas_pixels(page) -> np.ndarray:
+    """The 3D view as an (H, W, 3) array, from a real screenshot of the page."""
+    from PIL import Image
+
+    box = page.locator("canvas").first.bounding_box()  # the panel is docked beside it, not over it
+    png = page.screenshot(clip=box, scale="css")
+    return np.asarray(Image.open(io.BytesIO(png)).convert("RGB")).astype(int)
+
+
+def changed(before: np.ndarray, after: np.ndarray) -> float:
+    """The share of the canvas that changed visibly between two pictures."""
+    return float(changed_mask(before, after).mean())
+
+
+def changed_mask(before: np.ndarray, after: np.ndarray) -> np.ndarray:
+    if before.shape != after.shape:
+        return np.ones(after.shape[:2], bool)
+    return np.abs(after.astype(int) - before.astype(int)).sum(axis=-1) > 60
+
+
+def where_changed(before: np.ndarray, after: np.ndarray) -> str:
+    """Where two pictures differ, for an assertion message: the share and the box around it."""
+    mask = changed_mask(before, after)
+    if not mask.any():
+        return "nothing changed"
+    rows, cols = np.nonzero(mask)
+    return (f"{mask.mean():.2%} of the canvas changed, within x {cols.min()}–{cols.max()}, "
+            f"y {rows.min()}–{rows.max()} of {mask.shape[1]} × {mask.shape[0]}")
+
+
+def drawn_frames(page, count: int = 3) -> None:
+    """Have the page draw ``count`` more frames now, and wait until it has (each draws what has arrived)."""
+    page.evaluate("""n => new Promise(done => {
+        window.__framesAsked = Math.max(window.__framesAsked, 0) + n;
+        const next = k => k ? requestAnimationFrame(() => next(k - 1)) : done();
+        next(n);
+    })""", count)
+
+
+def settled_canvas(page, timeout: float = HANG_TIMEOUT) -> np.ndarray:
+    """The 3D view once it stops changing: two pictures, a few drawn frames apart, that agree.
+
+    A fixed wait is not enough on a loaded machine (two cores of software WebGL): a scene
+    still arriving would show up as a change later.
+    """
+    last = canvas_pixels(page)
+    result: list[np.ndarray] = []
+
+    def agrees() -> bool:
+        nonlocal last
+        drawn_frames(page)
+        now = canvas_pixels(page)
+        if changed(last, now) < SAME_PICTURE:
+            result.append(now)
+            return True
+        last = now
+        return False
+
+    wait_for(agrees, timeout, what="the 3D view to settle")
+    return result[0]
+
+
+def canvas_changed(page, before: np.ndarray, at_least: float, what: str) -> np.ndarray:
+    """The settled 3D view once at least ``at_least`` of it differs from ``before``; fails naming ``what``."""
+    found: list[np.ndarray] = []
+
+    def differs() -> bool:
+        now = settled_canvas(page)
+        if changed(before, now) >= at_least:
+            found.append(now)
+            return True
+        differs.last = now
+        return False
+
+    differs.last = before
+    try:
+        wait_for(differs, what=what)
+    except AssertionError:
+        raise AssertionError(f"{what}: {where_changed(before, differs.last)} (wanted {at_least:.2%})") from None
+    return found[0]
+
+
+# ---------------------------------------------------------------------------- the classroom
+
+
+@contextlib.contextmanager
+def teacher_and_student(app) -> Iterator[tuple]:
+    """Two browsers on a classroom server (``--shared``), each in a process of its own.
+
+    Yields (teacher page, student page, teacher's member, student's member), the members
+    being ``app.classroom``'s, both still watching; closes both browsers after, and fails
+    if either page asked anything of another host.
+    """
+    from playwright.sync_api import sync_playwright
+
+    url = f"http://127.0.0.1:{app.port}"
+    with sync_playwright() as playwright:
+        browsers = [launch(playwright), launch(playwright)]
+        try:
+            pages = [open_app(browser, url, SMALL_VIEWPORT) for browser in browsers]
+            wait_for(lambda: len(app.classroom.members) == 2, what="both browsers")
+            yield (*pages, *app.classroom.members.values())
+            for page in pages:
+                assert not foreign_requests(page, url), f"requests that leave the app's host: {foreign_requests(page, url)}"
+        finally:
+            for browser in browsers:
+                browser.close()
+
+
+def ask_to_present(page, member, code: str) -> None:
+    """Type the join code and press "Become presenter", as a teacher does."""
+    type_text(page, member.join_code, code)
+    page.get_by_role("button", name="Become presenter").click()

@@ -1,0 +1,55 @@
+"""Waiting on a condition, in plain and in asyncio code: never a fixed sleep, never a duration compared.
+
+A test waits for what it needs to have happened (the server's state, a message received,
+a settled picture) and gives up only after :data:`HANG_TIMEOUT`, which a hang reaches and
+a busy machine does not: the whole suite passes with both cores of a 2-core machine held
+by busy loops.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import os
+import sys
+import time
+from typing import Callable
+
+#: Seconds after which a wait is a hang. Generous on purpose: it only bounds a failure's report.
+HANG_TIMEOUT = 120.0
+#: How often a condition is looked at (seconds).
+POLL = 0.02
+#: ``UR10_TRACE_WAITS=1`` prints how long each wait took (to find where a slow test spends its time).
+TRACE = os.environ.get("UR10_TRACE_WAITS") == "1"
+
+
+def _trace(what: str, started: float) -> None:
+    if TRACE:
+        print(f"[{time.monotonic():10.2f}: waited {time.monotonic() - started:6.2f} s] {what}", file=sys.stderr, flush=True)
+
+
+def wait_for(condition: Callable[[], object], timeout: float = HANG_TIMEOUT, what: str = "condition") -> object:
+    """Poll ``condition`` until it returns something true, and return that; fail after ``timeout`` s."""
+    started = time.monotonic()
+    deadline = started + timeout
+    while True:
+        value = condition()
+        if value:
+            _trace(what, started)
+            return value
+        if time.monotonic() > deadline:
+            raise AssertionError(f"timed out after {timeout:.0f} s waiting for {what}")
+        time.sleep(POLL)
+
+
+async def until(condition: Callable[[], object], timeout: float = HANG_TIMEOUT, what: str = "condition") -> object:
+    """:func:`wait_for` for a coroutine: the event loop runs on while ``condition`` is false."""
+    started = time.monotonic()
+    deadline = started + timeout
+    while True:
+        value = condition()
+        if value:
+            _trace(what, started)
+            return value
+        if time.monotonic() > deadline:
+            raise AssertionError(f"timed out after {timeout:.0f} s waiting for {what}")
+        await asyncio.sleep(POLL)
