@@ -3,13 +3,15 @@
 #   - Debian's chromium for the browser tests (playwright drives it; it never downloads one)
 #   - a virtual environment ($UR10_TEST_VENV, default .venv-test) with the project and its
 #     test extras; .ci/run points it at a new, empty folder every time
+# Two runs share the two cores: the browser and install tests (mostly Chromium's and pip's work)
+# beside everything else, then the core's tests on numpy. Each run's output is printed when it ends.
 # Extra arguments go to one pytest run on the default backend, e.g. scripts/test.sh -k ik
 set -euo pipefail
 cd "$(dirname "$0")/.."
 VENV="${UR10_TEST_VENV:-.venv-test}"
 STARTED=$SECONDS
-stage() {  # stage NAME: prints how long the previous stage took, then the new one's name
-    echo "== ($((SECONDS - STARTED)) s so far) $1"
+stage() {  # stage NAME: a heading with the time since the start
+    echo "== ($((SECONDS - STARTED)) s) $1"
 }
 
 if ! command -v chromium >/dev/null 2>&1; then
@@ -39,13 +41,41 @@ if [ "$BACKEND" != "compiled" ] && [ -n "${UR10_REQUIRE_COMPILED:-}" ]; then
     echo "the compiled kernel did not build (see pip's output with --verbose); CI requires it" >&2
     exit 1
 fi
-stage "every test once, on the $BACKEND backend: core, app, server, browser, install on a laptop without a compiler"
-"$PYTHON" -m pytest -m "" --durations=15
-if [ "$BACKEND" = "compiled" ]; then
-    stage "the core's tests again on the numpy backend (what a laptop without a C compiler runs)"
-    UR10CORE_BACKEND=numpy "$PYTHON" -c 'import ur10core; print("backend:", ur10core.BACKEND)'
-    UR10CORE_BACKEND=numpy "$PYTHON" -m pytest -m core
-else
-    echo "no C compiler here: the compiled backend is not built, its comparison tests are skipped"
-fi
+
+LOGS="$(mktemp -d)"
+browser_run() {
+    "$PYTHON" -m pytest -m "browser or install" --durations=10
+}
+other_run() {
+    "$PYTHON" -m pytest -m "not browser and not install" --durations=10 || return
+    if [ "$BACKEND" = "compiled" ]; then
+        echo "== the core's tests again on the numpy backend (what a laptop without a C compiler runs)"
+        UR10CORE_BACKEND=numpy "$PYTHON" -c 'import ur10core; print("backend:", ur10core.BACKEND)'
+        # (the symbolic derivations, marked slow, are sympy's alone: once is enough)
+        UR10CORE_BACKEND=numpy "$PYTHON" -m pytest -m "core and not slow"
+    else
+        echo "no C compiler here: the compiled backend is not built, its comparison tests are skipped"
+    fi
+}
+
+stage "two runs side by side, on the $BACKEND backend: the browser and install tests, and everything else"
+declare -A NAME
+browser_run > "$LOGS/browser.log" 2>&1 &
+NAME[$!]="browser and install tests"
+other_run > "$LOGS/other.log" 2>&1 &
+NAME[$!]="core, app and server tests, then the core's tests on numpy"
+FAILED=0
+for _ in 1 2; do
+    set +e
+    wait -n -p DONE
+    CODE=$?
+    set -e
+    LOG="$LOGS/other.log"
+    if [ "${NAME[$DONE]}" = "browser and install tests" ]; then LOG="$LOGS/browser.log"; fi
+    stage "${NAME[$DONE]}: $([ $CODE -eq 0 ] && echo passed || echo "FAILED (exit $CODE)")"
+    cat "$LOG"
+    if [ $CODE -ne 0 ]; then FAILED=1; fi
+done
+rm -rf "$LOGS"
 stage "done"
+exit $FAILED

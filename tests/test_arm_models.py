@@ -59,3 +59,35 @@ def test_a_new_presenter_sees_the_classrooms_choice(classroom):
         await second.close()
 
     asyncio.run(scenario())
+
+
+@pytest.mark.parametrize("light", [False, True], ids=["default view", "light view"])
+def test_the_light_view_shades_the_arm_and_ghosts_for_software_webgl(light, monkeypatch):
+    """``--light``: toon shading, no shadow maps, no environment map; by default, shading, shadows and both."""
+    import viser
+
+    from app.server import TeachingServer
+
+    calls = []
+    for name in ("configure_default_lights", "configure_environment_map"):
+        original = getattr(viser.SceneApi, name)
+        monkeypatch.setattr(viser.SceneApi, name, lambda self, *a, _o=original, _n=name, **k: (calls.append((_n, a, k)), _o(self, *a, **k))[1])
+    server = TeachingServer(port=0, light=light)
+    try:
+        async def scenario():
+            client = await ViserClient(url(server)).connect()
+            session = session_of(server, client)
+            meshes = [m for models in session.scene_views.robot.meshes.values() for m in models]
+            ghosts = [g for models in session.scene_views.branches.models.values() for g in models]
+            assert {m.material for m in meshes + ghosts} == {"toon3" if light else "standard"}
+            assert {(m.cast_shadow, m.receive_shadow) for m in meshes} == {(not light, not light)}
+            await client.close()
+
+        asyncio.run(scenario())
+    finally:
+        server.stop()
+    if light:
+        assert ("configure_default_lights", (), {"enabled": True, "cast_shadow": False}) in calls
+        assert ("configure_environment_map", (), {"hdri": None}) in calls
+    else:
+        assert not calls  # viser's defaults: lights that cast shadows, and the warehouse environment map

@@ -245,7 +245,7 @@ def test_the_kernel_refuses_to_run_without_its_tolerances():
         "import importlib.util as u, numpy as np, sys; s = u.spec_from_file_location('_kernels', sys.argv[1]);"
         "k = u.module_from_spec(s); s.loader.exec_module(k); k.ik_one(np.eye(4), 0.0, float('nan'), float('nan'), (0.1,) * 6)"
     )
-    done = subprocess.run([sys.executable, "-c", code, compiled.__file__], capture_output=True, text=True, timeout=60)
+    done = subprocess.run([sys.executable, "-c", code, compiled.__file__], capture_output=True, text=True, timeout=HANG_TIMEOUT)
     assert "set_tolerances() was not called" in done.stderr
 
 
@@ -253,7 +253,7 @@ def test_the_kernel_refuses_to_run_without_its_tolerances():
 def test_the_environment_variable_picks_the_backend(requested, expected):
     env = dict(os.environ, UR10CORE_BACKEND=requested)
     code = "import ur10core, ur10core.ik as ik, sys; print(ur10core.BACKEND, ik.kernels.__name__, 'ur10core._kernels' in sys.modules)"
-    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=env, timeout=60, cwd=ROOT)
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=env, timeout=HANG_TIMEOUT, cwd=ROOT)
     assert done.returncode == 0, done.stderr
     backend, module, compiled_imported = done.stdout.split()
     assert backend == expected
@@ -263,7 +263,7 @@ def test_the_environment_variable_picks_the_backend(requested, expected):
 
 def test_a_misspelt_backend_is_refused():
     env = dict(os.environ, UR10CORE_BACKEND="fortran")
-    done = subprocess.run([sys.executable, "-c", "import ur10core"], capture_output=True, text=True, env=env, timeout=60)
+    done = subprocess.run([sys.executable, "-c", "import ur10core"], capture_output=True, text=True, env=env, timeout=HANG_TIMEOUT)
     assert done.returncode != 0 and "UR10CORE_BACKEND must be 'compiled' or 'numpy', got 'fortran'" in done.stderr
 
 

@@ -89,19 +89,12 @@ def test_the_arm_is_framed_beside_the_panel_in_any_window(open_page):
 
 def test_lecture_mode_for_the_presenter_and_the_class(open_page, playwright):
     """``--lecture``: 20 px type and thick gizmo lines in the teacher's browser, the panel folds away
-    and comes back, each browser can switch it off; the class's browsers get it too. (This server
-    draws the default view, not the light one: the real UR10 with its shading and shadows.)"""
-    from ur10dev.browser import SMALL_VIEWPORT, canvas_pixels, launch, open_app
+    and comes back, each browser can switch it off; the class's browsers get it too."""
+    from ur10dev.browser import SMALL_VIEWPORT, launch, open_app
 
-    server = TeachingServer(port=0, lecture=True)
+    server = TeachingServer(port=0, lecture=True, light=True)
     try:
         page, session = open_page(server=server, drawn=False)
-
-        def charcoal_caps() -> int:  # the charcoal joint caps and the aluminium arm, not just the white page
-            pixels = canvas_pixels(page)
-            return int(((pixels.max(axis=-1) < 110) & (pixels.max(axis=-1) - pixels.min(axis=-1) < 20)).sum())
-
-        wait_for(lambda: charcoal_caps() > 500, what="the default view's arm on screen")
         text = page.get_by_text("Drag the gizmo at the flange", exact=False).first
         assert font_px(text) >= 20, "lecture mode's panel type is under 20 px"
         assert session.ik_target.gizmo.line_width >= 6

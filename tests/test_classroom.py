@@ -87,7 +87,7 @@ def test_a_viewer_gets_each_presenter_update_whole(classroom, monkeypatch):
     draw_ghosts = BranchesScene.render
 
     def slow_ghosts(self, snapshot):
-        time.sleep(0.05)  # a busy moment between drawing the arm and its ghosts
+        time.sleep(0.05)  # not a wait: a slow redraw, so that a redraw sent in pieces would arrive in pieces
         draw_ghosts(self, snapshot)
 
     monkeypatch.setattr(BranchesScene, "render", slow_ghosts)

@@ -17,7 +17,7 @@ from app.__main__ import parse_args
 from app.server import lan_addresses
 from ur10dev.app_process import running_app
 from ur10dev.viser_client import ViserClient
-from ur10dev.waiting import until
+from ur10dev.waiting import HANG_TIMEOUT, until
 
 pytestmark = pytest.mark.server
 
@@ -78,7 +78,7 @@ def test_the_app_starts_no_helpers_and_frees_its_port_when_killed():
         assert _children(app.process.pid) == []
         port = int(re.search(r":(\d+)", app.url).group(1))
         app.process.send_signal(signal.SIGKILL)
-        app.process.wait(timeout=10)
+        app.process.wait(timeout=HANG_TIMEOUT)
     with socket.socket() as again:  # a restarted app gets the same port
         again.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
         again.bind(("127.0.0.1", port))

@@ -26,6 +26,7 @@ from app.server import TeachingServer
 
 from .server_support import drag_a_little, session_of, until, url
 from ur10dev.viser_client import ViserClient, encode
+from ur10dev.waiting import HANG_TIMEOUT
 
 pytestmark = pytest.mark.server
 
@@ -202,7 +203,7 @@ async def _handshake(port: int, headers: dict[str, str], host: str = "127.0.0.1"
     sock = socket.create_connection(("127.0.0.1", port))
     try:
         async with websockets.connect(f"ws://{host}:{port}", sock=sock, subprotocols=[f"viser-v{viser.__version__}"],
-                                      additional_headers=headers, open_timeout=10):
+                                      additional_headers=headers, open_timeout=HANG_TIMEOUT):
             return None
     except websockets.InvalidStatus as refusal:
         return refusal.response.status_code

@@ -4,18 +4,20 @@ Slow (it installs viser and friends into a new virtual environment): marked ``in
 which ``scripts/test.sh`` runs.
 """
 
+import asyncio
 import os
 import re
 import shutil
 import subprocess
 import sys
-import time
 import urllib.request
 from pathlib import Path
 
 import pytest
 
 from ur10dev.app_process import serving
+from ur10dev.viser_client import ViserClient
+from ur10dev.waiting import HANG_TIMEOUT
 
 ROOT = Path(__file__).resolve().parent.parent
 pytestmark = pytest.mark.install
@@ -60,11 +62,17 @@ def test_the_core_installs_without_a_compiler_and_runs_on_numpy(installed, tmp_p
 
 def test_the_app_starts_from_another_directory(installed, tmp_path):
     bin_dir, env = installed
-    with serving([str(bin_dir / "ur10-teach"), "--port", "0"], tmp_path, env, timeout=120) as (app, output):
+    with serving([str(bin_dir / "ur10-teach"), "--port", "0"], tmp_path, env, timeout=HANG_TIMEOUT) as (app, output):
         url = re.search(r"http://127\.0\.0\.1:\d+", "".join(output)).group(0)
-        with urllib.request.urlopen(url, timeout=30) as page:
+        with urllib.request.urlopen(url, timeout=HANG_TIMEOUT) as page:
             assert page.status == 200 and b"<html" in page.read().lower()
-        time.sleep(1.0)
+
+        async def a_student() -> None:  # a whole session built and drawn: the installed app serves a student
+            client = await ViserClient(url).connect()
+            assert client.gizmo_owner is not None and "θ1 base" in client.gui
+            await client.close()
+
+        asyncio.run(a_student())
         assert app.poll() is None and "Traceback" not in "".join(output), "".join(output)
 
 

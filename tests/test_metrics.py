@@ -6,6 +6,7 @@ import numpy as np
 
 from app.metrics import LatencyLog
 from app.server import _resident_bytes
+from ur10dev.waiting import HANG_TIMEOUT
 
 
 def test_ring_keeps_the_newest_samples_and_counts_all():
@@ -62,7 +63,7 @@ def test_a_collection_while_the_log_is_held_does_not_freeze_the_server():
         LATENCY.record("drag", 0.001)
         worker = threading.Thread(target=lambda: [LATENCY.summary() for _ in range(50)], daemon=True)
         worker.start()
-        worker.join(timeout=20)
+        worker.join(timeout=HANG_TIMEOUT)  # a deadlock never ends
         assert not worker.is_alive(), "summary() waited on its own lock"
         gc.set_threshold(*threshold)
         assert LATENCY.summary()["gc0"]["count"] > 0  # the pauses were recorded meanwhile

@@ -63,7 +63,8 @@ def test_explore_and_back_leaves_nothing_behind(classroom):
             checkbox = session.workspace.enabled._impl.uuid  # this private arm's, not the last one's
             await until(lambda: student.gui.get("Show workspace cloud", {}).get("uuid") == checkbox, what="the panel")
             await student.set_gui("Show workspace cloud", True)
-            await until(lambda s=session: s.workspace._cloud is not None, timeout=60, what="the private cloud")
+            await until(lambda s=session: s.workspace._cloud is not None, what="the private cloud")
+            assert len(session.workspace._cloud.points) == 200_000  # the default "Samples"
             await until(lambda: "Back to the presenter's arm" in student.gui, what="the way back")
             await student.set_gui("Back to the presenter's arm", True)
             await until(lambda: member.session is None, what="the private arm to go")
@@ -85,7 +86,7 @@ def test_a_presenter_who_leaves_takes_the_cloud_with_them(classroom):
         viewer = await ViserClient(url(classroom)).connect()
         await become_presenter(presenter, classroom)
         await presenter.set_gui("Show workspace cloud", True)
-        await until(lambda: "/workspace" in viewer.received.nodes, timeout=60, what="the cloud on the viewer's screen")
+        await until(lambda: "/workspace" in viewer.received.nodes, what="the cloud on the viewer's screen")
         presenter.abort()  # the tab closes
         await until(lambda: "/workspace" not in viewer.received.nodes, what="the cloud to leave every screen")
         await viewer.close()

@@ -16,6 +16,7 @@ from viser.infra._async_message_buffer import AsyncMessageBuffer
 from app import shared_frames
 from app.fast_updates import _UpdateMessage
 from ur10dev.viser_client import decode_frame
+from ur10dev.waiting import HANG_TIMEOUT, until
 
 #: viser 1.1.1's ``_message_producer``, which shared_frames.shared_message_producer copies.
 VISER_PRODUCER_SHA256 = "8283328d06cfa014576888930c49a857a2d79892dc89f9694444895945018ea3"
@@ -52,13 +53,9 @@ def produce(producer, window, persistent: bool = True, clients: int = 1) -> list
             buffer.push(message)
         sockets = [Recorder() for _ in range(clients)]
         tasks = [asyncio.create_task(producer(socket, buffer, client_id)) for client_id, socket in enumerate(sockets)]
-        async def all_sent() -> None:
-            while not all(socket.sent for socket in sockets):
-                await asyncio.sleep(0.001)
-
-        await asyncio.wait_for(all_sent(), 5)
+        await until(lambda: all(socket.sent for socket in sockets), what="a frame for every connection")
         buffer.set_done()
-        await asyncio.wait_for(asyncio.gather(*tasks), 5)
+        await asyncio.wait_for(asyncio.gather(*tasks), HANG_TIMEOUT)
         return [socket.sent[0] for socket in sockets]
 
     return asyncio.run(run())

@@ -214,7 +214,7 @@ def test_the_released_arm_falls_as_the_dynamics_say(app):
         await client.set_gui("Release the arm", True)
         await until(lambda: session.motion.player.playing, what="the drop to start")
         await until(lambda: not np.allclose(session.state.last.q, start), what="the arm to move")
-        await until(lambda: not session.motion.player.playing, timeout=30, what="the drop to end")
+        await until(lambda: not session.motion.player.playing, what="the drop to end")
         expected = wrap(dynamics.release(session.arm, start, duration=3.0).q[-1])
         np.testing.assert_allclose(session.state.last.q, expected, atol=1e-9)
         assert session.state.last.cause == "motion"
@@ -240,7 +240,7 @@ def test_moving_from_a_remembered_pose_along_a_path(app, kind):
         await client.set_gui("Go from the start to here along", kind)
         await until(lambda: session.motion.player.playing, what="the path to start")
         await until(lambda: np.abs(session.state.last.q - start).max() < 0.05, what="the arm back near the start")
-        await until(lambda: not session.motion.player.playing, timeout=30, what="the path to end")
+        await until(lambda: not session.motion.player.playing, what="the path to end")
         charts = session.motion.charts
         assert all(chart.visible for chart in charts.values()) and session.motion.summary.content.startswith(f"**{kind.capitalize()}**")
         assert len(charts[kind].data[0]) == len(charts["straight tool line"].data[0])  # both ways, over the same time
