@@ -53,6 +53,17 @@ def test_bottom_row(course, pose):
         course.ik(bad)
 
 
+def test_the_bottom_row_is_held_to_a_nanometre_scale(course, pose):
+    """Rounding (a product of transforms in floats) is accepted; anything a typing slip could make is refused."""
+    for k in range(4):
+        nearly, off = pose.copy(), pose.copy()
+        nearly[3, k] += 5e-10
+        off[3, k] += 5e-9
+        assert course.ik(nearly).valid.any()
+        with pytest.raises(ValueError, match="bottom row"):
+            course.ik(off)
+
+
 def test_not_orthonormal(course, pose):
     bad = pose.copy()
     bad[:3, :3] *= 1.01
