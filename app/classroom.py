@@ -9,9 +9,10 @@ thirty students cost the server one redraw, not thirty.
 * viser has no authentication, so the server prints a short **join code** at start-up;
   the browser that enters it becomes the **presenter** and gets the full panel and the
   gizmo (its own, client-scoped: a shared gizmo would let anyone drag it). Entering the
-  code elsewhere hands the role over. Wrong codes, from anyone, lock the code for the
-  whole class for a while, longer each time, and each is logged on the teacher's console:
-  guessing across fresh connections gains nothing.
+  code elsewhere hands the role over. Wrong codes from one address lock the code for that
+  address for a while, longer each time, however many tabs it guesses from; every wrong
+  code is logged on the teacher's console (grouped by address), and this machine, where
+  the teacher sits, is never locked out.
 * A viewer can **explore on their own**: a private arm starting from the presenter's
   pose, drawn with the same scene names in the browser's own scope, which hides the
   shared arm for that browser only. **Back to the presenter's arm** removes it again.
@@ -44,6 +45,7 @@ from .course_arms.scene import EXPLORER_ROOT, CourseArmScene
 from .course_arms.session import CourseArmSession, body_radius, reach
 from .course_arms.state import CourseArmState
 from .feedback import guard
+from .gate import address_of
 from .floor import add_floor_grid
 from .ik_target import branches_markdown
 from .readouts import flange_markdown, joints_markdown
@@ -60,11 +62,13 @@ log = logging.getLogger(__name__)
 #: Letters and digits that cannot be mistaken for one another when read off a projector.
 JOIN_ALPHABET = "ACDEFHJKMNPRTUVWXY3479"
 JOIN_LENGTH = 6
-#: Wrong codes (from anyone) that lock the join code, at first for LOCKOUT_SECONDS, twice as long
-#: each time after that up to MAX_LOCKOUT_SECONDS, until someone enters the right one.
+#: Wrong codes from one address that lock the join code for it, at first for LOCKOUT_SECONDS, twice as
+#: long each time after that up to MAX_LOCKOUT_SECONDS, until it enters the right one.
 MAX_WRONG_CODES = 5
 LOCKOUT_SECONDS = 10.0
 MAX_LOCKOUT_SECONDS = 600.0
+#: Addresses whose guesses are remembered (the oldest forgotten beyond it).
+MAX_GUESSERS = 10_000
 VIEWER, PRESENTER, EXPLORER = "viewer", "presenter", "explorer"
 #: Where the shared UR10 is drawn (``SceneViews``): an explorer of another arm hides these in its browser.
 UR10_ROOTS = ("/base_frame", "/arm", "/target", "/ghosts", "/floor_hits", "/overlay")
@@ -78,6 +82,16 @@ def make_join_code() -> str:
 
 def normalise_code(text: str) -> str:
     return "".join(ch for ch in text.upper() if ch.isalnum())
+
+
+@dataclasses.dataclass
+class Guesses:
+    """One address's wrong join codes."""
+
+    wrong: int = 0  #: since its last lock-out or its last right code
+    lockouts: int = 0  #: since its last right code: each lasts twice as long as the one before
+    locked_until: float = 0.0
+    while_locked: int = 0  #: tries refused during its current lock-out
 
 
 class LivePanel:
@@ -214,9 +228,8 @@ class Classroom:
         self._last_switch = -math.inf
         self.members: dict[int, Member] = {}
         self.presenter: Member | None = None
-        self.wrong_codes = 0  #: since the last lock-out or the last right code
-        self.lockouts = 0  #: since the last right code: each lasts twice as long as the one before
-        self.locked_until = 0.0
+        self.guesses: dict[str, Guesses] = {}  #: by address
+        self.claims = 0  #: join codes answered, right or wrong (for the tests)
         self._lock = threading.RLock()
 
     # ------------------------------------------------------------------ clients
@@ -268,22 +281,22 @@ class Classroom:
 
     def claim(self, member: Member, code: str) -> None:
         """Make ``member`` the presenter if ``code`` is the join code (``ValueError`` if not)."""
+        address = address_of(member.client)
         with self._lock:  # one claim at a time, and none for a browser that has gone meanwhile
+            self.claims += 1
             if member.closed:
                 return
             now = time.monotonic()
-            if now < self.locked_until:
-                raise ValueError(f"too many wrong codes in this class: the code works again in {self.locked_until - now:.0f} s")
-            if not secrets.compare_digest(normalise_code(code), normalise_code(self.code)):
-                self.wrong_codes += 1
-                log.warning("a wrong join code from browser %s (%d wrong since the last lock-out)",
-                            member.client.client_id, self.wrong_codes)
-                if self.wrong_codes >= MAX_WRONG_CODES:
-                    seconds = min(MAX_LOCKOUT_SECONDS, LOCKOUT_SECONDS * 2**self.lockouts)
-                    self.wrong_codes, self.lockouts, self.locked_until = 0, self.lockouts + 1, now + seconds
-                    log.warning("the join code is locked for %.0f s after %d wrong codes", seconds, MAX_WRONG_CODES)
+            guesses = self.guesses.get(address) if not self.app.gate.trusted(address) else None
+            if guesses is not None and now < guesses.locked_until:
+                guesses.while_locked += 1
+                raise ValueError(f"too many wrong codes from this computer: the code works again in "
+                                 f"{guesses.locked_until - now:.0f} s")
+            # compared as bytes: any text a browser sends is a wrong code, not a TypeError
+            if not secrets.compare_digest(normalise_code(code).encode(), normalise_code(self.code).encode()):
+                self._wrong_code(address, member, now)
                 raise ValueError("that is not the join code (the teacher's screen shows it)")
-            self.wrong_codes = self.lockouts = 0
+            self.guesses.pop(address, None)
             previous = self.presenter
             if previous is member:
                 return
@@ -316,6 +329,24 @@ class Classroom:
         session.observers.append(lambda _: app.refresher.request(self.live))
         session.camera = member.camera  # the browser's own camera, for the workspace sections
         return session
+
+    def _wrong_code(self, address: str, member: Member, now: float) -> None:
+        """Count a wrong code from ``address`` and lock it out after :data:`MAX_WRONG_CODES` (never this machine)."""
+        if self.app.gate.trusted(address):
+            log.warning("a wrong join code from %s, this machine (browser %s)", address, member.client.client_id)
+            return
+        guesses = self.guesses.pop(address, None) or Guesses()
+        self.guesses[address] = guesses  # the most recent guesser last: the oldest is forgotten first
+        if len(self.guesses) > MAX_GUESSERS:
+            del self.guesses[next(iter(self.guesses))]
+        guesses.wrong += 1
+        log.warning("a wrong join code from %s (browser %s; %d since its last lock-out)", address,
+                    member.client.client_id, guesses.wrong)
+        if guesses.wrong >= MAX_WRONG_CODES:
+            seconds = min(MAX_LOCKOUT_SECONDS, LOCKOUT_SECONDS * 2**guesses.lockouts)
+            log.warning("the join code is locked for %s for %.0f s after %d wrong codes (%d more tries refused "
+                        "during its last lock-out)", address, seconds, guesses.wrong, guesses.while_locked)
+            guesses.wrong, guesses.lockouts, guesses.locked_until, guesses.while_locked = 0, guesses.lockouts + 1, now + seconds, 0
 
     def can_switch(self) -> bool:
         """Whether the class's arm may change now (:data:`SWITCH_INTERVAL` after the last change)."""

@@ -5,17 +5,39 @@ from __future__ import annotations
 
 import functools
 import logging
+import time
 from typing import Any, Callable
 
 import viser
 
+from .gate import TokenBucket
 from .style import sentence
 
 log = logging.getLogger(__name__)
 
+#: Notifications a browser is shown, per second after a burst. Each is queued for that browser
+#: alone: one sending bad values fast (or not reading) must not grow the server's memory.
+NOTICES_PER_SECOND = 1.0
+NOTICE_BURST = 5
+#: The time the notices' rate is kept by (a test sets its own).
+clock = time.monotonic
+
 
 def notify(client: viser.ClientHandle, title: str, body: str, color: str = "yellow") -> None:
-    """A notification in one browser; nothing happens if that browser has gone."""
+    """A notification in one browser; nothing happens if that browser has gone.
+
+    Beyond :data:`NOTICES_PER_SECOND`, notifications are counted, not sent; the next one
+    sent says how many were not.
+    """
+    notices = getattr(client, "_notices", None)
+    if notices is None:
+        notices = client._notices = [TokenBucket(NOTICES_PER_SECOND, NOTICE_BURST, clock=lambda: clock()), 0]  # the rate, and how many unsent
+    if not notices[0].take():
+        notices[1] += 1
+        return
+    if notices[1]:
+        body = f"{sentence(body)} ({notices[1]} more messages were not shown.)"
+        notices[1] = 0
     try:
         client.add_notification(title, sentence(body), auto_close_seconds=8.0, color=color)
     except Exception:

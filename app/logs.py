@@ -32,7 +32,9 @@ class RepeatLimiter(logging.Filter):
     """A filter showing :data:`BURST` records of each kind per :data:`WINDOW` seconds.
 
     The kind of a record is its logger, the first line of its message (asyncio's reports
-    name a different task each time below it) and the type of its exception.
+    name a different task each time below it), its text arguments (what was dropped, from
+    which address) and the type of its exception. Numbers do not make a kind: "3 wrong" and
+    "4 wrong" are one.
     """
 
     def __init__(self, burst: int = BURST, window: float = WINDOW) -> None:
@@ -43,7 +45,8 @@ class RepeatLimiter(logging.Filter):
 
     def filter(self, record: logging.LogRecord) -> bool:
         first_line = str(record.msg).split("\n", 1)[0][:200]
-        kind = (record.name, first_line, record.exc_info[0] if record.exc_info else None)
+        texts = tuple(arg[:100] for arg in (record.args if isinstance(record.args, tuple) else ()) if isinstance(arg, str))
+        kind = (record.name, first_line, texts, record.exc_info[0] if record.exc_info else None)
         now = time.monotonic()
         with self._lock:
             seen = self._seen.get(kind)
@@ -62,6 +65,10 @@ class RepeatLimiter(logging.Filter):
             if seen.hidden > 1:
                 return False
         # the first one hidden: say so, once, without its traceback
+        try:
+            first_line = record.getMessage().split("\n", 1)[0][:200]
+        except (TypeError, ValueError):  # arguments that do not fit the message: the message as it is
+            pass
         record.msg = f"{first_line} (repeating: more like this are counted, not shown, for {self.window:.0f} s)"
         record.args, record.exc_info, record.exc_text, record.stack_info = (), None, None, None
         return True

@@ -119,7 +119,8 @@ class MotionLessons(View):
         dynamics.link_masses(arm)  # an arm without published masses: refused here, with the reason
 
         def compute() -> tuple[np.ndarray, np.ndarray]:
-            motion = HEAVY.run(session.client.client_id, lambda: dynamics.release(arm, start, duration=DROP_SECONDS))
+            motion = HEAVY.run(session.client, lambda: dynamics.release(arm, start, duration=DROP_SECONDS),
+                               cancelled=self.player.cancelled)
             return motion.t, wrap(motion.q)  # a joint that swung round is shown within one turn
 
         self.player.play(compute, "motion")
@@ -135,8 +136,9 @@ class MotionLessons(View):
         arm, start, goal = session.arm, self.start.copy(), session.state.last.q.copy()
 
         def compute() -> tuple[np.ndarray, np.ndarray]:
-            both = {PATHS[0]: HEAVY.run(session.client.client_id,
-                                        lambda: paths.straight_line(arm, start, arm.fk(goal), PATH_SECONDS, PATH_STEPS)),
+            both = {PATHS[0]: HEAVY.run(session.client,
+                                        lambda: paths.straight_line(arm, start, arm.fk(goal), PATH_SECONDS, PATH_STEPS),
+                                        cancelled=self.player.cancelled),
                     PATHS[1]: paths.joint_interpolation(arm, start, goal, PATH_SECONDS, PATH_STEPS)}
             self.summary.content = "\n\n".join(path_summary(both[k], k) for k in (kind, *(k for k in PATHS if k != kind)))
             with session.client.atomic():

@@ -3,8 +3,10 @@
 ``ur10core.workspace.branch_count_map`` solves 200 × 200 poses in one batch; the map is
 drawn as one small PNG image lying in the plane (a few KB, where 40 000 coloured points
 would be 600 KB). It is recomputed off the drag path: the panel's pace (≤ 10 Hz) asks
-for it, a worker thread of this view computes it, and requests that come meanwhile are
-folded into one more computation with the newest target (``app.workers.FoldedRuns``).
+for it, a background thread computes it, and requests that come meanwhile are folded into
+one more computation with the newest target (``app.workers.FoldedRuns``). Maps are made
+one at a time in the server, each address's at most half the time (``app.workers.MAPS``):
+eight tabs turning their gizmos cost what one does.
 """
 
 from __future__ import annotations
@@ -22,7 +24,7 @@ from .feedback import chosen
 from .state import Snapshot
 from .style import REACH_COLORS, hex_color
 from .view import View
-from .workers import FoldedRuns
+from .workers import MAPS, FoldedRuns
 from .workspace import FROM_ABOVE
 
 if TYPE_CHECKING:
@@ -102,16 +104,15 @@ class ReachMapView(View):
         with self._lock:
             if self._closed:
                 return
-        if self._maps.claim():
-            threading.Thread(target=self._session.guard(lambda _: self._maps.run_claimed()), args=(None,),
-                             name="reach-map", daemon=True).start()
+        self._maps.start("reach-map", self._session.guard)
 
     def _draw(self) -> None:
         snapshot = self._session.state.last
         key = self._key(snapshot)
         if not self.enabled.value or key == self.shown_key:
             return
-        reach = branch_count_map(self._session.arm, snapshot.target, key[1], RESOLUTION)
+        reach = MAPS.run(self._session.client, lambda: branch_count_map(self._session.arm, snapshot.target, key[1], RESOLUTION),
+                         cancelled=lambda: self._closed or self._session.closed)
         self.computed += 1
         image, (wxyz, position) = map_image(reach.counts), map_pose(reach)
         with self._lock:

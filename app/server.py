@@ -27,7 +27,7 @@ from .course_arms.panel import factor_scales
 from .course_arms.desktop_arm import DesktopArmSession
 from .course_arms.session import CourseArmSession
 from .floor import add_floor_grid
-from .gate import Gate, gated_serve
+from .gate import Gate, TokenBucket, budget_of, gated_serve
 from .meshes import load_models
 from .metrics import LATENCY
 from .workers import DragQueue, PanelRefresher
@@ -62,6 +62,33 @@ def lan_addresses() -> list[str]:
     except OSError:
         pass
     return [a for i, a in enumerate(found) if not a.startswith("127.") and a not in found[:i]]
+
+
+#: Addresses whose arm changes are remembered (all forgotten beyond it).
+MAX_SWITCH_BUDGETS = 10_000
+#: Open files the server asks for at start: a connection is one, and 1 024 (a common default) ran out
+#: when one address held a thousand half-open requests.
+OPEN_FILES = 65_536
+
+
+def raise_open_file_limit(wanted: int = OPEN_FILES) -> int:
+    """Raise this process's soft limit on open files towards ``wanted`` (up to the hard limit) where the OS allows.
+
+    Returns the soft limit in force afterwards (0 where there is none to read, as on Windows).
+    """
+    try:
+        import resource
+    except ImportError:  # Windows: no such limit on sockets
+        return 0
+    soft, hard = resource.getrlimit(resource.RLIMIT_NOFILE)
+    target = wanted if hard == resource.RLIM_INFINITY else min(wanted, hard)
+    if soft != resource.RLIM_INFINITY and soft < target:
+        try:
+            resource.setrlimit(resource.RLIMIT_NOFILE, (target, hard))
+            soft = target
+        except (ValueError, OSError):
+            log.info("could not raise the open-file limit from %d", soft)
+    return soft
 
 
 def _resident_bytes() -> int:
@@ -185,6 +212,7 @@ class TeachingServer:
         self.host = host
         label = f"UR10 kinematics ({preset})"
         self.gate = gate or Gate(allowed_origins)
+        raise_open_file_limit()
         shared_frames.install()
         with gated_serve(self.gate):
             self.server = viser.ViserServer(host=host, port=port, label=label, verbose=False)
@@ -202,6 +230,7 @@ class TeachingServer:
         self.drags = DragQueue(loop)
         self._sessions: dict[int, ClientSession | CourseArmSession | DesktopArmSession] = {}
         self._last_switch: dict[int, float] = {}  # client id → when its arm was last rebuilt
+        self._switches: dict[str, TokenBucket] = {}  # budget (an address) → its arm changes
         self._sessions_lock = threading.Lock()
         #: shared demo mode (``--shared``): everyone watches the presenter (``app.classroom``)
         self.classroom = Classroom(self) if shared else None
@@ -289,8 +318,13 @@ class TeachingServer:
         picker is shown, so a browser that waits that long after seeing it is never refused),
         so that flicking the picker cannot load the server.
         """
+        budget = budget_of(client)
         with self._sessions_lock:
-            if not self.can_switch(client.client_id):
+            if len(self._switches) > MAX_SWITCH_BUDGETS:
+                self._switches.clear()
+            switches = self._switches.setdefault(budget, TokenBucket(1.0 / SWITCH_INTERVAL, 2))
+            # each tab as often as its picker allows; all of one address's tabs together no more than one would
+            if not self.can_switch(client.client_id) or not switches.take():
                 raise ValueError(f"one change of arm every {SWITCH_INTERVAL:g} s, please: try again in a moment")
             self._last_switch[client.client_id] = math.inf  # refused while this one is being built
             old = self._sessions.pop(client.client_id, None)

@@ -10,16 +10,23 @@ of recent windows of viser's shared (broadcast) queue and sends the same bytes t
 browser whose window holds the same messages. Each browser's own queue is encoded as
 viser does it, since no other browser receives those windows.
 
+It also gives every send :data:`SEND_TIMEOUT`: a browser that stops reading its socket
+(a paused laptop, or a client that never reads) would otherwise keep its connection, and
+everything queued for it, for as long as the server runs; it is dropped instead, and
+viser's teardown frees its queue.
+
 This replaces a private function of viser 1.1.1, which is pinned exactly
 (pyproject.toml). ``tests/test_shared_frames.py`` checks that the frames decode to what
 viser's own producer sends and fails when viser's producer changes.
-``UR10_TEACH_ENCODE_PER_CLIENT=1`` keeps viser's own producer (the benchmark's
-comparison row).
+``UR10_TEACH_ENCODE_PER_CLIENT=1`` encodes every window per browser, as viser does (the
+benchmark's comparison row).
 """
 
 from __future__ import annotations
 
+import asyncio
 import collections
+import logging
 import os
 import threading
 import time
@@ -31,6 +38,11 @@ from viser.infra import _infra
 from viser.infra._async_message_buffer import AsyncMessageBuffer
 from viser.infra._messages import Message
 
+log = logging.getLogger(__name__)
+
+#: Seconds one frame may take to leave for a browser before that browser is dropped: far longer
+#: than a point cloud takes on a slow school network, far shorter than the class would wait.
+SEND_TIMEOUT = 15.0
 #: Frames larger than this (a newcomer's backlog, a point cloud) are encoded per browser, not kept.
 MAX_KEPT_BYTES = 256 * 1024
 #: Recent windows kept: a hundred viewers drain the same redraw within a few windows of each other.
@@ -91,22 +103,29 @@ KEPT = KeptFrames()
 
 async def shared_message_producer(websocket, buffer: AsyncMessageBuffer, client_id: int,
                                   backlog_done_message: Message | None = None) -> None:
-    """viser's ``_message_producer``, with the broadcast queue's frames encoded once for everyone."""
+    """viser's ``_message_producer``, with the broadcast queue's frames encoded once for everyone,
+    and a browser that takes longer than :data:`SEND_TIMEOUT` over a frame dropped."""
     window_generator = buffer.window_generator(client_id, backlog_done_message=backlog_done_message)
     zstd = zstandard.ZstdCompressor(level=1)
-    shared = buffer.persistent_messages  # viser's broadcast queue; each browser's own is not kept
+    shared = buffer.persistent_messages and not ENCODE_PER_CLIENT  # each browser's own queue is not kept
     try:
         while not buffer.done:
             try:
                 window = await window_generator.__anext__()
             except StopAsyncIteration:
                 break
-            await websocket.send(KEPT.frame(window) if shared else encode(window, zstd))
+            try:
+                await asyncio.wait_for(websocket.send(KEPT.frame(window) if shared else encode(window, zstd)), SEND_TIMEOUT)
+            except asyncio.TimeoutError:  # TimeoutError itself from Python 3.11
+                remote = websocket.remote_address
+                log.warning("dropped browser %s at %s: it has not read what was sent to it for %.0f s",
+                            client_id, remote[0] if remote else "?", SEND_TIMEOUT)
+                websocket.transport.abort()  # its receive side then ends, and viser tears the client down
+                break
     finally:
         await window_generator.aclose()  # as viser's: run the generator's cleanup now, not at a later collection
 
 
 def install() -> None:
-    """Use :func:`shared_message_producer` for every connection from now on (unless told not to)."""
-    if not ENCODE_PER_CLIENT:
-        _infra._message_producer = shared_message_producer
+    """Use :func:`shared_message_producer` for every connection from now on."""
+    _infra._message_producer = shared_message_producer

@@ -189,7 +189,7 @@ class StaticsView(View):
             if DIRECTIONS[direction] is None:
                 raise ValueError("the map needs a force fixed in the base frame: pick a direction other than the flange's z")
             force = force_vector(direction, float(self.newtons.value), snapshot.flange, self.dragged)
-            shown = force, HEAVY.run(session.client.client_id, lambda: torque_map(snapshot.arm, force))
+            shown = force, HEAVY.run(session.client, lambda: torque_map(snapshot.arm, force), cancelled=lambda: session.closed)
         with self._map_lock:
             if session.closed:
                 return

@@ -25,17 +25,20 @@ drag events costs one panel redraw, a click is answered at once, and thirty stud
 dragging at once slow the panels down rather than the arms.
 
 **Slow one-off jobs** (:data:`HEAVY`). A typed arm's branch search or workspace cloud takes
-tens of milliseconds to over a second, on a thread of its own (:meth:`FoldedRuns.start`).
-At most one such job runs at a time in the whole server, so the drags always keep the
-other core, and each browser's jobs take at most :data:`HEAVY_DUTY` of the time: a
-student clicking "Find every branch" over and over, or rebuilding an arm to recompute its
-cloud, waits between runs instead of keeping a core busy.
+tens of milliseconds to over a second, on a thread of :data:`BACKGROUND`, a bounded pool
+(:meth:`FoldedRuns.start`): presses that come while one runs fold into one more run. At
+most one such job runs at a time in the whole server, so the drags always keep the other
+core, and each address's jobs (each browser's, on the teacher's own machine) take at most
+:data:`HEAVY_DUTY` of the time: a student clicking "Find every branch" over and over, from
+one tab or eight, waits between runs instead of keeping a core busy. A job whose browser
+has gone, or whose motion was stopped, is not started.
 """
 
 from __future__ import annotations
 
 import asyncio
 import collections
+import concurrent.futures
 import heapq
 import itertools
 import logging
@@ -44,6 +47,7 @@ import threading
 import time
 from typing import Any, Protocol
 
+from .gate import budget_of
 from .metrics import LATENCY
 
 log = logging.getLogger(__name__)
@@ -55,8 +59,15 @@ PANEL_INTERVAL = 0.1
 #: ``UR10_TEACH_PANEL_DUTY=1`` lets them take all of it (the classroom benchmark measures both).
 DUTY = float(os.environ.get("UR10_TEACH_PANEL_DUTY", "0.15"))
 
-#: Largest share of the time one browser's slow one-off jobs may take (:class:`HeavyWork`).
+#: Largest share of the time one address's slow one-off jobs may take (:class:`HeavyWork`).
 HEAVY_DUTY = 0.25
+#: Threads for the background work of every session (:data:`BACKGROUND`). Each session's features
+#: fold their runs, so this bounds the threads, however fast presses come, not what is done.
+BACKGROUND_THREADS = 32
+
+
+class Cancelled(Exception):
+    """A slow job that was not started: its browser has gone, or its run was stopped."""
 
 
 #: The drag worker serves waiting sessions for this long (s) before the sockets get a turn.
@@ -282,16 +293,21 @@ class FoldedRuns:
             return True
 
     def run_claimed(self) -> None:
-        try:
-            while True:
+        """Run until no request is waiting. A run that raised is followed by the one waiting, if any,
+        and the first error is raised once none waits (it may explain a refusal)."""
+        error = None
+        while True:
+            try:
                 self._run()
-                with self._lock:
-                    if not self._again:
-                        return
-                    self._again = False
-        finally:
+            except BaseException as raised:  # noqa: BLE001 - re-raised below, once no request waits
+                error = error or raised
             with self._lock:
-                self._busy = False
+                if not self._again:
+                    self._busy = False
+                    break
+                self._again = False
+        if error is not None:
+            raise error
 
     def __call__(self) -> None:
         """Run here, in the caller's thread, unless a run is already under way."""
@@ -304,48 +320,68 @@ class FoldedRuns:
         ``wrap`` wraps the thread's work as it does a callback (``session.guard``): nothing escapes.
         """
         if self.claim():
-            threading.Thread(target=wrap(lambda _: self.run_claimed()), args=(None,), name=name, daemon=True).start()
+            BACKGROUND.submit(wrap(lambda _: self.run_claimed()), None)
 
 
 class HeavyWork:
-    """Slow one-off jobs: one at a time in the server, each browser's at most ``duty`` of the time.
+    """Slow one-off jobs: one at a time in the server, each budget's at most ``duty`` of the time.
 
-    A job of a browser starts no sooner than its last one's duration × (1/duty − 1) after
-    that one ended; the rest is kept per browser (client id), so a rebuilt arm does not
-    start afresh. Call :meth:`run` from a thread of the job's own: it may wait. ``clock`` and
-    ``sleep`` are the time and the wait (a test passes its own).
+    A job starts no sooner than the last one of its budget (``budget(who)``: by default
+    ``who`` itself; for :data:`HEAVY`, the browser's address) took × (1/duty − 1) after that
+    one ended; the rest is kept per budget, so a rebuilt arm or a new tab does not start
+    afresh. Call :meth:`run` from a thread of the job's own: it may wait, and it raises
+    :class:`Cancelled` instead of starting the job once ``cancelled()`` is true. ``clock``
+    and ``sleep`` are the time and the wait (a test passes its own).
     """
 
-    def __init__(self, duty: float = HEAVY_DUTY, clock=time.monotonic, sleep=time.sleep) -> None:
+    #: Longest single wait (s) before ``cancelled`` is asked again.
+    CHECK_EVERY = 0.25
+
+    def __init__(self, duty: float = HEAVY_DUTY, clock=time.monotonic, sleep=time.sleep, budget=lambda who: who) -> None:
         self.duty = duty
-        self._clock, self._sleep = clock, sleep
+        self._clock, self._sleep, self._budget = clock, sleep, budget
         self._slot = threading.Lock()
         self._lock = threading.Lock()
-        self._next: dict[int, float] = {}  #: client id → when its next job may start (monotonic)
+        self._next: dict[Any, float] = {}  #: budget → when its next job may start (monotonic)
+        self.started = 0  #: jobs started (for the tests)
 
-    def run(self, client_id: int, job):
+    def run(self, who, job, cancelled=lambda: False):
+        key = self._budget(who)
         while True:
-            wait = self._rest(client_id)
+            if cancelled():
+                raise Cancelled
+            wait = self._rest(key)
             if wait > 0:
-                self._sleep(wait)
+                self._sleep(min(wait, self.CHECK_EVERY))
                 continue
-            with self._slot:
-                if self._rest(client_id) > 0:  # another job of this browser ran while this one waited for the slot
+            if not self._slot.acquire(timeout=self.CHECK_EVERY):
+                continue
+            try:
+                if self._rest(key) > 0:  # another job of this budget ran while this one waited for the slot
                     continue
+                if cancelled():
+                    raise Cancelled
                 start = self._clock()
+                self.started += 1
                 try:
                     return job()
                 finally:
                     end = self._clock()
                     with self._lock:
-                        self._next[client_id] = end + (end - start) * (1.0 / self.duty - 1.0)
+                        self._next[key] = end + (end - start) * (1.0 / self.duty - 1.0)
+            finally:
+                self._slot.release()
 
-    def _rest(self, client_id: int) -> float:
-        """How long this browser must still wait before its next job (s)."""
+    def _rest(self, key) -> float:
+        """How long this budget must still wait before its next job (s)."""
         with self._lock:
             now = self._clock()
-            self._next = {k: t for k, t in self._next.items() if t > now}  # only browsers still resting
-            return self._next.get(client_id, now) - now
+            self._next = {k: t for k, t in self._next.items() if t > now}  # only budgets still resting
+            return self._next.get(key, now) - now
 
 
-HEAVY = HeavyWork()
+HEAVY = HeavyWork(budget=budget_of)
+#: The branch-count maps (``app.reach_map``): made while a gizmo turns, so a larger share, and a slot of their own.
+MAPS = HeavyWork(duty=0.5, budget=budget_of)
+#: The threads background work runs on (a pool: presses cannot multiply them).
+BACKGROUND = concurrent.futures.ThreadPoolExecutor(BACKGROUND_THREADS, thread_name_prefix="background")

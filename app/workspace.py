@@ -1,8 +1,9 @@
 """The workspace point cloud, coloured by manipulability |det J|, with an optional section.
 
-Sampled by ``Arm.sample_workspace`` off the event loop (in the callback's worker thread)
-and cached per (preset, size) for every client; each client is sent only the cloud it
-asked for. 200 k points (the default) is about 1.8 MB per client. A vertical section turns
+Sampled by ``Arm.sample_workspace`` off the event loop, as a slow job (``app.workers.HEAVY``:
+one at a time in the server, each address's a share of the time), and kept for every
+client in :data:`CLOUDS`, whose memory is a fixed budget; each client is sent only the
+cloud it asked for. 200 k points (the default) is about 1.8 MB per client. A vertical section turns
 every sample into the arm's plane; a horizontal one is sampled in its plane
 (``Arm.sample_horizontal_section``). The camera turns to face a section square-on. The
 translucent hull is the cloud's outer surface and hole, turned about the base axis
@@ -11,7 +12,7 @@ translucent hull is the cloud's outer surface and hole, turned about the base ax
 
 from __future__ import annotations
 
-import functools
+import collections
 import math
 import threading
 from typing import TYPE_CHECKING
@@ -26,7 +27,7 @@ from .camera import VIEWS
 from .feedback import chosen
 from .style import hex_color
 from .view import View
-from .workers import FoldedRuns
+from .workers import HEAVY, FoldedRuns
 
 if TYPE_CHECKING:
     from .session import ClientSession
@@ -59,19 +60,68 @@ def colormap(values: np.ndarray, top: float) -> np.ndarray:
     return ((1 - frac) * VIRIDIS[low] + frac * VIRIDIS[low + 1]).astype(np.uint8)
 
 
-@functools.lru_cache(maxsize=4)
-def coloured_cloud(arm: Arm, n: int) -> tuple[np.ndarray, np.ndarray, float]:
-    """(points (n, 3) float32, colours (n, 3) uint8, colour-scale top in m³), shared by all clients."""
-    points, manipulability = arm.sample_workspace(n, seed=0)
-    top = float(np.percentile(manipulability, 99))
-    return points.astype(np.float32), colormap(manipulability, top), top
+#: Bytes of clouds and sections kept for every client (a 1 M cloud is 15 MB).
+CLOUD_BUDGET_BYTES = 64 * 2**20
 
 
-@functools.lru_cache(maxsize=8)
-def coloured_horizontal_section(arm: Arm, height: float, n: int, top: float) -> tuple[np.ndarray, np.ndarray]:
+class KeptClouds:
+    """Clouds by what they were made from, the least recently used forgotten beyond ``budget`` bytes."""
+
+    def __init__(self, budget: int = CLOUD_BUDGET_BYTES) -> None:
+        self.budget = budget
+        self._kept: collections.OrderedDict[tuple, tuple] = collections.OrderedDict()
+        self._lock = threading.Lock()
+
+    @property
+    def nbytes(self) -> int:
+        with self._lock:
+            return sum(_nbytes(value) for value in self._kept.values())
+
+    def get(self, key: tuple, make):
+        """The kept value for ``key``, or ``make()`` (called outside the lock), kept within the budget."""
+        with self._lock:
+            if key in self._kept:
+                self._kept.move_to_end(key)
+                return self._kept[key]
+        value = make()
+        with self._lock:
+            self._kept[key] = value
+            total = sum(_nbytes(kept) for kept in self._kept.values())
+            while total > self.budget and len(self._kept) > 1:
+                total -= _nbytes(self._kept.popitem(last=False)[1])
+        return value
+
+
+def _nbytes(value: tuple) -> int:
+    return sum(part.nbytes for part in value if isinstance(part, np.ndarray))
+
+
+CLOUDS = KeptClouds()
+
+
+def coloured_cloud(arm: Arm, n: int, compute=lambda make: make()) -> tuple[np.ndarray, np.ndarray, float]:
+    """(points (n, 3) float32, colours (n, 3) uint8, colour-scale top in m³), shared by all clients.
+
+    ``compute(make)`` runs ``make`` when the cloud is not kept (a session passes its slow-job runner).
+    """
+
+    def make():
+        points, manipulability = arm.sample_workspace(n, seed=0)
+        top = float(np.percentile(manipulability, 99))
+        return points.astype(np.float32), colormap(manipulability, top), top
+
+    return CLOUDS.get(("cloud", arm, n), lambda: compute(make))
+
+
+def coloured_horizontal_section(arm: Arm, height: float, n: int, top: float,
+                                compute=lambda make: make()) -> tuple[np.ndarray, np.ndarray]:
     """(points (n, 3) float32 in the plane z = height, colours on the whole cloud's scale ``top``)."""
-    points, manipulability = arm.sample_horizontal_section(height, n, seed=0)
-    return points.astype(np.float32), colormap(manipulability, top)
+
+    def make():
+        points, manipulability = arm.sample_horizontal_section(height, n, seed=0)
+        return points.astype(np.float32), colormap(manipulability, top)
+
+    return CLOUDS.get(("horizontal", arm, height, n, top), lambda: compute(make))
 
 
 def revolved_mesh(heights: np.ndarray, inner: np.ndarray, outer: np.ndarray,
@@ -153,7 +203,11 @@ class WorkspaceView(View):
             widget.on_update(session.guard(self._changed))
 
     def _changed(self, _: viser.GuiEvent) -> None:
-        self._clouds()  # the running computation, if any, picks up the newest choices
+        self._clouds.start("workspace", self._session.guard)  # a run under way picks up the newest choices
+
+    def _slow_job(self, make):
+        session = self._session
+        return HEAVY.run(session.client, make, cancelled=lambda: session.closed)
 
     def _update_or_explain(self) -> None:
         try:
@@ -174,7 +228,7 @@ class WorkspaceView(View):
         self.progress.value = 5.0
         self.progress.visible = True
         try:
-            points, colors, top = coloured_cloud(self._session.arm, count)
+            points, colors, top = coloured_cloud(self._session.arm, count, self._slow_job)
             self.progress.value = 60.0
             if section == HULL:
                 vertices, faces = revolved_mesh(*revolved_boundary(points))
@@ -211,7 +265,7 @@ class WorkspaceView(View):
             return vertical_section(points, azimuth).astype(np.float32), colors
         if section == SECTIONS[2]:  # sampled in the plane itself: a slab of the cloud holds only a few hundred
             return coloured_horizontal_section(self._session.arm, self.height.value / 1000.0,
-                                               min(SECTION_POINTS, len(points)), top)
+                                               min(SECTION_POINTS, len(points)), top, self._slow_job)
         if section == SECTIONS[3]:  # the cut face shows the inside: the hole about the base axis, the dexterous core
             behind = points[:, :2] @ self._plane_normal()[:2] < 0
             return points[behind], colors[behind]

@@ -9,7 +9,7 @@ from app.ik_target import branch_table, status_markdown
 from app.readouts import joints_markdown, orientation_markdown, pose_markdown
 from app.singularity import alarm, factor_levels
 from app.state import COURSE_POSES, ArmState
-from app.workspace import VIRIDIS, colormap
+from app.workspace import VIRIDIS, KeptClouds, colormap
 from ur10core import Arm
 
 from .conftest import wrapped_difference
@@ -249,3 +249,22 @@ def test_presets_load_their_meshes():
     for preset in Arm.PRESETS:
         links = load_links(preset)
         assert len(links) == 7 and all(len(link.body_faces) for link in links)
+
+
+def test_the_kept_clouds_stay_within_their_memory_budget():
+    """Review 2, finding 5: the cache kept four clouds whatever their size (six sizes cycled: a 1.46 GB peak)."""
+    kept = KeptClouds(budget=10 * 2**20)
+    made = []
+
+    def cloud(n: int):
+        made.append(n)
+        return np.zeros((n, 3), np.float32), np.zeros((n, 3), np.uint8), 1.0  # 15 bytes a point
+
+    for n in (100_000, 200_000, 500_000, 100_000, 200_000, 500_000):
+        kept.get(("cloud", n), lambda n=n: cloud(n))
+        assert kept.nbytes <= 10 * 2**20
+    assert made == [100_000, 200_000, 500_000, 100_000, 200_000, 500_000]  # 7.5 MB leaves room for no other
+    kept.get(("cloud", 500_000), lambda: cloud(1))
+    assert made[-1] == 500_000  # the newest is kept
+    huge = kept.get(("cloud", 1_000_000), lambda: cloud(1_000_000))  # over the budget alone: kept, the others go
+    assert len(huge[0]) == 1_000_000 and kept.nbytes == 15_000_000

@@ -14,6 +14,7 @@ import numpy as np
 import pytest
 from viser import _messages as messages
 
+from app import feedback, shared_frames
 from ur10dev.app_process import running_app
 from .server_support import drag_a_little, session_of, until, url, wait_for
 from ur10dev.viser_client import BROWSER_SEND_INTERVAL, ViserClient, encode, wxyz_of
@@ -82,31 +83,56 @@ def test_a_browser_that_leaves_while_its_arm_is_being_built_is_freed(app):
     asyncio.run(scenario())
 
 
-def test_a_client_that_stops_reading_does_not_hold_up_the_others(app):
+def test_a_client_that_stops_reading_is_dropped_and_holds_up_no_one(app, monkeypatch, caplog):
+    """Review 2, finding 2: connections that asked for clouds and never read held 2.2 GB for as
+    long as the server ran (the keepalive ping waited behind the blocked send)."""
+    monkeypatch.setattr(shared_frames, "SEND_TIMEOUT", 2.0)  # the server's patience, shortened for the test
+
     async def scenario():
         frozen = await ViserClient(url(app)).connect()
         frozen_session = session_of(app, frozen)
+        cloud, samples = frozen.gui["Show workspace cloud"]["uuid"], frozen.gui["Samples"]["uuid"]
         frozen.freeze()  # stops reading its socket, even the server's pings
-        # the frozen one's arm keeps changing (its messages pile up on the server)...
-        for k in range(200):
-            frozen_session.apply(lambda state, k=k: state.set_joint(0, 0.01 * k))
-        # ...while a student next to it drags and is answered promptly
+        # ...and asks for clouds: megabytes the server cannot hand over
+        await frozen.send(messages.GuiUpdateMessage(cloud, {"value": True}))
+        for count in ("500 k", "1 M", "200 k", "1 M"):
+            await frozen.send(messages.GuiUpdateMessage(samples, {"value": count}))
+        # a student next to it drags and is answered (how fast, beside a frozen client, is bench_hostile's)
         active = await ViserClient(url(app)).connect()
         session = session_of(app, active)
-        T = session.state.last.flange.copy()
-        for k in range(40):
-            T[:3, 3] += (0.002, 0.001, 0.0)
-            await active.drag_target(T[:3, 3], wxyz_of(T), "start" if k == 0 else "update")
-            await asyncio.sleep(BROWSER_SEND_INTERVAL)
-        # answered: the student's screen shows the last target (how fast, beside a frozen client, is bench_hostile's)
-        await until(lambda: any((np.abs(flanges - T[:3, 3]).max(axis=-1) < 1e-5).any()
+        target = await drag_a_little(active, session, steps=20)
+        await until(lambda: any((np.abs(flanges - target[:3, 3]).max(axis=-1) < 1e-5).any()
                                 for _, flanges in active.received.ghost_flanges[-3:]), what="the drag's last target on screen")
-        # the server gives up on the frozen client (websocket pings go unanswered) and frees it
+        # the server gives up on the frozen client once a frame has waited its patience, and frees it
         await until(lambda: frozen_session.closed, what="the frozen client to be dropped")
+        assert any("has not read what was sent to it" in r.getMessage() for r in caplog.records)
         assert len(app.sessions) == 1
         await active.close()
 
-    asyncio.run(scenario())
+    with caplog.at_level("WARNING", logger="app.shared_frames"):
+        asyncio.run(scenario())
+
+
+def test_refusals_are_shown_at_a_readable_pace(monkeypatch):
+    """Review 2, finding 2: a paused browser sent bad values at 60/s and the server queued a
+    notification for each (0.21 MiB/s, for as long as it lasted)."""
+    shown = []
+
+    class Browser:
+        client_id = 7
+
+        def add_notification(self, title, body, **_):
+            shown.append(body)
+
+    now = [0.0]
+    monkeypatch.setattr(feedback, "clock", lambda: now[0])
+    browser = Browser()
+    for _ in range(600):  # ten seconds of bad values at 60/s, all at one instant of the clock
+        feedback.notify(browser, "Not accepted", "θ2: not a number")
+    assert len(shown) == feedback.NOTICE_BURST
+    now[0] += 10.0
+    feedback.notify(browser, "Not accepted", "θ2: not a number")
+    assert shown[-1] == "Θ2: not a number (595 more messages were not shown.)"
 
 
 def test_garbage_and_out_of_range_input_is_refused(app):

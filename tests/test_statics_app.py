@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import asyncio
+import threading
 
 import numpy as np
 import pytest
@@ -271,5 +272,34 @@ def test_the_workspace_coloured_by_the_torque_a_force_needs(app):
         await client.set_gui("Colour the workspace by ‖τ‖ for this force", False)
         await until(lambda: statics._map is None and not statics.map_legend.visible, what="the map gone")
         await client.close()
+
+    asyncio.run(scenario())
+
+
+def test_presses_fold_into_one_run_on_one_thread_and_none_for_a_browser_that_left(app):
+    """Review 2, finding 3: *Release the arm* pressed 30 times a second for 20 s left 543 threads,
+    each with its second of dynamics, running long after the student had gone."""
+    from app.workers import BACKGROUND_THREADS, HEAVY
+
+    async def scenario():
+        client = await ViserClient(url(app)).connect()
+        session = session_of(app, client)
+        threads = threading.active_count()
+        with HEAVY._slot:  # another student's slow job holds the server's slot while the presses come
+            started = HEAVY.started
+            for _ in range(300):
+                session.motion._release()  # as viser's callback threads run the button's handler
+            assert threading.active_count() <= threads + 1
+        await until(lambda: not session.motion.player.playing, what="the newest press's drop to end")
+        assert HEAVY.started == started + 1  # one drop computed, for the newest press
+        assert not [t for t in threading.enumerate() if t.name.startswith("background")][BACKGROUND_THREADS:]
+
+        with HEAVY._slot:
+            started = HEAVY.started
+            session.motion._release()
+            await client.close()
+            await until(lambda: session.closed, what="the browser to leave")
+        await until(lambda: not session.motion.player.playing, what="the waiting press to be dropped")
+        assert HEAVY.started == started  # nothing computed for a browser that has gone
 
     asyncio.run(scenario())

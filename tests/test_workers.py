@@ -127,6 +127,40 @@ def test_a_browsers_slow_jobs_rest_between_them_and_others_do_not_wait_for_that(
     assert waits == [pytest.approx(0.1)]
 
 
+def test_one_addresss_tabs_share_its_rest():
+    """Review 2, finding 5: eight tabs from one address each had their own rest, eight times the work."""
+    clock, waits = Clock(), []
+
+    def sleep(seconds: float) -> None:
+        waits.append(seconds)
+        clock.advance(seconds)
+
+    heavy = HeavyWork(duty=0.25, clock=clock, sleep=sleep, budget=lambda tab: tab[0])  # a tab is (address, client id)
+    job = lambda: clock.advance(0.05)  # noqa: E731
+    heavy.run(("10.0.0.5", 1), job)
+    heavy.run(("10.0.0.6", 2), job)  # another laptop: no rest of its own
+    assert waits == []
+    heavy.run(("10.0.0.5", 3), job)  # a new tab of the first laptop rests as the first tab would
+    assert sum(waits) == pytest.approx(0.1)
+
+
+def test_a_job_no_longer_wanted_is_not_started():
+    """Review 2, finding 3: queued dynamics jobs ran for 45 minutes after their student had gone."""
+    clock = Clock()
+    wanted = [True]
+
+    def sleep(seconds: float) -> None:
+        clock.advance(seconds)
+        wanted[0] = False  # the browser leaves while this job rests
+
+    heavy = HeavyWork(duty=0.25, clock=clock, sleep=sleep)
+    ran = []
+    heavy.run(1, lambda: (clock.advance(1.0), ran.append(1)))
+    with pytest.raises(workers.Cancelled):
+        heavy.run(1, lambda: ran.append(2), cancelled=lambda: not wanted[0])
+    assert ran == [1] and heavy.started == 1
+
+
 class WatchedLock:
     """A lock that says when a second thread has come to wait for it."""
 
@@ -134,13 +168,13 @@ class WatchedLock:
         self._lock = threading.Lock()
         self.contended = threading.Event()
 
-    def __enter__(self):
-        if not self._lock.acquire(blocking=False):
-            self.contended.set()
-            self._lock.acquire()
-        return self
+    def acquire(self, blocking: bool = True, timeout: float = -1) -> bool:
+        if self._lock.acquire(blocking=False):
+            return True
+        self.contended.set()
+        return self._lock.acquire(blocking, timeout)
 
-    def __exit__(self, *exc) -> None:
+    def release(self) -> None:
         self._lock.release()
 
 
@@ -163,3 +197,19 @@ def test_slow_jobs_run_one_at_a_time():
     one.join()
     two.join()
     assert order == ["first starts", "first ends", "second starts"]
+
+
+def test_a_request_that_comes_while_a_run_fails_is_still_served():
+    """A refused value (ValueError) ended the runs with a newer request waiting: that one was never drawn."""
+    runs = []
+
+    def run():
+        runs.append(len(runs))
+        if len(runs) == 1:
+            assert not folded.claim()  # a newer choice arrives while this run is under way...
+            raise ValueError("that section height is out of reach")  # ...and this run refuses its own
+
+    folded = workers.FoldedRuns(run)
+    with pytest.raises(ValueError, match="out of reach"):  # the refusal is still reported
+        folded()
+    assert runs == [0, 1] and not folded.busy and not folded.waiting

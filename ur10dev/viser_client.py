@@ -125,9 +125,11 @@ class DragStep(NamedTuple):
 class ViserClient:
     """One headless student. Use ``await client.connect()`` then the actions below."""
 
-    def __init__(self, url: str, read: bool = True) -> None:
+    def __init__(self, url: str, read: bool = True, local_address: str | None = None) -> None:
         self.url = url
         self.read = read  # False: a client that never reads its socket (a frozen laptop)
+        #: where it connects from: another loopback address (127.0.0.2, ...) stands in for another laptop
+        self.local_address = local_address
         self.received = Received()
         self.gui: dict[str, dict[str, Any]] = {}  # label -> {"uuid", "type", "value"}
         self.gizmo_owner: str | None = None
@@ -142,6 +144,7 @@ class ViserClient:
         self._websocket = await websocket_connect(
             self.url.replace("http://", "ws://"), subprotocols=[f"viser-v{viser.__version__}"],
             max_size=None, compression=None, open_timeout=timeout, create_connection=StampedConnection,
+            **({"local_addr": (self.local_address, 0)} if self.local_address else {}),
         )
         await self.send(CAMERA)  # the server counts a client as connected from its first camera
         if self.read:

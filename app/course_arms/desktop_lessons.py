@@ -198,7 +198,7 @@ class DesktopForces(View):
         arm, force = session.arm, self.force()
         if not force.any():
             raise ValueError("set a force first: with none, no pose needs any torque")
-        q, norms = HEAVY.run(session.client.client_id, lambda: torque_grid(arm, force, GRID_STEPS))
+        q, norms = HEAVY.run(session.client, lambda: torque_grid(arm, force, GRID_STEPS), cancelled=lambda: session.closed)
         worst = int(np.argmax(norms))
         points = to_world(arm.fk(q)[:, :3, 3])
         with self._map_lock:

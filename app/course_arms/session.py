@@ -57,7 +57,7 @@ class BranchSearch(View):
     def _search(self) -> None:
         session = self._session
         snapshot = session.state.last
-        solution = HEAVY.run(session.client.client_id, lambda: session.state.search(snapshot))
+        solution = HEAVY.run(session.client, lambda: session.state.search(snapshot), cancelled=lambda: session.closed)
         if not session.closed:
             session.apply(lambda state: state.with_branches(snapshot, solution), move_gizmo=False)
 

@@ -69,7 +69,7 @@ class CourseWorkspace(View):
         if self.enabled.value:  # the slow part, outside the lock
             if self._computed is None:
                 session = self._session
-                self._computed = HEAVY.run(session.client.client_id, lambda: cloud(session.arm))
+                self._computed = HEAVY.run(session.client, lambda: cloud(session.arm), cancelled=lambda: session.closed)
             shown = self._computed
         with self._lock:
             if not self._session.closed:
