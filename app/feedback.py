@@ -17,8 +17,8 @@ log = logging.getLogger(__name__)
 
 #: Notifications a browser is shown, per second after a burst. Each is queued for that browser
 #: alone: one sending bad values fast (or not reading) must not grow the server's memory.
-NOTICES_PER_SECOND = 1.0
-NOTICE_BURST = 5
+NOTICES_PER_SECOND = 2.0
+NOTICE_BURST = 20
 #: The time the notices' rate is kept by (a test sets its own).
 clock = time.monotonic
 

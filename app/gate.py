@@ -303,7 +303,7 @@ class Gate:
             self.dropped[kind] += 1
             first = self.dropped[kind] == 1
         if first:
-            log.warning("ignored a %s from a browser (the app has no use for it); more are counted, not logged", kind)
+            log.warning("dropped a %s from a browser; more are counted, not logged", kind)
 
 
 def _hostname(host: str) -> str:

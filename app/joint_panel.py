@@ -31,6 +31,11 @@ DRAG_STEP = 10.0
 TYPING_PAUSE = 0.5
 
 
+def _same(a: float, b: float) -> bool:
+    """Equal, a NaN a bad client sent included."""
+    return a == b or (a != a and b != b)
+
+
 def degrees_text(q: np.ndarray) -> str:
     """Six angles (rad) as the "All six" box takes them: ``30, 45, 26, 50, 60, 80``."""
     return ", ".join(number(v, ".2f").rstrip("0").rstrip(".") for v in np.degrees(q))
@@ -76,8 +81,8 @@ class JointPanel(View):
         def moved(event: viser.GuiEvent) -> None:
             if event.client is None:  # our own render() setting the value: not a user's move
                 return
-            value = float(self.sliders[index].value)
-            with self._typing_lock:
+            with self._typing_lock:  # read under the lock: callbacks run side by side, and the last must see the newest
+                value = float(self.sliders[index].value)
                 previous, self._received[index] = self._received[index], value
                 waiting = self._typing.pop(index, None)
                 if waiting is not None:
@@ -114,7 +119,9 @@ class JointPanel(View):
             typing = set(self._typing)
         for index, (slider, value) in enumerate(zip(self.sliders, np.degrees(snapshot.q))):
             value = round(float(value), 2)
-            if index not in typing and not abs(slider.value - value) <= 1e-9:  # true for a NaN a bad client left too
+            if index in typing or not _same(slider.value, self._received[index]):
+                continue  # the student's newer value, whose callback has yet to run: it is the last word
+            if not abs(slider.value - value) <= 1e-9:  # true for a NaN a bad client left too
                 slider.value = value
                 self._received[index] = value
         if not np.array_equal(snapshot.q, self._shown_q):  # leave the student's own typing alone otherwise

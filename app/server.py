@@ -316,7 +316,8 @@ class TeachingServer:
         Building an arm costs tens of milliseconds: one browser may start a build only
         :data:`SWITCH_INTERVAL` seconds after its last one was ready (timed just before its
         picker is shown, so a browser that waits that long after seeing it is never refused),
-        so that flicking the picker cannot load the server.
+        and all the tabs of one address together as often as one (:func:`app.gate.budget_of`),
+        so that flicking the picker, in one tab or eight, cannot load the server.
         """
         budget = budget_of(client)
         with self._sessions_lock:

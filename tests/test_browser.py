@@ -17,32 +17,34 @@ from ur10dev.waiting import wait_for
 pytestmark = pytest.mark.browser
 
 
-def drag_the_gizmo(page, session) -> None:
-    """Grab one of the gizmo's arrows with the mouse and pull, until a drag reaches the server."""
+def drag_the_gizmo(page, session, gate) -> None:
+    """Grab one of the gizmo's arrows with the mouse and pull, until a drag reaches the server.
+
+    Each try ends in one of two ways the server sees: the gizmo's drag ended (the arrow was
+    under the mouse), or the camera moved (the mouse orbited the view instead).
+    """
     box = page.locator("canvas").first.bounding_box()
     flange = session.state.last.flange
     size = session.ik_target.gizmo.scale  # the arrows' length, sized to the arm
 
-    def dragged() -> bool:
-        for axis, share in [(0, 0.75), (0, 0.6), (1, 0.75), (2, 0.75), (0, 0.9)]:
-            u, v = project(session.client.camera, flange[:3, 3] + share * size * flange[:3, axis], box)
-            # the gizmo reads the pointer once a frame: each move is given a drawn frame
-            page.mouse.move(u, v)
-            drawn_frames(page, 2)
-            page.mouse.down()
-            drawn_frames(page, 2)
-            for step in range(1, 11):
-                page.mouse.move(u - 3 * step, v + 2 * step)
-                drawn_frames(page, 1)
-            page.mouse.up()
-            try:
-                wait_for(lambda: session.state.last.cause == "target", timeout=5.0)
-                return True
-            except AssertionError:
-                continue  # that arrow was not under the mouse: another
-        return False
-
-    wait_for(dragged, what="a drag of the gizmo to reach the server")
+    for axis, share in [(0, 0.75), (0, 0.6), (1, 0.75), (2, 0.75), (0, 0.9)]:
+        u, v = project(session.client.camera, flange[:3, 3] + share * size * flange[:3, axis], box)
+        drags, cameras = gate.passed["TransformControlsDragEndMessage"], gate.passed["ViewerCameraMessage"]
+        # the gizmo reads the pointer once a frame: each move is given a drawn frame
+        page.mouse.move(u, v)
+        drawn_frames(page, 2)
+        page.mouse.down()
+        drawn_frames(page, 2)
+        for step in range(1, 11):
+            page.mouse.move(u - 3 * step, v + 2 * step)
+            drawn_frames(page, 1)
+        page.mouse.up()
+        wait_for(lambda: gate.passed["TransformControlsDragEndMessage"] > drags
+                 or gate.passed["ViewerCameraMessage"] > cameras, what="the server to hear the drag or the orbit")
+        if gate.passed["TransformControlsDragEndMessage"] > drags:
+            wait_for(lambda: session.state.last.cause == "target", what="the drag applied")
+            return
+    raise AssertionError("no arrow of the gizmo was under the mouse")
 
 
 def test_a_students_first_visit(open_page, light_app):
@@ -74,11 +76,12 @@ def test_a_students_first_visit(open_page, light_app):
     session.ik_target.show_ghosts.value = False  # nothing between the mouse and the gizmo
     settled_canvas(page)
     before = session.state.q
-    drag_the_gizmo(page, session)
+    drag_the_gizmo(page, session, light_app.gate)
     snapshot = session.state.last
     assert snapshot.reachable
     assert np.abs(snapshot.q - before).max() > 1e-3, "the arm did not follow the target"
-    assert snapshot.slot == 4, f"the arm jumped to another branch: {snapshot.slot}, {np.degrees(before)}, {np.degrees(snapshot.q)}"
+    assert snapshot.slot == 4, (f"the arm jumped to another branch: {snapshot.slot}, {np.degrees(before)}, {np.degrees(snapshot.q)}; "
+                                 f"the gate dropped {dict(light_app.gate.dropped)}")
     np.testing.assert_allclose(session.arm.fk(snapshot.q), snapshot.target, atol=1e-9)
     session.ik_target.show_ghosts.value = True
     ghost = session.scene_views.branches.ghosts[5]  # link 6 (the ghosts start at link 1)

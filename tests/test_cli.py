@@ -70,7 +70,7 @@ def test_the_app_starts_no_helpers_and_frees_its_port_when_killed():
     async def visit(url: str, app) -> None:
         client = await ViserClient(url).connect()
         await client.send(messages.ShareUrlRequest())
-        await until(lambda: any("ignored a ShareUrlRequest" in line for line in app.output), what="the request to be dropped")
+        await until(lambda: any("dropped a ShareUrlRequest" in line for line in app.output), what="the request to be dropped")
         await client.close()
 
     with running_app("--shared") as app:

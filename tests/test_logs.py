@@ -59,14 +59,14 @@ def test_other_kinds_still_show_and_the_count_comes_with_the_next_window():
 
 
 def test_each_kind_of_dropped_message_is_shown():
-    """Review 2, finding 7: the repeat filter grouped every "ignored a %s" together, so later kinds never showed."""
+    """Review 2, finding 7: the repeat filter grouped every "dropped a %s" together, so later kinds never showed."""
     stream = io.StringIO()
     logger = _logger(stream, RepeatLimiter(burst=3, window=60.0))
     kinds = ["ShareUrlRequest", "FileTransferStart", "GuiFormDirtyMessage", "malformed SceneNodeClickMessage", "text frame"]
     for kind in kinds:
-        logger.warning("ignored a %s from a browser", kind)
+        logger.warning("dropped a %s from a browser", kind)
     for k in range(10):
         logger.warning("a wrong join code from %s (%d since its last lock-out)", "10.0.0.9", k)
     text = stream.getvalue()
-    assert all(f"ignored a {kind} from a browser" in text for kind in kinds)
+    assert all(f"dropped a {kind} from a browser" in text for kind in kinds)
     assert text.count("a wrong join code from 10.0.0.9") == 4  # three, and the note that more are counted

@@ -379,3 +379,25 @@ def test_a_section_slider_flood_costs_one_cloud_in_the_making_and_one_waiting(ap
     flood = asyncio.run(scenario())
     # the one held while the flood came, and one more for everything that came meanwhile
     assert len(flood) == 2 and flood[-1] == 1495.0, flood  # the newest height: -500 + 5 × 399
+
+
+def test_a_students_slider_value_is_not_put_back_by_a_redraw_before_its_callback_runs(app):
+    """On a loaded machine a panel redraw ran between viser storing a student's slider value and
+    running its callback: the redraw put the arm's old angle back, and the student's value was lost."""
+    from viser import GuiEvent
+
+    async def scenario():
+        client = await ViserClient(url(app)).connect()
+        session = session_of(app, client)
+        panel, handle = session.joints, app.server.get_clients()[int(client.gizmo_owner)]
+        slider = panel.sliders[1]
+        wanted = slider.value + 1.0  # a drag step, applied at once
+        slider._impl.value = wanted  # what viser does with the student's message, before it runs the callback
+        panel.render_panel(session.state.last)  # the refresher's redraw comes first
+        assert slider.value == wanted
+        for callback in slider._impl.update_cb:  # then the callback
+            callback(GuiEvent(handle, handle.client_id, slider))
+        await until(lambda: abs(np.degrees(session.state.q[1]) - wanted) < 1e-9, what="the student's value applied")
+        await client.close()
+
+    asyncio.run(scenario())

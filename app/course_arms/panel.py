@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import functools
 import math
+import threading
 from typing import TYPE_CHECKING, Callable
 
 import numpy as np
@@ -59,6 +60,7 @@ class CourseJointSliders(View):
         #: what each slider was last set to from the state: a slider is written only when the state
         #: moved away from it (never just because the student's newer value differs from an older state)
         self._shown = [slider.value for slider in self.sliders]
+        self._moving = threading.Lock()
         for k, slider in enumerate(self.sliders):
             slider.on_update(session.guard(self._moved(k)))
 
@@ -67,11 +69,12 @@ class CourseJointSliders(View):
             if event.client is None:
                 return
             kind = self._session.arm.joint_types[index]
-            shown = float(self.sliders[index].value)
-            value = math.radians(shown) if kind == "R" else shown / 1000.0
-            self._shown[index] = shown  # what the browser shows now: if refused, the next panel redraw puts it back
             self._before()
-            self._session.apply(lambda state: state.set_joint(index, value))
+            with self._moving:  # callbacks run side by side: the last to apply reads the newest value
+                shown = float(self.sliders[index].value)
+                value = math.radians(shown) if kind == "R" else shown / 1000.0
+                self._shown[index] = shown  # what the browser shows now: if refused, the next panel redraw puts it back
+                self._session.apply(lambda state: state.set_joint(index, value))
         return moved
 
     def render_panel(self, snapshot: CourseSnapshot) -> None:
