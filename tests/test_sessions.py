@@ -342,7 +342,8 @@ def test_a_section_slider_flood_costs_one_cloud_in_the_making_and_one_waiting(ap
     """The section height at 200 Hz with a slow (1 M point) cloud queued a recomputation per message.
 
     The first cloud of the flood is held until every height has reached the server: the
-    400 messages that came meanwhile must fold into one more cloud, of the newest height.
+    150 messages that came meanwhile (a second's worth of what the gate reads off one socket,
+    app/gate.py) must fold into one more cloud, of the newest height.
     """
     from app.workspace import WorkspaceView
 
@@ -366,7 +367,7 @@ def test_a_section_slider_flood_costs_one_cloud_in_the_making_and_one_waiting(ap
         await client.set_gui("Show workspace cloud", True)
         await until(lambda: session.workspace._cloud is not None and not session.workspace._clouds.busy, what="the first section")
         before = len(computed)
-        heights = [-500.0 + 5.0 * k for k in range(400)]
+        heights = [-500.0 + 10.0 * k for k in range(150)]
         for height in heights:
             await client.set_gui("Section height (mm)", height)
         await until(lambda: session.workspace.height.value == heights[-1], what="every height to reach the server")
@@ -378,7 +379,7 @@ def test_a_section_slider_flood_costs_one_cloud_in_the_making_and_one_waiting(ap
 
     flood = asyncio.run(scenario())
     # the one held while the flood came, and one more for everything that came meanwhile
-    assert len(flood) == 2 and flood[-1] == 1495.0, flood  # the newest height: -500 + 5 × 399
+    assert len(flood) == 2 and flood[-1] == 990.0, flood  # the newest height: -500 + 10 × 149
 
 
 def test_a_students_slider_value_is_not_put_back_by_a_redraw_before_its_callback_runs(app):
