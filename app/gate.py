@@ -28,9 +28,9 @@ given these settings for as long as the server starts up) and does four things:
   (``--allow-origin``), and name this machine or an IP address as its host (no DNS
   rebinding). Apart from loopback (this machine: the teacher's own tabs and tools), an
   address may hold :data:`CONNECTIONS_PER_ADDRESS` websockets and open new ones at
-  :data:`NEW_CONNECTIONS_PER_SECOND` after a burst, and hold :data:`TCP_CONNECTIONS_PER_ADDRESS`
-  TCP connections of any kind (a half-sent request included, which waits at most
-  :data:`OPEN_TIMEOUT`).
+  :data:`NEW_CONNECTIONS_PER_SECOND` after a burst of :data:`NEW_CONNECTION_BURST`, and hold
+  :data:`TCP_CONNECTIONS_PER_ADDRESS` TCP connections of any kind (a half-sent request
+  included, which waits at most :data:`OPEN_TIMEOUT`).
 """
 
 from __future__ import annotations
@@ -69,8 +69,10 @@ MESSAGE_BURST = 60
 MAX_WAITING = 64
 #: Open websockets per address (loopback excepted).
 CONNECTIONS_PER_ADDRESS = 8
-#: New websockets per address and second, after a burst of :data:`CONNECTIONS_PER_ADDRESS`.
+#: New websockets per address and second, after a burst of :data:`NEW_CONNECTION_BURST`. Each builds a
+#: whole session (its arm, panel and scene): eight at once from one address held every student up.
 NEW_CONNECTIONS_PER_SECOND = 0.5
+NEW_CONNECTION_BURST = 3
 #: TCP connections per address (loopback excepted): the websockets and a browser's page downloads.
 TCP_CONNECTIONS_PER_ADDRESS = 32
 #: Seconds a new connection has to send its request (websockets' default is 10).
@@ -209,7 +211,7 @@ class Gate:
         if self.trusted(address):
             return None
         with self._lock:
-            bucket = self._arrivals.setdefault(address, TokenBucket(NEW_CONNECTIONS_PER_SECOND, CONNECTIONS_PER_ADDRESS))
+            bucket = self._arrivals.setdefault(address, TokenBucket(NEW_CONNECTIONS_PER_SECOND, NEW_CONNECTION_BURST))
             if self._open[address] >= CONNECTIONS_PER_ADDRESS:
                 reason = f"{address} already has {CONNECTIONS_PER_ADDRESS} connections"
             elif not bucket.take():
