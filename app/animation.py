@@ -31,7 +31,6 @@ class Player:
         self._pending: tuple | None = None  #: the newest request not yet started
         self._running = False  #: a background thread is taking requests
         self._lock = threading.Lock()
-        self.runs = 0  #: motions started (for the tests)
 
     @property
     def playing(self) -> bool:
@@ -70,7 +69,6 @@ class Player:
                         return
                     (compute, show, done), self._pending = self._pending, None
                     self._stop = stop = threading.Event()
-                    self.runs += 1
                 try:
                     self._run(compute, show, stop, done)
                 except Cancelled:
