@@ -231,6 +231,7 @@ class TeachingServer:
         self._sessions: dict[int, ClientSession | CourseArmSession | DesktopArmSession] = {}
         self._last_switch: dict[int, float] = {}  # client id → when its arm was last rebuilt
         self._switches: dict[str, TokenBucket] = {}  # budget (an address) → its arm changes
+        self.clock = time.monotonic  #: the time the arm changes of an address are paced by (a test sets its own)
         self._sessions_lock = threading.Lock()
         #: shared demo mode (``--shared``): everyone watches the presenter (``app.classroom``)
         self.classroom = Classroom(self) if shared else None
@@ -323,7 +324,7 @@ class TeachingServer:
         with self._sessions_lock:
             if len(self._switches) > MAX_SWITCH_BUDGETS:
                 self._switches.clear()
-            switches = self._switches.setdefault(budget, TokenBucket(1.0 / SWITCH_INTERVAL, 2))
+            switches = self._switches.setdefault(budget, TokenBucket(1.0 / SWITCH_INTERVAL, 2, clock=lambda: self.clock()))
             # each tab as often as its picker allows; all of one address's tabs together no more than one would
             if not self.can_switch(client.client_id) or not switches.take():
                 raise ValueError(f"one change of arm every {SWITCH_INTERVAL:g} s, please: try again in a moment")
