@@ -253,10 +253,13 @@ class Gate:
             self._open[address] += 1
 
     def closed(self, address: str) -> None:
+        self._forget_one(self._open, address)
+
+    def _forget_one(self, counts: collections.Counter, address: str) -> None:
         with self._lock:
-            self._open[address] -= 1
-            if self._open[address] <= 0:
-                del self._open[address]
+            counts[address] -= 1
+            if counts[address] <= 0:
+                del counts[address]
 
     def open_connections(self, address: str) -> int:
         with self._lock:
@@ -278,12 +281,8 @@ class Gate:
         return False
 
     def tcp_closed(self, address: str) -> None:
-        if self.trusted(address):
-            return
-        with self._lock:
-            self._tcp[address] -= 1
-            if self._tcp[address] <= 0:
-                del self._tcp[address]
+        if not self.trusted(address):
+            self._forget_one(self._tcp, address)
 
     def tcp_connections(self, address: str) -> int:
         with self._lock:

@@ -57,15 +57,20 @@ async def attacker(url: str, read: bool = True) -> ViserClient | None:
         return None
 
 
+async def counted_attacker(url: str, counts: dict) -> ViserClient | None:
+    """:func:`attacker`, counted in ``counts`` as opened or refused."""
+    client = await attacker(url)
+    counts["refused" if client is None else "opened"] += 1
+    return client
+
+
 async def keep_sending(url: str, stop: asyncio.Event, frames_of, pace: float | None, counts: dict) -> None:
     """One of the attacker's connections: sends ``frames_of(client)`` (at ``pace`` s apart, or back to back),
     reconnecting whenever the server closes it."""
     while not stop.is_set():
-        client = await attacker(url)
+        client = await counted_attacker(url, counts)
         if client is None:
-            counts["refused"] += 1
             continue
-        counts["opened"] += 1
         try:
             for frame in await frames_of(client):
                 if stop.is_set():
@@ -101,11 +106,9 @@ async def big_frames(client: ViserClient):
 
 async def frozen_clouds(url: str, stop: asyncio.Event, counts: dict) -> None:
     """A connection that turns the cloud on, stops reading, and changes *Samples* twice a second."""
-    client = await attacker(url)
+    client = await counted_attacker(url, counts)
     if client is None:
-        counts["refused"] += 1
         return
-    counts["opened"] += 1
     while "Samples" not in client.gui:
         await asyncio.sleep(0.05)
     cloud, samples = client.gui["Show workspace cloud"]["uuid"], client.gui["Samples"]["uuid"]
@@ -165,11 +168,9 @@ ATTACKS = {
 
 
 async def map_turner(url: str, stop: asyncio.Event, counts: dict) -> None:
-    client = await attacker(url)
+    client = await counted_attacker(url, counts)
     if client is None:
-        counts["refused"] += 1
         return
-    counts["opened"] += 1
     try:
         await client.set_gui("Show branch-count map", True)
         T = np.eye(4)

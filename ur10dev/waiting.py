@@ -27,29 +27,34 @@ def _trace(what: str, started: float) -> None:
         print(f"[{time.monotonic():10.2f}: waited {time.monotonic() - started:6.2f} s] {what}", file=sys.stderr, flush=True)
 
 
-def wait_for(condition: Callable[[], object], timeout: float = HANG_TIMEOUT, what: str = "condition") -> object:
-    """Poll ``condition`` until it returns something true, and return that; fail after ``timeout`` s."""
+def _checker(condition: Callable[[], object], timeout: float, what: str) -> Callable[[], object]:
+    """One look at ``condition``: its value once true, None while false; fails after ``timeout`` s."""
     started = time.monotonic()
     deadline = started + timeout
-    while True:
+
+    def check() -> object:
         value = condition()
         if value:
             _trace(what, started)
             return value
         if time.monotonic() > deadline:
             raise AssertionError(f"timed out after {timeout:.0f} s waiting for {what}")
+        return None
+
+    return check
+
+
+def wait_for(condition: Callable[[], object], timeout: float = HANG_TIMEOUT, what: str = "condition") -> object:
+    """Poll ``condition`` until it returns something true, and return that; fail after ``timeout`` s."""
+    check = _checker(condition, timeout, what)
+    while (value := check()) is None:
         time.sleep(POLL)
+    return value
 
 
 async def until(condition: Callable[[], object], timeout: float = HANG_TIMEOUT, what: str = "condition") -> object:
     """:func:`wait_for` for a coroutine: the event loop runs on while ``condition`` is false."""
-    started = time.monotonic()
-    deadline = started + timeout
-    while True:
-        value = condition()
-        if value:
-            _trace(what, started)
-            return value
-        if time.monotonic() > deadline:
-            raise AssertionError(f"timed out after {timeout:.0f} s waiting for {what}")
+    check = _checker(condition, timeout, what)
+    while (value := check()) is None:
         await asyncio.sleep(POLL)
+    return value
