@@ -13,6 +13,11 @@ its type hints (12–19 µs for these two kinds); the two subclasses below build
 dictionary straight from fields whose types are known (under 4 µs). With thirty
 students dragging that was another tenth of a core.
 
+Handles are also made faster. Each new scene node or widget handle had viser evaluate
+its props class's type hints afresh (``typing.get_type_hints``, per handle): 40 % of the
+server's time in building a browser's session. :func:`share_type_hints` evaluates them
+once per class.
+
 They rely on viser 1.1 internals (``SceneApi._queue_scene_message``, the handles'
 ``_impl``), so viser is pinned exactly (pyproject.toml) and ``tests/test_fast_updates.py``
 holds what they send to what the public setters send: a viser upgrade that changes those
@@ -24,10 +29,11 @@ what keeps this module here (BENCHMARKS.md).
 from __future__ import annotations
 
 import os
+import typing
 
 import numpy as np
 import viser
-from viser import _messages
+from viser import _assignable_props_api, _messages
 
 
 class _OrientationMessage(_messages.SetOrientationMessage):
@@ -72,6 +78,25 @@ class _UpdateMessage(_messages.SceneNodeUpdateMessage):
 
 #: Draw through viser's public setters instead (for the benchmark that keeps this module honest).
 PUBLIC_SETTERS = os.environ.get("UR10_TEACH_PUBLIC_SETTERS") == "1"
+
+_HINTS_OF_CLASS: dict[type, dict[str, typing.Any]] = {}
+
+
+def _prop_hints(handle) -> dict[str, typing.Any]:
+    props_class = type(handle._impl.props)
+    hints = _HINTS_OF_CLASS.get(props_class)
+    if hints is None:
+        hints = _HINTS_OF_CLASS[props_class] = typing.get_type_hints(props_class)
+    return hints
+
+
+def share_type_hints() -> None:
+    """Every handle of one props class reads the same type hints, evaluated once (viser: once per handle).
+
+    ``UR10_TEACH_PUBLIC_SETTERS=1`` leaves viser as it is (``benchmarks/bench_join_storm.py`` measures both).
+    """
+    if not PUBLIC_SETTERS:
+        _assignable_props_api.AssignablePropsBase._prop_hints = property(_prop_hints)
 
 
 def _set_each(nodes: list[viser.SceneNodeHandle], values: np.ndarray, field: str, message: type) -> None:

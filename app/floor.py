@@ -8,6 +8,8 @@ on the drag path.
 
 from __future__ import annotations
 
+import functools
+
 import numpy as np
 import trimesh
 import viser
@@ -28,14 +30,21 @@ def add_floor_grid(scene: viser.SceneApi) -> None:
     scene.add_grid("/floor", width=3.0, height=3.0, cell_size=0.1, section_size=0.5)
 
 
+@functools.lru_cache(maxsize=1)
+def disc_mesh() -> tuple[np.ndarray, np.ndarray]:
+    """(vertices, faces) of the red disc, made once for every browser."""
+    disc = trimesh.creation.cylinder(radius=DISC_RADIUS, height=0.002, sections=48)
+    return disc.vertices, disc.faces
+
+
 class FloorScene(View):
     """Instance 0 marks the solid arm, instance k + 1 the ghost of slot k."""
 
     def __init__(self, scene: viser.SceneApi, branches: BranchesScene) -> None:
         self._branches = branches
-        disc = trimesh.creation.cylinder(radius=DISC_RADIUS, height=0.002, sections=48)
+        vertices, faces = disc_mesh()
         self.discs = scene.add_batched_meshes_simple(
-            "/floor_hits", disc.vertices, disc.faces,
+            "/floor_hits", vertices, faces,
             batched_wxyzs=np.tile([1.0, 0.0, 0.0, 0.0], (9, 1)), batched_positions=np.zeros((9, 3)),
             batched_scales=np.zeros(9), batched_colors=np.tile(np.array(DANGER_RED, np.uint8), (9, 1)), opacity=0.75, lod="off",
             cast_shadow=False, receive_shadow=False,

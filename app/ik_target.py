@@ -193,23 +193,12 @@ class BranchesScene(View):
             self.target = scene.add_frame("/target", axes_length=0.1, axes_radius=0.004, origin_radius=0.008,
                                           wxyz=first.flange_wxyz, position=first.flange[:3, 3])
             self.unreachable = add_unreachable_halo(scene, "/target")
-        identity = np.tile([1.0, 0.0, 0.0, 0.0], (8, 1))
-        #: each model's batched ghost meshes, links 1..6 (every branch shares the base with the solid arm)
+        self._scene, self._models = scene, models
+        #: each model's batched ghost meshes, links 1..6, sent when the model is first shown
+        #: (every branch shares the base with the solid arm)
         self.models: dict[str, list[viser.BatchedMeshHandle]] = {}
-        for name, links in models.by_name.items():
-            self.models[name] = []
-            for link in links[1:]:
-                vertices, faces = link.ghost
-                ghost = scene.add_batched_meshes_simple(
-                    f"/ghosts/{model_slug(name)}/link{link.index}", vertices, faces,
-                    batched_wxyzs=identity, batched_positions=np.zeros((8, 3)), batched_scales=np.zeros(8),
-                    batched_colors=np.array(SLOT_COLORS, dtype=np.uint8), opacity=GHOST_OPACITY, lod="off",
-                    material=models.material, cast_shadow=False, receive_shadow=False, visible=name == models.names[0],
-                )
-                ghost.on_click(self._clicked)
-                self.models[name].append(ghost)
         self.model = models.names[0]
-        self.ghosts = self.models[self.model]  #: the shown model's; only these follow the arm
+        self.ghosts = self._send(self.model)  #: the shown model's; only these follow the arm
         self._forget_sent()
         # each branch's number by its elbow, as in the table: colours alone cannot tell eight apart for everyone
         self.labels = [scene.add_label(f"/ghosts/number{k + 1}", str(k + 1), visible=False, font_screen_scale=1.6,
@@ -220,13 +209,30 @@ class BranchesScene(View):
         self._scales = b""
         self._positions = {i: b"" for i in range(1, 7)}  # last sent, to skip unchanged ones
 
+    def _send(self, name: str) -> list[viser.BatchedMeshHandle]:
+        identity = np.tile([1.0, 0.0, 0.0, 0.0], (8, 1))
+        ghosts = []
+        for link in self._models.by_name[name][1:]:
+            vertices, faces = link.ghost
+            ghost = self._scene.add_batched_meshes_simple(
+                f"/ghosts/{model_slug(name)}/link{link.index}", vertices, faces,
+                batched_wxyzs=identity, batched_positions=np.zeros((8, 3)), batched_scales=np.zeros(8),
+                batched_colors=np.array(SLOT_COLORS, dtype=np.uint8), opacity=GHOST_OPACITY, lod="off",
+                material=self._models.material, cast_shadow=False, receive_shadow=False,
+            )
+            ghost.on_click(self._clicked)
+            ghosts.append(ghost)
+        self.models[name] = ghosts
+        return ghosts
+
     def show(self, model: str) -> None:
         """Draw the ghosts as ``model``; the next render poses them."""
-        if model not in self.models:
-            raise ValueError(f"no arm model {model!r}; the models are {', '.join(self.models)}")
+        if model not in self._models.names:
+            raise ValueError(f"no arm model {model!r}; the models are {', '.join(self._models.names)}")
         for ghost in self.ghosts:
             ghost.visible = False
-        self.model, self.ghosts = model, self.models[model]
+        self.model = model
+        self.ghosts = self.models[model] if model in self.models else self._send(model)
         for ghost in self.ghosts:
             ghost.visible = True
         self._forget_sent()

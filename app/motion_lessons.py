@@ -2,8 +2,8 @@
 remembered pose to the current one along a straight tool line or with the joints interpolated, with its
 joint rates plotted.
 
-Each is computed on a thread of its own as a slow job (``app.workers.HEAVY``) and then
-played on the arm in real time (``app.animation``).
+Each is computed as a slow job (``app.workers.HEAVY``) in the worker process (``app.workers.APART``:
+a Python loop) and then played on the arm in real time (``app.animation``).
 """
 
 from __future__ import annotations
@@ -22,7 +22,7 @@ from .feedback import chosen
 from .style import JOINT_LABELS, SLOT_COLORS, hex_color, number
 from .velocity import SPEED_LIMITS
 from .view import View
-from .workers import HEAVY
+from .workers import APART, HEAVY
 
 if TYPE_CHECKING:
     from .session import ClientSession
@@ -119,7 +119,7 @@ class MotionLessons(View):
         dynamics.link_masses(arm)  # an arm without published masses: refused here, with the reason
 
         def compute() -> tuple[np.ndarray, np.ndarray]:
-            motion = HEAVY.run(session.client, lambda: dynamics.release(arm, start, duration=DROP_SECONDS),
+            motion = HEAVY.run(session.client, lambda: APART.run(dynamics.release, arm, start, duration=DROP_SECONDS),
                                cancelled=self.player.cancelled)
             return motion.t, wrap(motion.q)  # a joint that swung round is shown within one turn
 
@@ -137,7 +137,8 @@ class MotionLessons(View):
 
         def compute() -> tuple[np.ndarray, np.ndarray]:
             both = {PATHS[0]: HEAVY.run(session.client,
-                                        lambda: paths.straight_line(arm, start, arm.fk(goal), PATH_SECONDS, PATH_STEPS),
+                                        lambda: APART.run(paths.straight_line, arm, start, arm.fk(goal),
+                                                          PATH_SECONDS, PATH_STEPS),
                                         cancelled=self.player.cancelled),
                     PATHS[1]: paths.joint_interpolation(arm, start, goal, PATH_SECONDS, PATH_STEPS)}
             self.summary.content = "\n\n".join(path_summary(both[k], k) for k in (kind, *(k for k in PATHS if k != kind)))

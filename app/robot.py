@@ -42,32 +42,43 @@ def model_slug(name: str) -> str:
 
 
 class RobotScene(View):
+    """The solid arm. A model's meshes are sent when it is first shown: a browser that never
+    switches model never receives the other's (a tenth of the cost of a newcomer's scene)."""
+
     def __init__(self, scene: viser.SceneApi, models: ArmModels, first: Snapshot) -> None:
         scene.add_frame("/base_frame", axes_length=0.3, axes_radius=0.008, origin_radius=0.015)
         wxyz, position = poses(first.arm.link_transforms(first.q))
+        self._scene, self._models = scene, models
+        self.names: tuple[str, ...] = tuple(models.names)  #: the models it can be drawn as
         self.model = models.names[0]
         self.links: list[viser.FrameHandle] = []
-        #: each model's mesh handles (bodies and caps)
-        self.meshes: dict[str, list[viser.MeshHandle]] = {name: [] for name in models.names}
+        #: the mesh handles (bodies and caps) of each model sent so far
+        self.meshes: dict[str, list[viser.MeshHandle]] = {}
         for i in range(7):
             pose = {} if i == 0 else {"wxyz": wxyz[i - 1], "position": position[i - 1]}
             self.links.append(scene.add_frame(node_name(i), show_axes=False, **pose))
-        for name, links in models.by_name.items():
-            for link in links:
-                parent, visible = f"{node_name(link.index)}/{model_slug(name)}", name == self.model
-                shading = {"material": models.material, "cast_shadow": models.shadows, "receive_shadow": models.shadows}
-                self.meshes[name].append(scene.add_mesh_simple(
-                    f"{parent}/body", link.body_vertices, link.body_faces, color=ALUMINIUM, visible=visible, **shading))
-                if len(link.cap_faces):
-                    self.meshes[name].append(scene.add_mesh_simple(
-                        f"{parent}/cap", link.cap_vertices, link.cap_faces, color=JOINT_CAP_GREY, visible=visible, **shading))
+        self._send(self.model)
         scene.add_frame(f"{node_name(6)}/flange_frame", axes_length=0.15, axes_radius=0.005, origin_radius=0.01)
 
+    def _send(self, name: str) -> None:
+        models, handles = self._models, []
+        shading = {"material": models.material, "cast_shadow": models.shadows, "receive_shadow": models.shadows}
+        for link in models.by_name[name]:
+            parent = f"{node_name(link.index)}/{model_slug(name)}"
+            handles.append(self._scene.add_mesh_simple(
+                f"{parent}/body", link.body_vertices, link.body_faces, color=ALUMINIUM, **shading))
+            if len(link.cap_faces):
+                handles.append(self._scene.add_mesh_simple(
+                    f"{parent}/cap", link.cap_vertices, link.cap_faces, color=JOINT_CAP_GREY, **shading))
+        self.meshes[name] = handles
+
     def show(self, model: str) -> None:
-        """Draw the arm as ``model`` (one of the names it was built with)."""
-        if model not in self.meshes:
-            raise ValueError(f"no arm model {model!r}; the models are {', '.join(self.meshes)}")
+        """Draw the arm as ``model`` (one of :attr:`names`)."""
+        if model not in self.names:
+            raise ValueError(f"no arm model {model!r}; the models are {', '.join(self.names)}")
         self.model = model
+        if model not in self.meshes:
+            self._send(model)
         for name, handles in self.meshes.items():
             for handle in handles:
                 handle.visible = name == model
@@ -88,7 +99,7 @@ class ArmModelControls(View):
         self._views, self._session = views, session
         with folder:
             self.dropdown = gui.add_dropdown(
-                "Arm drawn as", tuple(views.robot.meshes), initial_value=views.robot.model,
+                "Arm drawn as", views.robot.names, initial_value=views.robot.model,
                 hint="UR's own meshes, or the schematic arm that shows the DH geometry more plainly")
         self.dropdown.on_update(session.guard(self._chosen))
 

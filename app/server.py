@@ -19,7 +19,7 @@ import viser
 
 from ur10core import Arm, symbolic, symbolic_arms
 
-from . import shared_frames
+from . import fast_updates, shared_frames
 from .arm_picker import ARM_CHOICES, CUSTOM, SWITCH_INTERVAL, UR10, ArmPicker
 from .classroom import Classroom
 from .course_arms.editor import STARTING_TABLE, parse_table
@@ -30,7 +30,8 @@ from .floor import add_floor_grid
 from .gate import Gate, TokenBucket, budget_of, gated_serve
 from .meshes import load_models
 from .metrics import LATENCY
-from .workers import DragQueue, PanelRefresher
+from .workspace import CLOUDS
+from .workers import APART, JOINS, Cancelled, DragQueue, PanelRefresher
 from .session import ClientSession
 from .style import BRAND_BLUE
 
@@ -144,14 +145,17 @@ class Janitor:
     """Hands the memory of departed clients back to the system, a little after they leave.
 
     A class leaving at the bell frees thousands of small objects at once; Python keeps
-    the freed memory for reuse and glibc keeps the pages. A collection and a
-    ``malloc_trim`` a few seconds after the last departure returns the server to its
-    baseline instead (one pass however many leave, and never while a drag is being drawn).
+    the freed memory for reuse and glibc keeps the pages. Dropping the clouds no one shows,
+    a collection and a ``malloc_trim`` a few seconds after the last departure return the
+    server to its baseline instead (one pass however many leave, and never while a drag is
+    being drawn). Large buffers are handed back as soon as they are freed
+    (``app.__main__``).
     """
 
     DELAY = 3.0
 
-    def __init__(self) -> None:
+    def __init__(self, forget=()) -> None:
+        self._forget = forget  #: what to drop first: caches nobody uses any more
         self.sweeps = 0  #: how many times it has swept (the memory tests wait for one)
         self._timer: threading.Timer | None = None
         self._lock = threading.Lock()
@@ -169,6 +173,8 @@ class Janitor:
             self._timer.start()
 
     def sweep(self) -> None:
+        for forget in self._forget:
+            forget()
         gc.collect()
         if self._trim is not None:
             self._trim(0)
@@ -214,6 +220,7 @@ class TeachingServer:
         self.gate = gate or Gate(allowed_origins)
         raise_open_file_limit()
         shared_frames.install()
+        fast_updates.share_type_hints()
         with gated_serve(self.gate):
             self.server = viser.ViserServer(host=host, port=port, label=label, verbose=False)
         self.server.gui.configure_theme(show_share_button=False, brand_color=BRAND_BLUE, control_width="large")
@@ -235,7 +242,7 @@ class TeachingServer:
         self._sessions_lock = threading.Lock()
         #: shared demo mode (``--shared``): everyone watches the presenter (``app.classroom``)
         self.classroom = Classroom(self) if shared else None
-        self._janitor = Janitor()
+        self._janitor = Janitor(forget=(CLOUDS.forget_unheld,))
         self.server.on_client_connect(self._connected)
         self.server.on_client_disconnect(self._disconnected)
         self._metrics_stop = threading.Event()
@@ -271,10 +278,10 @@ class TeachingServer:
 
     def _connected(self, client: viser.ClientHandle) -> None:
         try:
-            if self.classroom is not None:
-                self.classroom.connect(client)
-            else:
-                self._start_session(client, UR10, self.lecture)
+            JOINS.run(client, lambda: self._build_first(client),
+                      cancelled=lambda: client.client_id not in self.server.get_clients())
+        except Cancelled:  # it left before its turn
+            return
         except Exception:
             log.exception("could not set up client %s", client.client_id)
             try:
@@ -286,6 +293,12 @@ class TeachingServer:
         # browser that left while its arm was being built was not here to be freed yet
         if client.client_id not in self.server.get_clients():
             self._disconnected(client)
+
+    def _build_first(self, client: viser.ClientHandle) -> None:
+        if self.classroom is not None:
+            self.classroom.connect(client)
+        else:
+            self._start_session(client, UR10, self.lecture)
 
     def _start_session(self, client: viser.ClientHandle, choice: str, lecture: bool, typed=None) -> None:
         """Build the arm ``choice`` (an ``ARM_CHOICES`` label) in this browser, with the picker above it.
@@ -386,4 +399,5 @@ class TeachingServer:
         self._metrics_stop.set()
         self.refresher.stop()
         self.drags.stop()
+        APART.stop()
         self.server.stop()

@@ -123,7 +123,7 @@ class ClientSession(SessionBasics):
         self.joints = JointPanel(gui, self)
         #: "Arm drawn as" (real or schematic), where the arm has more than one model
         self.arm_model = (ArmModelControls(gui, self.joints.folders[0], self.scene_views, self)
-                          if len(self.scene_views.robot.meshes) > 1 else None)
+                          if len(self.scene_views.robot.names) > 1 else None)
         self.ik_target = IKTargetControls(client.scene, gui, self.scene_views.branches, self)
         self.readouts = Readouts(gui, arm, first)
         self.singularity = OverlayPanel(gui, self.scene_views.overlay, self)

@@ -17,6 +17,7 @@ Buttons put the arm exactly on each singularity for a demonstration.
 from __future__ import annotations
 
 import collections
+import functools
 import time
 from typing import TYPE_CHECKING
 
@@ -92,6 +93,13 @@ def line_color(rgb: tuple[int, int, int]) -> np.ndarray:
     return np.array(rgb, dtype=np.uint8)
 
 
+@functools.lru_cache(maxsize=8)
+def shoulder_cylinder_mesh(radius: float) -> tuple[np.ndarray, np.ndarray]:
+    """(vertices, faces) of the shoulder singularity's cylinder, made once per radius for every browser."""
+    cylinder = trimesh.creation.cylinder(radius=radius, segment=[[0, 0, 0], [0, 0, 1.6]], sections=64)
+    return cylinder.vertices, cylinder.faces
+
+
 class OverlayScene(View):
     """The overlay's geometry in the 3D view, hidden until switched on.
 
@@ -108,9 +116,9 @@ class OverlayScene(View):
         def local(frame: int, point: np.ndarray) -> np.ndarray:
             return in_frame(F[frame], point)
 
-        cylinder = trimesh.creation.cylinder(radius=g.cylinder_radius, segment=[[0, 0, 0], [0, 0, 1.6]], sections=64)
+        vertices, faces = shoulder_cylinder_mesh(g.cylinder_radius)
         self.cylinder = scene.add_mesh_simple(
-            "/overlay/shoulder_cylinder", cylinder.vertices, cylinder.faces, color=SHOULDER_COLOR,
+            "/overlay/shoulder_cylinder", vertices, faces, color=SHOULDER_COLOR,
             opacity=0.18, side="double", cast_shadow=False, receive_shadow=False, visible=False,
         )
         self.p5 = scene.add_icosphere(f"{node_name(5)}/p5", radius=0.022, color=SHOULDER_COLOR,

@@ -32,6 +32,17 @@ core, and each address's jobs (each browser's, on the teacher's own machine) tak
 :data:`HEAVY_DUTY` of the time: a student clicking "Find every branch" over and over, from
 one tab or eight, waits between runs instead of keeping a core busy. A job whose browser
 has gone, or whose motion was stopped, is not started.
+
+**Joins** (:data:`JOINS`). A newcomer's session takes tens of milliseconds to build. A
+lecture hall opening the page at once is built one at a time, at most :data:`JOIN_DUTY` of
+the time, so that the students already dragging keep their arms moving.
+
+**Python loops in a process of their own** (:data:`APART`). A job that is a Python loop over
+small numpy calls (the arm let go under gravity, a path's resolved rates, a typed table's
+search from many starts) holds the GIL for most of its second, and a thread running it
+made the event loop wait at every socket call: eight tabs pressing *Release* took a
+dragging student's p99 from 4 to over 300 ms (``bench_hostile.py``). Such jobs run in
+one worker process, started at the first one, at a lower priority than the server.
 """
 
 from __future__ import annotations
@@ -39,10 +50,13 @@ from __future__ import annotations
 import asyncio
 import collections
 import concurrent.futures
+import concurrent.futures.process
 import heapq
 import itertools
 import logging
+import multiprocessing
 import os
+import signal
 import threading
 import time
 from typing import Any, Protocol
@@ -61,6 +75,10 @@ DUTY = float(os.environ.get("UR10_TEACH_PANEL_DUTY", "0.15"))
 
 #: Largest share of the time one address's slow one-off jobs may take (:class:`HeavyWork`).
 HEAVY_DUTY = 0.25
+#: Largest share of the time building newcomers' sessions may take (:data:`JOINS`). A hundred
+#: joining within 10 s while five dragged: at 1, the draggers' p99 was 285 ms; at 0.75, 174 ms,
+#: and every newcomer had its scene within 2.5 s. ``UR10_TEACH_JOIN_DUTY`` sets it (the benchmark measures both).
+JOIN_DUTY = float(os.environ.get("UR10_TEACH_JOIN_DUTY", "0.75"))
 #: Threads for the background work of every session (:data:`BACKGROUND`). Each session's features
 #: fold their runs, so this bounds the threads, however fast presses come, not what is done.
 BACKGROUND_THREADS = 32
@@ -381,7 +399,78 @@ class HeavyWork:
 
 
 HEAVY = HeavyWork(budget=budget_of)
+#: Newcomers' sessions (``app.server``): built one at a time, resting after each so that the students
+#: already there keep dragging while a lecture hall joins (``benchmarks/bench_join_storm.py``).
+JOINS = HeavyWork(duty=JOIN_DUTY, budget=lambda who: "joins")
 #: The branch-count maps (``app.reach_map``): made while a gizmo turns, so a larger share, and a slot of their own.
 MAPS = HeavyWork(duty=0.5, budget=budget_of)
 #: The threads background work runs on (a pool: presses cannot multiply them).
 BACKGROUND = concurrent.futures.ThreadPoolExecutor(BACKGROUND_THREADS, thread_name_prefix="background")
+
+
+def _worker_started() -> None:
+    """In the worker process: Ctrl+C is the server's to handle, and the server's drags come first."""
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    if hasattr(os, "nice"):
+        os.nice(5)
+
+
+class WorkerProcess:
+    """Runs ``function(*args, **kwargs)`` in a process of its own, from the thread that waits for it.
+
+    The process is started at the first call ("spawn", as on Windows and macOS) and used
+    again after; one job runs at a time (:data:`HEAVY` runs one at a time anyway). The
+    function and its arguments must pickle (a function of a module, an arm). Where no
+    process can be started, or the one started has died, the job runs in the caller's thread.
+    """
+
+    def __init__(self) -> None:
+        self._pool: concurrent.futures.ProcessPoolExecutor | None = None
+        self._lock = threading.Lock()
+        #: no process could be started (or ``UR10_TEACH_NO_WORKER_PROCESS=1``, for the benchmark that
+        #: measures both): jobs run in the caller's thread
+        self._unavailable = os.environ.get("UR10_TEACH_NO_WORKER_PROCESS") == "1"
+        self.processes_started = 0  #: (for the tests)
+
+    def run(self, function, *args, **kwargs):
+        pool = self._started()
+        if pool is not None:
+            try:
+                return pool.submit(function, *args, **kwargs).result()
+            except concurrent.futures.BrokenExecutor as broken:  # raised by the pool, never by the job
+                log.warning("the worker process is gone (%s); this job runs in the server", broken)
+                self._discard(pool)
+            except RuntimeError as error:
+                if not str(error).startswith("cannot schedule new futures"):
+                    raise  # the job's own
+                self._discard(pool)  # shut down as its server stopped
+        return function(*args, **kwargs)
+
+    def _started(self) -> concurrent.futures.ProcessPoolExecutor | None:
+        with self._lock:
+            if self._pool is None and not self._unavailable:
+                try:
+                    self._pool = concurrent.futures.ProcessPoolExecutor(
+                        1, mp_context=multiprocessing.get_context("spawn"), initializer=_worker_started)
+                    self.processes_started += 1
+                except (OSError, NotImplementedError, ImportError) as error:
+                    log.warning("no worker process (%s): slow jobs run in the server", error)
+                    self._unavailable = True
+            return self._pool
+
+    def _discard(self, pool: concurrent.futures.ProcessPoolExecutor) -> None:
+        with self._lock:
+            if self._pool is pool:
+                self._pool = None
+        pool.shutdown(wait=False, cancel_futures=True)
+
+    def stop(self) -> None:
+        """End the process, if one was started (a job under way in it is not waited for)."""
+        with self._lock:
+            pool = self._pool
+        if pool is not None:
+            self._discard(pool)
+
+
+#: The worker process of the jobs that hold the GIL.
+APART = WorkerProcess()

@@ -65,11 +65,17 @@ CLOUD_BUDGET_BYTES = 64 * 2**20
 
 
 class KeptClouds:
-    """Clouds by what they were made from, the least recently used forgotten beyond ``budget`` bytes."""
+    """Clouds by what they were made from, the least recently used forgotten beyond ``budget`` bytes.
+
+    A browser showing a cloud *holds* the values it was drawn from (``holder``, until
+    :meth:`release`); :meth:`forget_unheld`, called once browsers have left, forgets the
+    rest, so that the server's memory goes back to where it was.
+    """
 
     def __init__(self, budget: int = CLOUD_BUDGET_BYTES) -> None:
         self.budget = budget
         self._kept: collections.OrderedDict[tuple, tuple] = collections.OrderedDict()
+        self._held: dict[int, set[tuple]] = {}  #: id(holder) → the keys it shows
         self._lock = threading.Lock()
 
     @property
@@ -77,19 +83,35 @@ class KeptClouds:
         with self._lock:
             return sum(_nbytes(value) for value in self._kept.values())
 
-    def get(self, key: tuple, make):
+    def get(self, key: tuple, make, holder: object | None = None):
         """The kept value for ``key``, or ``make()`` (called outside the lock), kept within the budget."""
         with self._lock:
             if key in self._kept:
                 self._kept.move_to_end(key)
+                if holder is not None:
+                    self._held.setdefault(id(holder), set()).add(key)
                 return self._kept[key]
         value = make()
         with self._lock:
+            if holder is not None:
+                self._held.setdefault(id(holder), set()).add(key)
             self._kept[key] = value
             total = sum(_nbytes(kept) for kept in self._kept.values())
             while total > self.budget and len(self._kept) > 1:
                 total -= _nbytes(self._kept.popitem(last=False)[1])
         return value
+
+    def release(self, holder: object) -> None:
+        """``holder`` no longer shows what it asked for."""
+        with self._lock:
+            self._held.pop(id(holder), None)
+
+    def forget_unheld(self) -> None:
+        """Forget every value no holder shows."""
+        with self._lock:
+            held = set().union(*self._held.values())
+            for key in [key for key in self._kept if key not in held]:
+                del self._kept[key]
 
 
 def _nbytes(value: tuple) -> int:
@@ -99,10 +121,12 @@ def _nbytes(value: tuple) -> int:
 CLOUDS = KeptClouds()
 
 
-def coloured_cloud(arm: Arm, n: int, compute=lambda make: make()) -> tuple[np.ndarray, np.ndarray, float]:
+def coloured_cloud(arm: Arm, n: int, compute=lambda make: make(),
+                   holder: object | None = None) -> tuple[np.ndarray, np.ndarray, float]:
     """(points (n, 3) float32, colours (n, 3) uint8, colour-scale top in m³), shared by all clients.
 
-    ``compute(make)`` runs ``make`` when the cloud is not kept (a session passes its slow-job runner).
+    ``compute(make)`` runs ``make`` when the cloud is not kept (a session passes its slow-job runner);
+    ``holder`` shows it (:class:`KeptClouds`).
     """
 
     def make():
@@ -110,18 +134,18 @@ def coloured_cloud(arm: Arm, n: int, compute=lambda make: make()) -> tuple[np.nd
         top = float(np.percentile(manipulability, 99))
         return points.astype(np.float32), colormap(manipulability, top), top
 
-    return CLOUDS.get(("cloud", arm, n), lambda: compute(make))
+    return CLOUDS.get(("cloud", arm, n), lambda: compute(make), holder)
 
 
-def coloured_horizontal_section(arm: Arm, height: float, n: int, top: float,
-                                compute=lambda make: make()) -> tuple[np.ndarray, np.ndarray]:
+def coloured_horizontal_section(arm: Arm, height: float, n: int, top: float, compute=lambda make: make(),
+                                holder: object | None = None) -> tuple[np.ndarray, np.ndarray]:
     """(points (n, 3) float32 in the plane z = height, colours on the whole cloud's scale ``top``)."""
 
     def make():
         points, manipulability = arm.sample_horizontal_section(height, n, seed=0)
         return points.astype(np.float32), colormap(manipulability, top)
 
-    return CLOUDS.get(("horizontal", arm, height, n, top), lambda: compute(make))
+    return CLOUDS.get(("horizontal", arm, height, n, top), lambda: compute(make), holder)
 
 
 def revolved_mesh(heights: np.ndarray, inner: np.ndarray, outer: np.ndarray,
@@ -227,15 +251,16 @@ class WorkspaceView(View):
             return
         self.progress.value = 5.0
         self.progress.visible = True
+        CLOUDS.release(self)  # what it showed until now; it holds what it is about to draw
         try:
-            points, colors, top = coloured_cloud(self._session.arm, count, self._slow_job)
+            points, colors, top = coloured_cloud(self._session.arm, count, self._slow_job, holder=self)
             self.progress.value = 60.0
             if section == HULL:
                 vertices, faces = revolved_mesh(*revolved_boundary(points))
             else:
                 points, colors = self._section(section, points, colors, top)
             with self._lock:
-                if self._closed:
+                if self._closed:  # it left while its cloud was made
                     return
                 if self._cloud is not None:
                     self._cloud.remove()
@@ -256,6 +281,8 @@ class WorkspaceView(View):
             self.legend.visible = True
             self._look_square_on(section, points)
         finally:
+            if self._closed:  # it left while its cloud was made: it holds none
+                CLOUDS.release(self)
             self.progress.value = 100.0
             self.progress.visible = False
 
@@ -265,7 +292,7 @@ class WorkspaceView(View):
             return vertical_section(points, azimuth).astype(np.float32), colors
         if section == SECTIONS[2]:  # sampled in the plane itself: a slab of the cloud holds only a few hundred
             return coloured_horizontal_section(self._session.arm, self.height.value / 1000.0,
-                                               min(SECTION_POINTS, len(points)), top, self._slow_job)
+                                               min(SECTION_POINTS, len(points)), top, self._slow_job, holder=self)
         if section == SECTIONS[3]:  # the cut face shows the inside: the hole about the base axis, the dexterous core
             behind = points[:, :2] @ self._plane_normal()[:2] < 0
             return points[behind], colors[behind]
@@ -293,6 +320,7 @@ class WorkspaceView(View):
 
     def clear(self) -> None:
         """Take the cloud out of the scene (toggled off)."""
+        CLOUDS.release(self)
         with self._lock:
             if self._cloud is not None:
                 self._cloud.remove()  # and the legend under it

@@ -42,10 +42,16 @@ BOMB = b"\xdd" + (10_000_000).to_bytes(4, "big") + b"\x90" * 10_000_000  # revie
 
 
 def rss_mib(pid: int) -> float:
-    for line in Path(f"/proc/{pid}/status").read_text().splitlines():
-        if line.startswith("VmRSS:"):
-            return int(line.split()[1]) / 1024
-    return float("nan")
+    """Resident memory of the process ``pid`` and the processes it started (the app's worker process)."""
+    total = 0.0
+    try:
+        for line in Path(f"/proc/{pid}/status").read_text().splitlines():
+            if line.startswith("VmRSS:"):
+                total += int(line.split()[1]) / 1024
+        children = Path(f"/proc/{pid}/task/{pid}/children").read_text().split()
+    except OSError:  # it has just ended
+        return total
+    return total + sum(rss_mib(int(child)) for child in children)
 
 
 async def attacker(url: str, read: bool = True) -> ViserClient | None:
@@ -164,6 +170,15 @@ ATTACKS = {
     f"*Release the arm* 30 times a second, {CONNECTIONS} connections tried": (gui_frames("Release the arm", lambda k: True), 1 / 30),
     f"branch map on, gizmo turned at 30 Hz, {CONNECTIONS} connections tried": "map",
     "1 100 half-sent HTTP requests": "slowloris",
+}
+
+
+#: Rows that measure an attack again with one of the app's defences off (its environment variable).
+WITHOUT = {
+    f"the same, slow jobs in the server's threads (`UR10_TEACH_NO_WORKER_PROCESS=1`)":
+        (f"*Release the arm* 30 times a second, {CONNECTIONS} connections tried", {"UR10_TEACH_NO_WORKER_PROCESS": "1"}),
+    f"the clouds again, glibc's own threshold for large buffers (`UR10_TEACH_MALLOC_DEFAULTS=1`)":
+        (f"clouds asked for, socket never read, {CONNECTIONS} connections tried", {"UR10_TEACH_MALLOC_DEFAULTS": "1"}),
 }
 
 
@@ -305,9 +320,13 @@ def outcome(kind: str, counts: dict) -> str:
 
 def main(kinds: list[str]) -> None:
     rows = []
-    for kind in kinds or list(ATTACKS):
+    order = list(ATTACKS)
+    for label, (kind, _) in WITHOUT.items():
+        order.insert(order.index(kind) + 1, label)
+    for label in kinds or order:
+        kind, env = WITHOUT.get(label, (label, {}))
         quiet_machine(max_wait=120.0)
-        with running_app(env={"UR10_TEACH_LOOPBACK_IS_LAN": "1"}) as app:
+        with running_app(env={"UR10_TEACH_LOOPBACK_IS_LAN": "1", **env}) as app:
             result = scenario(app, kind)
         phases, memory = result["phases"], result["memory"]
         before = min(m for phase, m in memory if phase == "before")
@@ -315,7 +334,7 @@ def main(kinds: list[str]) -> None:
         end = next(m for phase, m in memory if phase == "end")
         after = phases["after"]
         rows.append([
-            kind, outcome(kind, result["counts"]),
+            label, outcome(kind, result["counts"]),
             fmt(phases["before"]), fmt(phases["during"]), fmt(after),
             f"{max(after):.0f} ms" if np.isfinite(max(after)) else "unanswered",
             f"{before:.0f} → {peak:.0f} → {end:.0f} MiB",
@@ -336,7 +355,7 @@ def main(kinds: list[str]) -> None:
         "branch maps on eight, p99 5 → 41 ms and +270–400 MiB; 1 100 half-sent requests, newcomers waiting 8–9 s.",
         "",
         table(["attack", "what became of it", "student p50 / p99 before", "during", "after", "longest wait after it stopped",
-               "server RSS: before → peak → end"], rows),
+               "server RSS (and its worker process): before → peak → end"], rows),
     ])
     if not kinds:
         write_section("hostile", body)

@@ -268,3 +268,22 @@ def test_the_kept_clouds_stay_within_their_memory_budget():
     assert made[-1] == 500_000  # the newest is kept
     huge = kept.get(("cloud", 1_000_000), lambda: cloud(1_000_000))  # over the budget alone: kept, the others go
     assert len(huge[0]) == 1_000_000 and kept.nbytes == 15_000_000
+
+
+def test_the_clouds_nobody_shows_are_forgotten_once_browsers_leave():
+    """Review 2, finding 2: memory went back to its baseline only once no cloud outlived the browsers showing it."""
+    kept = KeptClouds()
+    shown, left = object(), object()
+
+    def cloud(n: int):
+        return np.zeros((n, 3), np.float32), np.zeros((n, 3), np.uint8), 1.0
+
+    kept.get(("cloud", 10), lambda: cloud(10), shown)
+    kept.get(("cloud", 20), lambda: cloud(20), left)
+    kept.get(("cloud", 30), lambda: cloud(30))  # asked for, shown by no one
+    kept.release(left)
+    kept.forget_unheld()
+    assert kept.nbytes == 10 * 15  # only what a browser still shows
+    kept.release(shown)
+    kept.forget_unheld()
+    assert kept.nbytes == 0

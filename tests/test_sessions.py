@@ -402,3 +402,42 @@ def test_a_students_slider_value_is_not_put_back_by_a_redraw_before_its_callback
         await client.close()
 
     asyncio.run(scenario())
+
+
+def test_a_browser_gone_before_its_turn_to_be_built_costs_nothing(app, monkeypatch):
+    """A lecture hall joining at once is built one session at a time (``app.workers.JOINS``):
+    a browser that left while it waited for its turn is not built at all."""
+    from types import SimpleNamespace
+
+    from app import server as server_module
+
+    started = server_module.JOINS.started
+    built = []
+    monkeypatch.setattr(app, "_start_session", lambda *args, **kwargs: built.append(args))
+    gone = SimpleNamespace(client_id=10**9)  # not among the server's clients: it has left
+    app._connected(gone)
+    assert not built and server_module.JOINS.started == started and 10**9 not in app.sessions
+
+
+def test_a_cloud_goes_from_memory_once_its_browsers_have_left(app):
+    """Review 2, finding 2: clouds made for browsers that left stayed in the server's memory."""
+    from app.workspace import CLOUDS
+
+    async def scenario():
+        CLOUDS.forget_unheld()
+        staying, leaving = [await ViserClient(url(app)).connect() for _ in range(2)]
+        sessions = session_of(app, staying), session_of(app, leaving)
+        await leaving.set_gui("Samples", "50 k")
+        await leaving.set_gui("Show workspace cloud", True)
+        await until(lambda: sessions[1].workspace._cloud is not None, what="the leaving browser's cloud")
+        await staying.set_gui("Samples", "10 k")
+        await staying.set_gui("Show workspace cloud", True)
+        await until(lambda: sessions[0].workspace._cloud is not None, what="the staying browser's cloud")
+        both = CLOUDS.nbytes
+        sweeps = app._janitor.sweeps
+        await leaving.close()
+        await until(lambda: app._janitor.sweeps > sweeps, what="the janitor's sweep")
+        assert CLOUDS.nbytes == both - 50_000 * 15  # the 10 k cloud shown still, the 50 k one forgotten
+        await staying.close()
+
+    asyncio.run(scenario())

@@ -8,6 +8,8 @@ from __future__ import annotations
 
 import asyncio
 import contextlib
+import os
+import signal
 import threading
 
 import pytest
@@ -213,3 +215,41 @@ def test_a_request_that_comes_while_a_run_fails_is_still_served():
     with pytest.raises(ValueError, match="out of reach"):  # the refusal is still reported
         folded()
     assert runs == [0, 1] and not folded.busy and not folded.waiting
+
+
+def _raise_value_error(text: str) -> None:
+    raise ValueError(text)
+
+
+def test_a_job_sent_apart_runs_in_another_process_and_its_refusal_comes_back():
+    apart = workers.WorkerProcess()
+    try:
+        assert apart.run(os.getpid) != os.getpid()
+        assert apart.run(os.getpid) == apart.run(os.getpid)  # one process, started once
+        assert apart.processes_started == 1
+        with pytest.raises(ValueError, match="no such pose"):
+            apart.run(_raise_value_error, "no such pose")
+    finally:
+        apart.stop()
+
+
+def test_a_job_sent_apart_runs_in_the_callers_thread_where_no_process_can_start(monkeypatch):
+    def refuse(*args, **kwargs):
+        raise OSError("no processes here")
+
+    monkeypatch.setattr(workers.concurrent.futures, "ProcessPoolExecutor", refuse)
+    apart = workers.WorkerProcess()
+    assert apart.run(os.getpid) == os.getpid()
+    assert apart.processes_started == 0
+
+
+def test_a_job_sent_apart_outlives_its_process_dying():
+    apart = workers.WorkerProcess()
+    try:
+        first = apart.run(os.getpid)
+        os.kill(first, signal.SIGKILL)
+        assert apart.run(os.getpid) == os.getpid()  # the job that finds the process gone runs here
+        assert apart.run(os.getpid) not in (first, os.getpid())  # and the next in a new process
+        assert apart.processes_started == 2
+    finally:
+        apart.stop()

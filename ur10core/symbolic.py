@@ -211,8 +211,9 @@ def det_j_latex() -> str:
     return r"\det J = " + load().latex("det_J")
 
 
+@functools.lru_cache(maxsize=1)
 def det_j_mathml() -> str:
-    """``det J = a2 a3 (a2 c2 + a3 c23 − d5 s234) s3 s5`` as block MathML, from the cache."""
+    """``det J = a2 a3 (a2 c2 + a3 c23 − d5 s234) s3 s5`` as block MathML, from the cache (printed once)."""
     body = sp.printing.mathml(compact(load().det_J), printer="presentation")
     return f'<math display="block"><mrow><mi>det</mi><mo>&#8289;</mo><mi>J</mi><mo>=</mo>{body}</mrow></math>'
 

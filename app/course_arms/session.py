@@ -17,7 +17,7 @@ from ..metrics import LATENCY
 from ..session_basics import SessionBasics
 from ..velocity import VelocityView
 from ..view import View
-from ..workers import HEAVY, DragQueue, FoldedRuns, PanelRefresher
+from ..workers import APART, HEAVY, DragQueue, FoldedRuns, PanelRefresher
 from .editor import DHEditor
 from .forces import CourseForces
 from .gripper import GripperPose
@@ -39,7 +39,7 @@ def reach(arm: SerialArm) -> float:
 
 
 class BranchSearch(View):
-    """"Find every branch": a typed table's numerical IK from many starts, on a thread of its own."""
+    """"Find every branch": a typed table's numerical IK from many starts, in the worker process."""
 
     def __init__(self, gui: viser.GuiApi, session: "CourseArmSession") -> None:
         self._session = session
@@ -57,7 +57,8 @@ class BranchSearch(View):
     def _search(self) -> None:
         session = self._session
         snapshot = session.state.last
-        solution = HEAVY.run(session.client, lambda: session.state.search(snapshot), cancelled=lambda: session.closed)
+        solution = HEAVY.run(session.client, lambda: APART.run(session.state.arm.ik, snapshot.target, hint=snapshot.q),
+                             cancelled=lambda: session.closed)
         if not session.closed:
             session.apply(lambda state: state.with_branches(snapshot, solution), move_gizmo=False)
 

@@ -119,10 +119,6 @@ class CourseArmState:
             self.last = CourseSnapshot(q, self.arm.frames(q), target, solution, int(chosen), "")
         return self.last
 
-    def search(self, snapshot: CourseSnapshot) -> BranchSet:
-        """Every branch of ``snapshot``'s target (the numerical IK's many starts): slow, call it off the drag path."""
-        return self.arm.ik(snapshot.target, hint=snapshot.q)
-
     def with_branches(self, snapshot: CourseSnapshot, solution: BranchSet) -> CourseSnapshot:
         """The found branches shown, if the arm has not moved since they were searched for."""
         if self.last is not snapshot:
