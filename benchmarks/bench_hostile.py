@@ -175,9 +175,9 @@ ATTACKS = {
 
 #: Rows that measure an attack again with one of the app's defences off (its environment variable).
 WITHOUT = {
-    f"the same, slow jobs in the server's threads (`UR10_TEACH_NO_WORKER_PROCESS=1`)":
+    "the same, slow jobs in the server's threads (`UR10_TEACH_NO_WORKER_PROCESS=1`)":
         (f"*Release the arm* 30 times a second, {CONNECTIONS} connections tried", {"UR10_TEACH_NO_WORKER_PROCESS": "1"}),
-    f"the clouds again, glibc's own threshold for large buffers (`UR10_TEACH_MALLOC_DEFAULTS=1`)":
+    "the clouds again, glibc's own threshold for large buffers (`UR10_TEACH_MALLOC_DEFAULTS=1`)":
         (f"clouds asked for, socket never read, {CONNECTIONS} connections tried", {"UR10_TEACH_MALLOC_DEFAULTS": "1"}),
 }
 
