@@ -419,10 +419,14 @@ class WorkerProcess:
     """Runs ``function(*args, **kwargs)`` in a process of its own, from the thread that waits for it.
 
     The process is started at the first call ("spawn", as on Windows and macOS) and used
-    again after; one job runs at a time (:data:`HEAVY` runs one at a time anyway). The
-    function and its arguments must pickle (a function of a module, an arm). Where no
-    process can be started, or the one started has died, the job runs in the caller's thread.
+    again by the calls that follow; it ends once no job has come for :attr:`IDLE` seconds, so
+    that its memory (about 60 MiB) is the server's only while jobs come. One job runs at a time
+    (:data:`HEAVY` runs one at a time anyway). The function and its arguments must pickle (a
+    function of a module, an arm). Where no process can be started, or the one started has
+    died, the job runs in the caller's thread.
     """
+
+    IDLE = 10.0
 
     def __init__(self) -> None:
         self._pool: concurrent.futures.ProcessPoolExecutor | None = None
@@ -431,6 +435,7 @@ class WorkerProcess:
         #: measures both): jobs run in the caller's thread
         self._unavailable = os.environ.get("UR10_TEACH_NO_WORKER_PROCESS") == "1"
         self.processes_started = 0  #: (for the tests)
+        self._idle: threading.Timer | None = None
 
     def run(self, function, *args, **kwargs):
         pool = self._started()
@@ -448,6 +453,11 @@ class WorkerProcess:
 
     def _started(self) -> concurrent.futures.ProcessPoolExecutor | None:
         with self._lock:
+            if self._idle is not None:
+                self._idle.cancel()
+            self._idle = threading.Timer(self.IDLE, self.stop)  # from the job's start: jobs last a second or so
+            self._idle.daemon = True
+            self._idle.start()
             if self._pool is None and not self._unavailable:
                 try:
                     self._pool = concurrent.futures.ProcessPoolExecutor(

@@ -48,7 +48,8 @@ def rss_mib(pid: int) -> float:
         for line in Path(f"/proc/{pid}/status").read_text().splitlines():
             if line.startswith("VmRSS:"):
                 total += int(line.split()[1]) / 1024
-        children = Path(f"/proc/{pid}/task/{pid}/children").read_text().split()
+        # each thread's children: the worker process is started by one of the server's threads
+        children = [c for task in Path(f"/proc/{pid}/task").iterdir() for c in (task / "children").read_text().split()]
     except OSError:  # it has just ended
         return total
     return total + sum(rss_mib(int(child)) for child in children)

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import functools
+
 import numpy as np
 import pytest
 import viser
@@ -155,3 +157,28 @@ def test_stop_echo(scene):
     assert callable(gizmo._impl_aux.sync_cb)  # viser still echoes by default...
     stop_echo(gizmo)
     assert gizmo._impl_aux.sync_cb is None  # ...and this is how it is switched off
+
+
+def test_shared_type_hints_are_viser_s_own_and_handles_behave_the_same(scene, monkeypatch):
+    """``share_type_hints`` replaces viser's per-handle hints with one evaluation per class: the hints
+    must be the ones viser would evaluate, and a handle must cast and refuse values as before."""
+    import typing
+
+    from viser import _assignable_props_api
+
+    from app import fast_updates
+
+    # what it replaces (a viser upgrade that renames it fails here)
+    assert isinstance(vars(_assignable_props_api.AssignablePropsBase).get("_prop_hints"), (property, functools.cached_property))
+    monkeypatch.setattr(_assignable_props_api.AssignablePropsBase, "_prop_hints",
+                        _assignable_props_api.AssignablePropsBase._prop_hints)  # put back after the test
+    fast_updates.share_type_hints()
+    first, second = scene.add_icosphere("/a", radius=0.1), scene.add_icosphere("/b", radius=0.2)
+    assert first._prop_hints is second._prop_hints  # evaluated once for the class
+    assert first._prop_hints == typing.get_type_hints(type(first._impl.props))
+    first.color = (10, 20, 30)
+    first.position = [1, 2, 3]  # a list: cast to the declared array type, as viser does
+    assert tuple(first.color) == (10, 20, 30) and first.position.dtype == np.float64
+    first.remove()
+    with pytest.raises(RuntimeError, match="removed"):
+        first.color = (1, 2, 3)

@@ -253,3 +253,14 @@ def test_a_job_sent_apart_outlives_its_process_dying():
         assert apart.processes_started == 2
     finally:
         apart.stop()
+
+
+def test_the_worker_process_ends_once_no_job_comes_and_starts_again_for_the_next():
+    apart = workers.WorkerProcess()
+    apart.IDLE = 0.2
+    try:
+        first = apart.run(os.getpid)
+        wait_for(lambda: apart._pool is None, what="the idle worker process ended")
+        assert apart.run(os.getpid) not in (first, os.getpid()) and apart.processes_started == 2
+    finally:
+        apart.stop()

@@ -64,7 +64,7 @@ class CourseArmState:
 
     An arm with a closed form gets every branch on every change. A typed table's numerical
     IK follows the target from the current joints only (a millisecond or so a step); its
-    other branches come from :meth:`search`, many starts at once, when the student asks.
+    other branches come from its search from many starts (``BranchSearch``), when the student asks.
     """
 
     def __init__(self, arm: SerialArm, q=None) -> None:
