@@ -28,6 +28,7 @@ what keeps this module here (BENCHMARKS.md).
 
 from __future__ import annotations
 
+import functools
 import os
 import typing
 
@@ -96,7 +97,9 @@ def share_type_hints() -> None:
     ``UR10_TEACH_PUBLIC_SETTERS=1`` leaves viser as it is (``benchmarks/bench_join_storm.py`` measures both).
     """
     if not PUBLIC_SETTERS:
-        _assignable_props_api.AssignablePropsBase._prop_hints = property(_prop_hints)
+        shared = functools.cached_property(_prop_hints)  # then read from the handle, as viser's own
+        shared.__set_name__(_assignable_props_api.AssignablePropsBase, "_prop_hints")
+        _assignable_props_api.AssignablePropsBase._prop_hints = shared
 
 
 def _set_each(nodes: list[viser.SceneNodeHandle], values: np.ndarray, field: str, message: type) -> None:

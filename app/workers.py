@@ -76,8 +76,8 @@ DUTY = float(os.environ.get("UR10_TEACH_PANEL_DUTY", "0.15"))
 #: Largest share of the time one address's slow one-off jobs may take (:class:`HeavyWork`).
 HEAVY_DUTY = 0.25
 #: Largest share of the time building newcomers' sessions may take (:data:`JOINS`). A hundred
-#: joining within 10 s while five dragged: at 1, the draggers' p99 was 285 ms; at 0.75, 174 ms,
-#: and every newcomer had its scene within 2.5 s. ``UR10_TEACH_JOIN_DUTY`` sets it (the benchmark measures both).
+#: joining within 10 s while five dragged (BENCHMARKS.md, one run): at 1, the draggers' p99 was
+#: 189 ms; at 0.75, 102 ms, and every newcomer had its scene within 1.5 s. ``UR10_TEACH_JOIN_DUTY`` sets it (the benchmark measures both).
 JOIN_DUTY = float(os.environ.get("UR10_TEACH_JOIN_DUTY", "0.75"))
 #: Threads for the background work of every session (:data:`BACKGROUND`). Each session's features
 #: fold their runs, so this bounds the threads, however fast presses come, not what is done.
