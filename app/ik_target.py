@@ -231,11 +231,11 @@ class BranchesScene(View):
             raise ValueError(f"no arm model {model!r}; the models are {', '.join(self._models.names)}")
         for ghost in self.ghosts:
             ghost.visible = False
-        self.model = model
         self.ghosts = self.models[model] if model in self.models else self._send(model)
         for ghost in self.ghosts:
             ghost.visible = True
         self._forget_sent()
+        self.model = model  # named once drawn: whoever reads it finds its ghosts
 
     def _clicked(self, event) -> None:
         if self.on_select is not None and event.instance_index is not None:

@@ -17,7 +17,7 @@ import viser
 
 from .feedback import chosen
 from .readouts import joints_markdown
-from .state import COURSE_POSES, ArmState, Snapshot
+from .state import ArmState, Snapshot
 from .style import JOINT_LABELS, number
 from .view import View
 
@@ -107,7 +107,7 @@ class JointPanel(View):
         if choice == "Random":
             q = self._rng.uniform(-np.pi, np.pi, 6)
         else:
-            q = np.radians(COURSE_POSES[choice.lower()])
+            q = self._session.arm.specs.poses[choice.lower()]
         self._session.apply(lambda state: state.set_joints(q))
 
     def _typed_angles(self, _: viser.GuiEvent) -> None:

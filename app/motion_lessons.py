@@ -20,7 +20,6 @@ from ur10core.branches import wrap
 from .animation import Player
 from .feedback import chosen
 from .style import JOINT_LABELS, SLOT_COLORS, hex_color, number
-from .velocity import SPEED_LIMITS
 from .view import View
 from .workers import APART, HEAVY
 
@@ -37,15 +36,16 @@ PATHS = ("straight tool line", "joints interpolated")
 SINGULAR_FILL, OVER_FILL = "rgba(90, 90, 100, 0.22)", "rgba(220, 38, 38, 0.22)"
 
 
-def rate_chart_data(path: paths.Path) -> tuple[np.ndarray, ...]:
-    """The columns of a path's chart: t, each joint's speed |q̇| (°/s), the two speed limits,
-    and the two marks (the chart's top where they hold, 0 elsewhere, drawn as shading)."""
+def rate_chart_data(path: paths.Path, limits: np.ndarray) -> tuple[np.ndarray, ...]:
+    """The columns of a path's chart: t, each joint's speed |q̇| (°/s), the two speed limits (of
+    ``limits`` (6,), °/s: base and shoulder, elbow and wrists), and the two marks (the chart's top
+    where they hold, 0 elsewhere, drawn as shading)."""
     speeds = np.degrees(np.abs(path.qdot))
-    top = 1.1 * max(float(speeds.max()), float(SPEED_LIMITS.max()))
+    top = 1.1 * max(float(speeds.max()), float(limits.max()))
     ones = np.ones_like(path.t)
     singular = np.where(path.damping > 0, top, 0.0)
-    over = np.where((speeds > SPEED_LIMITS).any(axis=1), top, 0.0)
-    columns = (path.t, *speeds.T, SPEED_LIMITS[0] * ones, SPEED_LIMITS[2] * ones, singular, over)
+    over = np.where((speeds > limits).any(axis=1), top, 0.0)
+    columns = (path.t, *speeds.T, limits[0] * ones, limits[2] * ones, singular, over)
     return tuple(np.asarray(c, dtype=np.float32) for c in columns)
 
 
@@ -66,15 +66,15 @@ def rate_chart(gui: viser.GuiApi, kind: str) -> viser.GuiUplotHandle:
         title=f"{kind.capitalize()}: joint speeds", aspect=2.0, visible=False)
 
 
-def path_summary(path: paths.Path, kind: str) -> str:
+def path_summary(path: paths.Path, kind: str, limits: np.ndarray) -> str:
     """What a student should notice: each joint's fastest rate against its limit, and where damping acted."""
     fastest = np.degrees(np.abs(path.qdot).max(axis=0))
     cells = " · ".join((f"<b style='color:#dc2626'>{label} {number(rate, '.0f')}°/s</b>" if rate > limit
-                        else f"{label} {number(rate, '.0f')}°/s") for label, rate, limit in zip(JOINT_LABELS, fastest, SPEED_LIMITS))
+                        else f"{label} {number(rate, '.0f')}°/s") for label, rate, limit in zip(JOINT_LABELS, fastest, limits))
     lines = [f"**{kind.capitalize()}**, {path.t[-1]:.0f} s. Fastest rate of each joint: {cells}."]
-    over = int((fastest > SPEED_LIMITS).sum())
-    lines.append(f"{over} joint{'s' if over != 1 else ''} over the UR10's speed limit." if over
-                 else "Every joint within the UR10's speed limits.")
+    over = int((fastest > limits).sum())
+    lines.append(f"{over} joint{'s' if over != 1 else ''} over the arm's speed limit." if over
+                 else "Every joint within the arm's speed limits.")
     damped = np.flatnonzero(path.damping > 0)
     if len(damped):
         lines.append(f"Near a singularity from {path.t[damped[0]]:.2f} s to {path.t[damped[-1]]:.2f} s: the rates were damped "
@@ -141,10 +141,12 @@ class MotionLessons(View):
                                                           PATH_SECONDS, PATH_STEPS),
                                         cancelled=self.player.cancelled),
                     PATHS[1]: paths.joint_interpolation(arm, start, goal, PATH_SECONDS, PATH_STEPS)}
-            self.summary.content = "\n\n".join(path_summary(both[k], k) for k in (kind, *(k for k in PATHS if k != kind)))
+            limits = np.degrees(arm.specs.speed_limits)
+            self.summary.content = "\n\n".join(path_summary(both[k], k, limits)
+                                                for k in (kind, *(k for k in PATHS if k != kind)))
             with session.client.atomic():
                 for name, path in both.items():
-                    self.charts[name].data = rate_chart_data(path)
+                    self.charts[name].data = rate_chart_data(path, limits)
                     self.charts[name].visible = True
             return both[kind].t, both[kind].q
 

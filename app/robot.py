@@ -76,12 +76,12 @@ class RobotScene(View):
         """Draw the arm as ``model`` (one of :attr:`names`)."""
         if model not in self.names:
             raise ValueError(f"no arm model {model!r}; the models are {', '.join(self.names)}")
-        self.model = model
         if model not in self.meshes:
             self._send(model)
         for name, handles in self.meshes.items():
             for handle in handles:
                 handle.visible = name == model
+        self.model = model  # named once drawn: whoever reads it finds its meshes
 
     def render(self, snapshot: Snapshot) -> None:
         set_orientations(self.links[1:], snapshot.link_wxyz)  # the translations never change

@@ -237,6 +237,9 @@ class TeachingServer:
         self.drags = DragQueue(loop)
         self._sessions: dict[int, ClientSession | CourseArmSession | DesktopArmSession] = {}
         self._last_switch: dict[int, float] = {}  # client id → when its arm was last rebuilt
+        #: client id → picker choice → (state, typed table) of each arm the browser has left: going
+        #: back to one finds its pose, target and typed table as they were
+        self._left_arms: dict[int, dict[str, tuple]] = {}
         self._switches: dict[str, TokenBucket] = {}  # budget (an address) → its arm changes
         self.clock = time.monotonic  #: the time the arm changes of an address are paced by (a test sets its own)
         self._sessions_lock = threading.Lock()
@@ -306,17 +309,25 @@ class TeachingServer:
         ``typed``: (arm, text, convention) of a table typed in the DH editor.
         """
         name = ARM_CHOICES[choice]
+        state = None
+        if typed is None:  # not a newly typed table: the arm as this browser left it, if it has been here
+            with self._sessions_lock:
+                state, typed = self._left_arms.get(client.client_id, {}).get(choice, (None, None))
         if name is None:
-            session = ClientSession(client, self.arm, self.models, self.refresher, self.drags, lecture=lecture)
+            session = ClientSession(client, self.arm, self.models, self.refresher, self.drags, lecture=lecture, state=state)
         elif name == "custom":
-            arm, text, convention = typed or (parse_table(STARTING_TABLE, "standard"), STARTING_TABLE, "standard")
+            typed = typed or (parse_table(STARTING_TABLE, "standard"), STARTING_TABLE, "standard")
+            arm, text, convention = typed
             session = CourseArmSession(
-                client, arm, self.refresher, self.drags, lecture=lecture, text=text, convention=convention,
+                client, arm, self.refresher, self.drags, lecture=lecture, text=text, convention=convention, state=state,
                 rebuild=lambda new, new_text, new_convention: self._switch(client, CUSTOM, (new, new_text, new_convention)))
         elif name == "three_dof":
-            session = DesktopArmSession(client, Arm.preset(name), self.refresher, lecture=lecture)
+            session = DesktopArmSession(client, state.arm if state else Arm.preset(name), self.refresher, lecture=lecture,
+                                        state=state)
         else:
-            session = CourseArmSession(client, Arm.preset(name), self.refresher, self.drags, lecture=lecture)
+            session = CourseArmSession(client, state.arm if state else Arm.preset(name), self.refresher, self.drags,
+                                       lecture=lecture, state=state)
+        session.choice, session.typed = choice, typed
         with self._sessions_lock:
             if client.client_id in self._last_switch:  # a change of arm: the interval starts before its picker shows
                 self._last_switch[client.client_id] = time.monotonic()
@@ -343,6 +354,8 @@ class TeachingServer:
                 raise ValueError(f"one change of arm every {SWITCH_INTERVAL:g} s, please: try again in a moment")
             self._last_switch[client.client_id] = math.inf  # refused while this one is being built
             old = self._sessions.pop(client.client_id, None)
+            if old is not None:
+                self._left_arms.setdefault(client.client_id, {})[old.choice] = (old.state, old.typed)
         lecture = self.lecture
         if old is not None:
             if old.camera is not None:
@@ -370,6 +383,7 @@ class TeachingServer:
             with self._sessions_lock:
                 session = self._sessions.pop(client.client_id, None)
                 self._last_switch.pop(client.client_id, None)
+                self._left_arms.pop(client.client_id, None)
             if session is not None:
                 session.close()
         self._janitor.soon()

@@ -23,6 +23,10 @@ class SessionBasics:
 
     built = False
     panel_views: tuple = ()
+    #: the arm picker's label of this arm, and the typed table (arm, text, convention) it was
+    #: built from: the server sets them, and keeps the state under them when the browser leaves the arm
+    choice: str = ""
+    typed: tuple | None = None
 
     @contextlib.contextmanager
     def _batch(self):

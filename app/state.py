@@ -24,14 +24,6 @@ from ur10core.workspace import lowest_points
 
 from .style import JOINT_LABELS
 
-#: Named poses for the buttons: docs/kinematics.md §3 worked examples (degrees).
-COURSE_POSES = {
-    "zero": (0, 0, 0, 0, 0, 0),
-    "stretched": (45, 90, 0, -90, 0, 60),
-    "arbitrary": (30, 45, 26, 50, 60, 80),
-}
-#: The pose a new arm starts in: the course's arbitrary example, clear of every singularity.
-HOME = COURSE_POSES["arbitrary"]
 SINGULARITY_KINDS = ("shoulder", "elbow", "wrist")
 #: A body this far below z = 0 is through the floor (the base's own underside sits on it).
 FLOOR_TOLERANCE = 1e-3
@@ -97,7 +89,8 @@ class ArmState:
     arm : Arm
         The arm's dimensions.
     q : array_like, shape (6,), optional
-        Starting joints (rad); the course's arbitrary pose by default.
+        Starting joints (rad); the arm's home pose by default (``arm.specs``: for the UR10, the
+        course's arbitrary pose).
     body_points : array_like, shape (7, P, 3), optional
         Points of each link's body in its DH frame (``app.meshes.body_points``), for the
         floor check; the frame origins alone by default.
@@ -107,7 +100,7 @@ class ArmState:
         self.arm = arm
         self.body_points = np.zeros((7, 1, 3)) if body_points is None else np.asarray(body_points, dtype=float)
         self.lock = threading.RLock()
-        self._q = self.check_joints(np.radians(HOME) if q is None else q)
+        self._q = self.check_joints(arm.specs.home if q is None else q)
         self._target = arm.fk(self._q)
         self._solution = arm.ik(self._target, hint=self._q)
         self._slot = int(self._solution.nearest(self._q).slot)

@@ -15,6 +15,8 @@ from typing import TYPE_CHECKING
 import numpy as np
 import viser
 
+from ur10core.specs import torque_map
+
 from .fast_updates import set_positions, stop_echo
 from .feedback import chosen
 from .state import Snapshot
@@ -26,9 +28,6 @@ from .workspace import POINT_SIZE, colormap
 if TYPE_CHECKING:
     from .session import ClientSession
 
-#: Each joint's rated torque (N·m): UR's joint sizes for the UR10 (base and shoulder size 4,
-#: elbow size 3, wrists size 2).
-TORQUE_CAPACITY = np.array([330.0, 330.0, 150.0, 56.0, 56.0, 56.0])
 DRAGGED = "drag the handle"
 #: Where the force at the flange points (base frame); None: along the flange's own z axis;
 #: DRAGGED: where the student dragged the handle, from the flange.
@@ -37,22 +36,10 @@ DIRECTIONS = {"down (−z)": (0.0, 0.0, -1.0), "up (+z)": (0.0, 0.0, 1.0), "+x":
 #: How far from the flange the direction handle sits (m), and the gizmo's size there.
 HANDLE_DISTANCE, HANDLE_SCALE = 0.35, 0.12
 MAX_FORCE_N = 200.0
-MAX_PAYLOAD_KG = 10.0  #: the UR10's rated payload (docs/kinematics.md §1)
 ARROW_METRES_PER_N = 0.002
 FORCE_COLOR = (0, 114, 178)
-#: Joint vectors sampled for the torque map: the worst of them is marked.
+#: Joint vectors sampled for the torque map (``ur10core.specs.torque_map``): the worst of them is marked.
 TORQUE_MAP_POINTS = 20_000
-
-
-def torque_map(arm, force: np.ndarray, n: int = TORQUE_MAP_POINTS) -> tuple[np.ndarray, np.ndarray, int]:
-    """(flange positions (n, 3), ‖Jᵀ F‖ at each (n,), index of the largest) over random joints (docs/kinematics.md §8.3).
-
-    The course's statics exercise for its 3-DOF arm, on the UR10: where in its workspace does
-    holding ``force`` at the flange need the most joint torque?
-    """
-    points, _, q = arm.sample_workspace(n, seed=3, return_joints=True)
-    norms = np.linalg.norm(arm.static_torques(q, force), axis=-1)
-    return points, norms, int(np.argmax(norms))
 
 
 def force_vector(direction: str, newtons: float, flange: np.ndarray, dragged=(0.0, 0.0, -1.0)) -> np.ndarray:
@@ -63,8 +50,9 @@ def force_vector(direction: str, newtons: float, flange: np.ndarray, dragged=(0.
     return newtons * (flange[:3, 2] if unit is None else np.array(unit))
 
 
-def bars_html(force_torques: np.ndarray, gravity: np.ndarray, capacity: np.ndarray = TORQUE_CAPACITY) -> str:
-    """Per joint: a bar of |τ_force + τ_gravity| against its capacity, green to red, with the three numbers."""
+def bars_html(force_torques: np.ndarray, gravity: np.ndarray, capacity: np.ndarray) -> str:
+    """Per joint: a bar of |τ_force + τ_gravity| against its rated torque ``capacity`` (N·m), green to red,
+    with the three numbers."""
     rows = []
     for label, f, g, cap in zip(JOINT_LABELS, force_torques, gravity, capacity):
         total = f + g
@@ -94,7 +82,8 @@ class StaticsView(View):
             self.enabled = gui.add_checkbox("Show the torques", False)
             self.newtons = gui.add_slider("Force at the flange (N)", min=0.0, max=MAX_FORCE_N, step=5.0, initial_value=50.0)
             self.direction = gui.add_dropdown("Force direction", tuple(DIRECTIONS), initial_value="down (−z)")
-            self.payload = gui.add_slider("Payload (kg)", min=0.0, max=MAX_PAYLOAD_KG, step=0.5, initial_value=0.0)
+            self.payload = gui.add_slider("Payload (kg)", min=0.0, max=session.arm.specs.payload_kg, step=0.5,
+                                          initial_value=0.0)
             self.bars = gui.add_html("", visible=False)
             self.mapped = gui.add_checkbox("Colour the workspace by ‖τ‖ for this force", False,
                                            hint=f"{TORQUE_MAP_POINTS:,} random joint vectors; the worst one is marked")
@@ -141,8 +130,9 @@ class StaticsView(View):
         arm = snapshot.arm
         force = force_vector(chosen(self.direction, "force direction"), float(self.newtons.value), snapshot.flange, self.dragged)
         payload = float(self.payload.value)
-        if not 0.0 <= payload <= MAX_PAYLOAD_KG:
-            raise ValueError(f"payload: from 0 to {MAX_PAYLOAD_KG:g} kg, got {payload:g}")
+        rated = arm.specs.payload_kg
+        if not 0.0 <= payload <= rated:
+            raise ValueError(f"payload: from 0 to {rated:g} kg, got {payload:g}")
         try:
             gravity = arm.gravity_torques(snapshot.q, payload)
         except ValueError:  # an arm without published masses (the UR10e): the force's torques alone
@@ -178,7 +168,7 @@ class StaticsView(View):
         self.bars.visible = bool(self.enabled.value)
         if self.bars.visible:
             _, force_torques, gravity = self.loads(snapshot)
-            self.bars.content = bars_html(force_torques, gravity)
+            self.bars.content = bars_html(force_torques, gravity, snapshot.arm.specs.torque_ratings)
 
     def _draw_map(self) -> None:
         session = self._session
@@ -189,7 +179,7 @@ class StaticsView(View):
             if DIRECTIONS[direction] is None:
                 raise ValueError("the map needs a force fixed in the base frame: pick a direction other than the flange's z")
             force = force_vector(direction, float(self.newtons.value), snapshot.flange, self.dragged)
-            shown = force, HEAVY.run(session.client, lambda: torque_map(snapshot.arm, force), cancelled=lambda: session.closed)
+            shown = force, HEAVY.run(session.client, lambda: torque_map(snapshot.arm, force, TORQUE_MAP_POINTS), cancelled=lambda: session.closed)
         with self._map_lock:
             if session.closed:
                 return

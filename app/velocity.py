@@ -23,8 +23,6 @@ from .view import View
 if TYPE_CHECKING:
     from .session import ClientSession
 
-#: The UR10's joint speed limits (°/s): base and shoulder 120, elbow and wrists 180 (docs/kinematics.md §1).
-SPEED_LIMITS = np.array([120.0, 120.0, 180.0, 180.0, 180.0, 180.0])
 LINEAR_COLOR, ANGULAR_COLOR = (0, 114, 178), (204, 121, 167)
 #: Drawn length: metres per m/s of the flange, and per rad/s of its turning.
 METRES_PER_SPEED, METRES_PER_TURN_RATE = 0.5, 0.15
@@ -54,7 +52,7 @@ def shown_rates(qdot: np.ndarray, kinds: str) -> np.ndarray:
 
 def rates_markdown(qdot: np.ndarray, damping: float, asked: np.ndarray, achieved: np.ndarray,
                    labels: tuple[str, ...] = JOINT_LABELS, kinds: str = "RRRRRR",
-                   limits: np.ndarray | None = SPEED_LIMITS) -> str:
+                   limits: np.ndarray | None = None) -> str:
     """The joint rates (°/s, mm/s), red where over the joint's speed limit (if it has ``limits``), and what the damping cost."""
     shown = shown_rates(qdot, kinds)
     over_limit = np.abs(shown) > limits if limits is not None else np.zeros(len(shown), bool)
@@ -84,18 +82,19 @@ class VelocityView(View):
     """The "Velocities" folder and the two arrows at the tool.
 
     ``root``: where its nodes hang; ``tool(snapshot)``: the (4, 4) pose the arrows start at
-    (the UR10's flange by default); ``labels``, ``limits``: each joint's name and speed limit
-    (°/s, mm/s; None: the arm has none). The kinds of joints come from ``session.arm``.
+    (the UR10's flange by default); ``labels``: each joint's name. The kinds of joints and their
+    speed limits (``arm.specs``, where the maker publishes them) come from ``session.arm``.
     """
 
     def __init__(self, scene: viser.SceneApi, gui: viser.GuiApi, session: "ClientSession", root: str = "/velocity",
                  tool: Callable[[Any], np.ndarray] = lambda snapshot: snapshot.flange, place: str = "flange",
-                 labels: tuple[str, ...] = JOINT_LABELS, limits: np.ndarray | None = SPEED_LIMITS) -> None:
+                 labels: tuple[str, ...] = JOINT_LABELS) -> None:
         self._session = session
         self._arm = session.arm
         self._tool = tool
-        self._labels, self._limits = labels, limits
         self._kinds = "".join(self._arm.joint_types)
+        limits = self._arm.specs.speed_limits
+        self._labels, self._limits = labels, None if limits is None else shown_rates(limits, self._kinds)
         folder = gui.add_folder("Velocities", expand_by_default=False)
         self.folders = (folder,)
         with folder:

@@ -465,3 +465,40 @@ def test_the_tabs_of_one_address_change_arms_no_more_often_than_one_tab():
         asyncio.run(scenario())
     finally:
         app.stop()
+
+
+def test_going_back_to_an_arm_finds_its_pose_target_and_typed_table_as_left(app):
+    """Issue 29: switching to another arm and back lost the UR10's pose and target, and a typed
+    table went back to the starting one."""
+    async def scenario():
+        client = await ViserClient(url(app)).connect()
+        client_id = int(client.gizmo_owner)
+        ur10 = session_of(app, client)
+        ur10.apply(lambda state: state.set_joints(np.radians([10.0, -70.0, 80.0, -20.0, 50.0, 30.0])))
+        ur10_left = ur10.state.last
+        stanford = await pick(app, client, "Stanford arm (RRP + wrist)", CourseArmSession)
+        goal = stanford.state.last.frames[-1].copy()
+        goal[:3, 3] += (0.05, -0.03, 0.02)
+        await client.drag_target(goal[:3, 3], wxyz_of(goal), "start", name=TARGET)
+        await until(lambda: np.allclose(stanford.state.last.target[:3, 3], goal[:3, 3], atol=1e-6), what="the Stanford arm moved")
+        stanford_left = stanford.state.last
+        typed = await pick(app, client, CUSTOM, CourseArmSession)
+        await until(lambda: "Rows" in client.gui, what="the editor")
+        await client.set_gui("Rows", "500 0 0 0 R\n400 0 0 0 R")
+        await until(lambda: app.can_switch(client_id), what="the arm to be ready for a change")
+        await client.set_gui("Build this arm", True)
+        await until(lambda: session_for(app, client_id) is not typed
+                    and getattr(session_for(app, client_id), "arm", None) is not None
+                    and session_for(app, client_id).arm.joint_types == "RR", what="the typed arm")
+        await arrived(client, session_for(app, client_id))
+
+        back = await pick(app, client, UR10, ClientSession)
+        assert back.state.last is ur10_left  # the pose, target and branches as left
+        await until(lambda: abs(back.joints.sliders[1].value + 70.0) < 1e-6, what="the shoulder slider at −70°")
+        back = await pick(app, client, "Stanford arm (RRP + wrist)", CourseArmSession)
+        assert back.state.last is stanford_left
+        back = await pick(app, client, CUSTOM, CourseArmSession)
+        assert back.arm.joint_types == "RR" and back.editor.rows.value.startswith("500 0 0 0 R\n400")
+        await client.close()
+
+    asyncio.run(scenario())

@@ -6,7 +6,6 @@ import numpy as np
 import pytest
 
 from app.course_arms.overlay import factor_geometry
-from app.course_arms.state import HOMES
 from ur10core.serial import PRESETS, SerialArm
 
 
@@ -60,7 +59,7 @@ def singular_joints(arm: SerialArm, factor: int, q0: np.ndarray) -> np.ndarray:
 @pytest.mark.parametrize("name", sorted(PRESETS))
 def test_each_drawing_degenerates_where_its_factor_vanishes(name):
     arm = SerialArm.preset(name)
-    home = np.array(HOMES[name])
+    home = arm.specs.home
     drawn = factor_geometry(arm, home, arm.frames(home), 1.0)
     assert len(drawn) == len(arm.singularity_factors(home))
     for k, (factor, segments) in enumerate(drawn.items()):

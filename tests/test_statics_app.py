@@ -8,7 +8,8 @@ import threading
 import numpy as np
 import pytest
 
-from app.statics import TORQUE_CAPACITY, bars_html
+from app.statics import bars_html
+from ur10core import Arm
 
 from .server_support import session_of, until, url
 from ur10dev.viser_client import ViserClient
@@ -26,7 +27,7 @@ def test_the_torque_bars_add_the_force_and_the_weight(app):
         await until(lambda: statics.bars.visible and statics.arrow.visible, what="the bars and the arrow")
         snapshot = session.state.last
         arm = snapshot.arm
-        expected = bars_html(arm.static_torques(snapshot.q, [0, 0, -50.0]), arm.gravity_torques(snapshot.q))
+        expected = bars_html(arm.static_torques(snapshot.q, [0, 0, -50.0]), arm.gravity_torques(snapshot.q), arm.specs.torque_ratings)
         await until(lambda: statics.bars.content == expected, what="50 N down and the arm's weight")
         # the arrow starts at the flange and points the way the tool pushes: 50 N down is 10 cm down
         start, end = statics.arrow.points[0] + statics.arrow.position
@@ -36,7 +37,7 @@ def test_the_torque_bars_add_the_force_and_the_weight(app):
         # a payload adds its weight; a force along +x turns the arrow
         await client.set_gui("Payload (kg)", 5.0)
         await client.set_gui("Force direction", "+x")
-        expected = bars_html(arm.static_torques(snapshot.q, [50.0, 0, 0]), arm.gravity_torques(snapshot.q, 5.0))
+        expected = bars_html(arm.static_torques(snapshot.q, [50.0, 0, 0]), arm.gravity_torques(snapshot.q, 5.0), arm.specs.torque_ratings)
         await until(lambda: statics.bars.content == expected, what="the payload and the new direction")
         await until(lambda: np.allclose(np.diff(statics.arrow.points[0], axis=0), [[0.1, 0, 0]], atol=1e-6), what="the arrow along +x")
         # a direction that is not offered is refused, and nothing changes
@@ -69,7 +70,7 @@ def test_the_force_points_where_its_handle_is_dragged(app):
             await client.drag_target(tip + 0.5 * direction, (1.0, 0, 0, 0), phase, name=handle)
         await until(lambda: np.allclose(statics.dragged, direction, atol=1e-6), what="the dragged direction")
         arm = snapshot.arm
-        expected = bars_html(arm.static_torques(snapshot.q, 50.0 * direction), arm.gravity_torques(snapshot.q))
+        expected = bars_html(arm.static_torques(snapshot.q, 50.0 * direction), arm.gravity_torques(snapshot.q), arm.specs.torque_ratings)
         await until(lambda: statics.bars.content == expected, what="the bars for the dragged force")
         await until(lambda: np.allclose(np.diff(statics.arrow.points[0], axis=0), [0.1 * direction], atol=1e-6), what="the arrow")
         # the arm moves: the handle keeps its direction from the new flange
@@ -90,9 +91,10 @@ def test_the_force_points_where_its_handle_is_dragged(app):
 
 def test_a_joint_over_its_rating_is_flagged():
     """360 N·m at the shoulder is over its 330; 120 of the elbow's 150 fills 80 % of its bar."""
-    html = bars_html(np.array([0.0, 300.0, -100.0, 10.0, 0.0, 0.0]), np.array([0.0, 60.0, -20.0, 0.0, 0.0, 0.0]))
+    ratings = Arm.preset("course").specs.torque_ratings
+    html = bars_html(np.array([0.0, 300.0, -100.0, 10.0, 0.0, 0.0]), np.array([0.0, 60.0, -20.0, 0.0, 0.0, 0.0]), ratings)
     assert html.count("over its rating") == 1 and "+360.0 N·m" in html and "rated 330" in html
-    assert "width:100.0%" in html and "width:80.0%" in html and TORQUE_CAPACITY[2] == 150.0
+    assert "width:100.0%" in html and "width:80.0%" in html and ratings[2] == 150.0
 
 
 def test_the_ellipsoids_follow_the_arm_and_flatten_towards_the_elbow_singularity(app):
@@ -151,8 +153,9 @@ def test_joint_rates_draw_the_flange_velocity_and_a_typed_velocity_gets_its_rate
         await client.set_gui("Find the joint rates", True)
         asked = parse_twist("0 0 200 0 0 0")
         rates = snapshot.arm.joint_rates(snapshot.q, asked)
-        await until(lambda: view.rates.content == rates_markdown(rates.qdot, float(rates.damping), asked, rates.achieved),
-                    what="the joint rates")
+        limits = np.degrees(snapshot.arm.specs.speed_limits)
+        await until(lambda: view.rates.content == rates_markdown(rates.qdot, float(rates.damping), asked, rates.achieved,
+                                                                 limits=limits), what="the joint rates")
         assert float(rates.damping) == 0.0 and np.allclose(rates.achieved, asked)
         await client.set_gui("vx vy vz (mm/s) ωx ωy ωz (°/s)", "1 2 3")
         await client.set_gui("Find the joint rates", True)
@@ -176,7 +179,7 @@ def test_near_a_singularity_the_needed_rates_are_red_and_on_it_damped():
         q = singular.copy()
         q[4] += offset
         rates = arm.joint_rates(q, asked)
-        text = rates_markdown(rates.qdot, float(rates.damping), asked, rates.achieved)
+        text = rates_markdown(rates.qdot, float(rates.damping), asked, rates.achieved, limits=np.degrees(arm.specs.speed_limits))
         assert ("color:#dc2626" in text) == red and ("over the limit" in text) == red
         assert ("damped (λ =" in text) == damped
     with pytest.raises(ValueError, match="up to 2000 mm/s"):
@@ -192,7 +195,8 @@ def test_the_rate_charts_mark_the_singularity_and_the_speed_limits():
 
     arm = Arm.preset("course")
     start, goal = np.radians([10, -60, 80, -110, 20, 20]), np.radians([10, -60, 80, -110, -20, 20])
-    line = rate_chart_data(straight_line(arm, start, arm.fk(goal), 4.0, 240))
+    speed_limits = np.degrees(arm.specs.speed_limits)
+    line = rate_chart_data(straight_line(arm, start, arm.fk(goal), 4.0, 240), speed_limits)
     t, speeds, limits, singular, over = line[0], np.stack(line[1:7]), line[7:9], line[9], line[10]
     assert len(line) == 11 and all(len(c) == len(t) for c in line)
     np.testing.assert_allclose(limits, [np.full_like(t, 120.0), np.full_like(t, 180.0)])
@@ -200,7 +204,7 @@ def test_the_rate_charts_mark_the_singularity_and_the_speed_limits():
     assert top >= speeds.max() and set(np.unique(singular)) == {0.0, top} and set(np.unique(over)) == {0.0, top}
     assert (speeds[3:].max(axis=0)[over > 0] > 180.0).all() and (speeds[3:].max(axis=0)[over == 0] <= 180.0).all()
     assert singular[0] == 0.0 and singular[-1] == 0.0
-    joints = rate_chart_data(joint_interpolation(arm, start, goal, 4.0, 240))
+    joints = rate_chart_data(joint_interpolation(arm, start, goal, 4.0, 240), speed_limits)
     assert not joints[9].any() and not joints[10].any()
 
 
@@ -253,7 +257,7 @@ def test_moving_from_a_remembered_pose_along_a_path(app, kind):
 
 def test_the_workspace_coloured_by_the_torque_a_force_needs(app):
     async def scenario():
-        from app.statics import torque_map
+        from ur10core.specs import torque_map
 
         client = await ViserClient(url(app)).connect()
         session = session_of(app, client)

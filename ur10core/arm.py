@@ -31,6 +31,7 @@ from . import ik_reference
 from ._backend import kernels
 from ._validate import as_float_array, check_finite, homogeneous_transform, joint_vector
 from .differential import JacobianUses, cross
+from .specs import HasSpecs
 
 #: alpha_{i-1} of the course's DH table, rows i = 1..6.
 DH_ALPHA = (0.0, math.pi / 2, 0.0, 0.0, -math.pi / 2, math.pi / 2)
@@ -76,7 +77,7 @@ class SingularityGeometry:
 
 
 @dataclass(frozen=True)
-class Arm(JacobianUses):
+class Arm(JacobianUses, HasSpecs):
     """A UR-type 6R arm with the course's DH structure and its own link lengths.
 
     Example
@@ -143,6 +144,8 @@ class Arm(JacobianUses):
     #: The UR10's joints: six revolute ones, ±360° each (docs/kinematics.md §1).
     joint_types: ClassVar[str] = "RRRRRR"
     n_joints: ClassVar[int] = 6
+    #: What of a target pose it controls: all of it (as ``SerialArm.task``).
+    task: ClassVar[str] = "pose"
 
     @property
     def limits(self) -> np.ndarray:

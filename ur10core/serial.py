@@ -17,6 +17,7 @@ import numpy as np
 from ._validate import homogeneous_transform
 from .branches import BranchSet, wrap
 from .differential import TASK_ROWS, JacobianUses
+from .specs import HasSpecs
 from .dh import MODIFIED, PRISMATIC, REVOLUTE, STANDARD, DHRow, DHTable
 from .solvers.numerical import NumericalIK, sampling_range
 from .solvers.planar import Cylindrical, PlanarElbow, Scara
@@ -82,7 +83,7 @@ PRESETS: dict[str, _Preset] = {
 }
 
 
-class SerialArm(JacobianUses):
+class SerialArm(JacobianUses, HasSpecs):
     """A serial arm: its DH table, joint limits and an IK solver (analytic or numerical).
 
     Parameters
@@ -395,3 +396,25 @@ def kr210_to_urdf(T) -> np.ndarray:
 
 
 __all__ = ["DHRow", "DHTable", "KR210_URDF_TURN", "PRESETS", "SerialArm", "kr210_from_urdf", "kr210_to_urdf", "wrap"]
+
+
+def project_target(arm, T, current) -> np.ndarray:
+    """The part of a target pose ``T`` (4, 4) the arm can follow (``arm.task``), the rest from its
+    own tool pose ``current`` (4, 4).
+
+    A SCARA keeps its tool pointing down and takes only the target's yaw; an arm that places
+    only a position keeps its own orientation; the planar elbow stays in its plane z = 0
+    (docs/kinematics.md §7.5).
+    """
+    out = np.array(T, dtype=float)
+    if out.shape != (4, 4) or not np.isfinite(out).all():
+        raise ValueError(f"T must be one finite 4 × 4 pose, got shape {out.shape}")
+    if arm.task == "position and yaw":
+        yaw = math.atan2(out[1, 0], out[0, 0])
+        c, s = math.cos(yaw), math.sin(yaw)
+        out[:3, :3] = np.array([[c, s, 0.0], [s, -c, 0.0], [0.0, 0.0, -1.0]])  # Rz(yaw) Rx(π)
+    elif arm.task == "position":
+        out[:3, :3] = np.asarray(current, dtype=float)[:3, :3]
+        if arm.name == "planar_elbow":
+            out[2, 3] = 0.0
+    return out

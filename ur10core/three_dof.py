@@ -19,6 +19,7 @@ import numpy as np
 
 from ._validate import as_float_array, check_finite
 from .differential import JacobianUses
+from .specs import HasSpecs
 
 #: The course's lengths (its simulation's numbers; read here as metres): upper arm l5, forearm l1.
 UPPER_ARM, FOREARM = 1.35, 1.28
@@ -39,7 +40,7 @@ def _rz(angle: np.ndarray) -> np.ndarray:
     return np.stack([np.stack([c, -s, zero], -1), np.stack([s, c, zero], -1), np.stack([zero, zero, one], -1)], -2)
 
 
-class ThreeDofArm(JacobianUses):
+class ThreeDofArm(JacobianUses, HasSpecs):
     """The course's 3-DOF desktop arm (docs/kinematics.md §8.6): ``Arm.preset("three_dof")``.
 
     Example: upper arm straight up (θ2 = −90°), forearm level (θ3 = 0): the tool is l1 out, l5 up.

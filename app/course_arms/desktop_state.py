@@ -8,7 +8,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ur10core.three_dof import ThreeDofArm, course_path
+from ur10core.three_dof import ThreeDofArm
 
 #: The course's y = 0 (the shoulder) stands this high above the floor, so that every reach stays above it.
 SHOULDER_HEIGHT = 1.5
@@ -52,7 +52,7 @@ class DesktopArmState:
     def __init__(self, arm: ThreeDofArm, q=None) -> None:
         self.arm = arm
         self.lock = threading.RLock()
-        self.last = self._snapshot(course_path(0.0)[0] if q is None else np.array(q, dtype=float), np.zeros(3))
+        self.last = self._snapshot(arm.specs.home if q is None else np.array(q, dtype=float), np.zeros(3))
 
     def _snapshot(self, q: np.ndarray, rates: np.ndarray) -> DesktopSnapshot:
         frames = self.arm.frames(q)

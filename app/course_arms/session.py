@@ -114,7 +114,7 @@ class CourseArmSession(SessionBasics):
             return snapshot.frames[-1]
 
         self.velocity = VelocityView(drawn_in, gui, self, root=f"{nodes}/velocity", tool=at_tool, place="tool",
-                                     labels=arm.joint_names, limits=None)
+                                     labels=arm.joint_names)
         self.ellipsoids = EllipsoidsView(drawn_in, gui, self, root=f"{nodes}/ellipsoids", tool=at_tool, place="tool")
         self.forces = CourseForces(drawn_in, gui, self, f"{nodes}/statics")
         self.at_tool_views = (self.velocity, self.ellipsoids, self.forces)

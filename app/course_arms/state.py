@@ -2,25 +2,14 @@
 
 from __future__ import annotations
 
-import math
 import threading
 from dataclasses import dataclass
 
 import numpy as np
 
 from ur10core.branches import BranchSet
-from ur10core.serial import SerialArm
+from ur10core.serial import SerialArm, project_target
 from ur10core.solvers.numerical import NumericalIK
-
-#: Where each arm starts: a pose away from every singularity, so that all its branches show.
-HOMES = {
-    "kr210": (0.0, math.radians(15), math.radians(-30), math.radians(20), math.radians(40), math.radians(10)),
-    "stanford": (math.radians(30), math.radians(60), 0.254, math.radians(20), math.radians(40), math.radians(10)),
-    "elbow": (math.radians(20), math.radians(40), math.radians(60), math.radians(20), math.radians(40), math.radians(10)),
-    "scara": (math.radians(30), math.radians(60), 0.1, math.radians(20)),
-    "planar_elbow": (math.radians(30), math.radians(60)),
-    "cylindrical": (math.radians(30), 0.35, 0.35),
-}
 
 
 @dataclass(frozen=True)
@@ -41,24 +30,6 @@ class CourseSnapshot:
         return (points[np.argmin(points[:, 2])],)
 
 
-def project_target(arm: SerialArm, T: np.ndarray, current: np.ndarray) -> np.ndarray:
-    """The part of a gizmo pose ``T`` the arm can follow (``arm.task``), the rest from its own tool pose ``current``.
-
-    A SCARA keeps its tool pointing down and takes only the gizmo's yaw; an arm that places
-    only a position keeps its own orientation; the planar elbow stays in its plane z = 0.
-    """
-    out = np.array(T, dtype=float)
-    if arm.task == "position and yaw":
-        yaw = math.atan2(T[1, 0], T[0, 0])
-        c, s = math.cos(yaw), math.sin(yaw)
-        out[:3, :3] = np.array([[c, s, 0.0], [s, -c, 0.0], [0.0, 0.0, -1.0]])  # Rz(yaw) Rx(π)
-    elif arm.task == "position":
-        out[:3, :3] = current[:3, :3]
-        if arm.name == "planar_elbow":
-            out[2, 3] = 0.0
-    return out
-
-
 class CourseArmState:
     """The joints and target of one course arm; every change returns a new :class:`CourseSnapshot`.
 
@@ -71,8 +42,8 @@ class CourseArmState:
         self.arm = arm
         self.numerical = isinstance(arm.solver, NumericalIK)
         self.lock = threading.RLock()  # the drag queue holds it while it calls drag_to, which applies under it
-        if q is None:  # a typed arm: 20° on each revolute joint (zero is often stretched out), mid-stroke otherwise
-            q = HOMES.get(arm.name, np.where(arm.revolute, np.clip(math.radians(20), *arm.limits.T), arm.limits.mean(axis=1)))
+        if q is None:
+            q = arm.specs.home
         self.last = self._solved(np.array(q, dtype=float))
 
     def _solved(self, q: np.ndarray) -> CourseSnapshot:
