@@ -1,4 +1,4 @@
-"""``python -m app`` / ``ur10-teach``: start the UR10 teaching app."""
+"""``python -m ur10teach`` / ``ur10-teach``: start the UR10 teaching app."""
 
 from __future__ import annotations
 

@@ -22,7 +22,7 @@ class Player:
 
     Presses fold: however many come while a motion is computed or played, the one under
     way is stopped and only the newest is played next, on one background thread
-    (:data:`app.workers.BACKGROUND`) per session at most.
+    (:data:`ur10teach.workers.BACKGROUND`) per session at most.
     """
 
     def __init__(self, session: "ClientSession") -> None:

@@ -1,9 +1,9 @@
 """The "Arm" folder: which arm this browser drives — the UR10, or one of the course's other arms.
 
 Picking one takes the current arm out of this browser (its panel and scene) and builds the
-other's: the UR10 with every feature of the app (``app.session``), the others with theirs
-(``app.course_arms``). Each browser picks for itself; in shared mode the presenter picks the
-class's arm (``app.classroom``).
+other's: the UR10 with every feature of the app (``ur10teach.session``), the others with theirs
+(``ur10teach.course_arms``). Each browser picks for itself; in shared mode the presenter picks the
+class's arm (``ur10teach.classroom``).
 """
 
 from __future__ import annotations
@@ -22,7 +22,7 @@ UR10 = "UR10 (the app's arm)"
 CUSTOM = "Your own DH table"
 DESKTOP = "The course's 3-DOF desktop arm"
 #: What the dropdown shows → the ``Arm.preset`` name (None: the server's own UR10; "custom": the DH editor;
-#: "three_dof": the course's desktop arm, ``app.course_arms.desktop_arm``).
+#: "three_dof": the course's desktop arm, ``ur10teach.course_arms.desktop_arm``).
 ARM_CHOICES: dict[str, str | None] = {
     UR10: None,
     "KUKA KR210 (spherical wrist)": "kr210",
@@ -35,6 +35,11 @@ ARM_CHOICES: dict[str, str | None] = {
     CUSTOM: "custom",
 }
 assert set(ARM_CHOICES.values()) - {None, "custom", "three_dof"} == set(PRESETS)
+
+
+def panel_title(choice: str, preset: str) -> str:
+    """The panel's title: the arm it shows (``choice``, an :data:`ARM_CHOICES` label; ``preset``, the UR10's numbers)."""
+    return f"UR10 kinematics ({preset})" if choice == UR10 else f"{choice}: kinematics"
 
 
 #: What the classroom's presenter can show the class: a typed table is for one's own browser.

@@ -78,7 +78,7 @@ class CameraControls(View):
     guard : callable
         Wraps a handler so that nothing it raises escapes (``ClientSession.guard``, ``feedback.guard``).
     lecture : bool
-        Start in lecture mode (:mod:`app.lecture`, whose switch is in this folder too).
+        Start in lecture mode (:mod:`ur10teach.lecture`, whose switch is in this folder too).
     body_radius : float
         Room kept around each joint (m): the UR10's link bodies by default; a course arm's
         rods and gizmo scale with its reach.

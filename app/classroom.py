@@ -34,7 +34,7 @@ from ur10core import Arm
 from ur10core.serial import SerialArm
 from ur10core.three_dof import ThreeDofArm
 
-from .arm_picker import ARM_CHOICES, CLASS_CHOICES, SWITCH_INTERVAL, UR10, ArmPicker
+from .arm_picker import ARM_CHOICES, CLASS_CHOICES, SWITCH_INTERVAL, UR10, ArmPicker, panel_title
 from .camera import BODY_RADIUS, CameraControls
 from .course_arms import panel as course_panel
 from .course_arms.desktop_arm import EXPLORER_ROOT as DESKTOP_EXPLORER_ROOT
@@ -392,6 +392,7 @@ class Classroom:
                 self.course = ClassCourseArm(arm, state, CourseArmScene(app.server.scene, arm, state.last, reach(arm)))
                 self.live = CourseLivePanel(app.server.gui, state, label, True)
             self.choice = label
+            app.server.gui.set_panel_label(panel_title(label, app.arm.name))
             member.session = self._presenter_session(member)
             self._last_switch = time.monotonic()
             members = list(self.members.values())

@@ -59,7 +59,7 @@ HELD = {"pose": "the tool's orientation held", "position and yaw": "the tool's y
 class EllipsoidsView(View):
     """The "Manipulability ellipsoids" folder and the two ellipsoids at the tool.
 
-    ``root``, ``tool`` and ``place`` as for ``app.velocity.VelocityView``: the UR10's flange by default.
+    ``root``, ``tool`` and ``place`` as for ``ur10teach.velocity.VelocityView``: the UR10's flange by default.
     """
 
     def __init__(self, scene: viser.SceneApi, gui: viser.GuiApi, session: "ClientSession", root: str = "/ellipsoids",

@@ -11,8 +11,8 @@ from pathlib import Path
 import numpy as np
 import trimesh
 
-#: ``assets/meshes`` of the source tree, installed as the package data of ``app.assets``.
-MESH_DIR = Path(str(importlib.resources.files("app.assets") / "meshes"))
+#: ``assets/meshes`` of the source tree, installed as the package data of ``ur10teach.assets``.
+MESH_DIR = Path(str(importlib.resources.files("ur10teach.assets") / "meshes"))
 
 
 @dataclass(frozen=True, eq=False)  # compared and hashed by identity: load_links hands out one per link

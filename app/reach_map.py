@@ -4,8 +4,8 @@
 drawn as one small PNG image lying in the plane (a few KB, where 40 000 coloured points
 would be 600 KB). It is recomputed off the drag path: the panel's pace (≤ 10 Hz) asks
 for it, a background thread computes it, and requests that come meanwhile are folded into
-one more computation with the newest target (``app.workers.FoldedRuns``). Maps are made
-one at a time in the server, each address's at most half the time (``app.workers.MAPS``):
+one more computation with the newest target (``ur10teach.workers.FoldedRuns``). Maps are made
+one at a time in the server, each address's at most half the time (``ur10teach.workers.MAPS``):
 eight tabs turning their gizmos cost what one does.
 """
 

@@ -20,7 +20,7 @@ import viser
 from ur10core import Arm, symbolic, symbolic_arms
 
 from . import fast_updates, shared_frames
-from .arm_picker import ARM_CHOICES, CUSTOM, SWITCH_INTERVAL, UR10, ArmPicker
+from .arm_picker import ARM_CHOICES, CUSTOM, SWITCH_INTERVAL, UR10, ArmPicker, panel_title
 from .classroom import Classroom
 from .course_arms.editor import STARTING_TABLE, parse_table
 from .course_arms.panel import factor_scales
@@ -149,7 +149,7 @@ class Janitor:
     a collection and a ``malloc_trim`` a few seconds after the last departure return the
     server to its baseline instead (one pass however many leave, and never while a drag is
     being drawn). Large buffers are handed back as soon as they are freed
-    (``app.__main__``).
+    (``ur10teach.__main__``).
     """
 
     DELAY = 3.0
@@ -192,17 +192,17 @@ class TeachingServer:
         Where to listen. viser moves to the next free port when ``port`` is busy:
         :attr:`port` is the real one. ``port=0`` lets the OS choose (tests).
     shared : bool
-        Shared demo mode: everyone watches the presenter's arm (:class:`app.classroom.Classroom`).
+        Shared demo mode: everyone watches the presenter's arm (:class:`ur10teach.classroom.Classroom`).
     allowed_origins : iterable of str
         Web pages besides the app's own that may open its websocket (``--allow-origin``).
     gate : Gate, optional
-        What the server accepts from browsers (:mod:`app.gate`); one with
+        What the server accepts from browsers (:mod:`ur10teach.gate`); one with
         ``allowed_origins`` by default.
     lecture : bool
-        Every browser starts in lecture mode (:mod:`app.lecture`).
+        Every browser starts in lecture mode (:mod:`ur10teach.lecture`).
     light : bool
         The arm and its ghosts shaded for laptops without a graphics driver (``--light``,
-        :class:`app.meshes.ArmModels`).
+        :class:`ur10teach.meshes.ArmModels`).
     """
 
     def __init__(self, preset: str = "course", host: str = "127.0.0.1", port: int = 8080, shared: bool = False,
@@ -216,7 +216,7 @@ class TeachingServer:
                 symbolic_arms.load(name)
                 factor_scales(name)  # the gauges' scales: a few hundred ms in all, never in a callback
         self.host = host
-        label = f"UR10 kinematics ({preset})"
+        label = panel_title(UR10, preset)
         self.gate = gate or Gate(allowed_origins)
         raise_open_file_limit()
         shared_frames.install()
@@ -243,7 +243,7 @@ class TeachingServer:
         self._switches: dict[str, TokenBucket] = {}  # budget (an address) → its arm changes
         self.clock = time.monotonic  #: the time the arm changes of an address are paced by (a test sets its own)
         self._sessions_lock = threading.Lock()
-        #: shared demo mode (``--shared``): everyone watches the presenter (``app.classroom``)
+        #: shared demo mode (``--shared``): everyone watches the presenter (``ur10teach.classroom``)
         self.classroom = Classroom(self) if shared else None
         self._janitor = Janitor(forget=(CLOUDS.forget_unheld,))
         self.server.on_client_connect(self._connected)
@@ -328,6 +328,7 @@ class TeachingServer:
             session = CourseArmSession(client, state.arm if state else Arm.preset(name), self.refresher, self.drags,
                                        lecture=lecture, state=state)
         session.choice, session.typed = choice, typed
+        client.gui.set_panel_label(panel_title(choice, self.arm.name))
         with self._sessions_lock:
             if client.client_id in self._last_switch:  # a change of arm: the interval starts before its picker shows
                 self._last_switch[client.client_id] = time.monotonic()
@@ -341,7 +342,7 @@ class TeachingServer:
         Building an arm costs tens of milliseconds: one browser may start a build only
         :data:`SWITCH_INTERVAL` seconds after its last one was ready (timed just before its
         picker is shown, so a browser that waits that long after seeing it is never refused),
-        and all the tabs of one address together as often as one (:func:`app.gate.budget_of`),
+        and all the tabs of one address together as often as one (:func:`ur10teach.gate.budget_of`),
         so that flicking the picker, in one tab or eight, cannot load the server.
         """
         budget = budget_of(client)

@@ -3,7 +3,7 @@
 viser runs plain ``def`` callbacks on a thread pool, so callbacks of one browser can
 overlap: every change goes through :meth:`ClientSession.apply`, which holds the arm's
 lock while it changes the state and redraws the 3D view, then asks the
-:class:`~app.workers.PanelRefresher` to redraw the side panel. Every callback is wrapped
+:class:`~ur10teach.workers.PanelRefresher` to redraw the side panel. Every callback is wrapped
 by :meth:`ClientSession.guard`: no exception escapes, a refused value is explained in a
 notification in that browser, and every other browser carries on.
 
@@ -88,7 +88,7 @@ class ClientSession(SessionBasics):
     state : ArmState, optional
         The arm to drive; a new one at the home pose by default.
     own_camera, lecture : bool
-        Build the browser's "View" folder (camera framing, :mod:`app.camera`; lecture mode,
+        Build the browser's "View" folder (camera framing, :mod:`ur10teach.camera`; lecture mode,
         starting as ``lecture`` says); the classroom builds one per browser instead,
         whatever its role.
     server, scene_views : viser.ViserServer, SceneViews, optional

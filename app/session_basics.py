@@ -54,7 +54,7 @@ class SessionBasics:
                 view.render_panel(snapshot)
 
     def guard(self, handler: Callable[[Any], None]) -> Callable[[Any], None]:
-        """Wrap a viser callback so that nothing it raises escapes (see ``app.feedback``)."""
+        """Wrap a viser callback so that nothing it raises escapes (see ``ur10teach.feedback``)."""
         return guard(self.client, handler, is_closed=lambda: self.closed, on_refused=lambda: self.refresher.request(self))
 
     def notify(self, title: str, body: str, color: str = "yellow") -> None:

@@ -92,7 +92,7 @@ class ArmState:
         Starting joints (rad); the arm's home pose by default (``arm.specs``: for the UR10, the
         course's arbitrary pose).
     body_points : array_like, shape (7, P, 3), optional
-        Points of each link's body in its DH frame (``app.meshes.body_points``), for the
+        Points of each link's body in its DH frame (``ur10teach.meshes.body_points``), for the
         floor check; the frame origins alone by default.
     """
 

@@ -399,10 +399,10 @@ class HeavyWork:
 
 
 HEAVY = HeavyWork(budget=budget_of)
-#: Newcomers' sessions (``app.server``): built one at a time, resting after each so that the students
+#: Newcomers' sessions (``ur10teach.server``): built one at a time, resting after each so that the students
 #: already there keep dragging while a lecture hall joins (``benchmarks/bench_join_storm.py``).
 JOINS = HeavyWork(duty=JOIN_DUTY, budget=lambda who: "joins")
-#: The branch-count maps (``app.reach_map``): made while a gizmo turns, so a larger share, and a slot of their own.
+#: The branch-count maps (``ur10teach.reach_map``): made while a gizmo turns, so a larger share, and a slot of their own.
 MAPS = HeavyWork(duty=0.5, budget=budget_of)
 #: The threads background work runs on (a pool: presses cannot multiply them).
 BACKGROUND = concurrent.futures.ThreadPoolExecutor(BACKGROUND_THREADS, thread_name_prefix="background")

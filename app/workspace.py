@@ -1,6 +1,6 @@
 """The workspace point cloud, coloured by manipulability |det J|, with an optional section.
 
-Sampled by ``Arm.sample_workspace`` off the event loop, as a slow job (``app.workers.HEAVY``:
+Sampled by ``Arm.sample_workspace`` off the event loop, as a slow job (``ur10teach.workers.HEAVY``:
 one at a time in the server, each address's a share of the time), and kept for every
 client in :data:`CLOUDS`, whose memory is a fixed budget; each client is sent only the
 cloud it asked for. 200 k points (the default) is about 1.8 MB per client. A vertical section turns

@@ -1,1 +1,1 @@
-"""The app's package data (link meshes), installed as ``app.assets`` (see pyproject.toml)."""
+"""The app's package data (link meshes), installed as ``ur10teach.assets`` (see pyproject.toml)."""

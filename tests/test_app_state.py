@@ -5,11 +5,11 @@ import threading
 import numpy as np
 import pytest
 
-from app.ik_target import branch_table, status_markdown
-from app.readouts import joints_markdown, orientation_markdown, pose_markdown
-from app.singularity import alarm, factor_levels
-from app.state import ArmState
-from app.workspace import VIRIDIS, KeptClouds, colormap
+from ur10teach.ik_target import branch_table, status_markdown
+from ur10teach.readouts import joints_markdown, orientation_markdown, pose_markdown
+from ur10teach.singularity import alarm, factor_levels
+from ur10teach.state import ArmState
+from ur10teach.workspace import VIRIDIS, KeptClouds, colormap
 from ur10core import Arm
 
 from .conftest import wrapped_difference
@@ -244,7 +244,7 @@ def test_colormap_ends():
 
 
 def test_presets_load_their_meshes():
-    from app.meshes import load_links
+    from ur10teach.meshes import load_links
 
     for preset in Arm.PRESETS:
         links = load_links(preset)

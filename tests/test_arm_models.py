@@ -7,7 +7,7 @@ import asyncio
 import numpy as np
 import pytest
 
-from app.meshes import REAL, SCHEMATIC
+from ur10teach.meshes import REAL, SCHEMATIC
 
 from .server_support import session_of, until, url
 from ur10dev.viser_client import ViserClient
@@ -69,7 +69,7 @@ def test_the_light_view_shades_the_arm_and_ghosts_for_software_webgl(light, monk
     """``--light``: toon shading, no shadow maps, no environment map; by default, shading, shadows and both."""
     import viser
 
-    from app.server import TeachingServer
+    from ur10teach.server import TeachingServer
 
     calls = []
     for name in ("configure_default_lights", "configure_environment_map"):

@@ -5,9 +5,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from app.ik_target import ALL_BRANCHES, FOCUS_OPTIONS, branch_labels, branch_table, flipped, focused, same_pose_groups
-from app.meshes import body_points, load_links
-from app.state import ArmState
+from ur10teach.ik_target import ALL_BRANCHES, FOCUS_OPTIONS, branch_labels, branch_table, flipped, focused, same_pose_groups
+from ur10teach.meshes import body_points, load_links
+from ur10teach.state import ArmState
 from ur10core import SLOTS
 
 

@@ -1,12 +1,12 @@
-"""app.camera.framing: every point in the canvas, and no farther back than needed."""
+"""ur10teach.camera.framing: every point in the canvas, and no farther back than needed."""
 
 from __future__ import annotations
 
 import numpy as np
 import pytest
 
-from app.camera import VIEWS, arm_points, framing
-from app.state import ArmState
+from ur10teach.camera import VIEWS, arm_points, framing
+from ur10teach.state import ArmState
 
 
 def projected(points, position, look_at, fov, aspect) -> np.ndarray:

@@ -1,4 +1,4 @@
-"""``python -m app``: what the teacher types and what it prints."""
+"""``python -m ur10teach``: what the teacher types and what it prints."""
 
 from __future__ import annotations
 
@@ -13,8 +13,8 @@ from pathlib import Path
 import pytest
 from viser import _messages as messages
 
-from app.__main__ import parse_args
-from app.server import lan_addresses
+from ur10teach.__main__ import parse_args
+from ur10teach.server import lan_addresses
 from ur10dev.app_process import running_app
 from ur10dev.viser_client import ViserClient
 from ur10dev.waiting import HANG_TIMEOUT, until

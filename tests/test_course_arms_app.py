@@ -9,10 +9,10 @@ import numpy as np
 import pytest
 import viser
 
-from app.arm_picker import ARM_CHOICES, CUSTOM, UR10
-from app.course_arms.panel import branches_markdown, dh_table_markdown
-from app.course_arms.session import CourseArmSession
-from app.session import ClientSession
+from ur10teach.arm_picker import ARM_CHOICES, CUSTOM, UR10
+from ur10teach.course_arms.panel import branches_markdown, dh_table_markdown
+from ur10teach.course_arms.session import CourseArmSession
+from ur10teach.session import ClientSession
 from ur10core.serial import SerialArm
 
 from .server_support import session_of, until, url
@@ -174,7 +174,7 @@ def test_a_typed_dh_table_becomes_an_arm_with_numerical_ik(app):
 
 
 def test_parse_table_refuses_what_is_not_a_table():
-    from app.course_arms.editor import parse_table
+    from ur10teach.course_arms.editor import parse_table
 
     for text, words in (("", "empty"), ("1 2 3 4 X", "type must be"), ("a b c d R", "must be numbers"),
                         ("9000 0 0 0 R", "lengths up to"), ("1 0 0 0 F", "at least one joint"),
@@ -195,7 +195,7 @@ def test_parse_table_refuses_what_is_not_a_table():
 def test_the_skeleton_walks_each_row_along_d_then_a(name):
     """Every DH row is two straight moves between frame origins (standard: d along z_{i−1}, then a
     along x_i; modified: a along x_{i−1}, then d along z_i), so the drawing shows the table's numbers."""
-    from app.course_arms.scene import skeleton
+    from ur10teach.course_arms.scene import skeleton
 
     arm = SerialArm.preset(name)
     q = np.random.default_rng(1).uniform(arm.limits[:, 0], arm.limits[:, 1])
@@ -263,7 +263,7 @@ def test_a_course_arms_workspace_cloud(app):
 
 def test_the_kr210_gripper_pose_in_the_urdf_convention(app):
     async def scenario():
-        from app.course_arms.gripper import parse_pose, pose_text
+        from ur10teach.course_arms.gripper import parse_pose, pose_text
         from ur10core.serial import kr210_to_urdf
 
         client = await ViserClient(url(app)).connect()
@@ -293,7 +293,7 @@ def test_changing_arms_too_fast_is_refused_and_the_picker_shows_the_arm_still_dr
     async def scenario():
         client = await ViserClient(url(app)).connect()
         session = await pick(app, client, KR210, CourseArmSession)
-        monkeypatch.setattr("app.server.SWITCH_INTERVAL", 30.0)  # however slow this machine, the next change is too soon
+        monkeypatch.setattr("ur10teach.server.SWITCH_INTERVAL", 30.0)  # however slow this machine, the next change is too soon
         client_id = int(client.gizmo_owner)
         await until(lambda: "Which arm" in client.gui, what="the new picker")
         await client.set_gui("Which arm", "SCARA (RRP + roll)")  # at once: too soon
@@ -307,7 +307,7 @@ def test_changing_arms_too_fast_is_refused_and_the_picker_shows_the_arm_still_dr
 
 
 def test_singularity_gauges_empty_and_turn_red_at_each_factors_singularity():
-    from app.course_arms.panel import factors_html
+    from ur10teach.course_arms.panel import factors_html
 
     kr210 = SerialArm.preset("kr210")
     regular = factors_html(kr210, np.radians([0, 15, -30, 20, 40, 10]))
@@ -322,10 +322,10 @@ def test_singularity_gauges_empty_and_turn_red_at_each_factors_singularity():
 def test_any_table_a_student_types_can_be_built_driven_and_searched():
     """Random tables (1–10 rows, R/P/F, odd twists, zero lengths, both conventions): every view's
     text builds, a small drag follows, and every branch the search reports reaches the target."""
-    from app.course_arms.editor import parse_table
-    from app.course_arms.panel import factors_html, walkthrough_steps
-    from app.course_arms.scene import skeleton
-    from app.course_arms.state import CourseArmState
+    from ur10teach.course_arms.editor import parse_table
+    from ur10teach.course_arms.panel import factors_html, walkthrough_steps
+    from ur10teach.course_arms.scene import skeleton
+    from ur10teach.course_arms.state import CourseArmState
 
     rng = np.random.default_rng(0)
     built = 0
@@ -355,8 +355,8 @@ def test_any_table_a_student_types_can_be_built_driven_and_searched():
 
 def test_singularities_shown_on_the_arm_turn_red_at_the_singularity(app):
     async def scenario():
-        from app.course_arms.overlay import FACTOR_COLORS
-        from app.style import DANGER_RED
+        from ur10teach.course_arms.overlay import FACTOR_COLORS
+        from ur10teach.style import DANGER_RED
 
         client = await ViserClient(url(app)).connect()
         session = await pick(app, client, KR210, CourseArmSession)
@@ -405,8 +405,8 @@ def test_a_course_arms_velocities_ellipsoids_and_forces(app):
     """The Stanford arm (a sliding joint): joint rates to v and ω at its tool, a typed twist to joint rates
     (mm/s for d3, no speed limits), the ellipsoids' lengths, and τ = Jᵀ F for a force at the tool."""
     async def scenario():
-        from app.course_arms.forces import torques_markdown
-        from app.velocity import METRES_PER_SPEED, parse_twist, rates_markdown
+        from ur10teach.course_arms.forces import torques_markdown
+        from ur10teach.velocity import METRES_PER_SPEED, parse_twist, rates_markdown
 
         client = await ViserClient(url(app)).connect()
         session = await pick(app, client, "Stanford arm (RRP + wrist)", CourseArmSession)
@@ -443,8 +443,8 @@ def test_a_course_arms_velocities_ellipsoids_and_forces(app):
 
 def test_the_tabs_of_one_address_change_arms_no_more_often_than_one_tab():
     """Review 2, finding 5: eight tabs of one address flicking the picker at 4/s took 59 % of the server."""
-    from app.gate import Gate
-    from app.server import TeachingServer
+    from ur10teach.gate import Gate
+    from ur10teach.server import TeachingServer
 
     app = TeachingServer(port=0, gate=Gate(trust_loopback=False))  # loopback addresses stand in for laptops
     app.clock = lambda: 1000.0  # time stands still: what the address has in hand is all it gets
@@ -492,13 +492,44 @@ def test_going_back_to_an_arm_finds_its_pose_target_and_typed_table_as_left(app)
                     and session_for(app, client_id).arm.joint_types == "RR", what="the typed arm")
         await arrived(client, session_for(app, client_id))
 
+        await until(lambda: client.received.panel_label == f"{CUSTOM}: kinematics", what="the title naming the arm")
         back = await pick(app, client, UR10, ClientSession)
         assert back.state.last is ur10_left  # the pose, target and branches as left
+        await until(lambda: client.received.panel_label == "UR10 kinematics (course)", what="the UR10's title")
         await until(lambda: abs(back.joints.sliders[1].value + 70.0) < 1e-6, what="the shoulder slider at −70°")
         back = await pick(app, client, "Stanford arm (RRP + wrist)", CourseArmSession)
         assert back.state.last is stanford_left
         back = await pick(app, client, CUSTOM, CourseArmSession)
         assert back.arm.joint_types == "RR" and back.editor.rows.value.startswith("500 0 0 0 R\n400")
+        await client.close()
+
+    asyncio.run(scenario())
+
+
+@pytest.mark.parametrize("label", ["Stanford arm (RRP + wrist)", "SCARA (RRP + roll)"])
+def test_a_course_arm_moves_from_a_remembered_pose_along_both_paths(app, label):
+    """Issue 29: the Motion folder was the UR10's alone. On a course arm: both paths, the rates of a
+    sliding joint in mm/s, no speed limits it does not have, and no gravity drop without link masses."""
+    async def scenario():
+        client = await ViserClient(url(app)).connect()
+        session = await pick(app, client, label, CourseArmSession)
+        motion = session.motion
+        assert motion.release.disabled and "no link masses" in motion.gravity_text.content.lower()
+        start = session.state.last.q.copy()
+        await client.set_gui("Remember this pose as the start", True)
+        await until(lambda: motion.start is not None, what="the start remembered")
+        goal_q = start.copy()
+        goal_q[0] += np.radians(20.0)
+        session.apply(lambda state: state.set_joints(goal_q))
+        goal = session.state.last.frames[-1].copy()
+        await client.set_gui("Go from the start to here along", "straight tool line")
+        await until(lambda: motion.player.playing, what="the path to start")
+        await until(lambda: not motion.player.playing, what="the path to end")
+        np.testing.assert_allclose(session.state.last.frames[-1][:3, 3], goal[:3, 3], atol=1e-4)
+        data = motion.charts["straight tool line"].data
+        n = session.arm.n_joints
+        assert len(data) == 1 + n + 2  # time, each joint, the two marks: no limit lines for an arm without limits
+        assert "mm/s" in motion.summary.content and "publishes no speed limits" in motion.summary.content
         await client.close()
 
     asyncio.run(scenario())

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from app.course_arms.overlay import factor_geometry
+from ur10teach.course_arms.overlay import factor_geometry
 from ur10core.serial import PRESETS, SerialArm
 
 

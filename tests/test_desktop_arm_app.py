@@ -8,11 +8,11 @@ import math
 import numpy as np
 import pytest
 
-from app.arm_picker import DESKTOP, UR10
-from app.course_arms.desktop_arm import DesktopArmSession
-from app.course_arms.desktop_lessons import factors_markdown
-from app.course_arms.desktop_state import COURSE_TO_WORLD, SHOULDER_HEIGHT, DesktopArmState
-from app.session import ClientSession
+from ur10teach.arm_picker import DESKTOP, UR10
+from ur10teach.course_arms.desktop_arm import DesktopArmSession
+from ur10teach.course_arms.desktop_lessons import factors_markdown
+from ur10teach.course_arms.desktop_state import COURSE_TO_WORLD, SHOULDER_HEIGHT, DesktopArmState
+from ur10teach.session import ClientSession
 from ur10core import Arm
 from ur10core.three_dof import FOREARM, UPPER_ARM
 

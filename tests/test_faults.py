@@ -14,7 +14,7 @@ import numpy as np
 import pytest
 from viser import _messages as messages
 
-from app import feedback, shared_frames
+from ur10teach import feedback, shared_frames
 from ur10dev.app_process import running_app
 from .server_support import drag_a_little, session_of, until, url, wait_for
 from ur10dev.viser_client import BROWSER_SEND_INTERVAL, ViserClient, encode, wxyz_of
@@ -109,7 +109,7 @@ def test_a_client_that_stops_reading_is_dropped_and_holds_up_no_one(app, monkeyp
         assert len(app.sessions) == 1
         await active.close()
 
-    with caplog.at_level("WARNING", logger="app.shared_frames"):
+    with caplog.at_level("WARNING", logger="ur10teach.shared_frames"):
         asyncio.run(scenario())
 
 

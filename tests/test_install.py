@@ -79,7 +79,7 @@ def test_the_app_starts_from_another_directory(installed, tmp_path):
 def test_the_real_ur10_meshes_and_their_licence_ship(installed, tmp_path):
     bin_dir, env = installed
     code = (
-        "import app.meshes as m, pathlib; models = m.load_models('course');"
+        "import ur10teach.meshes as m, pathlib; models = m.load_models('course');"
         "print(','.join(models.names), (m.MESH_DIR / 'real' / 'ur10' / 'LICENSE.md').is_file(), m.MESH_DIR, sep='|')"
     )
     done = subprocess.run([str(bin_dir / "python"), "-c", code], cwd=tmp_path, env=env, capture_output=True, text=True)

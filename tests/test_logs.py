@@ -3,7 +3,7 @@
 import io
 import logging
 
-from app.logs import RepeatLimiter
+from ur10teach.logs import RepeatLimiter
 
 
 def _logger(stream: io.StringIO, limiter: RepeatLimiter) -> logging.Logger:

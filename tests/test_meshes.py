@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 import trimesh
 
-from app.meshes import MESH_DIR, REAL, SCHEMATIC, body_points, load_links, load_models
+from ur10teach.meshes import MESH_DIR, REAL, SCHEMATIC, body_points, load_links, load_models
 from ur10core import Arm
 
 ROOT = Path(__file__).resolve().parent.parent

@@ -9,7 +9,29 @@ ROOT = Path(__file__).resolve().parent.parent
 
 
 def test_every_python_package_is_declared_in_pyproject():
-    declared = set(tomllib.loads((ROOT / "pyproject.toml").read_text())["tool"]["setuptools"]["packages"])
-    found = {".".join(init.parent.relative_to(ROOT).parts)
-             for top in ("ur10core", "app") for init in (ROOT / top).rglob("__init__.py")}
+    setuptools = tomllib.loads((ROOT / "pyproject.toml").read_text())["tool"]["setuptools"]
+    declared = set(setuptools["packages"])
+    installed_as = {folder: name for name, folder in setuptools["package-dir"].items()}  # app/ → ur10teach
+    found = set()
+    for top in ("ur10core", "app"):
+        for init in (ROOT / top).rglob("__init__.py"):
+            parts = init.parent.relative_to(ROOT).parts
+            found.add(".".join((installed_as.get(parts[0], parts[0]), *parts[1:])))
     assert found <= declared, f"not installed by pip install .: {sorted(found - declared)}"
+
+
+def test_the_app_is_not_installed_under_a_bare_name():
+    """Issue 29: the import name ``app`` collided with any other project's ``app`` in one environment."""
+    setuptools = tomllib.loads((ROOT / "pyproject.toml").read_text())["tool"]["setuptools"]
+    assert setuptools["package-dir"]["ur10teach"] == "app"
+    assert not any(name == "app" or name.startswith("app.") for name in setuptools["packages"])
+
+
+def test_nothing_imports_the_app_by_its_folder_name():
+    """Importing ``app.x`` beside ``ur10teach.x`` would load the module twice, with two copies of its state."""
+    import re
+
+    bare = re.compile(r"^\s*(from app(\.| import)|import app\b)", re.M)
+    sources = [path for top in ("app", "tests", "ur10dev", "benchmarks", "scripts") for path in (ROOT / top).rglob("*.py")]
+    offenders = [str(path.relative_to(ROOT)) for path in sources if bare.search(path.read_text())]
+    assert not offenders, offenders

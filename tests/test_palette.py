@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from app.style import ALUMINIUM, GHOST_OPACITY, JOINT_CAP_GREY, SLOT_COLORS
+from ur10teach.style import ALUMINIUM, GHOST_OPACITY, JOINT_CAP_GREY, SLOT_COLORS
 from ur10dev.colour_vision import MIN_DELTA_E, cielab, closest_pair, linear, seen
 
 def test_a_pure_colour_is_where_cielab_puts_it():

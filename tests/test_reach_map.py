@@ -8,9 +8,9 @@ import threading
 import numpy as np
 import pytest
 
-from app import reach_map
-from app.reach_map import PLANES, map_image
-from app.style import REACH_COLORS
+from ur10teach import reach_map
+from ur10teach.reach_map import PLANES, map_image
+from ur10teach.style import REACH_COLORS
 from ur10core.orientation import rotation_from_zyx_euler
 from ur10core.workspace import branch_count_map
 

@@ -1,4 +1,4 @@
-"""app.shared_frames sends what viser's own producer sends, encoding a broadcast window once."""
+"""ur10teach.shared_frames sends what viser's own producer sends, encoding a broadcast window once."""
 
 from __future__ import annotations
 
@@ -13,8 +13,8 @@ from viser import _messages
 from viser.infra import _infra
 from viser.infra._async_message_buffer import AsyncMessageBuffer
 
-from app import shared_frames
-from app.fast_updates import _UpdateMessage
+from ur10teach import shared_frames
+from ur10teach.fast_updates import _UpdateMessage
 from ur10dev.viser_client import decode_frame
 from ur10dev.waiting import HANG_TIMEOUT, until
 

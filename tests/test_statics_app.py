@@ -8,7 +8,7 @@ import threading
 import numpy as np
 import pytest
 
-from app.statics import bars_html
+from ur10teach.statics import bars_html
 from ur10core import Arm
 
 from .server_support import session_of, until, url
@@ -52,7 +52,7 @@ def test_the_force_points_where_its_handle_is_dragged(app):
     """"Drag the handle": the force points from the flange to the handle, the arrow and the bars follow,
     and the handle rides with the flange when the arm moves."""
     async def scenario():
-        from app.statics import DRAGGED, HANDLE_DISTANCE
+        from ur10teach.statics import DRAGGED, HANDLE_DISTANCE
 
         client = await ViserClient(url(app)).connect()
         session = session_of(app, client)
@@ -99,7 +99,7 @@ def test_a_joint_over_its_rating_is_flagged():
 
 def test_the_ellipsoids_follow_the_arm_and_flatten_towards_the_elbow_singularity(app):
     async def scenario():
-        from app.ellipsoids import FORCE_METRES, VELOCITY_METRES
+        from ur10teach.ellipsoids import FORCE_METRES, VELOCITY_METRES
         from ur10core.orientation import rotation_from_quaternion
 
         client = await ViserClient(url(app)).connect()
@@ -133,7 +133,7 @@ def test_the_ellipsoids_follow_the_arm_and_flatten_towards_the_elbow_singularity
 
 def test_joint_rates_draw_the_flange_velocity_and_a_typed_velocity_gets_its_rates(app):
     async def scenario():
-        from app.velocity import METRES_PER_SPEED, METRES_PER_TURN_RATE, parse_twist, rates_markdown
+        from ur10teach.velocity import METRES_PER_SPEED, METRES_PER_TURN_RATE, parse_twist, rates_markdown
 
         client = await ViserClient(url(app)).connect()
         session = session_of(app, client)
@@ -169,7 +169,7 @@ def test_near_a_singularity_the_needed_rates_are_red_and_on_it_damped():
     """3° from the wrist singularity, turning the flange at 30 °/s about z needs a wrist far over its
     180 °/s (undamped); 0.06° from it the damping keeps every joint within its limit, and says what
     that costs."""
-    from app.velocity import parse_twist, rates_markdown
+    from ur10teach.velocity import parse_twist, rates_markdown
     from ur10core import Arm
 
     arm = Arm.preset("course")
@@ -189,7 +189,7 @@ def test_near_a_singularity_the_needed_rates_are_red_and_on_it_damped():
 def test_the_rate_charts_mark_the_singularity_and_the_speed_limits():
     """A straight line across s5 = 0 is shaded where it was damped and where a wrist went over
     180°/s; joint interpolation between the same poses needs neither mark."""
-    from app.motion_lessons import rate_chart_data
+    from ur10teach.motion_lessons import rate_chart_data
     from ur10core import Arm
     from ur10core.paths import joint_interpolation, straight_line
 
@@ -283,7 +283,7 @@ def test_the_workspace_coloured_by_the_torque_a_force_needs(app):
 def test_presses_fold_into_one_run_on_one_thread_and_none_for_a_browser_that_left(app):
     """Review 2, finding 3: *Release the arm* pressed 30 times a second for 20 s left 543 threads,
     each with its second of dynamics, running long after the student had gone."""
-    from app.workers import BACKGROUND_THREADS, HEAVY
+    from ur10teach.workers import BACKGROUND_THREADS, HEAVY
 
     async def scenario():
         client = await ViserClient(url(app)).connect()

@@ -1,7 +1,7 @@
 """Run the app in its own process, as in class, and read the figures it reports (tests and benchmarks).
 
 The load generator must not share the server's interpreter (and its GIL): the server
-runs as ``python -m app`` with ``UR10_TEACH_METRICS`` set, and writes its handler
+runs as ``python -m ur10teach`` with ``UR10_TEACH_METRICS`` set, and writes its handler
 latencies, CPU time and resident memory to a JSON file every second.
 """
 
@@ -60,7 +60,7 @@ def serving(command: list[str], cwd: Path, env: dict[str, str], timeout: float =
 @contextlib.contextmanager
 def running_app(*args: str, timeout: float = 60.0, env: dict[str, str] | None = None,
                 root: Path = ROOT) -> Iterator["AppProcess"]:
-    """``python -m app --port 0 *args`` in a subprocess (a later ``--port`` wins); yields once it is serving.
+    """``python -m ur10teach --port 0 *args`` in a subprocess (a later ``--port`` wins); yields once it is serving.
 
     ``env`` adds to the environment (``UR10CORE_BACKEND``, say); ``root`` is the checkout
     whose app runs (another commit's, for a before-and-after benchmark).
@@ -68,7 +68,7 @@ def running_app(*args: str, timeout: float = 60.0, env: dict[str, str] | None = 
     with tempfile.TemporaryDirectory() as folder:
         metrics = Path(folder) / "metrics.json"
         environment = dict(os.environ, **(env or {}), UR10_TEACH_METRICS=str(metrics))
-        command = [sys.executable, "-m", "app", "--port", "0", *args]
+        command = [sys.executable, "-m", "ur10teach", "--port", "0", *args]
         with serving(command, root, environment, timeout) as (process, output):
             url = next(URL.search(line).group(1) for line in output if line.startswith("    ") and URL.search(line))
             yield AppProcess(process, url, metrics, output)

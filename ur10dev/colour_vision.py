@@ -11,7 +11,7 @@ import itertools
 
 import numpy as np
 
-from app.style import PAGE_BACKGROUND
+from ur10teach.style import PAGE_BACKGROUND
 
 VISION = {
     "normal": np.eye(3),

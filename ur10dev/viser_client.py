@@ -91,6 +91,7 @@ class Received:
     positions: dict[str, tuple[float, float, float]] = dataclasses.field(default_factory=dict)
     visible: dict[str, bool] = dataclasses.field(default_factory=dict)
     removed_gui: set[str] = dataclasses.field(default_factory=set)
+    panel_label: str | None = None  #: the panel's title, once the server has set it for this browser
     #: seconds from the server sending a frame (its perf_counter, the same clock) to its arrival here
     delivery_lag: list[float] = dataclasses.field(default_factory=list)
 
@@ -252,6 +253,8 @@ class ViserClient:
         elif kind == "GuiUpdateMessage" and "p (mm)" in message.get("updates", {}).get("_markdown", ""):
             # viser may send a markdown's content as a separate update after creating it empty
             self._read_flange(now, message["updates"]["_markdown"])
+        elif kind == "SetGuiPanelLabelMessage":
+            self.received.panel_label = message.get("label")
         elif kind == "NotificationShowMessage":
             props = message.get("props", {})
             self.received.notifications.append((props.get("title", ""), props.get("body", "")))

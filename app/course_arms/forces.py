@@ -1,6 +1,6 @@
 """A course arm's "Forces" folder: a force at the tool and τ = Jᵀ F at each joint (docs/kinematics.md §8.3).
 
-The UR10's folder (``app.statics``) adds its weight and its joints' ratings; the course's
+The UR10's folder (``ur10teach.statics``) adds its weight and its joints' ratings; the course's
 other arms come without masses, so this one shows the force's torques alone.
 """
 

@@ -14,6 +14,7 @@ from ur10core.serial import SerialArm
 from ..camera import CameraControls
 from ..ellipsoids import EllipsoidsView
 from ..metrics import LATENCY
+from ..motion_lessons import MotionLessons
 from ..session_basics import SessionBasics
 from ..velocity import VelocityView
 from ..view import View
@@ -70,7 +71,7 @@ class CourseArmSession(SessionBasics):
     this one's place (the server does it); ``text`` and ``convention`` fill the editor.
 
     ``state``, ``scene`` and ``server``: the classroom's presenter drives an arm drawn in the
-    server's shared scene (``app.classroom``); its panel and gizmo stay its own. A browser
+    server's shared scene (``ur10teach.classroom``); its panel and gizmo stay its own. A browser
     draws its own arm by default, under ``root``. ``own_camera`` as for ``ClientSession``.
     """
 
@@ -118,12 +119,13 @@ class CourseArmSession(SessionBasics):
         self.ellipsoids = EllipsoidsView(drawn_in, gui, self, root=f"{nodes}/ellipsoids", tool=at_tool, place="tool")
         self.forces = CourseForces(drawn_in, gui, self, f"{nodes}/statics")
         self.at_tool_views = (self.velocity, self.ellipsoids, self.forces)
+        self.motion = MotionLessons(gui, self, labels=arm.joint_names)
         self.gripper = GripperPose(gui, self) if arm.name == "kr210" else None
         self.camera = (CameraControls(client, lambda: self.state.last, self.guard, lecture, body_radius=body_radius(size))
                        if own_camera else None)
         self.panel_views = (*(v for v in (self.editor, self.search, self.gripper, self.camera) if v is not None),
                             self.joints, self.branches, self.singularities, self.dh_table, self.walkthrough, self.workspace,
-                            *self.at_tool_views)
+                            *self.at_tool_views, self.motion)
         self.built = True
         self.render(self.state.last)
         self.render_panel()

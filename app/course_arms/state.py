@@ -59,7 +59,8 @@ class CourseArmState:
         q[index] = value
         return self.set_joints(q)
 
-    def set_joints(self, q) -> CourseSnapshot:
+    def set_joints(self, q, cause: str = "joints") -> CourseSnapshot:
+        """Put the arm at ``q`` (``cause``, as for the UR10's state: what moved it, e.g. "motion")."""
         q = self.arm.dh.joints(q).astype(float)
         low, high = self.arm.limits.T
         if ((q < low) | (q > high)).any():
