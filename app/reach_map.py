@@ -1,6 +1,7 @@
 """The branch-count map: for the tool's current orientation, how many IK branches reach each point of a plane.
 
-``ur10core.workspace.branch_count_map`` solves 200 × 200 poses in one batch; the map is
+``ur10core.workspace.branch_count_map`` solves 200 × 200 poses in one batch (100 × 100 for the
+course's other arms, whose IK is numpy's alone); the map is
 drawn as one small PNG image lying in the plane (a few KB, where 40 000 coloured points
 would be 600 KB). It is recomputed off the drag path: the panel's pace (≤ 10 Hz) asks
 for it, a background thread computes it, and requests that come meanwhile are folded into
@@ -17,7 +18,9 @@ from typing import TYPE_CHECKING
 import numpy as np
 import viser
 
+from ur10core import Arm
 from ur10core.orientation import quaternion
+from ur10core.solvers.numerical import NumericalIK
 from ur10core.workspace import BranchCountMap, branch_count_map
 
 from .feedback import chosen
@@ -31,13 +34,26 @@ if TYPE_CHECKING:
     from .session import ClientSession
 
 PLANES = {"vertical, through the base axis and the target": "vertical", "horizontal, at the target's height": "horizontal"}
-RESOLUTION = 200  #: cells per side: 40 000 poses, about 1.4 cm each
+RESOLUTION = 200  #: cells per side for the UR family (compiled batch IK): 40 000 poses, about 1.4 cm each
+#: cells per side for the course's other arms, whose IK is numpy's alone (a KR210 map of 10 000 poses: 0.25 s)
+COURSE_RESOLUTION = 100
 
 
-def map_image(counts: np.ndarray) -> np.ndarray:
-    """(n, n) branch counts → (n, n, 4) RGBA: 0 faint grey, then 2, 4, 6, 8 in REACH_COLORS (an odd count as the next even)."""
+def legend_counts(slots: int) -> tuple[int, ...]:
+    """The branch counts the legend names for an arm of ``slots`` IK slots: 2, 4, 6, 8 for the UR10; 1 … 4 for four."""
+    step = max(slots // 4, 1)
+    return tuple(range(step, slots + 1, step))
+
+
+def map_image(counts: np.ndarray, slots: int = 8) -> np.ndarray:
+    """(n, n) branch counts → (n, n, 4) RGBA: 0 faint grey, then the four REACH_COLORS in equal steps up to ``slots``
+    (for the UR10, 2, 4, 6, 8; an odd count as the next even)."""
     palette = np.array([(*rgb, alpha) for rgb, alpha in REACH_COLORS], dtype=np.uint8)
-    return palette[(counts.astype(int) + 1) // 2]
+    return palette[np.ceil(4 * counts.astype(int) / slots).astype(int)]
+
+
+def colour_of(count: int, slots: int) -> tuple[int, int, int]:
+    return REACH_COLORS[int(np.ceil(4 * count / slots))][0]
 
 
 def map_pose(reach: BranchCountMap) -> tuple[np.ndarray, np.ndarray]:
@@ -46,24 +62,39 @@ def map_pose(reach: BranchCountMap) -> tuple[np.ndarray, np.ndarray]:
     return quaternion(rotation, check=False), reach.centre
 
 
-LEGEND_TEXT = "branches reaching each point, tool turned as now: yellow 2 · green 4 · teal 6 · purple 8"
+COLOUR_NAMES = {REACH_COLORS[1][0]: "yellow", REACH_COLORS[2][0]: "green", REACH_COLORS[3][0]: "teal", REACH_COLORS[4][0]: "purple"}
 
 
-def legend_html() -> str:
+def legend_text(slots: int = 8) -> str:
+    """The map's label in 3D: "… yellow 2 · green 4 · teal 6 · purple 8" for the UR10."""
+    names = " · ".join(f"{COLOUR_NAMES[colour_of(count, slots)]} {count}" for count in legend_counts(slots))
+    return f"branches reaching each point, tool turned as now: {names}"
+
+
+def legend_html(slots: int = 8) -> str:
+    entries = [("none", REACH_COLORS[0][0]), *((str(count), colour_of(count, slots)) for count in legend_counts(slots))]
     swatches = "".join(
         f"<span style='display:inline-block;margin-right:10px'><span style='display:inline-block;width:14px;height:14px;"
-        f"border-radius:3px;vertical-align:middle;background:{hex_color(rgb)}'></span> {count}</span>"
-        for count, (rgb, _) in zip(("none", "2", "4", "6", "8"), REACH_COLORS)
+        f"border-radius:3px;vertical-align:middle;background:{hex_color(rgb)}'></span> {label}</span>"
+        for label, rgb in entries
     )
     return f"<div style='font-size:0.85em'>Branches that reach each point with this orientation:<br>{swatches}</div>"
 
 
 class ReachMapView(View):
-    """The "Reachable with this orientation" folder and its map, in the session's scene."""
+    """The "Reachable with this orientation" folder and its map, in the session's scene (``root``).
 
-    def __init__(self, scene: viser.SceneApi, gui: viser.GuiApi, session: "ClientSession") -> None:
+    For any arm with a closed-form IK; a typed table's folder says why it has no map.
+    """
+
+    def __init__(self, scene: viser.SceneApi, gui: viser.GuiApi, session: "ClientSession", root: str = "/reach_map") -> None:
         self._scene = scene
         self._session = session
+        self._root = root
+        arm = session.arm
+        self.resolution = RESOLUTION if isinstance(arm, Arm) else COURSE_RESOLUTION
+        numerical = isinstance(getattr(arm, "solver", None), NumericalIK)
+        self.slots = 0 if numerical else int(arm.ik(arm.fk(arm.specs.home)).q.shape[-2])
         self.image: viser.ImageHandle | None = None
         self.shown_key: tuple | None = None  #: (target bytes, plane) of the map on screen
         self.computed = 0  #: maps computed so far (tests and benchmarks read it)
@@ -74,11 +105,16 @@ class ReachMapView(View):
         folder = gui.add_folder("Reachable with this orientation", expand_by_default=False)
         self.folders = (folder,)
         with folder:
-            gui.add_markdown("Keep the tool turned as the gizmo has it and move it anywhere in a plane: "
-                             "how many of the 8 branches get there? Turn the gizmo and watch the rings change.")
-            self.enabled = gui.add_checkbox("Show branch-count map", False)
+            if numerical:
+                gui.add_markdown("A typed table's IK is numerical, from one start at a time: a map of thousands of "
+                                 "poses would take minutes, so this arm has none. The course's arms all have one.")
+            else:
+                gui.add_markdown("Keep the tool turned as the gizmo has it and move it anywhere in a plane: "
+                                 f"how many of the {self.slots} branches get there? Turn the gizmo and watch the "
+                                 "rings change.")
+            self.enabled = gui.add_checkbox("Show branch-count map", False, disabled=numerical)
             self.plane = gui.add_dropdown("Plane", tuple(PLANES), initial_value=tuple(PLANES)[0])
-            self.legend = gui.add_html(legend_html(), visible=False)
+            self.legend = gui.add_html(legend_html(max(self.slots, 1)), visible=False)
         self.enabled.on_update(session.guard(self._toggled))
         self.plane.on_update(session.guard(self._toggled))
 
@@ -111,19 +147,22 @@ class ReachMapView(View):
         key = self._key(snapshot)
         if not self.enabled.value or key == self.shown_key:
             return
-        reach = MAPS.run(self._session.client, lambda: branch_count_map(self._session.arm, snapshot.target, key[1], RESOLUTION),
+        if not self.slots:
+            raise ValueError("a typed table's IK is numerical: it has no branch-count map")
+        reach = MAPS.run(self._session.client,
+                         lambda: branch_count_map(self._session.arm, snapshot.target, key[1], self.resolution),
                          cancelled=lambda: self._closed or self._session.closed)
         self.computed += 1
-        image, (wxyz, position) = map_image(reach.counts), map_pose(reach)
+        image, (wxyz, position) = map_image(reach.counts, self.slots), map_pose(reach)
         with self._lock:
             if self._closed or not self.enabled.value:
                 return
             if self.image is None:
                 self.image = self._scene.add_image(
-                    "/reach_map", image, reach.size, reach.size, format="png", wxyz=wxyz, position=position,
+                    self._root, image, reach.size, reach.size, format="png", wxyz=wxyz, position=position,
                     cast_shadow=False, receive_shadow=False)
                 # in the scene beside the map, so that viewers of a shared scene can read it too
-                self._scene.add_label("/reach_map/legend", LEGEND_TEXT, position=(0.0, reach.size / 2 - 0.06, 0.0),
+                self._scene.add_label(f"{self._root}/legend", legend_text(self.slots), position=(0.0, reach.size / 2 - 0.06, 0.0),
                                       font_screen_scale=1.3, anchor="top-center")
             else:
                 self.image.image = image

@@ -533,3 +533,30 @@ def test_a_course_arm_moves_from_a_remembered_pose_along_both_paths(app, label):
         await client.close()
 
     asyncio.run(scenario())
+
+
+@pytest.mark.parametrize("label", ["KUKA KR210 (spherical wrist)", "SCARA (RRP + roll)"])
+def test_a_course_arm_has_its_branch_count_map_and_a_typed_table_says_why_not(app, label):
+    """Issue 29: the branch-count map was the UR10's alone."""
+    from ur10core.workspace import branch_count_map
+    from ur10teach.reach_map import COURSE_RESOLUTION, legend_text, map_image
+
+    async def scenario():
+        client = await ViserClient(url(app)).connect()
+        session = await pick(app, client, label, CourseArmSession)
+        view = session.reach_map
+        slots = len(session.state.last.solution.labels)
+        assert view.slots == slots
+        await client.set_gui("Plane", "horizontal, at the target's height")
+        await client.set_gui("Show branch-count map", True)
+        await until(lambda: view.image is not None and view.shown_key is not None, what="the map")
+        target = session.state.last.target
+        expected = branch_count_map(session.arm, target, "horizontal", COURSE_RESOLUTION)
+        assert expected.counts.max() > 0  # the arm reaches part of its plane
+        np.testing.assert_array_equal(view.image.image, map_image(expected.counts, slots))
+        assert str(slots) in legend_text(slots)
+        typed = await pick(app, client, CUSTOM, CourseArmSession)
+        assert typed.reach_map.slots == 0 and typed.reach_map.enabled.disabled
+        await client.close()
+
+    asyncio.run(scenario())

@@ -8,6 +8,7 @@ the section plane, instead of the few that happen to lie in a thin slab.
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass
 
 import numpy as np
@@ -127,20 +128,44 @@ class BranchCountMap:
         return self.centre + offsets[None, :, None] * self.u - offsets[:, None, None] * self.v
 
 
+def map_extent(arm) -> tuple[float, float]:
+    """(height on the base axis, half-width): the square a branch-count map covers, about any arm's workspace.
+
+    For the UR family, the shoulder's height d1, and a2 + a3 + d5 + d6: no flange lies farther
+    from the shoulder. For any other arm, from 4 000 samples of its workspace (seed 0): the
+    middle of their heights, and the farthest of them from the base axis or from that middle
+    height, with 5 % to spare (samples reach a little short of the boundary).
+    """
+    if all(hasattr(arm, name) for name in ("d1", "a2", "a3", "d5", "d6")):
+        return arm.d1, abs(arm.a2) + abs(arm.a3) + abs(arm.d5) + abs(arm.d6)
+    return _sampled_extent(arm)
+
+
+@functools.lru_cache(maxsize=32)
+def _sampled_extent(arm) -> tuple[float, float]:
+    points, _ = arm.sample_workspace(4000, seed=0)
+    low, high = float(points[:, 2].min()), float(points[:, 2].max())
+    middle = 0.5 * (low + high)
+    farthest = max(float(np.linalg.norm(points[:, :2], axis=1).max()), 0.5 * (high - low))
+    return middle, 1.05 * farthest
+
+
 def branch_count_map(arm, target, plane: str = "vertical", resolution: int = 200) -> BranchCountMap:
     """For the orientation R of ``target``, the number of IK branches reaching each point of a plane through it.
 
     docs/kinematics.md §4.2, "Where each orientation can be reached". Every cell of an
-    n × n grid asks :meth:`Arm.ik` for T = [R, p; 0, 1] with p the cell's centre, and
-    counts its valid slots: 0 (out of reach with this orientation), or 2 for each of the
-    four (shoulder, wrist) pairs whose elbow reaches: 2, 4, 6 or 8.
+    n × n grid asks the arm's IK for T = [R, p; 0, 1] with p the cell's centre, and
+    counts its valid slots within the joint limits: 0 (out of reach with this orientation); for the UR family, 2 for
+    each of the four (shoulder, wrist) pairs whose elbow reaches: 2, 4, 6 or 8.
 
     Parameters
     ----------
-    arm : Arm
+    arm : Arm or SerialArm
+        Any arm with a closed-form IK (one call solves the whole grid); the square it
+        covers is :func:`map_extent`.
     target : array_like, shape (4, 4)
-        The target pose: its rotation is the orientation asked for everywhere, its
-        position a point of the plane.
+        The target pose: its rotation is the orientation asked for everywhere (what of
+        it the arm controls: ``arm.task``), its position a point of the plane.
     plane : {"vertical", "horizontal"}
         "vertical": the plane holding the base axis and the target (the arm's own plane
         when θ1 points at it), u horizontal towards the target, v = z; "horizontal": the
@@ -169,7 +194,7 @@ def branch_count_map(arm, target, plane: str = "vertical", resolution: int = 200
         raise ValueError(f"plane must be one of {MAP_PLANES}, got {plane!r}")
     if isinstance(resolution, bool) or not isinstance(resolution, (int, np.integer)) or not 2 <= resolution <= 1000:
         raise ValueError(f"resolution must be an integer number of cells per side in [2, 1000], got {resolution!r}")
-    reach = abs(arm.a2) + abs(arm.a3) + abs(arm.d5) + abs(arm.d6)  # no flange lies farther from the shoulder
+    height, reach = map_extent(arm)
     size = 2.0 * (reach + 0.05)
     position = target[:3, 3]
     if plane == "vertical":
@@ -177,14 +202,16 @@ def branch_count_map(arm, target, plane: str = "vertical", resolution: int = 200
         length = np.linalg.norm(towards)
         u = towards / length if length > 1e-9 else np.array([1.0, 0.0, 0.0])  # on the axis: any vertical plane holds it
         v = np.array([0.0, 0.0, 1.0])
-        centre = np.array([0.0, 0.0, arm.d1])
+        centre = np.array([0.0, 0.0, height])
     else:
         u, v = np.array([1.0, 0.0, 0.0]), np.array([0.0, 1.0, 0.0])
         centre = np.array([0.0, 0.0, position[2]])
     grid = BranchCountMap(centre, u, v, size, np.zeros((resolution, resolution), np.int8))
     poses = np.broadcast_to(target, (resolution * resolution, 4, 4)).copy()
     poses[:, :3, 3] = grid.points().reshape(-1, 3)
-    counts = arm.ik(poses).valid.sum(axis=-1).astype(np.int8)
+    solution = arm.ik(poses)
+    reached = solution.valid & getattr(solution, "within_limits", True)  # a course arm's joint limits bind
+    counts = reached.sum(axis=-1).astype(np.int8)
     return BranchCountMap(centre, u, v, size, counts.reshape(resolution, resolution))
 
 

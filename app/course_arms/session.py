@@ -15,6 +15,7 @@ from ..camera import CameraControls
 from ..ellipsoids import EllipsoidsView
 from ..metrics import LATENCY
 from ..motion_lessons import MotionLessons
+from ..reach_map import ReachMapView
 from ..session_basics import SessionBasics
 from ..velocity import VelocityView
 from ..view import View
@@ -119,13 +120,14 @@ class CourseArmSession(SessionBasics):
         self.ellipsoids = EllipsoidsView(drawn_in, gui, self, root=f"{nodes}/ellipsoids", tool=at_tool, place="tool")
         self.forces = CourseForces(drawn_in, gui, self, f"{nodes}/statics")
         self.at_tool_views = (self.velocity, self.ellipsoids, self.forces)
+        self.reach_map = ReachMapView(drawn_in, gui, self, root=f"{nodes}/reach_map")
         self.motion = MotionLessons(gui, self, labels=arm.joint_names)
         self.gripper = GripperPose(gui, self) if arm.name == "kr210" else None
         self.camera = (CameraControls(client, lambda: self.state.last, self.guard, lecture, body_radius=body_radius(size))
                        if own_camera else None)
         self.panel_views = (*(v for v in (self.editor, self.search, self.gripper, self.camera) if v is not None),
                             self.joints, self.branches, self.singularities, self.dh_table, self.walkthrough, self.workspace,
-                            *self.at_tool_views, self.motion)
+                            *self.at_tool_views, self.reach_map, self.motion)
         self.built = True
         self.render(self.state.last)
         self.render_panel()
