@@ -8,7 +8,7 @@ a Python loop) and then played on the arm in real time (``ur10teach.animation``)
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Callable
 
 import numpy as np
 import viser
@@ -117,8 +117,10 @@ class MotionLessons(View):
     """The "Motion" folder: release the arm (where its link masses are known), or move it from a
     remembered pose two ways; a plot of the joint rates. For any arm: ``labels`` names its joints."""
 
-    def __init__(self, gui: viser.GuiApi, session: "ClientSession", labels: tuple[str, ...] = JOINT_LABELS) -> None:
+    def __init__(self, gui: viser.GuiApi, session: "ClientSession", labels: tuple[str, ...] = JOINT_LABELS,
+                 before: Callable[[], None] = lambda: None) -> None:
         self._session = session
+        self._before = before  #: called before a motion starts (another lesson's own motion stops)
         self.player = Player(session)
         arm = session.arm
         self._labels, self._kinds = labels, "".join(arm.joint_types)
@@ -138,7 +140,7 @@ class MotionLessons(View):
             self.remember = gui.add_button("Remember this pose as the start", icon=viser.Icon.PIN)
             self.start_text = gui.add_markdown("No start pose yet.")
             self.path = gui.add_button_group("Go from the start to here along", PATHS)
-            self.stop = gui.add_button("Stop", icon=viser.Icon.PLAYER_STOP)
+            self.stop = gui.add_button("Stop the motion", icon=viser.Icon.PLAYER_STOP)
             self.summary = gui.add_markdown("")
             gui.add_markdown("Both ways between the same two poses, the one played first. Shaded: grey where the "
                              "straight line passed near a singularity (the rates were damped)"
@@ -156,6 +158,7 @@ class MotionLessons(View):
         session = self._session
         arm, start = session.arm, session.state.last.q.copy()
         dynamics.link_masses(arm)  # an arm without published masses: refused here, with the reason
+        self._before()
 
         def compute() -> tuple[np.ndarray, np.ndarray]:
             motion = HEAVY.run(session.client, lambda: APART.run(dynamics.release, arm, start, duration=DROP_SECONDS),
@@ -175,6 +178,7 @@ class MotionLessons(View):
             raise ValueError("remember a start pose first, then move the arm to where it should go")
         session = self._session
         arm, start, goal = session.arm, self.start.copy(), session.state.last.q.copy()
+        self._before()
 
         def compute() -> tuple[np.ndarray, np.ndarray]:
             both = {PATHS[0]: HEAVY.run(session.client,

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from ur10core import Arm
-from ur10core.three_dof import FOREARM, UPPER_ARM, course_path, largest_torque
+from ur10core.three_dof import FOREARM, UPPER_ARM, ThreeDofArm, course_path, largest_torque
 
 pytestmark = pytest.mark.core
 
@@ -88,3 +88,61 @@ def test_the_largest_torque_for_a_tool_force():
     assert math.cos(worst.q[1]) == pytest.approx(1.0) and abs(math.cos(worst.q[2])) == pytest.approx(1.0)
     with pytest.raises(ValueError, match="force must be three numbers"):
         largest_torque(arm, [1.0, 2.0])
+
+
+def _elbow_above(arm, q) -> np.ndarray:
+    """Independently of ik: is the elbow above the straight line from the shoulder to the tool?
+
+    In the arm's vertical plane, with s the horizontal distance toward the tool and h the height,
+    the side of the line (t_s, t_h) the elbow (e_s, e_h) is on is the sign of t_s e_h − t_h e_s.
+    """
+    frames = arm.frames(q)
+    elbow, tool = frames[..., 1, :3, 3], frames[..., 2, :3, 3]
+    toward = tool[..., [0, 2]] / np.linalg.norm(tool[..., [0, 2]], axis=-1, keepdims=True)
+    tool_s, elbow_s = np.linalg.norm(tool[..., [0, 2]], axis=-1), np.einsum("...i,...i->...", elbow[..., [0, 2]], toward)
+    return tool_s * elbow[..., 1] - tool[..., 1] * elbow_s > 0
+
+
+def test_ik_finds_every_generating_pose_in_its_labelled_slot():
+    """FK∘IK on 5 000 random joint vectors: the generating one is found, in the slot its geometry names
+    (the tool in front or behind, the elbow above or below), and every valid slot reaches the position."""
+    arm = ThreeDofArm()
+    rng = np.random.default_rng(7)
+    q = rng.uniform(-np.pi, np.pi, (5000, 3))
+    T = arm.fk(q)
+    sol = arm.ik(T)
+    assert sol.q.shape == (5000, 4, 3) and sol.valid.all()
+    reached = arm.fk(np.where(sol.valid[..., None], sol.q, 0.0))[..., :3, 3]
+    assert np.abs(reached - T[:, None, :3, 3]).max() < 1e-9
+    planar = arm.forearm * np.cos(q[:, 2]) - arm.upper_arm * np.cos(q[:, 1])
+    slot = 2 * (planar > 0) + (~_elbow_above(arm, q))
+    found = sol.q[np.arange(5000), slot]
+    difference = np.abs(np.angle(np.exp(1j * (found - q))))
+    assert difference.max() < 1e-7, np.argmax(difference.max(axis=1))
+    inside = ((q >= arm.limits[:, 0]) & (q <= arm.limits[:, 1])).all(axis=1)
+    assert sol.within_limits[np.arange(5000), slot][inside].all()
+
+
+def test_ik_near_its_singularities_and_out_of_reach():
+    arm = ThreeDofArm()
+    # links in one line, stretched (θ3 = θ2 + π) and folded (θ3 = θ2): the boundary of the workspace
+    for q in (np.radians([10.0, -40.0, 140.0]), np.radians([10.0, -40.0, -40.0])):
+        for nudge in (0.0, 1e-9, -1e-9):
+            target = arm.fk(q + [0.0, 0.0, nudge])
+            sol = arm.ik(target)
+            assert sol.valid.any(), "a reachable position was called unreachable"
+            assert np.abs(arm.fk(sol.q[sol.valid])[:, :3, 3] - target[:3, 3]).max() < 1e-6
+    # the tool on the vertical axis: θ1 is free, the hint's is kept, and the slots say singular
+    q = np.array([0.3, -np.pi / 2, np.arccos(0.0)])  # reach l1 c3 − l5 c2 = 0
+    sol = arm.ik(arm.fk(q), hint=q)
+    assert sol.valid.any() and sol.singular[sol.valid].all()
+    assert np.isclose(sol.q[sol.valid][0, 0] % np.pi, 0.3 % np.pi)
+    far = np.eye(4)
+    far[:3, 3] = (3.0, 0.5, 0.0)
+    sol = arm.ik(far)
+    assert not sol.valid.any() and "reach at most 2630.0 mm" in sol.unreachable_reason()
+    near = np.eye(4)
+    near[:3, 3] = (0.0, 0.05, 0.0)
+    assert "no closer than 70.0 mm" in arm.ik(near).unreachable_reason()
+    with pytest.raises(ValueError):
+        arm.ik(np.eye(3))

@@ -17,8 +17,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ._validate import as_float_array, check_finite
+from ._validate import as_float_array, check_finite, homogeneous_transform
+from .branches import TOO_CLOSE, TOO_FAR, BranchSet, empty_branches, wrap
 from .differential import JacobianUses
+from .solvers.planar import _two_link
+from .tolerances import LENGTH_TOLERANCE
 from .specs import HasSpecs
 
 #: The course's lengths (its simulation's numbers; read here as metres): upper arm l5, forearm l1.
@@ -111,6 +114,71 @@ class ThreeDofArm(JacobianUses, HasSpecs):
         J[..., 0, 2], J[..., 1, 2], J[..., 2, 2] = -c1 * self.forearm * s3, self.forearm * c3, s1 * self.forearm * s3
         J[..., 3, 1], J[..., 4, 0], J[..., 5, 1] = s1, 1.0, c1
         return J
+
+    #: The four slots of :meth:`ik`: the tool in front of the arm's plane (as along the course's path:
+    #: the forearm reaching out past the upper arm, −x of the turned plane) or behind it (the base
+    #: turned half a turn), the elbow above or below the line from the shoulder to the tool.
+    labels = ("in front, elbow above", "in front, elbow below", "behind, elbow above", "behind, elbow below")
+
+    def ik(self, T, hint=None) -> BranchSet:
+        """Every joint vector that puts the tool at the position of ``T`` (..., 4, 4) (docs/kinematics.md §8.6).
+
+        The base turns the arm's vertical plane: p = Ry(θ1) (r, h, 0). With ρ = √(p_x² + p_z²),
+        the tool is in front (r = −ρ, θ1 = atan2(p_z, −p_x)) or behind (r = ρ, θ1 + π). In the plane
+        the upper arm points along θ2 + π (its end is −l5 (c2, s2)) and the forearm along
+        θ3, the parallelogram's absolute angle: a planar two-link arm of l5 then l1, solved
+        with the elbow above or below the shoulder–tool line. 4 slots (:attr:`labels`); only
+        the position is matched (``task``). On the vertical axis (ρ = 0) θ1 is free: the
+        hint's, or 0, and the slots are marked singular.
+
+        >>> arm = ThreeDofArm()
+        >>> sol = arm.ik(arm.fk(np.radians([20, -30, 60])))
+        >>> np.degrees(sol.q[1]).round(6).tolist(), sol.within_limits.tolist()
+        ([20.0, -30.0, 60.0], [False, True, False, False])
+        >>> float(np.abs(arm.fk(sol.q)[:, :3, 3] - arm.fk(np.radians([20, -30, 60]))[:3, 3]).max()) < 1e-12
+        True
+        """
+        T = homogeneous_transform(T)
+        batch = T.shape[:-2]
+        flat = T.reshape(-1, 4, 4)
+        n = len(flat)
+        if hint is not None:
+            hint = np.broadcast_to(self._joints(hint), batch + (3,)).reshape(-1, 3)
+        out = empty_branches((n,), 4, 3)
+        x, height, z = flat[:, 0, 3], flat[:, 1, 3], flat[:, 2, 3]
+        rho = np.hypot(x, z)
+        on_axis = rho <= LENGTH_TOLERANCE
+        front = np.where(on_axis, 0.0 if hint is None else hint[:, 0], np.arctan2(z, -x))
+        for side, (theta1, reach) in enumerate(((front, -rho), (wrap(front + np.pi), rho))):
+            for above in (True, False):
+                slot = 2 * side + (0 if above else 1)
+                # _two_link's "down" puts the elbow below the line where the plane's r axis points at
+                # the tool (behind); in front the r axis points away from it, and the sense is mirrored
+                upper, bend, too_far, too_close, span = _two_link(reach, height, self.upper_arm, self.forearm,
+                                                                  down=above if side == 0 else not above)
+                ok = ~(too_far | too_close)
+                q = np.stack([theta1, wrap(upper - np.pi), wrap(upper + bend)], axis=-1)
+                out["q"][ok, slot] = q[ok]
+                out["valid"][:, slot] = ok
+                out["singular"][:, slot] = ok & (on_axis | (np.abs(np.sin(bend)) <= 1e-12))
+                out["failure"][:, slot] = np.where(too_far, TOO_FAR, np.where(too_close, TOO_CLOSE, 0))
+                out["detail"][:, slot] = span
+        q, valid = out["q"], out["valid"]
+        low, high = self.limits.T
+        inside = valid & ((q >= low) & (q <= high)).all(axis=-1)
+        shape = lambda a, *tail: a.reshape(batch + (4,) + tail)  # noqa: E731
+        return BranchSet(q=shape(q, 3), valid=shape(valid), within_limits=shape(inside), singular=shape(out["singular"]),
+                         failure=shape(out["failure"]), detail=shape(out["detail"]), labels=self.labels,
+                         method="analytic", task=self.task, explain=self._explain)
+
+    def _explain(self, failure: int, detail: float) -> str:
+        if failure == TOO_FAR:
+            return (f"the tool is {1000 * detail:.1f} mm from the shoulder; the two links reach at most "
+                    f"{1000 * (self.upper_arm + self.forearm):.1f} mm")
+        if failure == TOO_CLOSE:
+            return (f"the tool is {1000 * detail:.1f} mm from the shoulder; folded, the two links come no closer than "
+                    f"{1000 * abs(self.upper_arm - self.forearm):.1f} mm")
+        return "no branch reaches this position"
 
     def singularity_factors(self, q) -> np.ndarray:
         """(..., 2) the factors of det J_v = −l1 l5 · (l1 c3 − l5 c2) · sin(θ2 − θ3) (docs/kinematics.md §8.6).

@@ -18,6 +18,7 @@ from ur10core.three_dof import ThreeDofArm
 
 from ..camera import CameraControls
 from ..session_basics import SessionBasics
+from ..motion_lessons import MotionLessons
 from ..style import JOINT_CAP_GREY, SHOULDER_COLOR
 from ..velocity import ANGULAR_COLOR, LINEAR_COLOR
 from ..view import View
@@ -123,10 +124,12 @@ class DesktopArmSession(SessionBasics):
         # a slider stops the course's path first: the arm goes where the student puts it
         self.joints = CourseJointSliders(gui, self, before=lambda: self.path.player.stop(), order=1.0)
         self.path = CoursePathLesson(gui, self)
+        self.motion = MotionLessons(gui, self, labels=arm.joint_names, before=lambda: self.path.player.stop())
         self.forces = DesktopForces(client.scene if server is None else server.scene, gui, self, self.scene.root)
         self.camera = (CameraControls(client, self._framed, self.guard, lecture, body_radius=0.15 * self.scene.size)
                        if own_camera else None)
-        self.panel_views = (*((self.camera,) if self.camera is not None else ()), self.about, self.joints, self.path, self.forces)
+        self.panel_views = (*((self.camera,) if self.camera is not None else ()), self.about, self.joints, self.path,
+                            self.forces, self.motion)
         self.built = True
         self.render(self.state.last)
         self.render_panel()

@@ -59,8 +59,9 @@ class DesktopArmState:
         points = to_world(np.vstack([[0.0, -SHOULDER_HEIGHT, 0.0], frames[:, :3, 3]]))
         return DesktopSnapshot(q, rates, frames[-1], points)
 
-    def set_joints(self, q, rates=(0.0, 0.0, 0.0)) -> DesktopSnapshot:
-        """Move to ``q`` (3,) rad, within the joint ranges, turning at ``rates`` (3,) rad/s."""
+    def set_joints(self, q, rates=(0.0, 0.0, 0.0), cause: str = "joints") -> DesktopSnapshot:
+        """Move to ``q`` (3,) rad, within the joint ranges, turning at ``rates`` (3,) rad/s (``cause``, as
+        for the UR10's state: what moved it)."""
         q = np.array(q, dtype=float)
         rates = np.array(rates, dtype=float)
         if q.shape != (3,) or rates.shape != (3,) or not (np.isfinite(q).all() and np.isfinite(rates).all()):
