@@ -13,7 +13,7 @@ eight tabs turning their gizmos cost what one does.
 from __future__ import annotations
 
 import threading
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any, Callable
 
 import numpy as np
 import viser
@@ -56,10 +56,11 @@ def colour_of(count: int, slots: int) -> tuple[int, int, int]:
     return REACH_COLORS[int(np.ceil(4 * count / slots))][0]
 
 
-def map_pose(reach: BranchCountMap) -> tuple[np.ndarray, np.ndarray]:
-    """(wxyz, position) of the image node: its x along u, its y along v (an image's top row is +y)."""
-    rotation = np.stack([reach.u, reach.v, np.cross(reach.u, reach.v)], axis=1)
-    return quaternion(rotation, check=False), reach.centre
+def map_pose(reach: BranchCountMap, world: np.ndarray = np.eye(4)) -> tuple[np.ndarray, np.ndarray]:
+    """(wxyz, position) of the image node: its x along u, its y along v (an image's top row is +y);
+    ``world`` (4, 4) puts the arm's base frame in the scene."""
+    rotation = world[:3, :3] @ np.stack([reach.u, reach.v, np.cross(reach.u, reach.v)], axis=1)
+    return quaternion(rotation, check=False), world[:3, :3] @ reach.centre + world[:3, 3]
 
 
 COLOUR_NAMES = {REACH_COLORS[1][0]: "yellow", REACH_COLORS[2][0]: "green", REACH_COLORS[3][0]: "teal", REACH_COLORS[4][0]: "purple"}
@@ -85,12 +86,17 @@ class ReachMapView(View):
     """The "Reachable with this orientation" folder and its map, in the session's scene (``root``).
 
     For any arm with a closed-form IK; a typed table's folder says why it has no map.
+    ``target_of(snapshot)`` is the pose whose orientation is kept (the IK target; the desktop
+    arm's tool), and ``world`` (4, 4) puts the arm's base frame in the scene.
     """
 
-    def __init__(self, scene: viser.SceneApi, gui: viser.GuiApi, session: "ClientSession", root: str = "/reach_map") -> None:
+    def __init__(self, scene: viser.SceneApi, gui: viser.GuiApi, session: "ClientSession", root: str = "/reach_map",
+                 target_of: Callable[[Any], np.ndarray] = lambda snapshot: snapshot.target,
+                 world: np.ndarray = np.eye(4)) -> None:
         self._scene = scene
         self._session = session
         self._root = root
+        self._target_of, self._world = target_of, world
         arm = session.arm
         self.resolution = RESOLUTION if isinstance(arm, Arm) else COURSE_RESOLUTION
         numerical = isinstance(getattr(arm, "solver", None), NumericalIK)
@@ -129,11 +135,11 @@ class ReachMapView(View):
     def render_panel(self, snapshot: Snapshot) -> None:
         # a plane not among the options is refused by the dropdown's own callback; meanwhile nothing to do
         plane = PLANES.get(self.plane.value)
-        if self.enabled.value and plane is not None and (snapshot.target.tobytes(), plane) != self.shown_key:
+        if self.enabled.value and plane is not None and (self._target_of(snapshot).tobytes(), plane) != self.shown_key:
             self._request()
 
     def _key(self, snapshot: Snapshot) -> tuple:
-        return snapshot.target.tobytes(), PLANES[chosen(self.plane, "plane")]
+        return self._target_of(snapshot).tobytes(), PLANES[chosen(self.plane, "plane")]
 
     def _request(self) -> None:
         """Compute the map for the newest target, in a worker thread of this view."""
@@ -150,10 +156,10 @@ class ReachMapView(View):
         if not self.slots:
             raise ValueError("a typed table's IK is numerical: it has no branch-count map")
         reach = MAPS.run(self._session.client,
-                         lambda: branch_count_map(self._session.arm, snapshot.target, key[1], self.resolution),
+                         lambda: branch_count_map(self._session.arm, self._target_of(snapshot), key[1], self.resolution),
                          cancelled=lambda: self._closed or self._session.closed)
         self.computed += 1
-        image, (wxyz, position) = map_image(reach.counts, self.slots), map_pose(reach)
+        image, (wxyz, position) = map_image(reach.counts, self.slots), map_pose(reach, self._world)
         with self._lock:
             if self._closed or not self.enabled.value:
                 return
@@ -178,10 +184,11 @@ class ReachMapView(View):
         camera = self._session.camera
         if camera is None:
             return
-        reached = reach.points()[reach.counts > 0]
-        if reach.v[2] > 0.5:  # vertical: from the side of the plane the camera is on
-            normal = np.cross(reach.u, reach.v)
-            side = np.sign(normal @ (np.asarray(self._session.client.camera.position) - reach.centre)) or 1.0
+        turn, shift = self._world[:3, :3], self._world[:3, 3]
+        reached = reach.points()[reach.counts > 0] @ turn.T + shift
+        if (turn @ reach.v)[2] > 0.5:  # vertical: from the side of the plane the camera is on
+            normal = turn @ np.cross(reach.u, reach.v)
+            side = np.sign(normal @ (np.asarray(self._session.client.camera.position) - (turn @ reach.centre + shift))) or 1.0
             direction = side * normal
         else:
             direction = FROM_ABOVE

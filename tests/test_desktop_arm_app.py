@@ -113,3 +113,30 @@ def test_the_desktop_arm_moves_from_a_remembered_pose_along_a_straight_line(app)
         await client.close()
 
     asyncio.run(scenario())
+
+
+def test_the_desktop_arm_has_its_branch_count_map_standing_the_right_way_up(app):
+    """Issue 29: the desktop arm's map, in its own frame (y up) and drawn in the scene's (z up)."""
+    from ur10core.workspace import branch_count_map
+    from ur10teach.reach_map import COURSE_RESOLUTION, map_image, map_pose
+
+    async def scenario():
+        client = await ViserClient(url(app)).connect()
+        session = await pick(app, client, DESKTOP, DesktopArmSession)
+        view = session.reach_map
+        assert view.slots == 4
+        await client.set_gui("Show branch-count map", True)
+        await until(lambda: view.image is not None and view.shown_key is not None, what="the map")
+        tool = session.state.last.tool
+        expected = branch_count_map(session.arm, tool, "vertical", COURSE_RESOLUTION)
+        np.testing.assert_array_equal(view.image.image, map_image(expected.counts, 4))
+        # the vertical map stands upright in the scene: its image's y axis (v, the arm's y) is the world's z
+        world = np.eye(4)
+        world[:3, :3], world[:3, 3] = COURSE_TO_WORLD, (0.0, 0.0, SHOULDER_HEIGHT)
+        wxyz, position = map_pose(expected, world)
+        np.testing.assert_allclose(view.image.position, position, atol=1e-6)
+        np.testing.assert_allclose(np.abs(view.image.wxyz @ wxyz), 1.0, atol=1e-6)
+        np.testing.assert_allclose(COURSE_TO_WORLD @ expected.v, [0.0, 0.0, 1.0], atol=1e-12)
+        await client.close()
+
+    asyncio.run(scenario())

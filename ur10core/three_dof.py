@@ -59,6 +59,8 @@ class ThreeDofArm(JacobianUses, HasSpecs):
     n_joints = 3
     joint_names = ("θ1 base", "θ2 upper arm", "θ3 forearm")
     task = "position"
+    #: Its vertical: the course's base frame has y up (every other arm of the core: z).
+    up = (0.0, 1.0, 0.0)
 
     def __init__(self, upper_arm: float = UPPER_ARM, forearm: float = FOREARM) -> None:
         self.upper_arm, self.forearm = upper_arm, forearm
@@ -114,6 +116,18 @@ class ThreeDofArm(JacobianUses, HasSpecs):
         J[..., 0, 2], J[..., 1, 2], J[..., 2, 2] = -c1 * self.forearm * s3, self.forearm * c3, s1 * self.forearm * s3
         J[..., 3, 1], J[..., 4, 0], J[..., 5, 1] = s1, 1.0, c1
         return J
+
+    def sample_workspace(self, n: int, seed: int = 0, return_joints: bool = False):
+        """Tool positions of ``n`` joint vectors drawn uniformly within the limits, and |det J_v| at each.
+
+        Returns points (n, 3) in metres, |det J_v| (n,) in m³ and, with ``return_joints``, the joints
+        (n, 3). The same ``n`` and ``seed`` give the same cloud.
+        """
+        low, high = self.limits.T
+        q = np.random.default_rng(seed).uniform(low, high, (int(n), 3))
+        points = self.fk(q)[:, :3, 3]
+        measure = np.abs(np.linalg.det(self.jacobian(q)[:, :3, :]))
+        return (points, measure, q) if return_joints else (points, measure)
 
     #: The four slots of :meth:`ik`: the tool in front of the arm's plane (as along the course's path:
     #: the forearm reaching out past the upper arm, −x of the turned plane) or behind it (the base

@@ -134,7 +134,8 @@ def map_extent(arm) -> tuple[float, float]:
     For the UR family, the shoulder's height d1, and a2 + a3 + d5 + d6: no flange lies farther
     from the shoulder. For any other arm, from 4 000 samples of its workspace (seed 0): the
     middle of their heights, and the farthest of them from the base axis or from that middle
-    height, with 5 % to spare (samples reach a little short of the boundary).
+    height, with 5 % to spare (samples reach a little short of the boundary). Heights are
+    along the arm's vertical (``arm.up``: z, or y for the course's desktop arm).
     """
     if all(hasattr(arm, name) for name in ("d1", "a2", "a3", "d5", "d6")):
         return arm.d1, abs(arm.a2) + abs(arm.a3) + abs(arm.d5) + abs(arm.d6)
@@ -144,10 +145,12 @@ def map_extent(arm) -> tuple[float, float]:
 @functools.lru_cache(maxsize=32)
 def _sampled_extent(arm) -> tuple[float, float]:
     points, _ = arm.sample_workspace(4000, seed=0)
-    low, high = float(points[:, 2].min()), float(points[:, 2].max())
+    up = np.asarray(getattr(arm, "up", (0.0, 0.0, 1.0)))
+    heights = points @ up
+    low, high = float(heights.min()), float(heights.max())
     middle = 0.5 * (low + high)
-    farthest = max(float(np.linalg.norm(points[:, :2], axis=1).max()), 0.5 * (high - low))
-    return middle, 1.05 * farthest
+    across = np.linalg.norm(points - heights[:, None] * up, axis=1)
+    return middle, 1.05 * max(float(across.max()), 0.5 * (high - low))
 
 
 def branch_count_map(arm, target, plane: str = "vertical", resolution: int = 200) -> BranchCountMap:
@@ -168,8 +171,8 @@ def branch_count_map(arm, target, plane: str = "vertical", resolution: int = 200
         it the arm controls: ``arm.task``), its position a point of the plane.
     plane : {"vertical", "horizontal"}
         "vertical": the plane holding the base axis and the target (the arm's own plane
-        when θ1 points at it), u horizontal towards the target, v = z; "horizontal": the
-        plane z = target height, u = x, v = y. Either way a square centred on the base
+        when θ1 points at it), u horizontal towards the target, v up; "horizontal": the
+        plane through the target square to the vertical, u = x, v = up × x (for z up, y). Either way a square centred on the base
         axis, as wide as the arm's longest reach each side (the vertical one centred at
         the shoulder's height d1).
     resolution : int
@@ -197,15 +200,17 @@ def branch_count_map(arm, target, plane: str = "vertical", resolution: int = 200
     height, reach = map_extent(arm)
     size = 2.0 * (reach + 0.05)
     position = target[:3, 3]
+    up = np.asarray(getattr(arm, "up", (0.0, 0.0, 1.0)), dtype=float)  # the arm's vertical
+    across = np.array([1.0, 0.0, 0.0])  # a horizontal axis of every arm's base frame
     if plane == "vertical":
-        towards = np.array([position[0], position[1], 0.0])
+        towards = position - (position @ up) * up
         length = np.linalg.norm(towards)
-        u = towards / length if length > 1e-9 else np.array([1.0, 0.0, 0.0])  # on the axis: any vertical plane holds it
-        v = np.array([0.0, 0.0, 1.0])
-        centre = np.array([0.0, 0.0, height])
+        u = towards / length if length > 1e-9 else across  # on the axis: any vertical plane holds it
+        v = up
+        centre = height * up
     else:
-        u, v = np.array([1.0, 0.0, 0.0]), np.array([0.0, 1.0, 0.0])
-        centre = np.array([0.0, 0.0, position[2]])
+        u, v = across, np.cross(up, across)  # so that u × v = up: the map is seen from above
+        centre = (position @ up) * up
     grid = BranchCountMap(centre, u, v, size, np.zeros((resolution, resolution), np.int8))
     poses = np.broadcast_to(target, (resolution * resolution, 4, 4)).copy()
     poses[:, :3, 3] = grid.points().reshape(-1, 3)

@@ -19,13 +19,14 @@ from ur10core.three_dof import ThreeDofArm
 from ..camera import CameraControls
 from ..session_basics import SessionBasics
 from ..motion_lessons import MotionLessons
+from ..reach_map import ReachMapView
 from ..style import JOINT_CAP_GREY, SHOULDER_COLOR
 from ..velocity import ANGULAR_COLOR, LINEAR_COLOR
 from ..view import View
 from ..workers import PanelRefresher
 from .desktop_lessons import CoursePathLesson, DesktopAbout, DesktopForces
 from .panel import CourseJointSliders
-from .desktop_state import COURSE_TO_WORLD, DesktopArmState, DesktopSnapshot
+from .desktop_state import COURSE_TO_WORLD, DesktopArmState, DesktopSnapshot, to_world
 
 ROOT = "/desktop_arm"
 #: A classroom explorer's own desktop arm, apart from the class's (which it hides in that one browser).
@@ -125,11 +126,16 @@ class DesktopArmSession(SessionBasics):
         self.joints = CourseJointSliders(gui, self, before=lambda: self.path.player.stop(), order=1.0)
         self.path = CoursePathLesson(gui, self)
         self.motion = MotionLessons(gui, self, labels=arm.joint_names, before=lambda: self.path.player.stop())
+        world = np.eye(4)  # the course's base frame (y up) in the scene, the shoulder raised off the floor
+        world[:3, :3], world[:3, 3] = COURSE_TO_WORLD, to_world(np.zeros(3))
+        self.reach_map = ReachMapView(client.scene if server is None else server.scene, gui, self,
+                                      root=f"{self.scene.root}/reach_map", target_of=lambda snapshot: snapshot.tool,
+                                      world=world)
         self.forces = DesktopForces(client.scene if server is None else server.scene, gui, self, self.scene.root)
         self.camera = (CameraControls(client, self._framed, self.guard, lecture, body_radius=0.15 * self.scene.size)
                        if own_camera else None)
         self.panel_views = (*((self.camera,) if self.camera is not None else ()), self.about, self.joints, self.path,
-                            self.forces, self.motion)
+                            self.forces, self.reach_map, self.motion)
         self.built = True
         self.render(self.state.last)
         self.render_panel()
