@@ -8,6 +8,7 @@ a Python loop) and then played on the arm in real time (``ur10teach.animation``)
 
 from __future__ import annotations
 
+import itertools
 from typing import TYPE_CHECKING, Callable
 
 import numpy as np
@@ -48,6 +49,11 @@ def limit_groups(limits: np.ndarray | None, labels: tuple[str, ...]) -> list[tup
     return [(limit, tuple(names)) for limit, names in groups.items()]
 
 
+def spoken_list(names: tuple[str, ...]) -> str:
+    """("elbow", "wrist 1", "wrist 2") → "elbow, wrist 1 and wrist 2"."""
+    return names[0] if len(names) == 1 else f"{', '.join(names[:-1])} and {names[-1]}"
+
+
 def rate_chart_data(path: paths.Path, limits: np.ndarray | None, kinds: str = "RRRRRR") -> tuple[np.ndarray, ...]:
     """The columns of a path's chart: t, each joint's speed |q̇| (°/s, or mm/s for a sliding joint),
     a line at each distinct speed limit of ``limits`` (n,) (none for an arm without published
@@ -69,8 +75,8 @@ def rate_chart(gui: viser.GuiApi, kind: str, labels: tuple[str, ...], kinds: str
     series = (viser.uplot.Series(label="time (s)"),
               *(viser.uplot.Series(label=label, stroke=hex_color(colour), width=2)
                 for label, colour in zip(labels, SLOT_COLORS)),
-              *(viser.uplot.Series(label=f"limit, {' and '.join(names)}", stroke="#333333", width=1.5, dash=dash)
-                for (_, names), dash in zip(groups, LIMIT_DASHES)),
+              *(viser.uplot.Series(label=f"limit, {spoken_list(names)}", stroke="#333333", width=1.5, dash=dash)
+                for (_, names), dash in zip(groups, itertools.cycle(LIMIT_DASHES))),
               viser.uplot.Series(label="near a singularity", stroke="rgba(0, 0, 0, 0)", width=0.0, fill=SINGULAR_FILL),
               viser.uplot.Series(label="over a speed limit", stroke="rgba(0, 0, 0, 0)", width=0.0, fill=OVER_FILL))
     units = "°/s" if set(kinds) == {"R"} else "°/s, mm/s"

@@ -20,11 +20,14 @@ pytestmark = pytest.mark.browser
 def drag_the_gizmo(page, session, gate) -> None:
     """Grab one of the gizmo's arrows with the mouse and pull, until a drag reaches the server.
 
-    Each try ends in one of two ways the server sees: the gizmo's drag ended (the arrow was
-    under the mouse), or the camera moved (the mouse orbited the view instead).
+    Each try ends in one of three ways the server sees: the gizmo's drag ended with the target
+    moved (an arrow was under the mouse), with the target turned (a rotation ring was: the
+    joints are put back as they were and the next point is tried), or the camera moved (the
+    mouse orbited the view instead).
     """
     box = page.locator("canvas").first.bounding_box()
-    flange = session.state.last.flange
+    start = session.state.last
+    flange = start.flange
     size = session.ik_target.gizmo.scale  # the arrows' length, sized to the arm
 
     for axis, share in [(0, 0.75), (0, 0.6), (1, 0.75), (2, 0.75), (0, 0.9)]:
@@ -43,7 +46,12 @@ def drag_the_gizmo(page, session, gate) -> None:
                  or gate.passed["ViewerCameraMessage"] > cameras, what="the server to hear the drag or the orbit")
         if gate.passed["TransformControlsDragEndMessage"] > drags:
             wait_for(lambda: session.state.last.cause == "target", what="the drag applied")
-            return
+            if np.allclose(session.state.last.target[:3, :3], start.target[:3, :3], atol=1e-6):
+                return
+            session.apply(lambda state: state.set_joints(start.q))  # a ring, not an arrow: back to the start
+            wait_for(lambda: np.allclose(session.ik_target.gizmo.position, flange[:3, 3], atol=1e-6),
+                     what="the gizmo back on the flange")
+            settled_canvas(page)
     raise AssertionError("no arrow of the gizmo was under the mouse")
 
 

@@ -307,3 +307,18 @@ def test_presses_fold_into_one_run_on_one_thread_and_none_for_a_browser_that_lef
         assert HEAVY.started == started  # nothing computed for a browser that has gone
 
     asyncio.run(scenario())
+
+
+def test_the_rate_charts_name_each_distinct_limit_once_with_its_joints():
+    from ur10teach.motion_lessons import limit_groups, rate_chart_data, spoken_list
+    from ur10teach.style import JOINT_LABELS
+    from ur10core.paths import joint_interpolation
+
+    arm = Arm.preset("course")
+    limits = np.degrees(arm.specs.speed_limits)
+    groups = limit_groups(limits, JOINT_LABELS)
+    assert [(round(limit, 9), spoken_list(names)) for limit, names in groups] == [
+        (120.0, "base and shoulder"), (180.0, "elbow, wrist 1, wrist 2 and wrist 3")]
+    path = joint_interpolation(arm, np.zeros(6), np.ones(6), 4.0, 50)
+    odd = np.array([100.0, 110.0, 120.0, 130.0, 140.0, 150.0])  # six distinct limits: six lines, as the chart's series
+    assert len(rate_chart_data(path, odd)) == 1 + 6 + len(limit_groups(odd, JOINT_LABELS)) + 2 == 15
