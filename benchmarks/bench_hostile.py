@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import asyncio
 import multiprocessing
+import re
 import socket
 import sys
 import time
@@ -38,6 +39,7 @@ DRAG_HZ = 10
 ATTACKER = "127.0.0.2"
 CONNECTIONS = 8  #: what one address may hold
 BIG_FRAME = b"\xdd" + (64995).to_bytes(4, "big") + b"\x90" * 64995  # review 2's 65 000 bytes of empty arrays
+JOIN_CODE = re.compile(r"Join code for the presenter: (\S+)")
 BOMB = b"\xdd" + (10_000_000).to_bytes(4, "big") + b"\x90" * 10_000_000  # review 1's 10 MB message
 
 
@@ -171,7 +173,10 @@ ATTACKS = {
     f"*Release the arm* 30 times a second, {CONNECTIONS} connections tried": (gui_frames("Release the arm", lambda k: True), 1 / 30),
     f"branch map on, gizmo turned at 30 Hz, {CONNECTIONS} connections tried": "map",
     "1 100 half-sent HTTP requests": "slowloris",
+    "wrong join codes five times a second (`--shared`; the student explores on their own)": "lockout",
 }
+#: The teacher's new tab asks for the presenter's role this long after the attack began (s).
+TEACHER_AFTER = 10.0
 
 
 #: Rows that measure an attack again with one of the app's defences off (its environment variable).
@@ -207,7 +212,7 @@ async def map_turner(url: str, stop: asyncio.Event, counts: dict) -> None:
     await client.close()
 
 
-def attack_process(url: str, kind: str, start_at: float, stop_at: float, results) -> None:
+def attack_process(url: str, kind: str, start_at: float, stop_at: float, results, code: str = "") -> None:
     """The attack, in a process of its own, from ``start_at`` to ``stop_at`` (``time.time()``)."""
 
     async def timed() -> dict:
@@ -215,12 +220,40 @@ def attack_process(url: str, kind: str, start_at: float, stop_at: float, results
         loop = asyncio.get_running_loop()
         loop.call_later(max(0.0, start_at - time.time()), start.set)
         loop.call_later(max(0.0, stop_at - time.time()), stop.set)
-        return await run_attack(url, kind, start, stop)
+        return await run_attack(url, kind, start, stop, code)
 
     results.put(asyncio.run(timed()))
 
 
-async def run_attack(url: str, kind, start: asyncio.Event, stop: asyncio.Event) -> dict:
+async def wrong_codes(url: str, stop: asyncio.Event, counts: dict) -> None:
+    """Review 2, finding 4: a viewer on another laptop types wrong join codes whenever it may."""
+    client = await attacker(url)
+    while "Join code" not in client.gui:
+        await asyncio.sleep(0.05)
+    k = 0
+    while not stop.is_set():
+        await client.set_gui("Join code", f"ZZ{k % 10}-Q{k % 7}Q")
+        await client.set_gui("Become presenter", True)
+        counts["sent"] += 1
+        k += 1
+        await asyncio.sleep(0.2)
+    await client.close()
+
+
+async def teacher_tab(url: str, code: str, counts: dict) -> None:
+    """The teacher opens a new tab on the server's own machine and enters the code, mid-attack."""
+    await asyncio.sleep(TEACHER_AFTER)
+    client = await ViserClient(url).connect()
+    started = time.perf_counter()
+    await client.set_gui("Join code", code)
+    await client.set_gui("Become presenter", True)
+    while client.gizmo_owner is None and time.perf_counter() - started < 30.0:
+        await asyncio.sleep(0.05)
+    counts["teacher_s"] = time.perf_counter() - started if client.gizmo_owner is not None else None
+    await client.close()
+
+
+async def run_attack(url: str, kind, start: asyncio.Event, stop: asyncio.Event, code: str = "") -> dict:
     spec = ATTACKS[kind]
     counts = {"opened": 0, "refused": 0, "closed": 0, "sent": 0}
     if spec is None:
@@ -235,6 +268,9 @@ async def run_attack(url: str, kind, start: asyncio.Event, stop: asyncio.Event) 
             pass
         await stop.wait()
         counts["close_code"] = client._websocket.close_code
+        return counts
+    if spec == "lockout":
+        await asyncio.gather(wrong_codes(url, stop, counts), teacher_tab(url, code, counts))
         return counts
     if spec == "slowloris":
         task = asyncio.create_task(half_sent_requests(port, stop, counts))
@@ -253,9 +289,17 @@ async def run_attack(url: str, kind, start: asyncio.Event, stop: asyncio.Event) 
     return counts
 
 
-async def student(url: str, began: float, memory: list, pid: int) -> dict:
-    """Drags from ``began`` (``time.time()``): WARM_UP, QUIET, ATTACK, QUIET seconds; the phases of its events."""
+async def student(url: str, began: float, memory: list, pid: int, shared: bool = False) -> dict:
+    """Drags from ``began`` (``time.time()``): WARM_UP, QUIET, ATTACK, QUIET seconds; the phases of its events.
+
+    ``shared``: the class's mode, where the student first chooses to explore an arm of their own.
+    """
     client = await ViserClient(url).connect()
+    if shared:
+        shown = len(client.received.flange_updates)
+        await client.set_gui("Explore on my own", True)
+        while client.gizmo_owner is None or len(client.received.flange_updates) <= shown:
+            await asyncio.sleep(0.05)
     T0 = np.eye(4)
     T0[:3, :3] = HOME_ROTATION
     T0[:3, 3] = client.received.flange_updates[-1][1]
@@ -298,10 +342,11 @@ def scenario(app, kind: str) -> dict:
     began = time.time() + 1.0
     results = multiprocessing.get_context("spawn").Queue()
     attack_at = began + WARM_UP + QUIET
+    code = next((match.group(1) for line in app.output if (match := JOIN_CODE.search(line))), "")
     process = multiprocessing.get_context("spawn").Process(
-        target=attack_process, args=(app.url, kind, attack_at, attack_at + ATTACK, results))
+        target=attack_process, args=(app.url, kind, attack_at, attack_at + ATTACK, results, code))
     process.start()
-    phases = asyncio.run(student(app.url, began, memory, app.process.pid))
+    phases = asyncio.run(student(app.url, began, memory, app.process.pid, shared=bool(code)))
     counts = results.get(timeout=120)
     process.join(timeout=60)
     return {"phases": phases, "counts": counts, "memory": memory}
@@ -312,6 +357,10 @@ def outcome(kind: str, counts: dict) -> str:
         return "—"
     if "close_code" in counts:
         return f"closed (code {counts['close_code']})"
+    if "teacher_s" in counts:
+        became = (f"the teacher's new tab, {TEACHER_AFTER:.0f} s into it, became presenter in {counts['teacher_s']:.1f} s"
+                  if counts["teacher_s"] is not None else "the teacher's new tab did not become presenter within 30 s")
+        return f"{counts['sent']} wrong codes sent; {became}"
     if "newcomer_s" in counts:
         return (f"{counts['opened']} opened; a newcomer from another address had its scene "
                 f"in {counts['newcomer_s']:.1f} s")
@@ -327,7 +376,8 @@ def main(kinds: list[str]) -> None:
     for label in kinds or order:
         kind, env = WITHOUT.get(label, (label, {}))
         quiet_machine(max_wait=120.0)
-        with running_app(env={"UR10_TEACH_LOOPBACK_IS_LAN": "1", **env}) as app:
+        extra = ("--shared",) if ATTACKS[kind] == "lockout" else ()
+        with running_app(*extra, env={"UR10_TEACH_LOOPBACK_IS_LAN": "1", **env}) as app:
             result = scenario(app, kind)
         phases, memory = result["phases"], result["memory"]
         before = min(m for phase, m in memory if phase == "before")
@@ -353,7 +403,8 @@ def main(kinds: list[str]) -> None:
         "connection, p50 2 → 267 ms, on eight 4–5 s with 25–40 % of drags unanswered and about 12 s with none "
         "answered after the attack; valid messages at full speed on eight, p50 429 ms; eight never-reading "
         "connections asking for clouds, 0.3 → 2.2 GB, held; *Release* at 30/s, 543 threads for 45 minutes; "
-        "branch maps on eight, p99 5 → 41 ms and +270–400 MiB; 1 100 half-sent requests, newcomers waiting 8–9 s.",
+        "branch maps on eight, p99 5 → 41 ms and +270–400 MiB; 1 100 half-sent requests, newcomers waiting 8–9 s; "
+        "wrong join codes from one viewer, the teacher's new tab presenter in 0 of 42 tries over 150 s.",
         "",
         table(["attack", "what became of it", "student p50 / p99 before", "during", "after", "longest wait after it stopped",
                "server RSS (and its worker process): before → peak → end"], rows),

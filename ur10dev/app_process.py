@@ -68,7 +68,9 @@ def running_app(*args: str, timeout: float = 60.0, env: dict[str, str] | None = 
     with tempfile.TemporaryDirectory() as folder:
         metrics = Path(folder) / "metrics.json"
         environment = dict(os.environ, **(env or {}), UR10_TEACH_METRICS=str(metrics))
-        command = [sys.executable, "-m", "ur10teach", "--port", "0", *args]
+        # a checkout from before the app was installed as ur10teach runs as ``-m app`` (bench_page --against)
+        module = "ur10teach" if "ur10teach" in (root / "pyproject.toml").read_text() else "app"
+        command = [sys.executable, "-m", module, "--port", "0", *args]
         with serving(command, root, environment, timeout) as (process, output):
             url = next(URL.search(line).group(1) for line in output if line.startswith("    ") and URL.search(line))
             yield AppProcess(process, url, metrics, output)
