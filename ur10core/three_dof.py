@@ -20,7 +20,7 @@ import numpy as np
 from ._validate import as_float_array, check_finite, homogeneous_transform
 from .branches import TOO_CLOSE, TOO_FAR, BranchSet, empty_branches, wrap
 from .differential import JacobianUses
-from .solvers.planar import _two_link
+from .solvers.planar import _reach_words, _two_link
 from .tolerances import LENGTH_TOLERANCE
 from .specs import HasSpecs
 
@@ -186,13 +186,8 @@ class ThreeDofArm(JacobianUses, HasSpecs):
                          method="analytic", task=self.task, explain=self._explain)
 
     def _explain(self, failure: int, detail: float) -> str:
-        if failure == TOO_FAR:
-            return (f"the tool is {1000 * detail:.1f} mm from the shoulder; the two links reach at most "
-                    f"{1000 * (self.upper_arm + self.forearm):.1f} mm")
-        if failure == TOO_CLOSE:
-            return (f"the tool is {1000 * detail:.1f} mm from the shoulder; folded, the two links come no closer than "
-                    f"{1000 * abs(self.upper_arm - self.forearm):.1f} mm")
-        return "no branch reaches this position"
+        return (_reach_words(failure, detail, self.upper_arm, self.forearm, "the tool", "the shoulder")
+                or "no branch reaches this position")
 
     def singularity_factors(self, q) -> np.ndarray:
         """(..., 2) the factors of det J_v = −l1 l5 · (l1 c3 − l5 c2) · sin(θ2 − θ3) (docs/kinematics.md §8.6).

@@ -31,12 +31,14 @@ def _two_link(x: np.ndarray, y: np.ndarray, a1: float, a2: float, down: bool):
     return wrap(theta1), theta2, too_far, too_close, r
 
 
-def _reach_words(failure: int, detail: float, a1: float, a2: float, what: str) -> str:
+def _reach_words(failure: int, detail: float, a1: float, a2: float, what: str,
+                 origin: str = "the first joint's axis") -> str:
+    """Why a two-link arm of ``a1`` then ``a2`` does not reach ``what``, ``detail`` m from ``origin`` ("" if it does)."""
     if failure == TOO_FAR:
-        return (f"{what} is {1000 * detail:.1f} mm from the first joint's axis; the two links reach at most "
+        return (f"{what} is {1000 * detail:.1f} mm from {origin}; the two links reach at most "
                 f"{1000 * (a1 + a2):.1f} mm")
     if failure == TOO_CLOSE:
-        return (f"{what} is {1000 * detail:.1f} mm from the first joint's axis; folded, the two links "
+        return (f"{what} is {1000 * detail:.1f} mm from {origin}; folded, the two links "
                 f"come no closer than {1000 * abs(a1 - a2):.1f} mm")
     return ""
 
