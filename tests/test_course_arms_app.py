@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 import viser
 
-from ur10teach.arm_picker import ARM_CHOICES, CUSTOM, UR10
+from ur10teach.arm_picker import ARM_CHOICES, CUSTOM, DESKTOP, UR10
 from ur10teach.course_arms.panel import branches_markdown, dh_table_markdown
 from ur10teach.course_arms.session import CourseArmSession
 from ur10teach.session import ClientSession
@@ -41,6 +41,22 @@ async def pick(app, client: ViserClient, label: str, kind: type):
     session = session_for(app, client_id)
     await arrived(client, session)
     return session
+
+
+async def build_table(app, client: ViserClient, rows: str, joint_types: str, replacing) -> CourseArmSession:
+    """Type ``rows`` into the DH editor and build them, as a student does, once the arm may change;
+    returns the new arm's session (of ``joint_types``, in ``replacing``'s place) once its panel is in."""
+    client_id = int(client.gizmo_owner)
+    await until(lambda: "Rows" in client.gui, what="the editor")
+    await client.set_gui("Rows", rows)
+    await until(lambda: app.can_switch(client_id), what="the arm to be ready for a change")
+    await client.set_gui("Build this arm", True)
+    await until(lambda: session_for(app, client_id) is not replacing
+                and getattr(session_for(app, client_id), "arm", None) is not None
+                and session_for(app, client_id).arm.joint_types == joint_types, what="the typed arm")
+    typed = session_for(app, client_id)
+    await arrived(client, typed)
+    return typed
 
 
 async def arrived(client: ViserClient, session) -> None:
@@ -147,15 +163,8 @@ def test_a_typed_dh_table_becomes_an_arm_with_numerical_ik(app):
         await until(lambda: any("line 2: a row is five entries" in body.lower() for _, body in client.received.notifications),
                     what="the refusal")
         assert session_for(app, client_id) is session
-        # a planar 2R arm
-        await client.set_gui("Rows", "500 0 0 0 R\n400 0 0 0 R")
-        await until(lambda: app.can_switch(client_id), what="the arm to be ready for a change")
-        await client.set_gui("Build this arm", True)
-        await until(lambda: session_for(app, client_id) is not session
-                    and getattr(session_for(app, client_id), "arm", None) is not None
-                    and session_for(app, client_id).arm.joint_types == "RR", what="the typed arm")
-        typed = session_for(app, client_id)
-        await arrived(client, typed)  # "Find every branch" was the last arm's too
+        # a planar 2R arm ("Find every branch" was the last arm's too: its panel is waited for)
+        typed = await build_table(app, client, "500 0 0 0 R\n400 0 0 0 R", "RR", session)
         assert typed.editor.rows.value.startswith("500 0 0 0 R")
         # dragging follows the target from the arm's joints
         goal = typed.arm.fk(np.radians([40.0, 50.0]))
@@ -472,7 +481,6 @@ def test_going_back_to_an_arm_finds_its_pose_target_and_typed_table_as_left(app)
     table went back to the starting one."""
     async def scenario():
         client = await ViserClient(url(app)).connect()
-        client_id = int(client.gizmo_owner)
         ur10 = session_of(app, client)
         ur10.apply(lambda state: state.set_joints(np.radians([10.0, -70.0, 80.0, -20.0, 50.0, 30.0])))
         ur10_left = ur10.state.last
@@ -483,14 +491,7 @@ def test_going_back_to_an_arm_finds_its_pose_target_and_typed_table_as_left(app)
         await until(lambda: np.allclose(stanford.state.last.target[:3, 3], goal[:3, 3], atol=1e-6), what="the Stanford arm moved")
         stanford_left = stanford.state.last
         typed = await pick(app, client, CUSTOM, CourseArmSession)
-        await until(lambda: "Rows" in client.gui, what="the editor")
-        await client.set_gui("Rows", "500 0 0 0 R\n400 0 0 0 R")
-        await until(lambda: app.can_switch(client_id), what="the arm to be ready for a change")
-        await client.set_gui("Build this arm", True)
-        await until(lambda: session_for(app, client_id) is not typed
-                    and getattr(session_for(app, client_id), "arm", None) is not None
-                    and session_for(app, client_id).arm.joint_types == "RR", what="the typed arm")
-        await arrived(client, session_for(app, client_id))
+        await build_table(app, client, "500 0 0 0 R\n400 0 0 0 R", "RR", typed)
 
         await until(lambda: client.received.panel_label == f"{CUSTOM}: kinematics", what="the title naming the arm")
         back = await pick(app, client, UR10, ClientSession)
@@ -506,13 +507,16 @@ def test_going_back_to_an_arm_finds_its_pose_target_and_typed_table_as_left(app)
     asyncio.run(scenario())
 
 
-@pytest.mark.parametrize("label", ["Stanford arm (RRP + wrist)", "SCARA (RRP + roll)"])
+@pytest.mark.parametrize("label", ["Stanford arm (RRP + wrist)", "SCARA (RRP + roll)", DESKTOP])
 def test_a_course_arm_moves_from_a_remembered_pose_along_both_paths(app, label):
-    """Issue 29: the Motion folder was the UR10's alone. On a course arm: both paths, the rates of a
-    sliding joint in mm/s, no speed limits it does not have, and no gravity drop without link masses."""
+    """Issue 29: the Motion folder was the UR10's alone. On the course's arms and its desktop arm: a
+    straight tool line, the rates of a sliding joint in mm/s, no speed limits an arm does not have,
+    and no gravity drop without link masses."""
+    from ur10teach.course_arms.desktop_arm import DesktopArmSession
+
     async def scenario():
         client = await ViserClient(url(app)).connect()
-        session = await pick(app, client, label, CourseArmSession)
+        session = await pick(app, client, label, DesktopArmSession if label == DESKTOP else CourseArmSession)
         motion = session.motion
         assert motion.release.disabled and "no link masses" in motion.gravity_text.content.lower()
         start = session.state.last.q.copy()
@@ -521,15 +525,16 @@ def test_a_course_arm_moves_from_a_remembered_pose_along_both_paths(app, label):
         goal_q = start.copy()
         goal_q[0] += np.radians(20.0)
         session.apply(lambda state: state.set_joints(goal_q))
-        goal = session.state.last.frames[-1].copy()
+        goal = session.arm.fk(goal_q)
         await client.set_gui("Go from the start to here along", "straight tool line")
         await until(lambda: motion.player.playing, what="the path to start")
         await until(lambda: not motion.player.playing, what="the path to end")
-        np.testing.assert_allclose(session.state.last.frames[-1][:3, 3], goal[:3, 3], atol=1e-4)
+        np.testing.assert_allclose(session.arm.fk(session.state.last.q)[:3, 3], goal[:3, 3], atol=1e-4)
         data = motion.charts["straight tool line"].data
         n = session.arm.n_joints
         assert len(data) == 1 + n + 2  # time, each joint, the two marks: no limit lines for an arm without limits
-        assert "mm/s" in motion.summary.content and "publishes no speed limits" in motion.summary.content
+        assert ("mm/s" in motion.summary.content) == ("P" in session.arm.joint_types)
+        assert "publishes no speed limits" in motion.summary.content
         await client.close()
 
     asyncio.run(scenario())

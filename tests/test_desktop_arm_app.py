@@ -92,29 +92,6 @@ def test_the_desktop_arm_is_picked_driven_played_and_searched(app):
     asyncio.run(scenario())
 
 
-def test_the_desktop_arm_moves_from_a_remembered_pose_along_a_straight_line(app):
-    """Issue 29: the Motion folder on the course's desktop arm too (no link masses: no gravity drop)."""
-    async def scenario():
-        client = await ViserClient(url(app)).connect()
-        session = await pick(app, client, DESKTOP, DesktopArmSession)
-        motion = session.motion
-        assert motion.release.disabled
-        start = session.state.last.q.copy()
-        await client.set_gui("Remember this pose as the start", True)
-        await until(lambda: motion.start is not None, what="the start remembered")
-        goal_q = start + np.radians([20.0, 10.0, -15.0])
-        session.apply(lambda state: state.set_joints(goal_q))
-        goal = session.arm.fk(goal_q)
-        await client.set_gui("Go from the start to here along", "straight tool line")
-        await until(lambda: motion.player.playing, what="the path to start")
-        await until(lambda: not motion.player.playing, what="the path to end")
-        np.testing.assert_allclose(session.arm.fk(session.state.last.q)[:3, 3], goal[:3, 3], atol=1e-4)
-        assert len(motion.charts["straight tool line"].data) == 1 + 3 + 2  # no limit lines: none published
-        await client.close()
-
-    asyncio.run(scenario())
-
-
 def test_the_desktop_arm_has_its_branch_count_map_standing_the_right_way_up(app):
     """Issue 29: the desktop arm's map, in its own frame (y up) and drawn in the scene's (z up)."""
     from ur10core.workspace import branch_count_map
