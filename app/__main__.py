@@ -42,7 +42,7 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
     parser.add_argument("--host", default="127.0.0.1",
                         help="interface to listen on (default 127.0.0.1; 0.0.0.0 lets students on the network join)")
     parser.add_argument("--port", type=int, default=8080, help="port (default 8080; the next free one if busy)")
-    parser.add_argument("--preset", choices=Arm.PRESETS, default="course",
+    parser.add_argument("--preset", choices=Arm.UR_PRESETS, default="course",
                         help="link lengths: the course's table, UR's CB3 UR10 or the UR10e (default course)")
     parser.add_argument("--shared", action="store_true",
                         help="shared demo mode: everyone watches the presenter's arm; the browser that enters "

@@ -31,8 +31,6 @@ from typing import TYPE_CHECKING
 import viser
 
 from ur10core import Arm
-from ur10core.serial import SerialArm
-from ur10core.three_dof import ThreeDofArm
 
 from .arm_picker import ARM_CHOICES, CLASS_CHOICES, SWITCH_INTERVAL, UR10, ArmPicker, panel_title
 from .camera import BODY_RADIUS, CameraControls
@@ -194,7 +192,7 @@ class DesktopLivePanel(LivePanel):
 class ClassCourseArm:
     """One of the course's other arms, shown to the class in the server's shared scene."""
 
-    arm: SerialArm | ThreeDofArm
+    arm: Arm
     state: CourseArmState | DesktopArmState
     scene: CourseArmScene | DesktopArmScene
 
@@ -387,7 +385,7 @@ class Classroom:
                 self.course = ClassCourseArm(arm, state, DesktopArmScene(app.server.scene, arm, state.last))
                 self.live = DesktopLivePanel(app.server.gui, state, label, True)
             else:
-                arm = SerialArm.preset(name)
+                arm = Arm.preset(name)
                 state = CourseArmState(arm)
                 self.course = ClassCourseArm(arm, state, CourseArmScene(app.server.scene, arm, state.last, reach(arm)))
                 self.live = CourseLivePanel(app.server.gui, state, label, True)

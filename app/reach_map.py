@@ -18,9 +18,8 @@ from typing import TYPE_CHECKING, Any, Callable
 import numpy as np
 import viser
 
-from ur10core import Arm
+from ur10core.solvers.ur import URFamily
 from ur10core.orientation import quaternion
-from ur10core.solvers.numerical import NumericalIK
 from ur10core.workspace import BranchCountMap, branch_count_map
 
 from .feedback import chosen
@@ -98,9 +97,8 @@ class ReachMapView(View):
         self._root = root
         self._target_of, self._world = target_of, world
         arm = session.arm
-        self.resolution = RESOLUTION if isinstance(arm, Arm) else COURSE_RESOLUTION
-        numerical = isinstance(getattr(arm, "solver", None), NumericalIK)
-        self.slots = 0 if numerical else int(arm.ik(arm.fk(arm.specs.home)).q.shape[-2])
+        self.resolution = RESOLUTION if isinstance(arm.solver, URFamily) else COURSE_RESOLUTION  # the kernels' speed
+        self.slots = 0 if arm.numerical else int(arm.ik(arm.fk(arm.specs.home)).q.shape[-2])
         self.image: viser.ImageHandle | None = None
         self.shown_key: tuple | None = None  #: (target bytes, plane) of the map on screen
         self.computed = 0  #: maps computed so far (tests and benchmarks read it)
@@ -111,14 +109,14 @@ class ReachMapView(View):
         folder = gui.add_folder("Reachable with this orientation", expand_by_default=False)
         self.folders = (folder,)
         with folder:
-            if numerical:
+            if arm.numerical:
                 gui.add_markdown("A typed table's IK is numerical, from one start at a time: a map of thousands of "
                                  "poses would take minutes, so this arm has none. The course's arms all have one.")
             else:
                 gui.add_markdown("Keep the tool turned as the gizmo has it and move it anywhere in a plane: "
                                  f"how many of the {self.slots} branches get there? Turn the gizmo and watch the "
                                  "rings change.")
-            self.enabled = gui.add_checkbox("Show branch-count map", False, disabled=numerical)
+            self.enabled = gui.add_checkbox("Show branch-count map", False, disabled=arm.numerical)
             self.plane = gui.add_dropdown("Plane", tuple(PLANES), initial_value=tuple(PLANES)[0])
             self.legend = gui.add_html(legend_html(max(self.slots, 1)), visible=False)
         self.enabled.on_update(session.guard(self._toggled))

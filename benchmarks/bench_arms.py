@@ -25,7 +25,8 @@ sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
 from _report import machine, steady_cpu, table, write_section  # noqa: E402
 
-from ur10core.serial import PRESETS, SerialArm  # noqa: E402
+from ur10core import Arm
+from ur10core.serial import PRESETS  # noqa: E402
 
 BATCH = 100_000
 NUMERICAL_POSES = 200
@@ -34,11 +35,11 @@ DRAG_STEPS = 2000
 DRAG_TARGET_MS = 5.0
 
 
-def joints(arm: SerialArm, n: int, seed: int) -> np.ndarray:
+def joints(arm: Arm, n: int, seed: int) -> np.ndarray:
     return np.random.default_rng(seed).uniform(arm.limits[:, 0], arm.limits[:, 1], (n, arm.n_joints))
 
 
-def one_pose_us(arm: SerialArm, poses: np.ndarray, repeats: int = 5) -> float:
+def one_pose_us(arm: Arm, poses: np.ndarray, repeats: int = 5) -> float:
     times = []
     for _ in range(repeats):
         start = time.perf_counter()
@@ -48,7 +49,7 @@ def one_pose_us(arm: SerialArm, poses: np.ndarray, repeats: int = 5) -> float:
     return statistics.median(times)
 
 
-def batch_us(arm: SerialArm, poses: np.ndarray, repeats: int = 3) -> float:
+def batch_us(arm: Arm, poses: np.ndarray, repeats: int = 3) -> float:
     times = []
     for _ in range(repeats):
         start = time.perf_counter()
@@ -57,7 +58,7 @@ def batch_us(arm: SerialArm, poses: np.ndarray, repeats: int = 3) -> float:
     return statistics.median(times)
 
 
-def drag_ms(arm: SerialArm, server) -> tuple[float, float, float]:
+def drag_ms(arm: Arm, server) -> tuple[float, float, float]:
     """One drag event's work in the app, before viser sends it: IK of the new target with the
     current joints as hint, the nearest valid branch, its frames, and drawing the arm, its
     ghosts and DH frames, on viser's event loop and batched as the app does. p50 and p99 (ms)
@@ -92,10 +93,10 @@ def drag_ms(arm: SerialArm, server) -> tuple[float, float, float]:
     return float(np.percentile(results[0], 50)), float(np.percentile(results[0], 99)), float(np.percentile(results[1], 99))
 
 
-def numerical_rate(arm: SerialArm) -> tuple[float, float, float, float]:
+def numerical_rate(arm: Arm) -> tuple[float, float, float, float]:
     """Per pose: ms of the numerical IK (one call each), share of poses with every branch found,
     share of branches found, and how many reported solutions the closed form does not list."""
-    numerical = SerialArm(arm.dh, arm.limits, None, "kr210 (numerical)")
+    numerical = Arm(arm.dh, arm.limits, None, "kr210 (numerical)")
     q = joints(arm, NUMERICAL_POSES, 9)
     T = arm.fk(q)
     analytic = arm.ik(T)
@@ -123,7 +124,7 @@ def main() -> None:
     gc.freeze()  # as app.server does once it has loaded
     rows = []
     for name in PRESETS:
-        arm = SerialArm.preset(name)
+        arm = Arm.preset(name)
         poses = arm.fk(joints(arm, BATCH, 1))
         one = one_pose_us(arm, poses[:2000])
         batch = batch_us(arm, poses)
@@ -133,7 +134,7 @@ def main() -> None:
                      f"{p50:.2f} / {p99:.2f} ms; overlay on: p99 {p99_overlay:.2f} ms",
                      "{:.2f} / {:.2f} ms".format(*floor), "every branch, by construction"])
     server.stop()
-    kr210 = SerialArm.preset("kr210")
+    kr210 = Arm.preset("kr210")
     ms, complete, share, strays = numerical_rate(kr210)
     rows.append(["`kr210`, numerical IK (48 starts, damped least squares)", f"{ms * 1e3:.0f} µs", "—", "—", "—",
                  f"all of the closed form's branches on {100 * complete:.1f} % of {NUMERICAL_POSES} random poses; "

@@ -13,6 +13,13 @@ one, all in the same run:
 * ``sample_workspace(1_000_000)`` vs the 0.5 s target.
 
 Figures are medians over repeats.
+
+    python benchmarks/bench_core.py --against REF
+
+times the UR10's one-pose IK, batch IK, FK and the app's drag step (``ArmState.move_target``)
+on this checkout and on git revision ``REF`` (a worktree, the compiled kernel copied in),
+alternately in their own processes, and writes the section "before_after": what a
+refactoring of the core cost the UR10.
 """
 
 from __future__ import annotations
@@ -28,7 +35,8 @@ from pathlib import Path
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
+# the checkout measured (--against runs this script on an older one too)
+sys.path.insert(0, os.environ.get("UR10_BENCH_CHECKOUT", str(Path(__file__).resolve().parent.parent)))
 
 from _report import machine, table, write_section  # noqa: E402
 
@@ -115,6 +123,75 @@ def references() -> dict:
     }
 
 
+def measure_speed() -> dict:
+    """The UR10's hot paths on the compiled backend, for :func:`before_after` (this process's checkout)."""
+    import ur10core
+    from app.state import ArmState
+
+    arm, q, poses, T_batch = _workload()
+    state = ArmState(arm, q[0])
+    step = np.eye(4)
+    step[:3, 3] = (0.0005, 0.0, 0.0)
+    start = state.last.flange.copy()
+    drags = [start @ np.linalg.matrix_power(step, k % 200) for k in range(400)]  # there and back, half a mm a step
+    assert Path(ur10core.__file__).resolve().is_relative_to(Path(os.environ.get("UR10_BENCH_CHECKOUT", "/")).resolve())
+    return {
+        "backend": ur10core.BACKEND,
+        "ik_one_hint_us": per_call_us(lambda T, h: arm.ik(T, hint=h), list(zip(poses, q))),
+        "batch_per_s": BATCH / seconds(lambda: arm.ik(T_batch), repeats=3),
+        "fk_one_us": per_call_us(arm.fk, [(x,) for x in q]),
+        "drag_step_us": per_call_us(state.move_target, [(T,) for T in drags]),
+    }
+
+
+def before_after(ref: str, rounds: int = 3) -> None:
+    import shutil
+    import tempfile
+
+    root = Path(__file__).resolve().parent.parent
+    tree = Path(tempfile.mkdtemp()) / "before"
+    subprocess.run(["git", "-C", str(root), "worktree", "add", "--detach", str(tree), ref], check=True, capture_output=True)
+    try:
+        for built in (root / "ur10core").glob("_kernels*.so"):  # the C source is the same: the same kernel
+            shutil.copy(built, tree / "ur10core")
+
+        def run(checkout: Path) -> dict:
+            env = dict(os.environ, UR10CORE_BACKEND="compiled", UR10_BENCH_CHECKOUT=str(checkout))
+            done = subprocess.run([sys.executable, __file__, "--measure-speed"], env=env, cwd=checkout,
+                                  capture_output=True, text=True, check=True)
+            return json.loads(done.stdout.strip().splitlines()[-1])
+
+        runs = {"before": [], "after": []}
+        for _ in range(rounds):  # alternately, so that the machine's drift falls on both
+            runs["before"].append(run(tree))
+            runs["after"].append(run(root))
+    finally:
+        subprocess.run(["git", "-C", str(root), "worktree", "remove", "--force", str(tree)], check=False)
+    median = {side: {key: statistics.median(r[key] for r in rs) for key in rs[0] if key != "backend"} for side, rs in runs.items()}
+    b, a = median["before"], median["after"]
+    commit = subprocess.run(["git", "-C", str(root), "rev-parse", "--short", "HEAD"], capture_output=True, text=True).stdout.strip()
+    rows = [
+        ["`arm.ik(T, hint=q)`, one pose (the drag handler's call)", f"{b['ik_one_hint_us']:.2f} µs", f"{a['ik_one_hint_us']:.2f} µs",
+         f"{a['ik_one_hint_us'] / b['ik_one_hint_us']:.2f}"],
+        [f"`arm.ik(T)`, {BATCH // 1_000_000} M poses", f"{b['batch_per_s'] / 1e6:.2f} M poses/s", f"{a['batch_per_s'] / 1e6:.2f} M poses/s",
+         f"{b['batch_per_s'] / a['batch_per_s']:.2f}"],
+        ["`arm.fk(q)`, one pose", f"{b['fk_one_us']:.2f} µs", f"{a['fk_one_us']:.2f} µs", f"{a['fk_one_us'] / b['fk_one_us']:.2f}"],
+        ["drag step: `ArmState.move_target(T)` (IK with hint, nearest branch, frames, snapshot)", f"{b['drag_step_us']:.1f} µs",
+         f"{a['drag_step_us']:.1f} µs", f"{a['drag_step_us'] / b['drag_step_us']:.2f}"],
+    ]
+    body = "\n".join([
+        "## The UR10's speed before and after a change of the core (`benchmarks/bench_core.py --against REF`)",
+        "",
+        f"Run: {machine()}. Before: `{ref}`; after: `{commit}` (and the working tree). The compiled backend; each",
+        f"checkout in its own process, alternately, {rounds} rounds; medians of the rounds' medians. Time ratio",
+        "after/before (below 1: faster).",
+        "",
+        table(["what", "before", "after", "after / before (time)"], rows),
+    ])
+    write_section("before_after", body)
+    print(body)
+
+
 def on_backend(backend: str) -> dict:
     env = dict(os.environ, UR10CORE_BACKEND=backend)
     done = subprocess.run([sys.executable, __file__, "--measure"], env=env, capture_output=True, text=True, check=True)
@@ -175,5 +252,9 @@ def main() -> None:
 if __name__ == "__main__":
     if sys.argv[1:] == ["--measure"]:
         print(json.dumps(measure()))
+    elif sys.argv[1:] == ["--measure-speed"]:
+        print(json.dumps(measure_speed()))
+    elif sys.argv[1:2] == ["--against"] and len(sys.argv) == 3:
+        before_after(sys.argv[2])
     else:
         main()

@@ -152,7 +152,7 @@ def main(argv: list[str] | None = None) -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--output", type=Path, default=OUTPUT)
     args = parser.parse_args(argv)
-    for preset in Arm.PRESETS:
+    for preset in Arm.UR_PRESETS:
         paths = write(preset, args.output)
         size = sum(p.stat().st_size for p in paths)
         print(f"{preset}: {len(paths)} files, {size / 1024:.0f} KiB in {paths[0].parent}")

@@ -20,7 +20,7 @@ def course() -> Arm:
     return Arm.preset("course")
 
 
-@pytest.fixture(scope="session", params=Arm.PRESETS)
+@pytest.fixture(scope="session", params=Arm.UR_PRESETS)
 def any_arm(request) -> Arm:
     return Arm.preset(request.param)
 

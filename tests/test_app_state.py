@@ -246,7 +246,7 @@ def test_colormap_ends():
 def test_presets_load_their_meshes():
     from ur10teach.meshes import load_links
 
-    for preset in Arm.PRESETS:
+    for preset in Arm.UR_PRESETS:
         links = load_links(preset)
         assert len(links) == 7 and all(len(link.body_faces) for link in links)
 

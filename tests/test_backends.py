@@ -119,7 +119,7 @@ def _corner_poses(arm: Arm) -> tuple[np.ndarray, np.ndarray, list[str]]:
     return poses, hints, names
 
 
-@pytest.mark.parametrize("preset", Arm.PRESETS)
+@pytest.mark.parametrize("preset", Arm.UR_PRESETS)
 def test_backends_agree_at_the_corners(preset):
     arm = Arm.preset(preset)
     T, hints, names = _corner_poses(arm)

@@ -13,7 +13,7 @@ from ur10teach.arm_picker import ARM_CHOICES, CUSTOM, DESKTOP, UR10
 from ur10teach.course_arms.panel import branches_markdown, dh_table_markdown
 from ur10teach.course_arms.session import CourseArmSession
 from ur10teach.session import ClientSession
-from ur10core.serial import SerialArm
+from ur10core import Arm
 
 from .server_support import session_of, until, url
 from ur10dev.viser_client import ViserClient, wxyz_of
@@ -141,12 +141,12 @@ def test_every_arm_can_be_picked_and_an_unknown_one_is_refused(app):
 
 
 def test_dh_tables_show_both_conventions():
-    kr210 = SerialArm.preset("kr210")
+    kr210 = Arm.preset("kr210")
     modified = dh_table_markdown(kr210.dh)
     assert "α<sub>i−1</sub>" in modified and "q2 − 90°" in modified and "fixed" in modified and "303.0" in modified
     standard = dh_table_markdown(kr210.dh.converted("standard"))
     assert "θ<sub>i</sub> | d<sub>i</sub>" in standard
-    stanford = dh_table_markdown(SerialArm.preset("stanford").dh)
+    stanford = dh_table_markdown(Arm.preset("stanford").dh)
     assert "q3" in stanford and "161.9" in stanford
 
 
@@ -206,7 +206,7 @@ def test_the_skeleton_walks_each_row_along_d_then_a(name):
     along x_i; modified: a along x_{i−1}, then d along z_i), so the drawing shows the table's numbers."""
     from ur10teach.course_arms.scene import skeleton
 
-    arm = SerialArm.preset(name)
+    arm = Arm.preset(name)
     q = np.random.default_rng(1).uniform(arm.limits[:, 0], arm.limits[:, 1])
     frames = arm.frames(q)
     segments = skeleton(arm.dh, frames)
@@ -318,13 +318,13 @@ def test_changing_arms_too_fast_is_refused_and_the_picker_shows_the_arm_still_dr
 def test_singularity_gauges_empty_and_turn_red_at_each_factors_singularity():
     from ur10teach.course_arms.panel import factors_html
 
-    kr210 = SerialArm.preset("kr210")
+    kr210 = Arm.preset("kr210")
     regular = factors_html(kr210, np.radians([0, 15, -30, 20, 40, 10]))
     assert "width:0.0%" not in regular and "zero when the wrist centre on axis 1" in regular
     aligned = factors_html(kr210, np.radians([0, 15, -30, 20, 0, 10]))  # θ5 = 0
     wrist = aligned[aligned.index("gauge-wrist"):]
     assert wrist.split("width:")[1].startswith("0.0%") and "#dc2626" in wrist[:200]
-    typed = SerialArm.from_dh([(0.5, 0, 0, 0), (0.4, 0, 0, 0)], joint_types="RR")
+    typed = Arm.from_dh([(0.5, 0, 0, 0), (0.4, 0, 0, 0)], joint_types="RR")
     assert "smallest singular value" in factors_html(typed, np.array([0.2, 0.4]))
 
 

@@ -6,7 +6,8 @@ import numpy as np
 import pytest
 
 from ur10teach.course_arms.overlay import factor_geometry
-from ur10core.serial import PRESETS, SerialArm
+from ur10core import Arm
+from ur10core.serial import PRESETS
 
 
 def _unit(v: np.ndarray) -> np.ndarray:
@@ -27,7 +28,7 @@ def degeneracy(arm: str, factor: str, segments: np.ndarray) -> float:
     return float(np.linalg.norm(np.cross(first, second)))
 
 
-def singular_joints(arm: SerialArm, factor: int, q0: np.ndarray) -> np.ndarray:
+def singular_joints(arm: Arm, factor: int, q0: np.ndarray) -> np.ndarray:
     """``q0`` with one joint moved so that factor ``factor`` of det J is zero (bisection on a sign change).
 
     Limits aside: the geometry holds beyond them (the cylindrical arm's stroke stops short of its axis).
@@ -58,7 +59,7 @@ def singular_joints(arm: SerialArm, factor: int, q0: np.ndarray) -> np.ndarray:
 
 @pytest.mark.parametrize("name", sorted(PRESETS))
 def test_each_drawing_degenerates_where_its_factor_vanishes(name):
-    arm = SerialArm.preset(name)
+    arm = Arm.preset(name)
     home = arm.specs.home
     drawn = factor_geometry(arm, home, arm.frames(home), 1.0)
     assert len(drawn) == len(arm.singularity_factors(home))

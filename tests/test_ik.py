@@ -276,8 +276,9 @@ def test_too_close_reason_wording(course):
     from ur10core.ik import IKSolution
 
     sol = IKSolution(
-        np.full((8, 6), np.nan), np.zeros(8, bool), np.zeros(8, bool), np.zeros(8, bool), np.bool_(False),
-        np.full(8, ELBOW_TOO_CLOSE, np.int8), np.float64(0.3), np.array([0.03, 0.03, 0.02, 0.02] * 2), course,
+        np.full((8, 6), np.nan), np.zeros(8, bool), np.full(8, ELBOW_TOO_CLOSE, np.int8), course,
+        wrist_singular=np.zeros(8, bool), elbow_singular=np.zeros(8, bool), shoulder_singular=np.bool_(False),
+        wrist2_radius=np.float64(0.3), elbow_distance=np.array([0.03, 0.03, 0.02, 0.02] * 2),
     )
     assert sol.unreachable_reason() == (
         "unreachable: elbow reach — the wrist-1 centre would be 30.0 mm from the shoulder, "
@@ -328,7 +329,7 @@ class TestNearestBranch:
         q[:, 0] = np.radians(value_deg)
         valid = np.zeros(8, bool)
         valid[3] = True
-        sol = IKSolution(q, valid, valid & False, valid & False, np.bool_(False), np.zeros(8, np.int8), np.float64(1), np.ones(8), course)
+        sol = IKSolution(q, valid, np.zeros(8, np.int8), course)
         branch = nearest_branch(sol, np.radians([current_deg, 0, 0, 0, 0, 0]))
         assert np.degrees(branch.q[0]) == pytest.approx(expected_deg)
         assert int(branch.slot) == 3

@@ -23,7 +23,7 @@ def _build_meshes_module():
 def test_script_reproduces_the_committed_files(tmp_path):
     """The same geometry (not the same bytes: a PLY header may change with trimesh's version)."""
     builder = _build_meshes_module()
-    for preset in Arm.PRESETS:
+    for preset in Arm.UR_PRESETS:
         written = builder.write(preset, tmp_path)
         assert len(written) == 14
         for path in written:
@@ -47,7 +47,7 @@ def test_sharp_edges_are_split_and_smooth_sides_are_not():
     np.testing.assert_allclose(split.vertices[split.faces], cylinder.vertices[cylinder.faces])
 
 
-@pytest.mark.parametrize("preset", Arm.PRESETS)
+@pytest.mark.parametrize("preset", Arm.UR_PRESETS)
 def test_meshes_sit_in_their_dh_frames(preset):
     arm = Arm.preset(preset)
     links = load_links(preset)

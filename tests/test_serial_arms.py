@@ -11,7 +11,7 @@ import pytest
 from ur10core import Arm
 from ur10core.branches import INSIDE_OFFSET, ORIENTATION, OUT_OF_PLANE, TOO_CLOSE, TOO_FAR
 from ur10core.dh import DHTable
-from ur10core.serial import PRESETS, SerialArm
+from ur10core.serial import PRESETS
 
 import roboticstoolbox as rtb  # test-only reference: a missing test extra fails here, loudly
 from spatialmath import SE3  # (comes with roboticstoolbox)
@@ -26,7 +26,7 @@ def wrapped(difference: np.ndarray, revolute: np.ndarray) -> np.ndarray:
     return np.where(revolute, (difference + np.pi) % (2 * np.pi) - np.pi, difference)
 
 
-def random_joints(arm: SerialArm, n: int, seed: int) -> np.ndarray:
+def random_joints(arm: Arm, n: int, seed: int) -> np.ndarray:
     low, high = arm.limits.T
     return np.random.default_rng(seed).uniform(low, high, (n, arm.n_joints))
 
@@ -78,7 +78,7 @@ def test_dh_chain_matches_roboticstoolbox_models(model):
 
 @pytest.mark.parametrize("name", ANALYTIC)
 def test_presets_fk_matches_roboticstoolbox_built_from_the_same_rows(name):
-    arm = SerialArm.preset(name)
+    arm = Arm.preset(name)
     tool_rows = [row for row in arm.dh.rows if row.joint is None]
     tool = None
     if tool_rows:  # the KR210's gripper row G: a translation along z6
@@ -93,7 +93,7 @@ def test_presets_fk_matches_roboticstoolbox_built_from_the_same_rows(name):
 
 @pytest.mark.parametrize("name", ANALYTIC)
 def test_jacobian_matches_finite_differences(name):
-    arm = SerialArm.preset(name)
+    arm = Arm.preset(name)
     q = random_joints(arm, 20, 2)
     h = 1e-6
     J = arm.jacobian(q)
@@ -115,7 +115,7 @@ def test_both_conventions_give_the_same_tool_pose(name):
         rows = [(l.a, l.alpha, l.d, l.offset, "R") for l in robot.links]
         table = DHTable(rows, "modified" if robot.mdh else "standard")
     else:
-        table = SerialArm.preset(name).dh
+        table = Arm.preset(name).dh
     other = table.converted("modified" if table.convention == "standard" else "standard")
     back = other.converted(table.convention)
     q = np.random.default_rng(3).uniform(-2, 2, (30, table.n_joints))
@@ -127,12 +127,12 @@ def test_both_conventions_give_the_same_tool_pose(name):
 
 def test_course_numbers():
     """docs/kinematics.md §7.5: the KR210 at zero and the Stanford arm's default input."""
-    kr210 = SerialArm.preset("kr210")
+    kr210 = Arm.preset("kr210")
     # zero pose: the gripper straight out at x = a1 + d4 + dG, height d1 + a2 + a3 (a3 = −0.054), tool along x
     T = kr210.fk(np.zeros(6))
     np.testing.assert_allclose(T[:3, 3], [0.35 + 1.50 + 0.303, 0.0, 0.75 + 1.25 - 0.054], atol=1e-12)
     np.testing.assert_allclose(T[:3, 2], [1.0, 0.0, 0.0], atol=1e-12)
-    stanford = SerialArm.preset("stanford")
+    stanford = Arm.preset("stanford")
     q = np.radians([100, 100, 0, 100, 100, 100])
     q[2] = 10 * 0.0254
     p = stanford.fk(q)[:3, 3]
@@ -145,7 +145,7 @@ def test_course_numbers():
 # ---------------------------------------------------------------------------- analytic IK
 
 
-def near_singular_joints(arm: SerialArm, n: int, seed: int) -> np.ndarray:
+def near_singular_joints(arm: Arm, n: int, seed: int) -> np.ndarray:
     """Joints 1e-12 … 1e-5 from each singularity of the arm's family (random otherwise)."""
     rng = np.random.default_rng(seed)
     q = random_joints(arm, n, seed)
@@ -183,7 +183,7 @@ def near_singular_joints(arm: SerialArm, n: int, seed: int) -> np.ndarray:
 def test_fk_of_ik_and_the_generating_joints(name, kind):
     """Every valid slot reproduces the pose to 1e-9; with the joints as hint they are among the branches;
     without a hint the pose is still reached."""
-    arm = SerialArm.preset(name)
+    arm = Arm.preset(name)
     q = random_joints(arm, 3000, 11) if kind == "random" else near_singular_joints(arm, 3000, 12)
     T = arm.fk(q)
     for hint in (q, None):
@@ -204,7 +204,7 @@ def test_one_pose_in_floats_decides_as_the_batch_does(name, kind):
     """The one-pose path (``_solve_one``, plain floats) against the batch path on the same poses and
     hints: the same slots valid, singular and failing, with the same numbers to rounding (one pose at
     a time is slow in a test: the thousands of poses are the batch tests' above)."""
-    arm = SerialArm.preset(name)
+    arm = Arm.preset(name)
     n = 1000 if kind == "near singular" else 300  # the rare decisions are near the singularities
     q = random_joints(arm, n, 21) if kind != "near singular" else near_singular_joints(arm, n, 22)
     T = arm.fk(q)
@@ -228,7 +228,7 @@ def test_one_pose_in_floats_decides_as_the_batch_does(name, kind):
 
 @pytest.mark.parametrize("name", ["kr210", "elbow"])
 def test_articulated_arms_have_eight_distinct_branches_inside_the_reach(name):
-    arm = SerialArm.preset(name)
+    arm = Arm.preset(name)
     q = random_joints(arm, 500, 4)
     sol = arm.ik(arm.fk(q))
     full = sol.valid.all(axis=-1)
@@ -243,7 +243,7 @@ def test_articulated_arms_have_eight_distinct_branches_inside_the_reach(name):
 def test_elbow_up_puts_the_elbow_above_the_shoulder_wrist_line(name):
     """The labels say what a student sees: "elbow up" has the elbow above the straight line from
     the shoulder joint to the wrist centre (checked where the arm reaches the way its shoulder faces)."""
-    arm = SerialArm.preset(name)
+    arm = Arm.preset(name)
     sol = arm.ik(arm.fk(random_joints(arm, 300, 5)))
     checked = 0
     for slot, label in enumerate(sol.labels):
@@ -264,19 +264,19 @@ def test_elbow_up_puts_the_elbow_above_the_shoulder_wrist_line(name):
 
 
 def test_wrist_singular_keeps_the_hints_theta4():
-    arm = SerialArm.preset("kr210")
+    arm = Arm.preset("kr210")
     q = np.radians([20, 10, -20, 35, 0, 50])
     sol = arm.ik(arm.fk(q), hint=q)
-    slot = sol.nearest(q, arm.revolute)
+    slot = int(sol.nearest(q).slot)
     np.testing.assert_allclose(sol.q[slot], q, atol=1e-12)
     assert sol.singular[slot]
     other = arm.ik(arm.fk(q))  # no hint: θ4 = 0, θ6 takes the whole turn
-    slot = other.nearest(q, arm.revolute)
+    slot = int(other.nearest(q).slot)
     assert abs(other.q[slot, 3]) < 1e-12 and math.isclose(other.q[slot, 5], math.radians(85), abs_tol=1e-9)
 
 
 def test_wrist_centre_on_axis_one_keeps_the_hints_theta1():
-    arm = SerialArm.preset("kr210")
+    arm = Arm.preset("kr210")
     T = np.eye(4)
     T[:3, 3] = (0.0, 0.0, 2.6)  # the wrist centre straight above the base, 0.303 below the tool
     T[:3, 3] += (0, 0, 0.303)
@@ -296,7 +296,7 @@ def test_wrist_centre_on_axis_one_keeps_the_hints_theta1():
     ("scara", (2.0, 0.0, 0.2), TOO_FAR, "reach at most"),
 ])
 def test_unreachable_poses_are_explained_with_numbers(name, position, failure, words):
-    arm = SerialArm.preset(name)
+    arm = Arm.preset(name)
     T = np.eye(4)
     if name == "scara":
         T[:3, :3] = np.diag([1.0, -1.0, -1.0])
@@ -309,7 +309,7 @@ def test_unreachable_poses_are_explained_with_numbers(name, position, failure, w
 
 
 def test_scara_refuses_a_tilted_tool_and_says_by_how_much():
-    arm = SerialArm.preset("scara")
+    arm = Arm.preset("scara")
     T = arm.fk(np.array([0.3, 0.5, 0.1, 0.2]))
     tilt = np.array([[1, 0, 0], [0, math.cos(0.01), -math.sin(0.01)], [0, math.sin(0.01), math.cos(0.01)]])
     T[:3, :3] = tilt @ T[:3, :3]
@@ -319,7 +319,7 @@ def test_scara_refuses_a_tilted_tool_and_says_by_how_much():
 
 
 def test_a_slot_beyond_a_joint_limit_stays_valid_and_is_flagged():
-    arm = SerialArm.preset("kr210")
+    arm = Arm.preset("kr210")
     q = random_joints(arm, 200, 6)
     sol = arm.ik(arm.fk(q))
     assert (sol.within_limits == sol.valid & arm.within_limits(np.where(sol.valid[..., None], sol.q, 0.0))).all()
@@ -329,7 +329,7 @@ def test_a_slot_beyond_a_joint_limit_stays_valid_and_is_flagged():
 
 
 def test_batches_and_hints_broadcast():
-    arm = SerialArm.preset("stanford")
+    arm = Arm.preset("stanford")
     q = random_joints(arm, 12, 8).reshape(3, 4, 6)
     sol = arm.ik(arm.fk(q), hint=q[0])
     assert sol.q.shape == (3, 4, 4, 6) and sol.valid.shape == (3, 4, 4)
@@ -343,8 +343,8 @@ def test_batches_and_hints_broadcast():
 def test_numerical_ik_finds_the_kr210s_branches():
     """The damped-least-squares search against the closed form: every branch it reports is
     real, and on most poses it finds all eight (the rate is printed in BENCHMARKS.md)."""
-    arm = SerialArm.preset("kr210")
-    numerical = SerialArm(arm.dh, arm.limits, None, "kr210 (numerical)")
+    arm = Arm.preset("kr210")
+    numerical = Arm(arm.dh, arm.limits, None, "kr210 (numerical)")
     q = random_joints(arm, 30, 9)
     T = arm.fk(q)
     analytic, found = arm.ik(T), numerical.ik(T)
@@ -373,7 +373,7 @@ def test_a_custom_arm_typed_by_a_student():
 
 
 def test_arm_preset_serves_every_arm():
-    assert isinstance(Arm.preset("kr210"), SerialArm)
+    assert isinstance(Arm.preset("kr210"), Arm)
     assert Arm.preset("course").__class__ is Arm
     for name in ANALYTIC:
         arm = Arm.preset(name)
@@ -390,11 +390,11 @@ def test_arm_preset_serves_every_arm():
 
 
 def test_manipulability_vanishes_at_the_singularities():
-    kr210 = SerialArm.preset("kr210")
+    kr210 = Arm.preset("kr210")
     assert kr210.manipulability(np.radians([10, 20, -30, 40, 0, 60])) < 1e-12
     q = np.radians([10, 20, -30, 40, 50, 60])
     np.testing.assert_allclose(kr210.manipulability(q), abs(np.linalg.det(kr210.jacobian(q))), rtol=1e-12)
-    stanford = SerialArm.preset("stanford")
+    stanford = Arm.preset("stanford")
     assert stanford.manipulability(np.array([0.3, 0.4, 0.0, 0.2, 0.5, 0.1])) < 1e-12
 
 
@@ -412,7 +412,7 @@ def test_bad_tables_are_refused_with_the_reason(rows, words):
 
 
 def test_bad_values_are_refused():
-    arm = SerialArm.preset("scara")
+    arm = Arm.preset("scara")
     with pytest.raises(ValueError, match=r"shape \(\.\.\., 4\)"):
         arm.fk(np.zeros(6))
     with pytest.raises(ValueError, match="complex"):
@@ -422,7 +422,7 @@ def test_bad_values_are_refused():
     with pytest.raises(ValueError, match="orthonormal"):
         arm.ik(np.diag([2.0, 1.0, 1.0, 1.0]))
     with pytest.raises(ValueError, match="joint_types"):
-        SerialArm.from_dh([(0.5, 0, 0, 0)], joint_types="RX")
+        Arm.from_dh([(0.5, 0, 0, 0)], joint_types="RX")
     with pytest.raises(ValueError, match="unknown preset"):
         Arm.preset("kr2100")
     with pytest.raises(ValueError, match="convention"):
@@ -443,16 +443,16 @@ def test_the_ur_family_is_the_same_chain_as_its_dh_table(name):
 
 
 def test_singular_flags_only_where_the_pose_leaves_a_value_free():
-    kr210 = SerialArm.preset("kr210")
+    kr210 = Arm.preset("kr210")
     q = np.radians([0, 15, -30, 20, 40, 10])  # the app's home: no singularity, and θ1 = 0 equals the hint's
     sol = kr210.ik(kr210.fk(q), hint=q)
     assert sol.valid.any() and not sol.singular.any()
     aligned = np.radians([0, 15, -30, 20, 0, 10])
     wrist = kr210.ik(kr210.fk(aligned), hint=aligned)
     # the branch with these joints has θ5 = 0; the elbow-down branches turn their wrists otherwise
-    assert wrist.singular[wrist.nearest(aligned, kr210.revolute)]
+    assert wrist.singular[int(wrist.nearest(aligned).slot)]
     assert not wrist.singular[np.abs(np.sin(wrist.q[:, 4])) > 1e-6].any()
-    cylindrical = SerialArm.preset("cylindrical")
+    cylindrical = Arm.preset("cylindrical")
     assert not cylindrical.ik(cylindrical.fk([0.0, 0.3, 0.3]), hint=[0.0, 0.3, 0.3]).singular.any()
     assert cylindrical.ik(cylindrical.fk([0.5, 0.3, 0.0]), hint=[0.5, 0.3, 0.0]).singular.all()
 
@@ -461,7 +461,7 @@ def test_singular_flags_only_where_the_pose_leaves_a_value_free():
 def test_row_geometry_puts_each_parameter_where_it_acts(name):
     """Turning a turn's start by its angle about its axis lands on the next axis, and the two
     segments have the row's lengths and lead from one frame origin to the next."""
-    arm = SerialArm.preset(name)
+    arm = Arm.preset(name)
     q = random_joints(arm, 1, 3)[0]
     frames = arm.frames(q)
     for row in range(1, len(arm.dh.rows) + 1):
@@ -487,7 +487,7 @@ def test_the_kr210_urdf_gripper_convention():
     c, s = math.cos(-math.pi / 2), math.sin(-math.pi / 2)
     ry = np.array([[c, 0, s], [0, 1, 0], [-s, 0, c]])
     np.testing.assert_allclose(KR210_URDF_TURN, rz @ ry, atol=1e-15)
-    arm = SerialArm.preset("kr210")
+    arm = Arm.preset("kr210")
     T = arm.fk(random_joints(arm, 20, 2))
     urdf = kr210_to_urdf(T)
     np.testing.assert_allclose(urdf[:, :3, 0], T[:, :3, 2], atol=1e-15)  # the URDF's x is the approach z_G
@@ -499,7 +499,7 @@ def test_the_kr210_urdf_gripper_convention():
 def test_the_wrist_centre_is_on_the_last_three_axes_and_behind_the_tool(name):
     """Every spherical wrist's centre lies on its last three joint axes, also at s5 = 0 (axes 4 and 6
     in line), and sits back from the tool along its z axis by the table's last d (KR210: d_G = 303 mm)."""
-    arm = SerialArm.preset(name)
+    arm = Arm.preset(name)
     rng = np.random.default_rng(3)
     q = rng.uniform(arm.limits[:, 0], arm.limits[:, 1], (2000, 6))
     q[::4, 4] = 0.0  # wrist singular
@@ -512,4 +512,4 @@ def test_the_wrist_centre_is_on_the_last_three_axes_and_behind_the_tool(name):
     np.testing.assert_allclose(centre, T[:, :3, 3] - behind * T[:, :3, 2], atol=1e-12)
     assert arm.wrist_centre(q[0]).shape == (3,)
     with pytest.raises(ValueError, match="no wrist"):
-        SerialArm.preset("scara").wrist_centre(np.zeros(4))
+        Arm.preset("scara").wrist_centre(np.zeros(4))

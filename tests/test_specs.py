@@ -12,13 +12,13 @@ from ur10core import Arm
 from ur10core.serial import PRESETS, project_target
 from ur10core.specs import ArmSpecs, torque_map
 
-EVERY_PRESET = (*Arm.PRESETS, *PRESETS, "three_dof")
+EVERY_PRESET = Arm.PRESETS
 
 
 def test_the_ur10s_numbers_are_the_courses():
     """docs/kinematics.md §1: 120 °/s for base and shoulder, 180 °/s for the rest, 10 kg; §8.5: joint
     sizes 4, 4, 3, 2, 2, 2 rated 330, 330, 150, 56, 56, 56 N·m; §3: the three worked poses."""
-    for name in Arm.PRESETS:
+    for name in Arm.UR_PRESETS:
         specs = Arm.preset(name).specs
         np.testing.assert_allclose(np.degrees(specs.speed_limits), [120, 120, 180, 180, 180, 180])
         np.testing.assert_array_equal(specs.torque_ratings, [330, 330, 150, 56, 56, 56])

@@ -7,7 +7,8 @@ import pytest
 import sympy as sp
 
 from ur10core import symbolic_arms
-from ur10core.serial import PRESETS, SerialArm
+from ur10core import Arm
+from ur10core.serial import PRESETS
 
 pytestmark = pytest.mark.core
 
@@ -28,7 +29,7 @@ def test_cache_matches_a_fresh_derivation():
 
 @pytest.mark.parametrize("name", PRESETS)
 def test_factors_multiply_to_the_numeric_det_j(name):
-    arm = SerialArm.preset(name)
+    arm = Arm.preset(name)
     derivation = symbolic_arms.load(name)
     q = np.random.default_rng(2).uniform(arm.limits[:, 0], arm.limits[:, 1], (200, arm.n_joints))
     J = arm.jacobian(q)[:, SQUARE_ROWS[name], :]
@@ -40,7 +41,7 @@ def test_factors_multiply_to_the_numeric_det_j(name):
 
 
 def test_each_factor_is_the_geometry_it_names():
-    kr210 = SerialArm.preset("kr210")
+    kr210 = Arm.preset("kr210")
     q = np.random.default_rng(3).uniform(-2, 2, (100, 6))
     shoulder, elbow, wrist = kr210.singularity_factors(q).T
     frames = kr210.frames(q)
@@ -58,7 +59,7 @@ def test_each_factor_is_the_geometry_it_names():
 
 
 def test_custom_arms_report_the_smallest_singular_value_instead():
-    arm = SerialArm.from_dh([(0.5, 0, 0, 0), (0.4, 0, 0, 0)], joint_types="RR")
+    arm = Arm.from_dh([(0.5, 0, 0, 0), (0.4, 0, 0, 0)], joint_types="RR")
     with pytest.raises(ValueError, match="smallest_singular_value"):
         arm.singularity_factors([0.1, 0.2])
     assert arm.smallest_singular_value([0.1, 0.0]) < 1e-12 < arm.smallest_singular_value([0.1, 0.5])

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from ur10core import Arm
-from ur10core.three_dof import FOREARM, UPPER_ARM, ThreeDofArm, course_path, largest_torque
+from ur10core.three_dof import FOREARM, UPPER_ARM, course_path, largest_torque
 
 pytestmark = pytest.mark.core
 
@@ -106,7 +106,7 @@ def _elbow_above(arm, q) -> np.ndarray:
 def test_ik_finds_every_generating_pose_in_its_labelled_slot():
     """FK∘IK on 5 000 random joint vectors: the generating one is found, in the slot its geometry names
     (the tool in front or behind, the elbow above or below), and every valid slot reaches the position."""
-    arm = ThreeDofArm()
+    arm = Arm.preset("three_dof")
     rng = np.random.default_rng(7)
     q = rng.uniform(-np.pi, np.pi, (5000, 3))
     T = arm.fk(q)
@@ -124,7 +124,7 @@ def test_ik_finds_every_generating_pose_in_its_labelled_slot():
 
 
 def test_ik_near_its_singularities_and_out_of_reach():
-    arm = ThreeDofArm()
+    arm = Arm.preset("three_dof")
     # links in one line, stretched (θ3 = θ2 + π) and folded (θ3 = θ2): the boundary of the workspace
     for q in (np.radians([10.0, -40.0, 140.0]), np.radians([10.0, -40.0, -40.0])):
         for nudge in (0.0, 1e-9, -1e-9):

@@ -123,9 +123,9 @@ def test_bad_arm_and_preset():
     with pytest.raises(ValueError, match="unknown preset 'ur5'; choose one of course, ur10, ur10e"):
         Arm.preset("ur5")
     with pytest.raises(ValueError, match="Arm.a2 must be positive"):
-        Arm(d1=0.1, a2=-0.6, a3=0.5, d4=0.1, d5=0.1, d6=0.1)
+        Arm.ur_family(d1=0.1, a2=-0.6, a3=0.5, d4=0.1, d5=0.1, d6=0.1)
     with pytest.raises(ValueError, match="Arm.d4 must be a finite number of metres"):
-        Arm(d1=0.1, a2=0.6, a3=0.5, d4=float("nan"), d5=0.1, d6=0.1)
+        Arm.ur_family(d1=0.1, a2=0.6, a3=0.5, d4=float("nan"), d5=0.1, d6=0.1)
 
 
 @pytest.mark.parametrize("n", [0, -5, 2.5, "100", True])
@@ -211,8 +211,8 @@ def test_nearest_stays_within_the_joint_limit_from_far_away(course, batch):
 
 def test_equal_upper_arm_and_forearm_are_refused():
     with pytest.raises(ValueError, match="Arm.a2 and Arm.a3 must differ"):
-        Arm(d1=0.1, a2=0.5, a3=0.5, d4=0.1, d5=0.1, d6=0.1)
-    Arm(d1=0.1, a2=0.5, a3=0.5 + 1e-12, d4=0.1, d5=0.1, d6=0.1)
+        Arm.ur_family(d1=0.1, a2=0.5, a3=0.5, d4=0.1, d5=0.1, d6=0.1)
+    Arm.ur_family(d1=0.1, a2=0.5, a3=0.5 + 1e-12, d4=0.1, d5=0.1, d6=0.1)
 
 
 @pytest.mark.parametrize("seed", [-1, 2.5, "7", True, None])

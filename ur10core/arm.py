@@ -1,349 +1,360 @@
-"""The UR10 arm: forward kinematics, frames, Jacobian, singularities, workspace.
+"""One model of a serial arm: its table, limits and physical data, and its family's IK solver.
 
-All quantities follow the course's modified (Craig) DH table (docs/kinematics.md §2):
+Every arm of the course is an :class:`Arm` (docs/kinematics.md §2, §7, §8.6): the UR10 and
+its kin (``"course"``, ``"ur10"``, ``"ur10e"``), the KUKA KR210, the Stanford arm, the
+elbow arm, the SCARA, the planar elbow, the cylindrical arm, the 3-DOF desktop arm, and any
+DH table a student types (:meth:`Arm.from_dh`). What differs between them is their
+*solver* (``arm.solver``, :mod:`ur10core.solvers`): the UR family's kernels, Pieper's
+decoupling, the planar closed forms, the desktop arm's closed form, or the numerical
+search. A solver may also supply faster closed forms of the arm's FK, frames, Jacobian,
+det J factors and workspace samples; the arm uses them where it has them and its DH table
+otherwise. Every arm's :meth:`Arm.ik` returns an :class:`ur10core.branches.IKSolution`.
 
-====  ==========  =========  =====  ======
- i    alpha_i-1    a_i-1      d_i   theta_i
-====  ==========  =========  =====  ======
- 1     0           0          d1     θ1
- 2     +π/2        0          0      θ2
- 3     0           a2         0      θ3
- 4     0           a3         d4     θ4
- 5     −π/2        0          d5     θ5
- 6     +π/2        0          d6     θ6
-====  ==========  =========  =====  ======
-
-Units are metres and radians. Every method accepts any leading batch shape ``...``;
-single poses take a pure-Python fast path where numpy's per-call overhead would
-dominate.
+Units are metres and radians. Every method accepts any leading batch shape ``...``.
 """
 
 from __future__ import annotations
 
+import dataclasses
 import math
-from dataclasses import dataclass, field
-from typing import ClassVar
 
 import numpy as np
 
-from . import ik as _ik
-from . import ik_reference
-from ._backend import kernels
-from ._validate import as_float_array, check_finite, homogeneous_transform, joint_vector
-from .differential import JacobianUses, cross
+from .branches import IKSolution
+from .dh import PRISMATIC, REVOLUTE, STANDARD, DHTable
+from .differential import TASK_ROWS, JacobianUses
 from .specs import HasSpecs
+from .solvers.numerical import NumericalIK, sampling_range
+from .serial import PRESETS as COURSE_ARMS
+from .solvers.ur import DESCRIPTIONS, DH_ALPHA, JOINT_LIMIT, JOINT_NAMES, LENGTHS, SingularityGeometry, URFamily
+from ._validate import homogeneous_transform
 
-#: alpha_{i-1} of the course's DH table, rows i = 1..6.
-DH_ALPHA = (0.0, math.pi / 2, 0.0, 0.0, -math.pi / 2, math.pi / 2)
-JOINT_NAMES = ("base", "shoulder", "elbow", "wrist 1", "wrist 2", "wrist 3")
-#: The UR10's joint range, every joint (docs/kinematics.md §1): ±360°.
-JOINT_LIMIT = 2.0 * math.pi
+__all__ = ["Arm", "DH_ALPHA", "JOINT_LIMIT", "JOINT_NAMES", "SingularityGeometry"]
 
-_PRESETS = {
-    # docs/kinematics.md §2: the course's table.
-    "course": dict(d1=0.128, a2=0.6129, a3=0.5716, d4=0.1639, d5=0.1157, d6=0.0922),
-    # UR's own numbers (standard DH, same structure; a2, a3 given as magnitudes).
-    "ur10": dict(d1=0.1273, a2=0.612, a3=0.5723, d4=0.163941, d5=0.1157, d6=0.0922),
-    "ur10e": dict(d1=0.1807, a2=0.6127, a3=0.57155, d4=0.17415, d5=0.11985, d6=0.11655),
-}
+_PI = math.pi
+#: The UR family's presets (:class:`ur10core.solvers.ur.URFamily`).
+UR_PRESETS = tuple(LENGTHS)
+#: Every preset: the UR family, the course's other arms (docs/kinematics.md §7.5), the desktop arm (§8.6).
+PRESETS = (*UR_PRESETS, *COURSE_ARMS, "three_dof")
 
 
-@dataclass(frozen=True)
-class SingularityGeometry:
-    """What the singularity overlay draws for joint angles ``q`` (leading shape ``...``).
-
-    docs/kinematics.md §5. All points and directions in the base frame, metres.
-
-    * **shoulder**: singular when the wrist-2 point ``p5`` lies on the cylinder of
-      radius ``cylinder_radius`` (= d4) about the base axis (the z axis).
-    * **elbow**: singular when the frame-4 origin ``p4`` lies on one of the two circles
-      of radii ``elbow_radii`` (a2 + a3 stretched, |a2 − a3| folded) about
-      ``elbow_center`` in the arm plane spanned by ``arm_forward`` (x1) and z. As θ1
-      turns they sweep spheres of radii ``sqrt(r² + d4²)`` about ``shoulder``.
-    * **wrist**: singular when ``axis4`` and ``axis6`` are parallel.
-    """
-
-    shoulder: np.ndarray  #: (..., 3) origin of frames 1 and 2, (0, 0, d1)
-    elbow: np.ndarray  #: (..., 3) origin of frame 3
-    p4: np.ndarray  #: (..., 3) origin of frame 4 (wrist-1 centre)
-    p5: np.ndarray  #: (..., 3) origin of frame 5 (wrist-2 point)
-    flange: np.ndarray  #: (..., 3) origin of frame 6
-    axis4: np.ndarray  #: (..., 3) unit direction of joint axis 4
-    axis6: np.ndarray  #: (..., 3) unit direction of joint axis 6 (tool axis)
-    arm_forward: np.ndarray  #: (..., 3) x1, the arm plane's horizontal direction
-    elbow_center: np.ndarray  #: (..., 3) shoulder + d4 z2: centre of the reach circles
-    cylinder_radius: float  #: d4
-    elbow_radii: tuple[float, float]  #: (a2 + a3, |a2 − a3|)
-
-
-@dataclass(frozen=True)
 class Arm(JacobianUses, HasSpecs):
-    """A UR-type 6R arm with the course's DH structure and its own link lengths.
+    """A serial arm: its DH table, joint types and limits, named poses and physical data, and its IK solver.
+
+    Parameters
+    ----------
+    table : DHTable or None
+        The arm's DH table (either convention). ``None`` only for an arm whose solver
+        supplies its geometry (the desktop arm's parallelogram has no DH table).
+    limits : array_like, shape (n, 2)
+        (low, high) per joint, radians or metres.
+    solver : object, optional
+        The family's IK (:mod:`ur10core.solvers`); default the numerical one.
+    name, description : str
+    joint_names : sequence of str, optional
+    joint_types : str, optional
+        ``"R"``/``"P"`` per joint, needed only without a table.
+
+    Its named poses and published numbers are :attr:`specs` (:mod:`ur10core.specs`); its
+    link masses, where known, ``dynamics.link_masses(arm)``. What only one family has (the
+    UR's lengths ``arm.d4`` and singularity geometry, the desktop arm's ``upper_arm``) is
+    its solver's, reached through the arm as ``arm.solver.d4`` or simply ``arm.d4``.
 
     Example
     -------
     >>> arm = Arm.preset("course")
     >>> (arm.fk([0, 0, 0, 0, 0, 0])[:3, 3] * 1000).round(1).tolist()   # docs/kinematics.md §3
     [1184.5, -256.1, 243.7]
+    >>> arm = Arm.preset("kr210")
+    >>> q = np.radians([10, 20, -30, 40, 50, 60])
+    >>> sol = arm.ik(arm.fk(q))
+    >>> int(sol.valid.sum()), int(sol.within_limits.sum())   # turned back, the shoulder cannot reach
+    (4, 2)
+    >>> branch = sol.nearest(q)
+    >>> sol.labels[branch.slot], np.degrees(branch.q).round(6).tolist()
+    ('shoulder front, elbow up, wrist not flipped', [10.0, 20.0, -30.0, 40.0, 50.0, 60.0])
     """
 
-    d1: float
-    a2: float
-    a3: float
-    d4: float
-    d5: float
-    d6: float
-    name: str = "custom"
+    def __init__(self, table: DHTable | None, limits, solver=None, name: str = "custom", description: str = "",
+                 joint_names=None, joint_types: str | None = None) -> None:
+        if table is None and (solver is None or joint_types is None or not hasattr(solver, "fk")):
+            raise ValueError("an arm without a DH table needs a solver that gives its FK, and its joint types")
+        self.dh = table
+        self.solver = solver if solver is not None else NumericalIK(table, limits)
+        self.joint_types = table.joint_types if table is not None else joint_types
+        n = len(self.joint_types)
+        self.name = name
+        self.description = description or f"custom arm ({self.joint_types}, {table.convention} DH)"
+        limits = np.array(limits, dtype=float)
+        if limits.shape != (n, 2) or not np.isfinite(limits).all() or (limits[:, 0] > limits[:, 1]).any():
+            raise ValueError(f"limits must be {n} finite (low, high) pairs with low ≤ high, got {limits.tolist()}")
+        self.limits = limits
+        self.joint_names = tuple(joint_names or (f"joint {k + 1}" for k in range(n)))
+        self.revolute = np.array([t == REVOLUTE for t in self.joint_types])
+        # the solver's closed forms where it has them (the UR10's drag path), else the table's
+        self._geometry = self.solver if hasattr(self.solver, "fk") else table
+        self._identity = self._key()  # arms are keys of caches: compared and hashed often
 
-    PRESETS: ClassVar[tuple[str, ...]] = tuple(_PRESETS)
-    #: ``(d1, a2, a3, d4, d5, d6)``, set on construction.
-    dh_lengths: tuple[float, ...] = field(init=False, repr=False, compare=False)
+    def __getattr__(self, name: str):
+        """What only this arm's family has (``arm.d4``, ``arm.singularity_geometry(q)``): its solver's."""
+        if name.startswith("_") or name in ("solver", "dh"):
+            raise AttributeError(name)
+        try:
+            return getattr(self.solver, name)
+        except AttributeError:
+            raise AttributeError(f"{self.name!r} arm ({type(self.solver).__name__}) has no {name!r}") from None
 
-    def __post_init__(self) -> None:
-        for name in ("d1", "a2", "a3", "d4", "d5", "d6"):
-            value = getattr(self, name)
-            if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
-                raise ValueError(f"Arm.{name} must be a finite number of metres, got {value!r}")
-            object.__setattr__(self, name, float(value))
-        for name in ("a2", "a3", "d4", "d5", "d6"):
-            if getattr(self, name) <= 0:
-                raise ValueError(f"Arm.{name} must be positive, got {getattr(self, name)!r}")
-        if self.a2 == self.a3:
-            raise ValueError("Arm.a2 and Arm.a3 must differ (the folded elbow would put the wrist on the shoulder)")
-        # what the compiled kernel reads, built once
-        object.__setattr__(self, "dh_lengths", (self.d1, self.a2, self.a3, self.d4, self.d5, self.d6))
+    def _key(self) -> tuple:
+        table = None if self.dh is None else (self.dh.convention, tuple(self.dh.rows))
+        # a family of lengths compares by them; any other solver is made from the table and the limits
+        solver = self.solver if dataclasses.is_dataclass(self.solver) else type(self.solver).__name__
+        return (self.name, table, self.joint_types, self.limits.tobytes(), solver)
+
+    def __eq__(self, other) -> bool:
+        return isinstance(other, Arm) and self._identity == other._identity
+
+    def __hash__(self) -> int:
+        return hash(self._identity)
+
+    def __repr__(self) -> str:
+        return f"Arm({self.name!r}, {type(self.solver).__name__}, {self.joint_types})"
+
+    # ------------------------------------------------------------------ construction
+
+    PRESETS = PRESETS
+    UR_PRESETS = UR_PRESETS
 
     @classmethod
-    def preset(cls, name: str):
-        """``"course"`` (docs/kinematics.md §2), ``"ur10"`` (UR's CB3 numbers) or ``"ur10e"``: an Arm;
-        the course's other arms (``"kr210"``, ``"stanford"``, ``"elbow"``, ``"scara"``,
-        ``"planar_elbow"``, ``"cylindrical"``, docs/kinematics.md §7.5): a :class:`ur10core.serial.SerialArm`;
-        the course's 3-DOF desktop arm (``"three_dof"``, §8.6): a :class:`ur10core.three_dof.ThreeDofArm`.
-        """
-        if name in _PRESETS:
-            return cls(name=name, **_PRESETS[name])
-        from .serial import PRESETS, SerialArm
-
-        if name in PRESETS:
-            return SerialArm.preset(name)
+    def preset(cls, name: str) -> "Arm":
+        """``"course"`` (docs/kinematics.md §2), ``"ur10"``, ``"ur10e"``, the course's other arms
+        (``"kr210"``, ``"stanford"``, ``"elbow"``, ``"scara"``, ``"planar_elbow"``, ``"cylindrical"``,
+        §7.5) or its 3-DOF desktop arm (``"three_dof"``, §8.6), each with its analytic IK."""
+        if name in LENGTHS:
+            return cls.ur_family(name=name, **LENGTHS[name])
+        if name in COURSE_ARMS:
+            spec = COURSE_ARMS[name]
+            table = DHTable(spec.rows, spec.convention)
+            return cls(table, spec.limits, spec.solver(table), name, spec.description, spec.joint_names)
         if name == "three_dof":
-            from .three_dof import ThreeDofArm
+            from .three_dof import LIMITS, DesktopArm
 
-            return ThreeDofArm()
-        raise ValueError(f"unknown preset {name!r}; choose one of {', '.join((*_PRESETS, *PRESETS, 'three_dof'))}")
+            return cls(None, LIMITS, DesktopArm(), "three_dof",
+                       "the course's 3-DOF desktop arm (parallelogram forearm, y vertical)",
+                       ("θ1 base", "θ2 upper arm", "θ3 forearm"), "RRR")
+        raise ValueError(f"unknown preset {name!r}; choose one of {', '.join(PRESETS)}")
 
-    @staticmethod
-    def from_dh(rows, convention: str = "standard", joint_types: str | None = None, limits=None, name: str = "custom"):
-        """Any arm from its DH table, with the numerical IK: see :meth:`ur10core.serial.SerialArm.from_dh`."""
-        from .serial import SerialArm
+    @classmethod
+    def ur_family(cls, d1: float, a2: float, a3: float, d4: float, d5: float, d6: float, name: str = "custom") -> "Arm":
+        """A UR-type 6R arm with the course's DH structure (docs/kinematics.md §2) and these lengths (m)."""
+        family = URFamily(d1, a2, a3, d4, d5, d6)
+        limits = np.tile([-JOINT_LIMIT, JOINT_LIMIT], (6, 1))
+        return cls(family.table(), limits, family, name, DESCRIPTIONS.get(name, "UR-type 6R arm"), JOINT_NAMES)
 
-        return SerialArm.from_dh(rows, convention, joint_types, limits, name)
+    @classmethod
+    def from_dh(cls, rows, convention: str = STANDARD, joint_types: str | None = None, limits=None,
+                name: str = "custom") -> "Arm":
+        """An arm from a DH table a student types; its IK is the numerical one.
 
-    # ------------------------------------------------------------------ as a general chain
+        Parameters
+        ----------
+        rows : sequence of (a, alpha, d, theta) or (a, alpha, d, theta, joint)
+            Metres and radians; ``theta`` (revolute) or ``d`` (prismatic) is the joint's
+            offset. In the modified convention ``a``, ``alpha`` are a_{i-1}, α_{i-1}.
+        convention : ``"standard"`` or ``"modified"``
+        joint_types : str, optional
+            One letter per row: ``R`` revolute, ``P`` prismatic, ``F`` fixed. Default: all R
+            (or each row's fifth entry).
+        limits : array_like (n, 2), optional
+            Default ±π for revolute joints, 0…1 m for prismatic ones.
 
-    #: The UR10's joints: six revolute ones, ±360° each (docs/kinematics.md §1).
-    joint_types: ClassVar[str] = "RRRRRR"
-    n_joints: ClassVar[int] = 6
-    #: What of a target pose it controls: all of it (as ``SerialArm.task``).
-    task: ClassVar[str] = "pose"
+        >>> arm = Arm.from_dh([(0.5, 0, 0, 0), (0.4, 0, 0, 0)], joint_types="RR")
+        >>> arm.ik(arm.fk(np.radians([30, 60]))).method
+        'found numerically'
+        """
+        rows = list(rows)
+        if joint_types is not None:
+            if not isinstance(joint_types, str) or len(joint_types) != len(rows) or set(joint_types.upper()) - set("RPF"):
+                raise ValueError(f"joint_types must be one letter R, P or F per row ({len(rows)} rows), got {joint_types!r}")
+            parsed = []
+            for k, (row, kind) in enumerate(zip(rows, joint_types.upper())):
+                values = tuple(row)
+                if len(values) not in (4, 5):
+                    raise ValueError(f"DH row {k + 1} must be (a, alpha, d, theta), got {row!r:.80}")
+                parsed.append(values[:4] + ({"R": REVOLUTE, "P": PRISMATIC, "F": None}[kind],))
+            rows = parsed
+        else:
+            rows = [tuple(row) + (REVOLUTE,) if len(tuple(row)) == 4 else tuple(row) for row in rows]
+        table = DHTable(rows, convention)
+        if limits is None:
+            limits = [(-_PI, _PI) if t == REVOLUTE else (0.0, 1.0) for t in table.joint_types]
+        return cls(table, limits, None, name)
+
+    # ------------------------------------------------------------------ what it is
 
     @property
-    def limits(self) -> np.ndarray:
-        """(6, 2) joint limits in radians."""
-        return np.tile([-JOINT_LIMIT, JOINT_LIMIT], (6, 1))
+    def n_joints(self) -> int:
+        return len(self.joint_types)
 
     @property
-    def dh(self):
-        """The course's table as a general :class:`ur10core.dh.DHTable` (modified DH, docs/kinematics.md §2).
-
-        Its FK, frames and Jacobian equal this arm's closed forms, which are its fast path.
-        """
-        from .dh import DHTable
-
-        return DHTable([(a, alpha, d, 0.0, "R") for alpha, a, d in self.dh_table], "modified")
-
-    # ------------------------------------------------------------------ DH table
+    def convention(self) -> str | None:
+        return None if self.dh is None else self.dh.convention
 
     @property
-    def dh_table(self) -> tuple[tuple[float, float, float], ...]:
-        """Rows ``(alpha_{i-1}, a_{i-1}, d_i)`` for i = 1..6 (docs/kinematics.md §2)."""
-        a = (0.0, 0.0, self.a2, self.a3, 0.0, 0.0)
-        d = (self.d1, 0.0, 0.0, self.d4, self.d5, self.d6)
-        return tuple(zip(DH_ALPHA, a, d))
+    def task(self) -> str:
+        """What of a pose the arm controls: ``"pose"``, ``"position and yaw"`` or ``"position"``."""
+        return self.solver.task
 
-    def link_transforms(self, q) -> np.ndarray:
-        """``T(i-1, i) = RotX(alpha_{i-1}) TransX(a_{i-1}) RotZ(θi) TransZ(d_i)``, (..., 6, 4, 4).
+    @property
+    def slot_labels(self) -> tuple[str, ...]:
+        return self.solver.labels
 
-        docs/kinematics.md §2, Craig form::
+    @property
+    def numerical(self) -> bool:
+        """Its IK is the numerical search (a typed table), not a closed form."""
+        return isinstance(self.solver, NumericalIK)
 
-            [ cθ      -sθ      0     a     ]
-            [ sθ·cα   cθ·cα   -sα   -sα·d  ]
-            [ sθ·sα   cθ·sα    cα    cα·d  ]
-            [ 0        0       0     1     ]
-        """
-        q = joint_vector(q)
-        alpha, a, d = (np.array(column) for column in zip(*self.dh_table))
-        ca, sa = np.cos(alpha), np.sin(alpha)
-        ct, st = np.cos(q), np.sin(q)
-        T = np.zeros(q.shape + (4, 4))
-        T[..., 0, 0] = ct
-        T[..., 0, 1] = -st
-        T[..., 0, 3] = a
-        T[..., 1, 0] = st * ca
-        T[..., 1, 1] = ct * ca
-        T[..., 1, 2] = -sa
-        T[..., 1, 3] = -sa * d
-        T[..., 2, 0] = st * sa
-        T[..., 2, 1] = ct * sa
-        T[..., 2, 2] = ca
-        T[..., 2, 3] = ca * d
-        T[..., 3, 3] = 1.0
-        return T
+    @property
+    def up(self) -> tuple[float, float, float]:
+        """Its vertical in the base frame: z, or y for the course's desktop arm."""
+        return getattr(self.solver, "up", (0.0, 0.0, 1.0))
 
-    def frames(self, q) -> np.ndarray:
-        """Frames {0}..{6} in the base frame, (..., 7, 4, 4): ``T0i = T01 T12 ... T(i-1,i)``.
+    def joints(self, q, name: str = "q") -> np.ndarray:
+        """``q`` checked: finite, shape (..., n); ``ValueError`` naming what is wrong."""
+        return self._geometry.joints(q, name)
 
-        ``frames(q)[..., i, :, :]`` places link i's mesh; ``frames(q)[..., 6]`` equals ``fk(q)``.
-        The product of :meth:`link_transforms`, computed by the compiled kernel (the app
-        asks for nine arms' frames on every drag event).
-        """
-        q = joint_vector(q)
-        flat = np.ascontiguousarray(q.reshape(-1, 6))
-        out = np.empty((len(flat), 7, 4, 4))
-        kernels.frames(flat, self.dh_lengths, out)
-        return out.reshape(q.shape[:-1] + (7, 4, 4))
-
-    # ------------------------------------------------------------------ FK
+    # ------------------------------------------------------------------ kinematics
 
     def fk(self, q) -> np.ndarray:
-        """Base → flange pose T06 in closed form (docs/kinematics.md §3), (..., 4, 4), metres.
+        """Base → tool pose (the last row of the table; the UR family's flange, docs/kinematics.md §3), (..., 4, 4).
 
-        Example
-        -------
         >>> arm = Arm.preset("course")
-        >>> T = arm.fk(np.radians([30, 45, 26, 50, 60, 80]))
-        >>> (T[:3, 3] * 1000).round(3).tolist()
+        >>> (arm.fk(np.radians([30, 45, 26, 50, 60, 80]))[:3, 3] * 1000).round(3).tolist()
         [519.984, 57.726, 1110.697]
         """
-        if type(q) is np.ndarray and q.shape == (6,) and q.dtype == np.float64 and q.flags.c_contiguous:
-            T = kernels.fk_one(q, self.dh_lengths)  # the same closed form for one pose, without numpy's overhead
-            if T is not None:
-                return T
-        q = joint_vector(q)
-        if q.shape == (6,):
-            return kernels.fk_one(np.ascontiguousarray(q), self.dh_lengths)
-        c1, c2, c3, c4, c5, c6 = np.moveaxis(np.cos(q), -1, 0)
-        s1, s2, s3, s4, s5, s6 = np.moveaxis(np.sin(q), -1, 0)
-        c23, s23 = c2 * c3 - s2 * s3, s2 * c3 + c2 * s3
-        c234, s234 = c23 * c4 - s23 * s4, s23 * c4 + c23 * s4
-        T = np.empty(q.shape[:-1] + (4, 4))
-        u = -s1 * s5 + c1 * c5 * c234
-        w = s5 * c1 + s1 * c5 * c234
-        T[..., 0, 0] = c6 * u - s6 * s234 * c1
-        T[..., 0, 1] = -s6 * u - s234 * c1 * c6
-        T[..., 0, 2] = r13 = s1 * c5 + s5 * c1 * c234
-        T[..., 1, 0] = c6 * w - s6 * s234 * s1
-        T[..., 1, 1] = -s6 * w - s234 * s1 * c6
-        T[..., 1, 2] = r23 = -c1 * c5 + s5 * s1 * c234
-        T[..., 2, 0] = s6 * c234 + s234 * c5 * c6
-        T[..., 2, 1] = c6 * c234 - s234 * c5 * s6
-        T[..., 2, 2] = r33 = s5 * s234
-        reach = self.a2 * c2 + self.a3 * c23 - self.d5 * s234
-        T[..., 0, 3] = c1 * reach + self.d4 * s1 + self.d6 * r13
-        T[..., 1, 3] = s1 * reach - self.d4 * c1 + self.d6 * r23
-        T[..., 2, 3] = self.a2 * s2 + self.a3 * s23 + self.d1 + self.d5 * c234 + self.d6 * r33
-        T[..., 3, :3] = 0.0
-        T[..., 3, 3] = 1.0
-        return T
+        return self._geometry.fk(q)
 
-    # ------------------------------------------------------------------ IK
+    def frames(self, q) -> np.ndarray:
+        """Every row's frame in the base frame, (..., rows + 1, 4, 4); the last is :meth:`fk`."""
+        return self._geometry.frames(q)
 
-    def ik(self, T, hint=None) -> _ik.IKSolution:
-        """All eight analytic IK branches of base → flange poses (docs/kinematics.md §4).
+    def jacobian(self, q) -> np.ndarray:
+        """Geometric Jacobian at the tool origin, base frame, (..., 6, n), rows [v; ω] (docs/kinematics.md §5, §7.6)."""
+        return self._geometry.jacobian(q)
+
+    def within_limits(self, q) -> np.ndarray:
+        """(...) bool: every joint inside its limits (revolute joints also one turn either way)."""
+        q = self.joints(q)
+        low, high = self.limits[:, 0], self.limits[:, 1]
+        inside = (q >= low) & (q <= high)
+        turned = np.where(self.revolute, (q + 2 * _PI >= low) & (q + 2 * _PI <= high)
+                          | (q - 2 * _PI >= low) & (q - 2 * _PI <= high), False)
+        return (inside | turned).all(axis=-1)
+
+    def ik(self, T, hint=None) -> IKSolution:
+        """Every IK branch of base → tool poses, in fixed labelled slots (docs/kinematics.md §4, §7.3).
 
         Parameters
         ----------
         T : array_like, shape (..., 4, 4)
-            Poses, metres. A rotation part that is not a proper rotation, a bottom row
-            other than [0, 0, 0, 1] or a non-finite entry raises ``ValueError``; an
-            unreachable pose does not (every slot is then invalid).
-        hint : array_like, shape (..., 6), optional
-            The current joints. Where the pose fixes a joint only loosely — θ6 near the
-            wrist singularity (only θ234 ± θ6 is determined), the shoulder's reach near the
-            shoulder singularity, θ3 at the stretched or folded elbow — the hint's value is
-            kept whenever it reproduces the pose within the tolerances of
-            :mod:`ur10core.tolerances`. Default: θ6 = 0.
+            Poses (metres). Only what the arm controls is matched (:attr:`task`). A pose that
+            is not a proper transform raises ``ValueError``; an unreachable one does not.
+        hint : array_like, shape (..., n), optional
+            The current joints: where the pose leaves a joint free (a singular wrist, a
+            wrist centre on axis 1), the hint's value is kept; the numerical IK starts there.
 
         Returns
         -------
         IKSolution
-            ``q`` (..., 8, 6) in (−π, π], ``valid`` (..., 8) and the flags; slot
-            ``k = 4 i + 2 j + l`` as described in :mod:`ur10core.ik`.
+            ``q`` (..., k, n), ``valid``, ``within_limits``, labels, and why empty slots are empty.
 
-        Example
-        -------
         >>> arm = Arm.preset("course")
         >>> q = np.radians([30, 45, 26, 50, 60, 80])
         >>> sol = arm.ik(arm.fk(q))
-        >>> int(sol.valid.sum()), np.degrees(sol.q[4]).round(6).tolist()
-        (8, [30.0, 45.0, 26.0, 50.0, 60.0, 80.0])
-        >>> sol.labels[4]
-        'shoulder right, elbow down, wrist not flipped'
+        >>> int(sol.valid.sum()), np.degrees(sol.q[4]).round(6).tolist(), sol.labels[4]
+        (8, [30.0, 45.0, 26.0, 50.0, 60.0, 80.0], 'shoulder right, elbow down, wrist not flipped')
         """
-        T = as_float_array(T, "T")
+        own = getattr(self.solver, "ik", None)
+        if own is not None:  # the family solves whole batches itself (the UR kernels, the desktop arm)
+            return own(self, T, hint)
+        T = homogeneous_transform(T)
+        batch = T.shape[:-2]
         if hint is not None:
-            hint = joint_vector(hint, "hint")
-        if T.shape == (4, 4) and (hint is None or hint.shape == (6,)):
-            solution = _ik.solve_one(
-                self, T if T.flags.c_contiguous else np.ascontiguousarray(T),
-                ik_reference.hint_values(None if hint is None else hint.tolist(), self.dh_lengths),
-            )
-            if solution is None:
-                homogeneous_transform(T)  # words what is wrong
-                raise ValueError("T is not a proper homogeneous transform (at the tolerance limit)")
-            return solution
-        if T.ndim < 2 or T.shape[-2:] != (4, 4):
-            homogeneous_transform(T)  # raises: wrong shape
-        if hint is None:
-            hints = np.array([0.0, np.nan, np.nan])
-        else:
-            hints = np.stack([hint[..., 5], self.singularity_factors(hint)[..., 0], hint[..., 2]], axis=-1)
-        try:
-            batch = np.broadcast_shapes(T.shape[:-2], hints.shape[:-1])
-        except ValueError:
-            raise ValueError(
-                f"hint of shape {hint.shape} does not broadcast against poses of shape {T.shape}"
-            ) from None
-        T = np.broadcast_to(T, batch + (4, 4))
-        solution = _ik.solve_batch(self, T, hints)
-        if isinstance(solution, int):
-            homogeneous_transform(T)  # words what is wrong
-            where = list(np.unravel_index(solution, batch))
-            raise ValueError(f"T{where} is not a proper homogeneous transform (at the tolerance limit)")
-        return solution
+            hint = self.joints(hint, "hint")
+            try:
+                batch = np.broadcast_shapes(batch, hint.shape[:-1])
+            except ValueError:
+                raise ValueError(f"hint of shape {hint.shape} does not broadcast against poses of shape {T.shape}") from None
+            hint = np.broadcast_to(hint, batch + (self.n_joints,)).reshape(-1, self.n_joints)
+        flat = np.ascontiguousarray(np.broadcast_to(T, batch + (4, 4)).reshape(-1, 4, 4))
+        out = self.solver.solve(flat, hint)
+        slots = out["q"].shape[1]
+        shape = lambda a, *tail: a.reshape(batch + (slots,) + tail)  # noqa: E731
+        return IKSolution(shape(out["q"], self.n_joints), shape(out["valid"]), shape(out["failure"]), self,
+                          detail=shape(out["detail"]), singular=shape(out["singular"]))
 
-    # ------------------------------------------------------------------ Jacobian
+    def pose_error(self, q, T) -> np.ndarray:
+        """How far FK(q) is from ``T`` in what the arm controls (max abs entry), shape (...)."""
+        difference = np.abs(self.fk(q) - np.asarray(T, dtype=float))
+        if self.task == "position":
+            return difference[..., :3, 3].max(axis=-1)
+        if self.task == "position and yaw":  # the tool axis is the arm's own: compare p and x, y axes' yaw
+            return np.maximum(difference[..., :3, 3].max(axis=-1), difference[..., :2, :2].max(axis=(-2, -1)))
+        return difference[..., :3, :].max(axis=(-2, -1))
 
-    def jacobian(self, q) -> np.ndarray:
-        """Geometric Jacobian at the flange origin in the base frame, (..., 6, 6), rows [v; w].
+    # ------------------------------------------------------------------ singularities
 
-        docs/kinematics.md §5: column i is ``[z_i × (o_6 − o_i); z_i]`` with z_i, o_i the axis
-        and origin of frame {i} (every joint revolute).
+    def singularity_factors(self, q) -> np.ndarray:
+        """The factors of det J at joints ``q`` (..., n), shape (..., k) (docs/kinematics.md §5, §7.6, §8.6).
+
+        ``det J`` is a constant times their product; each is zero on one singularity. The UR
+        family's three (shoulder, elbow, wrist) and the desktop arm's two are closed forms;
+        the course's other arms' are derived (``ur10core.symbolic_arms.load(name).factors``
+        names them). ``ValueError`` for a typed table.
+
+        >>> Arm.preset("course").singularity_factors(np.radians([0, 90, 0, 0, 90, 0])).round(4).tolist()
+        [-0.1157, 0.0, 1.0]
         """
-        frames = self.frames(q)
-        z = frames[..., 1:, :3, 2]  # (..., 6, 3)
-        o = frames[..., 1:, :3, 3]
-        J = np.empty(frames.shape[:-3] + (6, 6))
-        J[..., :3, :] = np.swapaxes(cross(z, o[..., 5:6, :] - o), -1, -2)
-        J[..., 3:, :] = np.swapaxes(z, -1, -2)
-        return J
+        own = getattr(self.solver, "singularity_factors", None)
+        if own is not None:
+            return own(q)
+        from . import symbolic_arms
+
+        if self.name not in COURSE_ARMS:
+            raise ValueError(f"{self.name!r} has no derived factors (a custom table): use smallest_singular_value or manipulability")
+        return symbolic_arms.load(self.name).evaluate(self.joints(q))
+
+    def wrist_centre(self, q) -> np.ndarray:
+        """The point nearest the last three joint axes at joints ``q`` (..., n), shape (..., 3).
+
+        For a spherical wrist (the KR210, the elbow arm, the Stanford arm) the three axes meet
+        there: it is the wrist centre Pieper's decoupling solves for (docs/kinematics.md §7.3),
+        and the point the shoulder and elbow singularities are about (§7.6). ``ValueError``
+        for an arm whose last three joints are not all revolute.
+
+        Example: the Stanford arm's d6 = 0 puts its tool frame at the wrist centre.
+
+        >>> arm = Arm.preset("stanford")
+        >>> q = np.array([0.3, 1.0, 0.4, 0.2, 0.5, 0.1])
+        >>> bool(np.allclose(arm.wrist_centre(q), arm.fk(q)[:3, 3]))
+        True
+        """
+        if self.dh is None or self.n_joints < 3 or self.joint_types[-3:] != "RRR":
+            raise ValueError(f"{self.name!r} has no wrist of three revolute joints: no wrist centre")
+        z, o = self.dh.joint_axes(self.dh.frames(q))
+        z, o = z[..., -3:, :], o[..., -3:, :]
+        # least squares: Σ (I − z zᵀ)(c − o) = 0 over the three axes
+        projector = np.eye(3) - z[..., :, None] * z[..., None, :]
+        A = projector.sum(axis=-3)
+        b = (projector @ o[..., None]).sum(axis=-3)
+        return np.linalg.solve(A, b)[..., 0]
 
     def gravity_torques(self, q, payload_kg: float = 0.0) -> np.ndarray:
-        """The joint torques (N·m) that hold the arm still against gravity at joints ``q``, (..., 6).
+        """The joint torques (N·m) that hold the arm still against gravity at joints ``q``, (..., n).
 
-        From UR's published link masses and centres of mass (docs/kinematics.md §8.5; ``ur10``
-        and ``course`` presets), ``payload_kg`` at the flange; the sense of
-        roboticstoolbox-python's ``gravload``. ``ValueError`` for an arm without them (``ur10e``).
+        From the arm's published link masses and centres of mass (docs/kinematics.md §8.5:
+        UR's, for ``ur10`` and ``course``), ``payload_kg`` at the flange; the sense of
+        roboticstoolbox-python's ``gravload``. ``ValueError`` naming the arms that have
+        masses, for one without them.
 
         Example: stretched out horizontally, the shoulder holds the most.
 
@@ -354,220 +365,59 @@ class Arm(JacobianUses, HasSpecs):
         """
         from . import dynamics
 
-        return dynamics.gravity_torques(self, joint_vector(q), payload_kg)
+        dynamics.link_masses(self)  # raises, naming the arms that have them
+        return dynamics.gravity_torques(self, self.joints(q), payload_kg)
 
-    def singularity_factors(self, q) -> np.ndarray:
-        """The three factors of det J, (..., 3): shoulder, elbow, wrist (docs/kinematics.md §5).
-
-        ``(a2 c2 + a3 c23 − d5 s234, s3, s5)``; ``det J = a2 a3`` times their product.
-        The shoulder factor is the signed reach of the wrist-2 point along x1: it is zero
-        when P5 lies on the cylinder of radius d4 about the base axis.
-        """
-        q = joint_vector(q)
-        if q.shape == (6,):  # one pose: plain floats beat a dozen numpy calls
-            _, t2, t3, t4, t5, _ = q.tolist()
-            shoulder = self.a2 * math.cos(t2) + self.a3 * math.cos(t2 + t3) - self.d5 * math.sin(t2 + t3 + t4)
-            return np.array([shoulder, math.sin(t3), math.sin(t5)])
-        t2, t3, t4, t5 = np.moveaxis(q[..., 1:5], -1, 0)
-        t23 = t2 + t3
-        shoulder = self.a2 * np.cos(t2) + self.a3 * np.cos(t23) - self.d5 * np.sin(t23 + t4)
-        return np.stack([shoulder, np.sin(t3), np.sin(t5)], axis=-1)
-
-    def det_jacobian(self, q) -> np.ndarray:
-        """``det J = a2 a3 (a2 c2 + a3 c23 − d5 s234) s3 s5`` (docs/kinematics.md §5), shape (...)."""
-        return self.a2 * self.a3 * self.singularity_factors(q).prod(axis=-1)
-
-    def singularity_geometry(self, q) -> SingularityGeometry:
-        """Points, axes and surfaces of the three singularities for ``q``; see :class:`SingularityGeometry`."""
-        return self.singularity_geometry_from_frames(self.frames(q))
-
-    def singularity_geometry_from_frames(self, frames: np.ndarray) -> SingularityGeometry:
-        """The same from frames {0}..{6} already computed by :meth:`frames`, (..., 7, 4, 4)."""
-        frames = as_float_array(frames, "frames")
-        if frames.shape[-3:] != (7, 4, 4):
-            raise ValueError(f"frames must have shape (..., 7, 4, 4), got {frames.shape}")
-        check_finite(frames, "frames")
-        shoulder = frames[..., 2, :3, 3]
-        return SingularityGeometry(
-            shoulder=shoulder,
-            elbow=frames[..., 3, :3, 3],
-            p4=frames[..., 4, :3, 3],
-            p5=frames[..., 5, :3, 3],
-            flange=frames[..., 6, :3, 3],
-            axis4=frames[..., 4, :3, 2],
-            axis6=frames[..., 6, :3, 2],
-            arm_forward=frames[..., 1, :3, 0],
-            elbow_center=shoulder + self.d4 * frames[..., 2, :3, 2],
-            cylinder_radius=self.d4,
-            elbow_radii=(self.a2 + self.a3, abs(self.a2 - self.a3)),
-        )
-
-    def singular_configuration(self, kind: str, q) -> np.ndarray:
-        """Joints ``q`` changed as little as needed to sit exactly on one singularity (docs/kinematics.md §5).
-
-        * ``"elbow"``: θ3 = 0, the arm stretched (s3 = 0).
-        * ``"wrist"``: θ5 = 0, axes 4 and 6 parallel (s5 = 0).
-        * ``"shoulder"``: θ4 chosen so that ``a2 c2 + a3 c23 − d5 s234 = 0`` (P5 on the d4
-          cylinder); if no θ4 can do it for these θ2, θ3, θ2 is first turned so that
-          ``a2 c2 + a3 c23 = 0`` and then s234 = 0.
-
-        Where two angles would do, the one nearest the current angle is taken.
-        Returns a new joint vector of shape (6,) or (..., 6) like ``q``.
-
-        >>> arm = Arm.preset("course")
-        >>> q = arm.singular_configuration("shoulder", np.radians([30, 45, 26, 50, 60, 80]))
-        >>> abs(float(arm.singularity_factors(q)[0])) < 1e-12
-        True
-        """
-        q = joint_vector(q).copy()
-        if kind == "elbow":
-            q[..., 2] = 0.0
-        elif kind == "wrist":
-            q[..., 4] = 0.0
-        elif kind == "shoulder":
-            t2, t3 = q[..., 1], q[..., 2]
-            ratio = (self.a2 * np.cos(t2) + self.a3 * np.cos(t2 + t3)) / self.d5
-            feasible = np.abs(ratio) <= 1.0
-            # otherwise turn θ2 so the upper arm and forearm together reach nowhere along x1
-            c3, s3 = np.cos(t3), np.sin(t3)
-            t2_zero = np.arctan2(self.a2 + self.a3 * c3, self.a3 * s3)
-            t2_zero = _ik.equivalent_near(np.stack([t2_zero, t2_zero + math.pi], -1), t2[..., None], JOINT_LIMIT)
-            t2_zero = np.take_along_axis(t2_zero, np.argmin(np.abs(t2_zero - t2[..., None]), -1)[..., None], -1)[..., 0]
-            t2 = np.where(feasible, t2, t2_zero)
-            s234_target = np.where(feasible, np.clip(ratio, -1.0, 1.0), 0.0)
-            candidates = np.stack([np.arcsin(s234_target), math.pi - np.arcsin(s234_target)], -1)
-            current_234 = (q[..., 1] + q[..., 2] + q[..., 3])[..., None]
-            candidates = _ik.equivalent_near(candidates, current_234, np.inf)
-            pick = np.argmin(np.abs(candidates - current_234), -1)[..., None]
-            t234 = np.take_along_axis(candidates, pick, -1)[..., 0]
-            q[..., 1] = t2
-            q[..., 3] = _ik.equivalent_near(t234 - t2 - t3, q[..., 3], JOINT_LIMIT)
-        else:
-            raise ValueError(f"kind must be 'shoulder', 'elbow' or 'wrist', got {kind!r}")
-        return q
+    def smallest_singular_value(self, q) -> np.ndarray:
+        """σ_min of the rows of J the arm controls, shape (...): how close to losing a direction."""
+        J = self.jacobian(q)[..., TASK_ROWS[self.task], :]
+        return np.linalg.svd(J, compute_uv=False)[..., -1]
 
     # ------------------------------------------------------------------ workspace
 
+    def manipulability(self, q) -> np.ndarray:
+        """Yoshikawa's measure ``sqrt(det(J_t J_tᵀ))`` over the rows the arm controls, shape (...).
+
+        For a square J (six joints, or a SCARA's four, or the desktop arm's J_v) it is |det J|;
+        it is zero exactly at a singularity.
+        """
+        J = self.jacobian(q)[..., TASK_ROWS[self.task], :]
+        if J.shape[-2] == J.shape[-1]:  # as accurate as det J itself (the square root would lift rounding to ~1e-10)
+            return np.abs(np.linalg.det(J))
+        if J.shape[-2] > J.shape[-1]:  # fewer joints than task rows: the measure of Jᵀ J
+            J = np.swapaxes(J, -1, -2)
+        return np.sqrt(np.clip(np.linalg.det(J @ np.swapaxes(J, -1, -2)), 0.0, None))
+
+    def sample_joints(self, n: int, seed: int = 0) -> np.ndarray:
+        """``n`` joint vectors drawn uniformly within the limits, (n, n_joints).
+
+        The joints behind :meth:`sample_workspace`'s cloud, without its forward kinematics:
+        the same ``n`` and ``seed`` give the same vectors.
+        """
+        if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < 1:
+            raise ValueError(f"n must be a positive integer number of samples, got {n!r}")
+        if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
+            raise ValueError(f"seed must be a non-negative integer, got {seed!r}")
+        low, high = sampling_range(self.limits, self.revolute)
+        return np.random.default_rng(int(seed)).uniform(low, high, (int(n), self.n_joints))
+
     def sample_workspace(self, n: int, seed: int = 0, return_joints: bool = False):
-        """Flange positions of ``n`` random joint vectors and their manipulability.
+        """Tool positions of ``n`` joint vectors drawn uniformly within the limits, and their manipulability.
 
-        θ1..θ5 are drawn uniformly from (−π, π] (θ6 moves neither the flange origin nor
-        det J, so it is 0); positions come from the closed form of docs/kinematics.md §3 and
-        the manipulability is ``|det J| = |a2 a3 (a2 c2 + a3 c23 − d5 s234) s3 s5|`` (§5).
-        The same ``n`` and ``seed`` always give the same cloud, on any number of threads.
-
-        Returns
-        -------
-        points : ndarray, shape (n, 3)
-            Metres, base frame.
-        manipulability : ndarray, shape (n,)
-            |det J| in m³.
-        joints : ndarray, shape (n, 6)
-            Only with ``return_joints=True``: the joint vectors sampled.
+        Returns points (n, 3) in metres, manipulability (n,) and, with ``return_joints``,
+        the joints (n, n_joints) (:meth:`sample_joints`; the UR family draws every joint over
+        one turn, in closed form, on all cores). The same ``n`` and ``seed`` give the same cloud.
         """
-        if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < 1:
-            raise ValueError(f"n must be a positive integer number of samples, got {n!r}")
-        if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
-            raise ValueError(f"seed must be a non-negative integer, got {seed!r}")
-        n = int(n)
-        points = np.empty((n, 3))
-        manipulability = np.empty(n)
-        joints = np.zeros((n, 6)) if return_joints else None
-        block = 65536
-        starts = range(0, n, block)
-        streams = np.random.SeedSequence(int(seed)).spawn(len(starts))
-
-        def run(index: int) -> None:
-            start = starts[index]
-            stop = min(start + block, n)
-            q = np.random.default_rng(streams[index]).uniform(-math.pi, math.pi, (5, stop - start))
-            np.negative(q, out=q)  # uniform on (-π, π], the joint-angle convention
-            self._positions_and_det(q, points[start:stop], manipulability[start:stop])
-            if joints is not None:
-                joints[start:stop, :5] = q.T
-
-        if len(starts) > 1:
-            list(_ik._pool().map(run, range(len(starts))))
-        else:
-            run(0)
+        own = getattr(self.solver, "sample_workspace", None)
+        if own is not None:
+            return own(n, seed, return_joints)
+        q = self.sample_joints(n, seed)
+        points = np.empty((int(n), 3))
+        manipulability = np.empty(int(n))
+        for start in range(0, int(n), 65536):
+            block = q[start:start + 65536]
+            points[start:start + len(block)] = self.fk(block)[:, :3, 3]
+            manipulability[start:start + len(block)] = self.manipulability(block)
         if return_joints:
-            return points, manipulability, joints
+            return points, manipulability, q
         return points, manipulability
-
-    def sample_horizontal_section(self, height: float, n: int, seed: int = 0, return_joints: bool = False):
-        """Up to ``n`` flange positions exactly in the plane z = ``height``, and their manipulability.
-
-        A horizontal section of :meth:`sample_workspace`, sampled in the plane itself rather
-        than filtered from a cloud (a thin slab of a 200 k cloud holds a few hundred points).
-        The flange height (docs/kinematics.md §3, "The height of the flange") depends on θ2
-        only through
-
-            z = d1 + A s2 + B c2,   A = a2 + a3 c3 − d5 s34 + d6 s5 c34,
-                                    B = a3 s3 + d5 c34 + d6 s5 s34,
-
-        so for θ1, θ3, θ4, θ5 drawn uniformly, θ2 = atan2(A, B) ± acos((z − d1) / √(A² + B²))
-        puts the flange in the plane (either sign at random; draws with no solution are
-        drawn again, up to 20 rounds: fewer than ``n`` come back only for a plane at the very
-        top or bottom of the workspace). θ6 = 0. ValueError when no flange reaches it.
-
-        Returns points (m, 3), m ≤ n, with z = height, manipulability (m,) = |det J| in m³,
-        and with ``return_joints`` the joints (m, 6).
-
-        >>> points, _ = Arm.preset("course").sample_horizontal_section(0.5, 4)
-        >>> points[:, 2].round(12).tolist()
-        [0.5, 0.5, 0.5, 0.5]
-        """
-        if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < 1:
-            raise ValueError(f"n must be a positive integer number of samples, got {n!r}")
-        if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
-            raise ValueError(f"seed must be a non-negative integer, got {seed!r}")
-        height = float(as_float_array(height, "height"))
-        reach = abs(self.a2) + abs(self.a3) + abs(self.d5) + abs(self.d6)  # no √(A² + B²) is larger
-        lowest, highest = self.d1 - reach, self.d1 + reach
-        if not np.isfinite(height) or not lowest < height < highest:
-            raise ValueError(f"height {height:.3f} m is outside the workspace: the flange reaches z in "
-                             f"({lowest:.3f}, {highest:.3f}) m")
-        rng = np.random.default_rng(int(seed))
-        kept: list[np.ndarray] = []
-        count = 0
-        for _ in range(20):  # inside the workspace a round keeps a good share of its draws
-            q = -rng.uniform(-math.pi, math.pi, (5, max(2 * (n - count), 1024)))  # (−π, π]
-            c3, s3, s5 = np.cos(q[2]), np.sin(q[2]), np.sin(q[4])
-            c34, s34 = np.cos(q[2] + q[3]), np.sin(q[2] + q[3])
-            A = self.a2 + self.a3 * c3 - self.d5 * s34 + self.d6 * s5 * c34
-            B = self.a3 * s3 + self.d5 * c34 + self.d6 * s5 * s34
-            ratio = (height - self.d1) / np.hypot(A, B)
-            ok = np.abs(ratio) <= 1.0
-            q = q[:, ok]
-            sign = np.where(rng.random(q.shape[1]) < 0.5, -1.0, 1.0)
-            q[1] = -np.remainder(-(np.arctan2(A[ok], B[ok]) + sign * np.arccos(ratio[ok])) + math.pi, 2 * math.pi) + math.pi
-            kept.append(q)
-            count += q.shape[1]
-            if count >= n:
-                break
-        q = np.concatenate(kept, axis=1)[:, :n]
-        if q.shape[1] == 0:
-            raise ValueError(f"height {height:.3f} m: no flange position found in that plane (the edge of the workspace)")
-        n = q.shape[1]
-        points, manipulability = np.empty((n, 3)), np.empty(n)
-        self._positions_and_det(q, points, manipulability)
-        points[:, 2] = height  # exact, not FK's last bit
-        if return_joints:
-            joints = np.zeros((n, 6))
-            joints[:, :5] = q.T
-            return points, manipulability, joints
-        return points, manipulability
-
-    def _positions_and_det(self, q: np.ndarray, points: np.ndarray, det_out: np.ndarray) -> None:
-        c = np.cos(q)
-        s = np.sin(q)
-        c1, c2, c3, c4, c5 = c
-        s1, s2, s3, s4, s5 = s
-        c23, s23 = c2 * c3 - s2 * s3, s2 * c3 + c2 * s3
-        c234, s234 = c23 * c4 - s23 * s4, s23 * c4 + c23 * s4
-        reach = self.a2 * c2 + self.a3 * c23 - self.d5 * s234
-        s5c234 = s5 * c234
-        points[:, 0] = c1 * reach + self.d4 * s1 + self.d6 * (s1 * c5 + c1 * s5c234)
-        points[:, 1] = s1 * reach - self.d4 * c1 - self.d6 * (c1 * c5 - s1 * s5c234)
-        points[:, 2] = self.a2 * s2 + self.a3 * s23 + self.d1 + self.d5 * c234 + self.d6 * s5 * s234
-        np.abs(self.a2 * self.a3 * reach * s3 * s5, out=det_out)

@@ -1,23 +1,26 @@
-"""The IK result of a general arm: every branch in a fixed, labelled slot (docs/kinematics.md §7.3).
+"""The one IK result of every arm: each branch in a fixed, labelled slot (docs/kinematics.md §4, §7.3).
 
-The UR family has its own richer result (:class:`ur10core.ik.IKSolution`); the other arms
-share this one, whether their branches come from a closed form or from the numerical
-solver.
+Whatever solved it (the UR family's kernels, Pieper's decoupling, a planar closed form,
+the desktop arm's, or the numerical search of a typed table), :meth:`ur10core.Arm.ik`
+returns an :class:`IKSolution`: the same slots for the same arm, valid flags, why an empty
+slot is empty (one set of failure codes), and one :meth:`IKSolution.nearest`.
 """
 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
-from typing import Callable
+from typing import TYPE_CHECKING, NamedTuple
 
 import numpy as np
 
-#: Why a slot is empty (``BranchSet.failure``); ``detail`` holds the number behind it.
+if TYPE_CHECKING:
+    from .arm import Arm
+
+#: Why a slot is empty (``IKSolution.failure``); ``detail`` holds the number behind it.
 REACHED = 0
-TOO_FAR = 1  #: detail: the distance the arm would have to span (m)
-TOO_CLOSE = 2  #: detail: the same, below the shortest span
-INSIDE_OFFSET = 3  #: detail: the point's distance from the base axis (m), below the shoulder offset
+INSIDE_OFFSET = 1  #: detail: the point's distance from the base axis (m), below the shoulder offset
+TOO_FAR = 2  #: detail: the distance the arm would have to span (m)
+TOO_CLOSE = 3  #: detail: the same, below the shortest span
 ORIENTATION = 4  #: detail: the angle (rad) between the tool axis asked for and the one the arm can have
 OUT_OF_PLANE = 5  #: detail: the distance (m) from the plane the arm moves in
 NOT_FOUND = 6  #: detail: the smallest pose error the numerical solver reached
@@ -30,45 +33,95 @@ def wrap(angle: np.ndarray) -> np.ndarray:
     return -np.remainder(-np.asarray(angle) + math.pi, _TAU) + math.pi
 
 
-@dataclass(frozen=True)
-class BranchSet:
-    """The IK branches of one or many poses (leading shape ``...``), k slots of n joints.
+class Branch(NamedTuple):
+    """The branch :meth:`IKSolution.nearest` picks."""
+
+    q: np.ndarray  #: (..., n) joint values, revolute ones turned next to the current ones (NaN if none valid)
+    slot: np.ndarray  #: (...,) int slot index, −1 where no slot is valid
+
+
+class IKSolution:
+    """The IK branches of one or many poses (leading shape ``...``): k slots of n joints.
 
     Attributes
     ----------
     q : ndarray, shape (..., k, n)
-        Joint values (radians in (−π, π] for revolute joints, metres for prismatic); NaN
-        in invalid slots.
+        Joint values (radians in (−π, π] for revolute joints, metres for prismatic ones);
+        NaN in invalid slots.
     valid : ndarray of bool, shape (..., k)
-        The slot reaches the pose (every component the arm controls, see ``task``).
+        The slot reaches the pose (every component the arm controls, see :attr:`task`).
     within_limits : ndarray of bool, shape (..., k)
         Valid and inside every joint limit. A valid slot beyond a limit stays valid.
     singular : ndarray of bool, shape (..., k)
-        A joint value was chosen, not computed (the pose does not fix it: a spherical
-        wrist with axes 4 and 6 aligned, a wrist centre on axis 1); the hint's value is
-        used there.
+        A joint value was chosen, not computed (the pose does not fix it: a wrist with
+        axes 4 and 6 aligned, a wrist centre on axis 1, two slots that coincide); the hint's
+        value is kept there.
     failure, detail : ndarray, shape (..., k)
         Why a slot is empty (:data:`TOO_FAR`, ...) and the number behind it.
     labels : tuple of str
-        What each slot is, e.g. ``"shoulder front, elbow up, wrist not flipped"``.
+        What each slot is, e.g. ``"shoulder right, elbow down, wrist not flipped"``.
     method : str
         ``"analytic"`` or ``"found numerically"``.
     task : str
         What of the pose the arm controls: ``"pose"``, ``"position and yaw"`` or ``"position"``.
-    explain : callable
-        ``explain(failure, detail) -> str``, the arm's words for a failure.
+    arm : Arm
+        The arm solved for.
+
+    A family may add its own numbers as attributes (the UR family: ``wrist_singular``,
+    ``elbow_singular``, ``shoulder_singular``, ``wrist2_radius``, ``elbow_distance``, see
+    :mod:`ur10core.ik`); ``detail``, ``singular`` and ``within_limits`` are then worked out
+    from them when first read, which keeps the UR10's one-pose call as fast as it was.
     """
 
-    q: np.ndarray
-    valid: np.ndarray
-    within_limits: np.ndarray
-    singular: np.ndarray
-    failure: np.ndarray
-    detail: np.ndarray
-    labels: tuple[str, ...]
-    method: str
-    task: str
-    explain: Callable[[int, float], str]
+    __slots__ = ("q", "valid", "failure", "arm", "extra", "_detail", "_singular", "_within_limits")
+
+    def __init__(self, q, valid, failure, arm: "Arm", detail=None, singular=None, within_limits=None, **extra) -> None:
+        self.q, self.valid, self.failure, self.arm = q, valid, failure, arm
+        self._detail, self._singular, self._within_limits = detail, singular, within_limits
+        self.extra = extra
+
+    def __getattr__(self, name: str):
+        try:
+            return self.extra[name]  # type: ignore[index]
+        except (KeyError, AttributeError):
+            raise AttributeError(f"IKSolution has no attribute {name!r}") from None
+
+    def __repr__(self) -> str:
+        return f"IKSolution({self.arm.name!r}, poses {self.valid.shape[:-1]}, {len(self.labels)} slots)"
+
+    # ------------------------------------------------------------------ what the family says
+
+    @property
+    def labels(self) -> tuple[str, ...]:
+        return self.arm.solver.labels
+
+    @property
+    def method(self) -> str:
+        return getattr(self.arm.solver, "method", "analytic")
+
+    @property
+    def task(self) -> str:
+        return self.arm.task
+
+    @property
+    def detail(self) -> np.ndarray:
+        if self._detail is None:
+            self._detail = self.arm.solver.derived(self, "detail")
+        return self._detail
+
+    @property
+    def singular(self) -> np.ndarray:
+        if self._singular is None:
+            self._singular = self.arm.solver.derived(self, "singular")
+        return self._singular
+
+    @property
+    def within_limits(self) -> np.ndarray:
+        if self._within_limits is None:
+            self._within_limits = self.valid & self.arm.within_limits(np.where(self.valid[..., None], self.q, 0.0))
+        return self._within_limits
+
+    # ------------------------------------------------------------------ reading it
 
     @property
     def reachable(self) -> np.ndarray:
@@ -79,29 +132,72 @@ class BranchSet:
         """Why the pose at ``index`` has no branch, with the numbers; ``""`` if it has one."""
         if self.valid[index].any():
             return ""
+        words = getattr(self.arm.solver, "unreachable_reason", None)
+        if words is not None:  # a family with more to say than a failure code and its number
+            return words(self, index)
         failure, detail = self.failure[index], self.detail[index]
-        # the slot that came nearest says most
-        order = np.argsort(np.where(failure > 0, detail, np.inf), kind="stable")
-        reasons = dict.fromkeys(self.explain(int(failure[k]), float(detail[k])) for k in order if failure[k])
+        order = np.argsort(np.where(failure > 0, detail, np.inf), kind="stable")  # the slot that came nearest says most
+        reasons = dict.fromkeys(self.arm.solver.explain(int(failure[k]), float(detail[k])) for k in order if failure[k])
         return "; ".join(reasons) or "no branch reaches this pose"
 
-    def nearest(self, q_current, revolute: np.ndarray | None = None) -> int | np.ndarray:
-        """Index of the valid slot nearest ``q_current`` (…, n) in joint space, −1 where none is valid.
+    def nearest(self, q_current, joint_limit: float | None = None, prefer=None) -> Branch:
+        """The valid branch nearest the current joints ``q_current`` (..., n), turned next to them.
 
-        Revolute differences are wrapped to (−π, π]; ``revolute`` (n,) says which joints are.
+        Each revolute joint of each valid slot is replaced by the whole-turn equivalent nearest
+        the current value that stays within the arm's limits (``joint_limit``: ±that instead,
+        for the UR family's ±360°); the slot with the smallest Euclidean joint-space distance
+        wins. ``prefer`` (int or (...) ints, −1 for none) is a slot kept when it ties with the
+        nearest, so that an app showing "the arm is on branch k" does not flip at a singularity.
+        Where no slot is valid, ``q`` is NaN and ``slot`` −1.
+
+        >>> from ur10core import Arm
+        >>> arm = Arm.preset("scara")
+        >>> q = np.array([0.3, -0.9, 0.1, 0.4])
+        >>> branch = arm.ik(arm.fk(q)).nearest(q)
+        >>> int(branch.slot), np.allclose(branch.q, q)
+        (1, True)
         """
-        q_current = np.asarray(q_current, dtype=float)
-        difference = self.q - q_current[..., None, :]
-        if revolute is not None:
-            difference = np.where(revolute, wrap(difference), difference)
-        distance = np.where(self.valid, np.abs(difference).max(axis=-1), np.inf)
-        best = np.argmin(distance, axis=-1)
-        best = np.where(self.valid.any(axis=-1), best, -1)
-        return int(best) if best.ndim == 0 else best
+        from . import ik
+
+        limit = getattr(self.arm.solver, "turn_limit", None)
+        if limit is not None or joint_limit is not None:  # symmetric ±limit on every joint: the UR family's kernels
+            return ik.nearest_branch(self, q_current, limit if joint_limit is None else joint_limit, prefer)
+        return _nearest_within_limits(self, q_current, prefer)
+
+
+def _nearest_within_limits(solution: IKSolution, q_current, prefer) -> Branch:
+    from .ik import _preferred_slot
+    from .tolerances import TIE_TOLERANCE
+
+    arm = solution.arm
+    q_current = arm.joints(q_current, "q_current")
+    current = q_current[..., None, :]
+    low, high = arm.limits[:, 0], arm.limits[:, 1]
+    turns = np.round((current - solution.q) / _TAU)
+    shifted = solution.q + turns * _TAU
+    # back inside the limits by a whole turn where the nearest turn leaves them (and a turn fits)
+    shifted = np.where((shifted < low) & (shifted + _TAU <= high), shifted + _TAU, shifted)
+    shifted = np.where((shifted > high) & (shifted - _TAU >= low), shifted - _TAU, shifted)
+    shifted = np.where(arm.revolute, shifted, solution.q)
+    with np.errstate(invalid="ignore"):
+        distance = np.where(solution.valid, ((shifted - current) ** 2).sum(axis=-1), np.inf)
+    slot = np.argmin(distance, axis=-1)
+    prefer = _preferred_slot(prefer, len(solution.labels))
+    try:
+        prefer = np.broadcast_to(prefer, slot.shape)
+    except ValueError:
+        raise ValueError(f"prefer of shape {np.shape(prefer)} does not broadcast against poses of shape {slot.shape}") from None
+    candidate = np.maximum(prefer, 0)
+    best = np.take_along_axis(distance, slot[..., None], -1)[..., 0]
+    tie = (prefer >= 0) & (np.take_along_axis(distance, candidate[..., None], -1)[..., 0] <= best + TIE_TOLERANCE)
+    slot = np.where(tie, candidate, slot)
+    any_valid = solution.valid.any(axis=-1)
+    q = np.take_along_axis(shifted, slot[..., None, None], -2)[..., 0, :]
+    return Branch(np.where(any_valid[..., None], q, np.nan), np.where(any_valid, slot, -1))
 
 
 def empty_branches(batch: tuple[int, ...], slots: int, joints: int) -> dict[str, np.ndarray]:
-    """Arrays for a BranchSet of ``batch`` poses, every slot invalid."""
+    """Arrays for the branches of ``batch`` poses, every slot invalid."""
     return dict(
         q=np.full(batch + (slots, joints), np.nan),
         valid=np.zeros(batch + (slots,), bool),

@@ -1,7 +1,7 @@
 """What the Jacobian does: tool velocities, the joint rates a velocity needs, torques for a tool
 wrench, and the manipulability ellipsoids (docs/kinematics.md §8).
 
-Every arm of the core (``Arm`` and ``SerialArm``) has these as methods through
+Every arm of the core (``Arm`` and ``Arm``) has these as methods through
 :class:`JacobianUses`, from its own geometric Jacobian ``J(q)`` (6 × n, rows [v; ω], at the
 tool origin, in the base frame).
 """

@@ -53,14 +53,14 @@ from __future__ import annotations
 import math
 import os
 from concurrent.futures import ThreadPoolExecutor
-from dataclasses import dataclass
-from typing import TYPE_CHECKING, ClassVar, NamedTuple
+from typing import TYPE_CHECKING, NamedTuple
 
 import numpy as np
 
 from . import _numpy_kernels, ik_reference
 from ._backend import kernels
 from ._validate import as_float_array, homogeneous_transform, joint_vector
+from .branches import Branch, IKSolution
 from .ik_reference import ELBOW_TOO_CLOSE, ELBOW_TOO_FAR, REACHABLE, WRIST_INSIDE_CYLINDER
 from .tolerances import LENGTH_TOLERANCE, TIE_TOLERANCE, WRIST_TOLERANCE, WRIST_TURN_TOLERANCE
 
@@ -117,103 +117,6 @@ SLOTS: tuple[Slot, ...] = _make_slots()
 SLOT_LABELS: tuple[str, ...] = tuple(slot.label for slot in SLOTS)
 
 
-class Branch(NamedTuple):
-    """A branch picked by :func:`nearest_branch`."""
-
-    q: np.ndarray  #: (..., 6) joint angles, each within π of the current one (NaN if none valid)
-    slot: np.ndarray  #: (...,) int slot index, −1 where no slot is valid
-
-
-@dataclass(eq=False, slots=True)
-class IKSolution:
-    """The eight IK branches of one or many poses (leading shape ``...``).
-
-    Attributes
-    ----------
-    q : ndarray, shape (..., 8, 6)
-        Joint angles in (−π, π]; NaN in invalid slots.
-    valid : ndarray of bool, shape (..., 8)
-    wrist_singular : ndarray of bool, shape (..., 8)
-        |s5| ≤ :data:`WRIST_TOLERANCE` (axes 4 and 6 parallel): θ6 was chosen, not
-        computed — the hint's, or the one nearest it that lets the elbow reach; θ2, θ3,
-        θ4 follow from it. Also set on slots that fail although θ6 was free to choose.
-    elbow_singular : ndarray of bool, shape (..., 8)
-        |c3| = 1 (stretched or folded): the two elbow slots coincide.
-    shoulder_singular : ndarray of bool, shape (...)
-        P5 at distance d4 from the base axis: the two shoulder slots coincide.
-    failure : ndarray of int8, shape (..., 8)
-        :data:`REACHABLE`, :data:`WRIST_INSIDE_CYLINDER`, :data:`ELBOW_TOO_FAR` or
-        :data:`ELBOW_TOO_CLOSE`.
-    wrist2_radius : ndarray, shape (...)
-        ρ, the horizontal distance of the wrist-2 point P5 from the base axis (m).
-    elbow_distance : ndarray, shape (..., 8)
-        Distance from the shoulder to the frame-4 origin in the arm plane (m), the
-        planar 2R reach; NaN where θ1 does not exist. Where the wrist is singular and
-        no θ6 lets the elbow reach, the nearest any θ6 comes.
-    arm : Arm
-        The arm solved for (its lengths word :meth:`unreachable_reason`).
-    """
-
-    q: np.ndarray
-    valid: np.ndarray
-    wrist_singular: np.ndarray
-    elbow_singular: np.ndarray
-    shoulder_singular: np.ndarray
-    failure: np.ndarray
-    wrist2_radius: np.ndarray
-    elbow_distance: np.ndarray
-    arm: "Arm"
-
-    labels: ClassVar[tuple[str, ...]] = SLOT_LABELS
-    slots: ClassVar[tuple[Slot, ...]] = SLOTS
-
-    @property
-    def reachable(self) -> np.ndarray:
-        """(...) bool: at least one slot is valid."""
-        return self.valid.any(axis=-1)
-
-    def nearest(self, q_current, joint_limit: float = _TAU, prefer=None) -> Branch:
-        """The valid branch nearest ``q_current``; see :func:`nearest_branch`."""
-        return nearest_branch(self, q_current, joint_limit, prefer)
-
-    def unreachable_reason(self, index: tuple[int, ...] = ()) -> str:
-        """Why the pose at ``index`` has no solution, with the numbers (mm); ``""`` if it has one."""
-        valid = self.valid[index]
-        if valid.any():
-            return ""
-        arm = self.arm
-        failure = self.failure[index]
-        if (failure == WRIST_INSIDE_CYLINDER).all():
-            rho = float(self.wrist2_radius[index])
-            return (
-                f"unreachable: the wrist-2 point P5 is {1e3 * (arm.d4 - rho):.1f} mm inside the "
-                f"shoulder cylinder (it is {1e3 * rho:.1f} mm from the base axis; it must be at "
-                f"least d4 = {1e3 * arm.d4:.1f} mm)"
-            )
-        distance = self.elbow_distance[index]
-        outer, inner = arm.a2 + arm.a3, abs(arm.a2 - arm.a3)
-        excess = np.where(failure == ELBOW_TOO_FAR, distance - outer, inner - distance)
-        if np.isnan(excess).all():  # coordinates so large that the distances overflowed
-            return (
-                f"unreachable: elbow reach — the target is too far away to measure "
-                f"(the arm reaches a2 + a3 = {1e3 * outer:.1f} mm from the shoulder)"
-            )
-        k = int(np.nanargmin(excess))
-        if self.wrist_singular[index][k]:
-            where = (
-                f"with the wrist singular (axes 4 and 6 parallel) no θ6 works: the wrist-1 centre "
-                f"stays at least {1e3 * distance[k]:.1f} mm from the shoulder"
-                if failure[k] == ELBOW_TOO_FAR
-                else f"with the wrist singular (axes 4 and 6 parallel) no θ6 works: the wrist-1 centre "
-                f"stays within {1e3 * distance[k]:.1f} mm of the shoulder"
-            )
-        else:
-            where = f"the wrist-1 centre would be {1e3 * distance[k]:.1f} mm from the shoulder"
-        if failure[k] == ELBOW_TOO_FAR:
-            return f"unreachable: elbow reach — {where}, {1e3 * excess[k]:.1f} mm beyond a2 + a3 = {1e3 * outer:.1f} mm"
-        return f"unreachable: elbow reach — {where}, {1e3 * excess[k]:.1f} mm closer than |a2 − a3| = {1e3 * inner:.1f} mm"
-
-
 def nearest_branch(solution: IKSolution, q_current, joint_limit: float = _TAU, prefer=None) -> Branch:
     """The valid branch nearest the current joints, shifted next to them.
 
@@ -226,7 +129,7 @@ def nearest_branch(solution: IKSolution, q_current, joint_limit: float = _TAU, p
     Parameters
     ----------
     solution : IKSolution
-        Result of :meth:`Arm.ik`, leading shape ``...``.
+        A UR-family arm's result of :meth:`Arm.ik`, leading shape ``...`` (8 slots of 6 joints).
     q_current : array_like, shape (..., 6)
         The current joint angles (radians).
     joint_limit : float
@@ -290,17 +193,17 @@ def _joint_limit(joint_limit) -> float:
     return float(joint_limit)
 
 
-def _preferred_slot(prefer) -> int | np.ndarray:
-    """``prefer`` as an int (or int array) with values −1 (none) or 0..7; ValueError otherwise."""
+def _preferred_slot(prefer, slots: int = 8) -> int | np.ndarray:
+    """``prefer`` as an int (or int array) with values −1 (none) or 0..slots−1; ValueError otherwise."""
     if prefer is None:
         return -1
-    if type(prefer) is int and -1 <= prefer <= 7:  # the app's one-pose call, without numpy's overhead
+    if type(prefer) is int and -1 <= prefer < slots:  # the app's one-pose call, without numpy's overhead
         return prefer
     value = np.asarray(prefer)
     if value.dtype == bool or not np.issubdtype(value.dtype, np.integer):
-        raise ValueError(f"prefer must be a slot number 0..7 (or −1 for none), got {prefer!r:.60}")
-    if ((value < -1) | (value > 7)).any():
-        raise ValueError(f"prefer must be a slot number 0..7 (or −1 for none), got {prefer!r:.60}")
+        raise ValueError(f"prefer must be a slot number 0..{slots - 1} (or −1 for none), got {prefer!r:.60}")
+    if ((value < -1) | (value >= slots)).any():
+        raise ValueError(f"prefer must be a slot number 0..{slots - 1} (or −1 for none), got {prefer!r:.60}")
     return int(value) if value.ndim == 0 else value.astype(np.intp)
 
 
@@ -335,12 +238,17 @@ def solve_reference(arm: "Arm", T, hint=None) -> IKSolution:
     hint = None if hint is None else joint_vector(hint, "hint")
     if hint is not None and hint.shape != (6,):
         raise ValueError(f"solve_reference takes one hint of shape (6,), got {hint.shape}")
-    hints = ik_reference.hint_values(None if hint is None else hint.tolist(), arm.dh_lengths)
-    q, valid, wrist, elbow, shoulder, failure, rho, distance = ik_reference.solve_pose(T.tolist(), *hints, arm.dh_lengths)
-    return IKSolution(
-        np.array(q).reshape(8, 6), np.array(valid), np.array(wrist), np.array(elbow), np.array(shoulder),
-        np.array(failure, dtype=np.int8), np.array(rho), np.array(distance), arm,
-    )
+    lengths = arm.solver.dh_lengths
+    hints = ik_reference.hint_values(None if hint is None else hint.tolist(), lengths)
+    q, valid, wrist, elbow, shoulder, failure, rho, distance = ik_reference.solve_pose(T.tolist(), *hints, lengths)
+    return _solution(arm, np.array(q).reshape(8, 6), np.array(valid), np.array(wrist), np.array(elbow), np.array(shoulder),
+                     np.array(failure, dtype=np.int8), np.array(rho), np.array(distance))
+
+
+def _solution(arm: "Arm", q, valid, wrist, elbow, shoulder, failure, rho, distance) -> IKSolution:
+    """The kernels' arrays as the one result type; a UR arm's slots are all within its ±360°."""
+    return IKSolution(q, valid, failure, arm, within_limits=valid, wrist_singular=wrist, elbow_singular=elbow,
+                      shoulder_singular=shoulder, wrist2_radius=rho, elbow_distance=distance)
 
 
 #: Poses per task that :func:`solve_batch` hands to the thread pool.
@@ -360,11 +268,10 @@ def solve_one(arm: "Arm", T: np.ndarray, hints: tuple[float, float, float]) -> I
 
     ``hints`` are :func:`ur10core.ik_reference.hint_values`.
     """
-    result = kernels.ik_one(T, *hints, arm.dh_lengths)
+    result = kernels.ik_one(T, *hints, arm.solver.dh_lengths)
     if result is None:
         return None
-    q, valid, wrist, elbow, shoulder, failure, rho, distance = result
-    return IKSolution(q, valid, wrist, elbow, shoulder, failure, rho, distance, arm)
+    return _solution(arm, *result)
 
 
 def solve_batch(arm: "Arm", T: np.ndarray, hints: np.ndarray) -> IKSolution | int:
@@ -380,6 +287,7 @@ def solve_batch(arm: "Arm", T: np.ndarray, hints: np.ndarray) -> IKSolution | in
     theta6_hint, reach_hint, theta3_hint = (
         np.ascontiguousarray(np.broadcast_to(hints[..., k], shape), dtype=float).reshape(-1) for k in range(3)
     )
+    lengths = arm.solver.dh_lengths
     q = np.empty((n, 8, 6))
     valid = np.empty((n, 8), dtype=bool)
     wrist = np.empty((n, 8), dtype=bool)
@@ -393,7 +301,7 @@ def solve_batch(arm: "Arm", T: np.ndarray, hints: np.ndarray) -> IKSolution | in
     def run(start: int) -> int:
         block = slice(start, min(start + BLOCK, n))
         bad = kernels.ik_batch(
-            flat[block], theta6_hint[block], reach_hint[block], theta3_hint[block], arm.dh_lengths,
+            flat[block], theta6_hint[block], reach_hint[block], theta3_hint[block], lengths,
             *(out[block] for out in outputs),
         )
         return -1 if bad < 0 else start + bad
@@ -403,14 +311,6 @@ def solve_batch(arm: "Arm", T: np.ndarray, hints: np.ndarray) -> IKSolution | in
     invalid = [index for index in bad if index >= 0]
     if invalid:
         return min(invalid)
-    return IKSolution(
-        q.reshape(shape + (8, 6)),
-        valid.reshape(shape + (8,)),
-        wrist.reshape(shape + (8,)),
-        elbow.reshape(shape + (8,)),
-        shoulder.reshape(shape),
-        failure.reshape(shape + (8,)),
-        rho.reshape(shape),
-        distance.reshape(shape + (8,)),
-        arm,
-    )
+    return _solution(arm, q.reshape(shape + (8, 6)), valid.reshape(shape + (8,)), wrist.reshape(shape + (8,)),
+                     elbow.reshape(shape + (8,)), shoulder.reshape(shape), failure.reshape(shape + (8,)),
+                     rho.reshape(shape), distance.reshape(shape + (8,)))

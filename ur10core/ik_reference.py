@@ -10,13 +10,14 @@ from __future__ import annotations
 
 import math
 
+from .branches import INSIDE_OFFSET, REACHED, TOO_CLOSE, TOO_FAR
 from .tolerances import BAND_LEVERAGE, CHOICE_TOLERANCE, LENGTH_TOLERANCE, WRIST_TOLERANCE, WRIST_TURN_TOLERANCE
 
-#: Why a slot has no solution (``IKSolution.failure``).
-REACHABLE = 0
-WRIST_INSIDE_CYLINDER = 1  #: P5 closer than d4 to the base axis: no θ1 at all
-ELBOW_TOO_FAR = 2  #: the frame-4 origin is beyond a2 + a3 from the shoulder
-ELBOW_TOO_CLOSE = 3  #: the frame-4 origin is closer than |a2 − a3| to the shoulder
+#: Why a slot has no solution (``IKSolution.failure``): every arm's codes, by the UR family's names.
+REACHABLE = REACHED
+WRIST_INSIDE_CYLINDER = INSIDE_OFFSET  #: P5 closer than d4 to the base axis: no θ1 at all
+ELBOW_TOO_FAR = TOO_FAR  #: the frame-4 origin is beyond a2 + a3 from the shoulder
+ELBOW_TOO_CLOSE = TOO_CLOSE  #: the frame-4 origin is closer than |a2 − a3| to the shoulder
 
 PI = math.pi
 TAU = 2.0 * math.pi

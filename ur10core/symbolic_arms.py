@@ -41,7 +41,8 @@ from pathlib import Path
 import numpy as np
 import sympy as sp
 
-from .serial import PRESETS, SerialArm
+from .arm import Arm
+from .serial import PRESETS
 
 CACHE_PATH = Path(__file__).with_name("symbolic_arms_cache.json")
 
@@ -71,7 +72,7 @@ def _exact(value: float) -> sp.Expr:
     return sp.nsimplify(value, [sp.pi], tolerance=1e-12, rational=False)
 
 
-def symbolic_frames(arm: SerialArm) -> list[sp.Matrix]:
+def symbolic_frames(arm: Arm) -> list[sp.Matrix]:
     """T0i for every row, in the joint symbols q1..qn (the table's own convention, §7.1)."""
     table = arm.dh
     q = joint_symbols(table.n_joints)
@@ -113,7 +114,7 @@ class ArmDerivation:
 
     @functools.cached_property
     def _functions(self):
-        n = SerialArm.preset(self.name).n_joints
+        n = Arm.preset(self.name).n_joints
         q = joint_symbols(n)
         return [sp.lambdify([q], f.expression, "numpy") for f in self.factors]
 
@@ -124,7 +125,7 @@ class ArmDerivation:
         return np.stack(columns, axis=-1)
 
 
-def _jacobian_blocks(arm: SerialArm, frames: list[sp.Matrix]) -> list[sp.Matrix]:
+def _jacobian_blocks(arm: Arm, frames: list[sp.Matrix]) -> list[sp.Matrix]:
     """The square blocks whose determinants multiply to det J (module docstring)."""
     table = arm.dh
     index = [k if table.convention == "standard" else k + 1 for k in table.joint_rows]
@@ -145,7 +146,7 @@ def _jacobian_blocks(arm: SerialArm, frames: list[sp.Matrix]) -> list[sp.Matrix]
     return [Jv[:2, :]] if n == 2 else [Jv]
 
 
-def _expected_factors(arm: SerialArm, frames: list[sp.Matrix]) -> list[sp.Expr]:
+def _expected_factors(arm: Arm, frames: list[sp.Matrix]) -> list[sp.Expr]:
     """The factors with a meaning, written from the geometry (module docstring)."""
     q = joint_symbols(arm.n_joints)
     if arm.name in ("kr210", "elbow"):
@@ -185,7 +186,7 @@ def vanishes(expression: sp.Expr, n: int) -> bool:
 
 def derive(name: str) -> ArmDerivation:
     """det J of preset ``name``, proved to be a constant times its meaningful factors; seconds to a minute."""
-    arm = SerialArm.preset(name)
+    arm = Arm.preset(name)
     frames = symbolic_frames(arm)
     det = sp.Mul(*(block.det(method="berkowitz") for block in _jacobian_blocks(arm, frames)))
     factors = _expected_factors(arm, frames)

@@ -14,15 +14,17 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from ._validate import as_float_array, check_finite, homogeneous_transform
-from .branches import TOO_CLOSE, TOO_FAR, BranchSet, empty_branches, wrap
-from .differential import JacobianUses
+from .branches import TOO_CLOSE, TOO_FAR, IKSolution, empty_branches, wrap
 from .solvers.planar import _reach_words, _two_link
 from .tolerances import LENGTH_TOLERANCE
-from .specs import HasSpecs
+
+if TYPE_CHECKING:
+    from .arm import Arm
 
 #: The course's lengths (its simulation's numbers; read here as metres): upper arm l5, forearm l1.
 UPPER_ARM, FOREARM = 1.35, 1.28
@@ -43,35 +45,34 @@ def _rz(angle: np.ndarray) -> np.ndarray:
     return np.stack([np.stack([c, -s, zero], -1), np.stack([s, c, zero], -1), np.stack([zero, zero, one], -1)], -2)
 
 
-class ThreeDofArm(JacobianUses, HasSpecs):
-    """The course's 3-DOF desktop arm (docs/kinematics.md §8.6): ``Arm.preset("three_dof")``.
+@dataclass(frozen=True)
+class DesktopArm:
+    """The course's 3-DOF desktop arm's closed forms (docs/kinematics.md §8.6): the solver of
+    ``Arm.preset("three_dof")``. It has no DH table: the parallelogram makes θ3 absolute.
 
     Example: upper arm straight up (θ2 = −90°), forearm level (θ3 = 0): the tool is l1 out, l5 up.
 
-    >>> arm = ThreeDofArm()
+    >>> from ur10core import Arm
+    >>> arm = Arm.preset("three_dof")
     >>> arm.fk(np.radians([0, -90, 0]))[:3, 3].round(6).tolist()
     [1.28, 1.35, 0.0]
     """
 
-    name = "three_dof"
-    description = "the course's 3-DOF desktop arm (parallelogram forearm, y vertical)"
-    joint_types = "RRR"
-    n_joints = 3
-    joint_names = ("θ1 base", "θ2 upper arm", "θ3 forearm")
+    upper_arm: float = UPPER_ARM
+    forearm: float = FOREARM
+
     task = "position"
+    method = "analytic"
     #: Its vertical: the course's base frame has y up (every other arm of the core: z).
     up = (0.0, 1.0, 0.0)
 
-    def __init__(self, upper_arm: float = UPPER_ARM, forearm: float = FOREARM) -> None:
-        self.upper_arm, self.forearm = upper_arm, forearm
-        self.limits = LIMITS.copy()
-
-    def _joints(self, q) -> np.ndarray:
-        q = as_float_array(q, "q")
+    def joints(self, q, name: str = "q") -> np.ndarray:
+        q = as_float_array(q, name)
         if q.ndim == 0 or q.shape[-1] != 3:
-            raise ValueError(f"q must have shape (..., 3) (θ1, θ2, θ3), got shape {q.shape}")
-        check_finite(q, "q")
+            raise ValueError(f"{name} must have shape (..., 3) (θ1, θ2, θ3), got shape {q.shape}")
+        check_finite(q, name)
         return q
+
 
     def _planar(self, q: np.ndarray) -> np.ndarray:
         """(..., 3) the tool in the arm's vertical plane, before the base turns it."""
@@ -81,7 +82,7 @@ class ThreeDofArm(JacobianUses, HasSpecs):
 
     def fk(self, q) -> np.ndarray:
         """Base → tool, (..., 4, 4): position p(q) and the orientation R = Ry(θ1) Rz(θ2)."""
-        q = self._joints(q)
+        q = self.joints(q)
         T = np.zeros(q.shape[:-1] + (4, 4))
         base = _ry(q[..., 0])
         T[..., :3, :3] = base @ _rz(q[..., 1])
@@ -91,7 +92,7 @@ class ThreeDofArm(JacobianUses, HasSpecs):
 
     def frames(self, q) -> np.ndarray:
         """(..., 3, 4, 4): the shoulder (base turned by θ1), the elbow and the tool, for drawing."""
-        q = self._joints(q)
+        q = self.joints(q)
         base = _ry(q[..., 0])
         elbow = np.einsum("...ij,...j->...i", base, np.stack(
             [-self.upper_arm * np.cos(q[..., 1]), -self.upper_arm * np.sin(q[..., 1]), np.zeros(q.shape[:-1])], -1))
@@ -104,7 +105,7 @@ class ThreeDofArm(JacobianUses, HasSpecs):
 
     def jacobian(self, q) -> np.ndarray:
         """The course's J = [J_v; J_ω], (..., 6, 3): J_v = ∂p/∂θ, J_ω = [[0, s1, 0], [1, 0, 0], [0, c1, 0]]."""
-        q = self._joints(q)
+        q = self.joints(q)
         s1, c1 = np.sin(q[..., 0]), np.cos(q[..., 0])
         s2, c2 = np.sin(q[..., 1]), np.cos(q[..., 1])
         s3, c3 = np.sin(q[..., 2]), np.cos(q[..., 2])
@@ -117,24 +118,12 @@ class ThreeDofArm(JacobianUses, HasSpecs):
         J[..., 3, 1], J[..., 4, 0], J[..., 5, 1] = s1, 1.0, c1
         return J
 
-    def sample_workspace(self, n: int, seed: int = 0, return_joints: bool = False):
-        """Tool positions of ``n`` joint vectors drawn uniformly within the limits, and |det J_v| at each.
-
-        Returns points (n, 3) in metres, |det J_v| (n,) in m³ and, with ``return_joints``, the joints
-        (n, 3). The same ``n`` and ``seed`` give the same cloud.
-        """
-        low, high = self.limits.T
-        q = np.random.default_rng(seed).uniform(low, high, (int(n), 3))
-        points = self.fk(q)[:, :3, 3]
-        measure = np.abs(np.linalg.det(self.jacobian(q)[:, :3, :]))
-        return (points, measure, q) if return_joints else (points, measure)
-
     #: The four slots of :meth:`ik`: the tool in front of the arm's plane (as along the course's path:
     #: the forearm reaching out past the upper arm, −x of the turned plane) or behind it (the base
     #: turned half a turn), the elbow above or below the line from the shoulder to the tool.
     labels = ("in front, elbow above", "in front, elbow below", "behind, elbow above", "behind, elbow below")
 
-    def ik(self, T, hint=None) -> BranchSet:
+    def ik(self, arm: "Arm", T, hint=None) -> IKSolution:
         """Every joint vector that puts the tool at the position of ``T`` (..., 4, 4) (docs/kinematics.md §8.6).
 
         The base turns the arm's vertical plane: p = Ry(θ1) (r, h, 0). With ρ = √(p_x² + p_z²),
@@ -145,7 +134,8 @@ class ThreeDofArm(JacobianUses, HasSpecs):
         the position is matched (``task``). On the vertical axis (ρ = 0) θ1 is free: the
         hint's, or 0, and the slots are marked singular.
 
-        >>> arm = ThreeDofArm()
+        >>> from ur10core import Arm
+        >>> arm = Arm.preset("three_dof")
         >>> sol = arm.ik(arm.fk(np.radians([20, -30, 60])))
         >>> np.degrees(sol.q[1]).round(6).tolist(), sol.within_limits.tolist()
         ([20.0, -30.0, 60.0], [False, True, False, False])
@@ -157,7 +147,7 @@ class ThreeDofArm(JacobianUses, HasSpecs):
         flat = T.reshape(-1, 4, 4)
         n = len(flat)
         if hint is not None:
-            hint = np.broadcast_to(self._joints(hint), batch + (3,)).reshape(-1, 3)
+            hint = np.broadcast_to(self.joints(hint), batch + (3,)).reshape(-1, 3)
         out = empty_branches((n,), 4, 3)
         x, height, z = flat[:, 0, 3], flat[:, 1, 3], flat[:, 2, 3]
         rho = np.hypot(x, z)
@@ -177,15 +167,11 @@ class ThreeDofArm(JacobianUses, HasSpecs):
                 out["singular"][:, slot] = ok & (on_axis | (np.abs(np.sin(bend)) <= 1e-12))
                 out["failure"][:, slot] = np.where(too_far, TOO_FAR, np.where(too_close, TOO_CLOSE, 0))
                 out["detail"][:, slot] = span
-        q, valid = out["q"], out["valid"]
-        low, high = self.limits.T
-        inside = valid & ((q >= low) & (q <= high)).all(axis=-1)
         shape = lambda a, *tail: a.reshape(batch + (4,) + tail)  # noqa: E731
-        return BranchSet(q=shape(q, 3), valid=shape(valid), within_limits=shape(inside), singular=shape(out["singular"]),
-                         failure=shape(out["failure"]), detail=shape(out["detail"]), labels=self.labels,
-                         method="analytic", task=self.task, explain=self._explain)
+        return IKSolution(shape(out["q"], 3), shape(out["valid"]), shape(out["failure"]), arm,
+                          detail=shape(out["detail"]), singular=shape(out["singular"]))
 
-    def _explain(self, failure: int, detail: float) -> str:
+    def explain(self, failure: int, detail: float) -> str:
         return (_reach_words(failure, detail, self.upper_arm, self.forearm, "the tool", "the shoulder")
                 or "no branch reaches this position")
 
@@ -196,10 +182,10 @@ class ThreeDofArm(JacobianUses, HasSpecs):
         base turns the tool in place. The second is zero when the upper arm and the forearm lie
         along one line, stretched or folded: then neither can move the tool along that line.
 
-        >>> ThreeDofArm().singularity_factors(np.radians([0, -90, 0])).round(6).tolist()
+        >>> DesktopArm().singularity_factors(np.radians([0, -90, 0])).round(6).tolist()
         [1.28, -1.0]
         """
-        q = self._joints(q)
+        q = self.joints(q)
         reach = self.forearm * np.cos(q[..., 2]) - self.upper_arm * np.cos(q[..., 1])
         return np.stack([reach, np.sin(q[..., 1] - q[..., 2])], axis=-1)
 
@@ -227,7 +213,7 @@ class WorstPose:
     samples: int  #: joint vectors searched
 
 
-def torque_grid(arm: ThreeDofArm, force, steps: int = 41) -> tuple[np.ndarray, np.ndarray]:
+def torque_grid(arm: "Arm", force, steps: int = 41) -> tuple[np.ndarray, np.ndarray]:
     """(q (steps³, 3), ‖J_vᵀ F‖ at each (steps³,)) on a grid of ``steps`` values per joint over ``arm.limits``.
 
     ``force`` (3,) is in N, in the base frame. The tool positions, for drawing the map the
@@ -244,7 +230,7 @@ def torque_grid(arm: ThreeDofArm, force, steps: int = 41) -> tuple[np.ndarray, n
     return q, np.linalg.norm(arm.static_torques(q, force), axis=-1)
 
 
-def largest_torque(arm: ThreeDofArm, force, steps: int = 41) -> WorstPose:
+def largest_torque(arm: "Arm", force, steps: int = 41) -> WorstPose:
     """Search :func:`torque_grid` for the largest ‖J_vᵀ F‖.
 
     The course's statics exercise: which configuration needs the most torque to hold

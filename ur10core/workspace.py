@@ -163,7 +163,7 @@ def branch_count_map(arm, target, plane: str = "vertical", resolution: int = 200
 
     Parameters
     ----------
-    arm : Arm or SerialArm
+    arm : Arm or Arm
         Any arm with a closed-form IK (one call solves the whole grid); the square it
         covers is :func:`map_extent`.
     target : array_like, shape (4, 4)

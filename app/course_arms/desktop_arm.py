@@ -14,7 +14,7 @@ import numpy as np
 import viser
 
 from ur10core.orientation import quaternion
-from ur10core.three_dof import ThreeDofArm
+from ur10core import Arm
 
 from ..camera import CameraControls
 from ..session_basics import SessionBasics
@@ -42,7 +42,7 @@ METRES_PER_SPEED, METRES_PER_TURN_RATE = 1.0, 0.6
 class DesktopArmScene(View):
     """The arm in 3D: pedestal, upper arm and forearm, the parallelogram drive, the course's base frame, the arrows."""
 
-    def __init__(self, scene: viser.SceneApi, arm: ThreeDofArm, first: DesktopSnapshot, root: str = ROOT) -> None:
+    def __init__(self, scene: viser.SceneApi, arm: Arm, first: DesktopSnapshot, root: str = ROOT) -> None:
         self._arm = arm
         self.root = root  #: every node's parent: a classroom explorer's own arm has one apart from the class's
         self.size = arm.upper_arm + arm.forearm  #: the arm's reach (m)
@@ -107,7 +107,7 @@ class DesktopArmSession(SessionBasics):
     classroom's presenter drives an arm drawn in the server's shared scene, an explorer its own.
     """
 
-    def __init__(self, client: viser.ClientHandle, arm: ThreeDofArm, refresher: PanelRefresher, lecture: bool = False,
+    def __init__(self, client: viser.ClientHandle, arm: Arm, refresher: PanelRefresher, lecture: bool = False,
                  state: DesktopArmState | None = None, scene: DesktopArmScene | None = None,
                  server: viser.ViserServer | None = None, own_camera: bool = True, root: str = ROOT) -> None:
         self.client = client

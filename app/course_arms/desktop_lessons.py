@@ -11,7 +11,8 @@ import numpy as np
 import viser
 import viser.uplot
 
-from ur10core.three_dof import ThreeDofArm, course_path, torque_grid
+from ur10core import Arm
+from ur10core.three_dof import course_path, torque_grid
 
 from ..animation import Player
 from ..feedback import chosen
@@ -39,7 +40,7 @@ GRID_STEPS = 31
 WORST_LABEL_RISE = 0.8
 
 
-def factors_markdown(arm: ThreeDofArm, snapshot: DesktopSnapshot) -> str:
+def factors_markdown(arm: Arm, snapshot: DesktopSnapshot) -> str:
     """The tool's position (mm, the course's frame) and det J_v with its two factors, red near zero."""
     p = 1000 * snapshot.tool[:3, 3]
     reach, fold = arm.singularity_factors(snapshot.q)

@@ -8,7 +8,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ur10core.three_dof import ThreeDofArm
+from ur10core import Arm
 
 #: The course's y = 0 (the shoulder) stands this high above the floor, so that every reach stays above it.
 SHOULDER_HEIGHT = 1.5
@@ -49,7 +49,7 @@ class DesktopSnapshot:
 class DesktopArmState:
     """The arm's joints; every change returns a new :class:`DesktopSnapshot`."""
 
-    def __init__(self, arm: ThreeDofArm, q=None) -> None:
+    def __init__(self, arm: Arm, q=None) -> None:
         self.arm = arm
         self.lock = threading.RLock()
         self.last = self._snapshot(arm.specs.home if q is None else np.array(q, dtype=float), np.zeros(3))

@@ -14,7 +14,7 @@ from typing import TYPE_CHECKING, Callable
 
 import viser
 
-from ur10core.serial import SerialArm
+from ur10core import Arm
 
 from ..feedback import chosen
 from ..view import View
@@ -35,7 +35,7 @@ DEFAULT_LIMITS = {"R": (-180.0, 180.0), "P": (0.0, 1000.0)}
 CONVENTIONS = {"standard (Spong: Rz Tz Tx Rx)": "standard", "modified (Craig: Rx Tx Rz Tz)": "modified"}
 
 
-def parse_table(text: str, convention: str, name: str = "custom") -> SerialArm:
+def parse_table(text: str, convention: str, name: str = "custom") -> Arm:
     """The arm a typed table describes; ``ValueError`` naming the row and what is wrong.
 
     >>> arm = parse_table("500 0 0 0 R -90 90\\n400 0 0 0 R", "standard")
@@ -75,7 +75,7 @@ def parse_table(text: str, convention: str, name: str = "custom") -> SerialArm:
         raise ValueError(f"at most {MAX_ROWS} rows, got {len(rows)}")
     if all(kind == "F" for _, kind in rows):
         raise ValueError("the table needs at least one joint (R or P)")
-    return SerialArm.from_dh([values for values, _ in rows], convention, "".join(kind for _, kind in rows),
+    return Arm.from_dh([values for values, _ in rows], convention, "".join(kind for _, kind in rows),
                              limits=limits, name=name)
 
 
@@ -93,7 +93,7 @@ class DHEditor(View):
     """The "Your DH table" folder: convention, the rows, and "Build this arm"."""
 
     def __init__(self, gui: viser.GuiApi, session: "CourseArmSession", text: str, convention: str,
-                 rebuild: Callable[[SerialArm, str, str], None]) -> None:
+                 rebuild: Callable[[Arm, str, str], None]) -> None:
         folder = gui.add_folder("Your DH table", order=0.2)
         self.folders = (folder,)
         with folder:
@@ -106,7 +106,7 @@ class DHEditor(View):
             self.build = gui.add_button("Build this arm", icon=viser.Icon.HAMMER)
         self.build.on_click(session.guard(lambda _: self._build(rebuild)))
 
-    def _build(self, rebuild: Callable[[SerialArm, str, str], None]) -> None:
+    def _build(self, rebuild: Callable[[Arm, str, str], None]) -> None:
         convention = CONVENTIONS[chosen(self.convention, "convention")]
         text = str(self.rows.value)
         if len(text) > 1000:  # the gate (app.gate) lets no longer text through from a browser

@@ -17,7 +17,8 @@ import numpy as np
 import viser
 
 from ur10core import symbolic_arms
-from ur10core.serial import PRESETS, SerialArm
+from ur10core import Arm
+from ur10core.serial import PRESETS
 
 from ..fast_updates import set_positions
 from ..singularity import ALARM_STEPS, line_color, alarm
@@ -33,7 +34,7 @@ def _foot(point: np.ndarray, axis_point: np.ndarray, axis: np.ndarray) -> np.nda
     return axis_point + np.dot(point - axis_point, axis) * axis
 
 
-def factor_geometry(arm: SerialArm, q: np.ndarray, frames: np.ndarray, size: float) -> dict[str, np.ndarray]:
+def factor_geometry(arm: Arm, q: np.ndarray, frames: np.ndarray, size: float) -> dict[str, np.ndarray]:
     """Per factor of the preset's det J, the (m, 2, 3) segments that show what it measures at joints ``q``.
 
     ``frames`` are ``arm.frames(q)``; ``size`` (the arm's reach, m) sets how long axes are drawn.
@@ -72,7 +73,7 @@ class CourseOverlay:
     only when it crosses a step. Not for a typed table (its det J is not derived).
     """
 
-    def __init__(self, scene: viser.SceneApi, arm: SerialArm, first: CourseSnapshot, size: float, root: str) -> None:
+    def __init__(self, scene: viser.SceneApi, arm: Arm, first: CourseSnapshot, size: float, root: str) -> None:
         self._arm = arm
         self._size = size
         self.enabled = False
@@ -107,5 +108,5 @@ class CourseOverlay:
                 self.lines[name].colors = line_color(blend(FACTOR_COLORS[name], DANGER_RED, step / ALARM_STEPS))
 
 
-def has_overlay(arm: SerialArm) -> bool:
+def has_overlay(arm: Arm) -> bool:
     return arm.name in PRESETS

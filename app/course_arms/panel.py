@@ -13,7 +13,8 @@ import viser
 
 from ur10core import symbolic_arms
 from ur10core.dh import DHTable
-from ur10core.serial import PRESETS, SerialArm
+from ur10core import Arm
+from ur10core.serial import PRESETS
 
 from ..feedback import chosen
 from ..singularity import alarm
@@ -31,7 +32,7 @@ def display_value(kind: str, value: float) -> float:
     return math.degrees(value) if kind == "R" else 1000.0 * value
 
 
-def joint_text(arm: SerialArm, q: np.ndarray) -> str:
+def joint_text(arm: Arm, q: np.ndarray) -> str:
     return ", ".join(number(display_value(kind, v), ".1f") + ("°" if kind == "R" else " mm")
                      for kind, v in zip(arm.joint_types, q))
 
@@ -85,7 +86,7 @@ class CourseJointSliders(View):
                 slider.value = shown
 
 
-def branches_markdown(arm: SerialArm, snapshot: CourseSnapshot) -> str:
+def branches_markdown(arm: Arm, snapshot: CourseSnapshot) -> str:
     sol = snapshot.solution
     if sol is None:  # a typed table: the numerical search runs when asked
         lines = ["The arm follows the target from its own joints (damped least squares). "
@@ -117,7 +118,7 @@ def branches_markdown(arm: SerialArm, snapshot: CourseSnapshot) -> str:
 class CourseBranches(View):
     """The table of branches: each slot, its joints, and whether it is beyond a limit."""
 
-    def __init__(self, gui: viser.GuiApi, arm: SerialArm) -> None:
+    def __init__(self, gui: viser.GuiApi, arm: Arm) -> None:
         self._arm = arm
         folder = gui.add_folder("IK branches")
         self.folders = (folder,)
@@ -131,12 +132,12 @@ class CourseBranches(View):
 @functools.lru_cache(maxsize=len(PRESETS))
 def factor_scales(name: str) -> np.ndarray:
     """Per factor, the 99th percentile of its size over the arm's workspace: a gauge is full there."""
-    arm = SerialArm.preset(name)
+    arm = Arm.preset(name)
     q = arm.sample_joints(20_000, seed=1)
     return np.maximum(np.percentile(np.abs(arm.singularity_factors(q)), 99, axis=0), 1e-12)
 
 
-def factors_html(arm: SerialArm, q: np.ndarray) -> str:
+def factors_html(arm: Arm, q: np.ndarray) -> str:
     """det J's factors as gauges, green far from their singularity and red at it, with what each means."""
     measures = (f"manipulability {number(float(arm.manipulability(q)), '.4g')}, smallest singular value "
                 f"{number(float(arm.smallest_singular_value(q)), '.4g')}")
@@ -241,7 +242,7 @@ class CourseDHTable(View):
         self.row_values.content = "" if row is None else row_values_markdown(self._session.arm, snapshot.q, row)
 
 
-def row_values_markdown(arm: SerialArm, q: np.ndarray, row: int) -> str:
+def row_values_markdown(arm: Arm, q: np.ndarray, row: int) -> str:
     """One row's four values at joints ``q``, with the table's subscripts (mm and degrees)."""
     values = arm.dh.row_geometry(q, row).values
     previous = row if arm.convention == "standard" else row - 1
@@ -250,7 +251,7 @@ def row_values_markdown(arm: SerialArm, q: np.ndarray, row: int) -> str:
             f"{number(1000 * values['a'], '.1f')} mm, α<sub>{previous}</sub> = {number(math.degrees(values['alpha']), '.1f')}°")
 
 
-def walkthrough_steps(arm: SerialArm) -> list[tuple[str, str, int | None]]:
+def walkthrough_steps(arm: Arm) -> list[tuple[str, str, int | None]]:
     """The DH procedure on ``arm``: (text, which frame axes show, row highlighted) per step."""
     standard = arm.convention == "standard"
     steps = [

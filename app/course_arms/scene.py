@@ -13,7 +13,7 @@ import viser
 
 from ur10core.orientation import quaternion
 from ur10core.dh import DHTable
-from ur10core.serial import SerialArm
+from ur10core import Arm
 
 from ..fast_updates import set_orientations, set_positions
 from ..style import JOINT_CAP_GREY, SLOT_COLORS
@@ -69,7 +69,7 @@ def show(node: viser.SceneNodeHandle, visible) -> None:
 class CourseArmScene:
     """Everything one course arm draws in a browser's scene."""
 
-    def __init__(self, scene: viser.SceneApi, arm: SerialArm, first: CourseSnapshot, size: float,
+    def __init__(self, scene: viser.SceneApi, arm: Arm, first: CourseSnapshot, size: float,
                  root: str = ROOT) -> None:
         self._scene = scene
         self.root = root  #: every node's parent: a classroom explorer's own arm has one apart from the class's

@@ -9,7 +9,7 @@ import numpy as np
 import viser
 
 from ur10core.orientation import quaternion, transform_from_quaternion
-from ur10core.serial import SerialArm
+from ur10core import Arm
 
 from ..camera import CameraControls
 from ..ellipsoids import EllipsoidsView
@@ -34,7 +34,7 @@ def body_radius(size: float) -> float:
     return 0.15 * size
 
 
-def reach(arm: SerialArm) -> float:
+def reach(arm: Arm) -> float:
     """How far the arm's tool gets from the base (m), from a workspace sample: sizes follow it."""
     points, _ = arm.sample_workspace(4000, seed=0)
     return float(max(np.linalg.norm(points, axis=-1).max(), 0.3))
@@ -76,8 +76,8 @@ class CourseArmSession(SessionBasics):
     draws its own arm by default, under ``root``. ``own_camera`` as for ``ClientSession``.
     """
 
-    def __init__(self, client: viser.ClientHandle, arm: SerialArm, refresher: PanelRefresher, drags: DragQueue,
-                 lecture: bool = False, rebuild: Callable[[SerialArm, str, str], None] | None = None,
+    def __init__(self, client: viser.ClientHandle, arm: Arm, refresher: PanelRefresher, drags: DragQueue,
+                 lecture: bool = False, rebuild: Callable[[Arm, str, str], None] | None = None,
                  text: str = "", convention: str = "standard", state: CourseArmState | None = None,
                  scene: CourseArmScene | None = None, server: viser.ViserServer | None = None,
                  own_camera: bool = True, root: str = ROOT) -> None:

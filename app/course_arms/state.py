@@ -7,9 +7,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ur10core.branches import BranchSet
-from ur10core.serial import SerialArm, project_target
-from ur10core.solvers.numerical import NumericalIK
+from ur10core.branches import IKSolution
+from ur10core import Arm
+from ur10core.serial import project_target
 
 
 @dataclass(frozen=True)
@@ -19,7 +19,7 @@ class CourseSnapshot:
     q: np.ndarray  #: (n,) joints: radians and metres
     frames: np.ndarray  #: (rows + 1, 4, 4) every DH frame
     target: np.ndarray  #: (4, 4) where the student put the target (what the arm controls of it)
-    solution: BranchSet | None  #: the branches of ``target``; None until searched, for a numerical arm
+    solution: IKSolution | None  #: the branches of ``target``; None until searched, for a numerical arm
     chosen: int  #: the slot the arm is in, −1 if none reaches (or not searched)
     reason: str  #: why the target is out of reach ("" if it is reached)
 
@@ -38,9 +38,9 @@ class CourseArmState:
     other branches come from its search from many starts (``BranchSearch``), when the student asks.
     """
 
-    def __init__(self, arm: SerialArm, q=None) -> None:
+    def __init__(self, arm: Arm, q=None) -> None:
         self.arm = arm
-        self.numerical = isinstance(arm.solver, NumericalIK)
+        self.numerical = arm.numerical
         self.lock = threading.RLock()  # the drag queue holds it while it calls drag_to, which applies under it
         if q is None:
             q = arm.specs.home
@@ -52,7 +52,7 @@ class CourseArmState:
         if self.numerical:
             return CourseSnapshot(q, frames, target, None, -1, "")
         solution = self.arm.ik(target, hint=q)
-        return CourseSnapshot(q, frames, target, solution, solution.nearest(q, self.arm.revolute), "")
+        return CourseSnapshot(q, frames, target, solution, int(solution.nearest(q).slot), "")
 
     def set_joint(self, index: int, value: float) -> CourseSnapshot:
         q = self.last.q.copy()
@@ -61,7 +61,7 @@ class CourseArmState:
 
     def set_joints(self, q, cause: str = "joints") -> CourseSnapshot:
         """Put the arm at ``q`` (``cause``, as for the UR10's state: what moved it, e.g. "motion")."""
-        q = self.arm.dh.joints(q).astype(float)
+        q = self.arm.joints(q).astype(float)
         low, high = self.arm.limits.T
         if ((q < low) | (q > high)).any():
             raise ValueError("joint values must stay within the arm's limits")
@@ -83,20 +83,19 @@ class CourseArmState:
                                            "out of reach, or reachable only from another branch (Find every branch)")
             return self.last
         solution = self.arm.ik(target, hint=previous.q)
-        chosen = solution.nearest(previous.q, self.arm.revolute)
-        if chosen < 0:
+        branch = solution.nearest(previous.q)  # turned next to the current joints, within the limits
+        if branch.slot < 0:
             self.last = CourseSnapshot(previous.q, previous.frames, target, solution, -1, solution.unreachable_reason())
         else:
-            q = solution.q[chosen]
-            self.last = CourseSnapshot(q, self.arm.frames(q), target, solution, int(chosen), "")
+            self.last = CourseSnapshot(branch.q, self.arm.frames(branch.q), target, solution, int(branch.slot), "")
         return self.last
 
-    def with_branches(self, snapshot: CourseSnapshot, solution: BranchSet) -> CourseSnapshot:
+    def with_branches(self, snapshot: CourseSnapshot, solution: IKSolution) -> CourseSnapshot:
         """The found branches shown, if the arm has not moved since they were searched for."""
         if self.last is not snapshot:
             return self.last
         reached = solution.valid.any()
-        chosen = solution.nearest(snapshot.q, self.arm.revolute) if reached else -1
+        chosen = int(solution.nearest(snapshot.q).slot) if reached else -1
         reason = snapshot.reason if reached else solution.unreachable_reason()
         self.last = CourseSnapshot(snapshot.q, snapshot.frames, snapshot.target, solution, chosen, reason)
         return self.last

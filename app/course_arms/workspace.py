@@ -9,7 +9,8 @@ from typing import TYPE_CHECKING
 import numpy as np
 import viser
 
-from ur10core.serial import PRESETS, SerialArm
+from ur10core import Arm
+from ur10core.serial import PRESETS
 
 from ..view import View
 from ..workers import HEAVY, FoldedRuns
@@ -21,7 +22,7 @@ if TYPE_CHECKING:
 POINTS = 60_000  #: within the joint limits; a few hundred ms for a six-joint arm, sent once per browser
 
 
-def cloud(arm: SerialArm, n: int = POINTS) -> tuple[np.ndarray, np.ndarray, float]:
+def cloud(arm: Arm, n: int = POINTS) -> tuple[np.ndarray, np.ndarray, float]:
     """(points (n, 3) float32, colours (n, 3) uint8, colour-scale top): a preset's is computed once for every browser."""
     if arm.name in PRESETS:
         return _preset_cloud(arm.name, n)
@@ -30,10 +31,10 @@ def cloud(arm: SerialArm, n: int = POINTS) -> tuple[np.ndarray, np.ndarray, floa
 
 @functools.lru_cache(maxsize=len(PRESETS))
 def _preset_cloud(name: str, n: int) -> tuple[np.ndarray, np.ndarray, float]:
-    return _cloud(SerialArm.preset(name), n)
+    return _cloud(Arm.preset(name), n)
 
 
-def _cloud(arm: SerialArm, n: int) -> tuple[np.ndarray, np.ndarray, float]:
+def _cloud(arm: Arm, n: int) -> tuple[np.ndarray, np.ndarray, float]:
     points, manipulability = arm.sample_workspace(n, seed=0)
     top = float(np.percentile(manipulability, 99)) or 1.0
     return points.astype(np.float32), colormap(manipulability, top), top

@@ -6,5 +6,5 @@
 * :mod:`.numerical`: damped least squares from many starts, for any DH table.
 
 A solver takes validated poses (N, 4, 4) and hints (N, n) or None and returns the arrays
-of a :class:`ur10core.branches.BranchSet` for N poses; the arm adds its joint limits.
+of an :class:`ur10core.branches.IKSolution` for N poses; the arm adds its joint limits.
 """

@@ -70,7 +70,7 @@ class PlanarElbow:
             out["q"][ok, slot] = np.stack([theta1, theta2], axis=-1)[ok]
             out["valid"][:, slot] = ok
             out["singular"][:, slot] = ok & (np.abs(np.sin(theta2)) <= 1e-12)
-            out["failure"][:, slot] = np.where(off_plane, OUT_OF_PLANE, np.where(too_far, 1, np.where(too_close, 2, 0)))
+            out["failure"][:, slot] = np.where(off_plane, OUT_OF_PLANE, np.where(too_far, TOO_FAR, np.where(too_close, TOO_CLOSE, 0)))
             out["detail"][:, slot] = np.where(off_plane, np.abs(z), r)
         return out
 
@@ -109,7 +109,7 @@ class Scara:
             out["q"][ok, slot] = np.stack([theta1, theta2, stroke, theta4], axis=-1)[ok]
             out["valid"][:, slot] = ok
             out["singular"][:, slot] = ok & (np.abs(np.sin(theta2)) <= 1e-12)
-            out["failure"][:, slot] = np.where(tilted, ORIENTATION, np.where(too_far, 1, np.where(too_close, 2, 0)))
+            out["failure"][:, slot] = np.where(tilted, ORIENTATION, np.where(too_far, TOO_FAR, np.where(too_close, TOO_CLOSE, 0)))
             out["detail"][:, slot] = np.where(tilted, tilt, r)
         return out
 
