@@ -125,9 +125,12 @@ def references() -> dict:
 
 def measure_speed() -> dict:
     """The UR10's hot paths on the compiled backend, for :func:`before_after` (this process's checkout)."""
-    import ur10core
-    from app.state import ArmState
+    import importlib
 
+    import ur10core
+
+    # the checkout is not installed: its app package goes by its folder's name (in this process only)
+    ArmState = importlib.import_module("app.state").ArmState
     arm, q, poses, T_batch = _workload()
     state = ArmState(arm, q[0])
     step = np.eye(4)

@@ -277,8 +277,7 @@ def test_too_close_reason_wording(course):
 
     sol = IKSolution(
         np.full((8, 6), np.nan), np.zeros(8, bool), np.full(8, ELBOW_TOO_CLOSE, np.int8), course,
-        wrist_singular=np.zeros(8, bool), elbow_singular=np.zeros(8, bool), shoulder_singular=np.bool_(False),
-        wrist2_radius=np.float64(0.3), elbow_distance=np.array([0.03, 0.03, 0.02, 0.02] * 2),
+        extra=(np.zeros(8, bool), np.zeros(8, bool), np.bool_(False), np.float64(0.3), np.array([0.03, 0.03, 0.02, 0.02] * 2)),
     )
     assert sol.unreachable_reason() == (
         "unreachable: elbow reach — the wrist-1 centre would be 30.0 mm from the shoulder, "

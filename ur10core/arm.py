@@ -93,16 +93,22 @@ class Arm(JacobianUses, HasSpecs):
         self.revolute = np.array([t == REVOLUTE for t in self.joint_types])
         # the solver's closed forms where it has them (the UR10's drag path), else the table's
         self._geometry = self.solver if hasattr(self.solver, "fk") else table
+        self._own_ik = getattr(self.solver, "ik", None)
+        self._own_factors = getattr(self.solver, "singularity_factors", None)
         self._identity = self._key()  # arms are keys of caches: compared and hashed often
+        # the drag path calls these hundreds of times a second: straight to the closed form, not through a method here
+        self.fk, self.frames, self.jacobian = self._geometry.fk, self._geometry.frames, self._geometry.jacobian
 
     def __getattr__(self, name: str):
         """What only this arm's family has (``arm.d4``, ``arm.singularity_geometry(q)``): its solver's."""
-        if name.startswith("_") or name in ("solver", "dh"):
+        if name.startswith("_") or name in ("solver", "dh", "name"):
             raise AttributeError(name)
         try:
-            return getattr(self.solver, name)
+            found = getattr(self.solver, name)
         except AttributeError:
             raise AttributeError(f"{self.name!r} arm ({type(self.solver).__name__}) has no {name!r}") from None
+        setattr(self, name, found)  # the solver does not change: found once, then an attribute of the arm
+        return found
 
     def _key(self) -> tuple:
         table = None if self.dh is None else (self.dh.convention, tuple(self.dh.rows))
@@ -273,9 +279,8 @@ class Arm(JacobianUses, HasSpecs):
         >>> int(sol.valid.sum()), np.degrees(sol.q[4]).round(6).tolist(), sol.labels[4]
         (8, [30.0, 45.0, 26.0, 50.0, 60.0, 80.0], 'shoulder right, elbow down, wrist not flipped')
         """
-        own = getattr(self.solver, "ik", None)
-        if own is not None:  # the family solves whole batches itself (the UR kernels, the desktop arm)
-            return own(self, T, hint)
+        if self._own_ik is not None:  # the family solves whole batches itself (the UR kernels, the desktop arm)
+            return self._own_ik(self, T, hint)
         T = homogeneous_transform(T)
         batch = T.shape[:-2]
         if hint is not None:
@@ -314,9 +319,8 @@ class Arm(JacobianUses, HasSpecs):
         >>> Arm.preset("course").singularity_factors(np.radians([0, 90, 0, 0, 90, 0])).round(4).tolist()
         [-0.1157, 0.0, 1.0]
         """
-        own = getattr(self.solver, "singularity_factors", None)
-        if own is not None:
-            return own(q)
+        if self._own_factors is not None:
+            return self._own_factors(q)
         from . import symbolic_arms
 
         if self.name not in COURSE_ARMS:

@@ -8,6 +8,7 @@ slot is empty (one set of failure codes), and one :meth:`IKSolution.nearest`.
 
 from __future__ import annotations
 
+import functools
 import math
 from typing import TYPE_CHECKING, NamedTuple
 
@@ -67,24 +68,27 @@ class IKSolution:
     arm : Arm
         The arm solved for.
 
-    A family may add its own numbers as attributes (the UR family: ``wrist_singular``,
-    ``elbow_singular``, ``shoulder_singular``, ``wrist2_radius``, ``elbow_distance``, see
-    :mod:`ur10core.ik`); ``detail``, ``singular`` and ``within_limits`` are then worked out
-    from them when first read, which keeps the UR10's one-pose call as fast as it was.
+    A family may add its own numbers (``extra``, named by its solver's ``extra_names``), read
+    as attributes: the UR family's ``wrist_singular``, ``elbow_singular``, ``shoulder_singular``,
+    ``wrist2_radius`` and ``elbow_distance`` (:mod:`ur10core.ik`). ``detail``, ``singular``
+    and ``within_limits`` are then worked out from them when first read, which keeps the
+    UR10's one-pose call as fast as it was.
     """
 
     __slots__ = ("q", "valid", "failure", "arm", "extra", "_detail", "_singular", "_within_limits")
 
-    def __init__(self, q, valid, failure, arm: "Arm", detail=None, singular=None, within_limits=None, **extra) -> None:
+    def __init__(self, q, valid, failure, arm: "Arm", detail=None, singular=None, within_limits=None,
+                 extra: tuple = ()) -> None:
         self.q, self.valid, self.failure, self.arm = q, valid, failure, arm
         self._detail, self._singular, self._within_limits = detail, singular, within_limits
         self.extra = extra
 
     def __getattr__(self, name: str):
-        try:
-            return self.extra[name]  # type: ignore[index]
-        except (KeyError, AttributeError):
-            raise AttributeError(f"IKSolution has no attribute {name!r}") from None
+        if not name.startswith("_"):
+            names = getattr(self.arm.solver, "extra_names", ())
+            if name in names:
+                return self.extra[names.index(name)]
+        raise AttributeError(f"IKSolution has no attribute {name!r}")
 
     def __repr__(self) -> str:
         return f"IKSolution({self.arm.name!r}, poses {self.valid.shape[:-1]}, {len(self.labels)} slots)"
@@ -157,12 +161,17 @@ class IKSolution:
         >>> int(branch.slot), np.allclose(branch.q, q)
         (1, True)
         """
-        from . import ik
-
         limit = getattr(self.arm.solver, "turn_limit", None)
         if limit is not None or joint_limit is not None:  # symmetric ±limit on every joint: the UR family's kernels
-            return ik.nearest_branch(self, q_current, limit if joint_limit is None else joint_limit, prefer)
+            return _ik().nearest_branch(self, q_current, limit if joint_limit is None else joint_limit, prefer)
         return _nearest_within_limits(self, q_current, prefer)
+
+
+@functools.cache
+def _ik():
+    from . import ik  # it imports this module
+
+    return ik
 
 
 def _nearest_within_limits(solution: IKSolution, q_current, prefer) -> Branch:

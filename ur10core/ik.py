@@ -245,10 +245,13 @@ def solve_reference(arm: "Arm", T, hint=None) -> IKSolution:
                      np.array(failure, dtype=np.int8), np.array(rho), np.array(distance))
 
 
+#: What the kernels add to the one result type (``IKSolution.extra``), by name.
+EXTRA_NAMES = ("wrist_singular", "elbow_singular", "shoulder_singular", "wrist2_radius", "elbow_distance")
+
+
 def _solution(arm: "Arm", q, valid, wrist, elbow, shoulder, failure, rho, distance) -> IKSolution:
-    """The kernels' arrays as the one result type; a UR arm's slots are all within its ±360°."""
-    return IKSolution(q, valid, failure, arm, within_limits=valid, wrist_singular=wrist, elbow_singular=elbow,
-                      shoulder_singular=shoulder, wrist2_radius=rho, elbow_distance=distance)
+    """The kernels' arrays as the one result type (:data:`EXTRA_NAMES`); a UR arm's slots are all within its ±360°."""
+    return IKSolution(q, valid, failure, arm, None, None, valid, (wrist, elbow, shoulder, rho, distance))
 
 
 #: Poses per task that :func:`solve_batch` hands to the thread pool.

@@ -114,6 +114,7 @@ class URFamily:
     slots: ClassVar[tuple[_ik.Slot, ...]] = _ik.SLOTS
     task: ClassVar[str] = "pose"
     method: ClassVar[str] = "analytic"
+    extra_names: ClassVar[tuple[str, ...]] = _ik.EXTRA_NAMES
     #: :meth:`IKSolution.nearest` turns each joint within ±this (the UR10's ±360°), by the kernel.
     turn_limit: ClassVar[float] = JOINT_LIMIT
 
