@@ -414,7 +414,7 @@ def test_a_course_arms_velocities_ellipsoids_and_forces(app):
     """The Stanford arm (a sliding joint): joint rates to v and ω at its tool, a typed twist to joint rates
     (mm/s for d3, no speed limits), the ellipsoids' lengths, and τ = Jᵀ F for a force at the tool."""
     async def scenario():
-        from ur10teach.course_arms.forces import torques_markdown
+        from ur10teach.statics import bars_html
         from ur10teach.velocity import METRES_PER_SPEED, parse_twist, rates_markdown
 
         client = await ViserClient(url(app)).connect()
@@ -438,13 +438,14 @@ def test_a_course_arms_velocities_ellipsoids_and_forces(app):
         await client.set_gui("Show at the tool", True)
         await until(lambda: session.ellipsoids.velocity.visible and "orientation held" in session.ellipsoids.lengths.content,
                     what="the ellipsoids")
-        # a force at the tool: the joints' torques, d3's as a force along its axis
-        await client.set_gui("Show the force at the tool", True)
+        # a force at the tool: the joints' torques, d3's as a force along its axis; no masses, no ratings
+        await client.set_gui("Show the torques", True)
         await client.set_gui("Force direction", "+x")
         torques = arm.static_torques(snapshot.q, [50.0, 0, 0])
-        await until(lambda: session.forces.torques.content == torques_markdown(torques, arm.joint_names, "RRPRRR", 50.0),
-                    what="the torques")
-        assert session.forces.arrow.visible and f"{torques[2]:+.2f} N |" in session.forces.torques.content
+        expected = bars_html(torques, np.zeros(6), None, arm.joint_names, "RRPRRR")
+        await until(lambda: session.statics.bars.content == expected, what="the torques")
+        assert session.statics.arrow.visible and f"{torques[2]:+.1f} N " in expected and "No published ratings" in expected
+        assert not session.statics.payload.visible  # no link masses: no gravity, no payload
         await client.close()
 
     asyncio.run(scenario())

@@ -27,7 +27,7 @@ def test_the_torque_bars_add_the_force_and_the_weight(app):
         await until(lambda: statics.bars.visible and statics.arrow.visible, what="the bars and the arrow")
         snapshot = session.state.last
         arm = snapshot.arm
-        expected = bars_html(arm.static_torques(snapshot.q, [0, 0, -50.0]), arm.gravity_torques(snapshot.q), arm.specs.torque_ratings)
+        expected = bars_html(arm.static_torques(snapshot.q, [0, 0, -50.0]), arm.gravity_torques(snapshot.q), arm.specs.torque_ratings, arm.joint_names, arm.joint_types)
         await until(lambda: statics.bars.content == expected, what="50 N down and the arm's weight")
         # the arrow starts at the flange and points the way the tool pushes: 50 N down is 10 cm down
         start, end = statics.arrow.points[0] + statics.arrow.position
@@ -37,7 +37,7 @@ def test_the_torque_bars_add_the_force_and_the_weight(app):
         # a payload adds its weight; a force along +x turns the arrow
         await client.set_gui("Payload (kg)", 5.0)
         await client.set_gui("Force direction", "+x")
-        expected = bars_html(arm.static_torques(snapshot.q, [50.0, 0, 0]), arm.gravity_torques(snapshot.q, 5.0), arm.specs.torque_ratings)
+        expected = bars_html(arm.static_torques(snapshot.q, [50.0, 0, 0]), arm.gravity_torques(snapshot.q, 5.0), arm.specs.torque_ratings, arm.joint_names, arm.joint_types)
         await until(lambda: statics.bars.content == expected, what="the payload and the new direction")
         await until(lambda: np.allclose(np.diff(statics.arrow.points[0], axis=0), [[0.1, 0, 0]], atol=1e-6), what="the arrow along +x")
         # a direction that is not offered is refused, and nothing changes
@@ -70,7 +70,7 @@ def test_the_force_points_where_its_handle_is_dragged(app):
             await client.drag_target(tip + 0.5 * direction, (1.0, 0, 0, 0), phase, name=handle)
         await until(lambda: np.allclose(statics.dragged, direction, atol=1e-6), what="the dragged direction")
         arm = snapshot.arm
-        expected = bars_html(arm.static_torques(snapshot.q, 50.0 * direction), arm.gravity_torques(snapshot.q), arm.specs.torque_ratings)
+        expected = bars_html(arm.static_torques(snapshot.q, 50.0 * direction), arm.gravity_torques(snapshot.q), arm.specs.torque_ratings, arm.joint_names, arm.joint_types)
         await until(lambda: statics.bars.content == expected, what="the bars for the dragged force")
         await until(lambda: np.allclose(np.diff(statics.arrow.points[0], axis=0), [0.1 * direction], atol=1e-6), what="the arrow")
         # the arm moves: the handle keeps its direction from the new flange
@@ -91,10 +91,19 @@ def test_the_force_points_where_its_handle_is_dragged(app):
 
 def test_a_joint_over_its_rating_is_flagged():
     """360 N·m at the shoulder is over its 330; 120 of the elbow's 150 fills 80 % of its bar."""
-    ratings = Arm.preset("course").specs.torque_ratings
-    html = bars_html(np.array([0.0, 300.0, -100.0, 10.0, 0.0, 0.0]), np.array([0.0, 60.0, -20.0, 0.0, 0.0, 0.0]), ratings)
+    arm = Arm.preset("course")
+    ratings = arm.specs.torque_ratings
+    html = bars_html(np.array([0.0, 300.0, -100.0, 10.0, 0.0, 0.0]), np.array([0.0, 60.0, -20.0, 0.0, 0.0, 0.0]), ratings,
+                     arm.joint_names, arm.joint_types)
     assert html.count("over its rating") == 1 and "+360.0 N·m" in html and "rated 330" in html
     assert "width:100.0%" in html and "width:80.0%" in html and ratings[2] == 150.0
+
+
+def test_without_ratings_each_bar_is_against_the_largest_and_a_slide_holds_newtons():
+    html = bars_html(np.array([20.0, -40.0, 10.0]), np.zeros(3), None, ("θ1", "θ2", "d3"), "RRP")
+    assert "No published ratings" in html and "over its rating" not in html and "rated" not in html
+    assert "width:50.0%" in html and "width:100.0%" in html and "width:25.0%" in html
+    assert "+10.0 N " in html and ("−40.0 N·m" in html or "-40.0 N·m" in html)
 
 
 def test_the_ellipsoids_follow_the_arm_and_flatten_towards_the_elbow_singularity(app):
@@ -270,7 +279,7 @@ def test_the_workspace_coloured_by_the_torque_a_force_needs(app):
         assert label.text == f"largest ‖τ‖ = {norms[worst]:.0f} N·m"
         # the worst pose is where the arm reaches furthest out: Jᵀ F of a vertical force is its lever
         assert np.hypot(*points[worst][:2]) > 0.9 * np.hypot(points[:, 0], points[:, 1]).max()
-        await client.set_gui("Force direction", "along the flange's z")  # not fixed in space: refused, with a reason
+        await client.set_gui("Force direction", "along the tool's z")  # not fixed in space: refused, with a reason
         await until(lambda: any("fixed in the base frame" in body for _, body in client.received.notifications),
                     what="the refusal")
         await client.set_gui("Colour the workspace by ‖τ‖ for this force", False)

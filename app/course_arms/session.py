@@ -17,11 +17,11 @@ from ..metrics import LATENCY
 from ..motion_lessons import MotionLessons
 from ..reach_map import ReachMapView
 from ..session_basics import SessionBasics
+from ..statics import StaticsView
 from ..velocity import VelocityView
 from ..view import View
 from ..workers import APART, HEAVY, DragQueue, FoldedRuns, PanelRefresher
 from .editor import DHEditor
-from .forces import CourseForces
 from .gripper import GripperPose
 from .panel import CourseBranches, CourseDHTable, CourseJointSliders, CourseSingularities, DHWalkthrough
 from .scene import ROOT, CourseArmScene
@@ -118,8 +118,8 @@ class CourseArmSession(SessionBasics):
         self.velocity = VelocityView(drawn_in, gui, self, root=f"{nodes}/velocity", tool=at_tool, place="tool",
                                      labels=arm.joint_names)
         self.ellipsoids = EllipsoidsView(drawn_in, gui, self, root=f"{nodes}/ellipsoids", tool=at_tool, place="tool")
-        self.forces = CourseForces(drawn_in, gui, self, f"{nodes}/statics")
-        self.at_tool_views = (self.velocity, self.ellipsoids, self.forces)
+        self.statics = StaticsView(drawn_in, gui, self, root=f"{nodes}/statics", size=size)
+        self.at_tool_views = (self.velocity, self.ellipsoids, self.statics)
         self.reach_map = ReachMapView(drawn_in, gui, self, root=f"{nodes}/reach_map")
         self.motion = MotionLessons(gui, self, labels=arm.joint_names)
         self.gripper = GripperPose(gui, self) if arm.name == "kr210" else None

@@ -24,6 +24,11 @@ class CourseSnapshot:
     reason: str  #: why the target is out of reach ("" if it is reached)
 
     @property
+    def flange(self) -> np.ndarray:
+        """(4, 4) the tool frame (the UR10's flange), where the views that act at the tool draw."""
+        return self.frames[-1]
+
+    @property
     def lowest(self) -> tuple[np.ndarray]:
         """The lowest frame origin (the camera keeps it in view)."""
         points = self.frames[:, :3, 3]
