@@ -131,7 +131,7 @@ def coloured_cloud(arm: Arm, n: int, compute=lambda make: make(),
 
     def make():
         points, manipulability = arm.sample_workspace(n, seed=0)
-        top = float(np.percentile(manipulability, 99))
+        top = float(np.percentile(manipulability, 99)) or 1.0  # an arm whose measure is zero almost everywhere
         return points.astype(np.float32), colormap(manipulability, top), top
 
     return CLOUDS.get(("cloud", arm, n), lambda: compute(make), holder)
@@ -181,19 +181,38 @@ HULL_LEGEND = ("the workspace's boundary: the flange reaches every point between
                "hole about the base axis")
 
 
-def legend_text(top: float) -> str:
+def manipulability_unit(arm: Arm) -> str:
+    """|det J| of six revolute joints is in m³ (three rows of metres); other arms' measures mix units."""
+    return " m³" if arm.joint_types == "RRRRRR" else ""
+
+
+def legend_text(top: float, unit: str = " m³") -> str:
     """The legend beside the cloud in 3D, for everyone who sees the cloud (viewers included)."""
-    return f"colour = manipulability |det J|: dark violet 0 (singular) … yellow ≥ {top:.3f} m³"
+    return f"colour = manipulability |det J|: dark violet 0 (singular) … yellow ≥ {top:.3f}{unit}"
 
 
-def legend_html(top: float) -> str:
+def legend_html(top: float, unit: str = " m³") -> str:
     stops = ", ".join(hex_color(tuple(int(c) for c in rgb)) for rgb in VIRIDIS)
     return (
         "<div style='font-size:0.85em'>Colour = manipulability |det J|"
         f"<div style='height:12px;border-radius:3px;margin:4px 0;background:linear-gradient(to right, {stops})'></div>"
         "<div style='display:flex;justify-content:space-between'><span>0 (singular)</span>"
-        f"<span>≥ {top:.4f} m³</span></div></div>"
+        f"<span>≥ {top:.4f}{unit}</span></div></div>"
     )
+
+
+def sections_of(arm: Arm) -> tuple[tuple[str, ...], str]:
+    """The sections ``arm``'s cloud offers, and what the folder says of the one it lacks ("" if none).
+
+    A horizontal section is sampled in its plane, from the flange height's closed form in θ2,
+    which only the UR family has (docs/kinematics.md §3); a slab cut from any cloud would hold
+    a few hundred points.
+    """
+    if hasattr(arm.solver, "sample_horizontal_section"):
+        return SECTIONS, ""
+    return tuple(s for s in SECTIONS if s != SECTIONS[2]), (
+        "No horizontal section for this arm: it is sampled in its plane from the UR family's closed form of the "
+        "flange's height, which this arm does not have.")
 
 
 class WorkspaceView(View):
@@ -204,9 +223,11 @@ class WorkspaceView(View):
     the section slider costs at most one cloud in the making and one waiting.
     """
 
-    def __init__(self, scene: viser.SceneApi, gui: viser.GuiApi, session: "ClientSession") -> None:
+    def __init__(self, scene: viser.SceneApi, gui: viser.GuiApi, session: "ClientSession", root: str = "") -> None:
         self._scene = scene
         self._session = session
+        self._root = root  #: the cloud is ``{root}/workspace``: a classroom explorer's arm has a root of its own
+        self._unit = manipulability_unit(session.arm)
         self._cloud: viser.PointCloudHandle | None = None
         self.legend_label: viser.LabelHandle | None = None
         self._lock = threading.Lock()
@@ -218,7 +239,8 @@ class WorkspaceView(View):
             self.enabled = gui.add_checkbox("Show workspace cloud", False)
             self.count = gui.add_dropdown("Samples", tuple(SAMPLE_COUNTS), initial_value=DEFAULT_COUNT,
                                           hint="Every client downloads its cloud: about 9 bytes per point")
-            self.section = gui.add_dropdown("Section", SECTIONS, initial_value=SECTIONS[0])
+            sections, missing = sections_of(session.arm)
+            self.section = gui.add_dropdown("Section", sections, initial_value=SECTIONS[0], hint=missing or None)
             self.height = gui.add_slider("Section height (mm)", min=-600.0, max=1600.0, step=10.0,
                                          initial_value=600.0, visible=False)
             self.progress = gui.add_progress_bar(0.0, animated=True, visible=False)
@@ -266,18 +288,18 @@ class WorkspaceView(View):
                     self._cloud.remove()
                 if section == HULL:  # faint, both faces drawn: the arm and the hole show through it
                     self._cloud = self._scene.add_mesh_simple(
-                        "/workspace", vertices, faces, color=HULL_COLOR, opacity=HULL_OPACITY, side="double",
+                        f"{self._root}/workspace", vertices, faces, color=HULL_COLOR, opacity=HULL_OPACITY, side="double",
                         cast_shadow=False, receive_shadow=False)
                 else:
                     self._cloud = self._scene.add_point_cloud(
-                        "/workspace", points, colors, point_size=POINT_SIZE, point_shape="circle"
+                        f"{self._root}/workspace", points, colors, point_size=POINT_SIZE, point_shape="circle"
                     )
                 # above the cloud, in the same scene: it goes with the cloud and reaches every viewer
                 self.legend_label = self._scene.add_label(
-                    "/workspace/legend", HULL_LEGEND if section == HULL else legend_text(top),
+                    f"{self._root}/workspace/legend", HULL_LEGEND if section == HULL else legend_text(top, self._unit),
                     position=(0.0, 0.0, float(points[:, 2].max()) + 0.12), font_screen_scale=1.3, anchor="bottom-center",
                 )
-            self.legend.content = HULL_LEGEND if section == HULL else legend_html(top)
+            self.legend.content = HULL_LEGEND if section == HULL else legend_html(top, self._unit)
             self.legend.visible = True
             self._look_square_on(section, points)
         finally:
@@ -288,7 +310,7 @@ class WorkspaceView(View):
 
     def _section(self, section: str, points: np.ndarray, colors: np.ndarray, top: float) -> tuple[np.ndarray, np.ndarray]:
         if section == SECTIONS[1]:
-            azimuth = float(self._session.state.q[0])  # the plane the arm moves in
+            azimuth = float(self._session.state.last.q[0])  # the plane the arm moves in
             return vertical_section(points, azimuth).astype(np.float32), colors
         if section == SECTIONS[2]:  # sampled in the plane itself: a slab of the cloud holds only a few hundred
             return coloured_horizontal_section(self._session.arm, self.height.value / 1000.0,
@@ -300,7 +322,7 @@ class WorkspaceView(View):
 
     def _plane_normal(self) -> np.ndarray:
         """The horizontal normal of the vertical plane the arm moves in (through the base axis, at θ1)."""
-        azimuth = float(self._session.state.q[0])
+        azimuth = float(self._session.state.last.q[0])
         return np.array([-math.sin(azimuth), math.cos(azimuth), 0.0])
 
     def _look_square_on(self, section: str, points: np.ndarray) -> None:

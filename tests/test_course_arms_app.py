@@ -263,6 +263,17 @@ def test_a_course_arms_workspace_cloud(app):
         radius = np.hypot(points[:, 0], points[:, 1])
         assert radius.max() <= 0.6 + 1e-4 and points[:, 2].max() <= 0.387 + 1e-3
         assert session.workspace.legend.visible
+        await until(lambda: f"{session.scene.root}/workspace" in client.received.nodes, what="the cloud under the arm's root")
+        # the UR10's sections, where they apply: the cut-away keeps the half behind the arm's plane
+        from ur10teach.workspace import SECTIONS, vertical_section
+
+        assert SECTIONS[2] not in session.workspace.section.options and "No horizontal section" in session.workspace.section.hint
+        whole = np.asarray(points, dtype=float)
+        await client.set_gui("Section", SECTIONS[1])
+        q1 = float(session.state.last.q[0])
+        await until(lambda: len(session.workspace._cloud.points) == len(vertical_section(whole, q1)), what="the side view")
+        await client.set_gui("Section", SECTIONS[2])  # a browser never sends a choice it was not given: refused
+        await until(lambda: any("section" in body for _, body in client.received.notifications), what="the refusal")
         await client.set_gui("Show workspace cloud", False)
         await until(lambda: session.workspace._cloud is None, what="the cloud gone")
         await client.close()

@@ -19,6 +19,7 @@ from ..reach_map import ReachMapView
 from ..session_basics import SessionBasics
 from ..statics import StaticsView
 from ..velocity import VelocityView
+from ..workspace import WorkspaceView
 from ..view import View
 from ..workers import APART, HEAVY, DragQueue, FoldedRuns, PanelRefresher
 from .editor import DHEditor
@@ -26,7 +27,6 @@ from .gripper import GripperPose
 from .panel import CourseBranches, CourseDHTable, CourseJointSliders, CourseSingularities, DHWalkthrough
 from .scene import ROOT, CourseArmScene
 from .state import CourseArmState, CourseSnapshot
-from .workspace import CourseWorkspace
 
 
 def body_radius(size: float) -> float:
@@ -108,9 +108,9 @@ class CourseArmSession(SessionBasics):
         self.dh_table = CourseDHTable(gui, self)
         self.walkthrough = DHWalkthrough(gui, self)
         drawn_in = client.scene if server is None else server.scene
-        self.workspace = CourseWorkspace(drawn_in, gui, self)
-        # what J does at the tool (docs/kinematics.md §8): the UR10's folders, for this arm's joints and tool
+        # the UR10's folders, for this arm's joints and tool: what J does there (docs/kinematics.md §8), its workspace
         nodes = self.scene.root
+        self.workspace = WorkspaceView(drawn_in, gui, self, root=nodes)
 
         def at_tool(snapshot: CourseSnapshot):
             return snapshot.frames[-1]
