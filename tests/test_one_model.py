@@ -103,3 +103,20 @@ def test_a_ur_arm_from_its_lengths_refuses_bad_ones():
         Arm.ur_family(d1=0.1, a2=-0.6, a3=0.5, d4=0.1, d5=0.1, d6=0.1)
     with pytest.raises(ValueError, match="unknown preset"):
         Arm.preset("ur5")
+
+
+@pytest.mark.parametrize("name", ["kr210", "stanford", "scara", "three_dof"])
+def test_one_pose_nearest_is_the_batchs(name):
+    """The drag path's plain-Python pick agrees with the vectorised one, preferred slot and turns included."""
+    arm = Arm.preset(name)
+    rng = np.random.default_rng(11)
+    low, high = arm.limits[:, 0], arm.limits[:, 1]
+    q = rng.uniform(np.maximum(low, -3.0), np.minimum(high, 3.0), (40, arm.n_joints))
+    current = q + rng.normal(0.0, 0.3, q.shape) + np.where(arm.revolute, rng.choice([-2, 0, 2], q.shape) * np.pi, 0.0)
+    solution = arm.ik(arm.fk(q), hint=q)
+    prefer = rng.integers(-1, len(solution.labels), 40)
+    batch = solution.nearest(current, prefer=prefer)
+    for k in range(40):
+        one = arm.ik(arm.fk(q[k]), hint=q[k]).nearest(current[k], prefer=int(prefer[k]))
+        assert int(one.slot) == int(batch.slot[k])
+        np.testing.assert_allclose(one.q, batch.q[k], atol=1e-12)

@@ -180,8 +180,11 @@ def _nearest_within_limits(solution: IKSolution, q_current, prefer) -> Branch:
 
     arm = solution.arm
     q_current = arm.joints(q_current, "q_current")
-    current = q_current[..., None, :]
+    prefer = _preferred_slot(prefer, len(solution.labels))
     low, high = arm.limits[:, 0], arm.limits[:, 1]
+    if solution.q.ndim == 2 and type(prefer) is int:  # one pose (the drag path): a dozen floats, not numpy calls
+        return _nearest_one(solution, q_current.tolist(), prefer, low.tolist(), high.tolist(), TIE_TOLERANCE)
+    current = q_current[..., None, :]
     turns = np.round((current - solution.q) / _TAU)
     shifted = solution.q + turns * _TAU
     # back inside the limits by a whole turn where the nearest turn leaves them (and a turn fits)
@@ -191,7 +194,6 @@ def _nearest_within_limits(solution: IKSolution, q_current, prefer) -> Branch:
     with np.errstate(invalid="ignore"):
         distance = np.where(solution.valid, ((shifted - current) ** 2).sum(axis=-1), np.inf)
     slot = np.argmin(distance, axis=-1)
-    prefer = _preferred_slot(prefer, len(solution.labels))
     try:
         prefer = np.broadcast_to(prefer, slot.shape)
     except ValueError:
@@ -203,6 +205,37 @@ def _nearest_within_limits(solution: IKSolution, q_current, prefer) -> Branch:
     any_valid = solution.valid.any(axis=-1)
     q = np.take_along_axis(shifted, slot[..., None, None], -2)[..., 0, :]
     return Branch(np.where(any_valid[..., None], q, np.nan), np.where(any_valid, slot, -1))
+
+
+def _nearest_one(solution: IKSolution, current: list, prefer: int, low: list, high: list, tie: float) -> Branch:
+    """:func:`_nearest_within_limits` for one pose, in plain Python."""
+    revolute = solution.arm.revolute.tolist()
+    chosen, chosen_distance, chosen_q = -1, math.inf, None
+    distances, turned = [], []
+    for k, (values, valid) in enumerate(zip(solution.q.tolist(), solution.valid.tolist())):
+        if not valid:
+            distances.append(math.inf)
+            turned.append(None)
+            continue
+        shifted = []
+        for value, now, lo, hi, rotates in zip(values, current, low, high, revolute):
+            if rotates:
+                value += round((now - value) / _TAU) * _TAU
+                if value < lo and value + _TAU <= hi:
+                    value += _TAU
+                elif value > hi and value - _TAU >= lo:
+                    value -= _TAU
+            shifted.append(value)
+        distance = sum((a - b) ** 2 for a, b in zip(shifted, current))
+        distances.append(distance)
+        turned.append(shifted)
+        if distance < chosen_distance:
+            chosen, chosen_distance, chosen_q = k, distance, shifted
+    if chosen < 0:
+        return Branch(np.full(len(current), np.nan), np.array(-1))
+    if prefer >= 0 and distances[prefer] <= chosen_distance + tie:
+        chosen, chosen_q = prefer, turned[prefer]
+    return Branch(np.array(chosen_q), np.array(chosen))
 
 
 def empty_branches(batch: tuple[int, ...], slots: int, joints: int) -> dict[str, np.ndarray]:
