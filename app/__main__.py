@@ -34,7 +34,7 @@ hand_back_large_buffers()  # before numpy and the rest allocate
 
 from ur10core import Arm  # noqa: E402
 
-from . import logs  # noqa: E402
+from .serving import logs  # noqa: E402
 
 
 def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
@@ -66,7 +66,7 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
 def main(argv: list[str] | None = None) -> None:
     args = parse_args(argv)
     logs.install()
-    from .server import TeachingServer
+    from .serving.server import TeachingServer
 
     app = TeachingServer(preset=args.preset, host=args.host, port=args.port, shared=args.shared,
                          allowed_origins=args.allow_origin, lecture=args.lecture, light=args.light)

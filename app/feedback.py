@@ -10,7 +10,7 @@ from typing import Any, Callable
 
 import viser
 
-from .gate import TokenBucket
+from .serving.gate import TokenBucket
 from .style import sentence
 
 log = logging.getLogger(__name__)

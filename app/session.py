@@ -3,7 +3,7 @@
 viser runs plain ``def`` callbacks on a thread pool, so callbacks of one browser can
 overlap: every change goes through :meth:`ClientSession.apply`, which holds the arm's
 lock while it changes the state and redraws the 3D view, then asks the
-:class:`~ur10teach.workers.PanelRefresher` to redraw the side panel. Every callback is wrapped
+:class:`~ur10teach.serving.workers.PanelRefresher` to redraw the side panel. Every callback is wrapped
 by :meth:`ClientSession.guard`: no exception escapes, a refused value is explained in a
 notification in that browser, and every other browser carries on.
 
@@ -23,25 +23,25 @@ import viser
 from ur10core import Arm
 from ur10core.orientation import transform_from_quaternion
 
-from .ik_target import BranchesScene, IKTargetControls
-from .camera import CameraControls
-from .lecture import LectureMode
-from .ellipsoids import EllipsoidsView
-from .floor import FloorScene
-from .joint_panel import JointPanel
+from .features.ik_target import BranchesScene, IKTargetControls
+from .features.camera import CameraControls
+from .features.lecture import LectureMode
+from .features.ellipsoids import EllipsoidsView
+from .features.floor import FloorScene
+from .features.joint_panel import JointPanel
 from .meshes import ArmModels
-from .metrics import LATENCY
-from .motion_lessons import MotionLessons
-from .reach_map import ReachMapView
-from .readouts import Readouts
-from .workers import DragQueue, PanelRefresher
-from .robot import ArmModelControls, RobotScene
+from .serving.metrics import LATENCY
+from .features.motion_lessons import MotionLessons
+from .features.reach_map import ReachMapView
+from .features.readouts import Readouts
+from .serving.workers import DragQueue, PanelRefresher
+from .features.robot import ArmModelControls, RobotScene
 from .session_basics import SessionBasics
-from .singularity import OverlayPanel, OverlayScene
-from .statics import StaticsView
-from .velocity import VelocityView
+from .features.singularity import OverlayPanel, OverlayScene
+from .features.statics import StaticsView
+from .features.velocity import VelocityView
 from .state import ArmState, Snapshot
-from .workspace import WorkspaceView
+from .features.workspace import WorkspaceView
 
 log = logging.getLogger(__name__)
 
@@ -88,7 +88,7 @@ class ClientSession(SessionBasics):
     state : ArmState, optional
         The arm to drive; a new one at the home pose by default.
     own_camera, lecture : bool
-        Build the browser's "View" folder (camera framing, :mod:`ur10teach.camera`; lecture mode,
+        Build the browser's "View" folder (camera framing, :mod:`ur10teach.features.camera`; lecture mode,
         starting as ``lecture`` says); the classroom builds one per browser instead,
         whatever its role.
     server, scene_views : viser.ViserServer, SceneViews, optional

@@ -17,12 +17,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ur10core import JOINT_LIMIT, Arm, IKSolution, SingularityGeometry
+from ur10core import JOINT_LIMIT, JOINT_NAMES, Arm, IKSolution, SingularityGeometry
 from ur10core.ik import equivalent_near
 from ur10core.orientation import quaternion
 from ur10core.workspace import lowest_points
 
-from .style import JOINT_LABELS
 
 SINGULARITY_KINDS = ("shoulder", "elbow", "wrist")
 #: A body this far below z = 0 is through the floor (the base's own underside sits on it).
@@ -130,7 +129,7 @@ class ArmState:
             raise ValueError(f"joint angles must be six numbers, got {q!r:.60}") from None
         if q.shape != (6,):
             raise ValueError(f"six joint angles are needed, got {q.size}")
-        for name, value in zip(JOINT_LABELS, q):
+        for name, value in zip(JOINT_NAMES, q):
             if not math.isfinite(value):
                 raise ValueError(f"{name}: {value} is not a number of degrees")
             if abs(value) > JOINT_LIMIT + 1e-9:

@@ -46,9 +46,6 @@ SHOULDER_COLOR = (230, 159, 0)
 ELBOW_COLOR = (0, 158, 115)
 WRIST_COLOR = (204, 121, 167)
 
-JOINT_LABELS = ("base", "shoulder", "elbow", "wrist 1", "wrist 2", "wrist 3")
-
-
 def hex_color(rgb: tuple[int, int, int]) -> str:
     return "#%02x%02x%02x" % tuple(int(c) for c in rgb)
 

@@ -10,7 +10,7 @@ class View:
 
     ``render`` draws the 3D scene on every change (it is on the drag path: keep it lean);
     ``render_panel`` draws the GUI, and 3D details that need not follow a drag frame by
-    frame (branch numbers, floor markers), at most ten times a second (see ``ur10teach.workers``).
+    frame (branch numbers, floor markers), at most ten times a second (see ``ur10teach.serving.workers``).
     Both run one at a time per session: ``render`` under the arm's lock
     (``ClientSession.apply`` or ``redraw``), ``render_panel`` on the panel refresher.
 

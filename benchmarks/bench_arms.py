@@ -63,9 +63,9 @@ def drag_ms(arm: Arm, server) -> tuple[float, float, float]:
     current joints as hint, the nearest valid branch, its frames, and drawing the arm, its
     ghosts and DH frames, on viser's event loop and batched as the app does. p50 and p99 (ms)
     in the default view, and p99 with the singularity overlay on too."""
-    from ur10teach.course_arms.scene import CourseArmScene
-    from ur10teach.course_arms.session import reach
-    from ur10teach.course_arms.state import CourseArmState
+    from ur10teach.features.course_arms.scene import CourseArmScene
+    from ur10teach.features.course_arms.session import reach
+    from ur10teach.features.course_arms.state import CourseArmState
 
     state = CourseArmState(arm)
     scene = CourseArmScene(server.scene, arm, state.last, reach(arm))
@@ -75,7 +75,7 @@ def drag_ms(arm: Arm, server) -> tuple[float, float, float]:
     loop = server.get_event_loop()
 
     async def step(T: np.ndarray) -> float:
-        """One drag event where the app serves it: on viser's event loop (``ur10teach.workers.DragQueue``), one batch."""
+        """One drag event where the app serves it: on viser's event loop (``ur10teach.serving.workers.DragQueue``), one batch."""
         start = time.perf_counter()
         with server.atomic():
             scene.render(state.move_target(T))

@@ -15,7 +15,7 @@ every frame received and decoded) run in this one. Scenarios:
   competes for the machine the whole time (the projector's browser and whatever else
   the teacher's laptop is running): how much headroom the server has, reproducibly;
 * **independent, viser's public setters** — as *independent*, the 3D updates drawn through
-  viser's public setters instead of ``app/fast_updates.py`` (``UR10_TEACH_PUBLIC_SETTERS=1``):
+  viser's public setters instead of ``app/viser_internals/fast_updates.py`` (``UR10_TEACH_PUBLIC_SETTERS=1``):
   what that module, which leans on viser's internals, buys;
 * **independent, panels without rest** — as *independent*, the panel refresher allowed all
   of the machine's time (``UR10_TEACH_PANEL_DUTY=1``) instead of 15 %: what its duty cycle buys;
@@ -26,7 +26,7 @@ every frame received and decoded) run in this one. Scenarios:
   students watch;
 * **lecture hall, viser's per-browser encoding** — as *lecture hall*, every browser's copy
   of a shared redraw encoded separately, as viser does it, instead of once
-  (``app/shared_frames.py``; ``UR10_TEACH_ENCODE_PER_CLIENT=1``): what that module buys.
+  (``app/viser_internals/shared_frames.py``; ``UR10_TEACH_ENCODE_PER_CLIENT=1``): what that module buys.
 
 Reported per scenario: server-side drag handler latency (the app's own measurement),
 end-to-end latency (a drag event sent → the client receives a 3D update showing that

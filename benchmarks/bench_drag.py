@@ -11,7 +11,7 @@ Reports
 
 * the server-side drag handler time (IK, nearest branch, snapshot, solid arm, ghost
   poses, overlay geometry: everything from the gizmo event to the queued 3D redraw), as
-  the app measures it (``ur10teach.metrics``); target p99 ≤ 5 ms;
+  the app measures it (``ur10teach.serving.metrics``); target p99 ≤ 5 ms;
 * the side-panel redraw the handler asks for (at most ten a second, off the drag path);
 * the bytes the client receives per update, in total and for the ghost arms alone;
 * the time from sending a gizmo event to receiving the moved branches (end to end).

@@ -17,7 +17,7 @@ sys.path.insert(0, str(ROOT))
 
 from playwright.sync_api import sync_playwright  # noqa: E402
 
-from ur10teach.server import TeachingServer  # noqa: E402
+from ur10teach.serving.server import TeachingServer  # noqa: E402
 from ur10dev.browser import CONNECTED, dom_id, launch, wait_for  # noqa: E402
 
 OUT = ROOT / "docs" / "images"
@@ -32,7 +32,7 @@ def show_the_map(page, session) -> None:
 
 
 def show_the_kr210(page, session) -> None:
-    from ur10teach.course_arms.session import CourseArmSession
+    from ur10teach.features.course_arms.session import CourseArmSession
     from ur10dev.browser import choose
 
     choose(page, session.arm_picker.dropdown, "KUKA KR210 (spherical wrist)")

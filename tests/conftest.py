@@ -38,7 +38,7 @@ def wrapped_difference(a, b) -> np.ndarray:
 @pytest.fixture
 def app():
     """A server in independent mode on a free port, in this process."""
-    from ur10teach.server import TeachingServer
+    from ur10teach.serving.server import TeachingServer
 
     server = TeachingServer(port=0)
     yield server
@@ -53,7 +53,7 @@ def light_app():
     the light view at 15–35: the browser suite checks what is drawn, and the screenshots
     come many times faster.
     """
-    from ur10teach.server import TeachingServer
+    from ur10teach.serving.server import TeachingServer
 
     server = TeachingServer(port=0, light=True)
     yield server
@@ -63,7 +63,7 @@ def light_app():
 @pytest.fixture
 def classroom():
     """A server in shared demo mode (``--shared``) on a free port, in this process."""
-    from ur10teach.server import TeachingServer
+    from ur10teach.serving.server import TeachingServer
 
     server = TeachingServer(port=0, shared=True)
     yield server

@@ -6,7 +6,7 @@ import asyncio
 
 import numpy as np
 
-from ur10teach.server import TeachingServer
+from ur10teach.serving.server import TeachingServer
 from ur10dev.viser_client import BROWSER_SEND_INTERVAL, ViserClient, wxyz_of
 from ur10dev.waiting import until, wait_for
 

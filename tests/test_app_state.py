@@ -5,11 +5,11 @@ import threading
 import numpy as np
 import pytest
 
-from ur10teach.ik_target import branch_table, status_markdown
-from ur10teach.readouts import joints_markdown, orientation_markdown, pose_markdown
-from ur10teach.singularity import alarm, factor_levels
+from ur10teach.features.ik_target import branch_table, status_markdown
+from ur10teach.features.readouts import joints_markdown, orientation_markdown, pose_markdown
+from ur10teach.features.singularity import alarm, factor_levels
 from ur10teach.state import ArmState
-from ur10teach.workspace import VIRIDIS, KeptClouds, colormap
+from ur10teach.features.workspace import VIRIDIS, KeptClouds, colormap
 from ur10core import Arm
 
 from .conftest import wrapped_difference

@@ -69,7 +69,7 @@ def test_the_light_view_shades_the_arm_and_ghosts_for_software_webgl(light, monk
     """``--light``: toon shading, no shadow maps, no environment map; by default, shading, shadows and both."""
     import viser
 
-    from ur10teach.server import TeachingServer
+    from ur10teach.serving.server import TeachingServer
 
     calls = []
     for name in ("configure_default_lights", "configure_environment_map"):

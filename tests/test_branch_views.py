@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from ur10teach.ik_target import ALL_BRANCHES, FOCUS_OPTIONS, branch_labels, branch_table, flipped, focused, same_pose_groups
+from ur10teach.features.ik_target import ALL_BRANCHES, FOCUS_OPTIONS, branch_labels, branch_table, flipped, focused, same_pose_groups
 from ur10teach.meshes import body_points, load_links
 from ur10teach.state import ArmState
 from ur10core import SLOTS

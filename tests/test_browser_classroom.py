@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from ur10teach.classroom import EXPLORER, PRESENTER, VIEWER
+from ur10teach.serving.classroom import EXPLORER, PRESENTER, VIEWER
 from ur10dev.browser import (
     HANG_TIMEOUT_MS, ask_to_present, changed, choose, dom_id, settled_canvas, step_slider, teacher_and_student,
     where_changed,
@@ -17,9 +17,9 @@ pytestmark = pytest.mark.browser
 
 
 def test_a_class_follows_the_presenter_and_a_student_explores(tmp_path):
-    from ur10teach.arm_picker import UR10
-    from ur10teach.course_arms.session import CourseArmSession
-    from ur10teach.server import TeachingServer
+    from ur10teach.features.arm_picker import UR10
+    from ur10teach.features.course_arms.session import CourseArmSession
+    from ur10teach.serving.server import TeachingServer
 
     app = TeachingServer(port=0, shared=True, light=True)
     try:

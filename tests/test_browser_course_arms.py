@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from ur10teach.course_arms.session import CourseArmSession
+from ur10teach.features.course_arms.session import CourseArmSession
 from ur10dev.browser import HANG_TIMEOUT_MS, canvas_changed, choose, dom_id, set_checkbox, settled_canvas, step_slider
 from ur10dev.waiting import wait_for
 

@@ -20,9 +20,9 @@ def test_what_the_jacobian_does_on_the_ur10_and_the_desktop_arm(open_page, light
     """Torque bars and the force arrow (its direction by a handle too), the ellipsoids, joint rates for
     a typed velocity, a path charted both ways; then the desktop arm plays the course's path and finds
     the pose that needs the most torque."""
-    from ur10teach.arm_picker import DESKTOP
-    from ur10teach.course_arms.desktop_arm import DesktopArmSession
-    from ur10teach.statics import DRAGGED
+    from ur10teach.features.arm_picker import DESKTOP
+    from ur10teach.features.course_arms.desktop_arm import DesktopArmSession
+    from ur10teach.features.statics import DRAGGED
 
     app = light_app
     page, session = open_page()

@@ -10,7 +10,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from ur10teach.server import TeachingServer
+from ur10teach.serving.server import TeachingServer
 from ur10teach.style import DANGER_RED, GHOST_OPACITY
 from ur10dev.browser import (
     HANG_TIMEOUT_MS, canvas_changed, changed_mask, choose, click, dom_id, neighbourhood, project, set_checkbox,
@@ -126,7 +126,7 @@ def test_the_ghosts_the_floor_and_the_gizmo_as_a_student_sees_them(open_page):
     """Numbers by the elbows, colours a colour-blind student tells apart, one branch or one choice at a
     time, a solid arm no ghost tints, a red mark under an arm through the floor, a gizmo that hides
     nothing, and the real UR10 with the schematic one choice away."""
-    from ur10teach.ik_target import flipped
+    from ur10teach.features.ik_target import flipped
     from ur10teach.meshes import REAL, SCHEMATIC
 
     page, session = open_page()
@@ -254,7 +254,7 @@ def test_the_ghosts_the_floor_and_the_gizmo_as_a_student_sees_them(open_page):
 def test_the_workspace_seen_square_on_through_its_sections_and_the_branch_count_map(open_page):
     """Sections sampled in their plane and faced square-on, a translucent hull the arm shows through,
     and the branch-count map drawn for the gizmo's orientation."""
-    from ur10teach.workspace import HULL
+    from ur10teach.features.workspace import HULL
 
     page, session = open_page()
     box = page.locator("canvas").first.bounding_box()

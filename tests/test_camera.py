@@ -1,11 +1,11 @@
-"""ur10teach.camera.framing: every point in the canvas, and no farther back than needed."""
+"""ur10teach.features.camera.framing: every point in the canvas, and no farther back than needed."""
 
 from __future__ import annotations
 
 import numpy as np
 import pytest
 
-from ur10teach.camera import VIEWS, arm_points, framing
+from ur10teach.features.camera import VIEWS, arm_points, framing
 from ur10teach.state import ArmState
 
 

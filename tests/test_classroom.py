@@ -9,9 +9,9 @@ import time
 import numpy as np
 import pytest
 
-from ur10teach.classroom import EXPLORER, LOCKOUT_SECONDS, MAX_WRONG_CODES, PRESENTER, VIEWER, make_join_code, normalise_code
-from ur10teach.gate import Gate
-from ur10teach.server import TeachingServer
+from ur10teach.serving.classroom import EXPLORER, LOCKOUT_SECONDS, MAX_WRONG_CODES, PRESENTER, VIEWER, make_join_code, normalise_code
+from ur10teach.serving.gate import Gate
+from ur10teach.serving.server import TeachingServer
 
 from .server_support import become_presenter, member_of, until
 from ur10dev.viser_client import ViserClient
@@ -85,7 +85,7 @@ def test_a_viewer_gets_each_presenter_update_whole(classroom, monkeypatch):
     (A drag is redrawn on the event loop, between two sends; a click is redrawn on viser's
     thread pool, while the loop sends, and that is where a redraw could be split.)
     """
-    from ur10teach.ik_target import BranchesScene
+    from ur10teach.features.ik_target import BranchesScene
 
     draw_ghosts = BranchesScene.render
 
@@ -227,7 +227,7 @@ def test_wrong_codes_lock_out_their_address_with_backoff_and_no_one_else(caplog)
             await client.close()
 
     try:
-        with caplog.at_level("WARNING", logger="ur10teach.classroom"):
+        with caplog.at_level("WARNING", logger="ur10teach.serving.classroom"):
             asyncio.run(scenario())
     finally:
         app.stop()
@@ -289,10 +289,10 @@ def test_a_browser_that_left_cannot_become_the_presenter(classroom):
 def test_the_presenter_shows_the_class_another_arm(classroom):
     """The presenter's picker changes the class's arm: every viewer's scene and live panel follow,
     an explorer gets a private copy of it, and the UR10 comes back where the presenter left it."""
-    from ur10teach.classroom import UR10_ROOTS
-    from ur10teach.course_arms.scene import EXPLORER_ROOT, ROOT
-    from ur10teach.course_arms.session import CourseArmSession
-    from ur10teach.arm_picker import UR10
+    from ur10teach.serving.classroom import UR10_ROOTS
+    from ur10teach.features.course_arms.scene import EXPLORER_ROOT, ROOT
+    from ur10teach.features.course_arms.session import CourseArmSession
+    from ur10teach.features.arm_picker import UR10
     from ur10teach.session import ClientSession
     from ur10dev.viser_client import wxyz_of
 
@@ -357,7 +357,7 @@ def test_the_presenter_shows_the_class_another_arm(classroom):
 
 def test_the_shared_ur10_lives_under_the_roots_an_explorer_hides(classroom):
     names = [name for name in classroom.server.scene._handle_from_node_name if name not in ("/floor", "/WorldAxes")]
-    from ur10teach.classroom import UR10_ROOTS
+    from ur10teach.serving.classroom import UR10_ROOTS
 
     assert names and all(name.split("/")[1] in {root.strip("/") for root in UR10_ROOTS} for name in names)
 
@@ -365,8 +365,8 @@ def test_the_shared_ur10_lives_under_the_roots_an_explorer_hides(classroom):
 def test_the_class_is_shown_the_desktop_arm_played_and_explored(classroom):
     """The presenter shows the 3-DOF desktop arm: the class sees it move along the course's path
     with its live panel; an explorer drives a copy of it and the class's stays hidden for them."""
-    from ur10teach.arm_picker import DESKTOP, UR10
-    from ur10teach.course_arms.desktop_arm import EXPLORER_ROOT, ROOT, DesktopArmSession
+    from ur10teach.features.arm_picker import DESKTOP, UR10
+    from ur10teach.features.course_arms.desktop_arm import EXPLORER_ROOT, ROOT, DesktopArmSession
     from ur10teach.session import ClientSession
 
     async def scenario():

@@ -14,7 +14,7 @@ import pytest
 from viser import _messages as messages
 
 from ur10teach.__main__ import parse_args
-from ur10teach.server import lan_addresses
+from ur10teach.serving.server import lan_addresses
 from ur10dev.app_process import running_app
 from ur10dev.viser_client import ViserClient
 from ur10dev.waiting import HANG_TIMEOUT, until

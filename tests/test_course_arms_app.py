@@ -9,9 +9,9 @@ import numpy as np
 import pytest
 import viser
 
-from ur10teach.arm_picker import ARM_CHOICES, CUSTOM, DESKTOP, UR10
-from ur10teach.course_arms.panel import branches_markdown, dh_table_markdown
-from ur10teach.course_arms.session import CourseArmSession
+from ur10teach.features.arm_picker import ARM_CHOICES, CUSTOM, DESKTOP, UR10
+from ur10teach.features.course_arms.panel import branches_markdown, dh_table_markdown
+from ur10teach.features.course_arms.session import CourseArmSession
 from ur10teach.session import ClientSession
 from ur10core import Arm
 
@@ -183,7 +183,7 @@ def test_a_typed_dh_table_becomes_an_arm_with_numerical_ik(app):
 
 
 def test_parse_table_refuses_what_is_not_a_table():
-    from ur10teach.course_arms.editor import parse_table
+    from ur10teach.features.course_arms.editor import parse_table
 
     for text, words in (("", "empty"), ("1 2 3 4 X", "type must be"), ("a b c d R", "must be numbers"),
                         ("9000 0 0 0 R", "lengths up to"), ("1 0 0 0 F", "at least one joint"),
@@ -204,7 +204,7 @@ def test_parse_table_refuses_what_is_not_a_table():
 def test_the_skeleton_walks_each_row_along_d_then_a(name):
     """Every DH row is two straight moves between frame origins (standard: d along z_{i−1}, then a
     along x_i; modified: a along x_{i−1}, then d along z_i), so the drawing shows the table's numbers."""
-    from ur10teach.course_arms.scene import skeleton
+    from ur10teach.features.course_arms.scene import skeleton
 
     arm = Arm.preset(name)
     q = np.random.default_rng(1).uniform(arm.limits[:, 0], arm.limits[:, 1])
@@ -265,7 +265,7 @@ def test_a_course_arms_workspace_cloud(app):
         assert session.workspace.legend.visible
         await until(lambda: f"{session.scene.root}/workspace" in client.received.nodes, what="the cloud under the arm's root")
         # the UR10's sections, where they apply: the cut-away keeps the half behind the arm's plane
-        from ur10teach.workspace import SECTIONS, vertical_section
+        from ur10teach.features.workspace import SECTIONS, vertical_section
 
         assert SECTIONS[2] not in session.workspace.section.options and "No horizontal section" in session.workspace.section.hint
         whole = np.asarray(points, dtype=float)
@@ -283,7 +283,7 @@ def test_a_course_arms_workspace_cloud(app):
 
 def test_the_kr210_gripper_pose_in_the_urdf_convention(app):
     async def scenario():
-        from ur10teach.course_arms.gripper import parse_pose, pose_text
+        from ur10teach.features.course_arms.gripper import parse_pose, pose_text
         from ur10core.serial import kr210_to_urdf
 
         client = await ViserClient(url(app)).connect()
@@ -313,7 +313,7 @@ def test_changing_arms_too_fast_is_refused_and_the_picker_shows_the_arm_still_dr
     async def scenario():
         client = await ViserClient(url(app)).connect()
         session = await pick(app, client, KR210, CourseArmSession)
-        monkeypatch.setattr("ur10teach.server.SWITCH_INTERVAL", 30.0)  # however slow this machine, the next change is too soon
+        monkeypatch.setattr("ur10teach.serving.server.SWITCH_INTERVAL", 30.0)  # however slow this machine, the next change is too soon
         client_id = int(client.gizmo_owner)
         await until(lambda: "Which arm" in client.gui, what="the new picker")
         await client.set_gui("Which arm", "SCARA (RRP + roll)")  # at once: too soon
@@ -327,7 +327,7 @@ def test_changing_arms_too_fast_is_refused_and_the_picker_shows_the_arm_still_dr
 
 
 def test_singularity_gauges_empty_and_turn_red_at_each_factors_singularity():
-    from ur10teach.course_arms.panel import factors_html
+    from ur10teach.features.course_arms.panel import factors_html
 
     kr210 = Arm.preset("kr210")
     regular = factors_html(kr210, np.radians([0, 15, -30, 20, 40, 10]))
@@ -342,10 +342,10 @@ def test_singularity_gauges_empty_and_turn_red_at_each_factors_singularity():
 def test_any_table_a_student_types_can_be_built_driven_and_searched():
     """Random tables (1–10 rows, R/P/F, odd twists, zero lengths, both conventions): every view's
     text builds, a small drag follows, and every branch the search reports reaches the target."""
-    from ur10teach.course_arms.editor import parse_table
-    from ur10teach.course_arms.panel import factors_html, walkthrough_steps
-    from ur10teach.course_arms.scene import skeleton
-    from ur10teach.course_arms.state import CourseArmState
+    from ur10teach.features.course_arms.editor import parse_table
+    from ur10teach.features.course_arms.panel import factors_html, walkthrough_steps
+    from ur10teach.features.course_arms.scene import skeleton
+    from ur10teach.features.course_arms.state import CourseArmState
 
     rng = np.random.default_rng(0)
     built = 0
@@ -375,7 +375,7 @@ def test_any_table_a_student_types_can_be_built_driven_and_searched():
 
 def test_singularities_shown_on_the_arm_turn_red_at_the_singularity(app):
     async def scenario():
-        from ur10teach.course_arms.overlay import FACTOR_COLORS
+        from ur10teach.features.course_arms.overlay import FACTOR_COLORS
         from ur10teach.style import DANGER_RED
 
         client = await ViserClient(url(app)).connect()
@@ -425,8 +425,8 @@ def test_a_course_arms_velocities_ellipsoids_and_forces(app):
     """The Stanford arm (a sliding joint): joint rates to v and ω at its tool, a typed twist to joint rates
     (mm/s for d3, no speed limits), the ellipsoids' lengths, and τ = Jᵀ F for a force at the tool."""
     async def scenario():
-        from ur10teach.statics import bars_html
-        from ur10teach.velocity import METRES_PER_SPEED, parse_twist, rates_markdown
+        from ur10teach.features.statics import bars_html
+        from ur10teach.features.velocity import METRES_PER_SPEED, parse_twist, rates_markdown
 
         client = await ViserClient(url(app)).connect()
         session = await pick(app, client, "Stanford arm (RRP + wrist)", CourseArmSession)
@@ -464,8 +464,8 @@ def test_a_course_arms_velocities_ellipsoids_and_forces(app):
 
 def test_the_tabs_of_one_address_change_arms_no_more_often_than_one_tab():
     """Review 2, finding 5: eight tabs of one address flicking the picker at 4/s took 59 % of the server."""
-    from ur10teach.gate import Gate
-    from ur10teach.server import TeachingServer
+    from ur10teach.serving.gate import Gate
+    from ur10teach.serving.server import TeachingServer
 
     app = TeachingServer(port=0, gate=Gate(trust_loopback=False))  # loopback addresses stand in for laptops
     app.clock = lambda: 1000.0  # time stands still: what the address has in hand is all it gets
@@ -524,7 +524,7 @@ def test_a_course_arm_moves_from_a_remembered_pose_along_both_paths(app, label):
     """Issue 29: the Motion folder was the UR10's alone. On the course's arms and its desktop arm: a
     straight tool line, the rates of a sliding joint in mm/s, no speed limits an arm does not have,
     and no gravity drop without link masses."""
-    from ur10teach.course_arms.desktop_arm import DesktopArmSession
+    from ur10teach.features.course_arms.desktop_arm import DesktopArmSession
 
     async def scenario():
         client = await ViserClient(url(app)).connect()
@@ -556,7 +556,7 @@ def test_a_course_arm_moves_from_a_remembered_pose_along_both_paths(app, label):
 def test_a_course_arm_has_its_branch_count_map_and_a_typed_table_says_why_not(app, label):
     """Issue 29: the branch-count map was the UR10's alone."""
     from ur10core.workspace import branch_count_map
-    from ur10teach.reach_map import COURSE_RESOLUTION, legend_text, map_image
+    from ur10teach.features.reach_map import COURSE_RESOLUTION, legend_text, map_image
 
     async def scenario():
         client = await ViserClient(url(app)).connect()

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from ur10teach.course_arms.overlay import factor_geometry
+from ur10teach.features.course_arms.overlay import factor_geometry
 from ur10core import Arm
 from ur10core.serial import PRESETS
 

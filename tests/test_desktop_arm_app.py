@@ -8,10 +8,10 @@ import math
 import numpy as np
 import pytest
 
-from ur10teach.arm_picker import DESKTOP, UR10
-from ur10teach.course_arms.desktop_arm import DesktopArmSession
-from ur10teach.course_arms.desktop_lessons import factors_markdown
-from ur10teach.course_arms.desktop_state import COURSE_TO_WORLD, SHOULDER_HEIGHT, DesktopArmState
+from ur10teach.features.arm_picker import DESKTOP, UR10
+from ur10teach.features.course_arms.desktop_arm import DesktopArmSession
+from ur10teach.features.course_arms.desktop_lessons import factors_markdown
+from ur10teach.features.course_arms.desktop_state import COURSE_TO_WORLD, SHOULDER_HEIGHT, DesktopArmState
 from ur10teach.session import ClientSession
 from ur10core import Arm
 from ur10core.three_dof import FOREARM, UPPER_ARM
@@ -95,7 +95,7 @@ def test_the_desktop_arm_is_picked_driven_played_and_searched(app):
 def test_the_desktop_arm_has_its_branch_count_map_standing_the_right_way_up(app):
     """Issue 29: the desktop arm's map, in its own frame (y up) and drawn in the scene's (z up)."""
     from ur10core.workspace import branch_count_map
-    from ur10teach.reach_map import COURSE_RESOLUTION, map_image, map_pose
+    from ur10teach.features.reach_map import COURSE_RESOLUTION, map_image, map_pose
 
     async def scenario():
         client = await ViserClient(url(app)).connect()

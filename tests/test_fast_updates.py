@@ -1,4 +1,4 @@
-"""ur10teach.fast_updates sends what viser's public setters send (it relies on viser internals)."""
+"""ur10teach.viser_internals.fast_updates sends what viser's public setters send (it relies on viser internals)."""
 
 from __future__ import annotations
 
@@ -9,7 +9,7 @@ import pytest
 import viser
 from viser import _messages
 
-from ur10teach.fast_updates import set_instances, set_orientations, set_positions, set_scales, stop_echo
+from ur10teach.viser_internals.fast_updates import set_instances, set_orientations, set_positions, set_scales, stop_echo
 
 pytestmark = pytest.mark.server
 
@@ -166,7 +166,7 @@ def test_shared_type_hints_are_viser_s_own_and_handles_behave_the_same(scene, mo
 
     from viser import _assignable_props_api
 
-    from ur10teach import fast_updates
+    from ur10teach.viser_internals import fast_updates
 
     # what it replaces (a viser upgrade that renames it fails here)
     assert isinstance(vars(_assignable_props_api.AssignablePropsBase).get("_prop_hints"), (property, functools.cached_property))

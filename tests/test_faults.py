@@ -14,8 +14,9 @@ import numpy as np
 import pytest
 from viser import _messages as messages
 
-from ur10teach import feedback, shared_frames
-from ur10teach.workspace import SAMPLE_COUNTS
+from ur10teach import feedback
+from ur10teach.viser_internals import shared_frames
+from ur10teach.features.workspace import SAMPLE_COUNTS
 from ur10dev.app_process import running_app
 from .server_support import drag_a_little, session_of, until, url, wait_for
 from ur10dev.viser_client import BROWSER_SEND_INTERVAL, ViserClient, encode, wxyz_of
@@ -120,7 +121,7 @@ def test_a_client_that_stops_reading_is_dropped_and_holds_up_no_one(app, monkeyp
         assert len(app.sessions) == 1
         await active.close()
 
-    with caplog.at_level("WARNING", logger="ur10teach.shared_frames"):
+    with caplog.at_level("WARNING", logger="ur10teach.viser_internals.shared_frames"):
         asyncio.run(scenario())
 
 
@@ -188,7 +189,7 @@ def test_garbage_and_out_of_range_input_is_refused(app):
         await until(lambda: abs(np.degrees(bad_session.state.q[1]) - 50.0) < 1e-9, what="a good value after the bad ones")
         target = await drag_a_little(good, good_session, steps=5)
         await until(lambda: np.allclose(good_session.state.last.target, target, atol=1e-9), what="the other student")
-        # bytes that are not even a message are dropped at the gate (app/gate.py), before viser sees them
+        # bytes that are not even a message are dropped at the gate (app/serving/gate.py), before viser sees them
         await bad.send_raw(b"\x00\x01garbage")
         await bad.send_raw(msgspec.msgpack.encode({"type": "NoSuchMessage"}))
         await until(lambda: app.gate.dropped["undecodable message"] == 1 and app.gate.dropped["NoSuchMessage"] == 1,

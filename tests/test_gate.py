@@ -1,7 +1,7 @@
 """Hostile clients: what one browser (or a page a student opens) can no longer do to the class.
 
 Each test here was a finding of the security review against the app before the gate
-(``app/gate.py``) and fails without it. The clients are headless and speak viser's own
+(``app/serving/gate.py``) and fails without it. The clients are headless and speak viser's own
 protocol (``ur10dev/viser_client.py``), so they can send what no browser would.
 """
 
@@ -20,9 +20,9 @@ import viser
 import websockets
 from viser import _messages as messages
 
-from ur10teach import gate as gate_module
-from ur10teach.gate import MAX_MESSAGE_BYTES, MESSAGE_BURST, Gate, TokenBucket, gated_serve, message_key
-from ur10teach.server import TeachingServer
+from ur10teach.serving import gate as gate_module
+from ur10teach.serving.gate import MAX_MESSAGE_BYTES, MESSAGE_BURST, Gate, TokenBucket, gated_serve, message_key
+from ur10teach.serving.server import TeachingServer
 
 from .server_support import drag_a_little, session_of, until, url
 from ur10dev.viser_client import ViserClient, encode
@@ -382,7 +382,7 @@ def test_the_gate_fails_loudly_if_viser_stops_starting_its_server_through_websoc
 
 def test_a_browsers_share_of_slow_work_is_its_address():
     """Review 2, finding 5: eight connections from one address each had a budget of their own."""
-    from ur10teach.gate import budget_of
+    from ur10teach.serving.gate import budget_of
 
     lan = TeachingServer(port=0, gate=Gate(trust_loopback=False))  # loopback addresses stand in for laptops
 
@@ -439,7 +439,7 @@ def test_the_open_file_limit_is_raised_where_the_system_allows():
     """Review 2, finding 6: a common default of 1 024 open files ran out under half-open connections."""
     import resource
 
-    from ur10teach.server import OPEN_FILES, raise_open_file_limit
+    from ur10teach.serving.server import OPEN_FILES, raise_open_file_limit
 
     soft, hard = resource.getrlimit(resource.RLIMIT_NOFILE)
     try:

@@ -3,7 +3,7 @@
 import io
 import logging
 
-from ur10teach.logs import RepeatLimiter
+from ur10teach.serving.logs import RepeatLimiter
 
 
 def _logger(stream: io.StringIO, limiter: RepeatLimiter) -> logging.Logger:

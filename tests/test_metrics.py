@@ -4,8 +4,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from ur10teach.metrics import LatencyLog
-from ur10teach.server import _resident_bytes
+from ur10teach.serving.metrics import LatencyLog
+from ur10teach.serving.server import _resident_bytes
 from ur10dev.waiting import HANG_TIMEOUT
 
 
@@ -52,8 +52,8 @@ def test_a_collection_while_the_log_is_held_does_not_freeze_the_server():
     import gc
     import threading
 
-    from ur10teach.metrics import LATENCY
-    from ur10teach.server import _watch_garbage_collector
+    from ur10teach.serving.metrics import LATENCY
+    from ur10teach.serving.server import _watch_garbage_collector
 
     callbacks = list(gc.callbacks)
     threshold = gc.get_threshold()

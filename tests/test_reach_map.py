@@ -8,8 +8,8 @@ import threading
 import numpy as np
 import pytest
 
-from ur10teach import reach_map
-from ur10teach.reach_map import PLANES, map_image
+from ur10teach.features import reach_map
+from ur10teach.features.reach_map import PLANES, map_image
 from ur10teach.style import REACH_COLORS
 from ur10core.orientation import rotation_from_zyx_euler
 from ur10core.workspace import branch_count_map

@@ -14,7 +14,8 @@ import weakref
 import numpy as np
 import pytest
 
-from ur10teach import joint_panel, workers
+from ur10teach.features import joint_panel
+from ur10teach.serving import workers
 from ur10teach.style import number, sentence
 
 from .server_support import become_presenter, drag_a_little, member_of, session_of, until, url
@@ -133,8 +134,8 @@ def test_a_click_while_the_session_is_being_built_is_not_an_error(app, monkeypat
     """A widget reaches the browser as soon as it is made: a click before the session's constructor
     had finished redrew a session without its views yet ("Something went wrong", AttributeError).
     The UR10's session and a course arm's, with the click made while their velocity folder is built."""
-    from ur10teach import velocity
-    from ur10teach.course_arms.session import CourseArmSession
+    from ur10teach.features import velocity
+    from ur10teach.features.course_arms.session import CourseArmSession
 
     from .test_course_arms_app import pick
 
@@ -343,9 +344,9 @@ def test_a_section_slider_flood_costs_one_cloud_in_the_making_and_one_waiting(ap
 
     The first cloud of the flood is held until every height has reached the server: the
     150 messages that came meanwhile (a second's worth of what the gate reads off one socket,
-    app/gate.py) must fold into one more cloud, of the newest height.
+    app/serving/gate.py) must fold into one more cloud, of the newest height.
     """
-    from ur10teach.workspace import WorkspaceView
+    from ur10teach.features.workspace import WorkspaceView
 
     computed: list[float] = []
     held = threading.Event()
@@ -405,11 +406,11 @@ def test_a_students_slider_value_is_not_put_back_by_a_redraw_before_its_callback
 
 
 def test_a_browser_gone_before_its_turn_to_be_built_costs_nothing(app, monkeypatch):
-    """A lecture hall joining at once is built one session at a time (``ur10teach.workers.JOINS``):
+    """A lecture hall joining at once is built one session at a time (``ur10teach.serving.workers.JOINS``):
     a browser that left while it waited for its turn is not built at all."""
     from types import SimpleNamespace
 
-    from ur10teach import server as server_module
+    from ur10teach.serving import server as server_module
 
     started = server_module.JOINS.started
     built = []
@@ -421,7 +422,7 @@ def test_a_browser_gone_before_its_turn_to_be_built_costs_nothing(app, monkeypat
 
 def test_a_cloud_goes_from_memory_once_its_browsers_have_left(app):
     """Review 2, finding 2: clouds made for browsers that left stayed in the server's memory."""
-    from ur10teach.workspace import CLOUDS
+    from ur10teach.features.workspace import CLOUDS
 
     async def scenario():
         CLOUDS.forget_unheld()

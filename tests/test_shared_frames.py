@@ -1,4 +1,4 @@
-"""ur10teach.shared_frames sends what viser's own producer sends, encoding a broadcast window once."""
+"""ur10teach.viser_internals.shared_frames sends what viser's own producer sends, encoding a broadcast window once."""
 
 from __future__ import annotations
 
@@ -13,8 +13,8 @@ from viser import _messages
 from viser.infra import _infra
 from viser.infra._async_message_buffer import AsyncMessageBuffer
 
-from ur10teach import shared_frames
-from ur10teach.fast_updates import _UpdateMessage
+from ur10teach.viser_internals import shared_frames
+from ur10teach.viser_internals.fast_updates import _UpdateMessage
 from ur10dev.viser_client import decode_frame
 from ur10dev.waiting import HANG_TIMEOUT, until
 
@@ -108,7 +108,7 @@ def test_only_recent_windows_are_kept():
 
 
 def test_viser_producer_is_the_one_copied():
-    """Fails when a viser upgrade changes the producer that app/shared_frames.py replaces: compare them again."""
+    """Fails when a viser upgrade changes the producer that app/viser_internals/shared_frames.py replaces: compare them again."""
     source = inspect.getsource(shared_frames.VISER_PRODUCER)
     assert hashlib.sha256(source.encode()).hexdigest() == VISER_PRODUCER_SHA256
 

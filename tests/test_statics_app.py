@@ -8,7 +8,7 @@ import threading
 import numpy as np
 import pytest
 
-from ur10teach.statics import bars_html
+from ur10teach.features.statics import bars_html
 from ur10core import Arm
 
 from .server_support import session_of, until, url
@@ -52,7 +52,7 @@ def test_the_force_points_where_its_handle_is_dragged(app):
     """"Drag the handle": the force points from the flange to the handle, the arrow and the bars follow,
     and the handle rides with the flange when the arm moves."""
     async def scenario():
-        from ur10teach.statics import DRAGGED, HANDLE_DISTANCE
+        from ur10teach.features.statics import DRAGGED, HANDLE_DISTANCE
 
         client = await ViserClient(url(app)).connect()
         session = session_of(app, client)
@@ -108,7 +108,7 @@ def test_without_ratings_each_bar_is_against_the_largest_and_a_slide_holds_newto
 
 def test_the_ellipsoids_follow_the_arm_and_flatten_towards_the_elbow_singularity(app):
     async def scenario():
-        from ur10teach.ellipsoids import FORCE_METRES, VELOCITY_METRES
+        from ur10teach.features.ellipsoids import FORCE_METRES, VELOCITY_METRES
         from ur10core.orientation import rotation_from_quaternion
 
         client = await ViserClient(url(app)).connect()
@@ -142,7 +142,7 @@ def test_the_ellipsoids_follow_the_arm_and_flatten_towards_the_elbow_singularity
 
 def test_joint_rates_draw_the_flange_velocity_and_a_typed_velocity_gets_its_rates(app):
     async def scenario():
-        from ur10teach.velocity import METRES_PER_SPEED, METRES_PER_TURN_RATE, parse_twist, rates_markdown
+        from ur10teach.features.velocity import METRES_PER_SPEED, METRES_PER_TURN_RATE, parse_twist, rates_markdown
 
         client = await ViserClient(url(app)).connect()
         session = session_of(app, client)
@@ -164,7 +164,7 @@ def test_joint_rates_draw_the_flange_velocity_and_a_typed_velocity_gets_its_rate
         rates = snapshot.arm.joint_rates(snapshot.q, asked)
         limits = np.degrees(snapshot.arm.specs.speed_limits)
         await until(lambda: view.rates.content == rates_markdown(rates.qdot, float(rates.damping), asked, rates.achieved,
-                                                                 limits=limits), what="the joint rates")
+                                                                 snapshot.arm.joint_names, "RRRRRR", limits), what="the joint rates")
         assert float(rates.damping) == 0.0 and np.allclose(rates.achieved, asked)
         await client.set_gui("vx vy vz (mm/s) ωx ωy ωz (°/s)", "1 2 3")
         await client.set_gui("Find the joint rates", True)
@@ -178,7 +178,7 @@ def test_near_a_singularity_the_needed_rates_are_red_and_on_it_damped():
     """3° from the wrist singularity, turning the flange at 30 °/s about z needs a wrist far over its
     180 °/s (undamped); 0.06° from it the damping keeps every joint within its limit, and says what
     that costs."""
-    from ur10teach.velocity import parse_twist, rates_markdown
+    from ur10teach.features.velocity import parse_twist, rates_markdown
     from ur10core import Arm
 
     arm = Arm.preset("course")
@@ -188,7 +188,8 @@ def test_near_a_singularity_the_needed_rates_are_red_and_on_it_damped():
         q = singular.copy()
         q[4] += offset
         rates = arm.joint_rates(q, asked)
-        text = rates_markdown(rates.qdot, float(rates.damping), asked, rates.achieved, limits=np.degrees(arm.specs.speed_limits))
+        text = rates_markdown(rates.qdot, float(rates.damping), asked, rates.achieved, arm.joint_names, "RRRRRR",
+                              np.degrees(arm.specs.speed_limits))
         assert ("color:#dc2626" in text) == red and ("over the limit" in text) == red
         assert ("damped (λ =" in text) == damped
     with pytest.raises(ValueError, match="up to 2000 mm/s"):
@@ -198,7 +199,7 @@ def test_near_a_singularity_the_needed_rates_are_red_and_on_it_damped():
 def test_the_rate_charts_mark_the_singularity_and_the_speed_limits():
     """A straight line across s5 = 0 is shaded where it was damped and where a wrist went over
     180°/s; joint interpolation between the same poses needs neither mark."""
-    from ur10teach.motion_lessons import rate_chart_data
+    from ur10teach.features.motion_lessons import rate_chart_data
     from ur10core import Arm
     from ur10core.paths import joint_interpolation, straight_line
 
@@ -292,7 +293,7 @@ def test_the_workspace_coloured_by_the_torque_a_force_needs(app):
 def test_presses_fold_into_one_run_on_one_thread_and_none_for_a_browser_that_left(app):
     """Review 2, finding 3: *Release the arm* pressed 30 times a second for 20 s left 543 threads,
     each with its second of dynamics, running long after the student had gone."""
-    from ur10teach.workers import BACKGROUND_THREADS, HEAVY
+    from ur10teach.serving.workers import BACKGROUND_THREADS, HEAVY
 
     async def scenario():
         client = await ViserClient(url(app)).connect()
@@ -319,11 +320,11 @@ def test_presses_fold_into_one_run_on_one_thread_and_none_for_a_browser_that_lef
 
 
 def test_the_rate_charts_name_each_distinct_limit_once_with_its_joints():
-    from ur10teach.motion_lessons import limit_groups, rate_chart_data, spoken_list
-    from ur10teach.style import JOINT_LABELS
+    from ur10teach.features.motion_lessons import limit_groups, rate_chart_data, spoken_list
     from ur10core.paths import joint_interpolation
 
     arm = Arm.preset("course")
+    JOINT_LABELS = arm.joint_names
     limits = np.degrees(arm.specs.speed_limits)
     groups = limit_groups(limits, JOINT_LABELS)
     assert [(round(limit, 9), spoken_list(names)) for limit, names in groups] == [

@@ -14,8 +14,8 @@ import threading
 
 import pytest
 
-from ur10teach import workers
-from ur10teach.workers import DragQueue, HeavyWork
+from ur10teach.serving import workers
+from ur10teach.serving.workers import DragQueue, HeavyWork
 from ur10dev.waiting import wait_for
 
 

@@ -189,7 +189,7 @@ def test_revolved_boundary_refuses_bad_arguments(bad, message):
 
 def test_the_hull_mesh_is_closed_and_turned_from_the_profile(course):
     import trimesh
-    from ur10teach.workspace import revolved_mesh
+    from ur10teach.features.workspace import revolved_mesh
 
     heights, inner, outer = revolved_boundary(course.sample_workspace(50_000, seed=1)[0], bins=30)
     vertices, faces = revolved_mesh(heights, inner, outer, segments=40)

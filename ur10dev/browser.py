@@ -306,7 +306,7 @@ def teacher_and_student(app) -> Iterator[tuple]:
     """Two browsers on a classroom server (``--shared``), each in a process of its own.
 
     Yields (teacher page, student page, teacher's member, student's member), the members
-    being ``ur10teach.classroom``'s, both still watching; closes both browsers after, and fails
+    being ``ur10teach.serving.classroom``'s, both still watching; closes both browsers after, and fails
     if either page asked anything of another host.
     """
     from playwright.sync_api import sync_playwright

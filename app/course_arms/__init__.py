@@ -1,8 +1,0 @@
-"""The course's other arms in the app: pick one, drive it, see its branches, singularities and DH frames.
-
-One browser drives one :class:`ur10core.serial.Arm` (``session.CourseArmSession``):
-its state (``state``), what is drawn in 3D (``scene``: the DH skeleton, its frames, the
-ghost branches) and the panel (``panel``: sliders, branch table, singularity factors,
-the DH table in both conventions). The UR10 keeps its own, richer session (``ur10teach.session``);
-``ur10teach.arm_picker`` switches a browser between them.
-"""

@@ -1,0 +1,73 @@
+"""The "Arm" folder: which arm this browser drives — the UR10, or one of the course's other arms.
+
+Picking one takes the current arm out of this browser (its panel and scene) and builds the
+other's: the UR10 with every feature of the app (``ur10teach.session``), the others with theirs
+(``ur10teach.features.course_arms``). Each browser picks for itself; in shared mode the presenter picks the
+class's arm (``ur10teach.serving.classroom``).
+"""
+
+from __future__ import annotations
+
+from typing import Callable
+
+import viser
+
+from ur10core.serial import PRESETS
+
+#: Seconds between two rebuilds of one browser's arm (the picker, the DH editor's "Build"), or of
+#: the classroom's: building an arm costs tens of milliseconds, and a flicked picker must not load the server.
+SWITCH_INTERVAL = 0.5
+
+UR10 = "UR10 (the app's arm)"
+CUSTOM = "Your own DH table"
+DESKTOP = "The course's 3-DOF desktop arm"
+#: What the dropdown shows → the ``Arm.preset`` name (None: the server's own UR10; "custom": the DH editor;
+#: "three_dof": the course's desktop arm, ``ur10teach.features.course_arms.desktop_arm``).
+ARM_CHOICES: dict[str, str | None] = {
+    UR10: None,
+    "KUKA KR210 (spherical wrist)": "kr210",
+    "Stanford arm (RRP + wrist)": "stanford",
+    "Elbow arm + spherical wrist": "elbow",
+    "SCARA (RRP + roll)": "scara",
+    "Planar elbow (2R)": "planar_elbow",
+    "Cylindrical arm (RPP)": "cylindrical",
+    DESKTOP: "three_dof",
+    CUSTOM: "custom",
+}
+assert set(ARM_CHOICES.values()) - {None, "custom", "three_dof"} == set(PRESETS)
+
+
+def panel_title(choice: str, preset: str) -> str:
+    """The panel's title: the arm it shows (``choice``, an :data:`ARM_CHOICES` label; ``preset``, the UR10's numbers)."""
+    return f"UR10 kinematics ({preset})" if choice == UR10 else f"{choice}: kinematics"
+
+
+#: What the classroom's presenter can show the class: a typed table is for one's own browser.
+CLASS_CHOICES = tuple(label for label in ARM_CHOICES if label != CUSTOM)
+
+
+class ArmPicker:
+    """The dropdown; ``on_pick(label)`` is called with a checked choice (one of ``choices``) when it changes."""
+
+    def __init__(self, gui: viser.GuiApi, current: str, on_pick: Callable[[str], None],
+                 guard: Callable[[Callable], Callable], choices: tuple[str, ...] = tuple(ARM_CHOICES),
+                 hint: str = "The course's other arms: their branches, singularities and DH frames") -> None:
+        self.folder = gui.add_folder("Arm", order=0.1)
+        with self.folder:
+            self.dropdown = gui.add_dropdown("Which arm", choices, initial_value=current, hint=hint)
+        self._choices = choices
+        self._current = current
+        self.dropdown.on_update(guard(lambda _: self._picked(on_pick)))
+
+    def _picked(self, on_pick: Callable[[str], None]) -> None:
+        label = self.dropdown.value
+        if label not in self._choices:  # not from a browser: put back the arm this one drives, and refuse
+            self.dropdown.value = self._current
+            raise ValueError(f"arm: {label!r:.40} is not one of the choices")
+        if label != self._current:
+            try:
+                on_pick(label)
+            except ValueError:  # refused (too soon after the last change): show the arm this browser still drives
+                self.dropdown.value = self._current
+                raise
+            self._current = label

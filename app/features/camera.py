@@ -1,0 +1,137 @@
+"""The "View" folder: frame the arm in the part of the window the panel leaves, the standard views, lecture mode.
+
+The panel is docked at the right edge (``main_panel.dock_right``), so the 3D canvas is
+the window minus the panel and nothing of the arm hides under it. The camera then frames
+the arm and its target in that canvas, from the direction the student chose, whenever
+the canvas changes size (a new window, a resize, the browser's zoom) or on "Frame the arm".
+"""
+
+from __future__ import annotations
+
+import threading
+from typing import Callable
+
+import numpy as np
+import viser
+
+from ..feedback import chosen
+from .lecture import LectureMode
+from ..state import Snapshot
+from ..view import View
+
+#: Where each view looks from (a direction from the arm towards the camera; z is up).
+VIEWS = {
+    "Course figure": (1.9, -1.9, 0.9),  # the three-quarter view of the course's drawings
+    "Front (x–z plane)": (0.0, -1.0, 0.0),
+    "Side (y–z plane)": (1.0, 0.0, 0.0),
+    "Top (x–y plane)": (0.0, -0.02, 1.0),  # a hair off vertical: the orbit keeps z up
+}
+#: Room kept around each joint (the link bodies are up to ~9 cm thick) and at the canvas edges.
+BODY_RADIUS = 0.1
+EDGE_MARGIN = 0.08
+
+
+def framing(points: np.ndarray, direction, fov: float, aspect: float, margin: float = EDGE_MARGIN) -> tuple[np.ndarray, np.ndarray]:
+    """(camera position, look-at point) that show every one of ``points`` (n, 3) in the canvas.
+
+    The camera looks at the points' bounding-box centre from ``direction``, with z up,
+    vertical field of view ``fov`` (rad) and ``aspect`` = width / height, and stands just
+    far enough back that each point is inside the canvas by ``margin`` of its half-size.
+
+    >>> position, look_at = framing(np.array([[1.0, 0, 0], [-1.0, 0, 0]]), (0, -1, 0), np.radians(90), 1.0, margin=0.0)
+    >>> position.round(6).tolist(), look_at.tolist()
+    [[0.0, -1.0, 0.0], [0.0, 0.0, 0.0]]
+    """
+    points = np.asarray(points, dtype=float)
+    back = np.asarray(direction, dtype=float)
+    back = back / np.linalg.norm(back)
+    forward = -back
+    right = np.cross(forward, (0.0, 0.0, 1.0))
+    right /= np.linalg.norm(right)
+    up = np.cross(right, forward)
+    centre = (points.min(axis=0) + points.max(axis=0)) / 2
+    relative = points - centre
+    x, y, depth = relative @ right, relative @ up, relative @ forward
+    tan_v = np.tan(fov / 2) * (1 - margin)
+    tan_h = tan_v * aspect
+    # a point at depth d beyond the centre is seen at x / (distance + d): solve for the distance
+    distance = max(float(np.max(np.abs(x) / tan_h - depth)), float(np.max(np.abs(y) / tan_v - depth)),
+                   float(np.max(-depth)) + 0.05)  # and never inside the arm
+    return centre + distance * back, centre
+
+
+def arm_points(snapshot: Snapshot, body_radius: float = BODY_RADIUS) -> np.ndarray:
+    """What the camera must show: the joints and the target, each with ``body_radius`` of room around it."""
+    centres = np.vstack([snapshot.frames[:, :3, 3], snapshot.target[:3, 3], snapshot.lowest[0]])
+    corners = np.array([[sx, sy, sz] for sx in (-1, 1) for sy in (-1, 1) for sz in (-1, 1)]) * body_radius
+    return (centres[:, None, :] + corners[None]).reshape(-1, 3)
+
+
+class CameraControls(View):
+    """One browser's camera: framed on arrival and on every new canvas size, and the "View" folder.
+
+    Parameters
+    ----------
+    client : viser.ClientHandle
+    snapshot : callable
+        The newest snapshot of the arm this browser is looking at.
+    guard : callable
+        Wraps a handler so that nothing it raises escapes (``ClientSession.guard``, ``feedback.guard``).
+    lecture : bool
+        Start in lecture mode (:mod:`ur10teach.features.lecture`, whose switch is in this folder too).
+    body_radius : float
+        Room kept around each joint (m): the UR10's link bodies by default; a course arm's
+        rods and gizmo scale with its reach.
+    """
+
+    def __init__(self, client: viser.ClientHandle, snapshot: Callable[[], Snapshot],
+                 guard: Callable[[Callable], Callable], lecture: bool = False, body_radius: float = BODY_RADIUS) -> None:
+        self._client = client
+        self.body_radius = body_radius  #: the classroom changes it with the arm it shows
+        self._snapshot = snapshot
+        self._guard = guard
+        self.closed = False
+        self._framed_size: tuple[int, int] | None = None
+        self._lock = threading.Lock()
+        gui = client.gui
+        gui.main_panel.dock_right()  # the canvas is what the panel leaves: nothing hides under it
+        folder = gui.add_folder("View", order=0.5, expand_by_default=False)  # near the top: a teacher wants it first
+        self.folders = (folder,)
+        with folder:
+            self.direction = gui.add_dropdown("Look from", tuple(VIEWS), initial_value="Course figure")
+            self.frame_button = gui.add_button("Frame the arm", icon=viser.Icon.FOCUS_CENTERED)
+        self.lecture = LectureMode(gui, folder, lecture, guard)
+        self.direction.on_update(guard(lambda _: self.frame()))
+        self.frame_button.on_click(guard(lambda _: self.frame()))
+        client.camera.on_update(self._camera_moved)
+
+    def close(self) -> None:
+        self.closed = True
+
+    def _camera_moved(self, camera: viser.CameraHandle) -> None:
+        if self.closed:
+            return
+        size = (camera.image_width, camera.image_height)
+        with self._lock:
+            if size == self._framed_size or 0 in size:
+                return  # an orbit or zoom of the student's own: leave it
+            self._framed_size = size
+        self._guard(lambda _: self.frame())(None)
+
+    def frame(self) -> None:
+        """Point this browser's camera at the arm and its target, from the chosen direction."""
+        self.look_from(VIEWS[chosen(self.direction, "look from")])
+
+    def look_from(self, direction, points: np.ndarray | None = None) -> None:
+        """Frame the arm, its target and ``points`` (n, 3; a section of the workspace, say) from ``direction``."""
+        if self.closed:
+            return
+        camera = self._client.camera
+        shown = arm_points(self._snapshot(), self.body_radius)
+        if points is not None:
+            shown = np.vstack([shown, points])
+        position, look_at = framing(shown, direction, camera.fov, camera.aspect)
+        with self._client.atomic():
+            camera.up_direction = (0.0, 0.0, 1.0)
+            camera.position = position
+            camera.look_at = look_at  # after the position: viser moves both together otherwise

@@ -1,0 +1,78 @@
+"""The KR210's gripper pose, read and typed in the DH convention or in its simulation model's (ROS/Gazebo URDF)."""
+
+from __future__ import annotations
+
+import math
+import re
+from typing import TYPE_CHECKING
+
+import numpy as np
+import viser
+
+from ur10core.orientation import rotation_from_xyz_fixed, xyz_fixed
+from ur10core.serial import kr210_from_urdf, kr210_to_urdf
+
+from ...style import number
+from ...view import View
+from .state import CourseSnapshot
+
+if TYPE_CHECKING:
+    from .session import CourseArmSession
+
+
+def pose_text(T: np.ndarray) -> str:
+    """``x y z`` in mm and roll, pitch, yaw (X-Y-Z fixed, as ROS writes them) in degrees."""
+    roll, pitch, yaw = np.degrees(xyz_fixed(T[:3, :3], check=False))
+    x, y, z = 1000 * T[:3, 3]
+    return " ".join(number(v, ".1f") for v in (x, y, z, roll, pitch, yaw))
+
+
+def parse_pose(text: str) -> np.ndarray:
+    """The pose typed as ``x y z roll pitch yaw`` (mm, degrees), (4, 4); ``ValueError`` saying what is wrong."""
+    fields = [f for f in re.split(r"[,\s]+", text.strip()) if f]
+    if len(fields) != 6:
+        raise ValueError(f"type six numbers, x y z (mm) roll pitch yaw (°); got {len(fields)}")
+    try:
+        values = [float(f) for f in fields]
+    except ValueError:
+        raise ValueError(f"x y z roll pitch yaw must be numbers, got {text!r:.60}") from None
+    if not all(math.isfinite(v) for v in values) or max(abs(v) for v in values[:3]) > 10_000:
+        raise ValueError("the position must be finite and within 10 m")
+    T = np.eye(4)
+    T[:3, :3] = rotation_from_xyz_fixed(np.radians(values[3:]))
+    T[:3, 3] = np.array(values[:3]) / 1000
+    return T
+
+
+class GripperPose(View):
+    """The "Gripper pose" folder of the KR210: the target in either convention, and a pose to go to."""
+
+    def __init__(self, gui: viser.GuiApi, session: "CourseArmSession") -> None:
+        self._session = session
+        folder = gui.add_folder("Gripper pose")
+        self.folders = (folder,)
+        with folder:
+            self.urdf = gui.add_checkbox("ROS/Gazebo gripper convention", False,
+                                         hint="The simulation model's gripper frame: R_DH = R_URDF · Rz(180°) · Ry(−90°)")
+            self.readout = gui.add_markdown("")
+            self.typed = gui.add_text("x y z (mm) roll pitch yaw (°)", pose_text(session.state.last.target))
+            self.go = gui.add_button("Go to this pose", icon=viser.Icon.ARROW_RIGHT)
+        self.urdf.on_update(session.guard(lambda _: self._convention_changed()))
+        self.go.on_click(session.guard(lambda _: self._go()))
+
+    def _shown(self, T: np.ndarray) -> np.ndarray:
+        return kr210_to_urdf(T) if self.urdf.value else T
+
+    def _convention_changed(self) -> None:
+        self.typed.value = pose_text(self._shown(self._session.state.last.target))
+        self._session.refresher.request(self._session)
+
+    def _go(self) -> None:
+        T = parse_pose(str(self.typed.value))
+        if self.urdf.value:
+            T = kr210_from_urdf(T)
+        self._session.apply(lambda state: state.move_target(T), move_gizmo=True)
+
+    def render_panel(self, snapshot: CourseSnapshot) -> None:
+        name = "URDF (ROS/Gazebo)" if self.urdf.value else "DH (frame G)"
+        self.readout.content = f"Target in the {name} convention: **{pose_text(self._shown(snapshot.target))}**"

@@ -1,0 +1,115 @@
+"""The manipulability ellipsoids at the tool (the UR10's flange; docs/kinematics.md §8.4).
+
+The velocity ellipsoid (sky blue) holds the flange velocities of all joint rates of unit
+norm that keep the tool's orientation; the force ellipsoid (vermilion) the forces the joints
+hold with torques of unit norm. Same axes, reciprocal lengths: near a singularity that costs
+the flange a direction of travel, the first flattens and the second stretches along it.
+Both follow the drag; their axis lengths are in the panel.
+"""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING, Any, Callable
+
+import numpy as np
+import viser
+
+from ur10core.orientation import quaternion
+
+from ..viser_internals.fast_updates import set_orientations, set_positions, set_scales
+from ..feedback import chosen
+from ..state import Snapshot
+from ..style import number
+from ..view import View
+
+if TYPE_CHECKING:
+    from ..session import ClientSession
+
+VELOCITY_COLOR, FORCE_COLOR = (86, 180, 233), (213, 94, 0)
+#: Drawn size: metres per unit of σ (m/s per rad/s) and of 1/σ (N per N·m).
+VELOCITY_METRES, FORCE_METRES = 0.3, 0.05
+#: The force ellipsoid's drawn semi-axes stop here (m): it grows without bound at a singularity.
+LONGEST_DRAWN = 0.8
+SHOWN = {"velocity": (True, False), "force": (False, True), "both": (True, True)}
+
+
+def ellipsoid_pose(axes: np.ndarray) -> np.ndarray:
+    """(4,) wxyz of a rotation whose columns are the ellipsoid's axes (one flipped if they are left-handed)."""
+    rotation = axes.copy()
+    if np.linalg.det(rotation) < 0:
+        rotation[:, 2] *= -1.0
+    return quaternion(rotation, check=False)
+
+
+def lengths_markdown(velocity: np.ndarray, force: np.ndarray, place: str = "flange", held: str = "the tool's orientation held") -> str:
+    def listed(values: np.ndarray) -> str:
+        return ", ".join("∞" if not np.isfinite(v) else number(v, ".3g") for v in values)
+
+    return (f"The {place}'s ellipsoids{' with ' + held if held else ''} (docs §8.4).  \n"
+            f"**Velocity ellipsoid** semi-axes (m/s per rad/s of joint rate): {listed(velocity)}  \n"
+            f"**Force ellipsoid** semi-axes (N per N·m of joint torque): {listed(force)}  \n"
+            "Same axes; each force axis is 1 / the velocity axis. Drag towards a singularity and watch "
+            "one velocity axis shrink while its force axis grows.")
+
+
+#: What an arm keeps still for its translational ellipsoid, by what it controls (``arm.task``).
+HELD = {"pose": "the tool's orientation held", "position and yaw": "the tool's yaw held", "position": ""}
+
+
+class EllipsoidsView(View):
+    """The "Manipulability ellipsoids" folder and the two ellipsoids at the tool.
+
+    ``root``, ``tool`` and ``place`` as for ``ur10teach.features.velocity.VelocityView``: the UR10's flange by default.
+    """
+
+    def __init__(self, scene: viser.SceneApi, gui: viser.GuiApi, session: "ClientSession", root: str = "/ellipsoids",
+                 tool: Callable[[Any], np.ndarray] = lambda snapshot: snapshot.flange, place: str = "flange") -> None:
+        self._arm = session.arm
+        self._tool = tool
+        self._place = place
+        folder = gui.add_folder("Manipulability ellipsoids", expand_by_default=False)
+        self.folders = (folder,)
+        with folder:
+            self.enabled = gui.add_checkbox(f"Show at the {place}", False)
+            self.which = gui.add_dropdown("Ellipsoid", tuple(SHOWN), initial_value="both")
+            self.lengths = gui.add_markdown("", visible=False)
+        # one frame at the tool, turned to the ellipsoids' axes (they share them), so a drag moves one node;
+        # in it, a unit sphere per ellipsoid scaled per axis, tiny until first sized, so it never shows a metre wide
+        self.frame = scene.add_frame(root, show_axes=False)
+        self.velocity = scene.add_icosphere(f"{root}/velocity", radius=1.0, color=VELOCITY_COLOR, opacity=0.35,
+                                            subdivisions=3, cast_shadow=False, receive_shadow=False, visible=False,
+                                            scale=(1e-4, 1e-4, 1e-4))
+        self.force = scene.add_icosphere(f"{root}/force", radius=1.0, color=FORCE_COLOR, opacity=0.3,
+                                         subdivisions=3, cast_shadow=False, receive_shadow=False, visible=False,
+                                         scale=(1e-4, 1e-4, 1e-4))
+        def changed(_) -> None:
+            chosen(self.which, "ellipsoid")  # refuses a value that is not offered, with a message
+            session.redraw()
+
+        for widget in (self.enabled, self.which):
+            widget.on_update(session.guard(changed))
+
+    def render(self, snapshot: Snapshot) -> None:
+        show_velocity, show_force = SHOWN.get(self.which.value, (False, False)) if self.enabled.value else (False, False)
+        if show_velocity or show_force:
+            translation = self._arm.translation_ellipsoid(snapshot.q)
+            set_orientations([self.frame], ellipsoid_pose(translation.axes)[None])
+            set_positions([self.frame], self._tool(snapshot)[None, :3, 3])
+            sizes = np.maximum([VELOCITY_METRES * translation.velocity,
+                                np.minimum(FORCE_METRES * translation.force, LONGEST_DRAWN)], 1e-4)
+            shown = [show_velocity, show_force]  # sized before they show; a zero axis makes a flat disc
+            set_scales([node for node, on in zip((self.velocity, self.force), shown) if on], sizes[shown])
+        for node, shown in ((self.velocity, show_velocity), (self.force, show_force)):
+            if node.visible != shown:
+                node.visible = shown
+
+    def render_panel(self, snapshot: Snapshot) -> None:
+        self.lengths.visible = bool(self.enabled.value)
+        if self.lengths.visible:
+            translation = self._arm.translation_ellipsoid(snapshot.q)
+            self.lengths.content = lengths_markdown(translation.velocity, translation.force, self._place,
+                                                    HELD.get(getattr(self._arm, "task", "pose"), ""))
+
+    def close(self) -> None:
+        """The session has gone: so do its ellipsoids, even from a scene everyone shares."""
+        self.frame.remove()  # and the ellipsoids in it

@@ -1,0 +1,404 @@
+"""The draggable IK target and the eight branches it has, drawn as translucent ghost arms.
+
+Each slot k keeps its colour and label for every pose (``ur10core.SLOTS``); a branch
+that does not exist for the target is hidden by scaling its instances to zero. The
+solid arm follows the branch nearest its joints (``ArmState.move_target``); clicking a
+ghost, or a number in the branch list, puts the arm on that branch.
+
+:class:`BranchesScene` is the 3D part (ghosts, target marker, the red "unreachable"
+halo); :class:`IKTargetControls` is the user's gizmo and panel. In the classroom's
+shared mode the scene part is shared by everyone while only the presenter has the
+controls.
+"""
+
+from __future__ import annotations
+
+import logging
+import threading
+from typing import TYPE_CHECKING, Callable
+
+import numpy as np
+import viser
+
+from ur10core import JOINT_LIMIT, SLOTS
+from ur10core.ik import equivalent_near
+from ur10core.orientation import quaternion, rotation_from_zyx_euler
+
+from ..viser_internals.fast_updates import set_instances, set_positions, stop_echo
+from ..feedback import chosen
+from ..meshes import ArmModels
+from .robot import model_slug
+from ..state import ArmState, Snapshot
+from ..style import GHOST_OPACITY, SLOT_COLORS, UNREACHABLE_RED, number, sentence, swatch
+from ..view import View
+
+if TYPE_CHECKING:
+    from ..session import ClientSession
+
+log = logging.getLogger(__name__)
+
+BRANCH_BUTTONS = tuple(str(slot.index + 1) for slot in SLOTS)
+#: What the "Ghosts shown" dropdown offers: every branch, one branch, or the arm's branch and
+#: the one that differs from it in a single choice.
+ALL_BRANCHES = "All 8 branches"
+FLIPS = {"Flip the shoulder": "shoulder", "Flip the elbow": "elbow", "Flip the wrist": "wrist"}
+FOCUS_OPTIONS = (ALL_BRANCHES, *FLIPS, *(f"Only branch {k}" for k in BRANCH_BUTTONS))
+#: Branches whose frame origins all lie this close (m) are drawn as one, labelled "3 = 4".
+SAME_POSE = 1e-3
+#: The gizmo's size as a share of the arm's reach a2 + a3: small enough to leave the wrist's
+#: axes and the overlay's P5 in view (it is drawn over everything, to stay grabbable).
+GIZMO_SHARE = 0.12
+GIZMO_LINE_WIDTH = {False: 3.0, True: 6.0}  #: pixels, normal and in lecture mode
+#: How far above a branch's elbow (frame {3}) its number floats. Not the wrist: every branch of a
+#: target shares the wrist centre P5 (and the flange); the elbows are where branches differ.
+LABEL_LIFT = 0.07
+
+
+def flipped(slot: int, choice: str) -> int:
+    """The slot that differs from ``slot`` in ``choice`` ("shoulder", "elbow" or "wrist") alone.
+
+    >>> flipped(4, "shoulder"), flipped(4, "elbow"), flipped(4, "wrist")
+    (1, 5, 6)
+    """
+    this = SLOTS[slot]
+    others = ("shoulder", "elbow", "wrist")
+    return next(other.index for other in SLOTS
+                if all((getattr(other, name) == getattr(this, name)) != (name == choice) for name in others))
+
+
+def focused(focus: str, arm_slot: int) -> np.ndarray:
+    """(8,) bool: the branches the "Ghosts shown" choice ``focus`` asks for.
+
+    >>> focused("Flip the elbow", 4).nonzero()[0].tolist(), focused("Only branch 3", 4).nonzero()[0].tolist()
+    ([4, 5], [2])
+    """
+    if focus not in FOCUS_OPTIONS:
+        raise ValueError(f"ghosts shown: {focus!r:.40} is not one of the choices")
+    shown = np.zeros(8, bool)
+    if focus == ALL_BRANCHES:
+        shown[:] = True
+    elif focus in FLIPS:
+        slot = max(arm_slot, 0)  # with the target out of reach: the pair of branch 1
+        shown[[slot, flipped(slot, FLIPS[focus])]] = True
+    else:
+        shown[int(focus.rsplit(" ", 1)[1]) - 1] = True  # "Only branch k"
+    return shown
+
+
+def same_pose_groups(ghost_frames: np.ndarray, valid: np.ndarray, tolerance: float = SAME_POSE) -> tuple[tuple[int, ...], ...]:
+    """The valid slots grouped by pose: slots in one group have every frame origin within ``tolerance``.
+
+    At a singularity two branches coincide (docs/kinematics.md §5); they are drawn as one.
+
+    >>> frames = np.tile(np.eye(4), (8, 7, 1, 1)); frames[3, :, 0, 3] = 1.0
+    >>> same_pose_groups(frames, np.array([True, True, False, True, False, False, False, False]))
+    ((0, 1), (3,))
+    """
+    # frames {3} and {4} alone: {0}..{2} sit on the base and {5}, {6} are fixed by the target (§4)
+    origins = ghost_frames[:, 3:5, :3, 3]
+    apart = np.abs(origins[:, None] - origins[None]).max(axis=(2, 3)) > tolerance
+    valid = np.asarray(valid, bool)
+    if apart.sum() == 56:  # no two coincide (away from singularities): every valid slot alone
+        return tuple((int(k),) for k in valid.nonzero()[0])
+    groups, taken = [], ~valid
+    for k in range(8):
+        if not taken[k]:
+            members = (~apart[k] & ~taken).nonzero()[0]
+            taken[members] = True
+            groups.append(tuple(int(m) for m in members))
+    return tuple(groups)
+
+
+def branch_labels(snapshot: Snapshot, groups: tuple[tuple[int, ...], ...]) -> list[str]:
+    """The 3D label of each slot ("" for none): its number, "3 = 4" for coinciding branches, the arm's marked.
+
+    Only the first slot of a group carries the group's label.
+    """
+    texts = [""] * 8
+    floor = snapshot.through_floor[1:]
+    for group in groups:
+        text = " = ".join(str(k + 1) for k in group)
+        if snapshot.slot in group:
+            text = f"arm: {text}"
+        if floor[list(group)].any():
+            text += " ⚠ floor"
+        texts[group[0]] = text
+    return texts
+
+
+def branch_table(snapshot: Snapshot) -> str:
+    """The eight slots with their colour, label and joint values (°).
+
+    Each angle is the turn of it nearest the arm's own joints, as the sliders show them:
+    the arm's branch reads exactly as its sliders do.
+    """
+    solution = snapshot.solution
+    rows = ["| | # | branch | θ1…θ6 (°), as the sliders would show them |", "|---|---:|---|---|"]
+    shown = equivalent_near(np.where(solution.valid[:, None], solution.q, 0.0), snapshot.q, JOINT_LIMIT)
+    for slot in SLOTS:
+        k = slot.index
+        if solution.valid[k]:
+            values = ", ".join(number(v, ".1f") for v in np.degrees(shown[k]))
+        else:
+            values = "— no solution"
+        mark = " **← arm**" if k == snapshot.slot else ""
+        if solution.valid[k] and snapshot.through_floor[k + 1]:
+            mark += " ⚠ through the floor"
+        rows.append(f"| {swatch(SLOT_COLORS[k])} | {k + 1} | {slot.label}{mark} | {values} |")
+    return "\n".join(rows)
+
+
+def status_markdown(snapshot: Snapshot) -> str:
+    if not snapshot.reachable:
+        return f"<span style='color:#c81e1e'>**Target unreachable.**</span> {sentence(snapshot.reason[len('unreachable: '):])}."
+    solution = snapshot.solution
+    notes = [f"**{int(solution.valid.sum())} of 8 branches** reach this target; the arm is on "
+             f"**{snapshot.slot + 1}: {SLOTS[snapshot.slot].label}**."]
+    if solution.shoulder_singular:
+        notes.append("Shoulder singular: the shoulder-left and shoulder-right branches coincide.")
+    if solution.elbow_singular[snapshot.slot]:
+        notes.append("Elbow singular (stretched or folded): the elbow-up and elbow-down branches coincide.")
+    if solution.wrist_singular[snapshot.slot]:
+        notes.append("Wrist singular: axes 4 and 6 are parallel; θ6 was kept and θ2…θ4 follow it.")
+    return " ".join(notes)
+
+
+def branches_markdown(snapshot: Snapshot) -> str:
+    """The status line above the eight-branch table."""
+    return status_markdown(snapshot) + "\n\n" + branch_table(snapshot)
+
+
+def add_unreachable_halo(scene: viser.SceneApi, parent: str) -> viser.IcosphereHandle:
+    """Transform controls have no colour of their own: a red halo on the target says "unreachable"."""
+    return scene.add_icosphere(f"{parent}/unreachable", radius=0.06, color=UNREACHABLE_RED, opacity=0.45,
+                               visible=False, cast_shadow=False, receive_shadow=False)
+
+
+class BranchesScene(View):
+    """The eight ghost arms, one batched mesh per moving link with an instance per slot.
+
+    With ``target_marker`` it also draws the target itself (axes and the red halo): the
+    shared scene of the classroom needs that, since only the presenter has a gizmo.
+    """
+
+    def __init__(self, scene: viser.SceneApi, models: ArmModels, first: Snapshot,
+                 target_marker: bool = False) -> None:
+        self.show_ghosts = True
+        self.focus = ALL_BRANCHES  #: one of FOCUS_OPTIONS
+        self.shown = np.zeros(8, bool)  #: the ghosts drawn by the last render
+        #: called with (client, slot) when a ghost is clicked; set by whoever drives this scene
+        self.on_select: Callable[[viser.ClientHandle | None, int], None] | None = None
+        self.target = self.unreachable = None
+        if target_marker:
+            self.target = scene.add_frame("/target", axes_length=0.1, axes_radius=0.004, origin_radius=0.008,
+                                          wxyz=first.flange_wxyz, position=first.flange[:3, 3])
+            self.unreachable = add_unreachable_halo(scene, "/target")
+        self._scene, self._models = scene, models
+        #: each model's batched ghost meshes, links 1..6, sent when the model is first shown
+        #: (every branch shares the base with the solid arm)
+        self.models: dict[str, list[viser.BatchedMeshHandle]] = {}
+        self.model = models.names[0]
+        self.ghosts = self._send(self.model)  #: the shown model's; only these follow the arm
+        self._forget_sent()
+        # each branch's number by its elbow, as in the table: colours alone cannot tell eight apart for everyone
+        self.labels = [scene.add_label(f"/ghosts/number{k + 1}", str(k + 1), visible=False, font_screen_scale=1.6,
+                                       anchor="bottom-center") for k in range(8)]
+        self._label_state: tuple = ()
+
+    def _forget_sent(self) -> None:
+        self._scales = b""
+        self._positions = {i: b"" for i in range(1, 7)}  # last sent, to skip unchanged ones
+
+    def _send(self, name: str) -> list[viser.BatchedMeshHandle]:
+        identity = np.tile([1.0, 0.0, 0.0, 0.0], (8, 1))
+        ghosts = []
+        for link in self._models.by_name[name][1:]:
+            vertices, faces = link.ghost
+            ghost = self._scene.add_batched_meshes_simple(
+                f"/ghosts/{model_slug(name)}/link{link.index}", vertices, faces,
+                batched_wxyzs=identity, batched_positions=np.zeros((8, 3)), batched_scales=np.zeros(8),
+                batched_colors=np.array(SLOT_COLORS, dtype=np.uint8), opacity=GHOST_OPACITY, lod="off",
+                material=self._models.material, cast_shadow=False, receive_shadow=False,
+            )
+            ghost.on_click(self._clicked)
+            ghosts.append(ghost)
+        self.models[name] = ghosts
+        return ghosts
+
+    def show(self, model: str) -> None:
+        """Draw the ghosts as ``model``; the next render poses them."""
+        if model not in self._models.names:
+            raise ValueError(f"no arm model {model!r}; the models are {', '.join(self._models.names)}")
+        for ghost in self.ghosts:
+            ghost.visible = False
+        self.ghosts = self.models[model] if model in self.models else self._send(model)
+        for ghost in self.ghosts:
+            ghost.visible = True
+        self._forget_sent()
+        self.model = model  # named once drawn: whoever reads it finds its ghosts
+
+    def _clicked(self, event) -> None:
+        if self.on_select is not None and event.instance_index is not None:
+            self.on_select(event.client, int(event.instance_index))
+
+    def render(self, snapshot: Snapshot) -> None:
+        if self.target is not None:
+            self.target.wxyz = quaternion(snapshot.target[:3, :3], check=False)
+            self.target.position = snapshot.target[:3, 3]
+            self.unreachable.visible = not snapshot.reachable
+        valid = snapshot.solution.valid
+        groups = same_pose_groups(snapshot.ghost_frames, valid)
+        focus = focused(self.focus, snapshot.slot)
+        if len(groups) == valid.sum():  # none coincide (away from singularities)
+            shown = valid & focus & self.show_ghosts
+            if snapshot.slot >= 0:
+                shown[snapshot.slot] = False  # the solid arm is there already
+        else:
+            shown = np.zeros(8, bool)
+            for group in groups:
+                # one ghost per pose, none where the solid arm is: the arm is never tinted by a ghost
+                shown[group[0]] = self.show_ghosts and focus[list(group)].any() and snapshot.slot not in group
+        self.shown = shown
+        scales = shown.astype(np.float32)
+        update_scales = scales.tobytes() != self._scales  # which branches exist rarely changes mid-drag
+        self._scales = scales.tobytes()
+        # link-major float32 copies, made once: each link's (8, 3) and (8, 4) rows are then contiguous
+        all_positions = np.ascontiguousarray(np.swapaxes(snapshot.ghost_frames[:, 1:, :3, 3], 0, 1), dtype=np.float32)
+        all_wxyzs = np.ascontiguousarray(np.swapaxes(snapshot.ghost_wxyz[:, 1:], 0, 1), dtype=np.float32)
+        for i, ghost in enumerate(self.ghosts, start=1):  # links 1..6
+            if update_scales:
+                ghost.batched_scales = scales
+            positions = all_positions[i - 1]
+            if positions.tobytes() == self._positions[i]:  # frames 1 and 2 sit on the shoulder whatever q is
+                positions = None
+            else:
+                self._positions[i] = positions.tobytes()
+            set_instances(ghost, all_wxyzs[i - 1], positions)
+
+    def render_panel(self, snapshot: Snapshot) -> None:
+        """The branch numbers, at the panel's pace (≤ 10 Hz): off the drag path, which they would double."""
+        groups = same_pose_groups(snapshot.ghost_frames, snapshot.solution.valid)
+        focus = focused(self.focus, snapshot.slot)
+        texts = branch_labels(snapshot, groups)
+        visible = [False] * 8
+        for group in groups:  # a group's label is its first slot's; the arm's is shown whatever the focus
+            visible[group[0]] = snapshot.slot in group or (self.show_ghosts and bool(focus[list(group)].any()))
+        state = (tuple(texts), tuple(visible))
+        if state != self._label_state:  # which branches exist, and where they coincide, rarely changes mid-drag
+            self._label_state = state
+            for label, text, show in zip(self.labels, texts, visible):
+                if show and label.text != text:
+                    label.text = text
+                if label.visible != show:
+                    label.visible = show
+        elbows = snapshot.ghost_frames[:, 3, :3, 3] + (0.0, 0.0, LABEL_LIFT)
+        set_positions([self.labels[k] for k in range(8) if visible[k]], elbows[np.array(visible)])
+
+
+class IKTargetControls(View):
+    """One user's gizmo at the flange and the "IK target" folder of their panel."""
+
+    def __init__(self, controls: viser.SceneApi, gui: viser.GuiApi, branches: BranchesScene,
+                 session: "ClientSession") -> None:
+        self._session = session
+        self._branches = branches
+        self._seen_pose: tuple | None = None
+        self._seen_lock = threading.Lock()
+        snapshot = session.state.last
+        self.gizmo = controls.add_transform_controls(
+            "/ik_target", scale=GIZMO_SHARE * (session.arm.a2 + session.arm.a3), line_width=GIZMO_LINE_WIDTH[False],
+            depth_test=False, opacity=0.85,
+            wxyz=snapshot.flange_wxyz, position=snapshot.flange[:3, 3],
+        )
+        stop_echo(self.gizmo)
+        # the halo rides on the gizmo unless the (shared) scene draws the target itself
+        self.unreachable = None if branches.target is not None else add_unreachable_halo(controls, "/ik_target")
+        folder = gui.add_folder("IK target: all 8 branches")
+        self.folders = (folder,)
+        with folder:
+            gui.add_markdown("Drag the gizmo at the flange. Each ghost arm is one IK branch, numbered at its "
+                             "elbow as in the table; click a ghost or a number below to put the arm on it.")
+            self.show_ghosts = gui.add_checkbox("Show ghost arms", branches.show_ghosts)
+            self.focus = gui.add_dropdown("Ghosts shown", FOCUS_OPTIONS, initial_value=branches.focus,
+                                          hint="One branch, or the arm's branch beside the one a single choice away")
+            self.branch_buttons = gui.add_button_group("Use branch", BRANCH_BUTTONS)
+            self.branches = gui.add_markdown(branches_markdown(snapshot))
+            self.typed_pose = gui.add_text(
+                "Target x y z (mm), α β γ (°)", "",
+                hint="Position in mm and Z-Y-X Euler angles in degrees, e.g. 520, 57.7, 1110.7, -159.6, 25.6, -34.6",
+            )
+            self.move_button = gui.add_button("Move target here", icon=viser.Icon.TARGET)
+            self.snap_button = gui.add_button("Put target back on the flange", icon=viser.Icon.ARROW_BACK_UP)
+
+        branches.on_select = self._ghost_clicked
+        self.gizmo.on_update(self._dragged)
+        self.branch_buttons.on_click(session.guard(self._branch_button))
+        self.show_ghosts.on_update(session.guard(self._toggle_ghosts))
+        self.focus.on_update(session.guard(self._choose_focus))
+        self.move_button.on_click(session.guard(self._typed_target))
+        self.snap_button.on_click(session.guard(lambda _: session.apply(lambda state: state.set_joints(state.q))))
+
+    def thicken(self, lecture: bool) -> None:
+        """The gizmo's lines for lecture mode (thick) or not."""
+        self.gizmo.line_width = GIZMO_LINE_WIDTH[lecture]
+
+    def close(self) -> None:
+        """Stop driving the branches scene (the browser has gone, or a presenter handed over)."""
+        if self._branches.on_select == self._ghost_clicked:
+            self._branches.on_select = None
+
+    def remove(self) -> None:
+        super().remove()
+        self.gizmo.remove()  # the red halo hangs under it
+
+    # ------------------------------------------------------------------ input
+
+    async def _dragged(self, event: viser.TransformControlsEvent) -> None:
+        """Runs on viser's event loop (no thread-pool hop): it only files the newest pose."""
+        try:
+            pose = (tuple(self.gizmo.wxyz), tuple(self.gizmo.position))
+            with self._seen_lock:
+                if pose == self._seen_pose:
+                    return  # the end of a drag repeats its last update
+                self._seen_pose = pose
+            self._session.drags.submit(self._session, pose)  # solved by the drag queue's worker
+        except Exception:  # nothing may escape onto the event loop
+            log.exception("could not queue a drag")
+
+    def _ghost_clicked(self, client: viser.ClientHandle | None, slot: int) -> None:
+        if client is None or client.client_id != self._session.client.client_id:
+            return  # in the shared scene only the presenter's clicks count
+        self._session.guard(lambda _: self._session.apply(lambda state: state.select_branch(slot)))(None)
+
+    def _branch_button(self, _: viser.GuiEvent) -> None:
+        slot = int(chosen(self.branch_buttons, "branch")) - 1
+        self._session.apply(lambda state: state.select_branch(slot))
+
+    def _toggle_ghosts(self, _: viser.GuiEvent) -> None:
+        self._branches.show_ghosts = self.show_ghosts.value
+        self._session.redraw()
+
+    def _choose_focus(self, _: viser.GuiEvent) -> None:
+        self._branches.focus = chosen(self.focus, "ghosts shown")
+        self._session.redraw()
+
+    def _typed_target(self, _: viser.GuiEvent) -> None:
+        values = ArmState.parse_degrees(self.typed_pose.value, count=6, what="target pose")
+        T = np.eye(4)
+        T[:3, :3] = rotation_from_zyx_euler(np.radians(values[3:]))
+        T[:3, 3] = values[:3] / 1000.0
+        self._session.apply(lambda state: state.move_target(T, cause="typed"))
+
+    # ------------------------------------------------------------------ output
+
+    def render(self, snapshot: Snapshot) -> None:
+        if snapshot.cause != "target":  # the user is not holding the gizmo: put it on the target
+            self.gizmo.wxyz = quaternion(snapshot.target[:3, :3], check=False)
+            self.gizmo.position = snapshot.target[:3, 3]
+            with self._seen_lock:
+                self._seen_pose = None  # the next drag starts afresh, even from this very pose
+        if self.unreachable is not None:
+            self.unreachable.visible = not snapshot.reachable
+
+    def render_panel(self, snapshot: Snapshot) -> None:
+        self.branches.content = branches_markdown(snapshot)

@@ -1,0 +1,205 @@
+"""The branch-count map: for the tool's current orientation, how many IK branches reach each point of a plane.
+
+``ur10core.workspace.branch_count_map`` solves 200 × 200 poses in one batch (100 × 100 for the
+course's other arms, whose IK is numpy's alone); the map is
+drawn as one small PNG image lying in the plane (a few KB, where 40 000 coloured points
+would be 600 KB). It is recomputed off the drag path: the panel's pace (≤ 10 Hz) asks
+for it, a background thread computes it, and requests that come meanwhile are folded into
+one more computation with the newest target (``ur10teach.serving.workers.FoldedRuns``). Maps are made
+one at a time in the server, each address's at most half the time (``ur10teach.serving.workers.MAPS``):
+eight tabs turning their gizmos cost what one does.
+"""
+
+from __future__ import annotations
+
+import threading
+from typing import TYPE_CHECKING, Any, Callable
+
+import numpy as np
+import viser
+
+from ur10core.solvers.ur import URFamily
+from ur10core.orientation import quaternion
+from ur10core.workspace import BranchCountMap, branch_count_map
+
+from ..feedback import chosen
+from ..state import Snapshot
+from ..style import REACH_COLORS, hex_color
+from ..view import View
+from ..serving.workers import MAPS, FoldedRuns
+from .workspace import FROM_ABOVE
+
+if TYPE_CHECKING:
+    from ..session import ClientSession
+
+PLANES = {"vertical, through the base axis and the target": "vertical", "horizontal, at the target's height": "horizontal"}
+RESOLUTION = 200  #: cells per side for the UR family (compiled batch IK): 40 000 poses, about 1.4 cm each
+#: cells per side for the course's other arms, whose IK is numpy's alone (a KR210 map of 10 000 poses: 0.25 s)
+COURSE_RESOLUTION = 100
+
+
+def legend_counts(slots: int) -> tuple[int, ...]:
+    """The branch counts the legend names for an arm of ``slots`` IK slots: 2, 4, 6, 8 for the UR10; 1 … 4 for four."""
+    step = max(slots // 4, 1)
+    return tuple(range(step, slots + 1, step))
+
+
+def map_image(counts: np.ndarray, slots: int = 8) -> np.ndarray:
+    """(n, n) branch counts → (n, n, 4) RGBA: 0 faint grey, then the four REACH_COLORS in equal steps up to ``slots``
+    (for the UR10, 2, 4, 6, 8; an odd count as the next even)."""
+    palette = np.array([(*rgb, alpha) for rgb, alpha in REACH_COLORS], dtype=np.uint8)
+    return palette[np.ceil(4 * counts.astype(int) / slots).astype(int)]
+
+
+def colour_of(count: int, slots: int) -> tuple[int, int, int]:
+    return REACH_COLORS[int(np.ceil(4 * count / slots))][0]
+
+
+def map_pose(reach: BranchCountMap, world: np.ndarray = np.eye(4)) -> tuple[np.ndarray, np.ndarray]:
+    """(wxyz, position) of the image node: its x along u, its y along v (an image's top row is +y);
+    ``world`` (4, 4) puts the arm's base frame in the scene."""
+    rotation = world[:3, :3] @ np.stack([reach.u, reach.v, np.cross(reach.u, reach.v)], axis=1)
+    return quaternion(rotation, check=False), world[:3, :3] @ reach.centre + world[:3, 3]
+
+
+COLOUR_NAMES = {REACH_COLORS[1][0]: "yellow", REACH_COLORS[2][0]: "green", REACH_COLORS[3][0]: "teal", REACH_COLORS[4][0]: "purple"}
+
+
+def legend_text(slots: int = 8) -> str:
+    """The map's label in 3D: "… yellow 2 · green 4 · teal 6 · purple 8" for the UR10."""
+    names = " · ".join(f"{COLOUR_NAMES[colour_of(count, slots)]} {count}" for count in legend_counts(slots))
+    return f"branches reaching each point, tool turned as now: {names}"
+
+
+def legend_html(slots: int = 8) -> str:
+    entries = [("none", REACH_COLORS[0][0]), *((str(count), colour_of(count, slots)) for count in legend_counts(slots))]
+    swatches = "".join(
+        f"<span style='display:inline-block;margin-right:10px'><span style='display:inline-block;width:14px;height:14px;"
+        f"border-radius:3px;vertical-align:middle;background:{hex_color(rgb)}'></span> {label}</span>"
+        for label, rgb in entries
+    )
+    return f"<div style='font-size:0.85em'>Branches that reach each point with this orientation:<br>{swatches}</div>"
+
+
+class ReachMapView(View):
+    """The "Reachable with this orientation" folder and its map, in the session's scene (``root``).
+
+    For any arm with a closed-form IK; a typed table's folder says why it has no map.
+    ``target_of(snapshot)`` is the pose whose orientation is kept (the IK target; the desktop
+    arm's tool), and ``world`` (4, 4) puts the arm's base frame in the scene.
+    """
+
+    def __init__(self, scene: viser.SceneApi, gui: viser.GuiApi, session: "ClientSession", root: str = "/reach_map",
+                 target_of: Callable[[Any], np.ndarray] = lambda snapshot: snapshot.target,
+                 world: np.ndarray = np.eye(4)) -> None:
+        self._scene = scene
+        self._session = session
+        self._root = root
+        self._target_of, self._world = target_of, world
+        arm = session.arm
+        self.resolution = RESOLUTION if isinstance(arm.solver, URFamily) else COURSE_RESOLUTION  # the kernels' speed
+        self.slots = 0 if arm.numerical else int(arm.ik(arm.fk(arm.specs.home)).q.shape[-2])
+        self.image: viser.ImageHandle | None = None
+        self.shown_key: tuple | None = None  #: (target bytes, plane) of the map on screen
+        self.computed = 0  #: maps computed so far (tests and benchmarks read it)
+        self._lock = threading.Lock()
+        self._closed = False
+        self._maps = FoldedRuns(self._draw)
+        self._face_next = False  # turn the camera to face the plane once the next map is drawn
+        folder = gui.add_folder("Reachable with this orientation", expand_by_default=False)
+        self.folders = (folder,)
+        with folder:
+            if arm.numerical:
+                gui.add_markdown("A typed table's IK is numerical, from one start at a time: a map of thousands of "
+                                 "poses would take minutes, so this arm has none. The course's arms all have one.")
+            else:
+                gui.add_markdown("Keep the tool turned as the gizmo has it and move it anywhere in a plane: "
+                                 f"how many of the {self.slots} branches get there? Turn the gizmo and watch the "
+                                 "rings change.")
+            self.enabled = gui.add_checkbox("Show branch-count map", False, disabled=arm.numerical)
+            self.plane = gui.add_dropdown("Plane", tuple(PLANES), initial_value=tuple(PLANES)[0])
+            self.legend = gui.add_html(legend_html(max(self.slots, 1)), visible=False)
+        self.enabled.on_update(session.guard(self._toggled))
+        self.plane.on_update(session.guard(self._toggled))
+
+    def _toggled(self, _: viser.GuiEvent) -> None:
+        self.legend.visible = self.enabled.value
+        if self.enabled.value:
+            self._face_next = True
+            self._request()
+        else:
+            self.clear()
+
+    def render_panel(self, snapshot: Snapshot) -> None:
+        # a plane not among the options is refused by the dropdown's own callback; meanwhile nothing to do
+        plane = PLANES.get(self.plane.value)
+        if self.enabled.value and plane is not None and (self._target_of(snapshot).tobytes(), plane) != self.shown_key:
+            self._request()
+
+    def _key(self, snapshot: Snapshot) -> tuple:
+        return self._target_of(snapshot).tobytes(), PLANES[chosen(self.plane, "plane")]
+
+    def _request(self) -> None:
+        """Compute the map for the newest target, in a worker thread of this view."""
+        with self._lock:
+            if self._closed:
+                return
+        self._maps.start("reach-map", self._session.guard)
+
+    def _draw(self) -> None:
+        snapshot = self._session.state.last
+        key = self._key(snapshot)
+        if not self.enabled.value or key == self.shown_key:
+            return
+        if not self.slots:
+            raise ValueError("a typed table's IK is numerical: it has no branch-count map")
+        reach = MAPS.run(self._session.client,
+                         lambda: branch_count_map(self._session.arm, self._target_of(snapshot), key[1], self.resolution),
+                         cancelled=lambda: self._closed or self._session.closed)
+        self.computed += 1
+        image, (wxyz, position) = map_image(reach.counts, self.slots), map_pose(reach, self._world)
+        with self._lock:
+            if self._closed or not self.enabled.value:
+                return
+            if self.image is None:
+                self.image = self._scene.add_image(
+                    self._root, image, reach.size, reach.size, format="png", wxyz=wxyz, position=position,
+                    cast_shadow=False, receive_shadow=False)
+                # in the scene beside the map, so that viewers of a shared scene can read it too
+                self._scene.add_label(f"{self._root}/legend", legend_text(self.slots), position=(0.0, reach.size / 2 - 0.06, 0.0),
+                                      font_screen_scale=1.3, anchor="top-center")
+            else:
+                self.image.image = image
+                if not np.allclose(self.image.position, position) or not np.allclose(self.image.wxyz, wxyz):
+                    self.image.wxyz, self.image.position = wxyz, position
+            self.shown_key = key
+        if self._face_next:
+            self._face_next = False
+            self._face(reach)
+
+    def _face(self, reach: BranchCountMap) -> None:
+        """Turn the camera square-on to the plane, framing the part of it that some branch reaches."""
+        camera = self._session.camera
+        if camera is None:
+            return
+        turn, shift = self._world[:3, :3], self._world[:3, 3]
+        reached = reach.points()[reach.counts > 0] @ turn.T + shift
+        if (turn @ reach.v)[2] > 0.5:  # vertical: from the side of the plane the camera is on
+            normal = turn @ np.cross(reach.u, reach.v)
+            side = np.sign(normal @ (np.asarray(self._session.client.camera.position) - (turn @ reach.centre + shift))) or 1.0
+            direction = side * normal
+        else:
+            direction = FROM_ABOVE
+        camera.look_from(direction, reached[:: max(1, len(reached) // 2000)] if len(reached) else None)
+
+    def clear(self) -> None:
+        with self._lock:
+            if self.image is not None:
+                self.image.remove()
+                self.image = None
+            self.shown_key = None
+
+    def close(self) -> None:
+        with self._lock:
+            self._closed = True
+        self.clear()

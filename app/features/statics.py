@@ -1,0 +1,239 @@
+"""Forces and gravity, for any arm: the torques each joint must hold, as bars (docs/kinematics.md §8.3, §8.5).
+
+A force the tool pushes with (its size in N; its direction from a list, or set by dragging
+a handle that rides beside the tool) is drawn as an arrow. The panel shows, per joint,
+τ = Jᵀ F for that force (N for a prismatic joint), the gravity torque of the arm and its
+payload where its link masses are known, and their sum against what the joint is rated
+for where that is published. The bars are drawn with the panel (≤ 10 Hz), the arrow with
+the arm.
+"""
+
+from __future__ import annotations
+
+import threading
+from typing import TYPE_CHECKING
+
+import numpy as np
+import viser
+
+from ur10core.specs import torque_map
+
+from ..viser_internals.fast_updates import set_positions, stop_echo
+from ..feedback import chosen
+from ur10core.dynamics import MASSES
+
+from ..state import Snapshot
+from ..style import DANGER_RED, SAFE_GREEN, blend, hex_color, number
+from ..view import View
+from ..serving.workers import HEAVY, FoldedRuns
+from .workspace import POINT_SIZE, colormap
+
+if TYPE_CHECKING:
+    from ..session import ClientSession
+
+DRAGGED = "drag the handle"
+#: Where the force at the tool points (base frame); None: along the tool's own z axis;
+#: DRAGGED: where the student dragged the handle, from the tool.
+DIRECTIONS = {"down (−z)": (0.0, 0.0, -1.0), "up (+z)": (0.0, 0.0, 1.0), "+x": (1.0, 0.0, 0.0), "−x": (-1.0, 0.0, 0.0),
+              "+y": (0.0, 1.0, 0.0), "−y": (0.0, -1.0, 0.0), "along the tool's z": None, DRAGGED: DRAGGED}
+#: How far from the tool the direction handle sits (m, for an arm 1 m across), and the gizmo's size there.
+HANDLE_DISTANCE, HANDLE_SCALE = 0.35, 0.12
+MAX_FORCE_N = 200.0
+ARROW_METRES_PER_N = 0.002
+FORCE_COLOR = (0, 114, 178)
+#: Joint vectors sampled for the torque map (``ur10core.specs.torque_map``): the worst of them is marked.
+TORQUE_MAP_POINTS = 20_000
+
+
+def force_vector(direction: str, newtons: float, flange: np.ndarray, dragged=(0.0, 0.0, -1.0)) -> np.ndarray:
+    """(3,) the force in the base frame, N; ``dragged`` (3,) is the unit direction the handle was dragged to."""
+    unit = DIRECTIONS[direction]
+    if unit == DRAGGED:
+        unit = dragged
+    return newtons * (flange[:3, 2] if unit is None else np.array(unit))
+
+
+def bars_html(force_torques: np.ndarray, gravity: np.ndarray, capacity: np.ndarray | None,
+              labels: tuple[str, ...], kinds: str) -> str:
+    """Per joint: a bar of |τ_force + τ_gravity| against its rated torque ``capacity`` (N·m), green to red,
+    with the three numbers; without published ratings (``None``), against the largest of them.
+    ``kinds``: ``"R"``/``"P"`` per joint (a prismatic joint holds a force, in N)."""
+    totals = np.asarray(force_torques) + np.asarray(gravity)
+    scale = capacity if capacity is not None else np.full(len(totals), max(float(np.abs(totals).max()), 1e-9))
+    rows = [] if capacity is not None else ["<div>No published ratings for this arm: each bar against the largest.</div>"]
+    for label, kind, f, g, total, cap in zip(labels, kinds, force_torques, gravity, totals, scale):
+        unit = "N·m" if kind == "R" else "N"
+        share = min(abs(total) / cap, 1.0)
+        colour = hex_color(blend(SAFE_GREEN, DANGER_RED, share))
+        over = " <b style='color:#dc2626'>over its rating</b>" if capacity is not None and abs(total) > cap else ""
+        rated = f"; rated {cap:.0f}" if capacity is not None else ""
+        rows.append(
+            f"<div style='margin:4px 0'><b>{label}</b> {number(total, '+.1f')} {unit} "
+            f"<span style='font-size:0.85em'>(force {number(f, '+.1f')}, gravity {number(g, '+.1f')}{rated}){over}</span>"
+            "<div style='height:10px;background:#e9ecef;border-radius:4px'>"
+            f"<div class='torque-bar' style='height:10px;width:{100 * share:.1f}%;border-radius:4px;background:{colour}'>"
+            "</div></div></div>")
+    return "<div style='font-size:0.9em'>" + "".join(rows) + "</div>"
+
+
+def gravity_words(arm) -> str:
+    """What the folder says of the arm's weight: counted, or why not."""
+    if arm.name in MASSES:
+        return "plus the arm's own weight and its payload."
+    return "The arm's own weight is not counted: no link masses are published for this arm, so no gravity."
+
+
+class StaticsView(View):
+    """The "Forces and gravity" folder and the force arrow at the tool, for any arm.
+
+    ``root`` is where its nodes go in the scene; ``size`` (the arm's reach, m) scales the
+    arrow, the handle's distance and the map's marker (the UR10's drawing is for 1 m).
+    """
+
+    def __init__(self, scene: viser.SceneApi, gui: viser.GuiApi, session: "ClientSession", root: str = "/statics",
+                 size: float = 1.0) -> None:
+        self._session = session
+        self._root, self._size = root, size
+        arm = session.arm
+        payload_kg = arm.specs.payload_kg if arm.name in MASSES else None
+        folder = gui.add_folder("Forces and gravity", expand_by_default=False)
+        self.folders = (folder,)
+        with folder:
+            gui.add_markdown("The torques the joints must hold: τ = Jᵀ F for a force the tool pushes with; "
+                             + gravity_words(arm))
+            self.enabled = gui.add_checkbox("Show the torques", False)
+            self.newtons = gui.add_slider("Force at the tool (N)", min=0.0, max=MAX_FORCE_N, step=5.0, initial_value=50.0)
+            self.direction = gui.add_dropdown("Force direction", tuple(DIRECTIONS), initial_value="down (−z)")
+            self.payload = gui.add_slider("Payload (kg)", min=0.0, max=payload_kg or 1.0, step=0.5, initial_value=0.0,
+                                          visible=payload_kg is not None)
+            self.bars = gui.add_html("", visible=False)
+            self.mapped = gui.add_checkbox("Colour the workspace by ‖τ‖ for this force", False,
+                                           hint=f"{TORQUE_MAP_POINTS:,} random joint vectors; the worst one is marked")
+            self.map_legend = gui.add_markdown("", visible=False)
+        self._metres_per_n = ARROW_METRES_PER_N * size
+        self.arrow = scene.add_arrows(f"{root}/force", np.zeros((1, 2, 3)), FORCE_COLOR, shaft_radius=0.012 * size,
+                                      head_radius=0.03 * size, head_length=0.05 * size, visible=False)
+        # the arrow's node rides at the tool and its label at the arrow's tip, in it: a drag moves one node,
+        # and the arrow's shape is sent again only when the force itself turns or grows
+        self.label = scene.add_label(f"{root}/force/label", "F", font_screen_scale=1.4, anchor="center-left", visible=False)
+        self._drawn_force: np.ndarray | None = None
+        #: the direction handle: this browser's own, like the IK target
+        self.handle = session.client.scene.add_transform_controls(
+            f"{root}/force_handle", scale=HANDLE_SCALE * size, disable_rotations=True, depth_test=False, visible=False)
+        stop_echo(self.handle)
+        self.dragged = np.array([0.0, 0.0, -1.0])  #: the unit direction the handle was last dragged to (base frame)
+        self._holding = False
+        self.handle.on_update(session.guard(self._handle_moved))
+        self._scene = scene
+        self._map: viser.PointCloudHandle | None = None
+        self._worst: tuple[viser.IcosphereHandle, viser.LabelHandle] | None = None
+        self._map_lock = threading.Lock()
+        self._maps = FoldedRuns(self._draw_map)
+        for widget in (self.enabled, self.newtons, self.direction, self.payload):
+            widget.on_update(session.guard(lambda _: session.redraw()))
+        for widget in (self.mapped, self.newtons, self.direction):
+            widget.on_update(session.guard(lambda _: self._maps.start("torque-map", session.guard)))
+
+    def _handle_moved(self, event: viser.TransformControlsEvent) -> None:
+        """The student dragged the handle: the force points from the tool towards it."""
+        self._holding = event.phase != "end"
+        position = np.array(self.handle.position, dtype=float)
+        offset = position - self._session.state.last.flange[:3, 3]
+        length = float(np.linalg.norm(offset))
+        if not np.isfinite(length):
+            raise ValueError("force direction: the handle's position must be finite")
+        if length > 1e-3:  # on the tool itself it names no direction: keep the last one
+            self.dragged = offset / length
+        self._session.redraw()
+        if not self._holding:
+            self._maps.start("torque-map", self._session.guard)
+
+    def loads(self, snapshot: Snapshot) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(force (3,), τ of the force (n,), τ of gravity and payload (n,)) at this snapshot, from the widgets."""
+        arm = self._session.arm
+        force = force_vector(chosen(self.direction, "force direction"), float(self.newtons.value), snapshot.flange, self.dragged)
+        gravity = np.zeros(arm.n_joints)
+        if arm.name in MASSES:  # otherwise (the UR10e, the course's other arms): the force's torques alone
+            payload = float(self.payload.value)
+            rated = arm.specs.payload_kg
+            if not 0.0 <= payload <= rated:
+                raise ValueError(f"payload: from 0 to {rated:g} kg, got {payload:g}")
+            gravity = arm.gravity_torques(snapshot.q, payload)
+        return force, arm.static_torques(snapshot.q, force), gravity
+
+    def render(self, snapshot: Snapshot) -> None:
+        direction = chosen(self.direction, "force direction")
+        shown = bool(self.enabled.value) and float(self.newtons.value) > 0.0
+        handled = bool(self.enabled.value) and direction == DRAGGED
+        tip = snapshot.flange[:3, 3]
+        if handled and not self._holding:  # the handle rides with the tool, unless the student holds it
+            set_positions([self.handle], (tip + HANDLE_DISTANCE * self._size * self.dragged)[None])
+        if self.handle.visible != handled:
+            self.handle.visible = handled
+        if shown:
+            newtons = float(self.newtons.value)
+            force = force_vector(direction, newtons, snapshot.flange, self.dragged)
+            if self._drawn_force is None or not np.array_equal(force, self._drawn_force):
+                end = self._metres_per_n * force
+                self.arrow.points = np.array([[np.zeros(3), end]])  # the way the tool pushes
+                set_positions([self.label], end[None])
+                self._drawn_force = force
+            set_positions([self.arrow], tip[None])
+            text = f"F = {newtons:.0f} N"
+            if self.label.text != text:
+                self.label.text = text
+        for node in (self.arrow, self.label):
+            if node.visible != shown:
+                node.visible = shown
+
+    def render_panel(self, snapshot: Snapshot) -> None:
+        self.bars.visible = bool(self.enabled.value)
+        if self.bars.visible:
+            _, force_torques, gravity = self.loads(snapshot)
+            arm = self._session.arm
+            self.bars.content = bars_html(force_torques, gravity, arm.specs.torque_ratings, arm.joint_names, arm.joint_types)
+
+    def _draw_map(self) -> None:
+        session = self._session
+        shown = None
+        if self.mapped.value and not session.closed:
+            snapshot = session.state.last
+            direction = chosen(self.direction, "force direction")
+            if DIRECTIONS[direction] is None:
+                raise ValueError("the map needs a force fixed in the base frame: pick a direction other than the tool's z")
+            force = force_vector(direction, float(self.newtons.value), snapshot.flange, self.dragged)
+            shown = force, HEAVY.run(session.client, lambda: torque_map(session.arm, force, TORQUE_MAP_POINTS), cancelled=lambda: session.closed)
+        with self._map_lock:
+            if session.closed:
+                return
+            self._clear_map()
+            self.map_legend.visible = shown is not None
+            if shown is None:
+                return
+            force, (points, norms, worst) = shown
+            top = float(norms[worst]) or 1.0
+            self._map = self._scene.add_point_cloud(f"{self._root}/torque_map", points.astype(np.float32), colormap(norms, top),
+                                                    point_size=POINT_SIZE, point_shape="circle")
+            marker = self._scene.add_icosphere(f"{self._root}/worst", radius=0.04 * self._size, color=DANGER_RED,
+                                               position=points[worst])
+            unit = "N·m" if "P" not in session.arm.joint_types else "N·m or N"
+            label = self._scene.add_label(f"{self._root}/worst/label", f"largest ‖τ‖ = {top:.0f} {unit}", font_screen_scale=1.4,
+                                          anchor="bottom-center")
+            self._worst = (marker, label)
+            self.map_legend.content = (f"Colour: ‖Jᵀ F‖ for {np.linalg.norm(force):.0f} N, from 0 (purple) to "
+                                       f"{top:.0f} {unit} (yellow), the largest of {len(norms):,} random joint vectors (red ball).")
+
+    def _clear_map(self) -> None:
+        if self._map is not None:
+            self._map.remove()
+        if self._worst is not None:
+            self._worst[0].remove()  # its label goes with it
+        self._map, self._worst = None, None
+
+    def close(self) -> None:
+        """The session has gone: so do its arrow and map, even from a scene everyone shares."""
+        self.label.remove()
+        self.arrow.remove()
+        self.handle.remove()
+        with self._map_lock:
+            self._clear_map()

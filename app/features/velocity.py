@@ -1,0 +1,158 @@
+"""Velocities: joint rates to the tool's velocity arrows, and a tool velocity to the joint rates it needs
+(docs/kinematics.md §8.1, §8.2).
+
+A joint-rate slider per joint draws v (blue) and ω (reddish purple) at the tool (the UR10's
+flange), live with the drag. A typed tool velocity gets its joint rates from the damped
+inverse, each in red where it exceeds the joint's speed limit (the UR10's, docs/kinematics.md
+§1; the course's other arms have none), with the damping it took.
+"""
+
+from __future__ import annotations
+
+import math
+import re
+from typing import TYPE_CHECKING, Any, Callable
+
+import numpy as np
+import viser
+
+from ..state import Snapshot
+from ..style import number
+from ..view import View
+
+if TYPE_CHECKING:
+    from ..session import ClientSession
+
+LINEAR_COLOR, ANGULAR_COLOR = (0, 114, 178), (204, 121, 167)
+#: Drawn length: metres per m/s of the flange, and per rad/s of its turning.
+METRES_PER_SPEED, METRES_PER_TURN_RATE = 0.5, 0.15
+MAX_TYPED = (2000.0, 360.0)  #: the largest typed speed (mm/s) and turning rate (°/s)
+
+
+def parse_twist(text: str) -> np.ndarray:
+    """``vx vy vz ωx ωy ωz`` in mm/s and °/s → (6,) in m/s and rad/s; ``ValueError`` saying what is wrong."""
+    fields = [f for f in re.split(r"[,\s]+", text.strip()) if f]
+    if len(fields) != 6:
+        raise ValueError(f"type six numbers, vx vy vz (mm/s) then ωx ωy ωz (°/s); got {len(fields)}")
+    try:
+        values = np.array([float(f) for f in fields])
+    except ValueError:
+        raise ValueError(f"the tool velocity must be numbers, got {text!r:.60}") from None
+    if not np.isfinite(values).all():
+        raise ValueError("the tool velocity must be finite numbers")
+    if np.abs(values[:3]).max() > MAX_TYPED[0] or np.abs(values[3:]).max() > MAX_TYPED[1]:
+        raise ValueError(f"speeds up to {MAX_TYPED[0]:.0f} mm/s and turning rates up to {MAX_TYPED[1]:.0f} °/s, please")
+    return np.concatenate([values[:3] / 1000.0, np.radians(values[3:])])
+
+
+def shown_rates(qdot: np.ndarray, kinds: str) -> np.ndarray:
+    """Joint rates as the panel shows them: °/s for a revolute joint, mm/s for a prismatic one."""
+    return np.where(np.array(list(kinds)) == "R", np.degrees(qdot), 1000.0 * np.asarray(qdot))
+
+
+def rates_markdown(qdot: np.ndarray, damping: float, asked: np.ndarray, achieved: np.ndarray,
+                   labels: tuple[str, ...], kinds: str, limits: np.ndarray | None = None) -> str:
+    """The joint rates (°/s, mm/s), red where over the joint's speed limit (if it has ``limits``), and what the damping cost."""
+    shown = shown_rates(qdot, kinds)
+    over_limit = np.abs(shown) > limits if limits is not None else np.zeros(len(shown), bool)
+    cells = []
+    for k, (label, rate, kind) in enumerate(zip(labels, shown, kinds)):
+        text = f"{number(rate, '+.1f')}{'°/s' if kind == 'R' else ' mm/s'}"
+        cells.append(f"| {label} | " + (f"<b style='color:#dc2626'>{text} (limit {limits[k]:.0f})</b>" if over_limit[k]
+                                        else f"{text}") + " |")
+    lines = ["| joint | rate |", "|---|---:|", *cells]
+    over = int(over_limit.sum())
+    lines.append("")
+    if limits is not None:
+        lines.append(f"**{over} joint{'s' if over != 1 else ''} over the limit.**" if over else "Every joint within its speed limit.")
+    if damping > 0:
+        miss_v = 1000 * np.linalg.norm(achieved[:3] - asked[:3])
+        miss_w = math.degrees(np.linalg.norm(achieved[3:] - asked[3:]))
+        lines.append(f"Near a singularity: damped (λ = {damping:.3f}), so the arm gives this velocity to within "
+                     f"{miss_v:.1f} mm/s and {miss_w:.1f} °/s rather than turn its joints without bound.")
+    return "\n".join(lines)
+
+
+#: The slider ranges: °/s for a revolute joint, mm/s for a prismatic one.
+MAX_RATE = {"R": 180.0, "P": 500.0}
+
+
+class VelocityView(View):
+    """The "Velocities" folder and the two arrows at the tool.
+
+    ``root``: where its nodes hang; ``tool(snapshot)``: the (4, 4) pose the arrows start at
+    (the UR10's flange by default); ``labels``: each joint's name. The kinds of joints and their
+    speed limits (``arm.specs``, where the maker publishes them) come from ``session.arm``.
+    """
+
+    def __init__(self, scene: viser.SceneApi, gui: viser.GuiApi, session: "ClientSession", root: str = "/velocity",
+                 tool: Callable[[Any], np.ndarray] = lambda snapshot: snapshot.flange, place: str = "flange") -> None:
+        self._session = session
+        self._arm = session.arm
+        self._tool = tool
+        self._kinds = "".join(self._arm.joint_types)
+        limits = self._arm.specs.speed_limits
+        self._labels, self._limits = self._arm.joint_names, None if limits is None else shown_rates(limits, self._kinds)
+        folder = gui.add_folder("Velocities", expand_by_default=False)
+        self.folders = (folder,)
+        with folder:
+            gui.add_markdown(f"Turn the joints at these rates: the arrows are the {place}'s velocity v (blue) and "
+                             "its turning rate ω (purple), v = J q̇.")
+            self.sliders = [gui.add_slider(f"{'θ̇' if kind == 'R' else 'ḋ'}{i + 1} {name} ({'°/s' if kind == 'R' else 'mm/s'})",
+                                           min=-MAX_RATE[kind], max=MAX_RATE[kind], step=1.0, initial_value=0.0)
+                            for i, (name, kind) in enumerate(zip(self._labels, self._kinds))]
+            self.readout = gui.add_markdown("")
+            gui.add_markdown(f"Or ask for a {place} velocity and see the joint rates it needs, q̇ = J⁻¹ v:")
+            self.typed = gui.add_text("vx vy vz (mm/s) ωx ωy ωz (°/s)", "100 0 0 0 0 0")
+            self.solve = gui.add_button("Find the joint rates")
+            self.rates = gui.add_markdown("")
+        self.linear = scene.add_arrows(f"{root}/linear", np.zeros((1, 2, 3)), LINEAR_COLOR, shaft_radius=0.008,
+                                       head_radius=0.02, head_length=0.04, visible=False)
+        self.angular = scene.add_arrows(f"{root}/angular", np.zeros((1, 2, 3)), ANGULAR_COLOR, shaft_radius=0.008,
+                                        head_radius=0.02, head_length=0.04, visible=False)
+        self.labels = (scene.add_label(f"{root}/linear_label", "v", font_screen_scale=1.4, anchor="center-left", visible=False),
+                       scene.add_label(f"{root}/angular_label", "ω", font_screen_scale=1.4, anchor="center-left", visible=False))
+        for slider in self.sliders:
+            slider.on_update(session.guard(lambda _: session.redraw()))
+        self.solve.on_click(session.guard(lambda _: self._solve()))
+
+    def joint_rates(self) -> np.ndarray:
+        """(n,) the sliders' joint rates, rad/s (m/s for a prismatic joint)."""
+        shown = np.array([float(s.value) for s in self.sliders])
+        largest = np.array([MAX_RATE[kind] for kind in self._kinds])
+        if not np.isfinite(shown).all() or (np.abs(shown) > largest).any():
+            raise ValueError("joint rates: from −180 to 180 °/s (−500 to 500 mm/s for a sliding joint)")
+        return np.where(np.array(list(self._kinds)) == "R", np.radians(shown), shown / 1000.0)
+
+    def _solve(self) -> None:
+        twist = parse_twist(str(self.typed.value))
+        snapshot = self._session.state.last
+        rates = self._arm.joint_rates(snapshot.q, twist)
+        self.rates.content = rates_markdown(rates.qdot, float(rates.damping), twist, rates.achieved,
+                                            self._labels, self._kinds, self._limits)
+
+    def render(self, snapshot: Snapshot) -> None:
+        moving = any(slider.value != 0.0 for slider in self.sliders)  # on every drag: no arrays while all are still
+        if moving:
+            qdot = self.joint_rates()
+            twist = self._arm.tool_twist(snapshot.q, qdot)
+            tip = self._tool(snapshot)[:3, 3]
+            ends = (tip + METRES_PER_SPEED * twist[:3], tip + METRES_PER_TURN_RATE * twist[3:])
+            for arrow, label, end in zip((self.linear, self.angular), self.labels, ends):
+                arrow.points = np.array([[tip, end]])
+                label.position = end
+        for node in (self.linear, self.angular, *self.labels):
+            if node.visible != moving:
+                node.visible = moving
+
+    def render_panel(self, snapshot: Snapshot) -> None:
+        qdot = self.joint_rates()
+        twist = self._arm.tool_twist(snapshot.q, qdot)
+        self.readout.content = (f"v = ({', '.join(number(1000 * v, '+.1f') for v in twist[:3])}) mm/s, "
+                                f"|v| = {number(1000 * np.linalg.norm(twist[:3]), '.1f')} mm/s  \n"
+                                f"ω = ({', '.join(number(math.degrees(w), '+.1f') for w in twist[3:])}) °/s")
+
+    def close(self) -> None:
+        """The session has gone: so do its arrows, even from a scene everyone shares."""
+        for node in (self.linear, self.angular, *self.labels):
+            node.remove()

@@ -1,0 +1,355 @@
+"""The workspace point cloud, coloured by manipulability |det J|, with an optional section.
+
+Sampled by ``Arm.sample_workspace`` off the event loop, as a slow job (``ur10teach.serving.workers.HEAVY``:
+one at a time in the server, each address's a share of the time), and kept for every
+client in :data:`CLOUDS`, whose memory is a fixed budget; each client is sent only the
+cloud it asked for. 200 k points (the default) is about 1.8 MB per client. A vertical section turns
+every sample into the arm's plane; a horizontal one is sampled in its plane
+(``Arm.sample_horizontal_section``). The camera turns to face a section square-on. The
+translucent hull is the cloud's outer surface and hole, turned about the base axis
+(``ur10core.workspace.revolved_boundary``): one light mesh instead of the points.
+"""
+
+from __future__ import annotations
+
+import collections
+import math
+import threading
+from typing import TYPE_CHECKING
+
+import numpy as np
+import viser
+
+from ur10core import Arm
+from ur10core.workspace import revolved_boundary, vertical_section
+
+from .camera import VIEWS
+from ..feedback import chosen
+from ..style import hex_color
+from ..view import View
+from ..serving.workers import HEAVY, FoldedRuns
+
+if TYPE_CHECKING:
+    from ..session import ClientSession
+
+SAMPLE_COUNTS = {"10 k": 10_000, "50 k": 50_000, "100 k": 100_000, "200 k": 200_000, "500 k": 500_000, "1 M": 1_000_000}
+DEFAULT_COUNT = "200 k"
+SECTIONS = ("whole cloud", "vertical section (side view)", "horizontal section (top view)",
+            "cut-away (the half behind the arm's plane)", "translucent hull (its outer and inner surfaces)")
+HULL = SECTIONS[4]
+HULL_COLOR = (86, 180, 233)  # Okabe-Ito sky blue: apart from the grey arm and the aluminium links
+HULL_OPACITY = 0.22
+HULL_SEGMENTS = 72
+POINT_SIZE = 0.006
+#: Points in a section: sampled in its plane, they cover it densely at this many.
+SECTION_POINTS = 40_000
+#: Where the camera looks from for a horizontal section: straight down (a hair off, so the orbit keeps z up).
+FROM_ABOVE = (0.0, -0.02, 1.0)
+#: Viridis, sampled at 9 stops: dark = near-singular (low |det J|), yellow = dexterous.
+VIRIDIS = np.array(
+    [(68, 1, 84), (71, 44, 122), (59, 81, 139), (44, 113, 142), (33, 144, 141),
+     (39, 173, 129), (92, 200, 99), (170, 220, 50), (253, 231, 37)], dtype=float,
+)
+
+
+def colormap(values: np.ndarray, top: float) -> np.ndarray:
+    """Viridis colours (n, 3) uint8 for ``values`` in [0, top]."""
+    t = np.clip(values / top, 0.0, 1.0) * (len(VIRIDIS) - 1)
+    low = np.minimum(t.astype(int), len(VIRIDIS) - 2)
+    frac = (t - low)[:, None]
+    return ((1 - frac) * VIRIDIS[low] + frac * VIRIDIS[low + 1]).astype(np.uint8)
+
+
+#: Bytes of clouds and sections kept for every client (a 1 M cloud is 15 MB).
+CLOUD_BUDGET_BYTES = 64 * 2**20
+
+
+class KeptClouds:
+    """Clouds by what they were made from, the least recently used forgotten beyond ``budget`` bytes.
+
+    A browser showing a cloud *holds* the values it was drawn from (``holder``, until
+    :meth:`release`); :meth:`forget_unheld`, called once browsers have left, forgets the
+    rest, so that the server's memory goes back to where it was.
+    """
+
+    def __init__(self, budget: int = CLOUD_BUDGET_BYTES) -> None:
+        self.budget = budget
+        self._kept: collections.OrderedDict[tuple, tuple] = collections.OrderedDict()
+        self._held: dict[int, set[tuple]] = {}  #: id(holder) → the keys it shows
+        self._lock = threading.Lock()
+
+    @property
+    def nbytes(self) -> int:
+        with self._lock:
+            return sum(_nbytes(value) for value in self._kept.values())
+
+    def get(self, key: tuple, make, holder: object | None = None):
+        """The kept value for ``key``, or ``make()`` (called outside the lock), kept within the budget."""
+        with self._lock:
+            if key in self._kept:
+                self._kept.move_to_end(key)
+                if holder is not None:
+                    self._held.setdefault(id(holder), set()).add(key)
+                return self._kept[key]
+        value = make()
+        with self._lock:
+            if holder is not None:
+                self._held.setdefault(id(holder), set()).add(key)
+            self._kept[key] = value
+            total = sum(_nbytes(kept) for kept in self._kept.values())
+            while total > self.budget and len(self._kept) > 1:
+                total -= _nbytes(self._kept.popitem(last=False)[1])
+        return value
+
+    def release(self, holder: object) -> None:
+        """``holder`` no longer shows what it asked for."""
+        with self._lock:
+            self._held.pop(id(holder), None)
+
+    def forget_unheld(self) -> None:
+        """Forget every value no holder shows."""
+        with self._lock:
+            held = set().union(*self._held.values())
+            for key in [key for key in self._kept if key not in held]:
+                del self._kept[key]
+
+
+def _nbytes(value: tuple) -> int:
+    return sum(part.nbytes for part in value if isinstance(part, np.ndarray))
+
+
+CLOUDS = KeptClouds()
+
+
+def coloured_cloud(arm: Arm, n: int, compute=lambda make: make(),
+                   holder: object | None = None) -> tuple[np.ndarray, np.ndarray, float]:
+    """(points (n, 3) float32, colours (n, 3) uint8, colour-scale top in m³), shared by all clients.
+
+    ``compute(make)`` runs ``make`` when the cloud is not kept (a session passes its slow-job runner);
+    ``holder`` shows it (:class:`KeptClouds`).
+    """
+
+    def make():
+        points, manipulability = arm.sample_workspace(n, seed=0)
+        top = float(np.percentile(manipulability, 99)) or 1.0  # an arm whose measure is zero almost everywhere
+        return points.astype(np.float32), colormap(manipulability, top), top
+
+    return CLOUDS.get(("cloud", arm, n), lambda: compute(make), holder)
+
+
+def coloured_horizontal_section(arm: Arm, height: float, n: int, top: float, compute=lambda make: make(),
+                                holder: object | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """(points (n, 3) float32 in the plane z = height, colours on the whole cloud's scale ``top``)."""
+
+    def make():
+        points, manipulability = arm.sample_horizontal_section(height, n, seed=0)
+        return points.astype(np.float32), colormap(manipulability, top)
+
+    return CLOUDS.get(("horizontal", arm, height, n, top), lambda: compute(make), holder)
+
+
+def revolved_mesh(heights: np.ndarray, inner: np.ndarray, outer: np.ndarray,
+                  segments: int = HULL_SEGMENTS) -> tuple[np.ndarray, np.ndarray]:
+    """(vertices (V, 3) float32, faces (F, 3) uint32): the profile turned about z, closed top and bottom.
+
+    Rings k = 0…m−1 of the outer surface, then of the inner; quads between neighbouring
+    rings, and an annulus from the inner to the outer ring at each end.
+    """
+    m = len(heights)
+    angle = np.linspace(0.0, 2 * np.pi, segments, endpoint=False)
+    ring = np.stack([np.cos(angle), np.sin(angle)], axis=1)
+    rings = [np.column_stack([radius * ring, np.full(segments, z)])
+             for radii in (outer, inner) for radius, z in zip(radii, heights)]
+    vertices = np.vstack(rings).astype(np.float32)
+    j, k = np.meshgrid(np.arange(segments), np.arange(m - 1))
+    j, k = j.ravel(), k.ravel()
+    nxt = (j + 1) % segments
+
+    def band(first_ring: np.ndarray, second_ring: np.ndarray) -> np.ndarray:
+        a, b = first_ring * segments + j, first_ring * segments + nxt
+        c, d = second_ring * segments + j, second_ring * segments + nxt
+        return np.concatenate([np.stack([a, b, d], 1), np.stack([a, d, c], 1)])
+
+    faces = [band(k, k + 1), band(m + k + 1, m + k)]  # outer facing out, inner facing the axis
+    j, nxt = np.arange(segments), (np.arange(segments) + 1) % segments
+    k = np.zeros(segments, int)
+    faces += [band(m + k, k), band(k + m - 1, k + 2 * m - 1)]  # bottom and top annuli
+    return vertices, np.vstack(faces).astype(np.uint32)
+
+
+HULL_LEGEND = ("the workspace's boundary: the flange reaches every point between the outer surface and the "
+               "hole about the base axis")
+
+
+def manipulability_unit(arm: Arm) -> str:
+    """|det J| of six revolute joints is in m³ (three rows of metres); other arms' measures mix units."""
+    return " m³" if arm.joint_types == "RRRRRR" else ""
+
+
+def legend_text(top: float, unit: str = " m³") -> str:
+    """The legend beside the cloud in 3D, for everyone who sees the cloud (viewers included)."""
+    return f"colour = manipulability |det J|: dark violet 0 (singular) … yellow ≥ {top:.3f}{unit}"
+
+
+def legend_html(top: float, unit: str = " m³") -> str:
+    stops = ", ".join(hex_color(tuple(int(c) for c in rgb)) for rgb in VIRIDIS)
+    return (
+        "<div style='font-size:0.85em'>Colour = manipulability |det J|"
+        f"<div style='height:12px;border-radius:3px;margin:4px 0;background:linear-gradient(to right, {stops})'></div>"
+        "<div style='display:flex;justify-content:space-between'><span>0 (singular)</span>"
+        f"<span>≥ {top:.4f}{unit}</span></div></div>"
+    )
+
+
+def sections_of(arm: Arm) -> tuple[tuple[str, ...], str]:
+    """The sections ``arm``'s cloud offers, and what the folder says of the one it lacks ("" if none).
+
+    A horizontal section is sampled in its plane, from the flange height's closed form in θ2,
+    which only the UR family has (docs/kinematics.md §3); a slab cut from any cloud would hold
+    a few hundred points.
+    """
+    if hasattr(arm.solver, "sample_horizontal_section"):
+        return SECTIONS, ""
+    return tuple(s for s in SECTIONS if s != SECTIONS[2]), (
+        "No horizontal section for this arm: it is sampled in its plane from the UR family's closed form of the "
+        "flange's height, which this arm does not have.")
+
+
+class WorkspaceView(View):
+    """The "Workspace" folder and the cloud it draws (in the session's scene: the classroom's, for a presenter).
+
+    A cloud takes a moment; widget changes that come meanwhile are folded into one more
+    computation with the newest choices, however many there were, so one student moving
+    the section slider costs at most one cloud in the making and one waiting.
+    """
+
+    def __init__(self, scene: viser.SceneApi, gui: viser.GuiApi, session: "ClientSession", root: str = "") -> None:
+        self._scene = scene
+        self._session = session
+        self._root = root  #: the cloud is ``{root}/workspace``: a classroom explorer's arm has a root of its own
+        self._unit = manipulability_unit(session.arm)
+        self._cloud: viser.PointCloudHandle | None = None
+        self.legend_label: viser.LabelHandle | None = None
+        self._lock = threading.Lock()
+        self._closed = False
+        self._clouds = FoldedRuns(self._update_or_explain)
+        folder = gui.add_folder("Workspace")
+        self.folders = (folder,)
+        with folder:
+            self.enabled = gui.add_checkbox("Show workspace cloud", False)
+            self.count = gui.add_dropdown("Samples", tuple(SAMPLE_COUNTS), initial_value=DEFAULT_COUNT,
+                                          hint="Every client downloads its cloud: about 9 bytes per point")
+            sections, missing = sections_of(session.arm)
+            self.section = gui.add_dropdown("Section", sections, initial_value=SECTIONS[0], hint=missing or None)
+            self.height = gui.add_slider("Section height (mm)", min=-600.0, max=1600.0, step=10.0,
+                                         initial_value=600.0, visible=False)
+            self.progress = gui.add_progress_bar(0.0, animated=True, visible=False)
+            self.legend = gui.add_html("", visible=False)
+        for widget in (self.enabled, self.count, self.section, self.height):
+            widget.on_update(session.guard(self._changed))
+
+    def _changed(self, _: viser.GuiEvent) -> None:
+        self._clouds.start("workspace", self._session.guard)  # a run under way picks up the newest choices
+
+    def _slow_job(self, make):
+        session = self._session
+        return HEAVY.run(session.client, make, cancelled=lambda: session.closed)
+
+    def _update_or_explain(self) -> None:
+        try:
+            self._update()
+        except ValueError as error:
+            if not self._clouds.waiting:
+                raise  # the browser is told why (a section height nobody reaches, say)
+            self._session.notify("Not accepted", str(error))  # and the newer choice waiting is drawn
+
+    def _update(self) -> None:
+        section = chosen(self.section, "section")
+        count = SAMPLE_COUNTS[chosen(self.count, "samples")]
+        self.height.visible = section == SECTIONS[2]
+        if not self.enabled.value:
+            self.clear()
+            self.legend.visible = False
+            return
+        self.progress.value = 5.0
+        self.progress.visible = True
+        CLOUDS.release(self)  # what it showed until now; it holds what it is about to draw
+        try:
+            points, colors, top = coloured_cloud(self._session.arm, count, self._slow_job, holder=self)
+            self.progress.value = 60.0
+            if section == HULL:
+                vertices, faces = revolved_mesh(*revolved_boundary(points))
+            else:
+                points, colors = self._section(section, points, colors, top)
+            with self._lock:
+                if self._closed:  # it left while its cloud was made
+                    return
+                if self._cloud is not None:
+                    self._cloud.remove()
+                if section == HULL:  # faint, both faces drawn: the arm and the hole show through it
+                    self._cloud = self._scene.add_mesh_simple(
+                        f"{self._root}/workspace", vertices, faces, color=HULL_COLOR, opacity=HULL_OPACITY, side="double",
+                        cast_shadow=False, receive_shadow=False)
+                else:
+                    self._cloud = self._scene.add_point_cloud(
+                        f"{self._root}/workspace", points, colors, point_size=POINT_SIZE, point_shape="circle"
+                    )
+                # above the cloud, in the same scene: it goes with the cloud and reaches every viewer
+                self.legend_label = self._scene.add_label(
+                    f"{self._root}/workspace/legend", HULL_LEGEND if section == HULL else legend_text(top, self._unit),
+                    position=(0.0, 0.0, float(points[:, 2].max()) + 0.12), font_screen_scale=1.3, anchor="bottom-center",
+                )
+            self.legend.content = HULL_LEGEND if section == HULL else legend_html(top, self._unit)
+            self.legend.visible = True
+            self._look_square_on(section, points)
+        finally:
+            if self._closed:  # it left while its cloud was made: it holds none
+                CLOUDS.release(self)
+            self.progress.value = 100.0
+            self.progress.visible = False
+
+    def _section(self, section: str, points: np.ndarray, colors: np.ndarray, top: float) -> tuple[np.ndarray, np.ndarray]:
+        if section == SECTIONS[1]:
+            azimuth = float(self._session.state.last.q[0])  # the plane the arm moves in
+            return vertical_section(points, azimuth).astype(np.float32), colors
+        if section == SECTIONS[2]:  # sampled in the plane itself: a slab of the cloud holds only a few hundred
+            return coloured_horizontal_section(self._session.arm, self.height.value / 1000.0,
+                                               min(SECTION_POINTS, len(points)), top, self._slow_job, holder=self)
+        if section == SECTIONS[3]:  # the cut face shows the inside: the hole about the base axis, the dexterous core
+            behind = points[:, :2] @ self._plane_normal()[:2] < 0
+            return points[behind], colors[behind]
+        return points, colors
+
+    def _plane_normal(self) -> np.ndarray:
+        """The horizontal normal of the vertical plane the arm moves in (through the base axis, at θ1)."""
+        azimuth = float(self._session.state.last.q[0])
+        return np.array([-math.sin(azimuth), math.cos(azimuth), 0.0])
+
+    def _look_square_on(self, section: str, points: np.ndarray) -> None:
+        """A section is seen square-on: the camera turns to face its plane (and frames the whole hull)."""
+        camera = self._session.camera
+        if camera is None or section == SECTIONS[0]:
+            return
+        if section == HULL:  # the whole of it in view, from the course's three-quarter angle
+            direction = VIEWS["Course figure"]
+        elif section == SECTIONS[1]:
+            direction = -self._plane_normal()
+        elif section == SECTIONS[3]:
+            direction = self._plane_normal()  # from the open side, onto the cut face
+        else:
+            direction = FROM_ABOVE
+        camera.look_from(direction, points[:: max(1, len(points) // 2000)])
+
+    def clear(self) -> None:
+        """Take the cloud out of the scene (toggled off)."""
+        CLOUDS.release(self)
+        with self._lock:
+            if self._cloud is not None:
+                self._cloud.remove()  # and the legend under it
+                self._cloud = self.legend_label = None
+
+    def close(self) -> None:
+        """The session has gone: its cloud goes too, even from a scene everyone shares."""
+        with self._lock:
+            self._closed = True
+        self.clear()

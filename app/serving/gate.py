@@ -1,0 +1,474 @@
+"""What the server accepts from a browser: one gate on viser's websocket, in every mode.
+
+viser accepts any message of up to 50 MB from any page, decodes it on the event loop,
+and dispatches every message type it knows (share tunnels, file uploads, form
+broadcasts), to anyone. A classroom needs less. The gate sits on the websocket server
+that viser starts (``websockets.asyncio.server.serve``, viser's only call into it, is
+given these settings for as long as the server starts up) and does four things:
+
+* **Size.** No incoming message over :data:`MAX_MESSAGE_BYTES`: the app's largest is a
+  typed text of at most 1000 characters. A bigger frame closes that connection (1009)
+  before a byte of it is decoded.
+* **Arrival.** Before a message is decoded, it takes a token from its connection's
+  message and byte buckets (:data:`ARRIVALS_PER_SECOND`, :data:`ARRIVAL_BYTES_PER_SECOND`,
+  far above what a browser sends); without one it is dropped undecoded, and a connection
+  that keeps sending over its rate is closed (1008). The reader lets the event loop run
+  between two frames, so a flooding socket cannot keep the others waiting.
+* **Kind.** Each message is decoded once. Only the messages the app has a use for pass
+  (:data:`ALLOWED`), with every field of the type viser's own class declares: widget
+  values, the gizmo, clicks on the arm, the camera. Anything else — a share-tunnel
+  request, a file upload, a form broadcast, a widget property other than its value, a
+  click without its fields — is dropped, and the first of each kind is logged.
+* **Rate.** Each connection's messages pass at most :data:`MESSAGES_PER_SECOND` (after a
+  burst), one at a time, and while one waits, a newer message for the same widget or
+  gizmo replaces it: a flood of slider updates costs the server one update per tick, and
+  only the flooding student waits.
+* **Who.** A websocket must come from a page the server itself served (its ``Origin``
+  names the host the browser asked for) or from an origin the teacher allowed
+  (``--allow-origin``), and name this machine or an IP address as its host (no DNS
+  rebinding). Apart from loopback (this machine: the teacher's own tabs and tools), an
+  address may hold :data:`CONNECTIONS_PER_ADDRESS` websockets and open new ones at
+  :data:`NEW_CONNECTIONS_PER_SECOND` after a burst of :data:`NEW_CONNECTION_BURST`, and hold
+  :data:`TCP_CONNECTIONS_PER_ADDRESS` TCP connections of any kind (a half-sent request
+  included, which waits at most :data:`OPEN_TIMEOUT`).
+"""
+
+from __future__ import annotations
+
+import asyncio
+import collections
+import contextlib
+import http
+import ipaddress
+import logging
+import os
+import socket
+import threading
+import time
+import urllib.parse
+from typing import Any, Iterator
+
+import msgspec
+import websockets.asyncio.server
+
+from ..viser_internals import connection_of as _connection_of
+from ..viser_internals import messages as viser_messages
+
+log = logging.getLogger(__name__)
+
+#: Largest message a browser may send (bytes): a text of :data:`_LONGEST_TEXT` characters, with room.
+MAX_MESSAGE_BYTES = 4 * 1024
+#: Messages and bytes a second one connection's socket is read at before decoding (after a burst of a
+#: second's worth). A browser sends at most a few dozen small messages a second.
+ARRIVALS_PER_SECOND = 200.0
+ARRIVAL_BYTES_PER_SECOND = 128 * 1024
+#: Messages over those rates a connection may send (refilling at one a second) before it is closed.
+OVER_RATE_ALLOWANCE = 100
+#: Messages per second a connection's messages pass at, after a burst of :data:`MESSAGE_BURST`.
+MESSAGES_PER_SECOND = 60.0
+MESSAGE_BURST = 60
+#: Different widgets (or gizmos) one connection may have waiting at once; more are dropped.
+MAX_WAITING = 64
+#: Open websockets per address (loopback excepted).
+CONNECTIONS_PER_ADDRESS = 8
+#: New websockets per address and second, after a burst of :data:`NEW_CONNECTION_BURST`. Each builds a
+#: whole session (its arm, panel and scene): eight at once from one address held every student up.
+NEW_CONNECTIONS_PER_SECOND = 0.5
+NEW_CONNECTION_BURST = 3
+#: TCP connections per address (loopback excepted): the websockets and a browser's page downloads.
+TCP_CONNECTIONS_PER_ADDRESS = 32
+#: Seconds a new connection has to send its request (websockets' default is 10).
+OPEN_TIMEOUT = 5.0
+
+#: The messages the app uses, and what makes two of them the same (the newer replaces the older).
+ALLOWED = {
+    "GuiUpdateMessage": ("uuid",),
+    "TransformControlsUpdateMessage": ("name",),
+    "TransformControlsDragStartMessage": ("name",),
+    "TransformControlsDragEndMessage": ("name",),
+    "SceneNodeClickMessage": ("name", "instance_index"),
+    "ViewerCameraMessage": (),
+}
+#: viser's class of each, whose fields a message must have, of their declared types.
+_CLASSES = {kind: getattr(viser_messages, kind) for kind in ALLOWED}
+#: A widget value is one of these, or a short list of them (a vector widget).
+_SCALARS = (str, int, float, bool)
+_LONGEST_TEXT = 1000
+_LONGEST_LIST = 16
+
+
+class TokenBucket:
+    """``rate`` tokens a second up to ``burst``; :meth:`take` says whether one was there.
+
+    ``clock`` gives the time in seconds (a test passes its own).
+    """
+
+    def __init__(self, rate: float, burst: float, clock=time.monotonic) -> None:
+        self.rate, self.burst, self._clock = rate, burst, clock
+        self.tokens, self.stamp = float(burst), clock()
+
+    def _fill(self) -> None:
+        now = self._clock()
+        self.tokens = min(self.burst, self.tokens + (now - self.stamp) * self.rate)
+        self.stamp = now
+
+    def take(self, amount: float = 1.0) -> bool:
+        self._fill()
+        if self.tokens >= amount:
+            self.tokens -= amount
+            return True
+        return False
+
+    def wait_time(self) -> float:
+        """Seconds until a token is there."""
+        self._fill()
+        return max(0.0, (1.0 - self.tokens) / self.rate)
+
+
+def classify(raw: bytes | str) -> tuple[tuple | None, str]:
+    """``(key, kind)``: what the gate knows a browser's message by (None when the app does not take
+    it), and the kind it claims to be (for the log). The message is decoded once, here."""
+    if not isinstance(raw, bytes):
+        return None, "text frame"
+    try:
+        message = msgspec.msgpack.decode(raw)
+    except (msgspec.DecodeError, ValueError, TypeError):
+        return None, "undecodable message"
+    kind = message.get("type") if isinstance(message, dict) else None
+    if not isinstance(kind, str) or len(kind) > 64:
+        return None, "undecodable message"
+    fields = ALLOWED.get(kind)
+    if fields is None:
+        return None, kind
+    if kind == "GuiUpdateMessage" and not _plain_value_update(message.get("updates")):
+        return None, f"{kind} setting more than a value"
+    try:
+        msgspec.convert({k: v for k, v in message.items() if k != "type"}, _CLASSES[kind])
+    except msgspec.ValidationError:  # viser would fail on it, closing the sender's connection (1011)
+        return None, f"malformed {kind}"
+    key = tuple(message.get(field) for field in fields)
+    if not all(value is None or isinstance(value, (str, int)) for value in key):
+        return None, f"malformed {kind}"
+    return (kind, *key), kind
+
+
+def message_key(raw: bytes) -> tuple | None:
+    """What the gate knows a browser's message by, or None when it is not one the app takes."""
+    return classify(raw)[0]
+
+
+def _plain_value_update(updates: Any) -> bool:
+    """A browser only ever sends ``{"value": v}``; other properties (options, disabled, ...) are not its to set."""
+    if not isinstance(updates, dict) or set(updates) != {"value"}:
+        return False
+    value = updates["value"]
+    if isinstance(value, list):
+        return len(value) <= _LONGEST_LIST and all(isinstance(v, _SCALARS) and not isinstance(v, str) for v in value)
+    return isinstance(value, _SCALARS) and (not isinstance(value, str) or len(value) <= _LONGEST_TEXT)
+
+
+class Gate:
+    """The limits one server applies, and what it has turned away (for the logs and the tests).
+
+    Parameters
+    ----------
+    allowed_origins : iterable of str
+        Origins (``http://host:port``) allowed besides the server's own pages.
+    trust_loopback : bool, optional
+        Whether connections from this machine skip the per-address limits: yes, unless
+        ``UR10_TEACH_LOOPBACK_IS_LAN=1`` (a benchmark's attacker on 127.0.0.2 then counts as a laptop).
+    """
+
+    def __init__(self, allowed_origins=(), trust_loopback: bool | None = None) -> None:
+        self.allowed_origins = {origin.rstrip("/").lower() for origin in allowed_origins}
+        if trust_loopback is None:
+            trust_loopback = os.environ.get("UR10_TEACH_LOOPBACK_IS_LAN") != "1"
+        self.trust_loopback = trust_loopback
+        self.local_names = {"localhost", socket.gethostname().lower()}
+        self.local_names |= {f"{name}.local" for name in list(self.local_names)}
+        self.dropped: collections.Counter = collections.Counter()  # message kind -> how many
+        self.passed: collections.Counter = collections.Counter()  # message kind -> how many were handed to viser
+        self.refused: collections.Counter = collections.Counter()  # reason -> how many connections
+        self.closed_for: collections.Counter = collections.Counter()  # reason -> how many open connections were closed
+        self._open: collections.Counter = collections.Counter()  # address -> open websockets
+        self._tcp: collections.Counter = collections.Counter()  # address -> open TCP connections
+        self._arrivals: dict[str, TokenBucket] = {}
+        self._lock = threading.Lock()
+
+    # ------------------------------------------------------------------ connections
+
+    def check_request(self, connection, request) -> Any:
+        """``process_request`` for websocket upgrades: None to go on, or the refusal to send."""
+        if request.headers.get("Upgrade", "").lower() != "websocket":
+            return None  # the page and its files: nothing to guard
+        hosts, origins = request.headers.get_all("Host"), request.headers.get_all("Origin")
+        if len(hosts) != 1 or len(origins) > 1:
+            return self._refuse(connection, http.HTTPStatus.BAD_REQUEST, "host", "a request with several Host or Origin headers")
+        host, origin = hosts[0], (origins[0] if origins else None)
+        if not self._is_our_host(host):
+            return self._refuse(connection, http.HTTPStatus.FORBIDDEN, "host", f"unknown host {host!r}")
+        if origin is not None and not self._is_allowed_origin(origin, host):
+            return self._refuse(connection, http.HTTPStatus.FORBIDDEN, "origin", f"websocket from the page {origin!r}")
+        address = _address(connection)
+        if self.trusted(address):
+            return None
+        with self._lock:
+            bucket = self._arrivals.setdefault(address, TokenBucket(NEW_CONNECTIONS_PER_SECOND, NEW_CONNECTION_BURST))
+            if self._open[address] >= CONNECTIONS_PER_ADDRESS:
+                reason = f"{address} already has {CONNECTIONS_PER_ADDRESS} connections"
+            elif not bucket.take():
+                reason = f"{address} is opening connections too fast"
+            else:
+                return None
+        return self._refuse(connection, http.HTTPStatus.TOO_MANY_REQUESTS, "address", reason)
+
+    def _refuse(self, connection, status: http.HTTPStatus, kind: str, reason: str):
+        with self._lock:
+            self.refused[kind] += 1
+            first = self.refused[kind] == 1
+        (log.warning if first else log.debug)("refused a websocket: %s", reason)
+        return connection.respond(status, f"{status.phrase}: {reason}\n")
+
+    def _is_our_host(self, host: str) -> bool:
+        name = _hostname(host)
+        if name in self.local_names or name in {urllib.parse.urlsplit(origin).hostname for origin in self.allowed_origins}:
+            return True
+        with contextlib.suppress(ValueError):
+            ipaddress.ip_address(name)
+            return True  # an address, not a name: nothing to rebind
+        return False
+
+    def _is_allowed_origin(self, origin: str, host: str) -> bool:
+        origin = origin.rstrip("/").lower()
+        return origin in (f"http://{host.lower()}", f"https://{host.lower()}") or origin in self.allowed_origins
+
+    def trusted(self, address: str) -> bool:
+        """Whether ``address`` is this machine's own (and the per-address limits skip it)."""
+        if not self.trust_loopback:
+            return False
+        with contextlib.suppress(ValueError):
+            return ipaddress.ip_address(address).is_loopback
+        return False
+
+    def opened(self, address: str) -> None:
+        with self._lock:
+            self._open[address] += 1
+
+    def closed(self, address: str) -> None:
+        self._forget_one(self._open, address)
+
+    def _forget_one(self, counts: collections.Counter, address: str) -> None:
+        with self._lock:
+            counts[address] -= 1
+            if counts[address] <= 0:
+                del counts[address]
+
+    def open_connections(self, address: str) -> int:
+        with self._lock:
+            return self._open[address]
+
+    def tcp_opened(self, address: str) -> bool:
+        """Count a new TCP connection from ``address``: False (and not counted) when it holds too many."""
+        if self.trusted(address):
+            return True
+        with self._lock:
+            if self._tcp[address] >= TCP_CONNECTIONS_PER_ADDRESS:
+                self.refused["tcp"] += 1
+                first = self.refused["tcp"] == 1
+            else:
+                self._tcp[address] += 1
+                return True
+        (log.warning if first else log.debug)("refused a TCP connection: %s already has %d", address,
+                                              TCP_CONNECTIONS_PER_ADDRESS)
+        return False
+
+    def tcp_closed(self, address: str) -> None:
+        if not self.trusted(address):
+            self._forget_one(self._tcp, address)
+
+    def tcp_connections(self, address: str) -> int:
+        with self._lock:
+            return self._tcp[address]
+
+    def note_closed(self, address: str, reason: str) -> None:
+        with self._lock:
+            self.closed_for[reason] += 1
+        log.warning("closed a connection from %s: it %s", address, reason)
+
+    # ------------------------------------------------------------------ messages
+
+    def note_passed(self, kind: str) -> None:
+        with self._lock:
+            self.passed[kind] += 1
+
+    def note_dropped(self, kind: str) -> None:
+        with self._lock:
+            self.dropped[kind] += 1
+            first = self.dropped[kind] == 1
+        if first:
+            log.warning("dropped a %s from a browser; more are counted, not logged", kind)
+
+
+def _hostname(host: str) -> str:
+    """The name in a ``Host`` header: ``name:port``, ``[v6 address]:port`` or ``name``."""
+    if host.startswith("["):
+        return host[1 : host.find("]")].lower()
+    return (host.rsplit(":", 1)[0] if host.count(":") == 1 else host).lower()
+
+
+def _address(connection) -> str:
+    remote = connection.remote_address
+    return str(remote[0]) if remote else "?"
+
+
+def address_of(client) -> str:  # noqa: ANN001
+    """The address ``client`` (a ``viser.ClientHandle``) connected from, or "?" once it has gone."""
+    connection = _connection_of(client)
+    return _address(connection) if connection is not None else "?"
+
+
+def budget_of(client) -> str:  # noqa: ANN001
+    """Whose share of the server's slow work ``client``'s is: its address, shared by every tab there,
+    or, for this machine's own tabs (which the gate trusts), each tab's own."""
+    connection = _connection_of(client)
+    if connection is None:
+        return f"gone #{client.client_id}"
+    address = _address(connection)
+    return f"{address} #{client.client_id}" if getattr(connection, "trusted", False) else address
+
+
+class GatedConnection:
+    """A websocket connection as viser sees it, passing only what the gate lets through.
+
+    A reader task takes every message off the socket as it arrives, keeps the newest of
+    each kind (:func:`message_key`) waiting, and :meth:`recv` hands them out oldest
+    first at the connection's rate. Everything else is the connection's own.
+    """
+
+    def __init__(self, connection, gate: Gate) -> None:
+        self._connection = connection
+        self._gate = gate
+        self.trusted = gate.trusted(_address(connection))  #: this machine's: no per-address limits
+        self._waiting: dict[tuple, bytes] = {}
+        self._arrived = asyncio.Event()
+        self._ended: BaseException | None = None
+        self._rate = TokenBucket(MESSAGES_PER_SECOND, MESSAGE_BURST)
+        self._arrivals = TokenBucket(ARRIVALS_PER_SECOND, ARRIVALS_PER_SECOND)
+        self._arrival_bytes = TokenBucket(ARRIVAL_BYTES_PER_SECOND, ARRIVAL_BYTES_PER_SECOND)
+        self._over_rate = TokenBucket(1.0, OVER_RATE_ALLOWANCE)
+        self._reader = asyncio.get_running_loop().create_task(self._read())
+
+    def __getattr__(self, name: str) -> Any:
+        return getattr(self._connection, name)
+
+    async def _read(self) -> None:
+        try:
+            while True:
+                raw = await self._connection.recv()
+                await asyncio.sleep(0)  # queued frames of this socket wait their turn with everyone else's
+                if not (self._arrivals.take() and self._arrival_bytes.take(len(raw))):
+                    self._gate.note_dropped("message over its connection's rate")
+                    if not self._over_rate.take():
+                        self._gate.note_closed(_address(self._connection), "kept sending over its rate")
+                        await self._connection.close(1008, "too many messages")
+                    continue
+                key, kind = classify(raw)
+                if key is None:
+                    self._gate.note_dropped(kind)
+                    continue
+                if key not in self._waiting and len(self._waiting) >= MAX_WAITING:
+                    self._gate.note_dropped("message over the waiting limit")
+                    continue
+                self._waiting[key] = raw  # a newer one for the same widget keeps the older one's place
+                self._arrived.set()
+        except BaseException as error:  # the connection closed (or we were cancelled): recv says so
+            self._ended = error
+            self._arrived.set()
+
+    async def recv(self) -> bytes:
+        while True:
+            if self._waiting:
+                delay = self._rate.wait_time()
+                if delay > 0.0:
+                    await asyncio.sleep(delay)  # newer messages for the same keys replace those waiting meanwhile
+                    continue
+                self._rate.take()
+                key = next(iter(self._waiting))
+                self._gate.note_passed(key[0])
+                return self._waiting.pop(key)
+            if self._ended is not None:
+                raise self._ended
+            self._arrived.clear()
+            await self._arrived.wait()
+
+    def close_reader(self) -> None:
+        self._reader.cancel()
+
+
+_STARTING = threading.Lock()
+
+
+@contextlib.contextmanager
+def gated_serve(gate: Gate) -> Iterator[None]:
+    """While active, a viser server that starts serves through ``gate``.
+
+    viser hands ``websockets.asyncio.server.serve`` its handler, a 50 MB message limit
+    and its HTTP handler; for the moment the server starts (``viser.ViserServer()``
+    returns once it is listening) the call gets the gate's limit, a request check in
+    front of viser's HTTP handler, and a handler that sees the connection through
+    :class:`GatedConnection`. ``tests/test_gate.py`` fails if viser stops calling it so.
+    """
+    _STARTING.acquire()  # one server starting at a time: the patch is the whole process's
+    original = websockets.asyncio.server.serve
+
+    class CountedConnection(websockets.asyncio.server.ServerConnection):
+        """A TCP connection counted against its address from its first byte, handshake or not."""
+
+        def connection_made(self, transport) -> None:  # noqa: ANN001
+            peer = transport.get_extra_info("peername")
+            self._peer = str(peer[0]) if peer else "?"
+            self._counted = gate.tcp_opened(self._peer)
+            super().connection_made(transport)
+            if not self._counted:
+                transport.abort()
+
+        def connection_lost(self, exc) -> None:  # noqa: ANN001
+            if self._counted:
+                gate.tcp_closed(self._peer)
+                self._counted = False
+            super().connection_lost(exc)
+
+    class serve_through_gate(original):  # type: ignore[misc, valid-type]
+        def __init__(self, handler, *args, process_request=None, **kwargs) -> None:  # noqa: ANN001
+            async def gated_handler(connection) -> None:  # noqa: ANN001
+                address = _address(connection)
+                gate.opened(address)
+                gated = GatedConnection(connection, gate)
+                try:
+                    await handler(gated)
+                finally:
+                    gated.close_reader()
+                    gate.closed(address)
+
+            def check_then_serve(connection, request):  # noqa: ANN001
+                refusal = gate.check_request(connection, request)
+                if refusal is not None:
+                    return refusal
+                return process_request(connection, request) if process_request is not None else None
+
+            kwargs["max_size"] = MAX_MESSAGE_BYTES
+            kwargs["open_timeout"] = OPEN_TIMEOUT
+            kwargs["create_connection"] = CountedConnection
+            serve_through_gate.used = True
+            super().__init__(gated_handler, *args, process_request=check_then_serve, **kwargs)
+
+    serve_through_gate.used = False
+    websockets.asyncio.server.serve = serve_through_gate
+    try:
+        yield
+    finally:
+        websockets.asyncio.server.serve = original
+        _STARTING.release()
+        if not serve_through_gate.used:
+            raise RuntimeError("viser did not start its websocket server through websockets.asyncio.server.serve: "
+                               "the gate would not apply (has viser changed?)")

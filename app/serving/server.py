@@ -1,0 +1,418 @@
+"""The viser server: one :class:`ClientSession` per connected browser."""
+
+from __future__ import annotations
+
+import asyncio
+import ctypes
+import gc
+import json
+import logging
+import math
+import os
+import socket
+import threading
+import time
+import warnings
+from pathlib import Path
+
+import viser
+
+from ur10core import Arm, symbolic, symbolic_arms
+
+from ..viser_internals import fast_updates, shared_frames
+from ..features.arm_picker import ARM_CHOICES, CUSTOM, SWITCH_INTERVAL, UR10, ArmPicker, panel_title
+from .classroom import Classroom
+from ..features.course_arms.editor import STARTING_TABLE, parse_table
+from ..features.course_arms.panel import factor_scales
+from ..features.course_arms.desktop_arm import DesktopArmSession
+from ..features.course_arms.session import CourseArmSession
+from ..features.floor import add_floor_grid
+from .gate import Gate, TokenBucket, budget_of, gated_serve
+from ..meshes import load_models
+from .metrics import LATENCY
+from ..features.workspace import CLOUDS
+from .workers import APART, JOINS, Cancelled, DragQueue, PanelRefresher
+from ..session import ClientSession
+from ..style import BRAND_BLUE
+
+log = logging.getLogger(__name__)
+
+# A browser that leaves mid-redraw gets a few late messages before its session hears it has
+# gone; viser warns about each such connection. The session stops drawing as soon as it
+# hears, so nothing accumulates: the warning would only clutter the teacher's console.
+warnings.filterwarnings("ignore", message=r"Queued a \w+ on a closed connection", category=UserWarning)
+
+#: Where the camera starts (and "reset view" returns): the whole arm, a little from above.
+CAMERA_POSITION = (2.1, -1.9, 1.4)
+CAMERA_LOOK_AT = (0.2, 0.0, 0.5)
+CAMERA_FOV_DEGREES = 50.0
+
+
+def lan_addresses() -> list[str]:
+    """This machine's IPv4 addresses other than loopback (what students type), best first."""
+    found: list[str] = []
+    try:  # the interface of the default route; sends nothing
+        with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as probe:
+            probe.connect(("10.255.255.255", 1))
+            found.append(probe.getsockname()[0])
+    except OSError:
+        pass
+    try:
+        for info in socket.getaddrinfo(socket.gethostname(), None, socket.AF_INET):
+            found.append(info[4][0])
+    except OSError:
+        pass
+    return [a for i, a in enumerate(found) if not a.startswith("127.") and a not in found[:i]]
+
+
+#: Addresses whose arm changes are remembered (all forgotten beyond it).
+MAX_SWITCH_BUDGETS = 10_000
+#: Open files the server asks for at start: a connection is one, and 1 024 (a common default) ran out
+#: when one address held a thousand half-open requests.
+OPEN_FILES = 65_536
+
+
+def raise_open_file_limit(wanted: int = OPEN_FILES) -> int:
+    """Raise this process's soft limit on open files towards ``wanted`` (up to the hard limit) where the OS allows.
+
+    Returns the soft limit in force afterwards (0 where there is none to read, as on Windows).
+    """
+    try:
+        import resource
+    except ImportError:  # Windows: no such limit on sockets
+        return 0
+    soft, hard = resource.getrlimit(resource.RLIMIT_NOFILE)
+    target = wanted if hard == resource.RLIM_INFINITY else min(wanted, hard)
+    if soft != resource.RLIM_INFINITY and soft < target:
+        try:
+            resource.setrlimit(resource.RLIMIT_NOFILE, (target, hard))
+            soft = target
+        except (ValueError, OSError):
+            log.info("could not raise the open-file limit from %d", soft)
+    return soft
+
+
+def _resident_bytes() -> int:
+    try:
+        for line in Path("/proc/self/status").read_text().splitlines():
+            if line.startswith("VmRSS:"):
+                return int(line.split()[1]) * 1024
+    except OSError:
+        pass
+    return 0
+
+
+async def _watch_event_loop(stop: threading.Event, period: float = 0.02) -> None:
+    """How late viser's event loop runs a callback it was asked to run ``period`` s from now.
+
+    Everything a browser sends and receives passes through that loop, so its lag adds to
+    every round trip; recorded as the ``event_loop_lag`` latency.
+    """
+    while not stop.is_set():
+        expected = time.perf_counter() + period
+        await asyncio.sleep(period)
+        LATENCY.record("event_loop_lag", max(0.0, time.perf_counter() - expected))
+
+
+def _watch_garbage_collector() -> None:
+    """Record each collection's pause as the ``gc`` latency (it stops every thread)."""
+    started: dict[str, float] = {}
+
+    def callback(phase: str, info: dict) -> None:
+        if phase == "start":
+            started["t"] = time.perf_counter()
+        elif "t" in started:
+            LATENCY.record(f"gc{info['generation']}", time.perf_counter() - started.pop("t"))
+
+    gc.callbacks.append(callback)
+
+
+def _thread_cpu_seconds() -> dict[str, float]:
+    """CPU seconds per kind of thread (the event loop, the workers, viser's pool), from /proc."""
+    ticks = os.sysconf("SC_CLK_TCK")
+    out: dict[str, float] = {}
+    for thread in threading.enumerate():
+        kind = "viser pool" if thread.name.startswith("ThreadPoolExecutor") else thread.name
+        try:
+            fields = Path(f"/proc/self/task/{thread.native_id}/stat").read_text().rsplit(") ", 1)[1].split()
+        except (OSError, IndexError):
+            continue
+        out[kind] = out.get(kind, 0.0) + (int(fields[11]) + int(fields[12])) / ticks
+    return out
+
+
+class Janitor:
+    """Hands the memory of departed clients back to the system, a little after they leave.
+
+    A class leaving at the bell frees thousands of small objects at once; Python keeps
+    the freed memory for reuse and glibc keeps the pages. Dropping the clouds no one shows,
+    a collection and a ``malloc_trim`` a few seconds after the last departure return the
+    server to its baseline instead (one pass however many leave, and never while a drag is
+    being drawn). Large buffers are handed back as soon as they are freed
+    (``ur10teach.__main__``).
+    """
+
+    DELAY = 3.0
+
+    def __init__(self, forget=()) -> None:
+        self._forget = forget  #: what to drop first: caches nobody uses any more
+        self.sweeps = 0  #: how many times it has swept (the memory tests wait for one)
+        self._timer: threading.Timer | None = None
+        self._lock = threading.Lock()
+        try:
+            self._trim = ctypes.CDLL("libc.so.6").malloc_trim
+        except (OSError, AttributeError):  # not glibc: collecting is all we can do
+            self._trim = None
+
+    def soon(self) -> None:
+        with self._lock:
+            if self._timer is not None:
+                self._timer.cancel()
+            self._timer = threading.Timer(self.DELAY, self.sweep)
+            self._timer.daemon = True
+            self._timer.start()
+
+    def sweep(self) -> None:
+        for forget in self._forget:
+            forget()
+        gc.collect()
+        if self._trim is not None:
+            self._trim(0)
+        self.sweeps += 1
+
+
+class TeachingServer:
+    """The app: a viser server giving every browser its own UR10.
+
+    Parameters
+    ----------
+    preset : str
+        ``"course"``, ``"ur10"`` or ``"ur10e"`` (see :meth:`ur10core.Arm.preset`).
+    host, port : str, int
+        Where to listen. viser moves to the next free port when ``port`` is busy:
+        :attr:`port` is the real one. ``port=0`` lets the OS choose (tests).
+    shared : bool
+        Shared demo mode: everyone watches the presenter's arm (:class:`ur10teach.serving.classroom.Classroom`).
+    allowed_origins : iterable of str
+        Web pages besides the app's own that may open its websocket (``--allow-origin``).
+    gate : Gate, optional
+        What the server accepts from browsers (:mod:`ur10teach.serving.gate`); one with
+        ``allowed_origins`` by default.
+    lecture : bool
+        Every browser starts in lecture mode (:mod:`ur10teach.features.lecture`).
+    light : bool
+        The arm and its ghosts shaded for laptops without a graphics driver (``--light``,
+        :class:`ur10teach.meshes.ArmModels`).
+    """
+
+    def __init__(self, preset: str = "course", host: str = "127.0.0.1", port: int = 8080, shared: bool = False,
+                 allowed_origins=(), gate: Gate | None = None, lecture: bool = False, light: bool = False) -> None:
+        self.arm = Arm.preset(preset)
+        self.lecture = lecture
+        self.models = load_models(preset, light)
+        symbolic.load()  # read the cached derivations now rather than in the first student's callback
+        for name in ARM_CHOICES.values():
+            if name not in (None, "custom", "three_dof"):
+                symbolic_arms.load(name)
+                factor_scales(name)  # the gauges' scales: a few hundred ms in all, never in a callback
+        self.host = host
+        label = panel_title(UR10, preset)
+        self.gate = gate or Gate(allowed_origins)
+        raise_open_file_limit()
+        shared_frames.install()
+        fast_updates.share_type_hints()
+        with gated_serve(self.gate):
+            self.server = viser.ViserServer(host=host, port=port, label=label, verbose=False)
+        self.server.gui.configure_theme(show_share_button=False, brand_color=BRAND_BLUE, control_width="large")
+        self.server.initial_camera.position = CAMERA_POSITION
+        self.server.initial_camera.look_at = CAMERA_LOOK_AT
+        self.server.initial_camera.up = (0.0, 0.0, 1.0)
+        self.server.initial_camera.fov = math.radians(CAMERA_FOV_DEGREES)
+        add_floor_grid(self.server.scene)
+        if light:  # shadow maps and image-based lighting cost software WebGL more than the scene itself
+            self.server.scene.configure_default_lights(enabled=True, cast_shadow=False)
+            self.server.scene.configure_environment_map(hdri=None)
+        loop = self.server.get_event_loop()
+        self.refresher = PanelRefresher(loop)
+        self.drags = DragQueue(loop)
+        self._sessions: dict[int, ClientSession | CourseArmSession | DesktopArmSession] = {}
+        self._last_switch: dict[int, float] = {}  # client id → when its arm was last rebuilt
+        #: client id → picker choice → (state, typed table) of each arm the browser has left: going
+        #: back to one finds its pose, target and typed table as they were
+        self._left_arms: dict[int, dict[str, tuple]] = {}
+        self._switches: dict[str, TokenBucket] = {}  # budget (an address) → its arm changes
+        self.clock = time.monotonic  #: the time the arm changes of an address are paced by (a test sets its own)
+        self._sessions_lock = threading.Lock()
+        #: shared demo mode (``--shared``): everyone watches the presenter (``ur10teach.serving.classroom``)
+        self.classroom = Classroom(self) if shared else None
+        self._janitor = Janitor(forget=(CLOUDS.forget_unheld,))
+        self.server.on_client_connect(self._connected)
+        self.server.on_client_disconnect(self._disconnected)
+        self._metrics_stop = threading.Event()
+        # Everything loaded so far (numpy, sympy, viser, the meshes) lives as long as the
+        # server: keep the collector from rescanning it, which paused every client for
+        # ~0.1 s at each full collection under a classroom's load.
+        gc.collect()
+        gc.freeze()
+        metrics_path = os.environ.get("UR10_TEACH_METRICS")
+        if metrics_path:
+            _watch_garbage_collector()
+            asyncio.run_coroutine_threadsafe(_watch_event_loop(self._metrics_stop), self.server.get_event_loop())
+            threading.Thread(target=self._write_metrics, args=(Path(metrics_path),), daemon=True).start()
+
+    @property
+    def port(self) -> int:
+        return self.server.get_port()
+
+    @property
+    def urls(self) -> list[str]:
+        """Where browsers can reach the app."""
+        if self.host in ("0.0.0.0", ""):
+            return [f"http://127.0.0.1:{self.port}"] + [f"http://{a}:{self.port}" for a in lan_addresses()]
+        return [f"http://{self.host}:{self.port}"]
+
+    @property
+    def sessions(self) -> dict[int, ClientSession]:
+        """Client id → the session driving an arm for it (independent mode: every client)."""
+        if self.classroom is not None:
+            return self.classroom.sessions
+        with self._sessions_lock:
+            return dict(self._sessions)
+
+    def _connected(self, client: viser.ClientHandle) -> None:
+        try:
+            JOINS.run(client, lambda: self._build_first(client),
+                      cancelled=lambda: client.client_id not in self.server.get_clients())
+        except Cancelled:  # it left before its turn
+            return
+        except Exception:
+            log.exception("could not set up client %s", client.client_id)
+            try:
+                client.add_notification("Could not start", "Reload the page to try again.", color="red")
+            except Exception:
+                pass
+            return
+        # viser runs connect and disconnect callbacks on its thread pool side by side: a
+        # browser that left while its arm was being built was not here to be freed yet
+        if client.client_id not in self.server.get_clients():
+            self._disconnected(client)
+
+    def _build_first(self, client: viser.ClientHandle) -> None:
+        if self.classroom is not None:
+            self.classroom.connect(client)
+        else:
+            self._start_session(client, UR10, self.lecture)
+
+    def _start_session(self, client: viser.ClientHandle, choice: str, lecture: bool, typed=None) -> None:
+        """Build the arm ``choice`` (an ``ARM_CHOICES`` label) in this browser, with the picker above it.
+
+        ``typed``: (arm, text, convention) of a table typed in the DH editor.
+        """
+        name = ARM_CHOICES[choice]
+        state = None
+        if typed is None:  # not a newly typed table: the arm as this browser left it, if it has been here
+            with self._sessions_lock:
+                state, typed = self._left_arms.get(client.client_id, {}).get(choice, (None, None))
+        if name is None:
+            session = ClientSession(client, self.arm, self.models, self.refresher, self.drags, lecture=lecture, state=state)
+        elif name == "custom":
+            typed = typed or (parse_table(STARTING_TABLE, "standard"), STARTING_TABLE, "standard")
+            arm, text, convention = typed
+            session = CourseArmSession(
+                client, arm, self.refresher, self.drags, lecture=lecture, text=text, convention=convention, state=state,
+                rebuild=lambda new, new_text, new_convention: self._switch(client, CUSTOM, (new, new_text, new_convention)))
+        elif name == "three_dof":
+            session = DesktopArmSession(client, state.arm if state else Arm.preset(name), self.refresher, lecture=lecture,
+                                        state=state)
+        else:
+            session = CourseArmSession(client, state.arm if state else Arm.preset(name), self.refresher, self.drags,
+                                       lecture=lecture, state=state)
+        session.choice, session.typed = choice, typed
+        client.gui.set_panel_label(panel_title(choice, self.arm.name))
+        with self._sessions_lock:
+            if client.client_id in self._last_switch:  # a change of arm: the interval starts before its picker shows
+                self._last_switch[client.client_id] = time.monotonic()
+        session.arm_picker = ArmPicker(client.gui, choice, lambda label: self._switch(client, label), session.guard)
+        with self._sessions_lock:
+            self._sessions[client.client_id] = session
+
+    def _switch(self, client: viser.ClientHandle, choice: str, typed=None) -> None:
+        """Take this browser's arm out (panel and scene) and build ``choice`` in its place.
+
+        Building an arm costs tens of milliseconds: one browser may start a build only
+        :data:`SWITCH_INTERVAL` seconds after its last one was ready (timed just before its
+        picker is shown, so a browser that waits that long after seeing it is never refused),
+        and all the tabs of one address together as often as one (:func:`ur10teach.serving.gate.budget_of`),
+        so that flicking the picker, in one tab or eight, cannot load the server.
+        """
+        budget = budget_of(client)
+        with self._sessions_lock:
+            if len(self._switches) > MAX_SWITCH_BUDGETS:
+                self._switches.clear()
+            switches = self._switches.setdefault(budget, TokenBucket(1.0 / SWITCH_INTERVAL, 2, clock=lambda: self.clock()))
+            # each tab as often as its picker allows; all of one address's tabs together no more than one would
+            if not self.can_switch(client.client_id) or not switches.take():
+                raise ValueError(f"one change of arm every {SWITCH_INTERVAL:g} s, please: try again in a moment")
+            self._last_switch[client.client_id] = math.inf  # refused while this one is being built
+            old = self._sessions.pop(client.client_id, None)
+            if old is not None:
+                self._left_arms.setdefault(client.client_id, {})[old.choice] = (old.state, old.typed)
+        lecture = self.lecture
+        if old is not None:
+            if old.camera is not None:
+                lecture = old.camera.lecture.on
+            old.close()
+        try:
+            client.gui.reset()
+            client.scene.reset()
+            self._start_session(client, choice, lecture, typed)
+        finally:
+            with self._sessions_lock:
+                if self._last_switch.get(client.client_id) == math.inf:  # the build failed before its picker
+                    self._last_switch[client.client_id] = time.monotonic()
+        if client.client_id not in self.server.get_clients():  # it left meanwhile
+            self._disconnected(client)
+
+    def can_switch(self, client_id: int) -> bool:
+        """Whether this browser may change its arm now (:data:`SWITCH_INTERVAL` after its last change was ready)."""
+        return time.monotonic() - self._last_switch.get(client_id, -math.inf) >= SWITCH_INTERVAL
+
+    def _disconnected(self, client: viser.ClientHandle) -> None:
+        if self.classroom is not None:
+            self.classroom.disconnect(client)
+        else:
+            with self._sessions_lock:
+                session = self._sessions.pop(client.client_id, None)
+                self._last_switch.pop(client.client_id, None)
+                self._left_arms.pop(client.client_id, None)
+            if session is not None:
+                session.close()
+        self._janitor.soon()
+
+    def _write_metrics(self, path: Path) -> None:
+        """Once a second: clients, handler latencies, CPU and memory of this process (for benchmarks)."""
+        while not self._metrics_stop.wait(1.0):
+            try:
+                report = {
+                    "time": time.time(),
+                    "clients": len(self.server.get_clients()),
+                    "sessions": len(self.sessions),
+                    "janitor_sweeps": self._janitor.sweeps,
+                    "latency": LATENCY.summary(),
+                    "cpu_seconds": sum(os.times()[:2]),
+                    "rss_bytes": _resident_bytes(),
+                    "threads": threading.active_count(),
+                    "thread_cpu_seconds": _thread_cpu_seconds(),
+                }
+                partial = path.with_suffix(".tmp")
+                partial.write_text(json.dumps(report))
+                partial.replace(path)  # readers never see half a file
+            except Exception:  # one failed report must not end the reports (a benchmark waits on them)
+                log.exception("metrics report failed")
+
+    def stop(self) -> None:
+        self._metrics_stop.set()
+        self.refresher.stop()
+        self.drags.stop()
+        APART.stop()
+        self.server.stop()

@@ -1,0 +1,74 @@
+"""Every viser internal the app relies on is still where and what it was (``ur10teach.viser_internals``).
+
+viser is pinned exactly; these fail on an upgrade that moves or reshapes one of them, before
+any classroom sees a wrong drawing or an unguarded socket. What each does with them is tested
+beside it: tests/test_fast_updates.py, tests/test_shared_frames.py, tests/test_gate.py.
+"""
+
+from __future__ import annotations
+
+import functools
+import importlib.metadata
+import inspect
+import pathlib
+import re
+
+import numpy as np
+import viser
+from viser import _assignable_props_api
+from viser.infra import _infra
+from viser.infra._async_message_buffer import AsyncMessageBuffer
+
+from ur10teach import viser_internals
+from ur10teach.serving.gate import ALLOWED
+
+ROOT = pathlib.Path(__file__).resolve().parent.parent
+
+
+def test_viser_is_the_version_pinned():
+    pinned = re.search(r'"viser==([0-9.]+)"', (ROOT / "pyproject.toml").read_text()).group(1)
+    assert importlib.metadata.version("viser") == pinned
+
+
+def test_nothing_else_in_the_app_reaches_into_viser():
+    """Only ``app/viser_internals/`` imports viser's private modules or reads a handle's private parts."""
+    private = re.compile(r"from viser(\.infra)? import _|viser\.infra\._|\._impl\b|\._impl_aux\b|\._viser_server\b|_queue_scene_message")
+    offenders = [str(path.relative_to(ROOT)) for path in (ROOT / "app").rglob("*.py")
+                 if "viser_internals" not in path.parts and private.search(path.read_text())]
+    assert not offenders, offenders
+
+
+def test_the_gates_message_classes_are_vipers():
+    for kind, fields in ALLOWED.items():
+        cls = getattr(viser_internals.messages, kind)
+        assert set(fields) <= set(inspect.signature(cls).parameters), kind
+
+
+def test_a_client_connection_is_found_where_it_was():
+    server = viser.ViserServer(port=0, verbose=False)
+    try:
+        assert isinstance(server._websock_server._live_connections, dict)
+    finally:
+        server.stop()
+
+
+def test_the_fast_updates_internals_are_there():
+    server = viser.ViserServer(port=0, verbose=False)
+    try:
+        node = server.scene.add_frame("/probe")
+        impl = node._impl
+        assert callable(impl.api._queue_scene_message) and impl.name == "/probe"
+        assert np.asarray(impl.wxyz).shape == (4,) and np.asarray(impl.position).shape == (3,)
+        assert hasattr(impl.props, "scale")
+        gizmo = server.scene.add_transform_controls("/probe_gizmo")
+        assert hasattr(gizmo._impl_aux, "sync_cb")
+        # share_type_hints puts its own cached property in the place of viser's
+        assert isinstance(inspect.getattr_static(_assignable_props_api.AssignablePropsBase, "_prop_hints"), functools.cached_property)
+    finally:
+        server.stop()
+
+
+def test_the_message_producer_is_what_shared_frames_replaces():
+    parameters = list(inspect.signature(_infra._message_producer).parameters)
+    assert parameters[:3] == ["websocket", "buffer", "client_id"]
+    assert callable(_infra._append_aligned_buffers) and hasattr(AsyncMessageBuffer, "window_generator")
