@@ -3,7 +3,8 @@
 Writes docs/images/eight_ghosts.png (the home pose, every branch numbered),
 docs/images/lecture_mode.png (``--lecture``: big type, the panel beside the arm),
 docs/images/branch_count_map.png (the map in the arm's plane, the ghosts hidden) and
-docs/images/kr210_dh_frames.png (the KR210 with its DH frames and row 3 drawn on it).
+docs/images/kr210_dh_frames.png (the KR210 with its DH frames and row 3 drawn on it) and
+docs/images/desktop_arm_branches.png (the desktop arm on its IK target, its other branches as ghosts).
 ``python scripts/screenshots.py kr210_dh_frames.png`` takes only the ones named.
 """
 
@@ -43,6 +44,23 @@ def show_the_kr210(page, session) -> None:
     course.dh_table.highlight.value = "row 3"
 
 
+def show_the_desktop_arm(page, session) -> None:
+    import numpy as np
+
+    from ur10core.orientation import transform_from_quaternion
+    from ur10teach.features.course_arms.session import CourseArmSession
+    from ur10dev.browser import choose
+
+    choose(page, session.arm_picker.dropdown, "The course's 3-DOF desktop arm")
+    server = SERVER["now"]
+    wait_for(lambda: any(isinstance(s, CourseArmSession) for s in server.sessions.values()), what="the desktop arm")
+    desktop = next(iter(server.sessions.values()))
+    page.wait_for_selector(dom_id(desktop.joints.sliders[0]), timeout=30_000)
+    goal = desktop.arm.fk(np.radians([25.0, -35.0, 60.0]))  # where all four branches reach
+    desktop.apply(lambda state: state.move_target(transform_from_quaternion(np.array([1.0, 0, 0, 0]), goal[:3, 3])))
+    wait_for(lambda: int(desktop.state.last.solution.valid.sum()) == 4, what="its four branches")
+
+
 #: the server of the screenshot being taken (a ``prepare`` may need it)
 SERVER: dict = {}
 
@@ -75,6 +93,7 @@ SHOTS = {
     "lecture_mode.png": dict(lecture=True),
     "branch_count_map.png": dict(lecture=False, prepare=show_the_map),
     "kr210_dh_frames.png": dict(lecture=False, prepare=show_the_kr210),
+    "desktop_arm_branches.png": dict(lecture=False, prepare=show_the_desktop_arm),
 }
 
 if __name__ == "__main__":

@@ -112,7 +112,8 @@ def test_a_prismatic_joint_is_driven_in_millimetres(app):
         await client.set_gui("d3 (mm)", 300.0)
         await until(lambda: math.isclose(session.state.last.q[2], 0.3, abs_tol=1e-9), what="d3 = 300 mm")
         await client.set_gui("d3 (mm)", 5000.0)  # beyond the stroke: refused, with a message
-        await until(lambda: any("limits" in body for _, body in client.received.notifications), what="the refusal")
+        await until(lambda: any("from 0 mm to 762 mm, got 5000.0 mm" in body for _, body in client.received.notifications),
+                    what="the refusal, with the stroke")
         assert math.isclose(session.state.last.q[2], 0.3, abs_tol=1e-9)
         await until(lambda: client.gui["d3 (mm)"]["value"] == 300.0, what="the slider put back")
         await client.close()
@@ -524,11 +525,9 @@ def test_a_course_arm_moves_from_a_remembered_pose_along_both_paths(app, label):
     """Issue 29: the Motion folder was the UR10's alone. On the course's arms and its desktop arm: a
     straight tool line, the rates of a sliding joint in mm/s, no speed limits an arm does not have,
     and no gravity drop without link masses."""
-    from ur10teach.features.course_arms.desktop_arm import DesktopArmSession
-
     async def scenario():
         client = await ViserClient(url(app)).connect()
-        session = await pick(app, client, label, DesktopArmSession if label == DESKTOP else CourseArmSession)
+        session = await pick(app, client, label, CourseArmSession)
         motion = session.motion
         assert motion.release.disabled and "no link masses" in motion.gravity_text.content.lower()
         start = session.state.last.q.copy()
@@ -574,6 +573,32 @@ def test_a_course_arm_has_its_branch_count_map_and_a_typed_table_says_why_not(ap
         assert str(slots) in legend_text(slots)
         typed = await pick(app, client, CUSTOM, CourseArmSession)
         assert typed.reach_map.slots == 0 and typed.reach_map.enabled.disabled
+        await client.close()
+
+    asyncio.run(scenario())
+
+
+#: Each teaching feature (issue 29) and the folder it has in an arm's panel (the UR10's own titles second).
+FEATURE_FOLDERS = {
+    "joints": ("Joints", "Joints (°)"), "IK target and its branches": ("IK branches", "IK target: all 8 branches"),
+    "singularities": ("Singularities",), "workspace": ("Workspace",), "reach map": ("Reachable with this orientation",),
+    "velocities": ("Velocities",), "ellipsoids": ("Manipulability ellipsoids",), "forces and gravity": ("Forces and gravity",),
+    "motion": ("Motion",), "DH table": ("DH table", "DH table (course)"),
+}
+
+
+def test_every_arm_in_the_picker_offers_every_feature(app):
+    """Issue 29: 65 of 81 arm × feature cells were there. Each arm's panel has a folder for each feature
+    (saying why, where its maths does not apply); every arm but the UR10 walks through its DH frames."""
+    async def scenario():
+        client = await ViserClient(url(app)).connect()
+        for label, name in ARM_CHOICES.items():
+            session = await pick(app, client, label, ClientSession if name is None else CourseArmSession)
+            folders = {k for k, v in client.gui.items() if v["type"] == "GuiFolderMessage"}
+            missing = [feature for feature, titles in FEATURE_FOLDERS.items() if not folders & set(titles)]
+            assert not missing, (label, missing)
+            assert name is None or "DH walkthrough" in folders, label
+            assert session.built
         await client.close()
 
     asyncio.run(scenario())

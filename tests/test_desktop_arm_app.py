@@ -9,26 +9,27 @@ import numpy as np
 import pytest
 
 from ur10teach.features.arm_picker import DESKTOP, UR10
-from ur10teach.features.course_arms.desktop_arm import DesktopArmSession
+from ur10teach.features.course_arms.desktop_arm import COURSE_TO_WORLD, SHOULDER_HEIGHT, to_world, world_placement
 from ur10teach.features.course_arms.desktop_lessons import factors_markdown
-from ur10teach.features.course_arms.desktop_state import COURSE_TO_WORLD, SHOULDER_HEIGHT, DesktopArmState
+from ur10teach.features.course_arms.session import CourseArmSession
+from ur10teach.features.course_arms.state import CourseArmState
 from ur10teach.session import ClientSession
 from ur10core import Arm
 from ur10core.three_dof import FOREARM, UPPER_ARM
 
 from .server_support import until, url
 from .test_course_arms_app import pick
-from ur10dev.viser_client import ViserClient
+from ur10dev.viser_client import ViserClient, wxyz_of
 
 
 def test_the_readout_names_each_factor_and_flags_the_one_near_zero():
     arm = Arm.preset("three_dof")
-    state = DesktopArmState(arm)
+    state = CourseArmState(arm)
     level = factors_markdown(arm, state.set_joints(np.radians([0.0, -90.0, 0.0])))
     assert "Tool p = (1280, 1350, 0) mm" in level and "singular" not in level
     folded = factors_markdown(arm, state.set_joints(np.radians([0.0, 30.0, 30.0])))  # the forearm back along the upper arm
     assert "upper arm and forearm in one line" in folded and folded.count("(singular)") == 1
-    with pytest.raises(ValueError, match="θ3 forearm: from 0° to 180°, got 200.0°"):
+    with pytest.raises(ValueError, match="θ3 forearm: from 0° to 180°, got 200.0°"):  # every arm's state words it so
         state.set_joints(np.radians([0.0, 0.0, 200.0]))
 
 
@@ -45,48 +46,54 @@ def test_the_world_stands_the_courses_y_up():
 def test_the_desktop_arm_is_picked_driven_played_and_searched(app):
     async def scenario():
         client = await ViserClient(url(app)).connect()
-        session = await pick(app, client, DESKTOP, DesktopArmSession)
-        await until(lambda: "/desktop_arm/links" in client.received.nodes and "θ2 upper arm (°)" in client.gui,
+        session = await pick(app, client, DESKTOP, CourseArmSession)
+        frame = session.scene.root
+        await until(lambda: f"{frame}/links" in client.received.nodes and "θ2 upper arm (°)" in client.gui,
                     what="the desktop arm")
         # sliders: upper arm straight up, forearm level → the tool is l1 out and l5 up (the course's frame)
         await client.set_gui("θ2 upper arm (°)", -90.0)
         await client.set_gui("θ3 forearm (°)", 0.0)
         await until(lambda: np.allclose(session.state.last.q, np.radians([0.0, -90.0, 0.0])), what="the sliders")
-        np.testing.assert_allclose(session.state.last.tool[:3, 3], (FOREARM, UPPER_ARM, 0.0), atol=1e-12)
-        np.testing.assert_allclose(session.state.last.points[3], (FOREARM, 0.0, SHOULDER_HEIGHT + UPPER_ARM), atol=1e-12)
+        np.testing.assert_allclose(session.state.last.flange[:3, 3], (FOREARM, UPPER_ARM, 0.0), atol=1e-12)
+        np.testing.assert_allclose(to_world(session.state.last.flange[:3, 3]), (FOREARM, 0.0, SHOULDER_HEIGHT + UPPER_ARM),
+                                   atol=1e-12)
+        # its base frame stands in the world y up, and the IK target hangs in it (a position-only gizmo)
+        np.testing.assert_allclose(world_placement()[:3, :3] @ (0.0, 1.0, 0.0), (0.0, 0.0, 1.0))
+        await until(lambda: f"{frame}/target" in client.received.nodes, what="the IK target in the course's frame")
         await client.set_gui("θ3 forearm (°)", 200.0)  # beyond its range: refused, with the range
         await until(lambda: any("from 0° to 180°" in body for _, body in client.received.notifications), what="the refusal")
         assert session.state.last.q[2] == 0.0
 
         # the course's path: while it plays the arm is on it (θ1 = θ2, θ3 = 3π/4 + ¾ θ1) and the arrows show
         await client.set_gui("Play the course's path", True)
-        await until(lambda: np.any(session.state.last.rates) and abs(session.state.last.q[0]) > 0.05, what="the path playing")
+        await until(lambda: session.state.last.rates is not None and abs(session.state.last.q[0]) > 0.05, what="the path playing")
         q = session.state.last.q
         assert q[0] == pytest.approx(q[1]) and q[2] == pytest.approx(3 * math.pi / 4 + 0.75 * q[0])
-        await until(lambda: client.received.visible.get("/desktop_arm/linear") is True, what="the velocity arrow")
+        await until(lambda: client.received.visible.get(f"{frame}/linear") is True, what="the velocity arrow")
         await client.set_gui("Stop", True)
-        await until(lambda: not np.any(session.state.last.rates), what="the path stopped")
-        await until(lambda: client.received.visible.get("/desktop_arm/linear") is False, what="the arrow hidden")
+        await until(lambda: session.state.last.rates is None, what="the path stopped")
+        await until(lambda: client.received.visible.get(f"{frame}/linear") is False, what="the arrow hidden")
 
-        # the statics search: 10 N down, the worst pose has both links level, and the map is drawn
+        # the statics exercise: 10 N down (its y), the worst pose has both links level, and the map is drawn
         await client.set_gui("Force at the tool (N)", 10.0)
+        assert session.statics.direction.value == "down (−y)"
         await client.set_gui("Find the pose that needs the largest ‖τ‖", True)
-        await until(lambda: "/desktop_arm/torque_map" in client.received.nodes, what="the torque map")
+        await until(lambda: f"{frame}/torque_map" in client.received.nodes, what="the torque map")
         await until(lambda: abs(math.cos(session.state.last.q[1])) > 0.999, what="the arm at the worst pose")
         worst = session.state.last.q
         assert abs(math.cos(worst[2])) == pytest.approx(1.0)
         torques = session.arm.static_torques(worst, (0.0, -10.0, 0.0))
         assert np.linalg.norm(torques) == pytest.approx(10.0 * math.hypot(UPPER_ARM, FOREARM), rel=1e-9)
-        await until(lambda: "F √(l5² + l1²) = 18.60 N·m" in session.forces.result.content, what="the course's closed form")
+        await until(lambda: "F √(l5² + l1²) = 18.60 N·m" in session.lessons[2].result.content, what="the course's closed form")
         # sideways the closed form does not hold, and the result does not claim it
         await client.set_gui("Force direction", "+x")
         await client.set_gui("Find the pose that needs the largest ‖τ‖", True)
-        await until(lambda: "Largest ‖τ‖" in session.forces.result.content and "√" not in session.forces.result.content,
+        await until(lambda: "Largest ‖τ‖" in session.lessons[2].result.content and "√" not in session.lessons[2].result.content,
                     what="the sideways search")
 
         back = await pick(app, client, UR10, ClientSession)
         assert session.closed and not back.closed
-        assert "/desktop_arm/links" not in client.received.nodes
+        assert f"{frame}/links" not in client.received.nodes
         await client.close()
 
     asyncio.run(scenario())
@@ -99,13 +106,12 @@ def test_the_desktop_arm_has_its_branch_count_map_standing_the_right_way_up(app)
 
     async def scenario():
         client = await ViserClient(url(app)).connect()
-        session = await pick(app, client, DESKTOP, DesktopArmSession)
+        session = await pick(app, client, DESKTOP, CourseArmSession)
         view = session.reach_map
         assert view.slots == 4
         await client.set_gui("Show branch-count map", True)
         await until(lambda: view.image is not None and view.shown_key is not None, what="the map")
-        tool = session.state.last.tool
-        expected = branch_count_map(session.arm, tool, "vertical", COURSE_RESOLUTION)
+        expected = branch_count_map(session.arm, session.state.last.target, "vertical", COURSE_RESOLUTION)
         np.testing.assert_array_equal(view.image.image, map_image(expected.counts, 4))
         # the vertical map stands upright in the scene: its image's y axis (v, the arm's y) is the world's z
         world = np.eye(4)
@@ -114,6 +120,34 @@ def test_the_desktop_arm_has_its_branch_count_map_standing_the_right_way_up(app)
         np.testing.assert_allclose(view.image.position, position, atol=1e-6)
         np.testing.assert_allclose(np.abs(view.image.wxyz @ wxyz), 1.0, atol=1e-6)
         np.testing.assert_allclose(COURSE_TO_WORLD @ expected.v, [0.0, 0.0, 1.0], atol=1e-12)
+        await client.close()
+
+    asyncio.run(scenario())
+
+
+def test_the_desktop_arm_follows_its_ik_target_with_its_other_branches_as_ghosts(app):
+    """Issue 29: the desktop arm had sliders only. Its position IK (four branches) now drives it from a
+    gizmo in the course's frame, the arm on the nearest branch, the others drawn as numbered ghosts."""
+    async def scenario():
+        client = await ViserClient(url(app)).connect()
+        session = await pick(app, client, DESKTOP, CourseArmSession)
+        arm, frame = session.arm, session.scene.root
+        goal_q = np.radians([15.0, -20.0, 70.0])
+        goal = arm.fk(goal_q)
+        await client.drag_target(goal[:3, 3], wxyz_of(goal), "start", name=f"{frame}/target")
+        await client.drag_target(goal[:3, 3], wxyz_of(goal), "end", name=f"{frame}/target")
+        await until(lambda: np.allclose(session.state.last.flange[:3, 3], goal[:3, 3], atol=1e-9), what="the arm at the target")
+        snapshot = session.state.last
+        assert snapshot.solution.valid.sum() >= 2 and snapshot.chosen >= 0
+        others = [k for k in np.flatnonzero(snapshot.solution.valid) if k != snapshot.chosen]
+        await until(lambda: all(client.received.visible.get(f"{frame}/ghosts/slot{k + 1}") is True for k in others),
+                    what="the other branches as ghosts")
+        # out of reach: the arm stays, and says why in the branch table
+        far = goal.copy()
+        far[:3, 3] = (4.0, 0.0, 0.0)
+        await client.drag_target(far[:3, 3], wxyz_of(far), "end", name=f"{frame}/target")
+        await until(lambda: "Out of reach" in session.branches.table.content, what="the reason")
+        np.testing.assert_allclose(session.state.last.flange[:3, 3], goal[:3, 3], atol=1e-9)
         await client.close()
 
     asyncio.run(scenario())

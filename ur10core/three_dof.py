@@ -63,6 +63,11 @@ class DesktopArm:
 
     task = "position"
     method = "analytic"
+    #: det J_v = −l1 l5 · (l1 c3 − l5 c2) · sin(θ2 − θ3): each factor of :meth:`singularity_factors` as
+    #: (name, expression, what makes it zero), as ``ur10core.symbolic_arms`` words the other arms'.
+    factor_words = (("reach", "l1 c3 − l5 c2", "the tool is on the base's vertical axis"),
+                    ("fold", "sin(θ2 − θ3)", "the upper arm and the forearm are in one line, stretched or folded"))
+    det_constant = "−l1 l5"
     #: Its vertical: the course's base frame has y up (every other arm of the core: z).
     up = (0.0, 1.0, 0.0)
 

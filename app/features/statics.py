@@ -10,6 +10,7 @@ the arm.
 
 from __future__ import annotations
 
+import math
 import threading
 from typing import TYPE_CHECKING
 
@@ -32,10 +33,21 @@ if TYPE_CHECKING:
     from ..session import ClientSession
 
 DRAGGED = "drag the handle"
-#: Where the force at the tool points (base frame); None: along the tool's own z axis;
-#: DRAGGED: where the student dragged the handle, from the tool.
-DIRECTIONS = {"down (−z)": (0.0, 0.0, -1.0), "up (+z)": (0.0, 0.0, 1.0), "+x": (1.0, 0.0, 0.0), "−x": (-1.0, 0.0, 0.0),
-              "+y": (0.0, 1.0, 0.0), "−y": (0.0, -1.0, 0.0), "along the tool's z": None, DRAGGED: DRAGGED}
+
+
+def directions_for(arm) -> dict[str, tuple[float, float, float] | str | None]:
+    """Where the force at the tool can point (base frame): down and up along the arm's vertical (z, or the
+    desktop arm's y), the other axes both ways; None: along the tool's own z axis; DRAGGED: where the
+    student dragged the handle, from the tool."""
+    up = int(np.argmax(np.abs(arm.up)))
+    out: dict[str, tuple[float, float, float] | str | None] = {}
+    for axis in (up, *(k for k in range(3) if k != up)):
+        name, unit = "xyz"[axis], np.eye(3)[axis]
+        out[f"down (−{name})" if axis == up else f"−{name}"] = tuple(-unit)
+        out[f"up (+{name})" if axis == up else f"+{name}"] = tuple(unit)
+    return {**out, "along the tool's z": None, DRAGGED: DRAGGED}
+
+
 #: How far from the tool the direction handle sits (m, for an arm 1 m across), and the gizmo's size there.
 HANDLE_DISTANCE, HANDLE_SCALE = 0.35, 0.12
 MAX_FORCE_N = 200.0
@@ -45,9 +57,10 @@ FORCE_COLOR = (0, 114, 178)
 TORQUE_MAP_POINTS = 20_000
 
 
-def force_vector(direction: str, newtons: float, flange: np.ndarray, dragged=(0.0, 0.0, -1.0)) -> np.ndarray:
-    """(3,) the force in the base frame, N; ``dragged`` (3,) is the unit direction the handle was dragged to."""
-    unit = DIRECTIONS[direction]
+def force_vector(direction: str, newtons: float, flange: np.ndarray, dragged, directions: dict) -> np.ndarray:
+    """(3,) the force in the base frame, N, pointing as ``directions[direction]`` says (:func:`directions_for`);
+    ``dragged`` (3,) is the unit direction the handle was dragged to."""
+    unit = directions[direction]
     if unit == DRAGGED:
         unit = dragged
     return newtons * (flange[:3, 2] if unit is None else np.array(unit))
@@ -103,7 +116,9 @@ class StaticsView(View):
                              + gravity_words(arm))
             self.enabled = gui.add_checkbox("Show the torques", False)
             self.newtons = gui.add_slider("Force at the tool (N)", min=0.0, max=MAX_FORCE_N, step=5.0, initial_value=50.0)
-            self.direction = gui.add_dropdown("Force direction", tuple(DIRECTIONS), initial_value="down (−z)")
+            self._directions = directions_for(arm)
+            self.direction = gui.add_dropdown("Force direction", tuple(self._directions),
+                                              initial_value=next(iter(self._directions)))
             self.payload = gui.add_slider("Payload (kg)", min=0.0, max=payload_kg or 1.0, step=0.5, initial_value=0.0,
                                           visible=payload_kg is not None)
             self.bars = gui.add_html("", visible=False)
@@ -121,7 +136,7 @@ class StaticsView(View):
         self.handle = session.client.scene.add_transform_controls(
             f"{root}/force_handle", scale=HANDLE_SCALE * size, disable_rotations=True, depth_test=False, visible=False)
         stop_echo(self.handle)
-        self.dragged = np.array([0.0, 0.0, -1.0])  #: the unit direction the handle was last dragged to (base frame)
+        self.dragged = -np.asarray(arm.up, dtype=float)  #: the unit direction the handle was last dragged to (base frame)
         self._holding = False
         self.handle.on_update(session.guard(self._handle_moved))
         self._scene = scene
@@ -151,7 +166,7 @@ class StaticsView(View):
     def loads(self, snapshot: Snapshot) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """(force (3,), τ of the force (n,), τ of gravity and payload (n,)) at this snapshot, from the widgets."""
         arm = self._session.arm
-        force = force_vector(chosen(self.direction, "force direction"), float(self.newtons.value), snapshot.flange, self.dragged)
+        force = self._force(chosen(self.direction, "force direction"), snapshot)
         gravity = np.zeros(arm.n_joints)
         if arm.name in MASSES:  # otherwise (the UR10e, the course's other arms): the force's torques alone
             payload = float(self.payload.value)
@@ -160,6 +175,21 @@ class StaticsView(View):
                 raise ValueError(f"payload: from 0 to {rated:g} kg, got {payload:g}")
             gravity = arm.gravity_torques(snapshot.q, payload)
         return force, arm.static_torques(snapshot.q, force), gravity
+
+    def _force(self, direction: str, snapshot, strict: bool = True) -> np.ndarray:
+        """The force; a size out of range is refused (``strict``) or, while drawing the arm, held to the range."""
+        newtons = float(self.newtons.value)
+        if strict and not 0.0 <= newtons <= MAX_FORCE_N:
+            raise ValueError(f"force: from 0 to {MAX_FORCE_N:g} N, got {newtons:g}")
+        newtons = min(max(newtons, 0.0), MAX_FORCE_N) if math.isfinite(newtons) else 0.0
+        return force_vector(direction, newtons, snapshot.flange, self.dragged, self._directions)
+
+    def fixed_force(self) -> np.ndarray:
+        """(3,) the force set in the folder, N, base frame: for a map or a search over poses, so fixed in space."""
+        direction = chosen(self.direction, "force direction")
+        if self._directions[direction] is None:
+            raise ValueError("a force fixed in the base frame is needed: pick a direction other than the tool's z")
+        return self._force(direction, self._session.state.last)
 
     def render(self, snapshot: Snapshot) -> None:
         direction = chosen(self.direction, "force direction")
@@ -172,7 +202,7 @@ class StaticsView(View):
             self.handle.visible = handled
         if shown:
             newtons = float(self.newtons.value)
-            force = force_vector(direction, newtons, snapshot.flange, self.dragged)
+            force = self._force(direction, snapshot, strict=False)
             if self._drawn_force is None or not np.array_equal(force, self._drawn_force):
                 end = self._metres_per_n * force
                 self.arrow.points = np.array([[np.zeros(3), end]])  # the way the tool pushes
@@ -197,11 +227,7 @@ class StaticsView(View):
         session = self._session
         shown = None
         if self.mapped.value and not session.closed:
-            snapshot = session.state.last
-            direction = chosen(self.direction, "force direction")
-            if DIRECTIONS[direction] is None:
-                raise ValueError("the map needs a force fixed in the base frame: pick a direction other than the tool's z")
-            force = force_vector(direction, float(self.newtons.value), snapshot.flange, self.dragged)
+            force = self.fixed_force()
             shown = force, HEAVY.run(session.client, lambda: torque_map(session.arm, force, TORQUE_MAP_POINTS), cancelled=lambda: session.closed)
         with self._map_lock:
             if session.closed:

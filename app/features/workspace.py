@@ -208,6 +208,9 @@ def sections_of(arm: Arm) -> tuple[tuple[str, ...], str]:
     which only the UR family has (docs/kinematics.md §3); a slab cut from any cloud would hold
     a few hundred points.
     """
+    if tuple(arm.up) != (0.0, 0.0, 1.0):
+        return SECTIONS[:1], ("Only the whole cloud for this arm: the sections are cut about a vertical base axis z, "
+                              "and this arm's vertical is its y axis.")
     if hasattr(arm.solver, "sample_horizontal_section"):
         return SECTIONS, ""
     return tuple(s for s in SECTIONS if s != SECTIONS[2]), (

@@ -36,11 +36,9 @@ from ..features.arm_picker import ARM_CHOICES, CLASS_CHOICES, SWITCH_INTERVAL, U
 from ..features.camera import BODY_RADIUS, CameraControls
 from ..features.course_arms import panel as course_panel
 from ..features.course_arms.desktop_arm import EXPLORER_ROOT as DESKTOP_EXPLORER_ROOT
-from ..features.course_arms.desktop_arm import DesktopArmScene, DesktopArmSession
-from ..features.course_arms.desktop_lessons import factors_markdown
-from ..features.course_arms.desktop_state import DesktopArmState
+from ..features.course_arms.desktop_arm import DesktopArmScene
 from ..features.course_arms.scene import EXPLORER_ROOT, CourseArmScene
-from ..features.course_arms.session import CourseArmSession, body_radius, reach
+from ..features.course_arms.session import CourseArmSession, arm_scene, body_radius
 from ..features.course_arms.state import CourseArmState
 from ..feedback import guard
 from .gate import address_of
@@ -165,35 +163,12 @@ class CourseLivePanel(LivePanel):
         self.gauges.content = course_panel.factors_html(arm, snapshot.q)
 
 
-class DesktopLivePanel(LivePanel):
-    """The live panel for the course's 3-DOF desktop arm: the presenter's joints, tool position and det J_v."""
-
-    def __init__(self, gui: viser.GuiApi, state: DesktopArmState, title: str, presenter_here: bool = False) -> None:
-        self._state = state
-        self.presenter_here = presenter_here
-        self.closed = False
-        self.folder = gui.add_folder("Live from the presenter", order=1e9)
-        with self.folder:
-            self.status = gui.add_markdown(self._status())
-            self.arm = gui.add_markdown(f"**{title}**")
-            self.joints = gui.add_markdown(self._joints())
-            self.factors = gui.add_markdown(factors_markdown(state.arm, state.last))
-
-    def _joints(self) -> str:
-        return " · ".join(f"θ{k + 1} {math.degrees(v):.1f}°" for k, v in enumerate(self._state.last.q))
-
-    def render_panel(self) -> None:
-        self.status.content = self._status()
-        self.joints.content = self._joints()
-        self.factors.content = factors_markdown(self._state.arm, self._state.last)
-
-
 @dataclasses.dataclass
 class ClassCourseArm:
     """One of the course's other arms, shown to the class in the server's shared scene."""
 
     arm: Arm
-    state: CourseArmState | DesktopArmState
+    state: CourseArmState
     scene: CourseArmScene | DesktopArmScene
 
 
@@ -203,7 +178,7 @@ class Member:
     def __init__(self, client: viser.ClientHandle) -> None:
         self.client = client
         self.role = VIEWER
-        self.session: "ClientSession | CourseArmSession | DesktopArmSession | None" = None
+        self.session: "ClientSession | CourseArmSession | None" = None
         self.folder: viser.GuiFolderHandle | None = None
         self.picker: ArmPicker | None = None  #: the presenter's: which arm the class sees
         self.camera: CameraControls | None = None
@@ -270,7 +245,7 @@ class Classroom:
         self.app.refresher.request(self.live)
 
     @property
-    def sessions(self) -> dict[int, "ClientSession | CourseArmSession | DesktopArmSession"]:
+    def sessions(self) -> dict[int, "ClientSession | CourseArmSession"]:
         """The sessions of the presenter and the explorers."""
         with self._lock:
             return {cid: m.session for cid, m in self.members.items() if m.session is not None}
@@ -309,7 +284,7 @@ class Classroom:
         self.app.refresher.request(self.live)
         log.info("client %s is presenting", member.client.client_id)
 
-    def _presenter_session(self, member: Member) -> "ClientSession | CourseArmSession | DesktopArmSession":
+    def _presenter_session(self, member: Member) -> "ClientSession | CourseArmSession":
         """The presenter's panel and gizmo, driving the class's arm in the shared scene."""
         from ..session import ClientSession
 
@@ -318,9 +293,6 @@ class Classroom:
             session = ClientSession(member.client, app.arm, app.models, app.refresher, app.drags, state=self.state,
                                     server=app.server, scene_views=self.scene_views, own_camera=False)
             session.follow_lecture_mode(member.camera.lecture)
-        elif isinstance(self.course.state, DesktopArmState):
-            session = DesktopArmSession(member.client, self.course.arm, app.refresher, state=self.course.state,
-                                        scene=self.course.scene, server=app.server, own_camera=False)
         else:
             session = CourseArmSession(member.client, self.course.arm, app.refresher, app.drags, state=self.course.state,
                                        scene=self.course.scene, server=app.server, own_camera=False)
@@ -379,15 +351,10 @@ class Classroom:
                 self.course = None
                 self.scene_views = SceneViews.build(app.server.scene, app.models, self.state.last, target_marker=True)
                 self.live = LivePanel(app.server.gui, self.state, lambda: self.scene_views.overlay.enabled, True)
-            elif name == "three_dof":
-                arm = Arm.preset(name)
-                state = DesktopArmState(arm)
-                self.course = ClassCourseArm(arm, state, DesktopArmScene(app.server.scene, arm, state.last))
-                self.live = DesktopLivePanel(app.server.gui, state, label, True)
             else:
                 arm = Arm.preset(name)
                 state = CourseArmState(arm)
-                self.course = ClassCourseArm(arm, state, CourseArmScene(app.server.scene, arm, state.last, reach(arm)))
+                self.course = ClassCourseArm(arm, state, arm_scene(app.server.scene, arm, state.last))
                 self.live = CourseLivePanel(app.server.gui, state, label, True)
             self.choice = label
             app.server.gui.set_panel_label(panel_title(label, app.arm.name))
@@ -429,16 +396,11 @@ class Classroom:
                     state=ArmState(app.arm, self.state.q, body_points=app.models.outline), own_camera=False,
                 )
                 member.session.follow_lecture_mode(member.camera.lecture)
-            elif isinstance(self.course.state, DesktopArmState):
-                arm = self.course.arm
-                member.session = DesktopArmSession(member.client, arm, app.refresher,
-                                                   state=DesktopArmState(arm, self.course.state.last.q), own_camera=False,
-                                                   root=DESKTOP_EXPLORER_ROOT)
             else:
                 arm = self.course.arm
                 member.session = CourseArmSession(member.client, arm, app.refresher, app.drags,
                                                   state=CourseArmState(arm, self.course.state.last.q), own_camera=False,
-                                                  root=EXPLORER_ROOT)
+                                                  root=DESKTOP_EXPLORER_ROOT if arm.dh is None else EXPLORER_ROOT)
             member.session.camera = member.camera
             member.role = EXPLORER
             self._hide_class_arm(member)
@@ -451,8 +413,8 @@ class Classroom:
         presenter's target marker; a private course arm has a root of its own.
         """
         if self.course is not None:
-            hidden: tuple[str, ...] = (self.course.scene.root,)
-        elif isinstance(member.session, (CourseArmSession, DesktopArmSession)):
+            hidden: tuple[str, ...] = (self.course.scene.top,)
+        elif isinstance(member.session, CourseArmSession):
             hidden = UR10_ROOTS
         else:
             hidden = ("/target",)

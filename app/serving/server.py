@@ -24,7 +24,6 @@ from ..features.arm_picker import ARM_CHOICES, CUSTOM, SWITCH_INTERVAL, UR10, Ar
 from .classroom import Classroom
 from ..features.course_arms.editor import STARTING_TABLE, parse_table
 from ..features.course_arms.panel import factor_scales
-from ..features.course_arms.desktop_arm import DesktopArmSession
 from ..features.course_arms.session import CourseArmSession
 from ..features.floor import add_floor_grid
 from .gate import Gate, TokenBucket, budget_of, gated_serve
@@ -212,8 +211,9 @@ class TeachingServer:
         self.models = load_models(preset, light)
         symbolic.load()  # read the cached derivations now rather than in the first student's callback
         for name in ARM_CHOICES.values():
-            if name not in (None, "custom", "three_dof"):
-                symbolic_arms.load(name)
+            if name not in (None, "custom"):
+                if name != "three_dof":  # its factors are a closed form
+                    symbolic_arms.load(name)
                 factor_scales(name)  # the gauges' scales: a few hundred ms in all, never in a callback
         self.host = host
         label = panel_title(UR10, preset)
@@ -235,7 +235,7 @@ class TeachingServer:
         loop = self.server.get_event_loop()
         self.refresher = PanelRefresher(loop)
         self.drags = DragQueue(loop)
-        self._sessions: dict[int, ClientSession | CourseArmSession | DesktopArmSession] = {}
+        self._sessions: dict[int, ClientSession | CourseArmSession] = {}
         self._last_switch: dict[int, float] = {}  # client id → when its arm was last rebuilt
         #: client id → picker choice → (state, typed table) of each arm the browser has left: going
         #: back to one finds its pose, target and typed table as they were
@@ -321,9 +321,6 @@ class TeachingServer:
             session = CourseArmSession(
                 client, arm, self.refresher, self.drags, lecture=lecture, text=text, convention=convention, state=state,
                 rebuild=lambda new, new_text, new_convention: self._switch(client, CUSTOM, (new, new_text, new_convention)))
-        elif name == "three_dof":
-            session = DesktopArmSession(client, state.arm if state else Arm.preset(name), self.refresher, lecture=lecture,
-                                        state=state)
         else:
             session = CourseArmSession(client, state.arm if state else Arm.preset(name), self.refresher, self.drags,
                                        lecture=lecture, state=state)

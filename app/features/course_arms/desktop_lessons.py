@@ -1,4 +1,4 @@
-"""The desktop arm's folders: its joints and det J_v, the course's velocity exercise, and its statics exercise
+"""The desktop arm's lessons: its joints and det J_v, the course's velocity exercise, and its statics exercise
 (docs/kinematics.md §8.6)."""
 
 from __future__ import annotations
@@ -15,34 +15,29 @@ from ur10core import Arm
 from ur10core.three_dof import course_path, torque_grid
 
 from ..animation import Player
-from ...feedback import chosen
 from ...style import DANGER_RED, SLOT_COLORS, hex_color, number
-from ..velocity import LINEAR_COLOR
 from ...view import View
 from ...serving.workers import HEAVY, FoldedRuns
 from ..workspace import colormap
-from .desktop_state import COURSE_TO_WORLD, DesktopSnapshot, to_world
+from .state import CourseSnapshot
 
 if TYPE_CHECKING:
-    from .desktop_arm import DesktopArmSession
+    from .session import CourseArmSession
 
 #: The course's path: one period of its sin t, played in real time.
 PATH_SECONDS = 2 * math.pi
 PATH_STEPS = 361
-#: Directions of the tool force, in the course's frame (y up).
-DIRECTIONS = {"down (−y)": (0.0, -1.0, 0.0), "up (+y)": (0.0, 1.0, 0.0), "+x": (1.0, 0.0, 0.0),
-              "−x": (-1.0, 0.0, 0.0), "+z": (0.0, 0.0, 1.0), "−z": (0.0, 0.0, -1.0)}
-MAX_FORCE_N = 50.0
-ARROW_METRES_PER_N = 0.03
 #: Joint values per range in the torque search: 31³ = 29,791 poses, a few tens of milliseconds.
 GRID_STEPS = 31
-#: How far above the worst pose's ball its label sits (m, up in the scene): clear of the base frame's labels.
+#: How far above the worst pose's ball its label sits (m, the course's y: up): clear of the base frame's labels.
 WORST_LABEL_RISE = 0.8
 
 
-def factors_markdown(arm: Arm, snapshot: DesktopSnapshot) -> str:
+
+
+def factors_markdown(arm: Arm, snapshot: CourseSnapshot) -> str:
     """The tool's position (mm, the course's frame) and det J_v with its two factors, red near zero."""
-    p = 1000 * snapshot.tool[:3, 3]
+    p = 1000 * snapshot.flange[:3, 3]
     reach, fold = arm.singularity_factors(snapshot.q)
     det = -arm.forearm * arm.upper_arm * reach * fold
 
@@ -61,7 +56,7 @@ def factors_markdown(arm: Arm, snapshot: DesktopSnapshot) -> str:
 class DesktopAbout(View):
     """The arm's own folder: what it is, where its tool is, and det J_v with its two factors."""
 
-    def __init__(self, gui: viser.GuiApi, session: "DesktopArmSession") -> None:
+    def __init__(self, gui: viser.GuiApi, session: "CourseArmSession") -> None:
         self._session = session
         arm = session.arm
         folder = gui.add_folder("Desktop arm (3-DOF)", order=0.9)
@@ -74,14 +69,14 @@ class DesktopAbout(View):
                 "**y up**: p = (c1(l1c3 − l5c2), l1s3 − l5s2, −s1(l1c3 − l5c2)).")
             self.readout = gui.add_markdown("")
 
-    def render_panel(self, snapshot: DesktopSnapshot) -> None:
+    def render_panel(self, snapshot: CourseSnapshot) -> None:
         self.readout.content = factors_markdown(self._session.arm, snapshot)
 
 
 class CoursePathLesson(View):
     """The course's velocity exercise: play its joint path, with v and ω drawn at the tool and plotted."""
 
-    def __init__(self, gui: viser.GuiApi, session: "DesktopArmSession") -> None:
+    def __init__(self, gui: viser.GuiApi, session: "CourseArmSession") -> None:
         self._session = session
         self.player = Player(session)
         t = np.linspace(0.0, PATH_SECONDS, PATH_STEPS)
@@ -125,11 +120,11 @@ class CoursePathLesson(View):
     def start(self) -> None:
         session = self._session
         self.player.play(lambda: self.path, "course path",
-                         show=lambda state, row: state.set_joints(row[:3], row[3:]),
+                         show=lambda state, row: state.set_joints(row[:3], "course path", rates=row[3:]),
                          done=lambda: session.apply(lambda state: state.set_joints(state.last.q)))
 
-    def render_panel(self, snapshot: DesktopSnapshot) -> None:
-        if not np.any(snapshot.rates):
+    def render_panel(self, snapshot: CourseSnapshot) -> None:
+        if snapshot.rates is None or not np.any(snapshot.rates):
             self.readout.content = "Not playing: the arrows show while the path plays."
             return
         twist = self._session.arm.tool_twist(snapshot.q, snapshot.rates)
@@ -140,68 +135,35 @@ class CoursePathLesson(View):
         self.player.stop()
 
 
-class DesktopForces(View):
-    """The course's statics exercise: τ = J_vᵀ F for a tool force, and the pose in the joint ranges that needs the most."""
+class StaticsExercise(View):
+    """The course's statics exercise: for the force of the "Forces and gravity" folder, the pose in the joint
+    ranges that needs the largest ‖τ‖ = ‖J_vᵀ F‖, over a grid of them, the arm put there."""
 
-    def __init__(self, scene: viser.SceneApi, gui: viser.GuiApi, session: "DesktopArmSession", root: str) -> None:
+    def __init__(self, scene: viser.SceneApi, gui: viser.GuiApi, session: "CourseArmSession") -> None:
         self._session = session
         self._scene = scene
-        self._root = root
-        folder = gui.add_folder("Forces", order=3.0, expand_by_default=False)
+        self._root = session.scene.root
+        folder = gui.add_folder("The course's statics exercise", order=3.0, expand_by_default=False)
         self.folders = (folder,)
         with folder:
-            gui.add_markdown("The torques the joints hold for a force F at the tool: τ = J_vᵀ F.")
-            self.enabled = gui.add_checkbox("Show the force", False)
-            self.newtons = gui.add_slider("Force at the tool (N)", min=0.0, max=MAX_FORCE_N, step=1.0, initial_value=10.0)
-            self.direction = gui.add_dropdown("Force direction", tuple(DIRECTIONS), initial_value="down (−y)")
-            self.torques = gui.add_markdown("")
+            gui.add_markdown("Which pose needs the most torque to hold the force set in **Forces and gravity**?")
             self.search = gui.add_button("Find the pose that needs the largest ‖τ‖", icon=viser.Icon.SEARCH,
                                          hint=f"Every joint over its range, {GRID_STEPS} values each: "
                                               f"{GRID_STEPS ** 3:,} poses, coloured by ‖τ‖")
             self.result = gui.add_markdown("")
-        self.arrow = scene.add_arrows(f"{root}/force", np.zeros((1, 2, 3)), LINEAR_COLOR, shaft_radius=0.02,
-                                      head_radius=0.05, head_length=0.1, visible=False)
-        self.label = scene.add_label(f"{root}/force/label", "F", font_screen_scale=1.4, visible=False)
         self._map: tuple[viser.SceneNodeHandle, ...] = ()
         self._map_lock = threading.Lock()
         self._searches = FoldedRuns(self._search)
-        for widget in (self.enabled, self.newtons, self.direction):
-            widget.on_update(session.guard(lambda _: session.redraw()))
         self.search.on_click(session.guard(lambda _: self._searches.start("torque-search", session.guard)))
-
-    def force(self) -> np.ndarray:
-        """(3,) the force in the course's frame, N."""
-        newtons = float(self.newtons.value)
-        if not 0.0 <= newtons <= MAX_FORCE_N:
-            raise ValueError(f"force: from 0 to {MAX_FORCE_N:g} N, got {newtons:g}")
-        return newtons * np.array(DIRECTIONS[chosen(self.direction, "force direction")])
-
-    def render(self, snapshot: DesktopSnapshot) -> None:
-        shown = bool(self.enabled.value) and float(self.newtons.value) > 0.0
-        if shown:
-            tip = snapshot.points[3]
-            end = tip + ARROW_METRES_PER_N * COURSE_TO_WORLD @ self.force()
-            self.arrow.points = np.array([[tip, end]])
-            self.label.position = end
-            self.label.text = f"F = {float(self.newtons.value):.0f} N"
-        for node in (self.arrow, self.label):
-            if node.visible != shown:
-                node.visible = shown
-
-    def render_panel(self, snapshot: DesktopSnapshot) -> None:
-        torques = self._session.arm.static_torques(snapshot.q, self.force())
-        self.torques.content = ("| τ1 | τ2 | τ3 | ‖τ‖ |\n|---:|---:|---:|---:|\n| "
-                                + " | ".join(number(v, "+.2f") for v in torques)
-                                + f" | **{number(float(np.linalg.norm(torques)), '.2f')}** |\n\n(N·m)")
 
     def _search(self) -> None:
         session = self._session
-        arm, force = session.arm, self.force()
+        arm, force = session.arm, session.statics.fixed_force()
         if not force.any():
             raise ValueError("set a force first: with none, no pose needs any torque")
         q, norms = HEAVY.run(session.client, lambda: torque_grid(arm, force, GRID_STEPS), cancelled=lambda: session.closed)
         worst = int(np.argmax(norms))
-        points = to_world(arm.fk(q)[:, :3, 3])
+        points = arm.fk(q)[:, :3, 3]
         with self._map_lock:
             if session.closed:
                 return
@@ -211,10 +173,10 @@ class DesktopForces(View):
                                                 point_size=0.025, point_shape="circle")
             marker = self._scene.add_icosphere(f"{self._root}/worst", radius=0.08, color=DANGER_RED, position=points[worst])
             # raised on a red stalk: at the ball it sat on the base frame's and the joints' labels
-            rise = np.array([[[0.0, 0.0, 0.0], [0.0, 0.0, WORST_LABEL_RISE]]], np.float32)
+            rise = np.array([[[0.0, 0.0, 0.0], [0.0, WORST_LABEL_RISE, 0.0]]], np.float32)
             self._scene.add_line_segments(f"{self._root}/worst/stalk", rise, DANGER_RED, thickness=0.015)
             self._scene.add_label(f"{self._root}/worst/label", f"largest ‖τ‖ = {top:.1f} N·m", font_screen_scale=1.4,
-                                  anchor="bottom-center", position=(0.0, 0.0, WORST_LABEL_RISE))
+                                  anchor="bottom-center", position=(0.0, WORST_LABEL_RISE, 0.0))
             self._map = (cloud, marker)
         self.result.content = (
             f"Largest ‖τ‖ = **{norms[worst]:.2f} N·m** for {np.linalg.norm(force):.0f} N, at θ = ("
@@ -225,16 +187,20 @@ class DesktopForces(View):
                 " For a vertical force the parallelogram decouples the links: joint 2 holds F l5 cos θ2 and "
                 "joint 3 F l1 cos θ3, so the worst pose has both links level, "
                 f"‖τ‖ = F √(l5² + l1²) = {np.linalg.norm(force) * math.hypot(arm.upper_arm, arm.forearm):.2f} N·m.")
-        session.path.player.stop()
+        session.stop_lessons()
         session.apply(lambda state: state.set_joints(q[worst]))
 
     def _clear(self) -> None:
         for node in self._map:
-            node.remove()  # the marker's label goes with it
+            node.remove()  # the marker's label and stalk go with it
         self._map = ()
 
     def close(self) -> None:
-        """The session has gone: so do its arrow and map, even from a scene everyone shares."""
-        self.arrow.remove()  # its label hangs under it
+        """The session has gone: so does its map, even from a scene everyone shares."""
         with self._map_lock:
             self._clear()
+
+
+def desktop_lessons(scene: viser.SceneApi, gui: viser.GuiApi, session: "CourseArmSession") -> tuple[View, ...]:
+    """The desktop arm's own folders: what it is, and the course's two exercises with it."""
+    return DesktopAbout(gui, session), CoursePathLesson(gui, session), StaticsExercise(scene, gui, session)

@@ -129,7 +129,7 @@ class CourseBranches(View):
         self.table.content = branches_markdown(self._arm, snapshot)
 
 
-@functools.lru_cache(maxsize=len(PRESETS))
+@functools.lru_cache(maxsize=len(PRESETS) + 1)
 def factor_scales(name: str) -> np.ndarray:
     """Per factor, the 99th percentile of its size over the arm's workspace: a gauge is full there."""
     arm = Arm.preset(name)
@@ -137,23 +137,43 @@ def factor_scales(name: str) -> np.ndarray:
     return np.maximum(np.percentile(np.abs(arm.singularity_factors(q)), 99, axis=0), 1e-12)
 
 
+#: What the DH folders say of an arm without a DH table (the desktop arm).
+NO_DH_TABLE = ("This arm has no DH table: its parallelogram makes θ3 the forearm's angle to the horizontal, not a "
+               "turn about its own joint axis, and a DH row turns each joint about its own axis. Its map is written "
+               "out instead (the arm's own folder).")
+
+
+def factor_words(arm: Arm) -> tuple[str, list[tuple[str, str, str]]] | None:
+    """(what det J is, [(name, expression, what makes it zero)] per factor) as the model gives them, or None
+    for a typed table (its det J is not derived)."""
+    if arm.name in PRESETS:
+        derivation = symbolic_arms.load(arm.name)
+        return (f"det J = {derivation.constant} × the factors (derived with sympy from the DH table)",
+                [(f.name, str(f.expression), f.meaning) for f in derivation.factors])
+    words = getattr(arm.solver, "factor_words", None)
+    if words is None:
+        return None
+    return f"det J_v = {arm.solver.det_constant} × the factors (the course's closed form)", list(words)
+
+
 def factors_html(arm: Arm, q: np.ndarray) -> str:
     """det J's factors as gauges, green far from their singularity and red at it, with what each means."""
     measures = (f"manipulability {number(float(arm.manipulability(q)), '.4g')}, smallest singular value "
                 f"{number(float(arm.smallest_singular_value(q)), '.4g')}")
-    if arm.name not in PRESETS:  # a typed table has no derivation: the numbers that vanish at a singularity
+    described = factor_words(arm)
+    if described is None:  # a typed table has no derivation: the numbers that vanish at a singularity
         return f"<div>A typed table's det J is not derived; these go to zero at a singularity: {measures}</div>"
-    derivation = symbolic_arms.load(arm.name)
+    heading, factors = described
     values = arm.singularity_factors(q)
     levels = np.clip(np.abs(values) / factor_scales(arm.name), 0.0, 1.0)
-    parts = [f"<div>det J = {derivation.constant} × the factors (derived with sympy from the DH table)</div>"]
-    for factor, value, level in zip(derivation.factors, values, levels):
+    parts = [f"<div>{heading}</div>"]
+    for (name, expression, meaning), value, level in zip(factors, values, levels):
         colour = hex_color(blend(SAFE_GREEN, DANGER_RED, alarm(level)))
         parts.append(
-            f"<div style='margin:4px 0'><b>{factor.name}</b> <code>{factor.expression}</code> = {number(value, '+.4f')}"
+            f"<div style='margin:4px 0'><b>{name}</b> <code>{expression}</code> = {number(value, '+.4f')}"
             "<div style='height:8px;background:#e9ecef;border-radius:4px'>"
-            f"<div class='gauge-{factor.name}' style='height:8px;width:{100 * level:.1f}%;border-radius:4px;"
-            f"background:{colour}'></div></div><div style='font-size:0.85em'>zero when {factor.meaning}</div></div>")
+            f"<div class='gauge-{name}' style='height:8px;width:{100 * level:.1f}%;border-radius:4px;"
+            f"background:{colour}'></div></div><div style='font-size:0.85em'>zero when {meaning}</div></div>")
     parts.append(f"<div>{measures}</div>")
     return "<div style='font-size:0.9em'>" + "".join(parts) + "</div>"
 
@@ -216,6 +236,10 @@ class CourseDHTable(View):
         arm = session.arm
         folder = gui.add_folder("DH table")
         self.folders = (folder,)
+        if arm.dh is None:
+            with folder:
+                gui.add_markdown(f"**{arm.description}.** {NO_DH_TABLE}")
+            return
         other = arm.dh.converted("modified" if arm.convention == "standard" else "standard")
         self.row_choices = ("none",) + tuple(f"row {i}" for i in range(1, len(arm.dh.rows) + 1))
         with folder:
@@ -238,6 +262,8 @@ class CourseDHTable(View):
         self._session.refresher.request(self._session)
 
     def render_panel(self, snapshot: CourseSnapshot) -> None:
+        if self._session.arm.dh is None:
+            return
         row = self._session.scene.highlight_row
         self.row_values.content = "" if row is None else row_values_markdown(self._session.arm, snapshot.q, row)
 
@@ -283,10 +309,15 @@ class DHWalkthrough(View):
 
     def __init__(self, gui: viser.GuiApi, session: "CourseArmSession") -> None:
         self._session = session
-        self.steps = walkthrough_steps(session.arm)
         self.step = -1  #: -1: not walking through (the arm as it is)
         folder = gui.add_folder("DH walkthrough", expand_by_default=False)
         self.folders = (folder,)
+        if session.arm.dh is None:
+            self.steps = []
+            with folder:
+                gui.add_markdown(NO_DH_TABLE)
+            return
+        self.steps = walkthrough_steps(session.arm)
         with folder:
             self.buttons = gui.add_button_group("Step", ("◀ Back", "Next ▶", "Stop"))
             self.text = gui.add_markdown("Press **Next** to build this arm's frames the DH way, one step at a time.")

@@ -72,7 +72,7 @@ class CourseArmScene:
     def __init__(self, scene: viser.SceneApi, arm: Arm, first: CourseSnapshot, size: float,
                  root: str = ROOT) -> None:
         self._scene = scene
-        self.root = root  #: every node's parent: a classroom explorer's own arm has one apart from the class's
+        self.root = self.top = root  #: every node's parent: a classroom explorer's own arm has one apart from the class's
         self._arm = arm
         self.size = size  #: the arm's reach (m): sizes of rods, axes and the gizmo follow it
         segments = skeleton(arm.dh, first.frames)
@@ -112,6 +112,13 @@ class CourseArmScene:
                                              anchor="bottom-center") for k in range(slots)]
         #: det J's factors in 3D (a preset's; a typed table's det J is not derived)
         self.overlay = CourseOverlay(scene, arm, first, size, root) if has_overlay(arm) else None
+
+    #: Where the arm's base frame is in the scene: at the world's origin.
+    world = np.eye(4)
+
+    def framed(self, snapshot: CourseSnapshot) -> CourseSnapshot:
+        """What the camera frames: the arm's frames and target, in the world as they are."""
+        return snapshot
 
     def render(self, snapshot: CourseSnapshot) -> None:
         frames = snapshot.frames

@@ -1,4 +1,4 @@
-"""One browser driving one of the course's other arms."""
+"""One browser driving any of the course's arms but the UR10: the other presets, a typed table, the desktop arm."""
 
 from __future__ import annotations
 
@@ -25,8 +25,13 @@ from ...serving.workers import APART, HEAVY, DragQueue, FoldedRuns, PanelRefresh
 from .editor import DHEditor
 from .gripper import GripperPose
 from .panel import CourseBranches, CourseDHTable, CourseJointSliders, CourseSingularities, DHWalkthrough
-from .scene import ROOT, CourseArmScene
+from .desktop_arm import DesktopArmScene
+from .desktop_lessons import desktop_lessons
+from .scene import CourseArmScene
 from .state import CourseArmState, CourseSnapshot
+
+#: An arm's own lessons (the course's exercises with it), beside the features every arm has.
+LESSONS = {"three_dof": desktop_lessons}
 
 
 def body_radius(size: float) -> float:
@@ -38,6 +43,12 @@ def reach(arm: Arm) -> float:
     """How far the arm's tool gets from the base (m), from a workspace sample: sizes follow it."""
     points, _ = arm.sample_workspace(4000, seed=0)
     return float(max(np.linalg.norm(points, axis=-1).max(), 0.3))
+
+
+def arm_scene(scene: viser.SceneApi, arm: Arm, first: CourseSnapshot, root: str | None = None) -> CourseArmScene | DesktopArmScene:
+    """The arm in 3D: its DH skeleton and frames, or, for an arm without a DH table, its own drawing."""
+    kind = DesktopArmScene if arm.dh is None else CourseArmScene
+    return kind(scene, arm, first, reach(arm), *(() if root is None else (root,)))
 
 
 class BranchSearch(View):
@@ -79,8 +90,8 @@ class CourseArmSession(SessionBasics):
     def __init__(self, client: viser.ClientHandle, arm: Arm, refresher: PanelRefresher, drags: DragQueue,
                  lecture: bool = False, rebuild: Callable[[Arm, str, str], None] | None = None,
                  text: str = "", convention: str = "standard", state: CourseArmState | None = None,
-                 scene: CourseArmScene | None = None, server: viser.ViserServer | None = None,
-                 own_camera: bool = True, root: str = ROOT) -> None:
+                 scene: CourseArmScene | DesktopArmScene | None = None, server: viser.ViserServer | None = None,
+                 own_camera: bool = True, root: str | None = None) -> None:
         self.client = client
         self.arm = arm
         self.state = state or CourseArmState(arm)
@@ -91,8 +102,8 @@ class CourseArmSession(SessionBasics):
         self.observers: list[Callable[[CourseSnapshot], None]] = []
         self._senders: tuple[viser.ClientHandle | viser.ViserServer, ...] = (client,) if server is None else (client, server)
         first = self.state.last
-        size = reach(arm)
-        self.scene = scene or CourseArmScene(client.scene, arm, first, size, root)
+        self.scene = scene or arm_scene(client.scene, arm, first, root)
+        size = self.scene.size
         self.gizmo = client.scene.add_transform_controls(
             f"{self.scene.root}/target", scale=0.12 * size, line_width=3.0, depth_test=False,
             disable_rotations=arm.task == "position",
@@ -102,7 +113,7 @@ class CourseArmSession(SessionBasics):
         gui = client.gui
         self.editor = DHEditor(gui, self, text, convention, rebuild) if rebuild is not None else None
         self.search = BranchSearch(gui, self) if self.state.numerical else None
-        self.joints = CourseJointSliders(gui, self)
+        self.joints = CourseJointSliders(gui, self, before=self.stop_lessons)
         self.branches = CourseBranches(gui, arm)
         self.singularities = CourseSingularities(gui, self)
         self.dh_table = CourseDHTable(gui, self)
@@ -116,14 +127,15 @@ class CourseArmSession(SessionBasics):
         self.ellipsoids = EllipsoidsView(drawn_in, gui, self, root=f"{nodes}/ellipsoids", place="tool")
         self.statics = StaticsView(drawn_in, gui, self, root=f"{nodes}/statics", size=size)
         self.at_tool_views = (self.velocity, self.ellipsoids, self.statics)
-        self.reach_map = ReachMapView(drawn_in, gui, self, root=f"{nodes}/reach_map")
-        self.motion = MotionLessons(gui, self)
+        self.reach_map = ReachMapView(drawn_in, gui, self, root=f"{nodes}/reach_map", world=self.scene.world)
+        self.motion = MotionLessons(gui, self, before=self.stop_lessons)
         self.gripper = GripperPose(gui, self) if arm.name == "kr210" else None
-        self.camera = (CameraControls(client, lambda: self.state.last, self.guard, lecture, body_radius=body_radius(size))
-                       if own_camera else None)
+        self.lessons = LESSONS[arm.name](drawn_in, gui, self) if arm.name in LESSONS else ()
+        self.camera = (CameraControls(client, lambda: self.scene.framed(self.state.last), self.guard, lecture,
+                                      body_radius=body_radius(size)) if own_camera else None)
         self.panel_views = (*(v for v in (self.editor, self.search, self.gripper, self.camera) if v is not None),
                             self.joints, self.branches, self.singularities, self.dh_table, self.walkthrough, self.workspace,
-                            *self.at_tool_views, self.reach_map, self.motion)
+                            *self.at_tool_views, self.reach_map, self.motion, *self.lessons)
         self.built = True
         self.render(self.state.last)
         self.render_panel()
@@ -146,6 +158,13 @@ class CourseArmSession(SessionBasics):
             observer(snapshot)
         return snapshot
 
+    def stop_lessons(self) -> None:
+        """A slider, a motion or a search moves the arm: a lesson playing a path stops first."""
+        for lesson in self.lessons:
+            player = getattr(lesson, "player", None)
+            if player is not None:
+                player.stop()
+
     def _dragged(self, event: viser.TransformControlsEvent) -> None:
         if self.closed:
             return
@@ -160,6 +179,7 @@ class CourseArmSession(SessionBasics):
         reason in the panel, if it did not.
         """
         wxyz, position, released = pose
+        self.stop_lessons()  # a path playing stops: the drag has the last word, under the arm's lock
         self.guard(lambda _: self.apply(lambda state: state.move_target(transform_from_quaternion(wxyz, position)),
                                         timed="course_drag", move_gizmo=released))(None)
 
@@ -168,7 +188,7 @@ class CourseArmSession(SessionBasics):
             return
         with self._batch():  # the arm and the gizmo arrive together, as in ClientSession.render
             self.scene.render(snapshot)
-            for view in self.at_tool_views:
+            for view in (*self.at_tool_views, *self.lessons):
                 view.render(snapshot)
             if move_gizmo and not snapshot.reason:
                 self.gizmo.wxyz = quaternion(snapshot.frames[-1, :3, :3], check=False)

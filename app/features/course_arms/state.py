@@ -1,7 +1,9 @@
-"""One browser's course arm: its joints, its IK target and the branches that reach it."""
+"""One browser's course arm (any arm but the UR10, the desktop arm included): its joints, its IK target and the
+branches that reach it."""
 
 from __future__ import annotations
 
+import math
 import threading
 from dataclasses import dataclass
 
@@ -22,6 +24,7 @@ class CourseSnapshot:
     solution: IKSolution | None  #: the branches of ``target``; None until searched, for a numerical arm
     chosen: int  #: the slot the arm is in, −1 if none reaches (or not searched)
     reason: str  #: why the target is out of reach ("" if it is reached)
+    rates: np.ndarray | None = None  #: (n,) the joints' rates while a lesson plays a path (None at rest)
 
     @property
     def flange(self) -> np.ndarray:
@@ -51,26 +54,32 @@ class CourseArmState:
             q = arm.specs.home
         self.last = self._solved(np.array(q, dtype=float))
 
-    def _solved(self, q: np.ndarray) -> CourseSnapshot:
+    def _solved(self, q: np.ndarray, rates: np.ndarray | None = None) -> CourseSnapshot:
         frames = self.arm.frames(q)
         target = frames[-1]
         if self.numerical:
-            return CourseSnapshot(q, frames, target, None, -1, "")
+            return CourseSnapshot(q, frames, target, None, -1, "", rates)
         solution = self.arm.ik(target, hint=q)
-        return CourseSnapshot(q, frames, target, solution, int(solution.nearest(q).slot), "")
+        return CourseSnapshot(q, frames, target, solution, int(solution.nearest(q).slot), "", rates)
 
     def set_joint(self, index: int, value: float) -> CourseSnapshot:
         q = self.last.q.copy()
         q[index] = value
         return self.set_joints(q)
 
-    def set_joints(self, q, cause: str = "joints") -> CourseSnapshot:
-        """Put the arm at ``q`` (``cause``, as for the UR10's state: what moved it, e.g. "motion")."""
-        q = self.arm.joints(q).astype(float)
-        low, high = self.arm.limits.T
-        if ((q < low) | (q > high)).any():
-            raise ValueError("joint values must stay within the arm's limits")
-        self.last = self._solved(q)
+    def set_joints(self, q, cause: str = "joints", rates=None) -> CourseSnapshot:
+        """Put the arm at ``q`` (``cause``, as for the UR10's state: what moved it, e.g. "motion"), its joints
+        turning at ``rates`` (a lesson playing a path; the arrows show them)."""
+        arm = self.arm
+        q = arm.joints(q).astype(float)
+        if q.shape != (arm.n_joints,):
+            raise ValueError(f"{arm.n_joints} joint values are needed, got shape {q.shape}")
+        for name, kind, value, (low, high) in zip(arm.joint_names, arm.joint_types, q, arm.limits):
+            if not low - 1e-9 <= value <= high + 1e-9:
+                shown = (lambda v: f"{math.degrees(v):.0f}°") if kind == "R" else (lambda v: f"{1000 * v:.0f} mm")
+                got = f"{math.degrees(value):.1f}°" if kind == "R" else f"{1000 * value:.1f} mm"
+                raise ValueError(f"{name}: from {shown(low)} to {shown(high)}, got {got}")
+        self.last = self._solved(q, None if rates is None else arm.joints(rates, "rates").astype(float))
         return self.last
 
     def move_target(self, T: np.ndarray) -> CourseSnapshot:
