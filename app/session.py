@@ -23,6 +23,8 @@ import viser
 from ur10core import Arm
 from ur10core.orientation import transform_from_quaternion
 
+from .features.course_arms.panel import DHWalkthrough
+from .features.dh_frames import FRAMES_NONE, DHFrames
 from .features.ik_target import BranchesScene, IKTargetControls
 from .features.camera import CameraControls
 from .features.lecture import LectureMode
@@ -44,6 +46,9 @@ from .state import ArmState, Snapshot
 from .features.workspace import WorkspaceView
 
 log = logging.getLogger(__name__)
+
+#: The UR10's reach (m), which sizes its DH frames' axes and labels.
+DH_FRAMES_SIZE = 1.3
 
 
 @dataclasses.dataclass
@@ -133,12 +138,16 @@ class ClientSession(SessionBasics):
         self.ellipsoids = EllipsoidsView(scene, gui, self)
         self.velocity = VelocityView(scene, gui, self)
         self.motion = MotionLessons(gui, self)
+        #: the course's table as frames on the arm, hidden until the walkthrough draws them
+        self.dh_frames = DHFrames(scene, arm, first.frames, DH_FRAMES_SIZE, "/dh_frames", at_rest=FRAMES_NONE)
+        self.walkthrough = DHWalkthrough(gui, self, self.dh_frames)
         self.camera = CameraControls(client, lambda: self.state.last, self.guard, lecture) if own_camera else None
         if self.camera is not None:
             self.follow_lecture_mode(self.camera.lecture)
         #: the views this session built in the browser's own panel (the scene views may be the classroom's)
         self.panel_views = (self.joints, *([self.arm_model] if self.arm_model else []), self.ik_target, self.readouts,
-                            self.singularity, self.workspace, self.reach_map, self.statics, self.ellipsoids, self.velocity, self.motion, *([self.camera] if self.camera else []))
+                            self.singularity, self.workspace, self.reach_map, self.statics, self.ellipsoids, self.velocity,
+                            self.motion, self.dh_frames, self.walkthrough, *([self.camera] if self.camera else []))
         self.views = (*self.scene_views, *self.panel_views)
         self.built = True
         self.render(self.state.last)  # as a click during the build may have left it

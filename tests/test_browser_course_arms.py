@@ -42,7 +42,7 @@ def test_the_course_arms_in_the_picker(open_page, light_app):
     # the DH frames' x axes (red) and z axes (blue) are on screen, and go when switched off (the renderer's
     # colour management shifts every colour a little, so the test compares two pictures, not one colour)
     set_checkbox(page, kr210.dh_table.show_frames, False)
-    wait_for(lambda: not kr210.scene.x_axes.visible and not kr210.scene.z_axes.visible, what="the frames hidden")
+    wait_for(lambda: not kr210.scene.dh_frames.x_axes.visible and not kr210.scene.dh_frames.z_axes.visible, what="the frames hidden")
     canvas_changed(page, with_frames, 0.003, "the frames' axes to go")
     # the first slider turns joint 1, in degrees, and the skeleton follows
     step_slider(page, kr210.joints.sliders[0], "ArrowRight", 1.0)
@@ -84,11 +84,11 @@ def test_the_course_arms_in_the_picker(open_page, light_app):
     next_button.wait_for(state="visible", timeout=HANG_TIMEOUT_MS)
     frames = settled_canvas(page)
     next_button.click()
-    wait_for(lambda: elbow.walkthrough.step == 0 and not elbow.scene.x_axes.visible, what="step 1")
+    wait_for(lambda: elbow.walkthrough.step == 0 and not elbow.scene.dh_frames.x_axes.visible, what="step 1")
     wait_for(lambda: page.get_by_text("Step 1 — the z axes", exact=False).count() > 0, what="step 1's text")
     z_only = canvas_changed(page, frames, 0.002, "the x axes to go")
     next_button.click()
-    wait_for(lambda: elbow.walkthrough.step == 1 and elbow.scene.x_axes.visible, what="step 2")
+    wait_for(lambda: elbow.walkthrough.step == 1 and elbow.scene.dh_frames.x_axes.visible, what="step 2")
     with_x = canvas_changed(page, z_only, 0.002, "the x axes to come back")
     next_button.click()  # step 3: row 1's θ1 and α1 (its d1 too: a1 = 0 is listed, not drawn)
     wait_for(lambda: elbow.walkthrough.step == 2, what="step 3")

@@ -226,11 +226,11 @@ def test_a_row_shown_on_the_arm_and_the_walkthrough(app):
         session = await pick(app, client, "Stanford arm (RRP + wrist)", CourseArmSession)
         scene = session.scene
         await client.set_gui("Show a row on the arm", "row 3")  # the prismatic row: d3 is the joint
-        await until(lambda: scene.highlight_row == 3 and scene.parameters["d"].visible, what="row 3 drawn")
-        await until(lambda: scene.parameter_labels["d"].text == "d3 = 254.0 mm", what="d3's value")
-        segment = scene.parameters["d"].points[0]
+        await until(lambda: scene.dh_frames.highlight_row == 3 and scene.dh_frames.parameters["d"].visible, what="row 3 drawn")
+        await until(lambda: scene.dh_frames.parameter_labels["d"].text == "d3 = 254.0 mm", what="d3's value")
+        segment = scene.dh_frames.parameters["d"].points[0]
         assert np.linalg.norm(segment[1] - segment[0]) == pytest.approx(0.254, abs=1e-6)
-        assert not scene.parameters["a"].visible  # a3 = 0: nothing to draw, and the panel lists it
+        assert not scene.dh_frames.parameters["a"].visible  # a3 = 0: nothing to draw, and the panel lists it
         await until(lambda: "a<sub>3</sub> = 0.0 mm" in session.dh_table.row_values.content, what="row 3's values")
         await client.set_gui("Show a row on the arm", "row 99")  # not an option: refused
         await until(lambda: any("not one of the choices" in body for _, body in client.received.notifications),
@@ -238,16 +238,16 @@ def test_a_row_shown_on_the_arm_and_the_walkthrough(app):
         # the walkthrough: z axes alone, then x too, then each row
         await client.set_gui("Step", "Next ▶")
         # the step is counted before the scene is redrawn: wait for the drawing itself
-        await until(lambda: session.walkthrough.step == 0 and not scene.x_axes.visible, what="step 1")
-        assert scene.z_axes.visible and scene.highlight_row is None
+        await until(lambda: session.walkthrough.step == 0 and not scene.dh_frames.x_axes.visible, what="step 1")
+        assert scene.dh_frames.z_axes.visible and scene.dh_frames.highlight_row is None
         for expected in (1, 2):
             await client.set_gui("Step", "Next ▶")
             await until(lambda: session.walkthrough.step == expected, what=f"step {expected + 1}")
-        await until(lambda: scene.x_axes.visible and scene.highlight_row == 1, what="row 1 drawn")
+        await until(lambda: scene.dh_frames.x_axes.visible and scene.dh_frames.highlight_row == 1, what="row 1 drawn")
         await until(lambda: "Row 1" in session.walkthrough.text.content and "Step 3 of 8" in session.walkthrough.text.content,
                     what="row 1's text")
         await client.set_gui("Step", "Stop")
-        await until(lambda: session.walkthrough.step == -1 and scene.highlight_row is None, what="the walkthrough stopped")
+        await until(lambda: session.walkthrough.step == -1 and scene.dh_frames.highlight_row is None, what="the walkthrough stopped")
         await client.close()
 
     asyncio.run(scenario())
@@ -583,13 +583,13 @@ FEATURE_FOLDERS = {
     "joints": ("Joints", "Joints (°)"), "IK target and its branches": ("IK branches", "IK target: all 8 branches"),
     "singularities": ("Singularities",), "workspace": ("Workspace",), "reach map": ("Reachable with this orientation",),
     "velocities": ("Velocities",), "ellipsoids": ("Manipulability ellipsoids",), "forces and gravity": ("Forces and gravity",),
-    "motion": ("Motion",), "DH table": ("DH table", "DH table (course)"),
+    "motion": ("Motion",), "DH table": ("DH table", "DH table (course)"), "DH walkthrough": ("DH walkthrough",),
 }
 
 
 def test_every_arm_in_the_picker_offers_every_feature(app):
     """Issue 29: 65 of 81 arm × feature cells were there. Each arm's panel has a folder for each feature
-    (saying why, where its maths does not apply); every arm but the UR10 walks through its DH frames."""
+    (saying why, where its maths does not apply)."""
     async def scenario():
         client = await ViserClient(url(app)).connect()
         for label, name in ARM_CHOICES.items():
@@ -597,8 +597,33 @@ def test_every_arm_in_the_picker_offers_every_feature(app):
             folders = {k for k, v in client.gui.items() if v["type"] == "GuiFolderMessage"}
             missing = [feature for feature, titles in FEATURE_FOLDERS.items() if not folders & set(titles)]
             assert not missing, (label, missing)
-            assert name is None or "DH walkthrough" in folders, label
             assert session.built
+        await client.close()
+
+    asyncio.run(scenario())
+
+
+def test_the_ur10_walks_through_its_dh_frames(app):
+    """Issue 29: the DH walkthrough was the other arms' alone. On the UR10 its frames, hidden until then,
+    are built step by step from the course's (modified) table, and go again when it stops."""
+    async def scenario():
+        client = await ViserClient(url(app)).connect()
+        session = await pick(app, client, UR10, ClientSession)
+        frames = session.dh_frames
+        assert not frames.x_axes.visible and not frames.z_axes.visible
+        await client.set_gui("Step", "Next ▶")
+        await until(lambda: session.walkthrough.step == 0 and frames.z_axes.visible and not frames.x_axes.visible,
+                    what="step 1: the z axes")
+        np.testing.assert_allclose(frames.z_axes.points[:, 0], session.state.last.frames[:, :3, 3], atol=1e-6)
+        for step in (1, 2):
+            await client.set_gui("Step", "Next ▶")
+            await until(lambda s=step: session.walkthrough.step == s, what=f"step {step + 1}")
+        await until(lambda: frames.highlight_row == 1 and frames.parameter_labels["d"].text == "d1 = 128.0 mm",
+                    what="row 1: d1 drawn with its value")
+        assert "a<sub>0</sub>" in session.walkthrough.text.content  # modified DH: row 1 holds a0, α0
+        await client.set_gui("Step", "Stop")
+        await until(lambda: session.walkthrough.step == -1 and not frames.z_axes.visible and not frames.parameters["d"].visible,
+                    what="the frames hidden again")
         await client.close()
 
     asyncio.run(scenario())

@@ -19,7 +19,7 @@ from ur10core.orientation import quaternion
 
 from ...style import JOINT_CAP_GREY, SHOULDER_COLOR, SLOT_COLORS
 from ..velocity import ANGULAR_COLOR, LINEAR_COLOR
-from .scene import FRAMES_XZ, show
+from ..dh_frames import show
 from .state import CourseSnapshot
 
 ROOT = "/desktop_arm"
@@ -62,7 +62,7 @@ class DesktopArmScene:
     and the tool's v and ω while a lesson plays a path. The course arms' scene for an arm without a DH table."""
 
     overlay = None  #: det J_v's factors are in the panel (the singularities folder), not drawn on this arm
-    frames_shown, highlight_row = FRAMES_XZ, None  #: no DH frames to show (the DH folders say why)
+    dh_frames = None  #: no DH frames to show (the DH folders say why)
 
     def __init__(self, scene: viser.SceneApi, arm: Arm, first: CourseSnapshot, size: float, top: str = ROOT) -> None:
         self._arm = arm

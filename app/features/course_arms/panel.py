@@ -20,7 +20,7 @@ from ...feedback import chosen
 from ..singularity import alarm
 from ...style import DANGER_RED, SAFE_GREEN, SLOT_COLORS, blend, hex_color, number, swatch
 from ...view import View
-from .scene import FRAMES_NONE, FRAMES_XZ, FRAMES_Z
+from ..dh_frames import FRAMES_NONE, FRAMES_XZ, FRAMES_Z, DHFrames
 from .state import CourseSnapshot
 
 if TYPE_CHECKING:
@@ -255,16 +255,16 @@ class CourseDHTable(View):
 
     def _apply(self) -> None:
         choice = chosen(self.highlight, "row")
-        scene = self._session.scene
-        scene.frames_shown = FRAMES_XZ if self.show_frames.value else FRAMES_NONE
-        scene.highlight_row = None if choice == "none" else int(choice.split()[1])
+        frames = self._session.scene.dh_frames
+        frames.shown = FRAMES_XZ if self.show_frames.value else FRAMES_NONE
+        frames.highlight_row = None if choice == "none" else int(choice.split()[1])
         self._session.redraw()
         self._session.refresher.request(self._session)
 
     def render_panel(self, snapshot: CourseSnapshot) -> None:
         if self._session.arm.dh is None:
             return
-        row = self._session.scene.highlight_row
+        row = self._session.scene.dh_frames.highlight_row
         self.row_values.content = "" if row is None else row_values_markdown(self._session.arm, snapshot.q, row)
 
 
@@ -305,10 +305,14 @@ def walkthrough_steps(arm: Arm) -> list[tuple[str, str, int | None]]:
 
 
 class DHWalkthrough(View):
-    """Step through the DH procedure on the arm: z axes, x axes, then each row's four parameters."""
+    """Step through the DH procedure on the arm: z axes, x axes, then each row's four parameters.
 
-    def __init__(self, gui: viser.GuiApi, session: "CourseArmSession") -> None:
+    ``frames`` draws them (:class:`ur10teach.features.dh_frames.DHFrames`; None for an arm without a DH table).
+    """
+
+    def __init__(self, gui: viser.GuiApi, session: "CourseArmSession", frames: DHFrames | None) -> None:
         self._session = session
+        self._frames = frames
         self.step = -1  #: -1: not walking through (the arm as it is)
         folder = gui.add_folder("DH walkthrough", expand_by_default=False)
         self.folders = (folder,)
@@ -331,13 +335,13 @@ class DHWalkthrough(View):
             self.step = min(self.step + 1, len(self.steps) - 1)
         else:
             self.step = max(self.step - 1, -1)
-        scene = self._session.scene
+        frames = self._frames
         if self.step < 0:
-            scene.frames_shown, scene.highlight_row = FRAMES_XZ, None
+            frames.shown, frames.highlight_row = frames.at_rest, None
             self.text.content = "Press **Next** to build this arm's frames the DH way, one step at a time."
         else:
             text, frames_shown, row = self.steps[self.step]
-            scene.frames_shown, scene.highlight_row = frames_shown, row
+            frames.shown, frames.highlight_row = frames_shown, row
             values = "" if row is None else "\n\n" + row_values_markdown(self._session.arm, self._session.state.last.q, row)
             self.text.content = f"{text}{values}\n\n*Step {self.step + 1} of {len(self.steps)}*"
         self._session.redraw()

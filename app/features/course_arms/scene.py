@@ -2,7 +2,7 @@
 
 The arm is drawn as the DH method builds it: from each frame origin to the next along d
 and a (:func:`skeleton`), a short rod along each joint axis (a box for a prismatic joint),
-and, optionally, the x and z axes of every frame with their names. Each IK slot is a thin ghost skeleton in
+and, optionally, the x and z axes of every frame with their names (:mod:`..dh_frames`). Each IK slot is a thin ghost skeleton in
 its slot colour with its number at the tool, as the UR10's ghosts are.
 """
 
@@ -16,6 +16,7 @@ from ur10core.dh import DHTable
 from ur10core import Arm
 
 from ...viser_internals.fast_updates import set_orientations, set_positions
+from ..dh_frames import DHFrames, show
 from ...style import JOINT_CAP_GREY, SLOT_COLORS
 from .overlay import CourseOverlay, has_overlay
 from .state import CourseSnapshot
@@ -24,11 +25,6 @@ ROOT = "/course_arm"
 #: An explorer's own arm in a classroom, apart from the class's (which it hides in that one browser).
 EXPLORER_ROOT = "/explored_arm"
 SKELETON_GREY = (60, 62, 68)
-X_AXIS_RED, Z_AXIS_BLUE = (220, 30, 30), (30, 60, 230)
-#: A highlighted row's parameters (Okabe-Ito): d blue, a vermilion, θ bluish green, α reddish purple.
-PARAMETER_COLORS = {"d": (0, 114, 178), "a": (213, 94, 0), "theta": (0, 158, 115), "alpha": (204, 121, 167)}
-#: Which axes the frames show: none, the z axes only (the walkthrough's first step), or x and z.
-FRAMES_NONE, FRAMES_Z, FRAMES_XZ = "none", "z", "xz"
 
 
 def skeleton(table: DHTable, frames: np.ndarray) -> np.ndarray:
@@ -60,12 +56,6 @@ def rod_rotations(axes: np.ndarray) -> np.ndarray:
     return np.stack([x, np.cross(axes, x), axes], axis=-1)
 
 
-def show(node: viser.SceneNodeHandle, visible) -> None:
-    """Set a node's visibility only when it changes (viser's setter costs tens of µs even then)."""
-    if node.visible != bool(visible):
-        node.visible = bool(visible)
-
-
 class CourseArmScene:
     """Everything one course arm draws in a browser's scene."""
 
@@ -86,23 +76,8 @@ class CourseArmScene:
                 rod = scene.add_box(f"{root}/joint{k + 1}", color=JOINT_CAP_GREY,
                                     dimensions=(0.03 * size, 0.03 * size, 0.06 * size))
             self.joints.append(rod)
-        count = len(first.frames)
-        self.frames_shown = FRAMES_XZ
-        self.highlight_row: int | None = None  #: a DH row (1-based) whose parameters are drawn on the arm
-        nothing = np.zeros((count, 2, 3))
-        self.z_axes = scene.add_line_segments(f"{root}/frames/z", nothing, Z_AXIS_BLUE, thickness=0.008 * size)
-        self.x_axes = scene.add_line_segments(f"{root}/frames/x", nothing, X_AXIS_RED, thickness=0.008 * size)
-        self.axis_labels = [
-            (scene.add_label(f"{root}/frame_labels/x{i}", f"x{i}", font_screen_scale=1.1, anchor="center-left"),
-             scene.add_label(f"{root}/frame_labels/z{i}", f"z{i}", font_screen_scale=1.1, anchor="center-left"))
-            for i in range(count)
-        ]
-        self.parameters = {key: scene.add_line_segments(f"{root}/row/{key}", np.zeros((1, 2, 3)), colour,
-                                                        thickness=0.016 * size, visible=False)
-                           for key, colour in PARAMETER_COLORS.items()}
-        self.parameter_labels = {key: scene.add_label(f"{root}/row/{key}/value", key, font_screen_scale=1.3,
-                                                      anchor="bottom-center", visible=False)
-                                 for key in PARAMETER_COLORS}
+        #: the DH frames, x and z named, and a row's parameters (the DH folders switch them)
+        self.dh_frames = DHFrames(scene, arm, first.frames, size, root)
         slots = len(arm.slot_labels)
         _, points = arm.dh.joint_axes(first.frames)
         self._label_frame = arm.dh.joint_rows[min(2, arm.n_joints - 1)] + (0 if arm.convention == "standard" else 1)
@@ -122,12 +97,11 @@ class CourseArmScene:
 
     def render(self, snapshot: CourseSnapshot) -> None:
         frames = snapshot.frames
-        self._q = snapshot.q
         self.body.points = skeleton(self._arm.dh, frames)
         z, o = self._arm.dh.joint_axes(frames)
         set_orientations(self.joints, quaternion(rod_rotations(z), check=False))
         set_positions(self.joints, o)
-        self._render_frames(frames)
+        self.dh_frames.render(snapshot)
         if self.overlay is not None:
             self.overlay.render(snapshot)
         sol = snapshot.solution
@@ -145,50 +119,3 @@ class CourseArmScene:
         labelled = np.flatnonzero(shown)  # at each ghost's middle joint: the branches share the tool, not their elbows
         set_positions([self.ghost_labels[k] for k in labelled],
                       np.array([ghost_frames[k][self._label_frame, :3, 3] for k in labelled]).reshape(-1, 3))
-
-    def _render_frames(self, frames: np.ndarray) -> None:
-        shown = self.frames_shown
-        length = 0.12 * self.size
-        origins = frames[:, :3, 3]
-        show(self.z_axes, shown != FRAMES_NONE)
-        show(self.x_axes, shown == FRAMES_XZ)
-        if shown != FRAMES_NONE:
-            self.z_axes.points = np.stack([origins, origins + length * frames[:, :3, 2]], axis=1)
-        if shown == FRAMES_XZ:
-            self.x_axes.points = np.stack([origins, origins + length * frames[:, :3, 0]], axis=1)
-        for x_label, z_label in self.axis_labels:
-            show(z_label, shown != FRAMES_NONE)
-            show(x_label, shown == FRAMES_XZ)
-        if shown != FRAMES_NONE:
-            tip = 0.14 * self.size
-            x_labels, z_labels = zip(*self.axis_labels)
-            set_positions(list(x_labels) + list(z_labels),
-                          np.concatenate([origins + tip * frames[:, :3, 0], origins + tip * frames[:, :3, 2]]))
-        self._render_row()
-
-    def _render_row(self) -> None:
-        row = self.highlight_row
-        for key in PARAMETER_COLORS:
-            self.parameters[key].visible = self.parameter_labels[key].visible = row is not None
-        if row is None:
-            return
-        geometry = self._arm.dh.row_geometry(self._q, row)
-        values = geometry.values
-        radius = 0.08 * self.size
-        # the subscripts the table uses: modified DH writes a row's a and α as a_{i−1}, α_{i−1}
-        previous = row if self._arm.convention == "standard" else row - 1
-        index = {"d": row, "theta": row, "a": previous, "alpha": previous}
-        names = {"d": "d", "a": "a", "theta": "θ", "alpha": "α"}
-        for key in ("d", "a", "theta", "alpha"):  # a zero parameter has nothing to draw (the panel lists it)
-            self.parameters[key].visible = self.parameter_labels[key].visible = abs(values[key]) > 1e-9
-        for key in ("d", "a"):
-            segment = geometry.d if key == "d" else geometry.a
-            self.parameters[key].points = segment[None]
-            self.parameter_labels[key].position = segment.mean(axis=0)
-            self.parameter_labels[key].text = f"{names[key]}{index[key]} = {1000 * values[key]:.1f} mm"
-        for key in ("theta", "alpha"):
-            turn = geometry.theta if key == "theta" else geometry.alpha
-            arc = turn.points(radius)
-            self.parameters[key].points = np.stack([arc[:-1], arc[1:]], axis=1)
-            self.parameter_labels[key].position = arc[len(arc) // 2]
-            self.parameter_labels[key].text = f"{names[key]}{index[key]} = {np.degrees(values[key]):.1f}°"

@@ -117,7 +117,7 @@ class CourseArmSession(SessionBasics):
         self.branches = CourseBranches(gui, arm)
         self.singularities = CourseSingularities(gui, self)
         self.dh_table = CourseDHTable(gui, self)
-        self.walkthrough = DHWalkthrough(gui, self)
+        self.walkthrough = DHWalkthrough(gui, self, getattr(self.scene, "dh_frames", None))
         drawn_in = client.scene if server is None else server.scene
         # the UR10's folders, for this arm's joints and tool: what J does there (docs/kinematics.md §8), its workspace
         nodes = self.scene.root
