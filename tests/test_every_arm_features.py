@@ -1,0 +1,113 @@
+"""Every arm in the picker, through viser's protocol: each shared feature computes the right thing for that arm.
+
+The references are independent of the Jacobian the features use: central differences of
+the arm's forward kinematics give the tool's velocity for a joint rate and, by the
+principle of virtual work, the joint torques τ = J_vᵀ F for a force at the tool.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import math
+
+import numpy as np
+import pytest
+
+from ur10teach.features.arm_picker import ARM_CHOICES
+from ur10teach.features.course_arms.session import CourseArmSession
+from ur10teach.features.statics import bars_html
+from ur10teach.features.velocity import METRES_PER_SPEED
+from ur10teach.session import ClientSession
+
+from .server_support import until, url
+from .test_course_arms_app import pick
+from ur10dev.viser_client import ViserClient
+
+pytestmark = pytest.mark.server
+
+EVERY_ARM = [label for label, name in ARM_CHOICES.items() if name != "custom"]  # the typed table: its own tests
+STEP = 1e-6
+
+
+def position_rate(arm, q: np.ndarray, joint: int) -> np.ndarray:
+    """(3,) ∂p/∂q_joint of the tool's position, by central differences of FK."""
+    dq = np.zeros_like(q)
+    dq[joint] = STEP
+    return (arm.fk(q + dq)[:3, 3] - arm.fk(q - dq)[:3, 3]) / (2 * STEP)
+
+
+@pytest.mark.parametrize("label", EVERY_ARM)
+def test_velocity_and_forces_on_every_arm_match_finite_differences(app, label):
+    async def scenario():
+        client = await ViserClient(url(app)).connect()
+        session = await pick(app, client, label, ClientSession if ARM_CHOICES[label] is None else CourseArmSession)
+        arm, snapshot = session.arm, session.state.last
+        q, tool = snapshot.q, snapshot.flange[:3, 3]
+        # a base rate of 10°/s: the arrow is the tool's velocity
+        await client.set_gui(f"θ̇1 {arm.joint_names[0]} (°/s)", 10.0)
+        expected = tool + METRES_PER_SPEED * math.radians(10.0) * position_rate(arm, q, 0)
+        await until(lambda: session.velocity.linear.visible
+                    and np.allclose(session.velocity.linear.points[0], [tool, expected], atol=1e-5), what="the velocity arrow")
+        # 50 N along +x at the tool: each joint holds ∂p/∂q_i · F (virtual work)
+        await client.set_gui("Show the torques", True)
+        await client.set_gui("Force direction", "+x")
+        await until(lambda: session.statics.direction.value == "+x" and session.statics.enabled.value, what="the force set")
+        force = np.array([50.0, 0.0, 0.0])
+        reference = np.array([position_rate(arm, q, i) @ force for i in range(arm.n_joints)])
+        _, torques, gravity = session.statics.loads(session.state.last)
+        np.testing.assert_allclose(torques, reference, atol=1e-6)
+        html = bars_html(torques, gravity, arm.specs.torque_ratings, arm.joint_names, arm.joint_types)
+        await until(lambda: session.statics.bars.content == html, what="the torque bars")
+        await client.close()
+
+    asyncio.run(scenario())
+
+
+@pytest.mark.parametrize("label", EVERY_ARM)
+def test_the_workspace_cloud_of_every_arm_is_its_own(app, label):
+    """The cloud drawn is the arm's own sampled workspace, under the arm's own root."""
+    async def scenario():
+        client = await ViserClient(url(app)).connect()
+        session = await pick(app, client, label, ClientSession if ARM_CHOICES[label] is None else CourseArmSession)
+        await client.set_gui("Samples", "10 k")
+        await client.set_gui("Show workspace cloud", True)
+        await until(lambda: session.workspace._cloud is not None and len(session.workspace._cloud.points) == 10_000,
+                    what="the cloud")
+        points, _ = session.arm.sample_workspace(10_000, seed=0)
+        np.testing.assert_allclose(session.workspace._cloud.points, points, atol=5e-3)  # float16 on the wire
+        root = getattr(session, "scene", None)
+        await until(lambda: f"{root.root if root else ''}/workspace" in client.received.nodes, what="the cloud on screen")
+        await client.close()
+
+    asyncio.run(scenario())
+
+
+
+@pytest.mark.parametrize("label", EVERY_ARM)
+def test_the_branch_count_map_of_every_arm_is_its_ik_s(app, label):
+    """The map shown counts, in each cell, the branches the arm's own IK finds within its limits."""
+    from ur10core.workspace import branch_count_map
+    from ur10teach.features.reach_map import map_image
+
+    async def scenario():
+        client = await ViserClient(url(app)).connect()
+        session = await pick(app, client, label, ClientSession if ARM_CHOICES[label] is None else CourseArmSession)
+        view = session.reach_map
+        plane = "horizontal" if session.arm.name == "planar_elbow" else "vertical"  # its workspace is the plane z = 0
+        if plane == "horizontal":
+            await client.set_gui("Plane", "horizontal, at the target's height")
+        await client.set_gui("Show branch-count map", True)
+        await until(lambda: view.image is not None and view.shown_key is not None and view.shown_key[1] == plane,
+                    what="the map")
+        expected = branch_count_map(session.arm, session.state.last.target, plane, view.resolution)
+        assert expected.counts.max() > 0 and view.slots == len(session.arm.slot_labels)
+        np.testing.assert_array_equal(view.image.image, map_image(expected.counts, view.slots))
+        # and one cell read back through the IK: its count is the number of branches that reach it within limits
+        i, j = np.argwhere(expected.counts > 0)[0]
+        T = session.state.last.target.copy()
+        T[:3, 3] = expected.points()[i, j]
+        solution = session.arm.ik(T)
+        assert int(solution.within_limits.sum()) == int(expected.counts[i, j])
+        await client.close()
+
+    asyncio.run(scenario())
