@@ -120,3 +120,13 @@ def test_one_pose_nearest_is_the_batchs(name):
         one = arm.ik(arm.fk(q[k]), hint=q[k]).nearest(current[k], prefer=int(prefer[k]))
         assert int(one.slot) == int(batch.slot[k])
         np.testing.assert_allclose(one.q, batch.q[k], atol=1e-12)
+
+
+def test_joint_limit_is_the_ur_familys_alone():
+    kr210 = Arm.preset("kr210")
+    q = kr210.specs.home
+    with pytest.raises(ValueError, match="joint_limit is the UR family's"):
+        kr210.ik(kr210.fk(q)).nearest(q, joint_limit=7.0)
+    course = Arm.preset("course")
+    q = course.specs.home
+    assert int(course.ik(course.fk(q)).nearest(q, joint_limit=4.0).slot) == 4

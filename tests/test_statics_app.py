@@ -332,3 +332,32 @@ def test_the_rate_charts_name_each_distinct_limit_once_with_its_joints():
     path = joint_interpolation(arm, np.zeros(6), np.ones(6), 4.0, 50)
     odd = np.array([100.0, 110.0, 120.0, 130.0, 140.0, 150.0])  # six distinct limits: six lines, as the chart's series
     assert len(rate_chart_data(path, odd)) == 1 + 6 + len(limit_groups(odd, JOINT_LABELS)) + 2 == 15
+
+
+def test_a_press_whose_browser_leaves_before_a_thread_is_free_leaves_the_player_idle(monkeypatch):
+    """CI, 2026-12-02: a press queued on the background pool ran, guarded, after its browser had gone; the
+    guard skipped it, and the player said it was playing for ever."""
+    import concurrent.futures
+
+    from ur10teach.features import animation
+    from ur10dev.waiting import wait_for
+
+    class Session:
+        closed = False
+
+        def guard(self, handler):
+            return lambda event: None if self.closed else handler(event)
+
+    session = Session()
+    player = animation.Player(session)
+    pool = concurrent.futures.ThreadPoolExecutor(1)
+    busy = threading.Event()
+    pool.submit(busy.wait)  # every background thread busy
+    monkeypatch.setattr(animation, "BACKGROUND", pool)
+    try:
+        player.play(lambda: (np.zeros(1), np.zeros((1, 6))), "test")
+        session.closed = True  # the browser leaves before a thread is free
+        busy.set()
+        wait_for(lambda: not player.playing, what="the player idle")
+    finally:
+        pool.shutdown()

@@ -148,8 +148,8 @@ class IKSolution:
         """The valid branch nearest the current joints ``q_current`` (..., n), turned next to them.
 
         Each revolute joint of each valid slot is replaced by the whole-turn equivalent nearest
-        the current value that stays within the arm's limits (``joint_limit``: ±that instead,
-        for the UR family's ±360°); the slot with the smallest Euclidean joint-space distance
+        the current value that stays within the arm's limits (for the UR family, ``joint_limit``
+        may set another ±limit than its ±360°); the slot with the smallest Euclidean joint-space distance
         wins. ``prefer`` (int or (...) ints, −1 for none) is a slot kept when it ties with the
         nearest, so that an app showing "the arm is on branch k" does not flip at a singularity.
         Where no slot is valid, ``q`` is NaN and ``slot`` −1.
@@ -162,8 +162,11 @@ class IKSolution:
         (1, True)
         """
         limit = getattr(self.arm.solver, "turn_limit", None)
-        if limit is not None or joint_limit is not None:  # symmetric ±limit on every joint: the UR family's kernels
+        if limit is not None:  # symmetric ±limit on every joint: the UR family's kernels
             return _ik().nearest_branch(self, q_current, limit if joint_limit is None else joint_limit, prefer)
+        if joint_limit is not None:
+            raise ValueError(f"joint_limit is the UR family's (±360° on every joint); the {self.arm.name!r} arm's "
+                             "joints turn within its own limits")
         return _nearest_within_limits(self, q_current, prefer)
 
 

@@ -58,7 +58,8 @@ class Player:
             if self._running:
                 return
             self._running = True
-        BACKGROUND.submit(self._session.guard(lambda _: self._take_requests()), None)
+        # not guarded as a whole: a browser gone before a thread is free must still find the player idle
+        BACKGROUND.submit(self._take_requests)
 
     def _take_requests(self) -> None:
         try:
@@ -69,13 +70,16 @@ class Player:
                         return
                     (compute, show, done), self._pending = self._pending, None
                     self._stop = stop = threading.Event()
-                try:
-                    self._run(compute, show, stop, done)
-                except Cancelled:
-                    pass
+                self._session.guard(lambda _: self._run_unless_cancelled(compute, show, stop, done))(None)
         finally:
             with self._lock:
                 self._running = False
+
+    def _run_unless_cancelled(self, compute, show, stop: threading.Event, done: Callable[[], None]) -> None:
+        try:
+            self._run(compute, show, stop, done)
+        except Cancelled:
+            pass
 
     def _run(self, compute, show: Callable[[Any, np.ndarray], Any], stop: threading.Event, done: Callable[[], None]) -> None:
         t, q = compute()
