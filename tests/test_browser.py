@@ -69,7 +69,8 @@ def test_a_students_first_visit(open_page, light_app):
     wait_for(lambda: abs(np.degrees(session.state.q[0]) - 32.0) < 1e-6, what="θ1 to reach 32°")
     wait_for(lambda: np.allclose(session.ik_target.gizmo.position, session.state.last.flange[:3, 3], atol=1e-6),
              what="the gizmo on the new flange")
-    assert thumb.get_attribute("aria-valuenow") == "32"
+    # the browser's own thumb ends where the keys took it (under CI's load it was read mid-way once: 31.8)
+    wait_for(lambda: thumb.get_attribute("aria-valuenow") == "32", what="the slider's thumb at 32°")
     wait_for(lambda: page.get_by_text("base 32.00°", exact=False).count() > 0, what="the joint summary")
 
     # a drag of the IK target: the arm follows on its own branch, the ghosts with it
