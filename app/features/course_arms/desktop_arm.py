@@ -145,13 +145,9 @@ class DesktopArmScene:
         self._render_ghosts(snapshot)
 
     def _render_ghosts(self, snapshot: CourseSnapshot) -> None:
-        sol = snapshot.solution
         shown = np.zeros(len(self.ghosts), bool)
-        if sol is not None:
-            shown[:] = sol.valid
-            if snapshot.chosen >= 0:
-                shown[snapshot.chosen] = False  # the arm itself
-        frames = self._arm.frames(sol.q[shown]) if shown.any() else ()
+        shown[:len(snapshot.ghosts)] = snapshot.ghosts
+        frames = self._arm.frames(snapshot.solution.q[shown]) if shown.any() else ()
         for k, ghost_frames in zip(np.flatnonzero(shown), frames):
             points = self._points(ghost_frames)
             self.ghosts[k].points = self._links(points)[1:]

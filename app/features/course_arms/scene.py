@@ -104,13 +104,9 @@ class CourseArmScene:
         self.dh_frames.render(snapshot)
         if self.overlay is not None:
             self.overlay.render(snapshot)
-        sol = snapshot.solution
         shown = np.zeros(len(self.ghosts), bool)
-        if sol is not None:
-            shown[:] = sol.valid
-            if snapshot.chosen >= 0:
-                shown[snapshot.chosen] = False  # the arm itself
-        ghost_frames = dict(zip(np.flatnonzero(shown), self._arm.frames(sol.q[shown]))) if shown.any() else {}  # one call
+        shown[:len(snapshot.ghosts)] = snapshot.ghosts
+        ghost_frames = dict(zip(np.flatnonzero(shown), self._arm.frames(snapshot.solution.q[shown]))) if shown.any() else {}  # one call
         for k, (ghost, label) in enumerate(zip(self.ghosts, self.ghost_labels)):
             show(ghost, shown[k])
             show(label, shown[k])

@@ -27,6 +27,16 @@ class CourseSnapshot:
     rates: np.ndarray | None = None  #: (n,) the joints' rates while a lesson plays a path (None at rest)
 
     @property
+    def ghosts(self) -> np.ndarray:
+        """(k,) bool: the slots drawn as ghosts, every valid one but the arm's own."""
+        if self.solution is None:  # a typed table's branches, until searched
+            return np.zeros(0, bool)
+        shown = self.solution.valid.copy()
+        if self.chosen >= 0:
+            shown[self.chosen] = False
+        return shown
+
+    @property
     def flange(self) -> np.ndarray:
         """(4, 4) the tool frame (the UR10's flange), where the views that act at the tool draw."""
         return self.frames[-1]
