@@ -7,7 +7,6 @@ the GUI. Its folders:
 * ``serving/``         — the server, the classroom, the gate, the workers, logs and metrics
 * ``viser_internals/`` — the only code that touches viser's internals
 
-and, beside them, what every session shares: ``session`` (one browser's arm, panel and
-target), ``session_basics``, ``state`` (what one arm is doing: no viser, unit-tested on its
+and, beside them: ``session`` (one browser's arm, panel and target, for any arm), ``state`` (what one arm is doing: no viser, unit-tested on its
 own), ``view``, ``style``, ``feedback`` and ``meshes``.
 """

@@ -1,120 +1,108 @@
-"""One browser's arm, panel and target.
+"""One browser's arm, panel and target, for any arm of the course.
 
 viser runs plain ``def`` callbacks on a thread pool, so callbacks of one browser can
-overlap: every change goes through :meth:`ClientSession.apply`, which holds the arm's
-lock while it changes the state and redraws the 3D view, then asks the
-:class:`~ur10teach.serving.workers.PanelRefresher` to redraw the side panel. Every callback is wrapped
-by :meth:`ClientSession.guard`: no exception escapes, a refused value is explained in a
-notification in that browser, and every other browser carries on.
+overlap: every change goes through :meth:`ArmSession.apply`, which holds the arm's lock
+while it changes the state and redraws the 3D view, then asks the
+:class:`~ur10teach.serving.workers.PanelRefresher` to redraw the side panel. Every callback
+is wrapped by :meth:`ArmSession.guard`: no exception escapes, a refused value is explained
+in a notification in that browser, and every other browser carries on.
 
 Each view has ``render(snapshot)`` (the 3D scene, on every change) and
-``render_panel(snapshot)`` (the GUI, at most ten times a second).
+``render_panel(snapshot)`` (the GUI, at most ten times a second). The features are the same
+for every arm; only the drawing (:mod:`ur10teach.features.drawings`) and an arm's own
+lessons differ.
 """
 
 from __future__ import annotations
 
-import dataclasses
-import logging
+import contextlib
 import time
 from typing import Any, Callable
 
 import viser
 
 from ur10core import Arm
-from ur10core.orientation import transform_from_quaternion
 
-from .features.course_arms.panel import DHWalkthrough
-from .features.dh_frames import FRAMES_NONE, DHFrames
-from .features.ik_target import BranchesScene, IKTargetControls
+from .features.branch_search import BranchSearch
 from .features.camera import CameraControls
-from .features.lecture import LectureMode
+from .features.course_arms.desktop_lessons import desktop_lessons
+from .features.course_arms.editor import DHEditor
+from .features.course_arms.gripper import GripperPose
+from .features.dh_table import DHTableView, DHWalkthrough
+from .features.drawings import arm_drawing
 from .features.ellipsoids import EllipsoidsView
-from .features.floor import FloorScene
+from .features.ik_target import IKTarget, pose_from_gizmo
 from .features.joint_panel import JointPanel
-from .meshes import ArmModels
-from .serving.metrics import LATENCY
+from .features.lecture import LectureMode
 from .features.motion_lessons import MotionLessons
 from .features.reach_map import ReachMapView
 from .features.readouts import Readouts
-from .serving.workers import DragQueue, PanelRefresher
-from .features.robot import ArmModelControls, RobotScene
-from .session_basics import SessionBasics
-from .features.singularity import OverlayPanel, OverlayScene
+from .features.robot import ArmModelControls
+from .features.singularity import Singularities
 from .features.statics import StaticsView
 from .features.velocity import VelocityView
-from .state import ArmState, Snapshot
 from .features.workspace import WorkspaceView
+from .feedback import guard, notify
+from .meshes import ArmModels
+from .serving.metrics import LATENCY
+from .serving.workers import DragQueue, PanelRefresher
+from .state import ArmState, Snapshot
 
-log = logging.getLogger(__name__)
-
-#: The UR10's reach (m), which sizes its DH frames' axes and labels.
-DH_FRAMES_SIZE = 1.3
-
-
-@dataclasses.dataclass
-class SceneViews:
-    """The 3D part of an arm: solid arm, ghost branches, singularity geometry, floor warnings.
-
-    A session builds its own on its browser's scene; the classroom builds one on the
-    shared scene, which the presenter's session then drives.
-    """
-
-    robot: RobotScene
-    branches: BranchesScene
-    overlay: OverlayScene
-    floor: FloorScene
-
-    @classmethod
-    def build(cls, scene: viser.SceneApi, models: ArmModels, first: Snapshot,
-              target_marker: bool = False) -> "SceneViews":
-        branches = BranchesScene(scene, models, first, target_marker)
-        return cls(RobotScene(scene, models, first), branches, OverlayScene(scene, first), FloorScene(scene, branches))
-
-    def show(self, model: str) -> None:
-        """Draw the solid arm and its ghosts as ``model`` ("Real UR10", "Schematic")."""
-        self.robot.show(model)
-        self.branches.show(model)
-
-    def __iter__(self):  # the floor after the branches: it marks the ghosts they drew
-        return iter((self.robot, self.branches, self.overlay, self.floor))
+#: An arm's own lessons (the course's exercises with it), beside the features every arm has.
+LESSONS = {"three_dof": desktop_lessons}
 
 
-class ClientSession(SessionBasics):
+class ArmSession:
     """One browser's controls on an arm.
 
     Parameters
     ----------
     client : viser.ClientHandle
         The browser. Its panel and gizmo are always its own.
-    arm, models : Arm, ArmModels
-        The arm's dimensions, and the meshes it can be drawn with.
+    arm : Arm
+        Any arm of the course, or a typed table.
     refresher, drags : PanelRefresher, DragQueue
         The server's workers: panel redraws and drag events, off viser's thread pool.
+    models : ArmModels, optional
+        UR's meshes, to draw a UR-family arm with; its DH skeleton otherwise.
     state : ArmState, optional
         The arm to drive; a new one at the home pose by default.
+    server, drawing : viser.ViserServer, drawing, optional
+        Where the arm is drawn: the browser's own scene by default (under ``root``, for a
+        classroom explorer's arm apart from the class's); the classroom's presenter drives a
+        drawing in the server's shared scene instead. Its messages go out through the
+        server's queue, which a redraw batches (``atomic``) and sends at once (``flush``) as it
+        does the browser's own: viser otherwise holds a message up to 1/60 s to batch it with
+        the next, and a viewer could see the arm moved and its ghosts not yet.
     own_camera, lecture : bool
-        Build the browser's "View" folder (camera framing, :mod:`ur10teach.features.camera`; lecture mode,
-        starting as ``lecture`` says); the classroom builds one per browser instead,
-        whatever its role.
-    server, scene_views : viser.ViserServer, SceneViews, optional
-        Where the arm is drawn: the browser's own scene by default; the classroom's
-        presenter drives the views in the server's shared scene instead. Their messages
-        go out through the server's queue, which a redraw batches (``atomic``) and sends
-        at once (``flush``) as it does the browser's own: viser otherwise holds a message
-        up to 1/60 s to batch it with the next, and a viewer could see the arm moved and
-        its ghosts not yet.
+        Build the browser's "View" folder (camera framing, :mod:`ur10teach.features.camera`; lecture
+        mode, starting as ``lecture`` says); the classroom builds one per browser instead.
+    rebuild, text, convention : optional
+        For a typed table: ``rebuild(arm, text, convention)`` puts a newly typed arm in this
+        one's place (the server does it); ``text`` and ``convention`` fill the DH editor.
+
+    Its widgets reach the browser as they are made, so a quick click can run a callback before
+    the constructor ends: until the constructor sets ``built``, nothing is drawn, and the first
+    render then draws the state as that click left it.
     """
 
+    built = False
+    panel_views: tuple = ()
     _lecture: LectureMode | None = None  #: the lecture switch it follows, once it follows one
+    #: the arm picker's label of this arm, and the typed table (arm, text, convention) it was
+    #: built from: the server sets them, and keeps the state under them when the browser leaves the arm
+    choice: str = ""
+    typed: tuple | None = None
 
     def __init__(
-        self, client: viser.ClientHandle, arm: Arm, models: ArmModels, refresher: PanelRefresher,
-        drags: DragQueue, state: ArmState | None = None, server: viser.ViserServer | None = None,
-        scene_views: SceneViews | None = None, own_camera: bool = True, lecture: bool = False,
+        self, client: viser.ClientHandle, arm: Arm, refresher: PanelRefresher, drags: DragQueue,
+        models: ArmModels | None = None, state: ArmState | None = None, server: viser.ViserServer | None = None,
+        drawing=None, own_camera: bool = True, lecture: bool = False, root: str | None = None,
+        rebuild: Callable[[Arm, str, str], None] | None = None, text: str = "", convention: str = "standard",
     ) -> None:
         self.client = client
         self.arm = arm
-        self.state = state or ArmState(arm, body_points=models.outline)
+        self.state = state or ArmState(arm, body_points=None if models is None else models.outline)
         self.refresher = refresher
         self.drags = drags
         self.closed = False
@@ -124,34 +112,41 @@ class ClientSession(SessionBasics):
         self._senders: tuple[viser.ClientHandle | viser.ViserServer, ...] = (client,) if server is None else (client, server)
         gui = client.gui
         first = self.state.last
-        self.scene_views = scene_views or SceneViews.build(scene, models, first)
-        self.joints = JointPanel(gui, self)
-        #: "Arm drawn as" (real or schematic), where the arm has more than one model
-        self.arm_model = (ArmModelControls(gui, self.joints.folders[0], self.scene_views, self)
-                          if len(self.scene_views.robot.names) > 1 else None)
-        self.ik_target = IKTargetControls(client.scene, gui, self.scene_views.branches, self)
-        self.readouts = Readouts(gui, arm, first)
-        self.singularity = OverlayPanel(gui, self.scene_views.overlay, self)
-        self.workspace = WorkspaceView(scene, gui, self)
-        self.reach_map = ReachMapView(scene, gui, self)
-        self.statics = StaticsView(scene, gui, self)
-        self.ellipsoids = EllipsoidsView(scene, gui, self)
-        self.velocity = VelocityView(scene, gui, self)
-        self.motion = MotionLessons(gui, self)
-        #: the course's table as frames on the arm, hidden until the walkthrough draws them
-        self.dh_frames = DHFrames(scene, arm, first.frames, DH_FRAMES_SIZE, "/dh_frames", at_rest=FRAMES_NONE)
-        self.walkthrough = DHWalkthrough(gui, self, self.dh_frames)
-        self.camera = CameraControls(client, lambda: self.state.last, self.guard, lecture) if own_camera else None
+        self.drawing = drawn = drawing or arm_drawing(scene, arm, first, models, root)
+        self.editor = DHEditor(gui, self, text, convention, rebuild) if rebuild is not None else None
+        self.search = BranchSearch(gui, self) if self.state.numerical else None
+        self.joints = JointPanel(gui, self, before=self.stop_lessons)
+        #: "Arm drawn as" (real or schematic), where the drawing has more than one model
+        self.arm_model = ArmModelControls(gui, self.joints.folders[0], drawn, self) if len(drawn.names) > 1 else None
+        self.ik_target = IKTarget(client.scene, gui, drawn, self)
+        self.readouts = Readouts(gui, first)
+        self.singularities = Singularities(gui, drawn.overlay, self)
+        self.dh_table = DHTableView(gui, self, drawn.dh_frames)
+        self.walkthrough = DHWalkthrough(gui, self, drawn.dh_frames)
+        nodes = drawn.root
+        self.workspace = WorkspaceView(scene, gui, self, root=nodes)
+        self.reach_map = ReachMapView(scene, gui, self, root=f"{nodes}/reach_map", world=drawn.world)
+        self.statics = StaticsView(scene, gui, self, root=f"{nodes}/statics", size=drawn.size)
+        self.ellipsoids = EllipsoidsView(scene, gui, self, root=f"{nodes}/ellipsoids")
+        self.velocity = VelocityView(scene, gui, self, root=f"{nodes}/velocity")
+        self.motion = MotionLessons(gui, self, before=self.stop_lessons)
+        self.gripper = GripperPose(gui, self) if arm.name == "kr210" else None
+        self.lessons = LESSONS[arm.name](scene, gui, self) if arm.name in LESSONS else ()
+        self.camera = (CameraControls(client, lambda: drawn.framed(self.state.last), self.guard, lecture,
+                                      body_radius=drawn.body_radius) if own_camera else None)
         if self.camera is not None:
             self.follow_lecture_mode(self.camera.lecture)
-        #: the views this session built in the browser's own panel (the scene views may be the classroom's)
-        self.panel_views = (self.joints, *([self.arm_model] if self.arm_model else []), self.ik_target, self.readouts,
-                            self.singularity, self.workspace, self.reach_map, self.statics, self.ellipsoids, self.velocity,
-                            self.motion, self.dh_frames, self.walkthrough, *([self.camera] if self.camera else []))
-        self.views = (*self.scene_views, *self.panel_views)
+        #: the views this session built in the browser's own panel (the drawing may be the classroom's)
+        self.panel_views = tuple(view for view in (
+            self.editor, self.search, self.gripper, self.joints, self.arm_model, self.ik_target, self.readouts,
+            self.singularities, self.dh_table, self.walkthrough, self.workspace, self.reach_map, self.statics,
+            self.ellipsoids, self.velocity, self.motion, *self.lessons, self.camera) if view is not None)
+        self.views = (drawn, *self.panel_views)
         self.built = True
         self.render(self.state.last)  # as a click during the build may have left it
         self.render_panel()
+        if self.camera is not None:
+            self.camera.frame()
 
     # ------------------------------------------------------------------ changes
 
@@ -171,16 +166,43 @@ class ClientSession(SessionBasics):
         return snapshot
 
     def drag_to(self, pose) -> None:
-        """The drag queue's worker solving for the gizmo's newest ``(wxyz, position)``."""
-        self.guard(lambda _: self.apply(lambda state: state.move_target(transform_from_quaternion(*pose)), timed="drag"))(None)
+        """The drag queue's worker solving for the gizmo's newest ``(wxyz, position, released)``.
+
+        While held, the gizmo stays where the student has it; once released it goes onto the
+        target the arm took (a SCARA's tool turned down again).
+        """
+        self.stop_lessons()  # a path playing stops: the drag has the last word, under the arm's lock
+
+        def move(state: ArmState) -> Snapshot:
+            T, released = pose_from_gizmo(pose)  # ValueError for a pose a bad client made up
+            return state.move_target(T, cause="dropped" if released else "target")
+
+        self.guard(lambda _: self.apply(move, timed="drag"))(None)
+
+    def stop_lessons(self) -> None:
+        """A slider, a motion or a search moves the arm: a path playing stops first."""
+        for lesson in (self.motion, *self.lessons):
+            player = getattr(lesson, "player", None)
+            if player is not None:
+                player.stop()
+
+    def redraw(self) -> None:
+        """The 3D view again, unchanged state (a toggle changed what is shown), and the panel after it."""
+        with self.state.lock:
+            self.render(self.state.last)
+        self.refresher.request(self)
 
     def render(self, snapshot: Snapshot) -> None:
-        """The 3D scene, atomically."""
+        """The 3D scene, atomically, to every sender."""
         if self.closed or not self.built:
             return
-        with self._batch():
+        with contextlib.ExitStack() as batch:
+            for sender in self._senders:
+                batch.enter_context(sender.atomic())
             for view in self.views:
                 view.render(snapshot)
+        for sender in self._senders:
+            sender.flush()
 
     def render_panel(self) -> None:
         """The side panel, from the newest state (called by the refresher, one thread at a time)."""
@@ -189,22 +211,61 @@ class ClientSession(SessionBasics):
         start = time.perf_counter()
         snapshot = self.state.last
         with self.client.atomic():
-            for view in self.views:  # the scene views' panel parts too (the branch numbers, say)
+            for view in self.views:  # the drawing's panel-paced parts too (the branch numbers, say)
                 view.render_panel(snapshot)
         LATENCY.record("panel", time.perf_counter() - start)
 
-    def follow_lecture_mode(self, lecture: "LectureMode") -> None:
+    # ------------------------------------------------------------------ display choices
+
+    def _switches(self):
+        """((view, label), handle) of each checkbox and dropdown of the panel: what is shown, not where the arm is."""
+        for view in self.panel_views:
+            if view is not self.camera:  # lecture mode follows the browser, not the arm
+                for handle in vars(view).values():
+                    if isinstance(handle, (viser.GuiCheckboxHandle, viser.GuiDropdownHandle)):
+                        yield (type(view).__name__, handle.label), handle
+
+    def display_choices(self) -> dict[tuple[str, str], Any]:
+        """What the student chose to show (ghosts, overlay, cloud, frames, …): the server keeps it with the arm."""
+        return {key: handle.value for key, handle in self._switches()}
+
+    def show_choices(self, choices: dict[tuple[str, str], Any]) -> None:
+        """Show what was chosen when the browser last had this arm (each switch's own callback applies it)."""
+        for key, handle in self._switches():
+            if key in choices and handle.value != choices[key]:
+                handle.value = choices[key]
+
+    # ------------------------------------------------------------------ the browser
+
+    def guard(self, handler: Callable[[Any], None]) -> Callable[[Any], None]:
+        """Wrap a viser callback so that nothing it raises escapes (see ``ur10teach.feedback``)."""
+        return guard(self.client, handler, is_closed=lambda: self.closed, on_refused=lambda: self.refresher.request(self))
+
+    def notify(self, title: str, body: str, color: str = "yellow") -> None:
+        if not self.closed:
+            notify(self.client, title, body, color)
+
+    def follow_lecture_mode(self, lecture: LectureMode) -> None:
         """Thick gizmo lines while the browser's lecture mode is on (until this session closes)."""
         lecture.on_change.append(self.ik_target.thicken)
         self._lecture = lecture
         self.ik_target.thicken(lecture.on)
 
-    def _unfollow_lecture_mode(self) -> None:
+    def close(self) -> None:
+        """The browser has gone (or handed over): stop drawing and let go of everything shared."""
+        self._leave(lambda view: view.close())
+
+    def remove(self) -> None:
+        """Close, and take this session's panel and gizmo out of a browser that stays."""
+        self._leave(lambda view: view.remove())
+
+    def _leave(self, how: Callable[[Any], None]) -> None:
         # the classroom's lecture switch outlives this session: it must not keep the session alive
         if self._lecture is not None and self.ik_target.thicken in self._lecture.on_change:
             self._lecture.on_change.remove(self.ik_target.thicken)
         self._lecture = None
-
-    def _leave(self, how: Callable[[Any], None]) -> None:
-        self._unfollow_lecture_mode()
-        super()._leave(how)
+        self.closed = True
+        with self.state.lock:  # not while a drag is being drawn
+            for view in self.panel_views:
+                how(view)
+        self.refresher.forget(self)

@@ -1,7 +1,7 @@
-"""What one arm is doing: its joints, its IK target and the eight branches of that target.
+"""What one arm is doing: its joints, its IK target and the branches of that target.
 
-No viser here — this is the app's logic, unit-tested without a browser. Every change
-returns a :class:`Snapshot`, which is all the views need to draw.
+No viser here — this is the app's logic for any arm, unit-tested without a browser. Every
+change returns a :class:`Snapshot`, which is all the views need to draw.
 
 All kinematics comes from :mod:`ur10core`; this module only decides *which* result to
 use (the branch nearest the current joints, the last reachable pose, …) and checks the
@@ -17,11 +17,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ur10core import JOINT_LIMIT, JOINT_NAMES, Arm, IKSolution, SingularityGeometry
-from ur10core.ik import equivalent_near
+from ur10core import Arm, IKSolution
 from ur10core.orientation import quaternion
+from ur10core.serial import project_target
 from ur10core.workspace import lowest_points
-
 
 SINGULARITY_KINDS = ("shoulder", "elbow", "wrist")
 #: A body this far below z = 0 is through the floor (the base's own underside sits on it).
@@ -30,115 +29,148 @@ FLOOR_TOLERANCE = 1e-3
 
 @dataclass(frozen=True)
 class Snapshot:
-    """Everything the views draw, computed once per change."""
+    """What one change left: the views draw from it (never from the live state).
 
-    q: np.ndarray  #: (6,) current joints, rad
-    frames: np.ndarray  #: (7, 4, 4) frames {0}..{6} of the solid arm
-    target: np.ndarray  #: (4, 4) where the IK target is
-    solution: IKSolution  #: the eight branches of the target pose
-    ghost_frames: np.ndarray  #: (8, 7, 4, 4) frames of each branch (identity where invalid)
-    slot: int  #: the branch the solid arm is on, −1 when the target is unreachable
-    reachable: bool
-    reason: str  #: why the target is unreachable ("" when it is reachable)
-    link_wxyz: np.ndarray  #: (6, 4) rotation of T(i−1, i), i = 1..6, as quaternions (the solid arm's tree)
-    ghost_wxyz: np.ndarray  #: (8, 7, 4) rotation of each branch's frames {0}..{6}, as quaternions
-    flange_wxyz: np.ndarray  #: (4,) the flange orientation as a quaternion
-    factors: np.ndarray  #: (3,) shoulder, elbow, wrist factors of det J
-    body_points: np.ndarray  #: (7, P, 3) outline points of each link's body, in its frame (ArmState's)
-    cause: str  #: "joints", "target" (dragged), "typed", "branch", "singularity", "reset" or "motion" (a played path): what made this change
+    What only some drawings need (the quaternions, the det J factors, the floor check) is
+    worked out when first asked for, once per snapshot.
+    """
+
+    q: np.ndarray  #: (n,) joints: radians and metres
+    frames: np.ndarray  #: (L, 4, 4) every frame of the arm, the base's first and the tool's last
+    target: np.ndarray  #: (4, 4) where the IK target is (what the arm controls of it)
+    solution: IKSolution | None  #: the branches of ``target``; None until searched, for a typed table
+    slot: int  #: the branch the arm is on, −1 if none reaches (or not searched)
+    reason: str  #: why the target is out of reach ("" if it is reached)
+    #: what made this change: "joints", "target" (dragged, still held), "dropped" (the drag's end), "typed",
+    #: "branch", "singularity", "reset", "motion" (a played path)
+    cause: str
     arm: Arm
+    ghost_frames: np.ndarray  #: (k, L, 4, 4) frames of each branch (identity where it does not reach)
+    rates: np.ndarray | None = None  #: (n,) the joints' rates while a path plays (None at rest)
+    body_points: np.ndarray | None = None  #: (L, P, 3) outline points of each body in its frame, for the floor check
+
+    @property
+    def reachable(self) -> bool:
+        return not self.reason
 
     @property
     def flange(self) -> np.ndarray:
-        return self.frames[6]
+        """(4, 4) the tool frame (the UR10's flange), where the views that act at the tool draw."""
+        return self.frames[-1]
+
+    @property
+    def ghosts(self) -> np.ndarray:
+        """(k,) bool: the slots drawn as ghosts, every valid one but the arm's own."""
+        if self.solution is None:
+            return np.zeros(0, bool)
+        shown = self.solution.valid.copy()
+        if self.slot >= 0:
+            shown[self.slot] = False
+        return shown
+
+    @functools.cached_property
+    def _wxyz(self) -> np.ndarray:
+        """Every rotation a drawing turns (the links' T(i−1, i), the ghosts' frames, the tool) as quaternions, in one call."""
+        link_transforms = getattr(self.arm.solver, "link_transforms", None)  # the UR family's: its meshes hang on them
+        links = np.zeros((0, 3, 3)) if link_transforms is None else link_transforms(self.q)[:, :3, :3]
+        ghosts = self.ghost_frames[:, :, :3, :3].reshape(-1, 3, 3)
+        return quaternion(np.concatenate([links, ghosts, self.frames[-1:, :3, :3]]), check=False)
+
+    @property
+    def link_wxyz(self) -> np.ndarray:
+        """(n, 4) rotation of T(i−1, i) as quaternions: a mesh arm's tree of link nodes."""
+        return self._wxyz[:len(self.q)]
+
+    @property
+    def ghost_wxyz(self) -> np.ndarray:
+        """(k, L, 4) rotation of each branch's frames, as quaternions."""
+        return self._wxyz[len(self._wxyz) - 1 - self.ghost_frames[:, :, 0, 0].size:-1].reshape(*self.ghost_frames.shape[:2], 4)
+
+    @property
+    def flange_wxyz(self) -> np.ndarray:
+        return self._wxyz[-1]
+
+    @functools.cached_property
+    def factors(self) -> np.ndarray:
+        """The factors of det J the arm's model gives (the UR10's: shoulder, elbow, wrist)."""
+        return self.arm.singularity_factors(self.q)
 
     @functools.cached_property
     def lowest(self) -> np.ndarray:
-        """(9, 3) lowest body point of the solid arm, then of each branch (NaN where invalid).
-
-        Computed when first asked for (the panel's redraw, the floor markers): not on the drag path.
-        """
-        frames = np.concatenate([self.frames[None], self.ghost_frames])
-        lowest = lowest_points(frames, self.body_points)
-        lowest[1:][~self.solution.valid] = np.nan
+        """(1 + k, 3) lowest body point of the arm, then of each branch (NaN where invalid)."""
+        points = np.zeros((len(self.frames), 1, 3)) if self.body_points is None else self.body_points
+        lowest = lowest_points(np.concatenate([self.frames[None], self.ghost_frames]), points)
+        if self.solution is not None:
+            lowest[1:][~self.solution.valid] = np.nan
         return lowest
 
     @functools.cached_property
     def through_floor(self) -> np.ndarray:
-        """(9,) bool: the solid arm, then each branch, reaches below the floor z = 0 (a real arm would hit it)."""
+        """(1 + k,) bool: the arm, then each branch, reaches below the floor z = 0 (a real arm would hit it)."""
         with np.errstate(invalid="ignore"):
             return self.lowest[:, 2] < -FLOOR_TOLERANCE
 
-    @functools.cached_property
-    def det_j(self) -> float:
-        """det J = a2 a3 × the three factors (docs/kinematics.md §5)."""
-        return float(self.arm.a2 * self.arm.a3 * self.factors.prod())
 
-    @functools.cached_property
-    def geometry(self) -> SingularityGeometry:
-        """The singularity overlay's points and axes (computed when first asked for: not on the drag path)."""
-        return self.arm.singularity_geometry_from_frames(self.frames)
+def joint_value_text(kind: str, value: float, digits: str = ".1f") -> str:
+    """A joint value as a student reads it: degrees for a revolute joint, millimetres for a prismatic one."""
+    return f"{math.degrees(value):{digits}}°" if kind == "R" else f"{1000 * value:{digits}} mm"
 
 
 class ArmState:
     """One arm and its IK target. Thread-safe: callbacks of one browser may overlap.
 
+    An arm with a closed form gets every branch on every change. A typed table's numerical
+    IK follows the target from the current joints only (a millisecond or so a step); its
+    other branches come from its search from many starts, when the student asks
+    (:meth:`with_branches`).
+
     Parameters
     ----------
     arm : Arm
-        The arm's dimensions.
-    q : array_like, shape (6,), optional
-        Starting joints (rad); the arm's home pose by default (``arm.specs``: for the UR10, the
-        course's arbitrary pose).
-    body_points : array_like, shape (7, P, 3), optional
-        Points of each link's body in its DH frame (``ur10teach.meshes.body_points``), for the
+        Any arm of the course, or a typed table.
+    q : array_like, shape (n,), optional
+        Starting joints; the arm's home pose by default (``arm.specs``).
+    body_points : array_like, shape (L, P, 3), optional
+        Points of each link's body in its frame (``ur10teach.meshes.body_points``), for the
         floor check; the frame origins alone by default.
     """
 
     def __init__(self, arm: Arm, q=None, body_points=None) -> None:
         self.arm = arm
-        self.body_points = np.zeros((7, 1, 3)) if body_points is None else np.asarray(body_points, dtype=float)
-        self.lock = threading.RLock()
-        self._q = self.check_joints(arm.specs.home if q is None else q)
-        self._target = arm.fk(self._q)
-        self._solution = arm.ik(self._target, hint=self._q)
-        self._slot = int(self._solution.nearest(self._q).slot)
-        self._reason = ""
-        self._before_singularity = self._q.copy()  #: where a row of singularity buttons started
-        self._last = self._snapshot("reset")
-
-    # ------------------------------------------------------------------ reading
+        self.numerical = arm.numerical
+        self.body_points = None if body_points is None else np.asarray(body_points, dtype=float)
+        self.lock = threading.RLock()  # the drag queue holds it while it calls drag_to, which applies under it
+        self._before_singularity: np.ndarray | None = None  #: where a row of singularity buttons started
+        self.last: Snapshot | None = None
+        self.last = self._solved(self.check_joints(arm.specs.home if q is None else q), "reset")
 
     @property
     def q(self) -> np.ndarray:
-        return self._q.copy()
-
-    @property
-    def last(self) -> Snapshot:
-        """The most recent snapshot."""
-        return self._last
+        return self.last.q.copy()
 
     # ------------------------------------------------------------------ validation
 
-    @staticmethod
-    def check_joints(q) -> np.ndarray:
-        """Six finite angles (rad) within the UR10's ±360°, else ``ValueError`` naming the joint."""
+    def check_joints(self, q) -> np.ndarray:
+        """n finite joint values within the arm's limits, else ``ValueError`` naming the joint."""
+        arm = self.arm
         try:
             q = np.array(q, dtype=float).reshape(-1)
         except (TypeError, ValueError):
-            raise ValueError(f"joint angles must be six numbers, got {q!r:.60}") from None
-        if q.shape != (6,):
-            raise ValueError(f"six joint angles are needed, got {q.size}")
-        for name, value in zip(JOINT_NAMES, q):
+            raise ValueError(f"joint values must be {arm.n_joints} numbers, got {q!r:.60}") from None
+        if q.shape != (arm.n_joints,):
+            raise ValueError(f"{arm.n_joints} joint values are needed, got {q.size}")
+        low, high = arm.limits[:, 0], arm.limits[:, 1]
+        for name, kind, value, lo, hi in zip(arm.joint_names, arm.joint_types, q.tolist(), low, high):
             if not math.isfinite(value):
-                raise ValueError(f"{name}: {value} is not a number of degrees")
-            if abs(value) > JOINT_LIMIT + 1e-9:
-                raise ValueError(f"{name}: {math.degrees(value):.1f}° is outside the joint range ±360°")
-        return np.clip(q, -JOINT_LIMIT, JOINT_LIMIT)
+                raise ValueError(f"{name}: {value} is not a number")
+            if not lo - 1e-9 <= value <= hi + 1e-9:
+                lowest, highest = (joint_value_text(kind, v, ".0f") for v in (lo, hi))
+                raise ValueError(f"{name}: from {lowest} to {highest}, got {joint_value_text(kind, value)}")
+        return np.clip(q, low, high)
 
     @staticmethod
-    def parse_degrees(text: str, count: int = 6, what: str = "joint angles") -> np.ndarray:
-        """``"30, 45, 26, 50, 60, 80"`` (commas or spaces) → floats, with a message a student understands."""
+    def parse_numbers(text: str, count: int, what: str = "joint values") -> np.ndarray:
+        """``"30, 45, 26, 50, 60, 80"`` (commas or spaces, a ° allowed) → floats, with a message a student understands."""
         parts = [p for p in text.replace(",", " ").replace(";", " ").split() if p]
         if len(parts) != count:
             raise ValueError(f"{what}: expected {count} numbers, got {len(parts)} in {text!r:.60}")
@@ -155,57 +187,84 @@ class ArmState:
 
     # ------------------------------------------------------------------ changes
 
-    def set_joints(self, q, cause: str = "joints") -> Snapshot:
-        """Move the arm to ``q`` (rad); the target follows the flange."""
+    def _solved(self, q: np.ndarray, cause: str, rates=None) -> Snapshot:
+        """The arm at ``q``, the target on its tool, with every branch of it."""
+        target = self.arm.fk(q)
+        if self.numerical:
+            return self._remember(q, target, None, -1, "", cause, rates)
+        solution = self.arm.ik(target, hint=q)
+        slot = int(solution.nearest(q, prefer=None if self.last is None else self.last.slot).slot)
+        return self._remember(q, target, solution, slot, "", cause, rates)
+
+    def _remember(self, q, target, solution, slot, reason, cause, rates=None) -> Snapshot:
+        # one frames() call for the arm and every branch (on the drag path: no more numpy calls than needed)
+        slots = 0 if solution is None else len(solution.valid)
+        joints = np.empty((1 + slots, len(q)))
+        joints[0] = q
+        invalid = None
+        if slots:
+            joints[1:] = solution.q
+            invalid = ~solution.valid
+            if invalid.any():
+                joints[1:][invalid] = 0.0
+            else:
+                invalid = None
+        frames = self.arm.frames(joints)
+        ghost_frames = frames[1:]
+        if invalid is not None:
+            ghost_frames[invalid] = np.eye(4)
+        self.last = Snapshot(q, frames[0], target, solution, slot, reason, cause, self.arm, ghost_frames, rates, self.body_points)
+        return self.last
+
+    def set_joints(self, q, cause: str = "joints", rates=None) -> Snapshot:
+        """Put the arm at ``q``; the target follows the tool. ``rates``: the joints' rates while a path plays."""
         q = self.check_joints(q)
         with self.lock:
-            self._q = q
-            self._target = self.arm.fk(q)
-            self._solution = self.arm.ik(self._target, hint=q)
-            self._slot = int(self._solution.nearest(q, prefer=self._slot).slot)
-            self._reason = ""
-            return self._remember(cause)
+            return self._solved(q, cause, None if rates is None else self.arm.joints(rates, "rates").astype(float))
 
     def set_joint(self, index: int, value: float) -> Snapshot:
-        """Change one joint (rad)."""
+        """Change one joint (rad or m)."""
         with self.lock:
-            q = self._q.copy()
+            q = self.last.q.copy()
             q[index] = value
             return self.set_joints(q)
 
     def move_target(self, T, cause: str = "target") -> Snapshot:
-        """Move the IK target to ``T`` (4x4): the arm takes the branch nearest its joints.
+        """Move the IK target to ``T`` (4, 4): the arm takes the branch nearest its joints.
 
         An unreachable target leaves the arm where it was and records why. ``cause`` is
         ``"target"`` for a drag (the user holds the gizmo there already) or ``"typed"``.
         """
         with self.lock:
-            solution = self.arm.ik(T, hint=self._q)  # ValueError for a malformed pose
-            self._target = np.array(T, dtype=float)
-            self._solution = solution
-            branch = solution.nearest(self._q, prefer=self._slot)
+            previous = self.last
+            # the whole pose for an arm that controls it (the IK checks it); what it controls of it otherwise
+            target = np.array(T, dtype=float) if self.arm.task == "pose" else project_target(self.arm, T, previous.flange)
+            if self.numerical:
+                q, _ = self.arm.solver.follow(target, previous.q)
+                error = float(self.arm.pose_error(q, target))
+                if error <= 1e-9:
+                    return self._remember(q, target, None, -1, "", cause)
+                return self._remember(previous.q, target, None, -1,
+                                      f"the search from the arm's joints came within {1000 * error:.3g} mm of it: it may "
+                                      "be out of reach, or reachable only from another branch (Find every branch)", cause)
+            solution = self.arm.ik(target, hint=previous.q)  # ValueError for a malformed pose
+            branch = solution.nearest(previous.q, prefer=previous.slot)  # turned next to the joints, within the limits
             if branch.slot < 0:
-                self._slot = -1
-                self._reason = solution.unreachable_reason()
-            else:
-                self._q = branch.q
-                self._slot = int(branch.slot)
-                self._reason = ""
-            return self._remember(cause)
+                return self._remember(previous.q, target, solution, -1, solution.unreachable_reason(), cause)
+            return self._remember(branch.q, target, solution, int(branch.slot), "", cause)
 
     def select_branch(self, slot: int) -> Snapshot:
-        """Put the arm on branch ``slot`` of the current target (shifted next to the current joints)."""
-        if isinstance(slot, bool) or not isinstance(slot, (int, np.integer)) or not 0 <= slot < 8:
-            raise ValueError(f"branch must be 0..7, got {slot!r}")
+        """Put the arm on branch ``slot`` of the current target (turned next to the current joints)."""
         with self.lock:
-            if not self._solution.valid[slot]:
-                raise ValueError(
-                    f"branch {slot + 1} ({self._solution.labels[slot]}) does not exist for this target"
-                )
-            self._q = equivalent_near(self._solution.q[slot], self._q, JOINT_LIMIT)
-            self._slot = int(slot)
-            self._reason = ""
-            return self._remember("branch")
+            solution = self.last.solution
+            if solution is None:
+                raise ValueError("this arm's branches have not been searched for yet: press Find every branch")
+            slots = len(solution.labels)
+            if isinstance(slot, bool) or not isinstance(slot, (int, np.integer)) or not 0 <= slot < slots:
+                raise ValueError(f"branch must be 1..{slots}, got {slot!r} (counting from 0)")
+            if not solution.valid[slot]:
+                raise ValueError(f"branch {slot + 1} ({solution.labels[slot]}) does not exist for this target")
+            return self._remember(solution.take(slot, self.last.q), self.last.target, solution, int(slot), "", "branch")
 
     def place_in_singularity(self, kind: str) -> Snapshot:
         """Move the arm exactly onto the shoulder, elbow or wrist singularity, and onto no other.
@@ -216,48 +275,16 @@ class ArmState:
         if kind not in SINGULARITY_KINDS:
             raise ValueError(f"kind must be one of {SINGULARITY_KINDS}, got {kind!r}")
         with self.lock:
-            if self._last.cause != "singularity":
-                self._before_singularity = self._q.copy()
+            if self.last.cause != "singularity" or self._before_singularity is None:
+                self._before_singularity = self.last.q.copy()
             return self.set_joints(self.arm.singular_configuration(kind, self._before_singularity), cause="singularity")
 
-    # ------------------------------------------------------------------ snapshot
-
-    def _remember(self, cause: str) -> Snapshot:
-        self._last = self._snapshot(cause)
-        return self._last
-
-    def _snapshot(self, cause: str) -> Snapshot:
-        arm, solution = self.arm, self._solution
-        # one frames() call for the solid arm and the eight ghosts
-        joints = np.empty((9, 6))
-        joints[0], joints[1:] = self._q, solution.q
-        invalid = ~solution.valid
-        some_invalid = invalid.any()
-        if some_invalid:
-            joints[1:][invalid] = 0.0
-        frames = arm.frames(joints)
-        ghost_frames = frames[1:]
-        if some_invalid:
-            ghost_frames[invalid] = np.eye(4)
-        # every rotation the views draw, converted to quaternions in one vectorised call
-        rotations = frames[:, :, :3, :3]
-        links = arm.link_transforms(self._q)[:, :3, :3]  # T(i−1, i): the solid arm's tree
-        wxyz = quaternion(np.concatenate([links, rotations[1:].reshape(-1, 3, 3), rotations[0, 6:]]), check=False)
-        factors = arm.singularity_factors(self._q)
-        return Snapshot(
-            q=self._q.copy(),
-            frames=frames[0],
-            target=self._target.copy(),
-            solution=solution,
-            ghost_frames=ghost_frames,
-            link_wxyz=wxyz[:6],
-            ghost_wxyz=wxyz[6:-1].reshape(8, 7, 4),
-            flange_wxyz=wxyz[-1],
-            slot=self._slot,
-            reachable=self._slot >= 0,
-            reason=self._reason,
-            factors=factors,
-            body_points=self.body_points,
-            cause=cause,
-            arm=arm,
-        )
+    def with_branches(self, snapshot: Snapshot, solution: IKSolution) -> Snapshot:
+        """A typed table's found branches shown, if the arm has not moved since they were searched for."""
+        with self.lock:
+            if self.last is not snapshot:
+                return self.last
+            reached = solution.valid.any()
+            slot = int(solution.nearest(snapshot.q).slot) if reached else -1
+            reason = snapshot.reason if reached else solution.unreachable_reason()
+            return self._remember(snapshot.q, snapshot.target, solution, slot, reason, "branch")

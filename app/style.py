@@ -32,7 +32,6 @@ UNREACHABLE_RED = (220, 30, 30)
 #: Singularity overlay: calm and alarming ends of the gauges, and the lit geometry.
 SAFE_GREEN = (46, 160, 67)
 DANGER_RED = (220, 38, 38)
-OVERLAY_IDLE = (150, 150, 160)
 #: Branch-count map (RGB, alpha): no branch (a faint grey, so the plane's extent shows), then
 #: 2, 4, 6 and 8 branches along viridis, whose lightness rises for every kind of colour vision.
 REACH_COLORS: tuple[tuple[tuple[int, int, int], int], ...] = (

@@ -1,8 +1,33 @@
-"""What every feature module's view offers the session."""
+"""What every feature module's view offers the session, and what a feature is handed of the session."""
 
 from __future__ import annotations
 
-from .state import Snapshot
+from typing import Any, Callable, Protocol
+
+import viser
+
+from ur10core import Arm
+
+from .state import ArmState, Snapshot
+
+
+class Session(Protocol):
+    """What a feature is handed (``ur10teach.session.ArmSession``): the browser, its arm, and the means to change
+    and redraw it. Features never import the session: the session builds them and hands itself over."""
+
+    client: viser.ClientHandle
+    arm: Arm
+    state: ArmState
+    refresher: Any  #: ``request(session)`` redraws the panel soon
+    closed: bool
+
+    def apply(self, change: Callable[[ArmState], Snapshot], timed: str | None = None) -> Snapshot: ...
+
+    def redraw(self) -> None: ...
+
+    def guard(self, handler: Callable[[Any], None]) -> Callable[[Any], None]: ...
+
+    def notify(self, title: str, body: str, color: str = "yellow") -> None: ...
 
 
 class View:
@@ -12,7 +37,7 @@ class View:
     ``render_panel`` draws the GUI, and 3D details that need not follow a drag frame by
     frame (branch numbers, floor markers), at most ten times a second (see ``ur10teach.serving.workers``).
     Both run one at a time per session: ``render`` under the arm's lock
-    (``ClientSession.apply`` or ``redraw``), ``render_panel`` on the panel refresher.
+    (``ArmSession.apply`` or ``redraw``), ``render_panel`` on the panel refresher.
 
     ``close`` lets go of what the view holds in a scene shared with others (the browser
     has gone, or handed the arm over); ``remove`` also takes the view's own widgets out of

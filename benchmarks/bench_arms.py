@@ -64,10 +64,10 @@ def drag_ms(arm: Arm, server) -> tuple[float, float, float]:
     ghosts and DH frames, on viser's event loop and batched as the app does. p50 and p99 (ms)
     in the default view, and p99 with the singularity overlay on too."""
     from ur10teach.features.course_arms.scene import CourseArmScene
-    from ur10teach.features.course_arms.session import reach
-    from ur10teach.features.course_arms.state import CourseArmState
+    from ur10teach.features.drawings import reach
+    from ur10teach.state import ArmState
 
-    state = CourseArmState(arm)
+    state = ArmState(arm)
     scene = CourseArmScene(server.scene, arm, state.last, reach(arm))
     rng = np.random.default_rng(4)
     q = state.last.q + np.cumsum(rng.normal(0.0, 0.01, (DRAG_STEPS, arm.n_joints)), axis=0)  # a student's hand

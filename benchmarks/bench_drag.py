@@ -69,7 +69,7 @@ async def drive(url: str, map_on: bool = False, jacobian: bool = False) -> dict:
         await client.set_gui("Show branch-count map", True)
     if jacobian:  # the ellipsoids and the force arrow on the drag path, the torque bars at the panel's pace
         await asyncio.sleep(0.1)
-        await client.set_gui("Show at the flange", True)
+        await client.set_gui("Show at the tool", True)
         await asyncio.sleep(0.1)
         await client.set_gui("Show the torques", True)
     await asyncio.sleep(0.5)

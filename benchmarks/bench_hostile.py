@@ -168,7 +168,7 @@ ATTACKS = {
     "none": None,
     "one 10 MB message (review 1)": "bomb",
     f"65 000-byte frames back to back, {CONNECTIONS} connections tried": (big_frames, None),
-    f"valid slider updates at full speed, {CONNECTIONS} connections tried": (gui_frames("θ2 shoulder", lambda k: float(k % 90)), None),
+    f"valid slider updates at full speed, {CONNECTIONS} connections tried": (gui_frames("θ2 shoulder (°)", lambda k: float(k % 90)), None),
     f"clouds asked for, socket never read, {CONNECTIONS} connections tried": "frozen",
     f"*Release the arm* 30 times a second, {CONNECTIONS} connections tried": (gui_frames("Release the arm", lambda k: True), 1 / 30),
     f"branch map on, gizmo turned at 30 Hz, {CONNECTIONS} connections tried": "map",

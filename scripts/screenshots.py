@@ -32,30 +32,28 @@ def show_the_map(page, session) -> None:
     wait_for(lambda: session.reach_map.image is not None, what="the map")
 
 
-def show_the_kr210(page, session) -> None:
-    from ur10teach.features.course_arms.session import CourseArmSession
+def pick_arm(page, session, label: str):
+    """Choose ``label`` in the arm picker, as a student does; the new arm's session once its sliders show."""
     from ur10dev.browser import choose
 
-    choose(page, session.arm_picker.dropdown, "KUKA KR210 (spherical wrist)")
+    choose(page, session.arm_picker.dropdown, label)
     server = SERVER["now"]
-    wait_for(lambda: any(isinstance(s, CourseArmSession) for s in server.sessions.values()), what="the KR210")
-    course = next(iter(server.sessions.values()))
-    page.wait_for_selector(dom_id(course.joints.sliders[0]), timeout=30_000)
-    course.dh_table.highlight.value = "row 3"
+    wait_for(lambda: any(s.choice == label for s in server.sessions.values()), what=label)
+    picked = next(iter(server.sessions.values()))
+    page.wait_for_selector(dom_id(picked.joints.sliders[0]), timeout=30_000)
+    return picked
+
+
+def show_the_kr210(page, session) -> None:
+    pick_arm(page, session, "KUKA KR210 (spherical wrist)").dh_table.highlight.value = "row 3"
 
 
 def show_the_desktop_arm(page, session) -> None:
     import numpy as np
 
     from ur10core.orientation import transform_from_quaternion
-    from ur10teach.features.course_arms.session import CourseArmSession
-    from ur10dev.browser import choose
 
-    choose(page, session.arm_picker.dropdown, "The course's 3-DOF desktop arm")
-    server = SERVER["now"]
-    wait_for(lambda: any(isinstance(s, CourseArmSession) for s in server.sessions.values()), what="the desktop arm")
-    desktop = next(iter(server.sessions.values()))
-    page.wait_for_selector(dom_id(desktop.joints.sliders[0]), timeout=30_000)
+    desktop = pick_arm(page, session, "The course's 3-DOF desktop arm")
     goal = desktop.arm.fk(np.radians([25.0, -35.0, 60.0]))  # where all four branches reach
     desktop.apply(lambda state: state.move_target(transform_from_quaternion(np.array([1.0, 0, 0, 0]), goal[:3, 3])))
     wait_for(lambda: int(desktop.state.last.solution.valid.sum()) == 4, what="its four branches")
@@ -75,7 +73,7 @@ def shoot(name: str, lecture: bool, prepare=None) -> None:
             page.wait_for_selector(CONNECTED, state="attached", timeout=30_000)
             wait_for(lambda: server.sessions, what="the session")
             session = next(iter(server.sessions.values()))
-            wait_for(lambda: session.scene_views.branches.labels[0].visible, what="the numbers")
+            wait_for(lambda: session.drawing.branches.labels[0].visible, what="the numbers")
             if prepare is not None:
                 prepare(page, session)
             page.wait_for_timeout(8000)  # the real meshes take a while to draw in software WebGL

@@ -19,7 +19,7 @@ def test_the_dropdown_switches_the_arm_and_its_ghosts_and_refuses_other_values(a
     async def scenario():
         client = await ViserClient(url(app)).connect()
         session = session_of(app, client)
-        robot, branches = session.scene_views.robot, session.scene_views.branches
+        robot, branches = session.drawing.robot, session.drawing.branches
         assert robot.model == branches.model == REAL  # the real arm by default
         assert all(m.visible for m in robot.meshes[REAL])
         # the schematic arm is sent only when it is first chosen: a newcomer's scene is smaller
@@ -52,7 +52,7 @@ def test_a_new_presenter_sees_the_classrooms_choice(classroom):
         first = await ViserClient(url(classroom)).connect()
         await become_presenter(first, classroom)
         await first.set_gui("Arm drawn as", SCHEMATIC)
-        views = classroom.classroom.scene_views
+        views = classroom.classroom.drawing
         await until(lambda: views.robot.model == SCHEMATIC, what="the shared scene's schematic arm")
         await first.close()
         second = await ViserClient(url(classroom)).connect()
@@ -80,8 +80,8 @@ def test_the_light_view_shades_the_arm_and_ghosts_for_software_webgl(light, monk
         async def scenario():
             client = await ViserClient(url(server)).connect()
             session = session_of(server, client)
-            meshes = [m for models in session.scene_views.robot.meshes.values() for m in models]
-            ghosts = [g for models in session.scene_views.branches.models.values() for g in models]
+            meshes = [m for models in session.drawing.robot.meshes.values() for m in models]
+            ghosts = [g for models in session.drawing.branches.models.values() for g in models]
             assert {m.material for m in meshes + ghosts} == {"toon3" if light else "standard"}
             assert {(m.cast_shadow, m.receive_shadow) for m in meshes} == {(not light, not light)}
             await client.close()

@@ -5,10 +5,10 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from ur10teach.features.ik_target import ALL_BRANCHES, FOCUS_OPTIONS, branch_labels, branch_table, flipped, focused, same_pose_groups
+from ur10teach.features.ik_target import ALL_BRANCHES, branch_labels, branch_table, flipped, focus_options, focused, same_pose_groups
 from ur10teach.meshes import body_points, load_links
 from ur10teach.state import ArmState
-from ur10core import SLOTS
+from ur10core import SLOTS, Arm
 
 
 @pytest.fixture(scope="module")
@@ -29,14 +29,19 @@ def test_flipping_a_choice_changes_that_choice_alone():
 
 
 def test_focus_choices(course):
-    assert focused(ALL_BRANCHES, 4).all()
+    assert focused(ALL_BRANCHES, 4, course).all()
     for k in range(8):
-        assert focused(f"Only branch {k + 1}", 4).nonzero()[0].tolist() == [k]
-    assert set(focused("Flip the wrist", 4).nonzero()[0]) == {4, flipped(4, "wrist")}
-    assert set(focused("Flip the shoulder", -1).nonzero()[0]) == {0, flipped(0, "shoulder")}  # out of reach
-    assert len(FOCUS_OPTIONS) == 12
+        assert focused(f"Only branch {k + 1}", 4, course).nonzero()[0].tolist() == [k]
+    assert set(focused("Flip the wrist", 4, course).nonzero()[0]) == {4, flipped(4, "wrist")}
+    assert set(focused("Flip the shoulder", -1, course).nonzero()[0]) == {0, flipped(0, "shoulder")}  # out of reach
+    assert len(focus_options(course)) == 12
     with pytest.raises(ValueError, match="ghosts shown"):
-        focused("Only branch 9x", 4)
+        focused("Only branch 9x", 4, course)
+    # an arm whose slots are not the UR family's shoulder, elbow and wrist choices: one branch, or all
+    scara = Arm.preset("scara")
+    assert focus_options(scara) == (ALL_BRANCHES, "Only branch 1", "Only branch 2")
+    with pytest.raises(ValueError, match="ghosts shown"):
+        focused("Flip the wrist", 0, scara)
 
 
 def test_every_branch_is_numbered_where_none_coincide(course, points):

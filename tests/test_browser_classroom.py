@@ -18,7 +18,6 @@ pytestmark = pytest.mark.browser
 
 def test_a_class_follows_the_presenter_and_a_student_explores(tmp_path):
     from ur10teach.features.arm_picker import UR10
-    from ur10teach.features.course_arms.session import CourseArmSession
     from ur10teach.serving.server import TeachingServer
 
     app = TeachingServer(port=0, shared=True, light=True)
@@ -56,18 +55,19 @@ def test_a_class_follows_the_presenter_and_a_student_explores(tmp_path):
             watching_ur10 = settled_canvas(student)
             wait_for(app.classroom.can_switch, what="the class's arm to be ready for a change")
             choose(teacher, teacher_member.picker.dropdown, "SCARA (RRP + roll)")
-            wait_for(lambda: isinstance(teacher_member.session, CourseArmSession), what="the class's SCARA")
+            wait_for(lambda: teacher_member.session is not None and teacher_member.session.arm.name == "scara",
+                     what="the class's SCARA")
             wait_for(lambda: student.get_by_text("SCARA (RRP + roll)").count() > 0, what="the student's live panel")
             wait_for(lambda: changed(watching_ur10, settled_canvas(student)) > 0.02, what="the student's screen to change arm")
 
             # exploring the SCARA, the student keeps their own arm on screen when the class goes back to the UR10
             student.get_by_role("button", name="Explore on my own").click()
-            wait_for(lambda: isinstance(student_member.session, CourseArmSession) and student_member.session.built,
+            wait_for(lambda: student_member.session is not None and student_member.session.built,
                      what="the student's own SCARA")
             exploring = settled_canvas(student)
             wait_for(app.classroom.can_switch, what="the class's arm to be ready for a change")
             choose(teacher, teacher_member.picker.dropdown, UR10)
-            wait_for(lambda: app.classroom.course is None, what="the class's UR10")
+            wait_for(lambda: app.classroom.choice == UR10, what="the class's UR10")
             # the class's UR10 reaches the student's browser, hidden there by a node of the student's own
             # (viser draws a client's node over the shared one of the same name)
             still_exploring = settled_canvas(student)

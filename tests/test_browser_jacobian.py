@@ -22,7 +22,6 @@ def test_what_the_jacobian_does_on_the_ur10_and_the_desktop_arm(open_page, light
     the pose that needs the most torque."""
     from ur10teach.features.arm_picker import DESKTOP
     from ur10teach.features.course_arms.desktop_lessons import CoursePathLesson, StaticsExercise
-    from ur10teach.features.course_arms.session import CourseArmSession
     from ur10teach.features.statics import DRAGGED
 
     app = light_app
@@ -78,23 +77,23 @@ def test_what_the_jacobian_does_on_the_ur10_and_the_desktop_arm(open_page, light
     before = settled_canvas(page)
     wait_for(lambda: app.can_switch(client_id), what="the arm to be ready for a change")
     choose(page, session.arm_picker.dropdown, DESKTOP)
-    wait_for(lambda: isinstance(app.sessions.get(client_id), CourseArmSession) and app.sessions[client_id].built
+    wait_for(lambda: app.sessions.get(client_id) is not None and app.sessions[client_id].built
              and app.sessions[client_id].arm.name == "three_dof", what="the desktop arm's session")
     desktop = app.sessions[client_id]
     path, exercise = (next(lesson for lesson in desktop.lessons if isinstance(lesson, kind))
                       for kind in (CoursePathLesson, StaticsExercise))
     page.wait_for_selector(dom_id(desktop.joints.sliders[0]), timeout=HANG_TIMEOUT_MS)
-    wait_for(lambda: page.get_by_text("upper arm and forearm in one line", exact=False).count() > 0, what="det J_v's factors")
+    wait_for(lambda: page.get_by_text("the upper arm and the forearm are in one line", exact=False).count() > 0, what="det J_v's factors")
     wait_for(lambda: page.get_by_text("Tool turning rate ω", exact=True).count() == 1, what="the velocity plots")
     assert page.get_by_text("1/1/70", exact=False).count() == 0, "the time axis is read as dates"
     still = canvas_changed(page, before, 0.02, "the desktop arm drawn in place of the UR10")
     rest = desktop.state.last.q
-    click(page, path.play, lambda: desktop.scene.velocity[0].visible, "the path playing")
+    click(page, path.play, lambda: desktop.velocity.linear.visible, "the path playing")
     wait_for(lambda: np.abs(desktop.state.last.q - rest).max() > 0.05, what="the arm to move along the path")
     with desktop.state.lock:  # the path waits at its next frame, however slow the machine, while the picture is taken
         canvas_changed(page, still, 0.003, "the arm and its arrows to show the path")
         page.screenshot(path=str(tmp_path / "desktop_arm_playing.png"))
-    click(page, path.stop, lambda: not desktop.scene.velocity[0].visible, "the path stopped")
+    click(page, path.stop, lambda: not desktop.velocity.linear.visible, "the path stopped")
     # the pose that needs the most torque, marked by a red ball with its label
     unfold(page, "The course's statics exercise", exercise.search)
     click(page, exercise.search, lambda: "Largest ‖τ‖" in exercise.result.content, "the worst pose")

@@ -95,7 +95,7 @@ def test_lecture_mode_for_the_presenter_and_the_class(open_page, playwright):
     server = TeachingServer(port=0, lecture=True, light=True)
     try:
         page, session = open_page(server=server, drawn=False)
-        text = page.get_by_text("Drag the gizmo at the flange", exact=False).first
+        text = page.get_by_text("Drag the gizmo at the tool", exact=False).first
         # lecture mode's style comes with the panel's last folder (the View folder): the text may show a moment before it
         wait_for(lambda: font_px(text) >= 20, what="lecture mode's 20 px panel type")
         assert session.ik_target.gizmo.line_width >= 6
@@ -131,7 +131,7 @@ def test_the_ghosts_the_floor_and_the_gizmo_as_a_student_sees_them(open_page):
     from ur10teach.meshes import REAL, SCHEMATIC
 
     page, session = open_page()
-    branches = session.scene_views.branches
+    branches = session.drawing.branches
     box = page.locator("canvas").first.bounding_box()
 
     # every ghost has its number by its elbow (viser draws 3D labels on the canvas: hiding them must change it there)
@@ -172,27 +172,27 @@ def test_the_ghosts_the_floor_and_the_gizmo_as_a_student_sees_them(open_page):
 
     # the gizmo, drawn over everything, is small beside the arm and leaves the overlay's P5 visible
     session.ik_target.show_ghosts.value = False
-    set_checkbox(page, session.singularity.enabled, True)
-    wait_for(lambda: session.scene_views.overlay.p5.visible, what="the overlay")
+    set_checkbox(page, session.singularities.enabled, True)
+    wait_for(lambda: session.drawing.overlay.lines["shoulder"].visible, what="the overlay")
     everything = settled_canvas(page)
     session.ik_target.gizmo.visible = False
     no_gizmo = canvas_changed(page, everything, 0.0005, "the gizmo to go")
-    for node in session.scene_views.robot.links:
+    for node in session.drawing.robot.links:
         node.visible = False
     no_arm = canvas_changed(page, no_gizmo, 0.01, "the arm to go")
     gizmo = changed_mask(no_gizmo, everything).sum()
     arm_pixels = changed_mask(no_arm, no_gizmo).sum()
     assert gizmo < GIZMO_MAX_SHARE * arm_pixels, f"the gizmo covers {gizmo / arm_pixels:.0%} as much of the view as the arm"
-    u, v = project(session.client.camera, session.state.last.geometry.p5, box)
+    u, v = project(session.client.camera, session.arm.singularity_geometry(session.state.last.q).p5, box)
     assert np.abs(neighbourhood(everything, u, v, box, 3) - neighbourhood(no_gizmo, u, v, box, 3)).sum(axis=1).mean() < 40, \
         "the gizmo covers P5"
-    for node in session.scene_views.robot.links:
+    for node in session.drawing.robot.links:
         node.visible = True
     session.ik_target.gizmo.visible = True
-    set_checkbox(page, session.singularity.enabled, False)
+    set_checkbox(page, session.singularities.enabled, False)
 
     # the arm on screen is UR's meshes (hiding them empties it); "Schematic" draws a different outline
-    robot = session.scene_views.robot
+    robot = session.drawing.robot
     session.camera.frame()
     real = settled_canvas(page)
     for mesh in robot.meshes[REAL]:
@@ -227,10 +227,10 @@ def test_the_ghosts_the_floor_and_the_gizmo_as_a_student_sees_them(open_page):
         snapshot = session.apply(lambda state: state.select_branch(int(grouped)))
     twins = twins_of(snapshot)
     assert twins, "no branch coincides with the arm at the zero pose"
-    assert not session.scene_views.branches.shown[twins].any()
+    assert not session.drawing.branches.shown[twins].any()
     choose(page, session.ik_target.focus, f"Only branch {twins[0] + 1}")  # nothing else in front of the arm
-    wait_for(lambda: session.scene_views.branches.focus == f"Only branch {twins[0] + 1}", what="the focus")
-    assert not session.scene_views.branches.shown.any()
+    wait_for(lambda: session.drawing.branches.focus == f"Only branch {twins[0] + 1}", what="the focus")
+    assert not session.drawing.branches.shown.any()
     session.camera.frame()
     pixels = settled_canvas(page)
     for frame in (3, 4):  # the elbow and the first wrist joint, in the middle of the arm

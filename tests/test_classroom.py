@@ -143,7 +143,7 @@ def test_exploring_on_your_own_and_back(classroom):
         assert own is not demo
         np.testing.assert_allclose(own.q, demo.q)  # starts from the presenter's pose
         # the student's moves stay theirs; the presenter's stay the class's
-        await student.set_gui("θ1 base", 25.0)
+        await student.set_gui("θ1 base (°)", 25.0)
         await until(lambda: abs(np.degrees(own.q[0]) - 25.0) < 1e-9, what="the student's slider")
         assert abs(np.degrees(demo.q[0]) - 10.0) < 1e-9
         demo.set_joints(np.radians([40, -70, 80, -30, 60, 20]))
@@ -289,11 +289,9 @@ def test_a_browser_that_left_cannot_become_the_presenter(classroom):
 def test_the_presenter_shows_the_class_another_arm(classroom):
     """The presenter's picker changes the class's arm: every viewer's scene and live panel follow,
     an explorer gets a private copy of it, and the UR10 comes back where the presenter left it."""
-    from ur10teach.serving.classroom import UR10_ROOTS
     from ur10teach.features.course_arms.scene import EXPLORER_ROOT, ROOT
-    from ur10teach.features.course_arms.session import CourseArmSession
     from ur10teach.features.arm_picker import UR10
-    from ur10teach.session import ClientSession
+    from ur10teach.session import ArmSession
     from ur10dev.viser_client import wxyz_of
 
     stanford = "Stanford arm (RRP + wrist)"
@@ -308,47 +306,47 @@ def test_the_presenter_shows_the_class_another_arm(classroom):
         ur10_q = room.state.q.copy()
         await until(room.can_switch, what="the class's arm to be ready for a change")
         await teacher.set_gui("Which arm", stanford)
-        await until(lambda: room.course is not None and isinstance(presenter.session, CourseArmSession),
+        await until(lambda: room.choice == stanford and presenter.session is not None,
                     what="the class's Stanford arm")
-        assert presenter.session.state is room.course.state and presenter.session.scene is room.course.scene
+        assert presenter.session.state is room.state and presenter.session.drawing is room.drawing
         # every browser is sent the new arm in the shared scene, and the UR10's nodes go
         for client in (teacher, student):
             await until(lambda: client.received.node_owners.get(f"{ROOT}/body") == "", what="the shared Stanford arm")
-            assert f"{ROOT}/target" not in client.received.nodes or client is teacher  # the gizmo is the presenter's own
+            assert f"{ROOT}/ik_target" not in client.received.nodes or client is teacher  # the gizmo is the presenter's own
             assert "/arm/link0" in client.received.removed_nodes
-        await until(lambda: room.live.arm.content == f"**{stanford}**", what="the Stanford arm's live panel")
+        await until(lambda: room.live.title.content == f"**{stanford}**", what="the Stanford arm's live panel")
         # the presenter drags; the class's arm and the live panel follow
         q = np.array([0.4, 1.2, 0.3, 0.2, 0.5, -0.3])
-        T = room.course.arm.fk(q)
-        await teacher.drag_target(T[:3, 3], wxyz_of(T), "start", name=f"{ROOT}/target")
-        await until(lambda: np.abs(room.course.arm.fk(room.course.state.last.q) - T).max() < 1e-9, what="the class's arm moved")
-        await until(lambda: "300.0 mm" in room.live.joints.content, what="d3 in the live panel")
+        T = room.state.arm.fk(q)
+        await teacher.drag_target(T[:3, 3], wxyz_of(T), "start", name=f"{ROOT}/ik_target")
+        await until(lambda: np.abs(room.state.arm.fk(room.state.last.q) - T).max() < 1e-9, what="the class's arm moved")
+        await until(lambda: "d3 300.00 mm" in room.live.joints.content, what="d3 in the live panel")
         # a student explores the same arm on their own, under a root of its own; the class's is hidden for them
         await student.set_gui("Explore on my own", True)
         explorer = member_of(classroom, 1)
-        await until(lambda: isinstance(explorer.session, CourseArmSession), what="the explorer's arm")
-        assert explorer.session.scene.root == EXPLORER_ROOT
-        np.testing.assert_allclose(explorer.session.state.last.q, room.course.state.last.q)
+        await until(lambda: isinstance(explorer.session, ArmSession), what="the explorer's arm")
+        assert explorer.session.drawing.root == EXPLORER_ROOT
+        np.testing.assert_allclose(explorer.session.state.last.q, room.state.last.q)
         mine = str(explorer.client.client_id)
         await until(lambda: student.received.node_owners.get(ROOT) == mine and student.received.visible.get(ROOT) is False,
                     what="the class's arm hidden for the explorer")
-        goal = room.course.arm.fk(np.array([0.1, 1.0, 0.2, 0.0, 0.4, 0.1]))
-        await student.drag_target(goal[:3, 3], wxyz_of(goal), "start", name=f"{EXPLORER_ROOT}/target")
+        goal = room.state.arm.fk(np.array([0.1, 1.0, 0.2, 0.0, 0.4, 0.1]))
+        await student.drag_target(goal[:3, 3], wxyz_of(goal), "start", name=f"{EXPLORER_ROOT}/ik_target")
         await until(lambda: np.abs(explorer.session.arm.fk(explorer.session.state.last.q) - goal).max() < 1e-9,
                     what="the explorer's own arm moved")
-        assert np.abs(room.course.arm.fk(room.course.state.last.q) - T).max() < 1e-9  # the class's did not
+        assert np.abs(room.state.arm.fk(room.state.last.q) - T).max() < 1e-9  # the class's did not
         # back to the UR10: where the presenter left it; the explorer now hides the shared UR10
         await until(room.can_switch, what="the class's arm to be ready for a change")
         await teacher.set_gui("Which arm", UR10)
-        await until(lambda: room.course is None and isinstance(presenter.session, ClientSession), what="the UR10 back")
+        await until(lambda: room.choice == UR10 and presenter.session is not None, what="the UR10 back")
         np.testing.assert_array_equal(room.state.q, ur10_q)
         await until(lambda: all(student.received.node_owners.get(name) == mine and student.received.visible.get(name) is False
-                                for name in UR10_ROOTS), what="the shared UR10 hidden for the explorer")
+                                for name in set(room.drawing.roots) - {"/target"}), what="the shared UR10 hidden for the explorer")
         # at once again: too soon, refused with a message; the class keeps its arm
         await teacher.set_gui("Which arm", stanford)
         await until(lambda: any("one change of arm" in body.lower() for _, body in teacher.received.notifications),
                     what="the refusal")
-        assert room.course is None
+        assert room.choice == UR10
         await teacher.close()
         await student.close()
 
@@ -357,9 +355,8 @@ def test_the_presenter_shows_the_class_another_arm(classroom):
 
 def test_the_shared_ur10_lives_under_the_roots_an_explorer_hides(classroom):
     names = [name for name in classroom.server.scene._handle_from_node_name if name not in ("/floor", "/WorldAxes")]
-    from ur10teach.serving.classroom import UR10_ROOTS
-
-    assert names and all(name.split("/")[1] in {root.strip("/") for root in UR10_ROOTS} for name in names)
+    roots = classroom.classroom.drawing.roots
+    assert names and all(name.split("/")[1] in {root.strip("/") for root in roots} for name in names)
 
 
 def test_the_class_is_shown_the_desktop_arm_played_and_explored(classroom):
@@ -367,8 +364,7 @@ def test_the_class_is_shown_the_desktop_arm_played_and_explored(classroom):
     with its live panel; an explorer drives a copy of it and the class's stays hidden for them."""
     from ur10teach.features.arm_picker import DESKTOP, UR10
     from ur10teach.features.course_arms.desktop_arm import EXPLORER_ROOT, ROOT
-    from ur10teach.features.course_arms.session import CourseArmSession
-    from ur10teach.session import ClientSession
+    from ur10teach.session import ArmSession
 
     async def scenario():
         teacher = await ViserClient(f"http://127.0.0.1:{classroom.port}").connect()
@@ -378,35 +374,35 @@ def test_the_class_is_shown_the_desktop_arm_played_and_explored(classroom):
         presenter = member_of(classroom, 0)
         await until(room.can_switch, what="the class's arm to be ready for a change")
         await teacher.set_gui("Which arm", DESKTOP)
-        await until(lambda: isinstance(presenter.session, CourseArmSession) and presenter.session.arm.name == "three_dof",
+        await until(lambda: presenter.session is not None and presenter.session.arm.name == "three_dof",
                     what="the class's desktop arm")
-        assert presenter.session.state is room.course.state and presenter.session.scene is room.course.scene
+        assert presenter.session.state is room.state and presenter.session.drawing is room.drawing
         for client in (teacher, student):
             await until(lambda: client.received.node_owners.get(f"{ROOT}/course_frame/links") == "", what="the shared desktop arm")
-        await until(lambda: room.live.arm.content == f"**{DESKTOP}**", what="the desktop arm's live panel")
+        await until(lambda: room.live.title.content == f"**{DESKTOP}**", what="the desktop arm's live panel")
         # the presenter plays the course's path: the class's arm moves and the live panel follows
         await teacher.set_gui("Play the course's path", True)
-        await until(lambda: abs(room.course.state.last.q[0]) > 0.05, what="the class's arm on the path")
-        await until(lambda: room.live.joints.content.split(",")[0] != "0.0°", what="the live joints")
+        await until(lambda: abs(room.state.last.q[0]) > 0.05, what="the class's arm on the path")
+        await until(lambda: "θ1 base 0.00°" not in room.live.joints.content, what="the live joints")
         await teacher.set_gui("Stop", True)
-        await until(lambda: room.course.state.last.rates is None, what="the path stopped")
+        await until(lambda: room.state.last.rates is None, what="the path stopped")
         # a student explores a copy of it, from the class's pose, under a root of its own
         await student.set_gui("Explore on my own", True)
         explorer = member_of(classroom, 1)
-        await until(lambda: isinstance(explorer.session, CourseArmSession), what="the explorer's desktop arm")
-        assert explorer.session.scene.top == EXPLORER_ROOT
-        np.testing.assert_allclose(explorer.session.state.last.q, room.course.state.last.q)
+        await until(lambda: isinstance(explorer.session, ArmSession), what="the explorer's desktop arm")
+        assert explorer.session.drawing.top == EXPLORER_ROOT
+        np.testing.assert_allclose(explorer.session.state.last.q, room.state.last.q)
         mine = str(explorer.client.client_id)
         await until(lambda: student.received.node_owners.get(ROOT) == mine and student.received.visible.get(ROOT) is False,
                     what="the class's arm hidden for the explorer")
-        class_q = room.course.state.last.q.copy()
+        class_q = room.state.last.q.copy()
         await student.set_gui("θ3 forearm (°)", 90.0)
         await until(lambda: abs(explorer.session.state.last.q[2] - np.pi / 2) < 1e-9, what="the explorer's own arm moved")
-        np.testing.assert_array_equal(room.course.state.last.q, class_q)  # the class's did not
+        np.testing.assert_array_equal(room.state.last.q, class_q)  # the class's did not
         # and back to the UR10
         await until(room.can_switch, what="the class's arm to be ready for a change")
         await teacher.set_gui("Which arm", UR10)
-        await until(lambda: room.course is None and isinstance(presenter.session, ClientSession), what="the UR10 back")
+        await until(lambda: room.choice == UR10 and presenter.session is not None, what="the UR10 back")
         await teacher.close()
         await student.close()
 

@@ -9,10 +9,11 @@ import numpy as np
 import pytest
 import viser
 
-from ur10teach.features.arm_picker import ARM_CHOICES, CUSTOM, DESKTOP, UR10
-from ur10teach.features.course_arms.panel import branches_markdown, dh_table_markdown
-from ur10teach.features.course_arms.session import CourseArmSession
-from ur10teach.session import ClientSession
+from ur10teach.features.arm_picker import ARM_CHOICES, CUSTOM, UR10
+from ur10teach.features.dh_table import dh_table_markdown
+from ur10teach.features.ik_target import branches_markdown
+from ur10teach.features.velocity import METRES_PER_SPEED
+from ur10teach.session import ArmSession
 from ur10core import Arm
 
 from .server_support import session_of, until, url
@@ -21,29 +22,27 @@ from ur10dev.viser_client import ViserClient, wxyz_of
 pytestmark = pytest.mark.server
 
 KR210 = "KUKA KR210 (spherical wrist)"
-TARGET = "/course_arm/target"
+TARGET = "/course_arm/ik_target"
 
 
 def session_for(app, client_id: int):
     return app.sessions.get(client_id)
 
 
-async def pick(app, client: ViserClient, label: str, kind: type):
+async def pick(app, client: ViserClient, label: str):
     """Choose ``label`` in the "Arm" dropdown, as a student does, once the current dropdown has arrived."""
     client_id = int(client.gizmo_owner)
     await until(lambda: "Which arm" in client.gui and client.gui["Which arm"]["uuid"] not in client.received.removed_gui,
                 what="the arm picker")
     await until(lambda: app.can_switch(client_id), what="the arm to be ready for a change")  # one change per interval
     await client.set_gui("Which arm", label)
-    await until(lambda: isinstance(session_for(app, client_id), kind)
-                and (kind is ClientSession or session_for(app, client_id).arm.name == ARM_CHOICES[label]),
-                what=f"the {label}")
+    await until(lambda: getattr(session_for(app, client_id), "choice", None) == label, what=f"the {label}")
     session = session_for(app, client_id)
     await arrived(client, session)
     return session
 
 
-async def build_table(app, client: ViserClient, rows: str, joint_types: str, replacing) -> CourseArmSession:
+async def build_table(app, client: ViserClient, rows: str, joint_types: str, replacing) -> ArmSession:
     """Type ``rows`` into the DH editor and build them, as a student does, once the arm may change;
     returns the new arm's session (of ``joint_types``, in ``replacing``'s place) once its panel is in."""
     client_id = int(client.gizmo_owner)
@@ -73,7 +72,7 @@ def test_picking_the_kr210_builds_its_arm_and_drags_it(app):
     async def scenario():
         client = await ViserClient(url(app)).connect()
         first = session_of(app, client)
-        session = await pick(app, client, KR210, CourseArmSession)
+        session = await pick(app, client, KR210)
         assert first.closed
         assert "/ik_target" in client.received.removed_nodes  # the UR10's gizmo went with its arm
         await until(lambda: "A1 (°)" in client.gui and "/course_arm/body" in client.received.nodes, what="the KR210")
@@ -84,7 +83,7 @@ def test_picking_the_kr210_builds_its_arm_and_drags_it(app):
         await client.drag_target(T[:3, 3], wxyz_of(T), "end", name=TARGET)
         await until(lambda: np.allclose(session.state.last.q, q, atol=1e-9), what="the arm at the dragged pose")
         snapshot = session.state.last
-        assert snapshot.reason == "" and snapshot.solution.valid[snapshot.chosen]
+        assert snapshot.reason == "" and snapshot.solution.valid[snapshot.slot]
         # out of reach: the arm stays, and the panel says why, with the numbers
         far = T.copy()
         far[:3, 3] = (5.0, 0.0, 1.0)
@@ -92,12 +91,12 @@ def test_picking_the_kr210_builds_its_arm_and_drags_it(app):
         await until(lambda: session.state.last.reason != "", what="the reason")
         assert "reach at most" in session.state.last.reason
         np.testing.assert_allclose(session.state.last.q, q, atol=1e-9)
-        assert "Out of reach" in branches_markdown(session.arm, session.state.last)
+        assert "Target unreachable" in branches_markdown(session.state.last)
         # a slider moves one joint, in degrees
         await client.set_gui("A2 (°)", 30.0)
         await until(lambda: math.isclose(session.state.last.q[1], math.radians(30.0), abs_tol=1e-9), what="A2 = 30°")
         # and back to the UR10, with its whole panel
-        back = await pick(app, client, UR10, ClientSession)
+        back = await pick(app, client, UR10)
         assert session.closed and not back.closed
         await until(lambda: "Show workspace cloud" in client.gui, what="the UR10's panel")
         await client.close()
@@ -108,7 +107,7 @@ def test_picking_the_kr210_builds_its_arm_and_drags_it(app):
 def test_a_prismatic_joint_is_driven_in_millimetres(app):
     async def scenario():
         client = await ViserClient(url(app)).connect()
-        session = await pick(app, client, "Stanford arm (RRP + wrist)", CourseArmSession)
+        session = await pick(app, client, "Stanford arm (RRP + wrist)")
         await client.set_gui("d3 (mm)", 300.0)
         await until(lambda: math.isclose(session.state.last.q[2], 0.3, abs_tol=1e-9), what="d3 = 300 mm")
         await client.set_gui("d3 (mm)", 5000.0)  # beyond the stroke: refused, with a message
@@ -127,9 +126,9 @@ def test_every_arm_can_be_picked_and_an_unknown_one_is_refused(app):
         for label, name in ARM_CHOICES.items():
             if name in (None, "custom", "three_dof"):  # the DH editor's arm and the desktop arm have their own tests
                 continue
-            session = await pick(app, client, label, CourseArmSession)
+            session = await pick(app, client, label)
             snapshot = session.state.last
-            assert snapshot.chosen >= 0 and snapshot.solution.valid.any()
+            assert snapshot.slot >= 0 and snapshot.solution.valid.any()
             np.testing.assert_allclose(session.arm.fk(snapshot.q), snapshot.target, atol=1e-9)
         client_id = int(client.gizmo_owner)
         await client.set_gui("Which arm", "PUMA 560")
@@ -154,7 +153,7 @@ def test_dh_tables_show_both_conventions():
 def test_a_typed_dh_table_becomes_an_arm_with_numerical_ik(app):
     async def scenario():
         client = await ViserClient(url(app)).connect()
-        session = await pick(app, client, CUSTOM, CourseArmSession)
+        session = await pick(app, client, CUSTOM)
         assert session.state.numerical and session.arm.joint_types == "RRR"  # the starting table
         client_id = int(client.gizmo_owner)
         # a bad row is refused, naming the line
@@ -177,7 +176,7 @@ def test_a_typed_dh_table_becomes_an_arm_with_numerical_ik(app):
         await until(lambda: typed.state.last.solution is not None, what="the search")
         solution = typed.state.last.solution
         assert solution.method == "found numerically" and int(solution.valid.sum()) == 2
-        assert "found numerically 2" in branches_markdown(typed.arm, typed.state.last)
+        assert "found numerically 2" in branches_markdown(typed.state.last)
         await client.close()
 
     asyncio.run(scenario())
@@ -223,8 +222,8 @@ def test_the_skeleton_walks_each_row_along_d_then_a(name):
 def test_a_row_shown_on_the_arm_and_the_walkthrough(app):
     async def scenario():
         client = await ViserClient(url(app)).connect()
-        session = await pick(app, client, "Stanford arm (RRP + wrist)", CourseArmSession)
-        scene = session.scene
+        session = await pick(app, client, "Stanford arm (RRP + wrist)")
+        scene = session.drawing
         await client.set_gui("Show a row on the arm", "row 3")  # the prismatic row: d3 is the joint
         await until(lambda: scene.dh_frames.highlight_row == 3 and scene.dh_frames.parameters["d"].visible, what="row 3 drawn")
         await until(lambda: scene.dh_frames.parameter_labels["d"].text == "d3 = 254.0 mm", what="d3's value")
@@ -256,7 +255,7 @@ def test_a_row_shown_on_the_arm_and_the_walkthrough(app):
 def test_a_course_arms_workspace_cloud(app):
     async def scenario():
         client = await ViserClient(url(app)).connect()
-        session = await pick(app, client, "SCARA (RRP + roll)", CourseArmSession)
+        session = await pick(app, client, "SCARA (RRP + roll)")
         await client.set_gui("Show workspace cloud", True)
         await until(lambda: session.workspace._cloud is not None, what="the cloud")
         points = session.workspace._cloud.points
@@ -264,7 +263,7 @@ def test_a_course_arms_workspace_cloud(app):
         radius = np.hypot(points[:, 0], points[:, 1])
         assert radius.max() <= 0.6 + 1e-4 and points[:, 2].max() <= 0.387 + 1e-3
         assert session.workspace.legend.visible
-        await until(lambda: f"{session.scene.root}/workspace" in client.received.nodes, what="the cloud under the arm's root")
+        await until(lambda: f"{session.drawing.root}/workspace" in client.received.nodes, what="the cloud under the arm's root")
         # the UR10's sections, where they apply: the cut-away keeps the half behind the arm's plane
         from ur10teach.features.workspace import SECTIONS, vertical_section
 
@@ -288,7 +287,7 @@ def test_the_kr210_gripper_pose_in_the_urdf_convention(app):
         from ur10core.serial import kr210_to_urdf
 
         client = await ViserClient(url(app)).connect()
-        session = await pick(app, client, KR210, CourseArmSession)
+        session = await pick(app, client, KR210)
         q = np.radians([20, 10, -15, 30, 40, 50])
         T = session.arm.fk(q)
         # typed in the simulation model's convention, the arm goes to the same gripper pose
@@ -313,7 +312,7 @@ def test_the_kr210_gripper_pose_in_the_urdf_convention(app):
 def test_changing_arms_too_fast_is_refused_and_the_picker_shows_the_arm_still_driven(app, monkeypatch):
     async def scenario():
         client = await ViserClient(url(app)).connect()
-        session = await pick(app, client, KR210, CourseArmSession)
+        session = await pick(app, client, KR210)
         monkeypatch.setattr("ur10teach.serving.server.SWITCH_INTERVAL", 30.0)  # however slow this machine, the next change is too soon
         client_id = int(client.gizmo_owner)
         await until(lambda: "Which arm" in client.gui, what="the new picker")
@@ -328,7 +327,7 @@ def test_changing_arms_too_fast_is_refused_and_the_picker_shows_the_arm_still_dr
 
 
 def test_singularity_gauges_empty_and_turn_red_at_each_factors_singularity():
-    from ur10teach.features.course_arms.panel import factors_html
+    from ur10teach.features.singularity import factors_html
 
     kr210 = Arm.preset("kr210")
     regular = factors_html(kr210, np.radians([0, 15, -30, 20, 40, 10]))
@@ -344,9 +343,10 @@ def test_any_table_a_student_types_can_be_built_driven_and_searched():
     """Random tables (1–10 rows, R/P/F, odd twists, zero lengths, both conventions): every view's
     text builds, a small drag follows, and every branch the search reports reaches the target."""
     from ur10teach.features.course_arms.editor import parse_table
-    from ur10teach.features.course_arms.panel import factors_html, walkthrough_steps
+    from ur10teach.features.dh_table import walkthrough_steps
+    from ur10teach.features.singularity import factors_html
     from ur10teach.features.course_arms.scene import skeleton
-    from ur10teach.features.course_arms.state import CourseArmState
+    from ur10teach.state import ArmState
 
     rng = np.random.default_rng(0)
     built = 0
@@ -359,9 +359,9 @@ def test_any_table_a_student_types_can_be_built_driven_and_searched():
         except ValueError:
             continue  # every row fixed
         built += 1
-        state = CourseArmState(arm)
+        state = ArmState(arm)
         snapshot = state.last
-        assert branches_markdown(arm, snapshot) and factors_html(arm, snapshot.q) and walkthrough_steps(arm)
+        assert branches_markdown(snapshot) and factors_html(arm, snapshot.q) and walkthrough_steps(arm)
         assert dh_table_markdown(arm.dh) and len(skeleton(arm.dh, snapshot.frames))
         target = snapshot.frames[-1].copy()
         target[:3, 3] += 0.02
@@ -376,14 +376,14 @@ def test_any_table_a_student_types_can_be_built_driven_and_searched():
 
 def test_singularities_shown_on_the_arm_turn_red_at_the_singularity(app):
     async def scenario():
-        from ur10teach.features.course_arms.overlay import FACTOR_COLORS
+        from ur10teach.features.singularity import FACTOR_COLORS
         from ur10teach.style import DANGER_RED
 
         client = await ViserClient(url(app)).connect()
-        session = await pick(app, client, KR210, CourseArmSession)
-        overlay = session.scene.overlay
+        session = await pick(app, client, KR210)
+        overlay = session.drawing.overlay
         assert not overlay.lines["wrist"].visible  # off until asked for
-        await client.set_gui("Show them on the arm", True)
+        await client.set_gui("Show singularity overlay", True)
         await until(lambda: overlay.enabled and overlay.lines["wrist"].visible and overlay.labels["elbow"].visible,
                     what="the factors drawn")
         assert tuple(overlay.lines["wrist"].colors) == FACTOR_COLORS["wrist"]  # far from s5 = 0 at home
@@ -394,7 +394,7 @@ def test_singularities_shown_on_the_arm_turn_red_at_the_singularity(app):
         axes = overlay.lines["wrist"].points
         directions = [(b - a) / np.linalg.norm(b - a) for a, b in axes]
         assert np.linalg.norm(np.cross(*directions)) < 1e-6
-        await client.set_gui("Show them on the arm", False)
+        await client.set_gui("Show singularity overlay", False)
         await until(lambda: not overlay.lines["wrist"].visible, what="the factors hidden")
         await client.close()
 
@@ -408,14 +408,14 @@ def test_every_line_is_drawn_in_one_colour_a_browser_can_read(app):
         client = await ViserClient(url(app)).connect()
         ur10 = session_of(app, client)
         await client.set_gui("Show singularity overlay", True)
-        await until(lambda: ur10.scene_views.overlay.enabled, what="the UR10 overlay")
-        kr210 = await pick(app, client, KR210, CourseArmSession)
-        await client.set_gui("Show them on the arm", True)
-        await until(lambda: kr210.scene.overlay.enabled, what="the KR210 overlay")
+        await until(lambda: ur10.drawing.overlay.enabled, what="the UR10 overlay")
+        kr210 = await pick(app, client, KR210)
+        await client.set_gui("Show singularity overlay", True)
+        await until(lambda: kr210.drawing.overlay.enabled, what="the KR210 overlay")
         for session in (ur10, kr210):
             lines = [h for h in session.client.scene._handle_from_node_name.values() if isinstance(h, viser.LineSegmentsHandle)]
             if session is ur10:  # its scene was reset when the KR210 came: check the handles it kept
-                lines = [session.scene_views.overlay.circles, *session.scene_views.overlay.axes]
+                lines = list(session.drawing.overlay.lines.values())
             assert lines and all(np.asarray(h.colors).shape == (3,) for h in lines), [h.name for h in lines]
         await client.close()
 
@@ -430,8 +430,8 @@ def test_a_course_arms_velocities_ellipsoids_and_forces(app):
         from ur10teach.features.velocity import METRES_PER_SPEED, parse_twist, rates_markdown
 
         client = await ViserClient(url(app)).connect()
-        session = await pick(app, client, "Stanford arm (RRP + wrist)", CourseArmSession)
-        arm, root = session.arm, session.scene.root
+        session = await pick(app, client, "Stanford arm (RRP + wrist)")
+        arm, root = session.arm, session.drawing.root
         await client.set_gui("ḋ3 d3 (mm/s)", 100.0)  # the boom slides out at 0.1 m/s
         await until(lambda: session.velocity.linear.visible, what="the velocity arrow")
         snapshot = session.state.last
@@ -475,11 +475,11 @@ def test_the_tabs_of_one_address_change_arms_no_more_often_than_one_tab():
         tabs = [await ViserClient(url(app), local_address="127.0.0.2").connect() for _ in range(3)]
         for tab in tabs:
             await tab.set_gui("Which arm", KR210)
-        await until(lambda: sum(isinstance(session_for(app, int(tab.gizmo_owner)), CourseArmSession) for tab in tabs) == 2
+        await until(lambda: sum(getattr(session_for(app, int(tab.gizmo_owner)), "choice", None) == KR210 for tab in tabs) == 2
                     and any("one change of arm every" in body.lower() for tab in tabs for _, body in tab.received.notifications),
                     what="two tabs on the KR210 and the third refused")
         other = await ViserClient(url(app), local_address="127.0.0.3").connect()  # another laptop: its own allowance
-        await pick(app, other, KR210, CourseArmSession)
+        await pick(app, other, KR210)
         for client in (*tabs, other):
             await client.close()
 
@@ -489,45 +489,50 @@ def test_the_tabs_of_one_address_change_arms_no_more_often_than_one_tab():
         app.stop()
 
 
-def test_going_back_to_an_arm_finds_its_pose_target_and_typed_table_as_left(app):
-    """Issue 29: switching to another arm and back lost the UR10's pose and target, and a typed
-    table went back to the starting one."""
+def test_going_back_to_an_arm_finds_its_pose_target_typed_table_and_display_as_left(app):
+    """Issue 29: switching to another arm and back lost the UR10's pose and target, a typed table
+    went back to the starting one, and what the student had switched on was off again."""
     async def scenario():
         client = await ViserClient(url(app)).connect()
         ur10 = session_of(app, client)
         ur10.apply(lambda state: state.set_joints(np.radians([10.0, -70.0, 80.0, -20.0, 50.0, 30.0])))
         ur10_left = ur10.state.last
-        stanford = await pick(app, client, "Stanford arm (RRP + wrist)", CourseArmSession)
+        stanford = await pick(app, client, "Stanford arm (RRP + wrist)")
         goal = stanford.state.last.frames[-1].copy()
         goal[:3, 3] += (0.05, -0.03, 0.02)
         await client.drag_target(goal[:3, 3], wxyz_of(goal), "start", name=TARGET)
         await until(lambda: np.allclose(stanford.state.last.target[:3, 3], goal[:3, 3], atol=1e-6), what="the Stanford arm moved")
         stanford_left = stanford.state.last
-        typed = await pick(app, client, CUSTOM, CourseArmSession)
+        await client.set_gui("Show ghost arms", False)  # and what it shows
+        await client.set_gui("Show singularity overlay", True)
+        await until(lambda: not stanford.drawing.show_ghosts and stanford.drawing.overlay.enabled, what="the choices applied")
+        typed = await pick(app, client, CUSTOM)
         await build_table(app, client, "500 0 0 0 R\n400 0 0 0 R", "RR", typed)
 
         await until(lambda: client.received.panel_label == f"{CUSTOM}: kinematics", what="the title naming the arm")
-        back = await pick(app, client, UR10, ClientSession)
+        back = await pick(app, client, UR10)
         assert back.state.last is ur10_left  # the pose, target and branches as left
         await until(lambda: client.received.panel_label == "UR10 kinematics (course)", what="the UR10's title")
         await until(lambda: abs(back.joints.sliders[1].value + 70.0) < 1e-6, what="the shoulder slider at −70°")
-        back = await pick(app, client, "Stanford arm (RRP + wrist)", CourseArmSession)
+        back = await pick(app, client, "Stanford arm (RRP + wrist)")
         assert back.state.last is stanford_left
-        back = await pick(app, client, CUSTOM, CourseArmSession)
+        assert not back.ik_target.show_ghosts.value and not back.drawing.show_ghosts  # shown as chosen, in the panel and 3D
+        assert back.singularities.enabled.value and back.drawing.overlay.enabled and back.drawing.overlay.lines["wrist"].visible
+        back = await pick(app, client, CUSTOM)
         assert back.arm.joint_types == "RR" and back.editor.rows.value.startswith("500 0 0 0 R\n400")
         await client.close()
 
     asyncio.run(scenario())
 
 
-@pytest.mark.parametrize("label", ["Stanford arm (RRP + wrist)", "SCARA (RRP + roll)", DESKTOP])
+@pytest.mark.parametrize("label", [label for label in ARM_CHOICES if label not in (UR10, CUSTOM)])
 def test_a_course_arm_moves_from_a_remembered_pose_along_both_paths(app, label):
     """Issue 29: the Motion folder was the UR10's alone. On the course's arms and its desktop arm: a
     straight tool line, the rates of a sliding joint in mm/s, no speed limits an arm does not have,
     and no gravity drop without link masses."""
     async def scenario():
         client = await ViserClient(url(app)).connect()
-        session = await pick(app, client, label, CourseArmSession)
+        session = await pick(app, client, label)
         motion = session.motion
         assert motion.release.disabled and "no link masses" in motion.gravity_text.content.lower()
         start = session.state.last.q.copy()
@@ -539,7 +544,13 @@ def test_a_course_arm_moves_from_a_remembered_pose_along_both_paths(app, label):
         goal = session.arm.fk(goal_q)
         await client.set_gui("Go from the start to here along", "straight tool line")
         await until(lambda: motion.player.playing, what="the path to start")
+        # while it plays, the tool's v is the path's own: J q̇ at the pose shown (the arrow, from its rates)
+        await until(lambda: session.state.last.rates is not None and session.velocity.linear.visible, what="v while it plays")
+        shown = session.state.last
+        tip, end = session.velocity.linear.points[0]
+        np.testing.assert_allclose(end - tip, METRES_PER_SPEED * session.arm.tool_twist(shown.q, shown.rates)[:3], atol=1e-5)
         await until(lambda: not motion.player.playing, what="the path to end")
+        await until(lambda: session.state.last.rates is None and not session.velocity.linear.visible, what="the arrows gone")
         np.testing.assert_allclose(session.arm.fk(session.state.last.q)[:3, 3], goal[:3, 3], atol=1e-4)
         data = motion.charts["straight tool line"].data
         n = session.arm.n_joints
@@ -559,7 +570,7 @@ def test_a_course_arm_has_its_branch_count_map_and_a_typed_table_says_why_not(ap
 
     async def scenario():
         client = await ViserClient(url(app)).connect()
-        session = await pick(app, client, label, CourseArmSession)
+        session = await pick(app, client, label)
         view = session.reach_map
         slots = len(session.state.last.solution.labels)
         assert view.slots == slots
@@ -571,19 +582,19 @@ def test_a_course_arm_has_its_branch_count_map_and_a_typed_table_says_why_not(ap
         assert expected.counts.max() > 0  # the arm reaches part of its plane
         np.testing.assert_array_equal(view.image.image, map_image(expected.counts, slots))
         assert str(slots) in legend_text(slots)
-        typed = await pick(app, client, CUSTOM, CourseArmSession)
+        typed = await pick(app, client, CUSTOM)
         assert typed.reach_map.slots == 0 and typed.reach_map.enabled.disabled
         await client.close()
 
     asyncio.run(scenario())
 
 
-#: Each teaching feature (issue 29) and the folder it has in an arm's panel (the UR10's own titles second).
+#: Each teaching feature (issue 29) and the folder it has in an arm's panel.
 FEATURE_FOLDERS = {
-    "joints": ("Joints", "Joints (°)"), "IK target and its branches": ("IK branches", "IK target: all 8 branches"),
+    "joints": ("Joints",), "IK target and its branches": ("IK target", *(f"IK target: all {k} branches" for k in (1, 2, 4, 8))),
     "singularities": ("Singularities",), "workspace": ("Workspace",), "reach map": ("Reachable with this orientation",),
     "velocities": ("Velocities",), "ellipsoids": ("Manipulability ellipsoids",), "forces and gravity": ("Forces and gravity",),
-    "motion": ("Motion",), "DH table": ("DH table", "DH table (course)"), "DH walkthrough": ("DH walkthrough",),
+    "motion": ("Motion",), "DH table": ("DH table",), "DH walkthrough": ("DH walkthrough",),
 }
 
 
@@ -593,7 +604,7 @@ def test_every_arm_in_the_picker_offers_every_feature(app):
     async def scenario():
         client = await ViserClient(url(app)).connect()
         for label, name in ARM_CHOICES.items():
-            session = await pick(app, client, label, ClientSession if name is None else CourseArmSession)
+            session = await pick(app, client, label)
             folders = {k for k, v in client.gui.items() if v["type"] == "GuiFolderMessage"}
             missing = [feature for feature, titles in FEATURE_FOLDERS.items() if not folders & set(titles)]
             assert not missing, (label, missing)
@@ -608,8 +619,8 @@ def test_the_ur10_walks_through_its_dh_frames(app):
     are built step by step from the course's (modified) table, and go again when it stops."""
     async def scenario():
         client = await ViserClient(url(app)).connect()
-        session = await pick(app, client, UR10, ClientSession)
-        frames = session.dh_frames
+        session = await pick(app, client, UR10)
+        frames = session.drawing.dh_frames
         assert not frames.x_axes.visible and not frames.z_axes.visible
         await client.set_gui("Step", "Next ▶")
         await until(lambda: session.walkthrough.step == 0 and frames.z_axes.visible and not frames.x_axes.visible,

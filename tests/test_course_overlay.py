@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from ur10teach.features.course_arms.overlay import factor_geometry
+from ur10teach.features.singularity import factor_geometry
 from ur10core import Arm
 from ur10core.serial import PRESETS
 
@@ -69,3 +69,28 @@ def test_each_drawing_degenerates_where_its_factor_vanishes(name):
         assert abs(arm.singularity_factors(q)[k]) < 1e-9
         singular = factor_geometry(arm, q, arm.frames(q), 1.0)[factor]
         assert degeneracy(name, factor, singular) < 1e-6, f"{name} {factor}: the drawing does not show the singularity"
+
+
+@pytest.mark.parametrize("kind", ["shoulder", "elbow", "wrist"])
+def test_the_ur_familys_drawing_degenerates_where_its_factor_vanishes(kind):
+    """The UR10's: P5 on the drawn d4 cylinder, P4 on a drawn reach circle, axes 4 and 6 parallel, exactly at
+    each singularity (each point is the centre of its cross, the last three segments)."""
+    arm = Arm.preset("ur10")
+    home = arm.specs.home
+
+    def degeneracy(q: np.ndarray) -> float:
+        segments = factor_geometry(arm, q, arm.frames(q), 1.0)[kind]
+        point = segments[-3:].mean(axis=(0, 1))
+        if kind == "shoulder":  # P5's distance from axis 1 against the drawn cylinder's (a ring's vertex)
+            radius = np.linalg.norm(segments[0, 0, :2])
+            return abs(float(np.linalg.norm(point[:2])) - radius)
+        if kind == "elbow":  # P4's distance from the drawn circles' centre against each circle's radius
+            circles = segments[:-3, 0].reshape(2, -1, 3)
+            centre = circles[0].mean(axis=0)
+            return min(abs(float(np.linalg.norm(point - centre) - np.linalg.norm(circle[0] - centre))) for circle in circles)
+        first, second = (_unit(b - a) for a, b in segments)
+        return float(np.linalg.norm(np.cross(first, second)))
+
+    assert degeneracy(home) > 1e-2
+    singular = arm.singular_configuration(kind, home)
+    assert degeneracy(singular) < 1e-9

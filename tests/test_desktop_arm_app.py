@@ -10,10 +10,9 @@ import pytest
 
 from ur10teach.features.arm_picker import DESKTOP, UR10
 from ur10teach.features.course_arms.desktop_arm import COURSE_TO_WORLD, SHOULDER_HEIGHT, to_world, world_placement
-from ur10teach.features.course_arms.desktop_lessons import factors_markdown
-from ur10teach.features.course_arms.session import CourseArmSession
-from ur10teach.features.course_arms.state import CourseArmState
-from ur10teach.session import ClientSession
+from ur10teach.features.readouts import pose_markdown
+from ur10teach.features.singularity import factors_html
+from ur10teach.state import ArmState
 from ur10core import Arm
 from ur10core.three_dof import FOREARM, UPPER_ARM
 
@@ -24,11 +23,13 @@ from ur10dev.viser_client import ViserClient, wxyz_of
 
 def test_the_readout_names_each_factor_and_flags_the_one_near_zero():
     arm = Arm.preset("three_dof")
-    state = CourseArmState(arm)
-    level = factors_markdown(arm, state.set_joints(np.radians([0.0, -90.0, 0.0])))
-    assert "Tool p = (1280, 1350, 0) mm" in level and "singular" not in level
-    folded = factors_markdown(arm, state.set_joints(np.radians([0.0, 30.0, 30.0])))  # the forearm back along the upper arm
-    assert "upper arm and forearm in one line" in folded and folded.count("(singular)") == 1
+    state = ArmState(arm)
+    level = state.set_joints(np.radians([0.0, -90.0, 0.0]))
+    pose = pose_markdown(level.flange)
+    assert "**+1280.0**" in pose and "**+1350.0**" in pose  # l1 out, l5 up (the course's frame, y up)
+    assert "zero when the upper arm and the forearm are in one line" in factors_html(arm, level.q)
+    folded = factors_html(arm, state.set_joints(np.radians([0.0, 30.0, 30.0])).q)  # the forearm back along the upper arm
+    assert "class='gauge-fold' style='height:8px;width:0.0%" in folded
     with pytest.raises(ValueError, match="θ3 forearm: from 0° to 180°, got 200.0°"):  # every arm's state words it so
         state.set_joints(np.radians([0.0, 0.0, 200.0]))
 
@@ -46,8 +47,8 @@ def test_the_world_stands_the_courses_y_up():
 def test_the_desktop_arm_is_picked_driven_played_and_searched(app):
     async def scenario():
         client = await ViserClient(url(app)).connect()
-        session = await pick(app, client, DESKTOP, CourseArmSession)
-        frame = session.scene.root
+        session = await pick(app, client, DESKTOP)
+        frame = session.drawing.root
         await until(lambda: f"{frame}/links" in client.received.nodes and "θ2 upper arm (°)" in client.gui,
                     what="the desktop arm")
         # sliders: upper arm straight up, forearm level → the tool is l1 out and l5 up (the course's frame)
@@ -59,7 +60,7 @@ def test_the_desktop_arm_is_picked_driven_played_and_searched(app):
                                    atol=1e-12)
         # its base frame stands in the world y up, and the IK target hangs in it (a position-only gizmo)
         np.testing.assert_allclose(world_placement()[:3, :3] @ (0.0, 1.0, 0.0), (0.0, 0.0, 1.0))
-        await until(lambda: f"{frame}/target" in client.received.nodes, what="the IK target in the course's frame")
+        await until(lambda: f"{frame}/ik_target" in client.received.nodes, what="the IK target in the course's frame")
         await client.set_gui("θ3 forearm (°)", 200.0)  # beyond its range: refused, with the range
         await until(lambda: any("from 0° to 180°" in body for _, body in client.received.notifications), what="the refusal")
         assert session.state.last.q[2] == 0.0
@@ -69,10 +70,10 @@ def test_the_desktop_arm_is_picked_driven_played_and_searched(app):
         await until(lambda: session.state.last.rates is not None and abs(session.state.last.q[0]) > 0.05, what="the path playing")
         q = session.state.last.q
         assert q[0] == pytest.approx(q[1]) and q[2] == pytest.approx(3 * math.pi / 4 + 0.75 * q[0])
-        await until(lambda: client.received.visible.get(f"{frame}/linear") is True, what="the velocity arrow")
+        await until(lambda: client.received.visible.get(f"{frame}/velocity/linear") is True, what="the velocity arrow")
         await client.set_gui("Stop", True)
         await until(lambda: session.state.last.rates is None, what="the path stopped")
-        await until(lambda: client.received.visible.get(f"{frame}/linear") is False, what="the arrow hidden")
+        await until(lambda: client.received.visible.get(f"{frame}/velocity/linear") is False, what="the arrow hidden")
 
         # the statics exercise: 10 N down (its y), the worst pose has both links level, and the map is drawn
         await client.set_gui("Force at the tool (N)", 10.0)
@@ -91,7 +92,7 @@ def test_the_desktop_arm_is_picked_driven_played_and_searched(app):
         await until(lambda: "Largest ‖τ‖" in session.lessons[2].result.content and "√" not in session.lessons[2].result.content,
                     what="the sideways search")
 
-        back = await pick(app, client, UR10, ClientSession)
+        back = await pick(app, client, UR10)
         assert session.closed and not back.closed
         assert f"{frame}/links" not in client.received.nodes
         await client.close()
@@ -106,7 +107,7 @@ def test_the_desktop_arm_has_its_branch_count_map_standing_the_right_way_up(app)
 
     async def scenario():
         client = await ViserClient(url(app)).connect()
-        session = await pick(app, client, DESKTOP, CourseArmSession)
+        session = await pick(app, client, DESKTOP)
         view = session.reach_map
         assert view.slots == 4
         await client.set_gui("Show branch-count map", True)
@@ -130,23 +131,23 @@ def test_the_desktop_arm_follows_its_ik_target_with_its_other_branches_as_ghosts
     gizmo in the course's frame, the arm on the nearest branch, the others drawn as numbered ghosts."""
     async def scenario():
         client = await ViserClient(url(app)).connect()
-        session = await pick(app, client, DESKTOP, CourseArmSession)
-        arm, frame = session.arm, session.scene.root
+        session = await pick(app, client, DESKTOP)
+        arm, frame = session.arm, session.drawing.root
         goal_q = np.radians([15.0, -20.0, 70.0])
         goal = arm.fk(goal_q)
-        await client.drag_target(goal[:3, 3], wxyz_of(goal), "start", name=f"{frame}/target")
-        await client.drag_target(goal[:3, 3], wxyz_of(goal), "end", name=f"{frame}/target")
+        await client.drag_target(goal[:3, 3], wxyz_of(goal), "start", name=f"{frame}/ik_target")
+        await client.drag_target(goal[:3, 3], wxyz_of(goal), "end", name=f"{frame}/ik_target")
         await until(lambda: np.allclose(session.state.last.flange[:3, 3], goal[:3, 3], atol=1e-9), what="the arm at the target")
         snapshot = session.state.last
-        assert snapshot.solution.valid.sum() >= 2 and snapshot.chosen >= 0
-        others = [k for k in np.flatnonzero(snapshot.solution.valid) if k != snapshot.chosen]
+        assert snapshot.solution.valid.sum() >= 2 and snapshot.slot >= 0
+        others = [k for k in np.flatnonzero(snapshot.solution.valid) if k != snapshot.slot]
         await until(lambda: all(client.received.visible.get(f"{frame}/ghosts/slot{k + 1}") is True for k in others),
                     what="the other branches as ghosts")
         # out of reach: the arm stays, and says why in the branch table
         far = goal.copy()
         far[:3, 3] = (4.0, 0.0, 0.0)
-        await client.drag_target(far[:3, 3], wxyz_of(far), "end", name=f"{frame}/target")
-        await until(lambda: "Out of reach" in session.branches.table.content, what="the reason")
+        await client.drag_target(far[:3, 3], wxyz_of(far), "end", name=f"{frame}/ik_target")
+        await until(lambda: "Target unreachable" in session.ik_target.branches.content, what="the reason")
         np.testing.assert_allclose(session.state.last.flange[:3, 3], goal[:3, 3], atol=1e-9)
         await client.close()
 

@@ -14,10 +14,8 @@ import numpy as np
 import pytest
 
 from ur10teach.features.arm_picker import ARM_CHOICES
-from ur10teach.features.course_arms.session import CourseArmSession
 from ur10teach.features.statics import bars_html
 from ur10teach.features.velocity import METRES_PER_SPEED
-from ur10teach.session import ClientSession
 
 from .server_support import until, url
 from .test_course_arms_app import pick
@@ -40,7 +38,7 @@ def position_rate(arm, q: np.ndarray, joint: int) -> np.ndarray:
 def test_velocity_and_forces_on_every_arm_match_finite_differences(app, label):
     async def scenario():
         client = await ViserClient(url(app)).connect()
-        session = await pick(app, client, label, ClientSession if ARM_CHOICES[label] is None else CourseArmSession)
+        session = await pick(app, client, label)
         arm, snapshot = session.arm, session.state.last
         q, tool = snapshot.q, snapshot.flange[:3, 3]
         # a base rate of 10°/s: the arrow is the tool's velocity
@@ -63,20 +61,58 @@ def test_velocity_and_forces_on_every_arm_match_finite_differences(app, label):
     asyncio.run(scenario())
 
 
+def jacobian_by_differences(arm, q: np.ndarray) -> np.ndarray:
+    """(6, n) the tool's v and ω per unit joint rate, by central differences of FK (ω from dR Rᵀ)."""
+    R = arm.fk(q)[:3, :3]
+    columns = []
+    for joint in range(arm.n_joints):
+        dq = np.zeros_like(q)
+        dq[joint] = STEP
+        ahead, behind = arm.fk(q + dq), arm.fk(q - dq)
+        spin = (ahead[:3, :3] - behind[:3, :3]) / (2 * STEP) @ R.T
+        columns.append(np.concatenate([(ahead[:3, 3] - behind[:3, 3]) / (2 * STEP), [spin[2, 1], spin[0, 2], spin[1, 0]]]))
+    return np.array(columns).T
+
+
+@pytest.mark.parametrize("label", EVERY_ARM)
+def test_the_ellipsoids_and_the_gauges_of_every_arm_are_its_own(app, label):
+    """The velocity ellipsoid drawn at the tool has the semi-axes of J_v on the joint rates that keep what the
+    arm controls of its orientation still (from differences of FK); each gauge shows that factor of det J."""
+    from ur10teach.features.ellipsoids import VELOCITY_METRES
+
+    async def scenario():
+        client = await ViserClient(url(app)).connect()
+        session = await pick(app, client, label)
+        arm, snapshot = session.arm, session.state.last
+        await client.set_gui("Show at the tool", True)
+        await until(lambda: session.ellipsoids.velocity.visible, what="the ellipsoids")
+        J = jacobian_by_differences(arm, snapshot.q)
+        held = {"pose": J[3:], "position and yaw": J[5:]}.get(arm.task, np.zeros((0, arm.n_joints)))
+        _, singular, vt = np.linalg.svd(held) if len(held) else (None, np.zeros(0), np.zeros((0, arm.n_joints)))
+        free = vt[int((singular > 1e-9).sum()):].T if len(held) else np.eye(arm.n_joints)  # rates that hold it still
+        expected = np.sort(np.maximum(VELOCITY_METRES * np.pad(np.linalg.svd(J[:3] @ free, compute_uv=False), (0, 3))[:3], 1e-4))
+        np.testing.assert_allclose(np.sort(session.ellipsoids.velocity.scale), expected, atol=1e-5)
+        np.testing.assert_allclose(session.ellipsoids.frame.position, snapshot.flange[:3, 3], atol=1e-9)
+        for value in arm.singularity_factors(snapshot.q):
+            assert f"= {value:+.4f}".replace("-", "−") in session.singularities.gauges.content.replace("-", "−")
+        await client.close()
+
+    asyncio.run(scenario())
+
+
 @pytest.mark.parametrize("label", EVERY_ARM)
 def test_the_workspace_cloud_of_every_arm_is_its_own(app, label):
     """The cloud drawn is the arm's own sampled workspace, under the arm's own root."""
     async def scenario():
         client = await ViserClient(url(app)).connect()
-        session = await pick(app, client, label, ClientSession if ARM_CHOICES[label] is None else CourseArmSession)
+        session = await pick(app, client, label)
         await client.set_gui("Samples", "10 k")
         await client.set_gui("Show workspace cloud", True)
         await until(lambda: session.workspace._cloud is not None and len(session.workspace._cloud.points) == 10_000,
                     what="the cloud")
         points, _ = session.arm.sample_workspace(10_000, seed=0)
         np.testing.assert_allclose(session.workspace._cloud.points, points, atol=5e-3)  # float16 on the wire
-        root = getattr(session, "scene", None)
-        await until(lambda: f"{root.root if root else ''}/workspace" in client.received.nodes, what="the cloud on screen")
+        await until(lambda: f"{session.drawing.root}/workspace" in client.received.nodes, what="the cloud on screen")
         await client.close()
 
     asyncio.run(scenario())
@@ -91,7 +127,7 @@ def test_the_branch_count_map_of_every_arm_is_its_ik_s(app, label):
 
     async def scenario():
         client = await ViserClient(url(app)).connect()
-        session = await pick(app, client, label, ClientSession if ARM_CHOICES[label] is None else CourseArmSession)
+        session = await pick(app, client, label)
         view = session.reach_map
         plane = "horizontal" if session.arm.name == "planar_elbow" else "vertical"  # its workspace is the plane z = 0
         if plane == "horizontal":

@@ -153,7 +153,7 @@ def test_garbage_and_out_of_range_input_is_refused(app):
         good = await ViserClient(url(app)).connect()
         bad_session, good_session = session_of(app, bad), session_of(app, good)
         before = bad_session.state.q
-        slider = bad.gui["θ1 base"]["uuid"]
+        slider = bad.gui["θ1 base (°)"]["uuid"]
 
         async def one_by_one(kind: str, frame: bytes) -> None:
             """Send, and wait until the gate has handed it on: it would fold back-to-back values for one widget into the last."""
@@ -165,8 +165,8 @@ def test_garbage_and_out_of_range_input_is_refused(app):
             await one_by_one("GuiUpdateMessage", encode(messages.GuiUpdateMessage(slider, {"value": value})))
         await bad.send(messages.GuiUpdateMessage(slider, {"value": "forty"}))  # viser cannot even cast it
         await bad.send(messages.GuiUpdateMessage(bad.gui["Use branch"]["uuid"], {"value": "99"}))
-        await bad.send(messages.GuiUpdateMessage(bad.gui["All six (°)"]["uuid"], {"value": "1, 2, x, 4, 5, 6"}))
-        await bad.set_gui("Set these angles", True)
+        await bad.send(messages.GuiUpdateMessage(bad.gui["All 6 (°)"]["uuid"], {"value": "1, 2, x, 4, 5, 6"}))
+        await bad.set_gui("Set these values", True)
         for position, wxyz in (
             ((np.nan, 0.0, 0.5), (1.0, 0.0, 0.0, 0.0)),
             ((0.5, 0.0, 0.5), (0.0, 0.0, 0.0, 0.0)),
@@ -183,9 +183,9 @@ def test_garbage_and_out_of_range_input_is_refused(app):
         assert not any(title == "Something went wrong" for title in titles)
         # the slider was put back on the arm's angle, on the server and in the student's browser
         await until(lambda: bad_session.joints.sliders[0].value == 30.0, what="the slider to be restored")
-        await until(lambda: bad.gui["θ1 base"]["value"] == 30.0, what="the browser's slider to be restored")
+        await until(lambda: bad.gui["θ1 base (°)"]["value"] == 30.0, what="the browser's slider to be restored")
         # both students carry on
-        await bad.set_gui("θ2 shoulder", 50.0)
+        await bad.set_gui("θ2 shoulder (°)", 50.0)
         await until(lambda: abs(np.degrees(bad_session.state.q[1]) - 50.0) < 1e-9, what="a good value after the bad ones")
         target = await drag_a_little(good, good_session, steps=5)
         await until(lambda: np.allclose(good_session.state.last.target, target, atol=1e-9), what="the other student")
@@ -194,7 +194,7 @@ def test_garbage_and_out_of_range_input_is_refused(app):
         await bad.send_raw(msgspec.msgpack.encode({"type": "NoSuchMessage"}))
         await until(lambda: app.gate.dropped["undecodable message"] == 1 and app.gate.dropped["NoSuchMessage"] == 1,
                     what="the garbage to be dropped")
-        await bad.set_gui("θ2 shoulder", 51.0)  # the connection still works
+        await bad.set_gui("θ2 shoulder (°)", 51.0)  # the connection still works
         await until(lambda: abs(np.degrees(bad_session.state.q[1]) - 51.0) < 1e-9, what="a good value after the garbage")
         target = await drag_a_little(good, good_session, steps=3)
         await until(lambda: np.allclose(good_session.state.last.target, target, atol=1e-9), what="the other student, still")

@@ -42,7 +42,7 @@ def resident_mib() -> float:
 async def click_is_applied(client: ViserClient, session) -> None:
     """A student's slider change reaches their arm (how fast, beside an attack, is bench_hostile's)."""
     before = session.state.q[0]
-    await client.set_gui("θ1 base", float(np.degrees(before)) + 1.0)
+    await client.set_gui("θ1 base (°)", float(np.degrees(before)) + 1.0)
     await until(lambda: abs(session.state.q[0] - before) > 1e-6, what="the slider change")
 
 
@@ -260,7 +260,7 @@ def test_updates_that_come_faster_than_they_pass_fold_into_the_newest(app):
         flooded = session_of(app, sender)
         student = await ViserClient(url(app)).connect()
         session = session_of(app, student)
-        uuid = sender.gui["θ2 shoulder"]["uuid"]
+        uuid = sender.gui["θ2 shoulder (°)"]["uuid"]
         applied = []
         flooded.observers.append(lambda snapshot: applied.append(snapshot.q[1]))
         burst = int(gate_module.ARRIVALS_PER_SECOND) - 10  # within what the socket is read at: all decoded
@@ -303,7 +303,7 @@ def test_a_flood_of_valid_messages_is_dropped_undecoded_and_its_connection_close
         student = await ViserClient(url(app)).connect()
         session = session_of(app, student)
         if what == "slider updates":
-            uuid = flooder.gui["θ2 shoulder"]["uuid"]
+            uuid = flooder.gui["θ2 shoulder (°)"]["uuid"]
             frames = (encode(messages.GuiUpdateMessage(uuid, {"value": float(k % 90)})) for k in range(20_000))
         else:
             T = flooded.state.last.flange.copy()

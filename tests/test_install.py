@@ -69,7 +69,7 @@ def test_the_app_starts_from_another_directory(installed, tmp_path):
 
         async def a_student() -> None:  # a whole session built and drawn: the installed app serves a student
             client = await ViserClient(url).connect()
-            assert client.gizmo_owner is not None and "θ1 base" in client.gui
+            assert client.gizmo_owner is not None and "θ1 base (°)" in client.gui
             await client.close()
 
         asyncio.run(a_student())

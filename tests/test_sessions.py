@@ -12,6 +12,8 @@ import types
 import weakref
 
 import numpy as np
+
+from ur10core import Arm
 import pytest
 
 from ur10teach.features import joint_panel
@@ -115,7 +117,7 @@ def test_every_redraw_holds_the_arms_lock(app):
         redraw = session.redraw
         session.redraw = lambda: (redraw(), redraws.append(1))
         toggles = 0
-        shown = {"Show ghost arms": session.ik_target.show_ghosts.value, "Show singularity overlay": session.singularity.enabled.value}
+        shown = {"Show ghost arms": session.ik_target.show_ghosts.value, "Show singularity overlay": session.singularities.enabled.value}
         for value in (False, True, False, True):
             for label in shown:
                 toggles += shown[label] != value  # a change: one redraw, from viser's thread pool
@@ -135,7 +137,6 @@ def test_a_click_while_the_session_is_being_built_is_not_an_error(app, monkeypat
     had finished redrew a session without its views yet ("Something went wrong", AttributeError).
     The UR10's session and a course arm's, with the click made while their velocity folder is built."""
     from ur10teach.features import velocity
-    from ur10teach.features.course_arms.session import CourseArmSession
 
     from .test_course_arms_app import pick
 
@@ -156,7 +157,7 @@ def test_a_click_while_the_session_is_being_built_is_not_an_error(app, monkeypat
         session = session_of(app, client)
         await until(lambda: built, what="the session")
         await drag_a_little(client, session, steps=2)
-        course = await pick(app, client, "Stanford arm (RRP + wrist)", CourseArmSession)
+        course = await pick(app, client, "Stanford arm (RRP + wrist)")
         assert built[-1] is course and course.panel_views  # built in full after the click
         # a failure's notice would have reached the browser before the arm's panel (one client, one queue)
         await until(lambda: course.joints.sliders[0]._impl.uuid in {w["uuid"] for w in client.gui.values()},
@@ -246,7 +247,7 @@ def test_typing_into_a_slider_box_applies_the_number_not_each_keystroke(app, mon
         session.observers.append(lambda snapshot: seen.append(round(float(np.degrees(snapshot.q[0])), 6)))
         panel = session.joints
         for keystrokes in ("2", "20", "200"):
-            await client.set_gui("θ1 base", float(keystrokes))
+            await client.set_gui("θ1 base (°)", float(keystrokes))
             await until(lambda k=keystrokes: panel._received[0] == float(k), what=f"the keystroke {keystrokes}")
         assert not seen  # each keystroke waits for the next
         await asyncio.to_thread(typing_pause.fire)  # the student stops typing
@@ -255,7 +256,7 @@ def test_typing_into_a_slider_box_applies_the_number_not_each_keystroke(app, mon
         # a dragged slider moves in small steps, and each is applied as it comes
         seen.clear()
         for value in (201.0, 202.5, 204.0, 205.0):
-            await client.set_gui("θ1 base", value)
+            await client.set_gui("θ1 base (°)", value)
             await until(lambda v=value: seen[-1:] == [v], what=f"the dragged value {value}")
         assert seen == [201.0, 202.5, 204.0, 205.0]
         assert not typing_pause.pending
@@ -269,9 +270,9 @@ def test_the_all_six_box_shows_the_current_pose(app):
         client = await ViserClient(url(app)).connect()
         session = session_of(app, client)
         await client.set_gui("Pose", "Stretched")
-        await until(lambda: client.gui["All six (°)"]["value"] == "45, 90, 0, -90, 0, 60", what="the box to follow")
-        await client.set_gui("θ2 shoulder", 91.0)
-        await until(lambda: client.gui["All six (°)"]["value"] == "45, 91, 0, -90, 0, 60", what="the box to follow the slider")
+        await until(lambda: client.gui["All 6 (°)"]["value"] == "45, 90, 0, -90, 0, 60", what="the box to follow")
+        await client.set_gui("θ2 shoulder (°)", 91.0)
+        await until(lambda: client.gui["All 6 (°)"]["value"] == "45, 91, 0, -90, 0, 60", what="the box to follow the slider")
         assert np.degrees(session.state.q[1]) == pytest.approx(91.0)
         await client.close()
 
@@ -284,14 +285,14 @@ def test_the_branch_table_shows_the_angles_the_sliders_show(app):
     async def scenario():
         client = await ViserClient(url(app)).connect()
         session = session_of(app, client)
-        await client.set_gui("θ1 base", 300.0)
+        await client.set_gui("θ1 base (°)", 300.0)
         await until(lambda: abs(np.degrees(session.state.q[0]) - 300.0) < 1e-9, what="300°")
 
         def arm_row() -> str:
             return next((line for line in session.ik_target.branches.content.splitlines() if "← arm" in line), "")
 
-        await until(lambda: "300.0," in arm_row(), what="the branch table to show the new pose")
-        assert arm_row().split("|")[-2].strip().startswith("300.0,")
+        await until(lambda: "300.0°," in arm_row(), what="the branch table to show the new pose")
+        assert arm_row().split("|")[4].strip().startswith("300.0°,")
         await client.close()
 
     asyncio.run(scenario())
@@ -323,7 +324,7 @@ def test_numbers_never_read_minus_zero():
     assert number(-0.00001, "+.4f") == "+0.0000"
     assert number(-0.04, ".1f") == "0.0"
     assert number(-0.06, ".1f") == "-0.1"
-    assert joint_panel.degrees_text(np.radians([-0.001, 0.0, -0.0, 12.345, -200.0, 0.5])) == "0, 0, 0, 12.35, -200, 0.5"
+    assert joint_panel.display_text(Arm.preset("course"), np.radians([-0.001, 0.0, -0.0, 12.345, -200.0, 0.5])) == "0, 0, 0, 12.35, -200, 0.5"
     assert sentence("elbow reach — the wrist") == "Elbow reach — the wrist"
 
 
@@ -331,7 +332,7 @@ def test_the_singularity_plot_says_seconds(app):
     async def scenario():
         client = await ViserClient(url(app)).connect()
         session = session_of(app, client)
-        plot = session.singularity.plot
+        plot = session.singularities.plot
         assert plot.axes[0]["label"] == "seconds (0 = now)"
         assert tuple(plot.scales["x"]["range"]) == (-10.0, 0.0)
         await client.close()

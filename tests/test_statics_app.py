@@ -29,17 +29,18 @@ def test_the_torque_bars_add_the_force_and_the_weight(app):
         arm = snapshot.arm
         expected = bars_html(arm.static_torques(snapshot.q, [0, 0, -50.0]), arm.gravity_torques(snapshot.q), arm.specs.torque_ratings, arm.joint_names, arm.joint_types)
         await until(lambda: statics.bars.content == expected, what="50 N down and the arm's weight")
-        # the arrow starts at the flange and points the way the tool pushes: 50 N down is 10 cm down
+        # the arrow starts at the flange and points the way the tool pushes: 50 N down is a tenth of the arm's size down
         start, end = statics.arrow.points[0] + statics.arrow.position
+        size = session.drawing.size
         np.testing.assert_allclose(start, snapshot.flange[:3, 3], atol=1e-6)
-        np.testing.assert_allclose(end - start, [0, 0, -0.1], atol=1e-6)
+        np.testing.assert_allclose(end - start, [0, 0, -0.1 * size], atol=1e-6)
         np.testing.assert_allclose(statics.label.position, end - start, atol=1e-6)  # the label at the tip (in the arrow)
         # a payload adds its weight; a force along +x turns the arrow
         await client.set_gui("Payload (kg)", 5.0)
         await client.set_gui("Force direction", "+x")
         expected = bars_html(arm.static_torques(snapshot.q, [50.0, 0, 0]), arm.gravity_torques(snapshot.q, 5.0), arm.specs.torque_ratings, arm.joint_names, arm.joint_types)
         await until(lambda: statics.bars.content == expected, what="the payload and the new direction")
-        await until(lambda: np.allclose(np.diff(statics.arrow.points[0], axis=0), [[0.1, 0, 0]], atol=1e-6), what="the arrow along +x")
+        await until(lambda: np.allclose(np.diff(statics.arrow.points[0], axis=0), [[0.1 * size, 0, 0]], atol=1e-6), what="the arrow along +x")
         # a direction that is not offered is refused, and nothing changes
         await client.set_gui("Force direction", "sideways")
         await until(lambda: any("not one of" in body.lower() for _, body in client.received.notifications), what="the refusal")
@@ -63,7 +64,7 @@ def test_the_force_points_where_its_handle_is_dragged(app):
         await until(lambda: client.received.visible.get(handle) is True, what="the handle")
         snapshot = session.state.last
         tip = snapshot.flange[:3, 3]
-        np.testing.assert_allclose(client.received.positions[handle], tip + HANDLE_DISTANCE * np.array([0, 0, -1.0]), atol=1e-6)
+        np.testing.assert_allclose(client.received.positions[handle], tip + HANDLE_DISTANCE * session.drawing.size * np.array([0, 0, -1.0]), atol=1e-6)
         # dragged out along +y and a little up: 50 N that way
         direction = np.array([0.0, 0.8, 0.6])
         for phase in ("start", "update", "end"):
@@ -72,12 +73,12 @@ def test_the_force_points_where_its_handle_is_dragged(app):
         arm = snapshot.arm
         expected = bars_html(arm.static_torques(snapshot.q, 50.0 * direction), arm.gravity_torques(snapshot.q), arm.specs.torque_ratings, arm.joint_names, arm.joint_types)
         await until(lambda: statics.bars.content == expected, what="the bars for the dragged force")
-        await until(lambda: np.allclose(np.diff(statics.arrow.points[0], axis=0), [0.1 * direction], atol=1e-6), what="the arrow")
+        await until(lambda: np.allclose(np.diff(statics.arrow.points[0], axis=0), [0.1 * session.drawing.size * direction], atol=1e-6), what="the arrow")
         # the arm moves: the handle keeps its direction from the new flange
-        await client.set_gui("θ1 base", float(np.degrees(snapshot.q[0]) + 20.0))
+        await client.set_gui("θ1 base (°)", float(np.degrees(snapshot.q[0]) + 20.0))
         await until(lambda: abs(session.state.last.q[0] - snapshot.q[0] - np.radians(20.0)) < 1e-6, what="the arm moved")
         new_tip = session.state.last.flange[:3, 3]
-        await until(lambda: np.allclose(client.received.positions[handle], new_tip + HANDLE_DISTANCE * direction, atol=1e-5),
+        await until(lambda: np.allclose(client.received.positions[handle], new_tip + HANDLE_DISTANCE * session.drawing.size * direction, atol=1e-5),
                     what="the handle at the new flange")
         await until(lambda: np.allclose(client.received.positions["/statics/force"], new_tip, atol=1e-5),
                     what="the arrow at the new flange")
@@ -115,7 +116,7 @@ def test_the_ellipsoids_follow_the_arm_and_flatten_towards_the_elbow_singularity
         session = session_of(app, client)
         view = session.ellipsoids
         assert not view.velocity.visible
-        await client.set_gui("Show at the flange", True)
+        await client.set_gui("Show at the tool", True)
         await until(lambda: view.velocity.visible and view.force.visible and view.lengths.visible, what="the ellipsoids")
         snapshot = session.state.last
         translation, _ = snapshot.arm.ellipsoids(snapshot.q)
@@ -127,7 +128,7 @@ def test_the_ellipsoids_follow_the_arm_and_flatten_towards_the_elbow_singularity
         np.testing.assert_allclose(np.abs(drawn), np.abs(translation.axes), atol=1e-6)
         # the elbow straightens: the thinnest velocity axis shrinks, the force ellipsoid grows along it
         thinnest = min(view.velocity.scale)
-        await client.set_gui("θ3 elbow", 2.0)
+        await client.set_gui("θ3 elbow (°)", 2.0)
         await until(lambda: abs(np.degrees(session.state.last.q[2]) - 2.0) < 1e-6, what="the elbow at 2°")
         await until(lambda: min(view.velocity.scale) < 0.7 * thinnest, what="a flatter velocity ellipsoid")
         longest = min(FORCE_METRES * VELOCITY_METRES / min(view.velocity.scale), 0.8)  # 1/σ, drawn at most 0.8 m
@@ -249,7 +250,7 @@ def test_moving_from_a_remembered_pose_along_a_path(app, kind):
         start = session.state.last.q.copy()
         await client.set_gui("Remember this pose as the start", True)
         await until(lambda: session.motion.start is not None, what="the start remembered")
-        await client.set_gui("θ1 base", float(np.degrees(start[0]) + 25.0))
+        await client.set_gui("θ1 base (°)", float(np.degrees(start[0]) + 25.0))
         await until(lambda: abs(session.state.last.q[0] - start[0] - np.radians(25.0)) < 1e-6, what="the arm moved on")
         goal = session.state.last.frames[6].copy()
         await client.set_gui("Go from the start to here along", kind)

@@ -28,8 +28,10 @@ def _numeric(expr, arm):
 def test_cache_equals_a_fresh_derivation(cached):
     fresh = symbolic.derive()  # ~1 minute; also asserts J = M J_wrist, det M = 1, det J factored
     for name in ("T06", "J", "J_wrist"):
-        assert (getattr(fresh, name) - getattr(cached, name)).applyfunc(sp.simplify) == sp.zeros(*getattr(fresh, name).shape), name
-    assert sp.simplify(fresh.det_J - cached.det_J) == 0
+        a, b = getattr(fresh, name), getattr(cached, name)
+        # the cache is the derivation's srepr: identical unless sympy changed how it writes a term
+        assert a == b or (a - b).applyfunc(sp.simplify) == sp.zeros(*a.shape), name
+    assert fresh.det_J == cached.det_J or sp.simplify(fresh.det_J - cached.det_J) == 0
 
 
 def test_det_j_is_the_factored_form(cached):

@@ -170,6 +170,28 @@ class IKSolution:
         return _nearest_within_limits(self, q_current, prefer)
 
 
+    def take(self, slot: int, q_current) -> np.ndarray:
+        """(n,) slot ``slot`` of one pose, each revolute joint turned next to ``q_current`` as :meth:`nearest` turns it.
+
+        Raises ``ValueError`` if the slot does not reach the pose.
+
+        >>> from ur10core import Arm
+        >>> arm = Arm.preset("course")
+        >>> q = np.array([0.1, -1.2, 1.0, -0.4, 1.1, 0.3])
+        >>> solution = arm.ik(arm.fk(q), hint=q)
+        >>> turned = q - [0, 0, 0, 0, 0, 2 * np.pi]  # wrist 3 a whole turn back: the slot follows it
+        >>> np.allclose(solution.take(int(solution.nearest(q).slot), turned), turned)
+        True
+        """
+        if self.valid.ndim != 1 or not 0 <= slot < len(self.labels):
+            raise ValueError(f"take: one pose's slot 0..{len(self.labels) - 1} is needed, got {slot!r}")
+        if not self.valid[slot]:
+            raise ValueError(f"slot {slot} ({self.labels[slot]}) does not reach the pose")
+        only = np.zeros_like(self.valid)
+        only[slot] = True
+        return IKSolution(self.q, only, self.failure, self.arm, extra=self.extra).nearest(q_current).q
+
+
 @functools.cache
 def _ik():
     from . import ik  # it imports this module

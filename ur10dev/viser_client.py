@@ -285,7 +285,7 @@ class ViserClient:
         """The frames a browser sends for one gizmo event, encoded now so that sending costs little.
 
         ``phase`` "start" and "end" add the drag's start and end messages around the update;
-        ``name`` is the gizmo's (a course arm's is ``/course_arm/target``).
+        ``name`` is the gizmo's (a course arm's is ``/course_arm/ik_target``).
         """
         owner = self.gizmo_owner or ""
         update = encode(messages.TransformControlsUpdateMessage(

@@ -14,8 +14,9 @@ import sys
 import time
 from typing import Callable
 
-#: Seconds after which a wait is a hang. Generous on purpose: it only bounds a failure's report.
-HANG_TIMEOUT = 120.0
+#: Seconds after which a wait is a hang. Generous on purpose: it only bounds a failure's report
+#: (``UR10_HANG_TIMEOUT`` shortens it while a change is being debugged).
+HANG_TIMEOUT = float(os.environ.get("UR10_HANG_TIMEOUT", 120.0))
 #: How often a condition is looked at (seconds).
 POLL = 0.02
 #: ``UR10_TRACE_WAITS=1`` prints how long each wait took (to find where a slow test spends its time).

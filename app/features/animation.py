@@ -4,14 +4,12 @@ from __future__ import annotations
 
 import threading
 import time
-from typing import TYPE_CHECKING, Any, Callable
+from typing import Any, Callable
 
 import numpy as np
 
 from ..serving.workers import BACKGROUND, Cancelled
-
-if TYPE_CHECKING:
-    from ..session import ClientSession
+from ..view import Session
 
 #: Frames a second sent to the browser: smooth to the eye, a few messages a frame.
 FRAME_RATE = 30.0
@@ -25,7 +23,7 @@ class Player:
     (:data:`ur10teach.serving.workers.BACKGROUND`) per session at most.
     """
 
-    def __init__(self, session: "ClientSession") -> None:
+    def __init__(self, session: Session) -> None:
         self._session = session
         self._stop = threading.Event()
         self._pending: tuple | None = None  #: the newest request not yet started

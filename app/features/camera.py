@@ -15,9 +15,9 @@ import numpy as np
 import viser
 
 from ..feedback import chosen
-from .lecture import LectureMode
 from ..state import Snapshot
 from ..view import View
+from .lecture import LectureMode
 
 #: Where each view looks from (a direction from the arm towards the camera; z is up).
 VIEWS = {
@@ -76,7 +76,7 @@ class CameraControls(View):
     snapshot : callable
         The newest snapshot of the arm this browser is looking at.
     guard : callable
-        Wraps a handler so that nothing it raises escapes (``ClientSession.guard``, ``feedback.guard``).
+        Wraps a handler so that nothing it raises escapes (``ArmSession.guard``, ``feedback.guard``).
     lecture : bool
         Start in lecture mode (:mod:`ur10teach.features.lecture`, whose switch is in this folder too).
     body_radius : float

@@ -9,21 +9,18 @@ Both follow the drag; their axis lengths are in the panel.
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING, Any, Callable
+from typing import Any, Callable
 
 import numpy as np
 import viser
 
 from ur10core.orientation import quaternion
 
-from ..viser_internals.fast_updates import set_orientations, set_positions, set_scales
 from ..feedback import chosen
 from ..state import Snapshot
 from ..style import number
-from ..view import View
-
-if TYPE_CHECKING:
-    from ..session import ClientSession
+from ..view import Session, View
+from ..viser_internals.fast_updates import set_orientations, set_positions, set_scales
 
 VELOCITY_COLOR, FORCE_COLOR = (86, 180, 233), (213, 94, 0)
 #: Drawn size: metres per unit of σ (m/s per rad/s) and of 1/σ (N per N·m).
@@ -41,7 +38,7 @@ def ellipsoid_pose(axes: np.ndarray) -> np.ndarray:
     return quaternion(rotation, check=False)
 
 
-def lengths_markdown(velocity: np.ndarray, force: np.ndarray, place: str = "flange", held: str = "the tool's orientation held") -> str:
+def lengths_markdown(velocity: np.ndarray, force: np.ndarray, place: str = "tool", held: str = "the tool's orientation held") -> str:
     def listed(values: np.ndarray) -> str:
         return ", ".join("∞" if not np.isfinite(v) else number(v, ".3g") for v in values)
 
@@ -59,11 +56,11 @@ HELD = {"pose": "the tool's orientation held", "position and yaw": "the tool's y
 class EllipsoidsView(View):
     """The "Manipulability ellipsoids" folder and the two ellipsoids at the tool.
 
-    ``root``, ``tool`` and ``place`` as for ``ur10teach.features.velocity.VelocityView``: the UR10's flange by default.
+    ``root``, ``tool`` and ``place`` as for ``ur10teach.features.velocity.VelocityView``: the arm's tool by default.
     """
 
-    def __init__(self, scene: viser.SceneApi, gui: viser.GuiApi, session: "ClientSession", root: str = "/ellipsoids",
-                 tool: Callable[[Any], np.ndarray] = lambda snapshot: snapshot.flange, place: str = "flange") -> None:
+    def __init__(self, scene: viser.SceneApi, gui: viser.GuiApi, session: Session, root: str = "/ellipsoids",
+                 tool: Callable[[Any], np.ndarray] = lambda snapshot: snapshot.flange, place: str = "tool") -> None:
         self._arm = session.arm
         self._tool = tool
         self._place = place

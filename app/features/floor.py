@@ -14,11 +14,11 @@ import numpy as np
 import trimesh
 import viser
 
-from ..viser_internals.fast_updates import set_instances
-from .ik_target import BranchesScene
 from ..state import Snapshot
 from ..style import DANGER_RED
 from ..view import View
+from ..viser_internals.fast_updates import set_instances
+from .ik_target import BranchesScene
 
 DISC_RADIUS = 0.09
 #: Just above the floor grid, so the disc is not hidden in it.

@@ -1,61 +1,85 @@
-"""The draggable IK target and the eight branches it has, drawn as translucent ghost arms.
+"""The draggable IK target and every branch it has, drawn as ghost arms, for any arm.
 
-Each slot k keeps its colour and label for every pose (``ur10core.SLOTS``); a branch
-that does not exist for the target is hidden by scaling its instances to zero. The
-solid arm follows the branch nearest its joints (``ArmState.move_target``); clicking a
-ghost, or a number in the branch list, puts the arm on that branch.
+Each slot k keeps its colour and label for every pose (``arm.slot_labels``); a branch that
+does not exist for the target is hidden. The arm follows the branch nearest its joints
+(``ArmState.move_target``); clicking a ghost, or a number in the branch list, puts the arm
+on that branch.
 
-:class:`BranchesScene` is the 3D part (ghosts, target marker, the red "unreachable"
-halo); :class:`IKTargetControls` is the user's gizmo and panel. In the classroom's
-shared mode the scene part is shared by everyone while only the presenter has the
-controls.
+:class:`IKTarget` is one browser's gizmo and "IK target" folder, for any arm. The ghosts are
+drawn by the arm's drawing (:mod:`.drawings`): :class:`BranchesScene` draws a UR-family
+arm's as meshes. In the classroom's shared mode the drawing is shared by everyone while
+only the presenter has the controls.
 """
 
 from __future__ import annotations
 
 import logging
 import threading
-from typing import TYPE_CHECKING, Callable
+from typing import Callable
 
 import numpy as np
 import viser
 
-from ur10core import JOINT_LIMIT, SLOTS
-from ur10core.ik import equivalent_near
-from ur10core.orientation import quaternion, rotation_from_zyx_euler
+from ur10core import SLOTS
+from ur10core.ik import SLOT_LABELS
+from ur10core.orientation import (
+    quaternion,
+    rotation_from_zyx_euler,
+    transform_from_quaternion,
+)
 
-from ..viser_internals.fast_updates import set_instances, set_positions, stop_echo
 from ..feedback import chosen
 from ..meshes import ArmModels
+from ..state import ArmState, Snapshot, joint_value_text
+from ..style import (
+    DANGER_RED,
+    GHOST_OPACITY,
+    SLOT_COLORS,
+    UNREACHABLE_RED,
+    hex_color,
+    sentence,
+    swatch,
+)
+from ..view import Session, View
+from ..viser_internals.fast_updates import set_instances, set_positions, stop_echo
 from .robot import model_slug
-from ..state import ArmState, Snapshot
-from ..style import GHOST_OPACITY, SLOT_COLORS, UNREACHABLE_RED, number, sentence, swatch
-from ..view import View
-
-if TYPE_CHECKING:
-    from ..session import ClientSession
 
 log = logging.getLogger(__name__)
 
-BRANCH_BUTTONS = tuple(str(slot.index + 1) for slot in SLOTS)
-#: What the "Ghosts shown" dropdown offers: every branch, one branch, or the arm's branch and
-#: the one that differs from it in a single choice.
-ALL_BRANCHES = "All 8 branches"
+#: What the "Ghosts shown" dropdown offers: every branch, one branch, or (for the UR family's
+#: eight) the arm's branch and the one that differs from it in a single choice.
+ALL_BRANCHES = "All branches"
 FLIPS = {"Flip the shoulder": "shoulder", "Flip the elbow": "elbow", "Flip the wrist": "wrist"}
-FOCUS_OPTIONS = (ALL_BRANCHES, *FLIPS, *(f"Only branch {k}" for k in BRANCH_BUTTONS))
 #: Branches whose frame origins all lie this close (m) are drawn as one, labelled "3 = 4".
 SAME_POSE = 1e-3
-#: The gizmo's size as a share of the arm's reach a2 + a3: small enough to leave the wrist's
+#: The gizmo's size as a share of the arm's reach: small enough to leave the wrist's
 #: axes and the overlay's P5 in view (it is drawn over everything, to stay grabbable).
 GIZMO_SHARE = 0.12
 GIZMO_LINE_WIDTH = {False: 3.0, True: 6.0}  #: pixels, normal and in lecture mode
 #: How far above a branch's elbow (frame {3}) its number floats. Not the wrist: every branch of a
 #: target shares the wrist centre P5 (and the flange); the elbows are where branches differ.
 LABEL_LIFT = 0.07
+#: What a typed target gives, by what of a pose the arm controls (``arm.task``).
+TYPED_TARGET = {"pose": ("Target x y z (mm), α β γ (°)", "Position in mm and Z-Y-X Euler angles in degrees, "
+                         "e.g. 520, 57.7, 1110.7, -159.6, 25.6, -34.6"),
+                "position and yaw": ("Target x y z (mm), yaw (°)", "Position in mm and the tool's turn about z, "
+                                     "e.g. 600, 200, 100, 30"),
+                "position": ("Target x y z (mm)", "Position in mm, e.g. 600, 200, 100")}
+
+
+def has_flips(arm) -> bool:
+    """The arm's slots are the UR family's eight: shoulder, elbow and wrist choices."""
+    return tuple(arm.slot_labels) == SLOT_LABELS
+
+
+def focus_options(arm) -> tuple[str, ...]:
+    """The "Ghosts shown" choices for ``arm``."""
+    flips = tuple(FLIPS) if has_flips(arm) else ()
+    return (ALL_BRANCHES, *flips, *(f"Only branch {k + 1}" for k in range(len(arm.slot_labels))))
 
 
 def flipped(slot: int, choice: str) -> int:
-    """The slot that differs from ``slot`` in ``choice`` ("shoulder", "elbow" or "wrist") alone.
+    """The UR slot that differs from ``slot`` in ``choice`` ("shoulder", "elbow" or "wrist") alone.
 
     >>> flipped(4, "shoulder"), flipped(4, "elbow"), flipped(4, "wrist")
     (1, 5, 6)
@@ -66,18 +90,20 @@ def flipped(slot: int, choice: str) -> int:
                 if all((getattr(other, name) == getattr(this, name)) != (name == choice) for name in others))
 
 
-def focused(focus: str, arm_slot: int) -> np.ndarray:
-    """(8,) bool: the branches the "Ghosts shown" choice ``focus`` asks for.
+def focused(focus: str, arm_slot: int, arm) -> np.ndarray:
+    """(k,) bool: the branches of ``arm`` the "Ghosts shown" choice ``focus`` asks for.
 
-    >>> focused("Flip the elbow", 4).nonzero()[0].tolist(), focused("Only branch 3", 4).nonzero()[0].tolist()
+    >>> from ur10core import Arm
+    >>> ur10 = Arm.preset("ur10")
+    >>> focused("Flip the elbow", 4, ur10).nonzero()[0].tolist(), focused("Only branch 3", 4, ur10).nonzero()[0].tolist()
     ([4, 5], [2])
     """
-    if focus not in FOCUS_OPTIONS:
+    if focus == ALL_BRANCHES:  # the usual choice, on every drag: no list of choices built
+        return np.ones(len(arm.slot_labels), bool)
+    if focus not in focus_options(arm):
         raise ValueError(f"ghosts shown: {focus!r:.40} is not one of the choices")
-    shown = np.zeros(8, bool)
-    if focus == ALL_BRANCHES:
-        shown[:] = True
-    elif focus in FLIPS:
+    shown = np.zeros(len(arm.slot_labels), bool)
+    if focus in FLIPS:
         slot = max(arm_slot, 0)  # with the target out of reach: the pair of branch 1
         shown[[slot, flipped(slot, FLIPS[focus])]] = True
     else:
@@ -114,7 +140,7 @@ def branch_labels(snapshot: Snapshot, groups: tuple[tuple[int, ...], ...]) -> li
 
     Only the first slot of a group carries the group's label.
     """
-    texts = [""] * 8
+    texts = [""] * len(snapshot.solution.labels)
     floor = snapshot.through_floor[1:]
     for group in groups:
         text = " = ".join(str(k + 1) for k in group)
@@ -126,45 +152,66 @@ def branch_labels(snapshot: Snapshot, groups: tuple[tuple[int, ...], ...]) -> li
     return texts
 
 
-def branch_table(snapshot: Snapshot) -> str:
-    """The eight slots with their colour, label and joint values (°).
+def joints_text(arm, q: np.ndarray) -> str:
+    """Joint values as the sliders show them: ``30.0°, 45.0°, 120.0 mm``."""
+    return ", ".join(joint_value_text(kind, float(v)) for kind, v in zip(arm.joint_types, q))
 
-    Each angle is the turn of it nearest the arm's own joints, as the sliders show them:
-    the arm's branch reads exactly as its sliders do.
+
+def branch_table(snapshot: Snapshot) -> str:
+    """Every slot with its colour, label and joint values.
+
+    Each revolute joint is the turn of it nearest the arm's own joints, as the sliders would
+    show it: the arm's branch reads exactly as its sliders do.
     """
-    solution = snapshot.solution
-    rows = ["| | # | branch | θ1…θ6 (°), as the sliders would show them |", "|---|---:|---|---|"]
-    shown = equivalent_near(np.where(solution.valid[:, None], solution.q, 0.0), snapshot.q, JOINT_LIMIT)
-    for slot in SLOTS:
-        k = slot.index
-        if solution.valid[k]:
-            values = ", ".join(number(v, ".1f") for v in np.degrees(shown[k]))
-        else:
-            values = "— no solution"
-        mark = " **← arm**" if k == snapshot.slot else ""
-        if solution.valid[k] and snapshot.through_floor[k + 1]:
-            mark += " ⚠ through the floor"
-        rows.append(f"| {swatch(SLOT_COLORS[k])} | {k + 1} | {slot.label}{mark} | {values} |")
+    arm, solution = snapshot.arm, snapshot.solution
+    floor = snapshot.body_points is not None  # the floor is checked where the arm's bodies are known
+    rows = ["| | # | branch | joints, as the sliders would show them | |", "|---|---:|---|---|---|"]
+    for k, label in enumerate(solution.labels):
+        colour = swatch(SLOT_COLORS[k % len(SLOT_COLORS)])
+        if not solution.valid[k]:
+            rows.append(f"| {colour} | {k + 1} | {label} | — no solution | |")
+            continue
+        flags = []
+        if k == snapshot.slot:
+            flags.append("**← arm**")
+        if floor and snapshot.through_floor[k + 1]:
+            flags.append("⚠ through the floor")
+        if not solution.within_limits[k]:
+            flags.append(f"<span style='color:{hex_color(DANGER_RED)}'>beyond a joint limit</span>")
+        if solution.singular[k]:
+            flags.append("singular: a joint chosen, not fixed")
+        rows.append(f"| {colour} | {k + 1} | {label} | {joints_text(arm, solution.take(k, snapshot.q))} | {', '.join(flags)} |")
     return "\n".join(rows)
 
 
 def status_markdown(snapshot: Snapshot) -> str:
-    if not snapshot.reachable:
-        return f"<span style='color:#c81e1e'>**Target unreachable.**</span> {sentence(snapshot.reason[len('unreachable: '):])}."
+    """How many branches reach the target and which the arm is on, or why none does."""
     solution = snapshot.solution
-    notes = [f"**{int(solution.valid.sum())} of 8 branches** reach this target; the arm is on "
-             f"**{snapshot.slot + 1}: {SLOTS[snapshot.slot].label}**."]
-    if solution.shoulder_singular:
-        notes.append("Shoulder singular: the shoulder-left and shoulder-right branches coincide.")
-    if solution.elbow_singular[snapshot.slot]:
-        notes.append("Elbow singular (stretched or folded): the elbow-up and elbow-down branches coincide.")
-    if solution.wrist_singular[snapshot.slot]:
-        notes.append("Wrist singular: axes 4 and 6 are parallel; θ6 was kept and θ2…θ4 follow it.")
+    if not snapshot.reachable:
+        reason = snapshot.reason.removeprefix("unreachable: ")
+        return f"<span style='color:{hex_color(DANGER_RED)}'>**Target unreachable.**</span> {sentence(reason)}."
+    if solution is None:  # a typed table, not searched yet
+        return ("The arm follows the target from its own joints (damped least squares). "
+                "**Find every branch** searches from many starts for the others.")
+    notes = [f"**{int(solution.valid.sum())} of {len(solution.labels)} branches** reach this target "
+             f"({solution.method}; the arm places its {solution.task}); the arm is on "
+             f"**{snapshot.slot + 1}: {solution.labels[snapshot.slot]}**."]
+    if has_flips(snapshot.arm):  # the UR family names which of its choices a singularity merges
+        if solution.shoulder_singular:
+            notes.append("Shoulder singular: the shoulder-left and shoulder-right branches coincide.")
+        if solution.elbow_singular[snapshot.slot]:
+            notes.append("Elbow singular (stretched or folded): the elbow-up and elbow-down branches coincide.")
+        if solution.wrist_singular[snapshot.slot]:
+            notes.append("Wrist singular: axes 4 and 6 are parallel; θ6 was kept and θ2…θ4 follow it.")
+    elif solution.singular[snapshot.slot]:
+        notes.append("Singular: the pose does not fix every joint; the arm's own value was kept.")
     return " ".join(notes)
 
 
 def branches_markdown(snapshot: Snapshot) -> str:
-    """The status line above the eight-branch table."""
+    """The status line above the branch table."""
+    if snapshot.solution is None:
+        return status_markdown(snapshot)
     return status_markdown(snapshot) + "\n\n" + branch_table(snapshot)
 
 
@@ -184,7 +231,7 @@ class BranchesScene(View):
     def __init__(self, scene: viser.SceneApi, models: ArmModels, first: Snapshot,
                  target_marker: bool = False) -> None:
         self.show_ghosts = True
-        self.focus = ALL_BRANCHES  #: one of FOCUS_OPTIONS
+        self.focus = ALL_BRANCHES  #: one of focus_options(arm)
         self.shown = np.zeros(8, bool)  #: the ghosts drawn by the last render
         #: called with (client, slot) when a ghost is clicked; set by whoever drives this scene
         self.on_select: Callable[[viser.ClientHandle | None, int], None] | None = None
@@ -248,7 +295,7 @@ class BranchesScene(View):
             self.unreachable.visible = not snapshot.reachable
         valid = snapshot.solution.valid
         groups = same_pose_groups(snapshot.ghost_frames, valid)
-        focus = focused(self.focus, snapshot.slot)
+        focus = focused(self.focus, snapshot.slot, snapshot.arm)
         if len(groups) == valid.sum():  # none coincide (away from singularities)
             shown = valid & focus & self.show_ghosts
             if snapshot.slot >= 0:
@@ -278,7 +325,7 @@ class BranchesScene(View):
     def render_panel(self, snapshot: Snapshot) -> None:
         """The branch numbers, at the panel's pace (≤ 10 Hz): off the drag path, which they would double."""
         groups = same_pose_groups(snapshot.ghost_frames, snapshot.solution.valid)
-        focus = focused(self.focus, snapshot.slot)
+        focus = focused(self.focus, snapshot.slot, snapshot.arm)
         texts = branch_labels(snapshot, groups)
         visible = [False] * 8
         for group in groups:  # a group's label is its first slot's; the arm's is shown whatever the focus
@@ -295,42 +342,46 @@ class BranchesScene(View):
         set_positions([self.labels[k] for k in range(8) if visible[k]], elbows[np.array(visible)])
 
 
-class IKTargetControls(View):
-    """One user's gizmo at the flange and the "IK target" folder of their panel."""
 
-    def __init__(self, controls: viser.SceneApi, gui: viser.GuiApi, branches: BranchesScene,
-                 session: "ClientSession") -> None:
+
+class IKTarget(View):
+    """One browser's gizmo at the tool and its "IK target" folder, for any arm.
+
+    ``drawing`` draws the ghosts (and, in the shared scene, the target marker); ``session``
+    applies the changes. A drag is filed on viser's event loop and solved by the drag queue.
+    """
+
+    def __init__(self, controls: viser.SceneApi, gui: viser.GuiApi, drawing, session: Session) -> None:
         self._session = session
-        self._branches = branches
-        self._seen_pose: tuple | None = None
+        self._drawing = drawing
+        self._seen: tuple | None = None
         self._seen_lock = threading.Lock()
-        snapshot = session.state.last
+        arm, snapshot = session.arm, session.state.last
         self.gizmo = controls.add_transform_controls(
-            "/ik_target", scale=GIZMO_SHARE * (session.arm.a2 + session.arm.a3), line_width=GIZMO_LINE_WIDTH[False],
-            depth_test=False, opacity=0.85,
-            wxyz=snapshot.flange_wxyz, position=snapshot.flange[:3, 3],
-        )
+            f"{drawing.root}/ik_target", scale=GIZMO_SHARE * drawing.size, line_width=GIZMO_LINE_WIDTH[False],
+            depth_test=False, opacity=0.85, disable_rotations=arm.task == "position",
+            active_axes=(True, True, arm.name != "planar_elbow"),
+            wxyz=quaternion(snapshot.target[:3, :3], check=False), position=snapshot.target[:3, 3])
         stop_echo(self.gizmo)
         # the halo rides on the gizmo unless the (shared) scene draws the target itself
-        self.unreachable = None if branches.target is not None else add_unreachable_halo(controls, "/ik_target")
-        folder = gui.add_folder("IK target: all 8 branches")
+        self.unreachable = None if drawing.target is not None else add_unreachable_halo(controls, f"{drawing.root}/ik_target")
+        slots = len(arm.slot_labels)
+        folder = gui.add_folder(f"IK target: all {slots} branches" if not arm.numerical else "IK target")
         self.folders = (folder,)
+        label, hint = TYPED_TARGET[arm.task]
         with folder:
-            gui.add_markdown("Drag the gizmo at the flange. Each ghost arm is one IK branch, numbered at its "
-                             "elbow as in the table; click a ghost or a number below to put the arm on it.")
-            self.show_ghosts = gui.add_checkbox("Show ghost arms", branches.show_ghosts)
-            self.focus = gui.add_dropdown("Ghosts shown", FOCUS_OPTIONS, initial_value=branches.focus,
+            gui.add_markdown("Drag the gizmo at the tool. Each ghost arm is one IK branch, numbered as in the "
+                             "table; click a ghost or a number below to put the arm on it.")
+            self.show_ghosts = gui.add_checkbox("Show ghost arms", drawing.show_ghosts)
+            self.focus = gui.add_dropdown("Ghosts shown", focus_options(arm), initial_value=drawing.focus,
                                           hint="One branch, or the arm's branch beside the one a single choice away")
-            self.branch_buttons = gui.add_button_group("Use branch", BRANCH_BUTTONS)
+            self.branch_buttons = gui.add_button_group("Use branch", tuple(str(k + 1) for k in range(slots)))
             self.branches = gui.add_markdown(branches_markdown(snapshot))
-            self.typed_pose = gui.add_text(
-                "Target x y z (mm), α β γ (°)", "",
-                hint="Position in mm and Z-Y-X Euler angles in degrees, e.g. 520, 57.7, 1110.7, -159.6, 25.6, -34.6",
-            )
+            self.typed_pose = gui.add_text(label, "", hint=hint)
             self.move_button = gui.add_button("Move target here", icon=viser.Icon.TARGET)
-            self.snap_button = gui.add_button("Put target back on the flange", icon=viser.Icon.ARROW_BACK_UP)
+            self.snap_button = gui.add_button("Put target back on the tool", icon=viser.Icon.ARROW_BACK_UP)
 
-        branches.on_select = self._ghost_clicked
+        drawing.on_select = self._ghost_clicked
         self.gizmo.on_update(self._dragged)
         self.branch_buttons.on_click(session.guard(self._branch_button))
         self.show_ghosts.on_update(session.guard(self._toggle_ghosts))
@@ -343,9 +394,9 @@ class IKTargetControls(View):
         self.gizmo.line_width = GIZMO_LINE_WIDTH[lecture]
 
     def close(self) -> None:
-        """Stop driving the branches scene (the browser has gone, or a presenter handed over)."""
-        if self._branches.on_select == self._ghost_clicked:
-            self._branches.on_select = None
+        """Stop driving the drawing's ghosts (the browser has gone, or a presenter handed over)."""
+        if self._drawing.on_select == self._ghost_clicked:
+            self._drawing.on_select = None
 
     def remove(self) -> None:
         super().remove()
@@ -356,11 +407,11 @@ class IKTargetControls(View):
     async def _dragged(self, event: viser.TransformControlsEvent) -> None:
         """Runs on viser's event loop (no thread-pool hop): it only files the newest pose."""
         try:
-            pose = (tuple(self.gizmo.wxyz), tuple(self.gizmo.position))
+            pose = (tuple(self.gizmo.wxyz), tuple(self.gizmo.position), event.phase == "end")
             with self._seen_lock:
-                if pose == self._seen_pose:
-                    return  # the end of a drag repeats its last update
-                self._seen_pose = pose
+                if pose == self._seen:
+                    return  # a repeated update
+                self._seen = pose
             self._session.drags.submit(self._session, pose)  # solved by the drag queue's worker
         except Exception:  # nothing may escape onto the event loop
             log.exception("could not queue a drag")
@@ -375,18 +426,23 @@ class IKTargetControls(View):
         self._session.apply(lambda state: state.select_branch(slot))
 
     def _toggle_ghosts(self, _: viser.GuiEvent) -> None:
-        self._branches.show_ghosts = self.show_ghosts.value
+        self._drawing.show_ghosts = bool(self.show_ghosts.value)
         self._session.redraw()
 
     def _choose_focus(self, _: viser.GuiEvent) -> None:
-        self._branches.focus = chosen(self.focus, "ghosts shown")
+        self._drawing.focus = chosen(self.focus, "ghosts shown")
         self._session.redraw()
 
     def _typed_target(self, _: viser.GuiEvent) -> None:
-        values = ArmState.parse_degrees(self.typed_pose.value, count=6, what="target pose")
-        T = np.eye(4)
-        T[:3, :3] = rotation_from_zyx_euler(np.radians(values[3:]))
+        arm = self._session.arm
+        count = {"pose": 6, "position and yaw": 4, "position": 3}[arm.task]
+        values = ArmState.parse_numbers(self.typed_pose.value, count=count, what="target")
+        T = np.array(self._session.state.last.target)
         T[:3, 3] = values[:3] / 1000.0
+        if count == 6:
+            T[:3, :3] = rotation_from_zyx_euler(np.radians(values[3:]))
+        elif count == 4:
+            T[:3, :3] = rotation_from_zyx_euler(np.radians([values[3], 0.0, 0.0]))
         self._session.apply(lambda state: state.move_target(T, cause="typed"))
 
     # ------------------------------------------------------------------ output
@@ -396,9 +452,15 @@ class IKTargetControls(View):
             self.gizmo.wxyz = quaternion(snapshot.target[:3, :3], check=False)
             self.gizmo.position = snapshot.target[:3, 3]
             with self._seen_lock:
-                self._seen_pose = None  # the next drag starts afresh, even from this very pose
+                self._seen = None  # the next drag starts afresh, even from this very pose
         if self.unreachable is not None:
             self.unreachable.visible = not snapshot.reachable
 
     def render_panel(self, snapshot: Snapshot) -> None:
         self.branches.content = branches_markdown(snapshot)
+
+
+def pose_from_gizmo(pose) -> tuple[np.ndarray, bool]:
+    """A filed drag ``(wxyz, position, released)`` → (T (4, 4), released)."""
+    wxyz, position, released = pose
+    return transform_from_quaternion(wxyz, position), released

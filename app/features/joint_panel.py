@@ -1,5 +1,5 @@
-"""Six joint sliders in degrees (±360°, each with its exact number box), pose buttons,
-a box to type all six angles, and the UR-controller view of the same angles.
+"""One slider per joint (degrees, or millimetres for a prismatic joint, each with its exact number box),
+pose buttons, a box to type every joint at once, and, for the UR family, the teach pendant's angles.
 
 viser's number box beside a slider sends every keystroke: typing 200 would move the arm
 through 2° and 20°. A value that jumps further than :data:`DRAG_STEP` from the one before
@@ -9,23 +9,21 @@ slider being dragged moves in small steps and is applied as it moves.
 
 from __future__ import annotations
 
+import re
 import threading
-from typing import TYPE_CHECKING
+from typing import Callable
 
 import numpy as np
 import viser
 
+from ur10core import to_controller
+
 from ..feedback import chosen
-from .readouts import joints_markdown
-from ..state import ArmState, Snapshot
+from ..state import ArmState, Snapshot, joint_value_text
 from ..style import number
-from ..view import View
+from ..view import Session, View
 
-if TYPE_CHECKING:
-    from ..session import ClientSession
-
-POSE_BUTTONS = ("Zero", "Stretched", "Arbitrary", "Random")
-#: Degrees between two values of a slider beyond which the second was typed, not dragged.
+#: Display units between two values of a slider beyond which the second was typed, not dragged.
 DRAG_STEP = 10.0
 #: Seconds a typed value waits for the next keystroke before it is applied.
 TYPING_PAUSE = 0.5
@@ -36,46 +34,87 @@ def _same(a: float, b: float) -> bool:
     return a == b or (a != a and b != b)
 
 
-def degrees_text(q: np.ndarray) -> str:
-    """Six angles (rad) as the "All six" box takes them: ``30, 45, 26, 50, 60, 80``."""
-    return ", ".join(number(v, ".2f").rstrip("0").rstrip(".") for v in np.degrees(q))
+def to_display(kind: str, value):
+    """A joint value as the panel shows it: degrees for R, millimetres for P."""
+    return np.degrees(value) if kind == "R" else 1000.0 * np.asarray(value)
+
+
+def from_display(kind: str, value):
+    return np.radians(value) if kind == "R" else np.asarray(value) / 1000.0
+
+
+def slider_label(arm, index: int) -> str:
+    """``θ1 base (°)``, ``d3 (mm)``: the joint's variable, its name, its unit."""
+    name, kind = arm.joint_names[index], arm.joint_types[index]
+    if not re.match(r"^(θ\d|d\d|A\d|joint )", name):  # a name that is not already a variable (a typed table's "joint 3")
+        name = f"{'θ' if kind == 'R' else 'd'}{index + 1} {name}"
+    return f"{name} ({'°' if kind == 'R' else 'mm'})"
+
+
+def typed_label(arm) -> str:
+    units = set(arm.joint_types)
+    unit = "°" if units == {"R"} else "mm" if units == {"P"} else "° and mm"
+    return f"All {arm.n_joints} ({unit})"
+
+
+def display_text(arm, q: np.ndarray) -> str:
+    """The joints as the typing box takes them: ``30, 45, 26, 50, 60, 80``."""
+    return ", ".join(number(float(to_display(kind, v)), ".2f").rstrip("0").rstrip(".")
+                     for kind, v in zip(arm.joint_types, q))
+
+
+def joints_markdown(arm, q: np.ndarray, with_controller: bool = False) -> str:
+    """The joint values, and the UR teach pendant's beside them when asked."""
+    if not with_controller:
+        return " · ".join(f"{name} {joint_value_text(kind, v, '.2f')}" for name, kind, v in zip(arm.joint_names, arm.joint_types, q))
+    controller = np.degrees(to_controller(q))
+    rows = ["| joint | course | UR controller |", "|---|---:|---:|"]
+    rows += [f"| {name} | {number(a, '.2f')}° | {number(b, '.2f')}° |" for name, a, b in zip(arm.joint_names, np.degrees(q), controller)]
+    rows.append("\nThe controller uses standard DH with a2, a3 < 0: shoulder + 180°, flange turned 180° about z6.")
+    return "\n".join(rows)
 
 
 class JointPanel(View):
-    def __init__(self, gui: viser.GuiApi, session: "ClientSession") -> None:
+    """The "Joints" folder; ``before()`` runs before a slider or a button moves the arm (a playing path stops)."""
+
+    def __init__(self, gui: viser.GuiApi, session: Session, before: Callable[[], None] = lambda: None) -> None:
         self._session = session
+        self._before = before
+        arm = self._arm = session.arm
         self._rng = np.random.default_rng()
         self._typing: dict[int, threading.Timer] = {}  # slider index -> its typed value, waiting
         self._typing_lock = threading.Lock()
-        q = np.degrees(session.state.q)
-        self._received = [round(float(v), 2) for v in q]  # each slider's last value, as the browser sent or we set it
-        self._shown_q = session.state.q
-        folder = gui.add_folder("Joints (°)")
+        q = session.state.q
+        shown = [round(float(to_display(kind, v)), 2) for kind, v in zip(arm.joint_types, q)]
+        self._received = list(shown)  # each slider's last value, as the browser sent or we set it
+        self._shown_q = q
+        self.pose_names = (*(name.capitalize() for name in arm.specs.poses), "Random")
+        folder = gui.add_folder("Joints")
         self.folders = (folder,)
         with folder:
-            self.sliders = [
-                gui.add_slider(
-                    f"θ{i + 1} {name}", min=-360.0, max=360.0, step=0.1, initial_value=round(float(q[i]), 2),
-                    hint=f"Joint {i + 1} ({name}) in degrees; the UR10 turns ±360°. Type an exact value in the box.",
-                )
-                for i, name in enumerate(session.arm.joint_names)
-            ]
-            self.poses = gui.add_button_group("Pose", POSE_BUTTONS)
-            self.typed = gui.add_text(
-                "All six (°)", degrees_text(session.state.q),
-                hint="Six angles in degrees, separated by commas or spaces, e.g. 30, 45, 26, 50, 60, 80",
-            )
-            self.apply_typed = gui.add_button("Set these angles", icon=viser.Icon.CHECK)
-            self.controller = gui.add_checkbox(
-                "UR controller angles", False, hint="Show what a real UR teach pendant displays for this pose"
-            )
+            self.sliders = []
+            for k, kind in enumerate(arm.joint_types):
+                low, high = (round(float(to_display(kind, v)), 1) for v in arm.limits[k])
+                unit = "°" if kind == "R" else " mm"
+                self.sliders.append(gui.add_slider(
+                    slider_label(arm, k), min=low, max=high, step=0.1 if kind == "R" else 1.0, initial_value=shown[k],
+                    hint=f"Joint {k + 1} ({arm.joint_names[k]}): {'revolute' if kind == 'R' else 'prismatic'}, "
+                         f"{low:g}…{high:g}{unit}. Type an exact value in the box."))
+            self.poses = gui.add_button_group("Pose", self.pose_names)
+            self.typed = gui.add_text(typed_label(arm), display_text(arm, q),
+                                      hint="Every joint, separated by commas or spaces: degrees, or mm for a prismatic joint")
+            self.apply_typed = gui.add_button("Set these values", icon=viser.Icon.CHECK)
+            self.controller = (gui.add_checkbox("UR controller angles", False,
+                                                hint="Show what a real UR teach pendant displays for this pose")
+                               if arm.name in arm.UR_PRESETS else None)
             self.summary = gui.add_markdown("")
 
         for index, slider in enumerate(self.sliders):
             slider.on_update(session.guard(self._slider_moved(index)))
         self.poses.on_click(session.guard(self._pose_button))
-        self.apply_typed.on_click(session.guard(self._typed_angles))
-        self.controller.on_update(session.guard(lambda _: session.refresher.request(session)))
+        self.apply_typed.on_click(session.guard(self._typed_values))
+        if self.controller is not None:
+            self.controller.on_update(session.guard(lambda _: session.refresher.request(session)))
 
     def _slider_moved(self, index: int):
         def moved(event: viser.GuiEvent) -> None:
@@ -97,28 +136,32 @@ class JointPanel(View):
 
         return moved
 
-    def _move(self, index: int, degrees: float) -> None:
+    def _move(self, index: int, shown: float) -> None:
         with self._typing_lock:
             self._typing.pop(index, None)
-        self._session.apply(lambda state: state.set_joint(index, np.radians(degrees)))
+        self._before()
+        value = float(from_display(self._arm.joint_types[index], shown))
+        self._session.apply(lambda state: state.set_joint(index, value))
 
     def _pose_button(self, event: viser.GuiEvent) -> None:
         choice = chosen(self.poses, "pose")
-        if choice == "Random":
-            q = self._rng.uniform(-np.pi, np.pi, 6)
-        else:
-            q = self._session.arm.specs.poses[choice.lower()]
+        arm = self._arm
+        q = arm.sample_joints(1, seed=int(self._rng.integers(2**31)))[0] if choice == "Random" else arm.specs.poses[choice.lower()]
+        self._before()
         self._session.apply(lambda state: state.set_joints(q))
 
-    def _typed_angles(self, _: viser.GuiEvent) -> None:
-        q = ArmState.parse_degrees(self.typed.value)
-        self._session.apply(lambda state: state.set_joints(np.radians(q)))
+    def _typed_values(self, _: viser.GuiEvent) -> None:
+        arm = self._arm
+        values = ArmState.parse_numbers(self.typed.value, arm.n_joints, "joint values")
+        q = [float(from_display(kind, v)) for kind, v in zip(arm.joint_types, values)]
+        self._before()
+        self._session.apply(lambda state: state.set_joints(q))
 
     def render_panel(self, snapshot: Snapshot) -> None:
         with self._typing_lock:
             typing = set(self._typing)
-        for index, (slider, value) in enumerate(zip(self.sliders, np.degrees(snapshot.q))):
-            value = round(float(value), 2)
+        for index, (slider, kind, value) in enumerate(zip(self.sliders, self._arm.joint_types, snapshot.q)):
+            value = round(float(to_display(kind, value)), 2)
             if index in typing or not _same(slider.value, self._received[index]):
                 continue  # the student's newer value, whose callback has yet to run: it is the last word
             if not abs(slider.value - value) <= 1e-9:  # true for a NaN a bad client left too
@@ -126,8 +169,9 @@ class JointPanel(View):
                 self._received[index] = value
         if not np.array_equal(snapshot.q, self._shown_q):  # leave the student's own typing alone otherwise
             self._shown_q = snapshot.q
-            self.typed.value = degrees_text(snapshot.q)
-        self.summary.content = joints_markdown(snapshot.q, self.controller.value)
+            self.typed.value = display_text(self._arm, snapshot.q)
+        with_controller = self.controller is not None and bool(self.controller.value)
+        self.summary.content = joints_markdown(self._arm, snapshot.q, with_controller)
 
     def close(self) -> None:
         with self._typing_lock:

@@ -9,7 +9,7 @@ a Python loop) and then played on the arm in real time (``ur10teach.features.ani
 from __future__ import annotations
 
 import itertools
-from typing import TYPE_CHECKING, Callable
+from typing import Callable
 
 import numpy as np
 import viser
@@ -18,15 +18,12 @@ import viser.uplot
 from ur10core import dynamics, paths
 from ur10core.branches import wrap
 
-from .animation import Player
 from ..feedback import chosen
-from ..style import SLOT_COLORS, hex_color, number
-from .velocity import shown_rates
-from ..view import View
 from ..serving.workers import APART, HEAVY
-
-if TYPE_CHECKING:
-    from ..session import ClientSession
+from ..style import SLOT_COLORS, hex_color, number
+from ..view import Session, View
+from .animation import Player
+from .velocity import shown_rates
 
 DROP_SECONDS = 3.0
 PATH_SECONDS = 4.0
@@ -123,7 +120,7 @@ class MotionLessons(View):
     """The "Motion" folder: release the arm (where its link masses are known), or move it from a
     remembered pose two ways; a plot of the joint rates. For any arm, its joints named as the arm names them."""
 
-    def __init__(self, gui: viser.GuiApi, session: "ClientSession", before: Callable[[], None] = lambda: None) -> None:
+    def __init__(self, gui: viser.GuiApi, session: Session, before: Callable[[], None] = lambda: None) -> None:
         self._session = session
         self._before = before  #: called before a motion starts (another lesson's own motion stops)
         self.player = Player(session)
@@ -197,9 +194,11 @@ class MotionLessons(View):
                 for name, path in both.items():
                     self.charts[name].data = rate_chart_data(path, self._limits, self._kinds)
                     self.charts[name].visible = True
-            return both[kind].t, both[kind].q
+            return both[kind].t, np.hstack([both[kind].q, both[kind].qdot])
 
-        self.player.play(compute, "motion")
+        n = arm.n_joints  # each frame carries its rates: the velocity arrows show them while it plays
+        self.player.play(compute, "motion", show=lambda state, row: state.set_joints(row[:n], "motion", rates=row[n:]),
+                         done=lambda: session.apply(lambda state: state.set_joints(state.q, "motion")))
 
     def close(self) -> None:
         self.player.stop()

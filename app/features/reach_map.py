@@ -13,24 +13,21 @@ eight tabs turning their gizmos cost what one does.
 from __future__ import annotations
 
 import threading
-from typing import TYPE_CHECKING, Any, Callable
+from typing import Any, Callable
 
 import numpy as np
 import viser
 
-from ur10core.solvers.ur import URFamily
 from ur10core.orientation import quaternion
+from ur10core.solvers.ur import URFamily
 from ur10core.workspace import BranchCountMap, branch_count_map
 
 from ..feedback import chosen
+from ..serving.workers import MAPS, FoldedRuns
 from ..state import Snapshot
 from ..style import REACH_COLORS, hex_color
-from ..view import View
-from ..serving.workers import MAPS, FoldedRuns
+from ..view import Session, View
 from .workspace import FROM_ABOVE
-
-if TYPE_CHECKING:
-    from ..session import ClientSession
 
 PLANES = {"vertical, through the base axis and the target": "vertical", "horizontal, at the target's height": "horizontal"}
 RESOLUTION = 200  #: cells per side for the UR family (compiled batch IK): 40 000 poses, about 1.4 cm each
@@ -89,7 +86,7 @@ class ReachMapView(View):
     arm's tool), and ``world`` (4, 4) puts the arm's base frame in the scene.
     """
 
-    def __init__(self, scene: viser.SceneApi, gui: viser.GuiApi, session: "ClientSession", root: str = "/reach_map",
+    def __init__(self, scene: viser.SceneApi, gui: viser.GuiApi, session: Session, root: str = "/reach_map",
                  target_of: Callable[[Any], np.ndarray] = lambda snapshot: snapshot.target,
                  world: np.ndarray = np.eye(4)) -> None:
         self._scene = scene

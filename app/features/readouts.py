@@ -1,12 +1,16 @@
-"""Live readouts: T06 in millimetres and the orientation the four ways the course reads it."""
+"""Live readouts: the tool pose T0n in millimetres and its orientation the four ways the course reads it."""
 
 from __future__ import annotations
 
 import numpy as np
 import viser
 
-from ur10core import JOINT_NAMES, Arm, to_controller
-from ur10core.orientation import angle_axis_from_quaternion, quaternion, xyz_fixed, zyx_euler
+from ur10core.orientation import (
+    angle_axis_from_quaternion,
+    quaternion,
+    xyz_fixed,
+    zyx_euler,
+)
 
 from ..state import Snapshot
 from ..style import number
@@ -49,36 +53,19 @@ def flange_markdown(snapshot: Snapshot) -> str:
     return pose_markdown(snapshot.flange) + "\n\n" + orientation_markdown(snapshot.flange[:3, :3], snapshot.flange_wxyz)
 
 
-def joints_markdown(q: np.ndarray, with_controller: bool) -> str:
-    """The joint angles in degrees, and the teach pendant's beside them when asked."""
-    course = np.degrees(q)
-    if not with_controller:
-        return " · ".join(f"{name} {number(value, '.2f')}°" for name, value in zip(JOINT_NAMES, course))
-    controller = np.degrees(to_controller(q))
-    rows = ["| joint | course | UR controller |", "|---|---:|---:|"]
-    rows += [f"| {name} | {number(a, '.2f')}° | {number(b, '.2f')}° |" for name, a, b in zip(JOINT_NAMES, course, controller)]
-    rows.append("\nThe controller uses standard DH with a2, a3 < 0: shoulder + 180°, flange turned 180° about z6.")
-    return "\n".join(rows)
-
-
-def dh_markdown(arm: Arm) -> str:
-    rows = ["| i | α(i−1) | a(i−1) (mm) | d(i) (mm) | θ(i) |", "|---:|---:|---:|---:|---|"]
-    for i, (alpha, a, d) in enumerate(arm.dh_table, start=1):
-        rows.append(f"| {i} | {np.degrees(alpha):+.0f}° | {a * 1000:.1f} | {d * 1000:.1f} | θ{i} |")
-    return "\n".join(rows)
+def pose_title(snapshot: Snapshot) -> str:
+    """``Tool pose T06``: the base-to-tool transform, named by the tool's frame."""
+    return f"Tool pose T0{len(snapshot.frames) - 1}"
 
 
 class Readouts(View):
-    """The "Flange pose" folder."""
+    """The "Tool pose" folder."""
 
-    def __init__(self, gui: viser.GuiApi, arm: Arm, first: Snapshot) -> None:
-        pose = gui.add_folder("Flange pose T06")
-        with pose:
+    def __init__(self, gui: viser.GuiApi, first: Snapshot) -> None:
+        folder = gui.add_folder(pose_title(first))
+        with folder:
             self.pose = gui.add_markdown(flange_markdown(first))
-        table = gui.add_folder(f"DH table ({arm.name})", expand_by_default=False)
-        with table:
-            gui.add_markdown(dh_markdown(arm))
-        self.folders = (pose, table)
+        self.folders = (folder,)
 
     def render_panel(self, snapshot: Snapshot) -> None:
         self.pose.content = flange_markdown(snapshot)

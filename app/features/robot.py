@@ -15,15 +15,15 @@ import viser
 
 from ur10core.orientation import quaternion
 
-from ..viser_internals.fast_updates import set_orientations
 from ..feedback import chosen
 from ..meshes import ArmModels
 from ..state import Snapshot
-from ..view import View
 from ..style import ALUMINIUM, JOINT_CAP_GREY
+from ..view import Session, View
+from ..viser_internals.fast_updates import set_orientations
 
 if TYPE_CHECKING:
-    from ..session import ClientSession, SceneViews
+    from .drawings import MeshArm
 
 
 def poses(frames: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -94,8 +94,8 @@ class ArmModelControls(View):
     the classroom's shared scene that its presenter drives.
     """
 
-    def __init__(self, gui: viser.GuiApi, folder: viser.GuiFolderHandle, views: "SceneViews",
-                 session: "ClientSession") -> None:
+    def __init__(self, gui: viser.GuiApi, folder: viser.GuiFolderHandle, views: "MeshArm",
+                 session: Session) -> None:
         self._views, self._session = views, session
         with folder:
             self.dropdown = gui.add_dropdown(

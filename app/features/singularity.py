@@ -1,17 +1,19 @@
-"""The singularity-manifold overlay (docs/kinematics.md §5).
+"""Singularities, for any arm whose model factors det J (docs/kinematics.md §5, §7.6).
 
-det J = a2 · a3 · (a2 c2 + a3 c23 − d5 s234) · s3 · s5: three factors, three kinds of
-singularity. The overlay shows each factor as a gauge that turns from green to red as it
-approaches zero, a short rolling plot, det J itself and its factored formula (rendered
-MathML from ``ur10core.symbolic``), and in the 3D view the geometry each factor measures:
+The "Singularities" folder shows each factor the model gives as a gauge that turns from
+green to red as it approaches zero, with what makes it zero, a short rolling plot, the
+UR family's factored formula (rendered MathML from ``ur10core.symbolic``), and buttons that
+put the arm exactly on each singularity where the model can. In 3D each arm's drawing
+shows the geometry each factor measures (:class:`SingularityOverlay`): for the UR family
 
-* shoulder — the cylinder of radius d4 about the base axis and the wrist-2 point P5
-  (singular when P5 touches the cylinder);
-* elbow — the reach circles (a2 + a3 stretched, |a2 − a3| folded) of the frame-4
-  origin P4 about the shoulder, in the arm's plane;
-* wrist — axes 4 and 6 as lines (singular when they are parallel).
+* shoulder — the cylinder of radius d4 about axis 1 and the wrist-2 point P5, marked by a
+  cross (singular when P5 touches the cylinder);
+* elbow — the reach circles (a2 + a3 stretched, |a2 − a3| folded) of the frame-4 origin P4
+  about the shoulder, in the arm's plane, and P4 (singular on a circle);
+* wrist — axes 4 and 6 (singular when they are parallel);
 
-Buttons put the arm exactly on each singularity for a demonstration.
+for the course's other arms (§7.6) the same for their own factors (the Stanford arm's stroke,
+the cylindrical arm's reach; a SCARA's or a planar arm's elbow seen along axis 1).
 """
 
 from __future__ import annotations
@@ -19,24 +21,30 @@ from __future__ import annotations
 import collections
 import functools
 import time
-from typing import TYPE_CHECKING
+from typing import Callable
 
 import numpy as np
-import trimesh
 import viser
 import viser.uplot
 
-from ur10core import symbolic
+from ur10core import Arm, symbolic, symbolic_arms
 from ur10core.orientation import in_frame
+from ur10core.serial import PRESETS
 
 from ..feedback import chosen
-from .robot import node_name
 from ..state import SINGULARITY_KINDS, Snapshot
-from ..view import View
-from ..style import DANGER_RED, ELBOW_COLOR, OVERLAY_IDLE, SAFE_GREEN, SHOULDER_COLOR, WRIST_COLOR, blend, hex_color, number
-
-if TYPE_CHECKING:
-    from ..session import ClientSession
+from ..style import (
+    DANGER_RED,
+    ELBOW_COLOR,
+    SAFE_GREEN,
+    SHOULDER_COLOR,
+    WRIST_COLOR,
+    blend,
+    hex_color,
+    number,
+)
+from ..view import Session, View
+from ..viser_internals.fast_updates import set_positions
 
 #: Below this share of its largest value a factor is drawn fully red.
 ALARM_AT = 0.05
@@ -46,14 +54,12 @@ CALM_AT = 0.35
 ALARM_STEPS = 20
 PLOT_SECONDS = 10.0
 PLOT_SAMPLES = 200
-CIRCLE_SEGMENTS = 96
+CIRCLE_SEGMENTS = 48
 AXIS_HALF_LENGTH = 0.25
-
-
-def factor_levels(snapshot: Snapshot, reach: float) -> tuple[float, float, float]:
-    """|factor| as a share of its largest value: shoulder by a2 + a3, elbow |s3|, wrist |s5|."""
-    shoulder, elbow, wrist = snapshot.factors.tolist()
-    return min(abs(shoulder) / reach, 1.0), abs(elbow), abs(wrist)
+#: Each factor's colour (Okabe-Ito): shoulder orange (and the Stanford arm's stroke, the cylindrical
+#: arm's reach), elbow bluish green, wrist reddish purple.
+FACTOR_COLORS = {"shoulder": SHOULDER_COLOR, "stroke": SHOULDER_COLOR, "reach": SHOULDER_COLOR,
+                 "elbow": ELBOW_COLOR, "wrist": WRIST_COLOR}
 
 
 def alarm(level: float) -> float:
@@ -68,24 +74,51 @@ def circle_segments(center: np.ndarray, u: np.ndarray, v: np.ndarray, radius: fl
     return np.stack([points[:-1], points[1:]], axis=1)
 
 
-def gauges_html(snapshot: Snapshot, levels: np.ndarray, colors: list[tuple[int, int, int]]) -> str:
-    """Three labelled bars, green → red as each factor of det J approaches zero, and det J."""
-    shoulder, elbow, wrist = snapshot.factors
-    rows = (
-        ("shoulder", f"a2c2 + a3c23 − d5s234 = {number(shoulder * 1000, '+.1f')} mm"),
-        ("elbow", f"s3 = {number(elbow, '+.4f')}"),
-        ("wrist", f"s5 = {number(wrist, '+.4f')}"),
-    )
-    bars = []
-    for (name, value), level, color in zip(rows, levels, colors):
-        bars.append(
-            f"<div style='margin:3px 0'><b>{name}</b> {value}"
+@functools.lru_cache(maxsize=64)
+def factor_scales(arm: Arm) -> np.ndarray:
+    """Per factor, the 99th percentile of its size over the arm's workspace: a gauge is full there."""
+    q = arm.sample_joints(20_000, seed=1)
+    return np.maximum(np.percentile(np.abs(arm.singularity_factors(q)), 99, axis=0), 1e-12)
+
+
+def factor_levels(arm: Arm, factors: np.ndarray) -> np.ndarray:
+    """Each factor's size as a share of its scale (:func:`factor_scales`), in [0, 1]."""
+    return np.clip(np.abs(factors) / factor_scales(arm), 0.0, 1.0)
+
+
+def factor_words(arm: Arm) -> tuple[str, list[tuple[str, str, str]]] | None:
+    """(what det J is, [(name, expression, what makes it zero)] per factor) as the model gives them, or None
+    for a typed table (its det J is not derived)."""
+    if arm.name in PRESETS:
+        derivation = symbolic_arms.load(arm.name)
+        return (f"det J = {derivation.constant} × the factors (derived with sympy from the DH table)",
+                [(f.name, str(f.expression), f.meaning) for f in derivation.factors])
+    words = getattr(arm.solver, "factor_words", None)
+    if words is None:
+        return None
+    what = "det J" if arm.task == "pose" else "det J_v"
+    return f"{what} = {arm.solver.det_constant} × the factors (the course's closed form)", list(words)
+
+
+def factors_html(arm: Arm, q: np.ndarray) -> str:
+    """det J's factors as gauges, green far from their singularity and red at it, with what each means."""
+    measures = (f"manipulability {number(float(arm.manipulability(q)), '.4g')}, smallest singular value "
+                f"{number(float(arm.smallest_singular_value(q)), '.4g')}")
+    described = factor_words(arm)
+    if described is None:  # a typed table has no derivation: the numbers that vanish at a singularity
+        return f"<div>A typed table's det J is not derived; these go to zero at a singularity: {measures}</div>"
+    heading, factors = described
+    values = arm.singularity_factors(q)
+    parts = [f"<div>{heading}</div>"]
+    for (name, expression, meaning), value, level in zip(factors, values, factor_levels(arm, values)):
+        colour = hex_color(blend(SAFE_GREEN, DANGER_RED, alarm(level)))
+        parts.append(
+            f"<div style='margin:4px 0'><b>{name}</b> <code>{expression}</code> = {number(value, '+.4f')}"
             "<div style='height:8px;background:#e9ecef;border-radius:4px'>"
             f"<div class='gauge-{name}' style='height:8px;width:{100 * level:.1f}%;border-radius:4px;"
-            f"background:{hex_color(color)}'></div></div></div>"
-        )
-    bars.append(f"<div><b>det J</b> = {number(snapshot.det_j, '+.5f')} m³ (|det J| is the manipulability)</div>")
-    return "<div style='font-size:0.85em'>" + "".join(bars) + "</div>"
+            f"background:{colour}'></div></div><div style='font-size:0.85em'>zero when {meaning}</div></div>")
+    parts.append(f"<div>{measures}</div>")
+    return "<div style='font-size:0.9em'>" + "".join(parts) + "</div>"
 
 
 def line_color(rgb: tuple[int, int, int]) -> np.ndarray:
@@ -93,138 +126,216 @@ def line_color(rgb: tuple[int, int, int]) -> np.ndarray:
     return np.array(rgb, dtype=np.uint8)
 
 
-@functools.lru_cache(maxsize=8)
-def shoulder_cylinder_mesh(radius: float) -> tuple[np.ndarray, np.ndarray]:
-    """(vertices, faces) of the shoulder singularity's cylinder, made once per radius for every browser."""
-    cylinder = trimesh.creation.cylinder(radius=radius, segment=[[0, 0, 0], [0, 0, 1.6]], sections=64)
-    return cylinder.vertices, cylinder.faces
+#: Half the length of the cross that marks a point (m).
+MARK = 0.03
 
 
-class OverlayScene(View):
-    """The overlay's geometry in the 3D view, hidden until switched on.
+def _cross(point: np.ndarray) -> np.ndarray:
+    """(3, 2, 3) a small cross of three segments through ``point``, along x, y and z."""
+    return np.stack([point - MARK * np.eye(3), point + MARK * np.eye(3)], axis=1)
 
-    The markers and lines hang under the solid arm's link nodes (``robot.node_name``) in
-    coordinates taken once from the core's geometry, so a redraw only recolours them.
+
+def anchored_geometry(arm: Arm, frames: np.ndarray) -> dict[str, list[tuple[int | None, np.ndarray]]] | None:
+    """The UR family's factors (docs/kinematics.md §5) as segments fixed in a frame of the arm: per factor,
+    [(frame index, or None for the base; (m, 2, 3) segments in that frame)]. Hung under the links, they move
+    with the arm and a redraw only recolours them. None for an arm whose model gives no such geometry.
+
+    shoulder: the cylinder of radius d4 about axis 1 and the wrist-2 point P5 (singular on it); elbow: the
+    reach circles of P4 about the shoulder, in the arm's plane (frame {1}'s x–z), and P4 on them; wrist:
+    axes 4 and 6 (singular when parallel).
+    """
+    if not hasattr(arm.solver, "singularity_geometry_from_frames"):
+        return None
+    g = arm.singularity_geometry_from_frames(frames)
+    x, y, z = np.eye(3)
+    rings = [circle_segments(h * z, x, y, g.cylinder_radius) for h in (0.0, 0.8, 1.6)]
+    sides = [[g.cylinder_radius * d, g.cylinder_radius * d + 1.6 * z] for d in (x, y, -x, -y)]
+    centre = in_frame(frames[1], g.elbow_center)
+    return {
+        "shoulder": [(None, np.concatenate([*rings, sides])), (5, _cross(in_frame(frames[5], g.p5)))],
+        "elbow": [(1, np.concatenate([circle_segments(centre, x, z, r) for r in g.elbow_radii])),
+                  (4, _cross(in_frame(frames[4], g.p4)))],
+        "wrist": [(4, in_frame(frames[4], np.array([[g.p4 - AXIS_HALF_LENGTH * g.axis4, g.p4 + AXIS_HALF_LENGTH * g.axis4]]))),
+                  (6, in_frame(frames[6], np.array([[g.flange - AXIS_HALF_LENGTH * g.axis6,
+                                                     g.flange + AXIS_HALF_LENGTH * g.axis6]])))],
+    }
+
+
+def _placed(frames: np.ndarray, parts: list[tuple[int | None, np.ndarray]]) -> np.ndarray:
+    """Anchored parts in the base frame, one (m, 2, 3) array."""
+    return np.concatenate([segments if anchor is None else segments @ frames[anchor, :3, :3].T + frames[anchor, :3, 3]
+                           for anchor, segments in parts])
+
+
+def factor_names(arm: Arm) -> list[str]:
+    described = factor_words(arm)
+    return [] if described is None else [name for name, _, _ in described[1]]
+
+
+def _foot(point: np.ndarray, axis_point: np.ndarray, axis: np.ndarray) -> np.ndarray:
+    """The point of a line (through ``axis_point`` along unit ``axis``) nearest ``point``."""
+    return axis_point + np.dot(point - axis_point, axis) * axis
+
+
+def factor_geometry(arm: Arm, q: np.ndarray, frames: np.ndarray, size: float) -> dict[str, np.ndarray]:
+    """Per factor of the arm's det J, the (m, 2, 3) segments that show what it measures at joints ``q``.
+
+    ``frames`` are ``arm.frames(q)``; ``size`` (the arm's reach, m) sets how long axes are drawn.
+    """
+    anchored = anchored_geometry(arm, frames)
+    if anchored is not None:
+        return {name: _placed(frames, parts) for name, parts in anchored.items()}
+    z, o = arm.dh.joint_axes(frames)
+    tool = frames[-1, :3, 3]
+    centre = arm.wrist_centre(q) if arm.n_joints == 6 else tool
+    axis_line = [o[0] - 0.1 * size * z[0], o[0] + 0.9 * size * z[0]]
+    out: dict[str, np.ndarray] = {}
+    for name in factor_names(arm):
+        if name == "shoulder" and arm.joint_types[2] == "P":  # Stanford: the boom parallel to axis 1
+            out["shoulder"] = np.array([axis_line, [centre - 0.5 * size * z[2], centre + 0.2 * size * z[2]]])
+        elif name == "shoulder":  # the wrist centre's distance from axis 1
+            out["shoulder"] = np.array([axis_line, [_foot(centre, o[0], z[0]), centre]])
+        elif name == "reach":
+            out["reach"] = np.array([axis_line, [_foot(tool, o[0], z[0]), tool]])
+        elif name == "stroke":  # the wrist centre's distance from axis 2: d3
+            out["stroke"] = np.array([[_foot(centre, o[1], z[1]), centre]])
+        elif name == "wrist":
+            half = 0.25 * size
+            out["wrist"] = np.array([[centre - half * z[3], centre + half * z[3]], [centre - half * z[5], centre + half * z[5]]])
+        elif name == "elbow" and arm.n_joints == 6:  # upper arm and forearm, up to the wrist centre
+            out["elbow"] = np.array([[o[1], o[2]], [o[2], centre]])
+        elif name == "elbow":  # SCARA, planar: the links seen along axis 1, at the elbow's height
+            flat = [p - np.dot(p - o[1], z[0]) * z[0] for p in (_foot(o[1], o[0], z[0]), o[1], tool)]
+            out["elbow"] = np.array([[flat[0], flat[1]], [flat[1], flat[2]]])
+        else:
+            raise ValueError(f"no drawing for {arm.name}'s factor {name!r}")
+    return out
+
+
+class SingularityOverlay(View):
+    """det J's factors in 3D for any arm whose model factors it: each factor's geometry (:func:`factor_geometry`)
+    in its own colour, turning red as the factor nears zero, and its name; hidden until switched on.
+
+    Where the arm's drawing has a node per link (``link_node(i)``, UR's meshes) and the model anchors its
+    geometry in the links (:func:`anchored_geometry`), it is sent once and hangs under them: a drag only
+    recolours it. Otherwise it is computed and sent again on every change. Colours move towards red in
+    :data:`ALARM_STEPS` steps, so that a drag sends a colour only when it crosses a step.
     """
 
-    def __init__(self, scene: viser.SceneApi, first: Snapshot) -> None:
+    def __init__(self, scene: viser.SceneApi, arm: Arm, first: Snapshot, size: float, root: str,
+                 link_node: Callable[[int], str] | None = None) -> None:
+        self._arm = arm
+        self._size = size
         self.enabled = False
-        self._reach = first.arm.a2 + first.arm.a3
-        self._drawn_alarms: tuple[float, ...] | None = None
-        F, g = first.frames, first.geometry
-
-        def local(frame: int, point: np.ndarray) -> np.ndarray:
-            return in_frame(F[frame], point)
-
-        vertices, faces = shoulder_cylinder_mesh(g.cylinder_radius)
-        self.cylinder = scene.add_mesh_simple(
-            "/overlay/shoulder_cylinder", vertices, faces, color=SHOULDER_COLOR,
-            opacity=0.18, side="double", cast_shadow=False, receive_shadow=False, visible=False,
-        )
-        self.p5 = scene.add_icosphere(f"{node_name(5)}/p5", radius=0.022, color=SHOULDER_COLOR,
-                                      position=local(5, g.p5), visible=False, cast_shadow=False)
-        self.p4 = scene.add_icosphere(f"{node_name(4)}/p4", radius=0.022, color=ELBOW_COLOR,
-                                      position=local(4, g.p4), visible=False, cast_shadow=False)
-        # the reach circles turn with θ1: they live in frame {1}, spanned by x1 and z1
-        centre = local(1, g.elbow_center)
-        x1, z1 = np.eye(3)[0], np.eye(3)[2]
-        circles = np.concatenate([circle_segments(centre, x1, z1, r) for r in g.elbow_radii]).astype(np.float32)
-        self.circles = scene.add_line_segments(f"{node_name(1)}/elbow_circles", circles,
-                                               line_color(OVERLAY_IDLE), thickness=0.006,
-                                               visible=False)
-        self.axes = []
-        for frame, point, axis in ((4, g.p4, g.axis4), (6, g.flange, g.axis6)):
-            start = local(frame, point - AXIS_HALF_LENGTH * axis)
-            end = local(frame, point + AXIS_HALF_LENGTH * axis)
-            self.axes.append(scene.add_line_segments(f"{node_name(frame)}/axis{frame}", np.array([[start, end]], np.float32),
-                                                     line_color(WRIST_COLOR), thickness=0.01, visible=False))
+        self._steps: dict[str, int] = {}
+        self._scales = factor_scales(arm).tolist()
+        anchored = anchored_geometry(arm, first.frames) if link_node is not None else None
+        self._moving = anchored is None  #: computed again on every change
+        if anchored is None:
+            anchored = {name: [(None, segments)] for name, segments in factor_geometry(arm, first.q, first.frames, size).items()}
+        self.parts: dict[str, list[viser.LineSegmentsHandle]] = {}
+        self.labels: dict[str, viser.LabelHandle] = {}
+        for name, parts in anchored.items():
+            self.parts[name] = []
+            for k, (anchor, segments) in enumerate(parts):
+                parent = f"{root}/singular" if anchor is None else link_node(anchor)
+                self.parts[name].append(scene.add_line_segments(
+                    f"{parent}/{name}{k}", segments.astype(np.float32), line_color(FACTOR_COLORS[name]),
+                    thickness=0.01 * size, visible=False))
+            anchor, segments = parts[-1]  # the name by the last part: the point or the axis that matters
+            parent = f"{root}/singular" if anchor is None else link_node(anchor)
+            self.labels[name] = scene.add_label(f"{parent}/{name}_label", name, font_screen_scale=1.3, anchor="bottom-center",
+                                                position=segments.mean(axis=(0, 1)), visible=False)
+        #: each factor's first line drawing
+        self.lines = {name: parts[0] for name, parts in self.parts.items()}
 
     def set_enabled(self, enabled: bool) -> None:
-        """Show or hide the overlay; the next render colours it (the session redraws at once)."""
+        """Show or hide it; the next render draws it (the session redraws at once)."""
         self.enabled = enabled
-        self._drawn_alarms = None
-        for node in (self.cylinder, self.p5, self.p4, self.circles, *self.axes):
+        for node in (*(part for parts in self.parts.values() for part in parts), *self.labels.values()):
             node.visible = enabled
 
     def render(self, snapshot: Snapshot) -> None:
         if not self.enabled:
             return
-        alarms = tuple(round(alarm(level) * ALARM_STEPS) / ALARM_STEPS for level in factor_levels(snapshot, self._reach))
-        drawn = self._drawn_alarms or (None, None, None)
-        self._drawn_alarms = alarms
-        shoulder, elbow, wrist = alarms
-        # a drag usually moves one factor's colour a step, or none: recolour only what changed
-        if shoulder != drawn[0]:
-            self.cylinder.color = blend(SHOULDER_COLOR, DANGER_RED, shoulder)
-            self.p5.color = blend(SHOULDER_COLOR, DANGER_RED, shoulder)
-        if elbow != drawn[1]:
-            self.circles.colors = line_color(blend(OVERLAY_IDLE, DANGER_RED, elbow))
-            self.p4.color = blend(ELBOW_COLOR, DANGER_RED, elbow)
-        if wrist != drawn[2]:
-            for axis in self.axes:
-                axis.colors = line_color(blend(WRIST_COLOR, DANGER_RED, wrist))
+        if self._moving:
+            geometry = factor_geometry(self._arm, snapshot.q, snapshot.frames, self._size)
+            set_positions(list(self.labels.values()), np.array([segments.mean(axis=(0, 1)) for segments in geometry.values()]))
+            for name, segments in geometry.items():
+                self.lines[name].points = segments.astype(np.float32)
+        for name, value, scale in zip(self.parts, snapshot.factors.tolist(), self._scales):  # a few floats: plain Python
+            step = round(ALARM_STEPS * alarm(min(abs(value) / scale, 1.0)))
+            if self._steps.get(name) != step:  # a drag usually moves a colour a step, or none: send only that
+                self._steps[name] = step
+                for part in self.parts[name]:
+                    part.colors = line_color(blend(FACTOR_COLORS[name], DANGER_RED, step / ALARM_STEPS))
 
 
-class OverlayPanel(View):
-    """The "Singularities" folder: the switch, det J's formula, gauges, rolling plot, demo buttons."""
+def has_overlay(arm: Arm) -> bool:
+    """The model factors det J and the geometry of each factor is written (not a typed table's, nor the desktop arm's)."""
+    return factor_words(arm) is not None and arm.dh is not None
 
-    def __init__(self, gui: viser.GuiApi, scene: OverlayScene, session: "ClientSession") -> None:
+
+class Singularities(View):
+    """The "Singularities" folder, for any arm: the 3D switch, the formula, gauges, rolling plot, demo buttons.
+
+    ``overlay`` is the drawing's 3D part (``enabled``, ``set_enabled``), None where it draws none.
+    """
+
+    def __init__(self, gui: viser.GuiApi, overlay, session: Session) -> None:
         self._session = session
-        self._scene = scene
-        self._reach = session.arm.a2 + session.arm.a3
+        self._overlay = overlay
+        arm = self._arm = session.arm
+        self._words = factor_words(arm)
         self._history: collections.deque = collections.deque(maxlen=PLOT_SAMPLES)
         self._started = time.monotonic()
         folder = gui.add_folder("Singularities")
         self.folders = (folder,)
+        names = [name for name, _, _ in self._words[1]] if self._words else []
         with folder:
-            self.enabled = gui.add_checkbox("Show singularity overlay", scene.enabled)
-            self.formula = gui.add_html(
-                "<div style='font-size:1.05em'>" + symbolic.det_j_mathml() + "</div>", visible=scene.enabled
-            )
-            # the three gauges and the numbers in one HTML element: one message per redraw
-            self.gauges = gui.add_html("", visible=scene.enabled)
-            self.levels = (1.0, 1.0, 1.0)  #: last drawn gauge levels (share of the factor's maximum)
-            self.colors: list[tuple[int, int, int]] = [SAFE_GREEN] * 3  #: last drawn gauge colours
+            self.enabled = (gui.add_checkbox("Show singularity overlay", overlay.enabled,
+                                             hint="The geometry each factor measures, red as it nears zero")
+                            if overlay is not None else None)
+            if overlay is None:
+                gui.add_markdown("No overlay on this arm: its factors' geometry is drawn for the arms of the course "
+                                 "that have a DH table and a factored det J; the gauges below are what there is.")
+            if arm.name in arm.UR_PRESETS:
+                gui.add_html("<div style='font-size:1.05em'>" + symbolic.det_j_mathml() + "</div>")
+            self.gauges = gui.add_html(factors_html(arm, session.state.q))
             self.plot = gui.add_uplot(
-                data=(np.zeros(2, np.float32), np.ones(2, np.float32), np.ones(2, np.float32), np.ones(2, np.float32)),
-                series=(
-                    viser.uplot.Series(label="time (s)"),
-                    viser.uplot.Series(label="shoulder", stroke=hex_color(SHOULDER_COLOR), width=2),
-                    viser.uplot.Series(label="elbow |s3|", stroke=hex_color(ELBOW_COLOR), width=2),
-                    viser.uplot.Series(label="wrist |s5|", stroke=hex_color(WRIST_COLOR), width=2),
-                ),
+                data=(np.zeros(2, np.float32), *(np.ones(2, np.float32) for _ in names)),
+                series=(viser.uplot.Series(label="time (s)"),
+                        *(viser.uplot.Series(label=name, stroke=hex_color(FACTOR_COLORS.get(name, SHOULDER_COLOR)), width=2)
+                          for name in names)),
                 scales={"x": viser.uplot.Scale(time=False, range=(-PLOT_SECONDS, 0.0)),
                         "y": viser.uplot.Scale(range=(0.0, 1.0))},
-                axes=(viser.uplot.Axis(label="seconds (0 = now)"), viser.uplot.Axis(label="share of maximum")),
-                title="Factors over the last 10 s (share of their maximum)",
-                aspect=2.0,
-                visible=scene.enabled,
-            )
-            self.demo = gui.add_button_group("Put the arm on the", SINGULARITY_KINDS, visible=scene.enabled)
-        self.enabled.on_update(session.guard(self._toggled))
-        self.demo.on_click(session.guard(self._demo))
+                axes=(viser.uplot.Axis(label="seconds (0 = now)"), viser.uplot.Axis(label="share of its scale")),
+                title="Factors over the last 10 s", aspect=2.0) if names else None
+            placeable = hasattr(arm.solver, "singular_configuration")
+            self.demo = gui.add_button_group("Put the arm on the", SINGULARITY_KINDS) if placeable else None
+            if not placeable and self._words:
+                gui.add_markdown("Drag the target or the sliders until a gauge turns red: this arm has no button that "
+                                 "places it on a singularity.")
+        if self.enabled is not None:
+            self.enabled.on_update(session.guard(self._toggled))
+        if self.demo is not None:
+            self.demo.on_click(session.guard(self._demo))
 
     def _toggled(self, _: viser.GuiEvent) -> None:
-        for widget in (self.formula, self.gauges, self.plot, self.demo):
-            widget.visible = self.enabled.value
         with self._session.state.lock:
-            self._scene.set_enabled(self.enabled.value)
+            self._overlay.set_enabled(bool(self.enabled.value))
         self._session.redraw()
-        self._session.refresher.request(self._session)
 
     def _demo(self, _: viser.GuiEvent) -> None:
         kind = chosen(self.demo, "singularity")
         self._session.apply(lambda state: state.place_in_singularity(kind))
 
     def render_panel(self, snapshot: Snapshot) -> None:
-        levels = factor_levels(snapshot, self._reach)
-        now = time.monotonic() - self._started
-        self._history.append((now, *levels))
-        if not self.enabled.value:
+        self.gauges.content = factors_html(self._arm, snapshot.q)
+        if self.plot is None:
             return
-        self.levels = levels
-        self.colors = [blend(SAFE_GREEN, DANGER_RED, alarm(level)) for level in levels]
-        self.gauges.content = gauges_html(snapshot, levels, self.colors)
+        now = time.monotonic() - self._started
+        self._history.append((now, *factor_levels(self._arm, snapshot.factors)))
         history = np.array([h for h in self._history if h[0] >= now - PLOT_SECONDS], dtype=np.float32)
         if len(history) < 2:
             history = np.vstack([history, history])

@@ -12,25 +12,20 @@ from __future__ import annotations
 
 import math
 import threading
-from typing import TYPE_CHECKING
 
 import numpy as np
 import viser
 
+from ur10core.dynamics import MASSES
 from ur10core.specs import torque_map
 
-from ..viser_internals.fast_updates import set_positions, stop_echo
 from ..feedback import chosen
-from ur10core.dynamics import MASSES
-
+from ..serving.workers import HEAVY, FoldedRuns
 from ..state import Snapshot
 from ..style import DANGER_RED, SAFE_GREEN, blend, hex_color, number
-from ..view import View
-from ..serving.workers import HEAVY, FoldedRuns
+from ..view import Session, View
+from ..viser_internals.fast_updates import set_positions, stop_echo
 from .workspace import POINT_SIZE, colormap
-
-if TYPE_CHECKING:
-    from ..session import ClientSession
 
 DRAGGED = "drag the handle"
 
@@ -103,7 +98,7 @@ class StaticsView(View):
     arrow, the handle's distance and the map's marker (the UR10's drawing is for 1 m).
     """
 
-    def __init__(self, scene: viser.SceneApi, gui: viser.GuiApi, session: "ClientSession", root: str = "/statics",
+    def __init__(self, scene: viser.SceneApi, gui: viser.GuiApi, session: Session, root: str = "/statics",
                  size: float = 1.0) -> None:
         self._session = session
         self._root, self._size = root, size

@@ -11,17 +11,14 @@ from __future__ import annotations
 
 import math
 import re
-from typing import TYPE_CHECKING, Any, Callable
+from typing import Any, Callable
 
 import numpy as np
 import viser
 
 from ..state import Snapshot
 from ..style import number
-from ..view import View
-
-if TYPE_CHECKING:
-    from ..session import ClientSession
+from ..view import Session, View
 
 LINEAR_COLOR, ANGULAR_COLOR = (0, 114, 178), (204, 121, 167)
 #: Drawn length: metres per m/s of the flange, and per rad/s of its turning.
@@ -78,15 +75,15 @@ MAX_RATE = {"R": 180.0, "P": 500.0}
 
 
 class VelocityView(View):
-    """The "Velocities" folder and the two arrows at the tool.
+    """The "Velocities" folder and the two arrows at the tool: for the sliders' joint rates, or a playing path's.
 
     ``root``: where its nodes hang; ``tool(snapshot)``: the (4, 4) pose the arrows start at
-    (the UR10's flange by default); ``labels``: each joint's name. The kinds of joints and their
+    (the arm's tool by default); ``labels``: each joint's name. The kinds of joints and their
     speed limits (``arm.specs``, where the maker publishes them) come from ``session.arm``.
     """
 
-    def __init__(self, scene: viser.SceneApi, gui: viser.GuiApi, session: "ClientSession", root: str = "/velocity",
-                 tool: Callable[[Any], np.ndarray] = lambda snapshot: snapshot.flange, place: str = "flange") -> None:
+    def __init__(self, scene: viser.SceneApi, gui: viser.GuiApi, session: Session, root: str = "/velocity",
+                 tool: Callable[[Any], np.ndarray] = lambda snapshot: snapshot.flange, place: str = "tool") -> None:
         self._session = session
         self._arm = session.arm
         self._tool = tool
@@ -132,9 +129,10 @@ class VelocityView(View):
                                             self._labels, self._kinds, self._limits)
 
     def render(self, snapshot: Snapshot) -> None:
-        moving = any(slider.value != 0.0 for slider in self.sliders)  # on every drag: no arrays while all are still
+        playing = snapshot.rates is not None and bool(np.any(snapshot.rates))  # a path playing: its own rates
+        moving = playing or any(slider.value != 0.0 for slider in self.sliders)  # on every drag: no arrays while all are still
         if moving:
-            qdot = self.joint_rates()
+            qdot = snapshot.rates if playing else self.joint_rates()
             twist = self._arm.tool_twist(snapshot.q, qdot)
             tip = self._tool(snapshot)[:3, 3]
             ends = (tip + METRES_PER_SPEED * twist[:3], tip + METRES_PER_TURN_RATE * twist[3:])

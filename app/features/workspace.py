@@ -15,7 +15,6 @@ from __future__ import annotations
 import collections
 import math
 import threading
-from typing import TYPE_CHECKING
 
 import numpy as np
 import viser
@@ -23,14 +22,11 @@ import viser
 from ur10core import Arm
 from ur10core.workspace import revolved_boundary, vertical_section
 
-from .camera import VIEWS
 from ..feedback import chosen
-from ..style import hex_color
-from ..view import View
 from ..serving.workers import HEAVY, FoldedRuns
-
-if TYPE_CHECKING:
-    from ..session import ClientSession
+from ..style import hex_color
+from ..view import Session, View
+from .camera import VIEWS
 
 SAMPLE_COUNTS = {"10 k": 10_000, "50 k": 50_000, "100 k": 100_000, "200 k": 200_000, "500 k": 500_000, "1 M": 1_000_000}
 DEFAULT_COUNT = "200 k"
@@ -226,7 +222,7 @@ class WorkspaceView(View):
     the section slider costs at most one cloud in the making and one waiting.
     """
 
-    def __init__(self, scene: viser.SceneApi, gui: viser.GuiApi, session: "ClientSession", root: str = "") -> None:
+    def __init__(self, scene: viser.SceneApi, gui: viser.GuiApi, session: Session, root: str = "") -> None:
         self._scene = scene
         self._session = session
         self._root = root  #: the cloud is ``{root}/workspace``: a classroom explorer's arm has a root of its own

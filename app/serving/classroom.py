@@ -14,8 +14,8 @@ thirty students cost the server one redraw, not thirty.
   code is logged on the teacher's console (grouped by address), and this machine, where
   the teacher sits, is never locked out.
 * A viewer can **explore on their own**: a private arm starting from the presenter's
-  pose, drawn with the same scene names in the browser's own scope, which hides the
-  shared arm for that browser only. **Back to the presenter's arm** removes it again.
+  pose, drawn in the browser's own scope, where the shared arm is hidden for that browser
+  only. **Back to the presenter's arm** removes it again.
 """
 
 from __future__ import annotations
@@ -32,26 +32,30 @@ import viser
 
 from ur10core import Arm
 
-from ..features.arm_picker import ARM_CHOICES, CLASS_CHOICES, SWITCH_INTERVAL, UR10, ArmPicker, panel_title
-from ..features.camera import BODY_RADIUS, CameraControls
-from ..features.course_arms import panel as course_panel
+from ..features.arm_picker import (
+    ARM_CHOICES,
+    CLASS_CHOICES,
+    SWITCH_INTERVAL,
+    UR10,
+    ArmPicker,
+    panel_title,
+)
+from ..features.camera import CameraControls
 from ..features.course_arms.desktop_arm import EXPLORER_ROOT as DESKTOP_EXPLORER_ROOT
-from ..features.course_arms.desktop_arm import DesktopArmScene
-from ..features.course_arms.scene import EXPLORER_ROOT, CourseArmScene
-from ..features.course_arms.session import CourseArmSession, arm_scene, body_radius
-from ..features.course_arms.state import CourseArmState
-from ..feedback import guard
-from .gate import address_of
+from ..features.course_arms.scene import EXPLORER_ROOT
+from ..features.drawings import arm_drawing
 from ..features.floor import add_floor_grid
 from ..features.ik_target import branches_markdown
-from ..features.readouts import flange_markdown, joints_markdown
-from ..features.singularity import alarm, factor_levels, gauges_html
+from ..features.joint_panel import joints_markdown
+from ..features.readouts import flange_markdown
+from ..features.singularity import factors_html
+from ..feedback import guard
+from ..session import ArmSession
 from ..state import ArmState
-from ..style import DANGER_RED, SAFE_GREEN, blend
+from .gate import address_of
 
 if TYPE_CHECKING:
     from .server import TeachingServer
-    from ..session import ClientSession
 
 log = logging.getLogger(__name__)
 
@@ -66,8 +70,6 @@ MAX_LOCKOUT_SECONDS = 600.0
 #: Addresses whose guesses are remembered (the oldest forgotten beyond it).
 MAX_GUESSERS = 10_000
 VIEWER, PRESENTER, EXPLORER = "viewer", "presenter", "explorer"
-#: Where the shared UR10 is drawn (``SceneViews``): an explorer of another arm hides these in its browser.
-UR10_ROOTS = ("/base_frame", "/arm", "/target", "/ghosts", "/floor_hits", "/overlay")
 
 
 def make_join_code() -> str:
@@ -91,7 +93,7 @@ class Guesses:
 
 
 class LivePanel:
-    """The shared, read-only panel everyone sees: the presenter's joints, pose, branches, gauges.
+    """The shared, read-only panel everyone sees: the presenter's arm, joints, branches, tool pose and det J's factors.
 
     Redrawn three times a second rather than ten: viser serialises and compresses a shared
     widget's update once per browser, and in a lecture hall of a hundred that was most of
@@ -101,21 +103,20 @@ class LivePanel:
 
     panel_interval = 0.3
 
-    def __init__(self, gui: viser.GuiApi, state: ArmState, overlay_enabled, presenter_here: bool = False) -> None:
+    def __init__(self, gui: viser.GuiApi, state: ArmState, title: str, presenter_here: bool = False) -> None:
         self._state = state
-        self._overlay_enabled = overlay_enabled
-        self._reach = state.arm.a2 + state.arm.a3
         self.presenter_here = presenter_here
         self.closed = False  # the refresher's protocol
-        first = state.last
         # last in every panel: below the presenter's or an explorer's own controls
         self.folder = gui.add_folder("Live from the presenter", order=1e9)
         with self.folder:
             self.status = gui.add_markdown(self._status())
-            self.joints = gui.add_markdown(joints_markdown(first.q, with_controller=False))
-            self.branches = gui.add_markdown(branches_markdown(first))
-            self.flange = gui.add_markdown(flange_markdown(first))
-            self.gauges = gui.add_html("", visible=False)
+            self.title = gui.add_markdown(f"**{title}**")
+            self.joints = gui.add_markdown("")
+            self.branches = gui.add_markdown("")
+            self.flange = gui.add_markdown("")
+            self.gauges = gui.add_html("")
+        self.render_panel()
 
     def _status(self) -> str:
         if self.presenter_here:
@@ -127,49 +128,12 @@ class LivePanel:
         self.folder.remove()
 
     def render_panel(self) -> None:
-        snapshot = self._state.last
-        self.status.content = self._status()
-        self.joints.content = joints_markdown(snapshot.q, with_controller=False)
-        self.branches.content = branches_markdown(snapshot)
-        self.flange.content = flange_markdown(snapshot)
-        self.gauges.visible = self._overlay_enabled()
-        if self.gauges.visible:
-            levels = factor_levels(snapshot, self._reach)
-            colors = [blend(SAFE_GREEN, DANGER_RED, alarm(level)) for level in levels]
-            self.gauges.content = gauges_html(snapshot, levels, colors)
-
-
-class CourseLivePanel(LivePanel):
-    """The live panel for one of the course's other arms: the presenter's joints, branches and det J's factors."""
-
-    def __init__(self, gui: viser.GuiApi, state: CourseArmState, title: str, presenter_here: bool = False) -> None:
-        self._state = state
-        self.presenter_here = presenter_here
-        self.closed = False
-        arm, first = state.arm, state.last
-        self.folder = gui.add_folder("Live from the presenter", order=1e9)
-        with self.folder:
-            self.status = gui.add_markdown(self._status())
-            self.arm = gui.add_markdown(f"**{title}**")
-            self.joints = gui.add_markdown(course_panel.joint_text(arm, first.q))
-            self.branches = gui.add_markdown(course_panel.branches_markdown(arm, first))
-            self.gauges = gui.add_html(course_panel.factors_html(arm, first.q))
-
-    def render_panel(self) -> None:
         snapshot, arm = self._state.last, self._state.arm
         self.status.content = self._status()
-        self.joints.content = course_panel.joint_text(arm, snapshot.q)
-        self.branches.content = course_panel.branches_markdown(arm, snapshot)
-        self.gauges.content = course_panel.factors_html(arm, snapshot.q)
-
-
-@dataclasses.dataclass
-class ClassCourseArm:
-    """One of the course's other arms, shown to the class in the server's shared scene."""
-
-    arm: Arm
-    state: CourseArmState
-    scene: CourseArmScene | DesktopArmScene
+        self.joints.content = joints_markdown(arm, snapshot.q)
+        self.branches.content = branches_markdown(snapshot)
+        self.flange.content = flange_markdown(snapshot)
+        self.gauges.content = factors_html(arm, snapshot.q)
 
 
 class Member:
@@ -178,7 +142,7 @@ class Member:
     def __init__(self, client: viser.ClientHandle) -> None:
         self.client = client
         self.role = VIEWER
-        self.session: "ClientSession | CourseArmSession | None" = None
+        self.session: ArmSession | None = None
         self.folder: viser.GuiFolderHandle | None = None
         self.picker: ArmPicker | None = None  #: the presenter's: which arm the class sees
         self.camera: CameraControls | None = None
@@ -188,22 +152,36 @@ class Member:
 
 class Classroom:
     def __init__(self, app: "TeachingServer") -> None:
-        from ..session import SceneViews  # the session module imports views; keep the import graph one-way
-
         self.app = app
         self.code = make_join_code()
-        #: the class's UR10: kept while the presenter shows another arm, so that it comes back where it was
-        self.state = ArmState(app.arm, body_points=app.models.outline)
-        self.scene_views = SceneViews.build(app.server.scene, app.models, self.state.last, target_marker=True)
-        self.live: LivePanel = LivePanel(app.server.gui, self.state, lambda: self.scene_views.overlay.enabled)
         self.choice = UR10  #: the arm the class is shown (an ``ARM_CHOICES`` label)
-        self.course: ClassCourseArm | None = None  #: that arm, when it is not the UR10
+        #: each arm the class has been shown, by label: it comes back where the presenter left it
+        self.states: dict[str, ArmState] = {}
+        self.state = self._state_of(UR10)
+        self.drawing = self._draw()
+        self.live = LivePanel(app.server.gui, self.state, UR10)
         self._last_switch = -math.inf
         self.members: dict[int, Member] = {}
         self.presenter: Member | None = None
         self.guesses: dict[str, Guesses] = {}  #: by address
         self.claims = 0  #: join codes answered, right or wrong (for the tests)
         self._lock = threading.RLock()
+
+    def _state_of(self, label: str) -> ArmState:
+        if label not in self.states:
+            name, app = ARM_CHOICES[label], self.app
+            self.states[label] = (ArmState(app.arm, body_points=app.models.outline) if name is None
+                                  else ArmState(Arm.preset(name)))
+        return self.states[label]
+
+    def _models(self, arm: Arm):
+        """UR's meshes for the server's own UR10; other arms are drawn from their tables."""
+        return self.app.models if arm == self.app.arm else None
+
+    def _draw(self):
+        """The class's arm in the shared scene, with a marker for its target (only the presenter has a gizmo)."""
+        arm = self.state.arm
+        return arm_drawing(self.app.server.scene, arm, self.state.last, self._models(arm), target_marker=True)
 
     # ------------------------------------------------------------------ clients
 
@@ -222,11 +200,11 @@ class Classroom:
     def _watched(self, member: Member):
         """The newest snapshot of the arm ``member`` looks at: its own, or the class's."""
         if member.session is not None:
-            return member.session.state.last
-        return (self.course or self).state.last
+            return member.session.drawing.framed(member.session.state.last)
+        return self.drawing.framed(self.state.last)
 
     def _body_radius(self) -> float:
-        return BODY_RADIUS if self.course is None else body_radius(self.course.scene.size)
+        return self.drawing.body_radius
 
     def disconnect(self, client: viser.ClientHandle) -> None:
         with self._lock:
@@ -245,7 +223,7 @@ class Classroom:
         self.app.refresher.request(self.live)
 
     @property
-    def sessions(self) -> dict[int, "ClientSession | CourseArmSession"]:
+    def sessions(self) -> dict[int, ArmSession]:
         """The sessions of the presenter and the explorers."""
         with self._lock:
             return {cid: m.session for cid, m in self.members.items() if m.session is not None}
@@ -284,18 +262,12 @@ class Classroom:
         self.app.refresher.request(self.live)
         log.info("client %s is presenting", member.client.client_id)
 
-    def _presenter_session(self, member: Member) -> "ClientSession | CourseArmSession":
+    def _presenter_session(self, member: Member) -> ArmSession:
         """The presenter's panel and gizmo, driving the class's arm in the shared scene."""
-        from ..session import ClientSession
-
-        app = self.app
-        if self.course is None:
-            session = ClientSession(member.client, app.arm, app.models, app.refresher, app.drags, state=self.state,
-                                    server=app.server, scene_views=self.scene_views, own_camera=False)
-            session.follow_lecture_mode(member.camera.lecture)
-        else:
-            session = CourseArmSession(member.client, self.course.arm, app.refresher, app.drags, state=self.course.state,
-                                       scene=self.course.scene, server=app.server, own_camera=False)
+        app, arm = self.app, self.state.arm
+        session = ArmSession(member.client, arm, app.refresher, app.drags, models=self._models(arm), state=self.state,
+                             server=app.server, drawing=self.drawing, own_camera=False)
+        session.follow_lecture_mode(member.camera.lecture)
         session.observers.append(lambda _: app.refresher.request(self.live))
         session.camera = member.camera  # the browser's own camera, for the workspace sections
         return session
@@ -325,12 +297,10 @@ class Classroom:
     def show_arm(self, member: Member, label: str) -> None:
         """The presenter shows the class another arm (``CLASS_CHOICES``): everyone's scene and live panel follow.
 
-        The UR10 stays where the presenter left it; another arm starts at its home pose.
+        Each arm comes back where the presenter left it; a new one starts at its home pose.
         ``ValueError`` for anyone but the presenter, or sooner than :data:`SWITCH_INTERVAL`
         after the last change.
         """
-        from ..session import SceneViews
-
         if label not in CLASS_CHOICES:
             raise ValueError(f"arm: {label!r:.40} is not one of the choices")
         app = self.app
@@ -346,16 +316,10 @@ class Classroom:
             self.live.remove()
             app.server.scene.reset()  # the class's arm and everything drawn with it
             add_floor_grid(app.server.scene)
-            name = ARM_CHOICES[label]
-            if name is None:
-                self.course = None
-                self.scene_views = SceneViews.build(app.server.scene, app.models, self.state.last, target_marker=True)
-                self.live = LivePanel(app.server.gui, self.state, lambda: self.scene_views.overlay.enabled, True)
-            else:
-                arm = Arm.preset(name)
-                state = CourseArmState(arm)
-                self.course = ClassCourseArm(arm, state, arm_scene(app.server.scene, arm, state.last))
-                self.live = CourseLivePanel(app.server.gui, state, label, True)
+            self.choice = label
+            self.state = self._state_of(label)
+            self.drawing = self._draw()
+            self.live = LivePanel(app.server.gui, self.state, label, True)
             self.choice = label
             app.server.gui.set_panel_label(panel_title(label, app.arm.name))
             member.session = self._presenter_session(member)
@@ -382,25 +346,18 @@ class Classroom:
 
     def explore(self, member: Member) -> None:
         """A private copy of the class's arm, starting from the presenter's pose."""
-        from ..session import ClientSession
-
-        app = self.app
+        app, arm = self.app, self.state.arm
         with self._lock:
             if member.role == EXPLORER:
                 return
             if self.presenter is member:
                 self.stop_presenting(member)
-            if self.course is None:
-                member.session = ClientSession(
-                    member.client, app.arm, app.models, app.refresher, app.drags,
-                    state=ArmState(app.arm, self.state.q, body_points=app.models.outline), own_camera=False,
-                )
-                member.session.follow_lecture_mode(member.camera.lecture)
-            else:
-                arm = self.course.arm
-                member.session = CourseArmSession(member.client, arm, app.refresher, app.drags,
-                                                  state=CourseArmState(arm, self.course.state.last.q), own_camera=False,
-                                                  root=DESKTOP_EXPLORER_ROOT if arm.dh is None else EXPLORER_ROOT)
+            models = self._models(arm)
+            member.session = ArmSession(
+                member.client, arm, app.refresher, app.drags, models=models, own_camera=False,
+                state=ArmState(arm, self.state.q, body_points=None if models is None else models.outline),
+                root=DESKTOP_EXPLORER_ROOT if arm.dh is None else EXPLORER_ROOT)
+            member.session.follow_lecture_mode(member.camera.lecture)
             member.session.camera = member.camera
             member.role = EXPLORER
             self._hide_class_arm(member)
@@ -409,16 +366,10 @@ class Classroom:
     def _hide_class_arm(self, member: Member) -> None:
         """In an explorer's browser, hide what of the class's arm its own arm does not already cover.
 
-        A private UR10 uses the shared UR10's scene names, which hides all of it but the
+        A private UR10 reuses the shared UR10's scene names, which hides all of it but the
         presenter's target marker; a private course arm has a root of its own.
         """
-        if self.course is not None:
-            hidden: tuple[str, ...] = (self.course.scene.top,)
-        elif isinstance(member.session, CourseArmSession):
-            hidden = UR10_ROOTS
-        else:
-            hidden = ("/target",)
-        for name in hidden:
+        for name in set(self.drawing.roots) - set(member.session.drawing.roots):
             member.client.scene.add_frame(name, show_axes=False, visible=False)
 
     def rejoin(self, member: Member) -> None:

@@ -1,4 +1,4 @@
-"""The viser server: one :class:`ClientSession` per connected browser."""
+"""The viser server: one :class:`ArmSession` per connected browser."""
 
 from __future__ import annotations
 
@@ -19,20 +19,26 @@ import viser
 
 from ur10core import Arm, symbolic, symbolic_arms
 
-from ..viser_internals import fast_updates, shared_frames
-from ..features.arm_picker import ARM_CHOICES, CUSTOM, SWITCH_INTERVAL, UR10, ArmPicker, panel_title
-from .classroom import Classroom
+from ..features.arm_picker import (
+    ARM_CHOICES,
+    CUSTOM,
+    SWITCH_INTERVAL,
+    UR10,
+    ArmPicker,
+    panel_title,
+)
 from ..features.course_arms.editor import STARTING_TABLE, parse_table
-from ..features.course_arms.panel import factor_scales
-from ..features.course_arms.session import CourseArmSession
 from ..features.floor import add_floor_grid
-from .gate import Gate, TokenBucket, budget_of, gated_serve
-from ..meshes import load_models
-from .metrics import LATENCY
+from ..features.singularity import factor_scales
 from ..features.workspace import CLOUDS
-from .workers import APART, JOINS, Cancelled, DragQueue, PanelRefresher
-from ..session import ClientSession
+from ..meshes import load_models
+from ..session import ArmSession
 from ..style import BRAND_BLUE
+from ..viser_internals import fast_updates, shared_frames
+from .classroom import Classroom
+from .gate import Gate, TokenBucket, budget_of, gated_serve
+from .metrics import LATENCY
+from .workers import APART, JOINS, Cancelled, DragQueue, PanelRefresher
 
 log = logging.getLogger(__name__)
 
@@ -214,7 +220,8 @@ class TeachingServer:
             if name not in (None, "custom"):
                 if name != "three_dof":  # its factors are a closed form
                     symbolic_arms.load(name)
-                factor_scales(name)  # the gauges' scales: a few hundred ms in all, never in a callback
+                factor_scales(Arm.preset(name))  # the gauges' scales: a few hundred ms in all, never in a callback
+        factor_scales(self.arm)
         self.host = host
         label = panel_title(UR10, preset)
         self.gate = gate or Gate(allowed_origins)
@@ -235,10 +242,10 @@ class TeachingServer:
         loop = self.server.get_event_loop()
         self.refresher = PanelRefresher(loop)
         self.drags = DragQueue(loop)
-        self._sessions: dict[int, ClientSession | CourseArmSession] = {}
+        self._sessions: dict[int, ArmSession] = {}
         self._last_switch: dict[int, float] = {}  # client id → when its arm was last rebuilt
-        #: client id → picker choice → (state, typed table) of each arm the browser has left: going
-        #: back to one finds its pose, target and typed table as they were
+        #: client id → picker choice → (state, typed table, display choices) of each arm the browser has
+        #: left: going back to one finds its pose, target, typed table and what it showed as they were
         self._left_arms: dict[int, dict[str, tuple]] = {}
         self._switches: dict[str, TokenBucket] = {}  # budget (an address) → its arm changes
         self.clock = time.monotonic  #: the time the arm changes of an address are paced by (a test sets its own)
@@ -272,7 +279,7 @@ class TeachingServer:
         return [f"http://{self.host}:{self.port}"]
 
     @property
-    def sessions(self) -> dict[int, ClientSession]:
+    def sessions(self) -> dict[int, ArmSession]:
         """Client id → the session driving an arm for it (independent mode: every client)."""
         if self.classroom is not None:
             return self.classroom.sessions
@@ -309,22 +316,23 @@ class TeachingServer:
         ``typed``: (arm, text, convention) of a table typed in the DH editor.
         """
         name = ARM_CHOICES[choice]
-        state = None
+        state, display = None, {}
         if typed is None:  # not a newly typed table: the arm as this browser left it, if it has been here
             with self._sessions_lock:
-                state, typed = self._left_arms.get(client.client_id, {}).get(choice, (None, None))
+                state, typed, display = self._left_arms.get(client.client_id, {}).get(choice, (None, None, {}))
         if name is None:
-            session = ClientSession(client, self.arm, self.models, self.refresher, self.drags, lecture=lecture, state=state)
+            session = ArmSession(client, self.arm, self.refresher, self.drags, models=self.models, lecture=lecture, state=state)
         elif name == "custom":
             typed = typed or (parse_table(STARTING_TABLE, "standard"), STARTING_TABLE, "standard")
             arm, text, convention = typed
-            session = CourseArmSession(
+            session = ArmSession(
                 client, arm, self.refresher, self.drags, lecture=lecture, text=text, convention=convention, state=state,
                 rebuild=lambda new, new_text, new_convention: self._switch(client, CUSTOM, (new, new_text, new_convention)))
         else:
-            session = CourseArmSession(client, state.arm if state else Arm.preset(name), self.refresher, self.drags,
-                                       lecture=lecture, state=state)
+            session = ArmSession(client, state.arm if state else Arm.preset(name), self.refresher, self.drags,
+                                 lecture=lecture, state=state)
         session.choice, session.typed = choice, typed
+        session.show_choices(display)
         client.gui.set_panel_label(panel_title(choice, self.arm.name))
         with self._sessions_lock:
             if client.client_id in self._last_switch:  # a change of arm: the interval starts before its picker shows
@@ -353,7 +361,7 @@ class TeachingServer:
             self._last_switch[client.client_id] = math.inf  # refused while this one is being built
             old = self._sessions.pop(client.client_id, None)
             if old is not None:
-                self._left_arms.setdefault(client.client_id, {})[old.choice] = (old.state, old.typed)
+                self._left_arms.setdefault(client.client_id, {})[old.choice] = (old.state, old.typed, old.display_choices())
         lecture = self.lecture
         if old is not None:
             if old.camera is not None:

@@ -117,6 +117,12 @@ class URFamily:
     extra_names: ClassVar[tuple[str, ...]] = _ik.EXTRA_NAMES
     #: :meth:`IKSolution.nearest` turns each joint within ±this (the UR10's ±360°), by the kernel.
     turn_limit: ClassVar[float] = JOINT_LIMIT
+    #: det J's factors (docs/kinematics.md §5): (name, expression, what makes it zero), and the constant before them
+    factor_words: ClassVar[tuple[tuple[str, str, str], ...]] = (
+        ("shoulder", "a2 c2 + a3 c23 − d5 s234", "the wrist centre P5 touches the cylinder of radius d4 about axis 1"),
+        ("elbow", "s3", "the arm is stretched or folded"),
+        ("wrist", "s5", "axes 4 and 6 are parallel"))
+    det_constant: ClassVar[str] = "a2 a3"
 
     def __post_init__(self) -> None:
         for name in ("d1", "a2", "a3", "d4", "d5", "d6"):

@@ -1,7 +1,7 @@
 """The course's 3-DOF desktop arm in 3D (docs/kinematics.md §8.6): on a pedestal, with its parallelogram drive.
 
 The arm has no DH table (its forearm angle is absolute), so it is drawn from its frames,
-not its DH skeleton; everything else is a course arm's (``session.CourseArmSession``). Its
+not its DH skeleton; everything else is a course arm's (``session.ArmSession``). Its
 base frame has y up: a node under the top one (``root``, "course frame") stands it in the
 world (z up), and every node under it, the IK target and the other features' drawings
 included, is in the course's frame.
@@ -17,10 +17,9 @@ import viser
 from ur10core import Arm
 from ur10core.orientation import quaternion
 
-from ...style import JOINT_CAP_GREY, SHOULDER_COLOR, SLOT_COLORS
-from ..velocity import ANGULAR_COLOR, LINEAR_COLOR
-from ..dh_frames import show
-from .state import CourseSnapshot
+from ...state import Snapshot
+from ...style import JOINT_CAP_GREY, SHOULDER_COLOR
+from .scene import LineDrawing
 
 ROOT = "/desktop_arm"
 #: A classroom explorer's own desktop arm, apart from the class's (which it hides in that one browser).
@@ -33,8 +32,6 @@ COURSE_TO_WORLD = np.array([[1.0, 0.0, 0.0], [0.0, 0.0, -1.0], [0.0, 1.0, 0.0]])
 CRANK = 0.3
 LINK_GREY = (90, 94, 102)
 DRIVE_COLOR = SHOULDER_COLOR
-#: Arrows while a lesson plays a path: metres drawn per m/s of the tool, and per rad/s of its turning.
-METRES_PER_SPEED, METRES_PER_TURN_RATE = 1.0, 0.6
 
 
 def world_placement() -> np.ndarray:
@@ -57,14 +54,16 @@ class Framed(NamedTuple):
     lowest: tuple[np.ndarray]
 
 
-class DesktopArmScene:
+class DesktopArmScene(LineDrawing):
     """Pedestal, upper arm and forearm, the parallelogram drive, the course's base frame, one ghost per branch,
-    and the tool's v and ω while a lesson plays a path. The course arms' scene for an arm without a DH table."""
+    The course arms' scene for an arm without a DH table (the tool's v and ω while a path plays are the
+    velocities folder's arrows)."""
 
     overlay = None  #: det J_v's factors are in the panel (the singularities folder), not drawn on this arm
     dh_frames = None  #: no DH frames to show (the DH folders say why)
 
-    def __init__(self, scene: viser.SceneApi, arm: Arm, first: CourseSnapshot, size: float, top: str = ROOT) -> None:
+    def __init__(self, scene: viser.SceneApi, arm: Arm, first: Snapshot, size: float, top: str = ROOT,
+                 target_marker: bool = False) -> None:
         self._arm = arm
         self.top = top  #: the node everything hangs from: a classroom explorer's own arm has one apart from the class's
         self.root = root = f"{top}/course_frame"  #: every node's parent: the course's base frame, placed in the world
@@ -82,17 +81,9 @@ class DesktopArmScene:
         self.tool = scene.add_frame(f"{root}/tool", axes_length=0.3, axes_radius=0.01)
         self.labels = [scene.add_label(f"{root}/label_{k}", text, font_screen_scale=1.4, anchor="bottom-left")
                        for k, text in enumerate(("θ2", "θ3 (absolute)", "tool"))]
-        self.velocity = [scene.add_arrows(f"{root}/{name}", np.zeros((1, 2, 3)), colour, shaft_radius=0.015,
-                                          head_radius=0.04, head_length=0.08, visible=False)
-                         for name, colour in (("linear", LINEAR_COLOR), ("angular", ANGULAR_COLOR))]
-        self.velocity_labels = [scene.add_label(f"{root}/{name}_label", text, font_screen_scale=1.4, anchor="center-left",
-                                                visible=False) for name, text in (("linear", "v"), ("angular", "ω"))]
-        slots = len(arm.slot_labels)
-        self.ghosts = [scene.add_line_segments(f"{root}/ghosts/slot{k + 1}", self._links(points)[1:],
-                                               SLOT_COLORS[k % len(SLOT_COLORS)], thickness=0.02, visible=False)
-                       for k in range(slots)]
-        self.ghost_labels = [scene.add_label(f"{root}/ghosts/slot{k + 1}/number", str(k + 1), font_screen_scale=1.4,
-                                             anchor="bottom-center", visible=False) for k in range(slots)]
+        self._add_ghosts(scene, arm, self._links(points)[1:], 0.02)
+        if target_marker:
+            self._add_target_marker(scene)
         self.render(first)
 
     @staticmethod
@@ -112,7 +103,7 @@ class DesktopArmScene:
         back = CRANK * (elbow - tool) / np.linalg.norm(tool - elbow)
         return np.array([[shoulder, shoulder + back], [shoulder + back, elbow + back], [elbow + back, elbow]])
 
-    def framed(self, snapshot: CourseSnapshot) -> Framed:
+    def framed(self, snapshot: Snapshot) -> Framed:
         """What the camera frames: the arm as it is, and its reach about the shoulder and above, in the world."""
         points = self._points(snapshot.frames)
         ends = points[1] + self.size * np.array([[1.0, 0, 0], [-1.0, 0, 0], [0, 1.0, 0], [0, -1.0, 0], [0, 0, 1.0]])
@@ -121,7 +112,7 @@ class DesktopArmScene:
         frames[:, :3, 3] = world
         return Framed(frames, frames[3], (world[0],))
 
-    def render(self, snapshot: CourseSnapshot) -> None:
+    def render(self, snapshot: Snapshot) -> None:
         points = self._points(snapshot.frames)
         self.links.points = self._links(points)
         drive = self._drive(points)
@@ -132,26 +123,10 @@ class DesktopArmScene:
         self.tool.position = points[3]
         for label, point in zip(self.labels, (points[1], drive[0, 1], points[3])):
             label.position = point
-        moving = snapshot.rates is not None and bool(np.any(snapshot.rates))
-        if moving:
-            twist = self._arm.tool_twist(snapshot.q, snapshot.rates)
-            for arrow, label, vector, scale in zip(self.velocity, self.velocity_labels, (twist[:3], twist[3:]),
-                                                   (METRES_PER_SPEED, METRES_PER_TURN_RATE)):
-                end = points[3] + scale * vector
-                arrow.points = np.array([[points[3], end]])
-                label.position = end
-        for node in (*self.velocity, *self.velocity_labels):
-            show(node, moving)
         self._render_ghosts(snapshot)
 
-    def _render_ghosts(self, snapshot: CourseSnapshot) -> None:
-        shown = np.zeros(len(self.ghosts), bool)
-        shown[:len(snapshot.ghosts)] = snapshot.ghosts
-        frames = self._arm.frames(snapshot.solution.q[shown]) if shown.any() else ()
-        for k, ghost_frames in zip(np.flatnonzero(shown), frames):
-            points = self._points(ghost_frames)
-            self.ghosts[k].points = self._links(points)[1:]
-            self.ghost_labels[k].position = points[2]
-        for k, (ghost, label) in enumerate(zip(self.ghosts, self.ghost_labels)):
-            show(ghost, shown[k])
-            show(label, shown[k])
+    def _ghost_lines(self, frames: np.ndarray) -> np.ndarray:
+        return self._links(self._points(frames))[1:]
+
+    def _ghost_label(self, frames: np.ndarray) -> np.ndarray:
+        return self._points(frames)[2]  # the elbow

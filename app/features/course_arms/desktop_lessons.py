@@ -5,24 +5,19 @@ from __future__ import annotations
 
 import math
 import threading
-from typing import TYPE_CHECKING
 
 import numpy as np
 import viser
 import viser.uplot
 
-from ur10core import Arm
 from ur10core.three_dof import course_path, torque_grid
 
-from ..animation import Player
-from ...style import DANGER_RED, SLOT_COLORS, hex_color, number
-from ...view import View
 from ...serving.workers import HEAVY, FoldedRuns
+from ...state import Snapshot
+from ...style import DANGER_RED, SLOT_COLORS, hex_color, number
+from ...view import Session, View
+from ..animation import Player
 from ..workspace import colormap
-from .state import CourseSnapshot
-
-if TYPE_CHECKING:
-    from .session import CourseArmSession
 
 #: The course's path: one period of its sin t, played in real time.
 PATH_SECONDS = 2 * math.pi
@@ -35,29 +30,10 @@ WORST_LABEL_RISE = 0.8
 
 
 
-def factors_markdown(arm: Arm, snapshot: CourseSnapshot) -> str:
-    """The tool's position (mm, the course's frame) and det J_v with its two factors, red near zero."""
-    p = 1000 * snapshot.flange[:3, 3]
-    reach, fold = arm.singularity_factors(snapshot.q)
-    det = -arm.forearm * arm.upper_arm * reach * fold
-
-    def flagged(text: str, near: bool) -> str:
-        return f"<b style='color:{hex_color(DANGER_RED)}'>{text} (singular)</b>" if near else text
-
-    return "\n".join([
-        f"Tool p = ({', '.join(number(v, '.0f') for v in p)}) mm (course frame, y up)", "",
-        f"det J_v = −l1 l5 · (l1 c3 − l5 c2) · sin(θ2 − θ3) = **{number(det, '+.3f')} m³**", "",
-        "| factor | value | zero when |", "|---|---:|---|",
-        f"| l1 c3 − l5 c2 | {flagged(number(1000 * reach, '+.0f') + ' mm', abs(reach) < 0.05)} | the tool is on the base's axis |",
-        f"| sin(θ2 − θ3) | {flagged(number(fold, '+.3f'), abs(fold) < 0.05)} | upper arm and forearm in one line |",
-    ])
-
-
 class DesktopAbout(View):
-    """The arm's own folder: what it is, where its tool is, and det J_v with its two factors."""
+    """The arm's own folder: what it is (its tool pose and det J_v are in the folders every arm has)."""
 
-    def __init__(self, gui: viser.GuiApi, session: "CourseArmSession") -> None:
-        self._session = session
+    def __init__(self, gui: viser.GuiApi, session: Session) -> None:
         arm = session.arm
         folder = gui.add_folder("Desktop arm (3-DOF)", order=0.9)
         self.folders = (folder,)
@@ -67,16 +43,12 @@ class DesktopAbout(View):
                 f"{1000 * arm.forearm:.0f} mm. Joint 3 drives the forearm through a parallelogram (orange), so "
                 "θ3 is the forearm's angle to the horizontal, not to the upper arm. The course's base frame has "
                 "**y up**: p = (c1(l1c3 − l5c2), l1s3 − l5s2, −s1(l1c3 − l5c2)).")
-            self.readout = gui.add_markdown("")
-
-    def render_panel(self, snapshot: CourseSnapshot) -> None:
-        self.readout.content = factors_markdown(self._session.arm, snapshot)
 
 
 class CoursePathLesson(View):
     """The course's velocity exercise: play its joint path, with v and ω drawn at the tool and plotted."""
 
-    def __init__(self, gui: viser.GuiApi, session: "CourseArmSession") -> None:
+    def __init__(self, gui: viser.GuiApi, session: Session) -> None:
         self._session = session
         self.player = Player(session)
         t = np.linspace(0.0, PATH_SECONDS, PATH_STEPS)
@@ -123,7 +95,7 @@ class CoursePathLesson(View):
                          show=lambda state, row: state.set_joints(row[:3], "course path", rates=row[3:]),
                          done=lambda: session.apply(lambda state: state.set_joints(state.last.q)))
 
-    def render_panel(self, snapshot: CourseSnapshot) -> None:
+    def render_panel(self, snapshot: Snapshot) -> None:
         if snapshot.rates is None or not np.any(snapshot.rates):
             self.readout.content = "Not playing: the arrows show while the path plays."
             return
@@ -139,10 +111,10 @@ class StaticsExercise(View):
     """The course's statics exercise: for the force of the "Forces and gravity" folder, the pose in the joint
     ranges that needs the largest ‖τ‖ = ‖J_vᵀ F‖, over a grid of them, the arm put there."""
 
-    def __init__(self, scene: viser.SceneApi, gui: viser.GuiApi, session: "CourseArmSession") -> None:
+    def __init__(self, scene: viser.SceneApi, gui: viser.GuiApi, session: Session) -> None:
         self._session = session
         self._scene = scene
-        self._root = session.scene.root
+        self._root = session.drawing.root
         folder = gui.add_folder("The course's statics exercise", order=3.0, expand_by_default=False)
         self.folders = (folder,)
         with folder:
@@ -201,6 +173,6 @@ class StaticsExercise(View):
             self._clear()
 
 
-def desktop_lessons(scene: viser.SceneApi, gui: viser.GuiApi, session: "CourseArmSession") -> tuple[View, ...]:
+def desktop_lessons(scene: viser.SceneApi, gui: viser.GuiApi, session: Session) -> tuple[View, ...]:
     """The desktop arm's own folders: what it is, and the course's two exercises with it."""
     return DesktopAbout(gui, session), CoursePathLesson(gui, session), StaticsExercise(scene, gui, session)

@@ -10,17 +10,14 @@ from __future__ import annotations
 
 import math
 import re
-from typing import TYPE_CHECKING, Callable
+from typing import Callable
 
 import viser
 
 from ur10core import Arm
 
 from ...feedback import chosen
-from ...view import View
-
-if TYPE_CHECKING:
-    from .session import CourseArmSession
+from ...view import Session, View
 
 #: What the editor starts with: the lecture notes' articulated arm without its wrist.
 STARTING_TABLE = """# a (mm)  alpha (deg)  d (mm)  theta (deg)  type  [min max]
@@ -92,7 +89,7 @@ def _limits(number: int, kind: str, typed) -> tuple[float, float]:
 class DHEditor(View):
     """The "Your DH table" folder: convention, the rows, and "Build this arm"."""
 
-    def __init__(self, gui: viser.GuiApi, session: "CourseArmSession", text: str, convention: str,
+    def __init__(self, gui: viser.GuiApi, session: Session, text: str, convention: str,
                  rebuild: Callable[[Arm, str, str], None]) -> None:
         folder = gui.add_folder("Your DH table", order=0.2)
         self.folders = (folder,)

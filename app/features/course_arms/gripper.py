@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import math
 import re
-from typing import TYPE_CHECKING
 
 import numpy as np
 import viser
@@ -12,12 +11,9 @@ import viser
 from ur10core.orientation import rotation_from_xyz_fixed, xyz_fixed
 from ur10core.serial import kr210_from_urdf, kr210_to_urdf
 
+from ...state import Snapshot
 from ...style import number
-from ...view import View
-from .state import CourseSnapshot
-
-if TYPE_CHECKING:
-    from .session import CourseArmSession
+from ...view import Session, View
 
 
 def pose_text(T: np.ndarray) -> str:
@@ -47,7 +43,7 @@ def parse_pose(text: str) -> np.ndarray:
 class GripperPose(View):
     """The "Gripper pose" folder of the KR210: the target in either convention, and a pose to go to."""
 
-    def __init__(self, gui: viser.GuiApi, session: "CourseArmSession") -> None:
+    def __init__(self, gui: viser.GuiApi, session: Session) -> None:
         self._session = session
         folder = gui.add_folder("Gripper pose")
         self.folders = (folder,)
@@ -71,8 +67,8 @@ class GripperPose(View):
         T = parse_pose(str(self.typed.value))
         if self.urdf.value:
             T = kr210_from_urdf(T)
-        self._session.apply(lambda state: state.move_target(T), move_gizmo=True)
+        self._session.apply(lambda state: state.move_target(T, cause="typed"))
 
-    def render_panel(self, snapshot: CourseSnapshot) -> None:
+    def render_panel(self, snapshot: Snapshot) -> None:
         name = "URDF (ROS/Gazebo)" if self.urdf.value else "DH (frame G)"
         self.readout.content = f"Target in the {name} convention: **{pose_text(self._shown(snapshot.target))}**"

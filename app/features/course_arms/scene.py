@@ -11,15 +11,16 @@ from __future__ import annotations
 import numpy as np
 import viser
 
-from ur10core.orientation import quaternion
-from ur10core.dh import DHTable
 from ur10core import Arm
+from ur10core.dh import DHTable
+from ur10core.orientation import quaternion
 
+from ...state import Snapshot
+from ...style import JOINT_CAP_GREY, SLOT_COLORS
 from ...viser_internals.fast_updates import set_orientations, set_positions
 from ..dh_frames import DHFrames, show
-from ...style import JOINT_CAP_GREY, SLOT_COLORS
-from .overlay import CourseOverlay, has_overlay
-from .state import CourseSnapshot
+from ..ik_target import ALL_BRANCHES, add_unreachable_halo, focused
+from ..singularity import SingularityOverlay, has_overlay
 
 ROOT = "/course_arm"
 #: An explorer's own arm in a classroom, apart from the class's (which it hides in that one browser).
@@ -56,11 +57,77 @@ def rod_rotations(axes: np.ndarray) -> np.ndarray:
     return np.stack([x, np.cross(axes, x), axes], axis=-1)
 
 
-class CourseArmScene:
+class LineDrawing:
+    """What the course's line drawings share (the interface of ``..drawings``): ghosts shown as chosen, a target marker."""
+
+    names: tuple[str, ...] = ()  #: one way to draw it: no "Arm drawn as"
+    show_ghosts = True
+    focus = ALL_BRANCHES
+    on_select = None  #: the ghosts are lines: nothing to click
+    target = unreachable = None
+    top: str
+    root: str
+    size: float
+
+    @property
+    def roots(self) -> tuple[str, ...]:
+        return (self.top,)
+
+    @property
+    def body_radius(self) -> float:
+        """Room the camera keeps around each joint (the rods and the gizmo scale with the reach)."""
+        return 0.15 * self.size
+
+    def _add_target_marker(self, scene: viser.SceneApi) -> None:
+        """The target, drawn for the shared scene (only the presenter has a gizmo)."""
+        name = f"{self.root}/target_marker"
+        self.target = scene.add_frame(name, axes_length=0.08 * self.size, axes_radius=0.004 * self.size)
+        self.unreachable = add_unreachable_halo(scene, name)
+
+    def _render_target(self, snapshot: Snapshot) -> None:
+        if self.target is not None:
+            self.target.wxyz = quaternion(snapshot.target[:3, :3], check=False)
+            self.target.position = snapshot.target[:3, 3]
+            show(self.unreachable, not snapshot.reachable)
+
+    def shown_ghosts(self, snapshot: Snapshot, count: int) -> np.ndarray:
+        """(count,) bool: the ghosts to draw, as the snapshot and the "Ghosts shown" choice say."""
+        shown = np.zeros(count, bool)
+        if self.show_ghosts and len(snapshot.ghosts):
+            shown[:len(snapshot.ghosts)] = snapshot.ghosts & focused(self.focus, snapshot.slot, snapshot.arm)
+        return shown
+
+    def render_panel(self, snapshot: Snapshot) -> None:
+        pass
+
+    def _add_ghosts(self, scene: viser.SceneApi, arm: Arm, segments: np.ndarray, thickness: float) -> None:
+        """One line drawing per slot in its colour, with its number (hidden until a branch is there)."""
+        slots = range(len(arm.slot_labels))
+        self.ghosts = [scene.add_line_segments(f"{self.root}/ghosts/slot{k + 1}", segments, SLOT_COLORS[k % len(SLOT_COLORS)],
+                                               thickness=thickness, visible=False) for k in slots]
+        self.ghost_labels = [scene.add_label(f"{self.root}/ghosts/slot{k + 1}/number", str(k + 1), font_screen_scale=1.4,
+                                             anchor="bottom-center", visible=False) for k in slots]
+
+    def _render_ghosts(self, snapshot: Snapshot) -> None:
+        """The target marker, and each branch shown as the drawing draws an arm (``_ghost_lines``), numbered
+        where branches differ (``_ghost_label``): they share the tool, not their elbows."""
+        self._render_target(snapshot)
+        shown = self.shown_ghosts(snapshot, len(self.ghosts))
+        labelled = np.flatnonzero(shown)
+        frames = snapshot.ghost_frames[shown[:len(snapshot.ghost_frames)]]
+        for k, ghost_frames in zip(labelled, frames):
+            self.ghosts[k].points = self._ghost_lines(ghost_frames)
+        set_positions([self.ghost_labels[k] for k in labelled], np.array([self._ghost_label(f) for f in frames]).reshape(-1, 3))
+        for k, (ghost, label) in enumerate(zip(self.ghosts, self.ghost_labels)):
+            show(ghost, shown[k])
+            show(label, shown[k])
+
+
+class CourseArmScene(LineDrawing):
     """Everything one course arm draws in a browser's scene."""
 
-    def __init__(self, scene: viser.SceneApi, arm: Arm, first: CourseSnapshot, size: float,
-                 root: str = ROOT) -> None:
+    def __init__(self, scene: viser.SceneApi, arm: Arm, first: Snapshot, size: float,
+                 root: str = ROOT, target_marker: bool = False) -> None:
         self._scene = scene
         self.root = self.top = root  #: every node's parent: a classroom explorer's own arm has one apart from the class's
         self._arm = arm
@@ -78,24 +145,21 @@ class CourseArmScene:
             self.joints.append(rod)
         #: the DH frames, x and z named, and a row's parameters (the DH folders switch them)
         self.dh_frames = DHFrames(scene, arm, first.frames, size, root)
-        slots = len(arm.slot_labels)
-        _, points = arm.dh.joint_axes(first.frames)
         self._label_frame = arm.dh.joint_rows[min(2, arm.n_joints - 1)] + (0 if arm.convention == "standard" else 1)
-        self.ghosts = [scene.add_line_segments(f"{root}/ghosts/slot{k + 1}", segments, SLOT_COLORS[k % len(SLOT_COLORS)],
-                                               thickness=0.006 * size) for k in range(slots)]
-        self.ghost_labels = [scene.add_label(f"{root}/ghosts/slot{k + 1}/number", str(k + 1), font_screen_scale=1.4,
-                                             anchor="bottom-center") for k in range(slots)]
+        self._add_ghosts(scene, arm, segments, 0.006 * size)
         #: det J's factors in 3D (a preset's; a typed table's det J is not derived)
-        self.overlay = CourseOverlay(scene, arm, first, size, root) if has_overlay(arm) else None
+        self.overlay = SingularityOverlay(scene, arm, first, size, root) if has_overlay(arm) else None
+        if target_marker:
+            self._add_target_marker(scene)
 
     #: Where the arm's base frame is in the scene: at the world's origin.
     world = np.eye(4)
 
-    def framed(self, snapshot: CourseSnapshot) -> CourseSnapshot:
+    def framed(self, snapshot: Snapshot) -> Snapshot:
         """What the camera frames: the arm's frames and target, in the world as they are."""
         return snapshot
 
-    def render(self, snapshot: CourseSnapshot) -> None:
+    def render(self, snapshot: Snapshot) -> None:
         frames = snapshot.frames
         self.body.points = skeleton(self._arm.dh, frames)
         z, o = self._arm.dh.joint_axes(frames)
@@ -104,14 +168,10 @@ class CourseArmScene:
         self.dh_frames.render(snapshot)
         if self.overlay is not None:
             self.overlay.render(snapshot)
-        shown = np.zeros(len(self.ghosts), bool)
-        shown[:len(snapshot.ghosts)] = snapshot.ghosts
-        ghost_frames = dict(zip(np.flatnonzero(shown), self._arm.frames(snapshot.solution.q[shown]))) if shown.any() else {}  # one call
-        for k, (ghost, label) in enumerate(zip(self.ghosts, self.ghost_labels)):
-            show(ghost, shown[k])
-            show(label, shown[k])
-            if shown[k]:
-                ghost.points = skeleton(self._arm.dh, ghost_frames[k])
-        labelled = np.flatnonzero(shown)  # at each ghost's middle joint: the branches share the tool, not their elbows
-        set_positions([self.ghost_labels[k] for k in labelled],
-                      np.array([ghost_frames[k][self._label_frame, :3, 3] for k in labelled]).reshape(-1, 3))
+        self._render_ghosts(snapshot)
+
+    def _ghost_lines(self, frames: np.ndarray) -> np.ndarray:
+        return skeleton(self._arm.dh, frames)
+
+    def _ghost_label(self, frames: np.ndarray) -> np.ndarray:
+        return frames[self._label_frame, :3, 3]  # the middle joint

@@ -1,0 +1,30 @@
+"""A typed table's "Find every branch": its numerical IK from many starts, in the worker process."""
+
+from __future__ import annotations
+
+import viser
+
+from ..serving.workers import APART, HEAVY, FoldedRuns
+from ..view import Session, View
+
+
+class BranchSearch(View):
+    """The "Numerical IK" folder: damped least squares from many starts, its branches shown as the closed forms' are."""
+
+    def __init__(self, gui: viser.GuiApi, session: Session) -> None:
+        self._session = session
+        self._runs = FoldedRuns(self._search)
+        folder = gui.add_folder("Numerical IK", order=0.3)
+        self.folders = (folder,)
+        with folder:
+            self.button = gui.add_button("Find every branch", icon=viser.Icon.SEARCH,
+                                         hint="Damped least squares from 48 starts: every distinct solution it finds")
+        self.button.on_click(session.guard(lambda _: self._runs.start("branch-search", session.guard)))
+
+    def _search(self) -> None:
+        session = self._session
+        snapshot = session.state.last
+        solution = HEAVY.run(session.client, lambda: APART.run(session.state.arm.ik, snapshot.target, hint=snapshot.q),
+                             cancelled=lambda: session.closed)
+        if not session.closed:
+            session.apply(lambda state: state.with_branches(snapshot, solution))
