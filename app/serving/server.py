@@ -187,7 +187,7 @@ class Janitor:
 
 
 class TeachingServer:
-    """The app: a viser server giving every browser its own UR10.
+    """The app: a viser server giving every browser its own arm (the UR10 first, then any arm it picks).
 
     Parameters
     ----------
