@@ -1,2 +1,2 @@
-"""What only some of the course's arms have: the DH skeleton drawing and its overlay (``scene``, ``overlay``), the
-desktop arm's drawing and lessons, the KR210's gripper pose, and the DH editor for a typed table."""
+"""What only some of the course's arms have: the DH skeleton drawing (``scene``), the desktop arm's drawing and
+lessons, the KR210's gripper pose, and the DH editor for a typed table."""
