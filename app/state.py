@@ -22,6 +22,8 @@ from ur10core.orientation import quaternion
 from ur10core.serial import project_target
 from ur10core.workspace import lowest_points
 
+from .style import number
+
 SINGULARITY_KINDS = ("shoulder", "elbow", "wrist")
 #: A body this far below z = 0 is through the floor (the base's own underside sits on it).
 FLOOR_TOLERANCE = 1e-3
@@ -84,7 +86,8 @@ class Snapshot:
     @property
     def ghost_wxyz(self) -> np.ndarray:
         """(k, L, 4) rotation of each branch's frames, as quaternions."""
-        return self._wxyz[len(self._wxyz) - 1 - self.ghost_frames[:, :, 0, 0].size:-1].reshape(*self.ghost_frames.shape[:2], 4)
+        slots, frames = self.ghost_frames.shape[:2]
+        return self._wxyz[-1 - slots * frames:-1].reshape(slots, frames, 4)
 
     @property
     def flange_wxyz(self) -> np.ndarray:
@@ -113,7 +116,7 @@ class Snapshot:
 
 def joint_value_text(kind: str, value: float, digits: str = ".1f") -> str:
     """A joint value as a student reads it: degrees for a revolute joint, millimetres for a prismatic one."""
-    return f"{math.degrees(value):{digits}}°" if kind == "R" else f"{1000 * value:{digits}} mm"
+    return number(math.degrees(value), digits) + "°" if kind == "R" else number(1000 * value, digits) + " mm"
 
 
 class ArmState:

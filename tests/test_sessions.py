@@ -18,6 +18,7 @@ import pytest
 
 from ur10teach.features import joint_panel
 from ur10teach.serving import workers
+from ur10teach.state import joint_value_text
 from ur10teach.style import number, sentence
 
 from .server_support import become_presenter, drag_a_little, member_of, session_of, until, url
@@ -324,6 +325,7 @@ def test_numbers_never_read_minus_zero():
     assert number(-0.00001, "+.4f") == "+0.0000"
     assert number(-0.04, ".1f") == "0.0"
     assert number(-0.06, ".1f") == "-0.1"
+    assert joint_value_text("R", -1e-9) == "0.0°" and joint_value_text("P", -1e-9) == "0.0 mm"  # the branch table, the sliders' text
     assert joint_panel.display_text(Arm.preset("course"), np.radians([-0.001, 0.0, -0.0, 12.345, -200.0, 0.5])) == "0, 0, 0, 12.35, -200, 0.5"
     assert sentence("elbow reach — the wrist") == "Elbow reach — the wrist"
 

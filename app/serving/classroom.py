@@ -103,8 +103,9 @@ class LivePanel:
 
     panel_interval = 0.3
 
-    def __init__(self, gui: viser.GuiApi, state: ArmState, title: str, presenter_here: bool = False) -> None:
+    def __init__(self, gui: viser.GuiApi, state: ArmState, title: str, overlay=None, presenter_here: bool = False) -> None:
         self._state = state
+        self._overlay = overlay  #: the class's singularity overlay: its gauges show with it (or always, without one)
         self.presenter_here = presenter_here
         self.closed = False  # the refresher's protocol
         # last in every panel: below the presenter's or an explorer's own controls
@@ -133,7 +134,10 @@ class LivePanel:
         self.joints.content = joints_markdown(arm, snapshot.q)
         self.branches.content = branches_markdown(snapshot)
         self.flange.content = flange_markdown(snapshot)
-        self.gauges.content = factors_html(arm, snapshot.q)
+        # a shared widget's update is sent to every browser: the gauges only while the presenter shows the overlay
+        self.gauges.visible = self._overlay is None or self._overlay.enabled
+        if self.gauges.visible:
+            self.gauges.content = factors_html(arm, snapshot.q)
 
 
 class Member:
@@ -159,7 +163,7 @@ class Classroom:
         self.states: dict[str, ArmState] = {}
         self.state = self._state_of(UR10)
         self.drawing = self._draw()
-        self.live = LivePanel(app.server.gui, self.state, UR10)
+        self.live = LivePanel(app.server.gui, self.state, UR10, self.drawing.overlay)
         self._last_switch = -math.inf
         self.members: dict[int, Member] = {}
         self.presenter: Member | None = None
@@ -319,7 +323,7 @@ class Classroom:
             self.choice = label
             self.state = self._state_of(label)
             self.drawing = self._draw()
-            self.live = LivePanel(app.server.gui, self.state, label, True)
+            self.live = LivePanel(app.server.gui, self.state, label, self.drawing.overlay, True)
             self.choice = label
             app.server.gui.set_panel_label(panel_title(label, app.arm.name))
             member.session = self._presenter_session(member)
