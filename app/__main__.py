@@ -32,6 +32,7 @@ def hand_back_large_buffers() -> None:
 
 hand_back_large_buffers()  # before numpy and the rest allocate
 
+import ur10core  # noqa: E402
 from ur10core import Arm  # noqa: E402
 
 from .serving import logs  # noqa: E402
@@ -63,7 +64,8 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
     return args
 
 
-def main(argv: list[str] | None = None) -> None:
+def main(argv: list[str] | None = None, started=None) -> None:
+    """Serve until Ctrl+C. ``started(app)`` is called once it serves (``ur10dev.metered_app`` measures it)."""
     args = parse_args(argv)
     logs.install()
     from .serving.server import TeachingServer
@@ -72,13 +74,16 @@ def main(argv: list[str] | None = None) -> None:
                          allowed_origins=args.allow_origin, lecture=args.lecture, light=args.light)
     moved = "" if args.port in (0, app.port) else f" (port {args.port} was busy)"
     mode = "shared demo mode" if args.shared else "every browser has its own arm"
-    print(f"\nUR10 teaching app ({args.preset}, {mode}) is running{moved}. Open:", flush=True)
+    kernel = "compiled kernel" if ur10core.BACKEND == "compiled" else "numpy, no compiled kernel"
+    print(f"\nUR10 teaching app ({args.preset}, {mode}; kinematics: {kernel}) is running{moved}. Open:", flush=True)
     for url in app.urls:
         print(f"    {url}", flush=True)
     if args.host in ("0.0.0.0", ""):
         print("Students on the same network use one of the addresses above.", flush=True)
     if app.classroom is not None:
         print(f"Join code for the presenter: {app.classroom.code}", flush=True)
+    if started is not None:
+        started(app)
     print("Press Ctrl+C to stop.", flush=True)
     signal.signal(signal.SIGTERM, _interrupt)  # stop as on Ctrl+C
     try:

@@ -11,7 +11,7 @@ from typing import Any, Callable
 import viser
 
 from .serving.gate import TokenBucket
-from .style import sentence
+from .style import DANGER_RED, hex_color, sentence
 
 log = logging.getLogger(__name__)
 
@@ -44,17 +44,34 @@ def notify(client: viser.ClientHandle, title: str, body: str, color: str = "yell
         log.debug("could not notify client %s", client.client_id, exc_info=True)
 
 
+class Beside:
+    """A line right below an input, where a value typed into it and refused is explained: a notice at the
+    far edge of the window went unseen (issue 30). Hidden until there is something to say."""
+
+    def __init__(self, gui: viser.GuiApi) -> None:
+        self.line = gui.add_markdown("", visible=False)
+
+    def say(self, message: str) -> None:
+        self.line.content = f"<span style='color:{hex_color(DANGER_RED)}'>**Not accepted.** {sentence(message)}</span>"
+        self.line.visible = True
+
+    def clear(self) -> None:
+        if self.line.visible:
+            self.line.visible = False
+
+
 def guard(
     client: viser.ClientHandle,
     handler: Callable[[Any], None],
     is_closed: Callable[[], bool] = lambda: False,
     on_refused: Callable[[], None] | None = None,
+    beside: Beside | None = None,
 ) -> Callable[[Any], None]:
     """Wrap a viser callback of ``client``'s.
 
-    ``ValueError`` is a value the user gave that we refuse: it is shown to them as "Not
-    accepted" and ``on_refused`` puts the widgets back. Anything else is a bug: it is
-    logged and the user is told the app is still running.
+    ``ValueError`` is a value the user gave that we refuse: it is explained ``beside`` the
+    input it came from (or in a notice, "Not accepted") and ``on_refused`` puts the widgets
+    back. Anything else is a bug: it is logged and the user is told the app is still running.
     """
 
     @functools.wraps(handler)
@@ -63,8 +80,13 @@ def guard(
             return
         try:
             handler(event)
+            if beside is not None:
+                beside.clear()
         except ValueError as error:
-            notify(client, "Not accepted", str(error))
+            if beside is not None:
+                beside.say(str(error))
+            else:
+                notify(client, "Not accepted", str(error))
             if on_refused is not None:
                 on_refused()
         except Exception as error:

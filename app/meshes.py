@@ -61,6 +61,8 @@ def load_links(preset: str, mesh_dir: Path = MESH_DIR) -> tuple[LinkMesh, ...]:
 
 REAL = "Real UR10"
 SCHEMATIC = "Schematic"
+#: The ghosts' default drawing (:func:`skeleton_links`): thick sticks and joint discs, unmistakably not the solid arm.
+SKELETON = "Skeleton"
 #: presets drawn with UR's UR10 meshes: the course's DH table rounds the UR10's to within 1 mm
 REAL_MESHES = {"course": "ur10", "ur10": "ur10"}
 _EMPTY = (np.zeros((0, 3), np.float32), np.zeros((0, 3), np.uint32))
@@ -122,10 +124,12 @@ class ArmModels:
 @functools.lru_cache(maxsize=None)
 def load_models(preset: str, light: bool = False) -> ArmModels:
     """The real UR10 where the preset is one (and the schematic beside it), else the schematic alone;
-    ``light`` shades them for software WebGL (:class:`ArmModels`)."""
+    ``light`` draws the schematic first (a tenth of the real arm's triangles) and shades both for
+    software WebGL (:class:`ArmModels`)."""
     schematic = load_links(preset)
     if preset in REAL_MESHES:
-        return ArmModels({REAL: load_real_links(REAL_MESHES[preset]), SCHEMATIC: schematic}, light)
+        real = load_real_links(REAL_MESHES[preset])
+        return ArmModels({SCHEMATIC: schematic, REAL: real} if light else {REAL: real, SCHEMATIC: schematic}, light)
     return ArmModels({SCHEMATIC: schematic}, light)
 
 
@@ -146,3 +150,26 @@ def body_points(links: tuple[LinkMesh, ...], directions: int = 128) -> np.ndarra
         outlines.append(vertices[np.unique(np.argmax(vertices @ unit.T, axis=0))])
     size = max(len(o) for o in outlines)
     return np.stack([np.vstack([o, np.repeat(o[:1], size - len(o), axis=0)]) for o in outlines])
+
+
+@functools.lru_cache(maxsize=None)
+def skeleton_links(table, stick: float = 0.018, disc: tuple[float, float] = (0.045, 0.03)) -> tuple[LinkMesh, ...]:
+    """A ghost's links as its DH table builds them, each in its own frame {i} (modified DH, revolute joints).
+
+    Link i is a stick from its origin along x_i by a_i, then along z_{i+1} by d_{i+1} to the
+    next origin (both fixed in {i}: row i+1 turns only about z_{i+1}), and a disc on joint i's
+    axis z_i; ``stick`` is the sticks' radius, ``disc`` the discs' radius and thickness (m).
+    """
+    links = []
+    for i in range(7):
+        parts = [trimesh.creation.cylinder(radius=disc[0], height=disc[1], sections=20)] if i else []
+        if 0 < i < len(table.rows):
+            row = table.rows[i]  # a_i, α_i and d_{i+1}
+            corner = np.array([row.a, 0.0, 0.0])
+            end = corner + row.d * np.array([0.0, -np.sin(row.alpha), np.cos(row.alpha)])
+            parts += [trimesh.creation.cylinder(radius=stick, segment=(a, b), sections=10)
+                      for a, b in ((np.zeros(3), corner), (corner, end)) if np.linalg.norm(b - a) > 1e-6]
+        mesh = trimesh.util.concatenate(parts) if parts else trimesh.Trimesh(np.zeros((0, 3)), np.zeros((0, 3), int))
+        vertices, faces = np.asarray(mesh.vertices, np.float32), np.asarray(mesh.faces, np.uint32).reshape(-1, 3)
+        links.append(LinkMesh(i, vertices, faces, *_EMPTY))
+    return tuple(links)

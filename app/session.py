@@ -1,16 +1,6 @@
 """One browser's arm, panel and target, for any arm of the course.
 
-viser runs plain ``def`` callbacks on a thread pool, so callbacks of one browser can
-overlap: every change goes through :meth:`ArmSession.apply`, which holds the arm's lock
-while it changes the state and redraws the 3D view, then asks the
-:class:`~ur10teach.serving.workers.PanelRefresher` to redraw the side panel. Every callback
-is wrapped by :meth:`ArmSession.guard`: no exception escapes, a refused value is explained
-in a notification in that browser, and every other browser carries on.
-
-Each view has ``render(snapshot)`` (the 3D scene, on every change) and
-``render_panel(snapshot)`` (the GUI, at most ten times a second). The features are the same
-for every arm; only the drawing (:mod:`ur10teach.features.drawings`) and an arm's own
-lessons differ.
+Why it is built so: docs/architecture.md §1.
 """
 
 from __future__ import annotations
@@ -23,6 +13,7 @@ import viser
 
 from ur10core import Arm
 
+from .features.branch_labels import DEFAULT_VIEW, ScreenView
 from .features.branch_search import BranchSearch
 from .features.camera import CameraControls
 from .features.course_arms.desktop_lessons import desktop_lessons
@@ -33,7 +24,7 @@ from .features.drawings import arm_drawing
 from .features.ellipsoids import EllipsoidsView
 from .features.ik_target import IKTarget, pose_from_gizmo
 from .features.joint_panel import JointPanel
-from .features.lecture import LectureMode
+from .features.lecture import LectureMode, size_labels
 from .features.motion_lessons import MotionLessons
 from .features.reach_map import ReachMapView
 from .features.readouts import Readouts
@@ -42,12 +33,14 @@ from .features.singularity import Singularities
 from .features.statics import StaticsView
 from .features.velocity import VelocityView
 from .features.workspace import WorkspaceView
-from .feedback import guard, notify
+from .feedback import Beside, guard, notify
 from .meshes import ArmModels
 from .serving.metrics import LATENCY
 from .serving.workers import DragQueue, PanelRefresher
 from .state import ArmState, Snapshot
 
+#: Changes after which the camera frames the arm again: it may have gone far (a drag or a slider moves it gradually).
+REFRAMED = ("singularity", "typed")
 #: An arm's own lessons (the course's exercises with it), beside the features every arm has.
 LESSONS = {"three_dof": desktop_lessons}
 
@@ -127,7 +120,7 @@ class ArmSession:
         self.workspace = WorkspaceView(scene, gui, self, root=nodes)
         self.reach_map = ReachMapView(scene, gui, self, root=f"{nodes}/reach_map", world=drawn.world)
         self.statics = StaticsView(scene, gui, self, root=f"{nodes}/statics", size=drawn.size)
-        self.ellipsoids = EllipsoidsView(scene, gui, self, root=f"{nodes}/ellipsoids")
+        self.ellipsoids = EllipsoidsView(scene, gui, self, root=f"{nodes}/ellipsoids", reach=drawn.size)
         self.velocity = VelocityView(scene, gui, self, root=f"{nodes}/velocity")
         self.motion = MotionLessons(gui, self, before=self.stop_lessons)
         self.gripper = GripperPose(gui, self) if arm.name == "kr210" else None
@@ -136,6 +129,15 @@ class ArmSession:
                                       body_radius=drawn.body_radius) if own_camera else None)
         if self.camera is not None:
             self.follow_lecture_mode(self.camera.lecture)
+        #: the scene whose 3D labels this browser's lecture mode sizes: its own (a shared one follows the server's)
+        self._label_scene = scene if server is None else None
+        placed = self.guard(lambda _: [labels.place() for labels in drawn.label_sets])
+        self._place_numbers = lambda: placed(None)  # on every camera move: the 3D labels placed for the new view
+        if server is None:  # the 3D labels placed apart for this browser's camera, as it moves
+            for labels in drawn.label_sets:
+                labels.view = self._screen_view
+        if self.camera is not None:
+            self.watch_camera(self.camera)
         #: the views this session built in the browser's own panel (the drawing may be the classroom's)
         self.panel_views = tuple(view for view in (
             self.editor, self.search, self.gripper, self.joints, self.arm_model, self.ik_target, self.readouts,
@@ -163,6 +165,8 @@ class ArmSession:
         self.refresher.request(self)
         for observer in self.observers:
             observer(snapshot)
+        if snapshot.cause in REFRAMED and self.camera is not None:
+            self.camera.frame()  # the arm may have gone far from where the student was looking
         return snapshot
 
     def drag_to(self, pose) -> None:
@@ -211,6 +215,8 @@ class ArmSession:
         start = time.perf_counter()
         snapshot = self.state.last
         with self.client.atomic():
+            if self._label_scene is not None and self._lecture is not None:
+                size_labels(self._label_scene, self._lecture.on)
             for view in self.views:  # the drawing's panel-paced parts too (the branch numbers, say)
                 view.render_panel(snapshot)
         LATENCY.record("panel", time.perf_counter() - start)
@@ -237,19 +243,40 @@ class ArmSession:
 
     # ------------------------------------------------------------------ the browser
 
-    def guard(self, handler: Callable[[Any], None]) -> Callable[[Any], None]:
-        """Wrap a viser callback so that nothing it raises escapes (see ``ur10teach.feedback``)."""
-        return guard(self.client, handler, is_closed=lambda: self.closed, on_refused=lambda: self.refresher.request(self))
+    def guard(self, handler: Callable[[Any], None], beside: Beside | None = None) -> Callable[[Any], None]:
+        """Wrap a viser callback so that nothing it raises escapes; a refusal is explained ``beside`` its input
+        (see ``ur10teach.feedback``)."""
+        return guard(self.client, handler, is_closed=lambda: self.closed, on_refused=lambda: self.refresher.request(self),
+                     beside=beside)
+
+    def watch_camera(self, camera: CameraControls) -> None:
+        """Use this browser's camera (a classroom's member has one for all its sessions): frame with it,
+        and place the branch numbers of this session's own drawing for it as it moves."""
+        self.camera = camera
+        if self._label_scene is not None:
+            camera.on_moved.append(self._place_numbers)
+
+    def _screen_view(self) -> ScreenView:
+        """This browser's camera, to place the branch numbers for (the default one until it reports)."""
+        try:
+            return ScreenView.of(self.client.camera)
+        except Exception:  # no camera message yet, or the browser has gone
+            return DEFAULT_VIEW
 
     def notify(self, title: str, body: str, color: str = "yellow") -> None:
         if not self.closed:
             notify(self.client, title, body, color)
 
     def follow_lecture_mode(self, lecture: LectureMode) -> None:
-        """Thick gizmo lines while the browser's lecture mode is on (until this session closes)."""
-        lecture.on_change.append(self.ik_target.thicken)
+        """Thick gizmo lines and big 3D labels while the browser's lecture mode is on (until this session closes)."""
+        lecture.on_change.append(self._lecture_changed)
         self._lecture = lecture
         self.ik_target.thicken(lecture.on)
+
+    def _lecture_changed(self, on: bool) -> None:
+        """Lecture mode switched: thick gizmo lines, and the 3D labels sized at the next panel redraw."""
+        self.ik_target.thicken(on)
+        self.refresher.request(self)
 
     def close(self) -> None:
         """The browser has gone (or handed over): stop drawing and let go of everything shared."""
@@ -261,9 +288,11 @@ class ArmSession:
 
     def _leave(self, how: Callable[[Any], None]) -> None:
         # the classroom's lecture switch outlives this session: it must not keep the session alive
-        if self._lecture is not None and self.ik_target.thicken in self._lecture.on_change:
-            self._lecture.on_change.remove(self.ik_target.thicken)
+        if self._lecture is not None and self._lecture_changed in self._lecture.on_change:
+            self._lecture.on_change.remove(self._lecture_changed)
         self._lecture = None
+        if self.camera is not None and self._place_numbers in self.camera.on_moved:
+            self.camera.on_moved.remove(self._place_numbers)
         self.closed = True
         with self.state.lock:  # not while a drag is being drawn
             for view in self.panel_views:

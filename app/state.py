@@ -20,13 +20,12 @@ import numpy as np
 from ur10core import Arm, IKSolution
 from ur10core.orientation import quaternion
 from ur10core.serial import project_target
+from ur10core.tolerances import FLOOR_TOLERANCE
 from ur10core.workspace import lowest_points
 
 from .style import number
 
 SINGULARITY_KINDS = ("shoulder", "elbow", "wrist")
-#: A body this far below z = 0 is through the floor (the base's own underside sits on it).
-FLOOR_TOLERANCE = 1e-3
 
 
 @dataclass(frozen=True)

@@ -45,6 +45,21 @@ SHOULDER_COLOR = (230, 159, 0)
 ELBOW_COLOR = (0, 158, 115)
 WRIST_COLOR = (204, 121, 167)
 
+#: Size of the branch numbers in 3D (viser's font_screen_scale: an em of 12 px times it). In lecture
+#: mode every 3D label grows by LECTURE_LABEL_FACTOR, to at least LECTURE_LABEL_MIN (an em of 24 px:
+#: read from the back of a lecture hall on a 1080p projector).
+NUMBER_SCALE = 1.6
+LECTURE_LABEL_FACTOR, LECTURE_LABEL_MIN = 1.6, 2.0
+
+
+def label_scale(base: float, lecture: bool) -> float:
+    """A 3D label's font_screen_scale in or out of lecture mode, from its size out of it.
+
+    >>> label_scale(1.6, False), label_scale(1.6, True), label_scale(1.1, True)
+    (1.6, 2.56, 2.0)
+    """
+    return round(max(base * LECTURE_LABEL_FACTOR, LECTURE_LABEL_MIN), 6) if lecture else base
+
 def hex_color(rgb: tuple[int, int, int]) -> str:
     return "#%02x%02x%02x" % tuple(int(c) for c in rgb)
 

@@ -19,13 +19,15 @@ class Session(Protocol):
     arm: Arm
     state: ArmState
     refresher: Any  #: ``request(session)`` redraws the panel soon
+    camera: Any  #: the browser's camera (``features.camera.CameraControls``), or None
+    drawing: Any  #: how the arm is drawn (``features.drawings``): its ``world`` places the base frame
     closed: bool
 
     def apply(self, change: Callable[[ArmState], Snapshot], timed: str | None = None) -> Snapshot: ...
 
     def redraw(self) -> None: ...
 
-    def guard(self, handler: Callable[[Any], None]) -> Callable[[Any], None]: ...
+    def guard(self, handler: Callable[[Any], None], beside: Any = None) -> Callable[[Any], None]: ...
 
     def notify(self, title: str, body: str, color: str = "yellow") -> None: ...
 

@@ -2,6 +2,7 @@
 
 Writes docs/images/eight_ghosts.png (the home pose, every branch numbered),
 docs/images/lecture_mode.png (``--lecture``: big type, the panel beside the arm),
+docs/images/wrist_singularity.png (the arm on the wrist singularity, its overlay and gauges),
 docs/images/branch_count_map.png (the map in the arm's plane, the ghosts hidden) and
 docs/images/kr210_dh_frames.png (the KR210 with its DH frames and row 3 drawn on it) and
 docs/images/desktop_arm_branches.png (the desktop arm on its IK target, its other branches as ghosts).
@@ -59,6 +60,14 @@ def show_the_desktop_arm(page, session) -> None:
     wait_for(lambda: int(desktop.state.last.solution.valid.sum()) == 4, what="its four branches")
 
 
+def show_a_singularity(page, session) -> None:
+    """The wrist singularity with its overlay on: axes 4 and 6 in line, the gauges in the open folder."""
+    page.get_by_text("Singularities", exact=True).first.click()
+    page.locator(dom_id(session.singularities.enabled)).check()
+    wait_for(lambda: session.drawing.overlay.enabled, what="the overlay")
+    session.apply(lambda state: state.place_in_singularity("wrist"))
+
+
 #: the server of the screenshot being taken (a ``prepare`` may need it)
 SERVER: dict = {}
 
@@ -73,7 +82,7 @@ def shoot(name: str, lecture: bool, prepare=None) -> None:
             page.wait_for_selector(CONNECTED, state="attached", timeout=30_000)
             wait_for(lambda: server.sessions, what="the session")
             session = next(iter(server.sessions.values()))
-            wait_for(lambda: session.drawing.branches.labels[0].visible, what="the numbers")
+            wait_for(lambda: session.drawing.branches.numbers.placed, what="the numbers")
             if prepare is not None:
                 prepare(page, session)
             page.wait_for_timeout(8000)  # the real meshes take a while to draw in software WebGL
@@ -89,6 +98,7 @@ def shoot(name: str, lecture: bool, prepare=None) -> None:
 SHOTS = {
     "eight_ghosts.png": dict(lecture=False),
     "lecture_mode.png": dict(lecture=True),
+    "wrist_singularity.png": dict(lecture=False, prepare=show_a_singularity),
     "branch_count_map.png": dict(lecture=False, prepare=show_the_map),
     "kr210_dh_frames.png": dict(lecture=False, prepare=show_the_kr210),
     "desktop_arm_branches.png": dict(lecture=False, prepare=show_the_desktop_arm),

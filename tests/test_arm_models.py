@@ -7,7 +7,7 @@ import asyncio
 import numpy as np
 import pytest
 
-from ur10teach.meshes import REAL, SCHEMATIC
+from ur10teach.meshes import REAL, SCHEMATIC, SKELETON
 
 from .server_support import session_of, until, url
 from ur10dev.viser_client import ViserClient
@@ -22,9 +22,14 @@ def test_the_dropdown_switches_the_arm_and_its_ghosts_and_refuses_other_values(a
         robot, branches = session.drawing.robot, session.drawing.branches
         assert robot.model == branches.model == REAL  # the real arm by default
         assert all(m.visible for m in robot.meshes[REAL])
+        # the ghosts are coloured skeletons by default (issue 30: the solid arm unmistakable among them)
+        assert branches.geometry == SKELETON and list(branches.models) == [SKELETON]
         # the schematic arm is sent only when it is first chosen: a newcomer's scene is smaller
         assert SCHEMATIC not in robot.meshes and SCHEMATIC not in branches.models
         assert not any(SCHEMATIC.lower() in name for name in client.received.nodes)
+        await client.set_gui("Ghosts drawn as", "Meshes")  # one click away: the ghosts as the arm is drawn
+        await until(lambda: branches.geometry == REAL and [g.visible for g in branches.models[REAL]] == [True] * 6
+                    and [g.visible for g in branches.models[SKELETON]] == [False] * 6, what="the mesh ghosts")
         await client.set_gui("Arm drawn as", SCHEMATIC)
         # the model is named before it is drawn: wait for the drawing, arm and ghosts
         await until(lambda: robot.model == SCHEMATIC and branches.model == SCHEMATIC
@@ -34,9 +39,13 @@ def test_the_dropdown_switches_the_arm_and_its_ghosts_and_refuses_other_values(a
         # the newly shown ghosts were posed at once, where the branches are
         shown = branches.shown
         assert shown.any()
-        await until(lambda: np.array_equal(branches.ghosts[5].batched_scales.astype(bool), shown), what="the ghosts posed")
-        np.testing.assert_allclose(branches.ghosts[5].batched_positions[shown],
-                                   session.state.last.ghost_frames[shown, 6, :3, 3], atol=1e-6)
+        # link 3 (the ghosts start at link 1): no branch's is where the solid arm's is
+        await until(lambda: np.array_equal(branches.ghosts[2].batched_scales.astype(bool), shown), what="the ghosts posed")
+        np.testing.assert_allclose(branches.ghosts[2].batched_positions[shown],
+                                   session.state.last.ghost_frames[shown, 3, :3, 3], atol=1e-6)
+        # link 4 of the branch an elbow flip away is the solid arm's (the same wrist point, the same θ2 + θ3 + θ4)
+        # the flange is where the solid arm's is, for every branch: never drawn twice (the two would flicker)
+        assert not branches.ghosts[5].batched_scales.any()
         await client.set_gui("Arm drawn as", "Cardboard")  # not an option: refused, nothing changes
         await until(lambda: session.arm_model.dropdown.value == SCHEMATIC, what="the value put back")
         assert robot.model == SCHEMATIC
@@ -68,7 +77,6 @@ def test_a_new_presenter_sees_the_classrooms_choice(classroom):
 def test_the_light_view_shades_the_arm_and_ghosts_for_software_webgl(light, monkeypatch):
     """``--light``: toon shading, no shadow maps, no environment map; by default, shading, shadows and both."""
     import viser
-
     from ur10teach.serving.server import TeachingServer
 
     calls = []

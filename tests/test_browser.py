@@ -9,8 +9,18 @@ import numpy as np
 import pytest
 
 from ur10dev.browser import (
-    canvas_changed, canvas_pixels, choose, dom_id, drawn_frames, foreign_requests, project, set_checkbox, settled_canvas,
-    step_slider, type_text,
+    canvas_changed,
+    canvas_pixels,
+    choose,
+    dom_id,
+    drawn_frames,
+    foreign_requests,
+    project,
+    set_checkbox,
+    settled_canvas,
+    step_slider,
+    type_text,
+    unfold,
 )
 from ur10dev.waiting import wait_for
 
@@ -65,7 +75,7 @@ def test_a_students_first_visit(open_page, light_app):
 
     # a joint slider: the arm follows, the gizmo sits on the new flange, the readout says so
     thumb = page.locator(f"{dom_id(session.joints.sliders[0])} [role=slider]")
-    step_slider(page, session.joints.sliders[0], "ArrowRight", 32.0)  # 0.1° steps from 30°
+    step_slider(page, session.joints.sliders[0], "ArrowRight", 32.0)  # 1° a press from 30° (issue 30: it was 0.1°)
     wait_for(lambda: abs(np.degrees(session.state.q[0]) - 32.0) < 1e-6, what="θ1 to reach 32°")
     wait_for(lambda: np.allclose(session.ik_target.gizmo.position, session.state.last.flange[:3, 3], atol=1e-6),
              what="the gizmo on the new flange")
@@ -112,6 +122,7 @@ def test_a_students_first_visit(open_page, light_app):
     wait_for(lambda: np.allclose(np.degrees(session.state.q), [10, 20, 30, 40, 50, 60]), what="the typed angles")
 
     # the singularity overlay: det J as MathML, and the wrist button puts the arm on s5 = 0
+    unfold(page, "Singularities", session.singularities.enabled)  # folded: the first lesson needs the joints and the target
     set_checkbox(page, session.singularities.enabled, True)
     wait_for(lambda: session.drawing.overlay.lines["shoulder"].visible, what="the overlay")
     wait_for(lambda: page.locator("math").count() > 0 and page.locator("math").first.is_visible(), what="det J as MathML")
@@ -128,6 +139,7 @@ def test_a_students_first_visit(open_page, light_app):
     # the workspace cloud, and its legend (50 000 points: the default 200 000 are the server tests', and
     # software WebGL draws each frame of them for seconds)
     before = settled_canvas(page)
+    unfold(page, "Workspace", session.workspace.count)
     choose(page, session.workspace.count, "50 k")
     set_checkbox(page, session.workspace.enabled, True)
     wait_for(lambda: session.workspace._cloud is not None, what="the cloud")

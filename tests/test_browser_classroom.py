@@ -13,6 +13,8 @@ from ur10dev.browser import (
 )
 from ur10dev.waiting import wait_for
 
+from .test_browser_lecture_hall import steady
+
 pytestmark = pytest.mark.browser
 
 
@@ -64,6 +66,7 @@ def test_a_class_follows_the_presenter_and_a_student_explores(tmp_path):
             student.get_by_role("button", name="Explore on my own").click()
             wait_for(lambda: student_member.session is not None and student_member.session.built,
                      what="the student's own SCARA")
+            steady(student_member.session)  # its labels placed for the student's camera, which has come to rest
             exploring = settled_canvas(student)
             wait_for(app.classroom.can_switch, what="the class's arm to be ready for a change")
             choose(teacher, teacher_member.picker.dropdown, UR10)

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from ur10dev.browser import HANG_TIMEOUT_MS, canvas_changed, choose, dom_id, set_checkbox, settled_canvas, step_slider
+from ur10dev.browser import HANG_TIMEOUT_MS, canvas_changed, choose, dom_id, set_checkbox, settled_canvas, step_slider, unfold
 from ur10dev.waiting import wait_for
 
 pytestmark = pytest.mark.browser
@@ -38,6 +38,7 @@ def test_the_course_arms_in_the_picker(open_page, light_app):
     with_frames = canvas_changed(page, before, 0.02, "the KR210 drawn in place of the UR10")
     # the DH frames' x axes (red) and z axes (blue) are on screen, and go when switched off (the renderer's
     # colour management shifts every colour a little, so the test compares two pictures, not one colour)
+    unfold(page, "DH table", kr210.dh_table.show_frames)
     set_checkbox(page, kr210.dh_table.show_frames, False)
     wait_for(lambda: not kr210.drawing.dh_frames.x_axes.visible and not kr210.drawing.dh_frames.z_axes.visible, what="the frames hidden")
     canvas_changed(page, with_frames, 0.003, "the frames' axes to go")
@@ -46,10 +47,12 @@ def test_the_course_arms_in_the_picker(open_page, light_app):
     wait_for(lambda: abs(np.degrees(kr210.state.last.q[0]) - 1.0) < 1e-6, what="A1 at 1°")
     # det J's factors drawn on the arm: axis 1, the links, axes 4 and 6, each named in 3D
     plain = settled_canvas(page)
+    unfold(page, "Singularities", kr210.singularities.enabled)
     set_checkbox(page, kr210.singularities.enabled, True)
     wait_for(lambda: kr210.drawing.overlay.lines["wrist"].visible, what="the factors drawn")
     with_factors = canvas_changed(page, plain, 0.003, "the singular geometry to show")
     # viser draws 3D labels on the canvas, not as page text: the label shows if hiding it changes the picture
+    wait_for(lambda: "shoulder" in kr210.drawing.overlay.labels, what="the names placed")
     kr210.drawing.overlay.labels["shoulder"].visible = False
     canvas_changed(page, with_factors, 0.0003, "the shoulder factor's 3D label to go")
 

@@ -83,7 +83,8 @@ def test_what_the_jacobian_does_on_the_ur10_and_the_desktop_arm(open_page, light
     path, exercise = (next(lesson for lesson in desktop.lessons if isinstance(lesson, kind))
                       for kind in (CoursePathLesson, StaticsExercise))
     page.wait_for_selector(dom_id(desktop.joints.sliders[0]), timeout=HANG_TIMEOUT_MS)
-    wait_for(lambda: page.get_by_text("the upper arm and the forearm are in one line", exact=False).count() > 0, what="det J_v's factors")
+    wait_for(lambda: "the upper arm and the forearm are in one line" in desktop.singularities.gauges.content, what="det J_v's factors")
+    unfold(page, "Velocities along the course's path", path.play)
     wait_for(lambda: page.get_by_text("Tool turning rate ω", exact=True).count() == 1, what="the velocity plots")
     assert page.get_by_text("1/1/70", exact=False).count() == 0, "the time axis is read as dates"
     still = canvas_changed(page, before, 0.02, "the desktop arm drawn in place of the UR10")

@@ -14,7 +14,7 @@ from ur10teach.serving.server import TeachingServer
 from ur10teach.style import DANGER_RED, GHOST_OPACITY
 from ur10dev.browser import (
     HANG_TIMEOUT_MS, canvas_changed, changed_mask, choose, click, dom_id, neighbourhood, project, set_checkbox,
-    settled_canvas, type_text,
+    settled_canvas, type_text, unfold,
 )
 from ur10dev.colour_vision import MIN_DELTA_E, closest_pair
 from ur10dev.waiting import wait_for
@@ -134,19 +134,22 @@ def test_the_ghosts_the_floor_and_the_gizmo_as_a_student_sees_them(open_page):
     branches = session.drawing.branches
     box = page.locator("canvas").first.bounding_box()
 
-    # every ghost has its number by its elbow (viser draws 3D labels on the canvas: hiding them must change it there)
+    # every ghost has its number by its elbow, or joined to it by a leader line where that spot is taken
+    # (viser draws 3D labels on the canvas: hiding them must change it there)
     snapshot = session.state.last
     valid = snapshot.solution.valid.nonzero()[0]
-    wait_for(lambda: all(branches.labels[k].visible for k in valid), what="the numbers")
-    assert [branches.labels[k].text for k in valid] == [("arm: " if k == snapshot.slot else "") + str(k + 1) for k in valid]
+    numbers = branches.numbers
+    wait_for(lambda: sorted(k for members, _, _ in numbers.placed for k in members) == valid.tolist(), what="the numbers")
+    texts = " · ".join(text for _, text, _ in numbers.placed)
+    assert all((("arm: " if k == snapshot.slot else "") + str(k + 1)) in texts for k in valid), texts
     with_numbers = settled_canvas(page)
     for label in branches.labels:
         label.visible = False
     without = canvas_changed(page, with_numbers, 0.001, "the numbers to go")
-    for k in valid:
+    for k in range(len(numbers.placed)):
         u, v = project(session.client.camera, branches.labels[k].position, box)
         differ = np.abs(neighbourhood(with_numbers, u, v - 12, box, 10) - neighbourhood(without, u, v - 12, box, 10)).sum(axis=1)
-        assert (differ > 60).sum() > 8, f"no number drawn above branch {k + 1}'s elbow"
+        assert (differ > 60).sum() > 8, f"no number {numbers.placed[k][1]!r} drawn where it was placed"
     session.redraw()  # the numbers back
 
     # the branch table's colours stay apart for protan, deutan and normal vision, and washed out
@@ -162,7 +165,7 @@ def test_the_ghosts_the_floor_and_the_gizmo_as_a_student_sees_them(open_page):
     # one branch, or the branch one choice away
     choose(page, session.ik_target.focus, "Only branch 3")
     wait_for(lambda: branches.shown.nonzero()[0].tolist() == [2], what="only branch 3")
-    wait_for(lambda: [k for k in range(8) if branches.labels[k].visible] == sorted({2, session.state.last.slot}),
+    wait_for(lambda: sorted(k for members, _, _ in branches.numbers.placed for k in members) == sorted({2, session.state.last.slot}),
              what="the numbers of branch 3 and the arm's alone")
     choose(page, session.ik_target.focus, "Flip the elbow")
     arm = session.state.last.slot
@@ -172,6 +175,7 @@ def test_the_ghosts_the_floor_and_the_gizmo_as_a_student_sees_them(open_page):
 
     # the gizmo, drawn over everything, is small beside the arm and leaves the overlay's P5 visible
     session.ik_target.show_ghosts.value = False
+    unfold(page, "Singularities", session.singularities.enabled)
     set_checkbox(page, session.singularities.enabled, True)
     wait_for(lambda: session.drawing.overlay.lines["shoulder"].visible, what="the overlay")
     everything = settled_canvas(page)
@@ -191,24 +195,26 @@ def test_the_ghosts_the_floor_and_the_gizmo_as_a_student_sees_them(open_page):
     session.ik_target.gizmo.visible = True
     set_checkbox(page, session.singularities.enabled, False)
 
-    # the arm on screen is UR's meshes (hiding them empties it); "Schematic" draws a different outline
+    # the light view draws the schematic arm first (hiding its meshes empties the view); UR's own meshes,
+    # one choice away, draw a different outline
     robot = session.drawing.robot
+    assert robot.model == SCHEMATIC  # light_app: --light
     session.camera.frame()
-    real = settled_canvas(page)
-    for mesh in robot.meshes[REAL]:
+    schematic = settled_canvas(page)
+    for mesh in robot.meshes[SCHEMATIC]:
         mesh.visible = False
-    empty = canvas_changed(page, real, 0.01, "the real meshes to go")
-    choose(page, session.arm_model.dropdown, SCHEMATIC)
-    wait_for(lambda: robot.model == SCHEMATIC, what="the schematic arm")
-    schematic = canvas_changed(page, empty, 0.01, "the schematic arm to show")
+    empty = canvas_changed(page, schematic, 0.01, "the schematic meshes to go")
+    choose(page, session.arm_model.dropdown, REAL)
+    wait_for(lambda: robot.model == REAL, what="the real arm")
+    real = canvas_changed(page, empty, 0.01, "the real arm to show")
     real_arm, schematic_arm = changed_mask(empty, real), changed_mask(empty, schematic)
     assert real_arm.sum() > 5000, "the real meshes drew (almost) nothing"
     assert schematic_arm.sum() > 5000, "the schematic arm drew (almost) nothing"
     differ = (real_arm ^ schematic_arm).sum() / real_arm.sum()
     # the schematic is built to the same sizes: 8 % of the pixels differ at the home pose
     assert differ > 0.03, f"the two models cover the same pixels ({differ:.1%} differ)"
-    choose(page, session.arm_model.dropdown, REAL)
-    wait_for(lambda: all(m.visible for m in robot.meshes[REAL]), what="the real arm back")
+    choose(page, session.arm_model.dropdown, SCHEMATIC)
+    wait_for(lambda: all(m.visible for m in robot.meshes[SCHEMATIC]), what="the schematic arm back")
 
     # at the zero pose three branches coincide with the arm; shown alone, the arm still looks like the arm
     page.get_by_role("button", name="Zero", exact=True).click()
@@ -263,6 +269,7 @@ def test_the_workspace_seen_square_on_through_its_sections_and_the_branch_count_
     session.ik_target.show_ghosts.value = False
 
     # the sections: sampled in their plane, and the camera turns to face each
+    unfold(page, "Workspace", workspace.count)
     choose(page, workspace.count, "50 k")  # more than a section's 40 000 points: the section is capped
     set_checkbox(page, workspace.enabled, True)
     wait_for(lambda: workspace._cloud is not None, what="the cloud")

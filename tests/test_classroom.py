@@ -123,7 +123,7 @@ def test_a_viewer_gets_each_presenter_update_whole(classroom, monkeypatch):
 
     frames = asyncio.run(scenario())
     assert len(frames) >= 12
-    whole = {"/arm/link0/link1", "/ghosts/real_ur10/link1", "/ghosts/real_ur10/link6"}
+    whole = {"/arm/link0/link1", "/ghosts/skeleton/link1", "/ghosts/skeleton/link6"}
     split = [sorted(names) for names in frames if names & whole and not whole <= names]
     assert not split, f"{len(split)} of {len(frames)} frames held part of a redraw: {split[:3]}"
 

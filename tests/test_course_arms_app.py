@@ -160,8 +160,10 @@ def test_a_typed_dh_table_becomes_an_arm_with_numerical_ik(app):
         await until(lambda: "Rows" in client.gui, what="the editor")
         await client.set_gui("Rows", "500 0 0 0 R\n400 0 0 R")
         await client.set_gui("Build this arm", True)  # one connection's messages are handled in order
-        await until(lambda: any("line 2: a row is five entries" in body.lower() for _, body in client.received.notifications),
-                    what="the refusal")
+        # explained beside the table it came from, not in a notice at the far edge (issue 30)
+        await until(lambda: "line 2: a row is five entries" in session.editor.refusal.line.content.lower()
+                    and session.editor.refusal.line.visible, what="the refusal beside the table")
+        assert not any("five entries" in body.lower() for _, body in client.received.notifications)
         assert session_for(app, client_id) is session
         # a planar 2R arm ("Find every branch" was the last arm's too: its panel is waited for)
         typed = await build_table(app, client, "500 0 0 0 R\n400 0 0 0 R", "RR", session)
@@ -176,7 +178,10 @@ def test_a_typed_dh_table_becomes_an_arm_with_numerical_ik(app):
         await until(lambda: typed.state.last.solution is not None, what="the search")
         solution = typed.state.last.solution
         assert solution.method == "found numerically" and int(solution.valid.sum()) == 2
-        assert "found numerically 2" in branches_markdown(typed.state.last)
+        shown = branches_markdown(typed.state.last)
+        # a 2R arm has room for two solutions, not sixteen, and none is listed empty (issue 30, bug 3)
+        assert len(solution.labels) == 2 and "found numerically 2" in shown
+        assert "**2 solutions** found (this chain has at most 2)" in shown and "no solution" not in shown
         await client.close()
 
     asyncio.run(scenario())
@@ -226,7 +231,7 @@ def test_a_row_shown_on_the_arm_and_the_walkthrough(app):
         scene = session.drawing
         await client.set_gui("Show a row on the arm", "row 3")  # the prismatic row: d3 is the joint
         await until(lambda: scene.dh_frames.highlight_row == 3 and scene.dh_frames.parameters["d"].visible, what="row 3 drawn")
-        await until(lambda: scene.dh_frames.parameter_labels["d"].text == "d3 = 254.0 mm", what="d3's value")
+        await until(lambda: getattr(scene.dh_frames.parameter_labels.get("d"), "text", "") == "d3 = 254.0 mm", what="d3's value")
         segment = scene.dh_frames.parameters["d"].points[0]
         assert np.linalg.norm(segment[1] - segment[0]) == pytest.approx(0.254, abs=1e-6)
         assert not scene.dh_frames.parameters["a"].visible  # a3 = 0: nothing to draw, and the panel lists it
@@ -284,6 +289,7 @@ def test_a_course_arms_workspace_cloud(app):
 def test_the_kr210_gripper_pose_in_the_urdf_convention(app):
     async def scenario():
         from ur10teach.features.course_arms.gripper import parse_pose, pose_text
+
         from ur10core.serial import kr210_to_urdf
 
         client = await ViserClient(url(app)).connect()
@@ -302,7 +308,7 @@ def test_the_kr210_gripper_pose_in_the_urdf_convention(app):
         # a pose that is not six numbers is refused
         await client.set_gui("x y z (mm) roll pitch yaw (°)", "1 2 3")
         await client.set_gui("Go to this pose", True)
-        await until(lambda: any("six numbers" in body for _, body in client.received.notifications), what="the refusal")
+        await until(lambda: "six numbers" in session.gripper.refusal.line.content, what="the refusal beside the pose")
         np.testing.assert_allclose(parse_pose(pose_text(T)), T, atol=1e-3)
         await client.close()
 
@@ -343,9 +349,9 @@ def test_any_table_a_student_types_can_be_built_driven_and_searched():
     """Random tables (1–10 rows, R/P/F, odd twists, zero lengths, both conventions): every view's
     text builds, a small drag follows, and every branch the search reports reaches the target."""
     from ur10teach.features.course_arms.editor import parse_table
+    from ur10teach.features.course_arms.scene import skeleton
     from ur10teach.features.dh_table import walkthrough_steps
     from ur10teach.features.singularity import factors_html
-    from ur10teach.features.course_arms.scene import skeleton
     from ur10teach.state import ArmState
 
     rng = np.random.default_rng(0)
@@ -384,7 +390,7 @@ def test_singularities_shown_on_the_arm_turn_red_at_the_singularity(app):
         overlay = session.drawing.overlay
         assert not overlay.lines["wrist"].visible  # off until asked for
         await client.set_gui("Show singularity overlay", True)
-        await until(lambda: overlay.enabled and overlay.lines["wrist"].visible and overlay.labels["elbow"].visible,
+        await until(lambda: overlay.enabled and overlay.lines["wrist"].visible and getattr(overlay.labels.get("elbow"), "visible", False),
                     what="the factors drawn")
         assert tuple(overlay.lines["wrist"].colors) == FACTOR_COLORS["wrist"]  # far from s5 = 0 at home
         # A5 to 0: axes 4 and 6 in line, drawn parallel and red
@@ -427,7 +433,11 @@ def test_a_course_arms_velocities_ellipsoids_and_forces(app):
     (mm/s for d3, no speed limits), the ellipsoids' lengths, and τ = Jᵀ F for a force at the tool."""
     async def scenario():
         from ur10teach.features.statics import bars_html
-        from ur10teach.features.velocity import METRES_PER_SPEED, parse_twist, rates_markdown
+        from ur10teach.features.velocity import (
+            METRES_PER_SPEED,
+            parse_twist,
+            rates_markdown,
+        )
 
         client = await ViserClient(url(app)).connect()
         session = await pick(app, client, "Stanford arm (RRP + wrist)")
@@ -565,8 +575,9 @@ def test_a_course_arm_moves_from_a_remembered_pose_along_both_paths(app, label):
 @pytest.mark.parametrize("label", ["KUKA KR210 (spherical wrist)", "SCARA (RRP + roll)"])
 def test_a_course_arm_has_its_branch_count_map_and_a_typed_table_says_why_not(app, label):
     """Issue 29: the branch-count map was the UR10's alone."""
-    from ur10core.workspace import branch_count_map
     from ur10teach.features.reach_map import COURSE_RESOLUTION, legend_text, map_image
+
+    from ur10core.workspace import branch_count_map
 
     async def scenario():
         client = await ViserClient(url(app)).connect()
@@ -629,12 +640,41 @@ def test_the_ur10_walks_through_its_dh_frames(app):
         for step in (1, 2):
             await client.set_gui("Step", "Next ▶")
             await until(lambda s=step: session.walkthrough.step == s, what=f"step {step + 1}")
-        await until(lambda: frames.highlight_row == 1 and frames.parameter_labels["d"].text == "d1 = 128.0 mm",
+        await until(lambda: frames.highlight_row == 1 and getattr(frames.parameter_labels.get("d"), "text", "") == "d1 = 128.0 mm",
                     what="row 1: d1 drawn with its value")
         assert "a<sub>0</sub>" in session.walkthrough.text.content  # modified DH: row 1 holds a0, α0
         await client.set_gui("Step", "Stop")
         await until(lambda: session.walkthrough.step == -1 and not frames.z_axes.visible and not frames.parameters["d"].visible,
                     what="the frames hidden again")
+        await client.close()
+
+    asyncio.run(scenario())
+
+
+def test_a_course_arms_ghosts_leave_out_what_lies_on_the_solid_arm_and_number_every_branch(app):
+    """Issue 30: ghosts and the solid arm flickered where they overlap (the same segment drawn twice). A
+    ghost's skeleton leaves out every segment the solid arm draws; every shown branch is numbered."""
+    from ur10teach.features.course_arms.scene import skeleton
+    from ur10teach.features.ik_target import same_pose_groups
+
+    async def scenario():
+        client = await ViserClient(url(app)).connect()
+        session = await pick(app, client, "KUKA KR210 (spherical wrist)")
+        drawing, snapshot = session.drawing, session.state.last
+        solid = skeleton(session.arm.dh, snapshot.frames)
+        shown = [k for k, ghost in enumerate(drawing.ghosts) if ghost.visible]
+        assert shown, "no ghost drawn at the home pose"
+        for k in shown:
+            for segment in drawing.ghosts[k].points:
+                assert not np.isclose(segment, solid, atol=1e-6).all(axis=(1, 2)).any(), f"ghost {k + 1} repeats the arm"
+            # and what it leaves out is exactly what it shares with the arm
+            full = skeleton(session.arm.dh, snapshot.ghost_frames[k])
+            kept = [s for s in full if not np.isclose(s, solid, atol=1e-6).all(axis=(1, 2)).any()]
+            np.testing.assert_allclose(drawing.ghosts[k].points, np.array(kept), atol=1e-6)
+        await until(lambda: drawing.numbers.placed, what="the numbers")
+        numbered = {k for members, _, _ in drawing.numbers.placed for k in members}
+        groups = same_pose_groups(snapshot.ghost_frames, snapshot.solution.valid)  # "3 = 4" is one number
+        assert all(numbered & set(group) for group in groups if set(group) & {*shown, snapshot.slot})
         await client.close()
 
     asyncio.run(scenario())

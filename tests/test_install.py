@@ -74,6 +74,7 @@ def test_the_app_starts_from_another_directory(installed, tmp_path):
 
         asyncio.run(a_student())
         assert app.poll() is None and "Traceback" not in "".join(output), "".join(output)
+        assert "kinematics: numpy, no compiled kernel" in "".join(output)  # which backend, said where a teacher looks
 
 
 def test_the_real_ur10_meshes_and_their_licence_ship(installed, tmp_path):

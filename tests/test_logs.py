@@ -70,3 +70,5 @@ def test_each_kind_of_dropped_message_is_shown():
     text = stream.getvalue()
     assert all(f"dropped a {kind} from a browser" in text for kind in kinds)
     assert text.count("a wrong join code from 10.0.0.9") == 4  # three, and the note that more are counted
+    # the note is the message as it reads, not its template (issue 30, bug 2)
+    assert "%s" not in text and "%d" not in text and "from 10.0.0.9 (3 since its last lock-out) (repeating" in text

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 
 from ur10teach.serving.metrics import LatencyLog
-from ur10teach.serving.server import _resident_bytes
+from ur10dev.metered_app import resident_bytes
 from ur10dev.waiting import HANG_TIMEOUT
 
 
@@ -37,11 +37,11 @@ def test_filling_the_ring_takes_no_more_memory():
     capacity = 500_000  # 4 MB of samples, far above the allocator's noise
     log = LatencyLog(capacity=capacity)
     log.record("drag", 0.001)
-    before = _resident_bytes()
+    before = resident_bytes()
     assert before > 0, "no resident memory figure on this system"
     for _ in range(capacity):
         log.record("drag", 0.001)
-    grown = _resident_bytes() - before
+    grown = resident_bytes() - before
     assert grown < 1_000_000, f"resident memory grew by {grown / 1e6:.1f} MB while the ring filled"
 
 
@@ -53,11 +53,12 @@ def test_a_collection_while_the_log_is_held_does_not_freeze_the_server():
     import threading
 
     from ur10teach.serving.metrics import LATENCY
-    from ur10teach.serving.server import _watch_garbage_collector
+
+    from ur10dev.metered_app import watch_garbage_collector
 
     callbacks = list(gc.callbacks)
     threshold = gc.get_threshold()
-    _watch_garbage_collector()
+    watch_garbage_collector()
     gc.set_threshold(1)  # a collection at (nearly) every allocation, summary()'s own included
     try:
         LATENCY.record("drag", 0.001)

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from ur10core import Arm
+from ur10core import Arm, paths
 from ur10core.paths import joint_interpolation, straight_line
 
 pytestmark = pytest.mark.core
@@ -77,3 +77,39 @@ def test_bad_paths_are_refused():
                         (lambda: joint_interpolation(arm, np.zeros(6), [np.inf] * 6), "q_goal contains a non-finite")):
         with pytest.raises(ValueError, match=words):
             call()
+
+
+@pytest.mark.core
+def test_the_issues_straight_line_is_measured_and_its_unreachable_stretch_named():
+    """Issue 30, bug 1: from (−30, 60, 60, 30, 60, 0)° to (30, 45, 26, 50, 60, 80)° the line passes inside
+    the shoulder cylinder. The path leaves it by hundreds of millimetres; that is measured, and said."""
+    arm = Arm.preset("course")
+    start, goal = np.radians([-30, 60, 60, 30, 60, 0]), np.radians([30, 45, 26, 50, 60, 80])
+    path = paths.straight_line(arm, start, arm.fk(goal), 4.0, 240)
+    # the deviation measured independently: each tool point's distance from the line through the endpoints
+    p0, p1 = arm.fk(start)[:3, 3], arm.fk(goal)[:3, 3]
+    u = (p1 - p0) / np.linalg.norm(p1 - p0)
+    offsets = (path.tool - p0) - np.outer((path.tool - p0) @ u, u)
+    assert paths.line_deviation(path) == pytest.approx(np.linalg.norm(offsets, axis=1).max(), rel=1e-6)
+    assert paths.line_deviation(path) > 0.1
+    first, last, why = paths.line_out_of_reach(arm, start, arm.fk(goal))
+    assert 0 < first < last < 1 and "shoulder cylinder" in why
+    poses = paths.line_poses(arm.fk(start), arm.fk(goal), np.array([first, (first + last) / 2, last]))
+    assert not arm.ik(poses).valid.any(axis=1).any()  # each named sample is indeed out of reach
+    # a reachable line keeps to it, and says nothing is out of reach
+    near = start + np.radians([10, 0, 0, 0, 0, 0])
+    assert paths.line_out_of_reach(arm, start, arm.fk(near)) is None
+    assert paths.line_deviation(paths.straight_line(arm, start, arm.fk(near))) < 1e-4
+
+
+@pytest.mark.core
+def test_a_path_beyond_a_joints_range_is_named_with_the_joint_and_the_time():
+    arm = Arm.preset("scara")
+    low, high = arm.limits[1]
+    path = paths.joint_interpolation(arm, np.zeros(4), np.zeros(4))
+    assert paths.out_of_range(arm, path) == ""
+    beyond = paths.Path(path.t, np.where(path.t[:, None] > 2.0, [0.0, high + 0.1, 0.0, 0.0], 0.0),
+                        path.qdot, path.tool, path.damping)
+    message = paths.out_of_range(arm, beyond)
+    assert message.startswith(f"{arm.joint_names[1]} would reach {np.degrees(high + 0.1):.1f}°")
+    assert f"at {path.t[path.t > 2.0][0]:.2f} s" in message

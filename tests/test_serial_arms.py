@@ -513,3 +513,11 @@ def test_the_wrist_centre_is_on_the_last_three_axes_and_behind_the_tool(name):
     assert arm.wrist_centre(q[0]).shape == (3,)
     with pytest.raises(ValueError, match="no wrist"):
         Arm.preset("scara").wrist_centre(np.zeros(4))
+
+
+@pytest.mark.core
+@pytest.mark.parametrize("rows, slots", [(1, 1), (2, 2), (3, 4), (4, 16), (6, 16)])
+def test_a_typed_tables_slots_fit_its_chain(rows, slots):
+    """Issue 30, bug 3: a typed 2-link arm had sixteen slots, fourteen always empty."""
+    arm = Arm.from_dh([(0.3, 0.5, 0.1, 0.0)] * rows)
+    assert len(arm.ik(arm.fk(np.full(rows, 0.3))).labels) == len(arm.slot_labels) == slots

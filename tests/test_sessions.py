@@ -330,6 +330,22 @@ def test_numbers_never_read_minus_zero():
     assert sentence("elbow reach — the wrist") == "Elbow reach — the wrist"
 
 
+def test_an_arrow_key_moves_a_joint_slider_a_whole_degree_or_millimetre(app):
+    """Issue 30: the arrow keys moved a slider 0.1° a press. The box beside it still takes any value typed."""
+    from ur10teach.features.joint_panel import JointPanel  # noqa: F401  (the sliders are the joint panel's)
+
+    async def scenario():
+        client = await ViserClient(url(app)).connect()
+        session = session_of(app, client)
+        assert all(slider.step == 1.0 for slider in session.joints.sliders)
+        assert all(slider.precision >= 1 for slider in session.joints.sliders)  # typed tenths are kept
+        await client.set_gui("θ1 base (°)", 30.5)
+        await until(lambda: abs(np.degrees(session.state.q[0]) - 30.5) < 1e-9, what="a typed 30.5°")
+        await client.close()
+
+    asyncio.run(scenario())
+
+
 def test_the_singularity_plot_says_seconds(app):
     async def scenario():
         client = await ViserClient(url(app)).connect()
@@ -337,6 +353,10 @@ def test_the_singularity_plot_says_seconds(app):
         plot = session.singularities.plot
         assert plot.axes[0]["label"] == "seconds (0 = now)"
         assert tuple(plot.scales["x"]["range"]) == (-10.0, 0.0)
+        # an arm at rest draws its factors as lines across the window, not a dot (issue 30)
+        await until(lambda: len(plot.data[0]) >= 2, what="the plot drawn")
+        assert plot.data[0][0] == -10.0 and plot.data[0][-1] == 0.0
+        assert all(np.ptp(column) == 0.0 for column in plot.data[1:])  # level: nothing moved
         await client.close()
 
     asyncio.run(scenario())
@@ -438,9 +458,9 @@ def test_a_cloud_goes_from_memory_once_its_browsers_have_left(app):
         await staying.set_gui("Show workspace cloud", True)
         await until(lambda: sessions[0].workspace._cloud is not None, what="the staying browser's cloud")
         both = CLOUDS.nbytes
-        sweeps = app._janitor.sweeps
+        sweeps = app.janitor.sweeps
         await leaving.close()
-        await until(lambda: app._janitor.sweeps > sweeps, what="the janitor's sweep")
+        await until(lambda: app.janitor.sweeps > sweeps, what="the janitor's sweep")
         assert CLOUDS.nbytes == both - 50_000 * 15  # the 10 k cloud shown still, the 50 k one forgotten
         await staying.close()
 

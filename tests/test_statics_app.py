@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from ur10teach.features.statics import bars_html
-from ur10core import Arm
+from ur10core import Arm, paths
 
 from .server_support import session_of, until, url
 from ur10dev.viser_client import ViserClient
@@ -109,7 +109,8 @@ def test_without_ratings_each_bar_is_against_the_largest_and_a_slide_holds_newto
 
 def test_the_ellipsoids_follow_the_arm_and_flatten_towards_the_elbow_singularity(app):
     async def scenario():
-        from ur10teach.features.ellipsoids import FORCE_METRES, VELOCITY_METRES
+        from ur10teach.features.ellipsoids import FORCE_METRES, LONGEST_SHARE, VELOCITY_METRES, force_scale
+
         from ur10core.orientation import rotation_from_quaternion
 
         client = await ViserClient(url(app)).connect()
@@ -122,7 +123,10 @@ def test_the_ellipsoids_follow_the_arm_and_flatten_towards_the_elbow_singularity
         translation, _ = snapshot.arm.ellipsoids(snapshot.q)
         np.testing.assert_allclose(view.frame.position, snapshot.flange[:3, 3], atol=1e-6)
         np.testing.assert_allclose(view.velocity.scale, VELOCITY_METRES * translation.velocity, rtol=1e-6)
-        np.testing.assert_allclose(view.force.scale, FORCE_METRES * translation.force, rtol=1e-6)
+        scale = force_scale(translation.force, session.drawing.size)  # FORCE_METRES, or less where it would not fit
+        assert scale <= FORCE_METRES
+        np.testing.assert_allclose(view.force.scale, scale * translation.force, rtol=1e-6)
+        assert f"drawn at {1000 * scale:.3g} mm per N per N·m" in view.lengths.content or not view.lengths.content
         # the drawn axes are the ellipsoid's (up to each axis's sign)
         drawn = rotation_from_quaternion(view.frame.wxyz)
         np.testing.assert_allclose(np.abs(drawn), np.abs(translation.axes), atol=1e-6)
@@ -131,9 +135,16 @@ def test_the_ellipsoids_follow_the_arm_and_flatten_towards_the_elbow_singularity
         await client.set_gui("θ3 elbow (°)", 2.0)
         await until(lambda: abs(np.degrees(session.state.last.q[2]) - 2.0) < 1e-6, what="the elbow at 2°")
         await until(lambda: min(view.velocity.scale) < 0.7 * thinnest, what="a flatter velocity ellipsoid")
-        longest = min(FORCE_METRES * VELOCITY_METRES / min(view.velocity.scale), 0.8)  # 1/σ, drawn at most 0.8 m
+        # the force ellipsoid grows along it, but is drawn at a smaller scale to stay on screen (issue 30): its
+        # longest axis at most LONGEST_SHARE of the arm's reach, the scale printed in the panel
+        force = VELOCITY_METRES / np.asarray(view.velocity.scale)  # 1/σ
+        longest = min(FORCE_METRES * force.max(), LONGEST_SHARE * session.drawing.size)
         assert max(view.force.scale) == pytest.approx(longest, rel=1e-6)
-        await until(lambda: "Velocity ellipsoid" in view.lengths.content, what="the lengths")
+        assert longest < FORCE_METRES * force.max()  # it was drawn smaller
+        shrunk = f"drawn at {1000 * longest / force.max():.3g} mm per N per N·m"
+        await until(lambda: shrunk in view.lengths.content, what="the smaller scale in the panel")
+        assert view.names[1].visible and view.names[1].text == "force"  # named in 3D, at its longest axis
+        np.testing.assert_allclose(np.linalg.norm(view.names[1].position), longest, rtol=1e-6)
         await client.set_gui("Ellipsoid", "velocity")
         await until(lambda: view.velocity.visible and not view.force.visible, what="the velocity one alone")
         await client.close()
@@ -143,7 +154,12 @@ def test_the_ellipsoids_follow_the_arm_and_flatten_towards_the_elbow_singularity
 
 def test_joint_rates_draw_the_flange_velocity_and_a_typed_velocity_gets_its_rates(app):
     async def scenario():
-        from ur10teach.features.velocity import METRES_PER_SPEED, METRES_PER_TURN_RATE, parse_twist, rates_markdown
+        from ur10teach.features.velocity import (
+            METRES_PER_SPEED,
+            METRES_PER_TURN_RATE,
+            parse_twist,
+            rates_markdown,
+        )
 
         client = await ViserClient(url(app)).connect()
         session = session_of(app, client)
@@ -169,7 +185,11 @@ def test_joint_rates_draw_the_flange_velocity_and_a_typed_velocity_gets_its_rate
         assert float(rates.damping) == 0.0 and np.allclose(rates.achieved, asked)
         await client.set_gui("vx vy vz (mm/s) ωx ωy ωz (°/s)", "1 2 3")
         await client.set_gui("Find the joint rates", True)
-        await until(lambda: any("six numbers" in body.lower() for _, body in client.received.notifications), what="the refusal")
+        await until(lambda: "six numbers" in view.refusal.line.content.lower() and view.refusal.line.visible,
+                    what="the refusal beside the velocity")
+        await client.set_gui("vx vy vz (mm/s) ωx ωy ωz (°/s)", "0 0 200 0 0 0")
+        await client.set_gui("Find the joint rates", True)
+        await until(lambda: not view.refusal.line.visible, what="the refusal gone once a velocity is accepted")
         await client.close()
 
     asyncio.run(scenario())
@@ -180,6 +200,7 @@ def test_near_a_singularity_the_needed_rates_are_red_and_on_it_damped():
     180 °/s (undamped); 0.06° from it the damping keeps every joint within its limit, and says what
     that costs."""
     from ur10teach.features.velocity import parse_twist, rates_markdown
+
     from ur10core import Arm
 
     arm = Arm.preset("course")
@@ -201,6 +222,7 @@ def test_the_rate_charts_mark_the_singularity_and_the_speed_limits():
     """A straight line across s5 = 0 is shaded where it was damped and where a wrist went over
     180°/s; joint interpolation between the same poses needs neither mark."""
     from ur10teach.features.motion_lessons import rate_chart_data
+
     from ur10core import Arm
     from ur10core.paths import joint_interpolation, straight_line
 
@@ -231,9 +253,16 @@ def test_the_released_arm_falls_as_the_dynamics_say(app):
         await until(lambda: session.motion.player.playing, what="the drop to start")
         await until(lambda: not np.allclose(session.state.last.q, start), what="the arm to move")
         await until(lambda: not session.motion.player.playing, what="the drop to end")
-        expected = wrap(dynamics.release(session.arm, start, duration=3.0).q[-1])
-        np.testing.assert_allclose(session.state.last.q, expected, atol=1e-9)
-        assert session.state.last.cause == "motion"
+        # it stops on the floor (issue 30, bug 4: it ended through it, "arm: 4 ⚠ floor"): at the last
+        # sample of the dynamics before the first that the floor check (the snapshot's own) finds below z = 0
+        motion = dynamics.release(session.arm, start, duration=3.0)
+        frames = session.arm.frames(motion.q)
+        from ur10core.workspace import lowest_points
+        hit = int(np.argmax(lowest_points(frames, session.state.body_points)[:, 2] < -1e-3))
+        assert hit > 0, "the default pose falls onto the floor within 3 s"
+        np.testing.assert_allclose(session.state.last.q, wrap(motion.q[hit - 1]), atol=1e-9)
+        assert session.state.last.cause == "motion" and not session.state.last.through_floor[0]
+        assert f"hits the floor at {motion.t[hit]:.2f} s" in session.motion.summary.content
         await client.close()
 
     asyncio.run(scenario())
@@ -261,6 +290,39 @@ def test_moving_from_a_remembered_pose_along_a_path(app, kind):
         assert all(chart.visible for chart in charts.values()) and session.motion.summary.content.startswith(f"**{kind.capitalize()}**")
         assert len(charts[kind].data[0]) == len(charts["straight tool line"].data[0])  # both ways, over the same time
         np.testing.assert_allclose(session.state.last.frames[6], goal, atol=1e-5)
+        await client.close()
+
+    asyncio.run(scenario())
+
+
+def test_a_straight_line_the_arm_cannot_follow_is_explained_before_it_starts(app):
+    """Issue 30, bug 1: this straight line passes inside the shoulder cylinder; the arm froze at 1.24 s
+    with wrist 3 past 360°, and the summary said the tool leaves the line "a little" (it was 362 mm)."""
+    async def scenario():
+        client = await ViserClient(url(app)).connect()
+        session = session_of(app, client)
+        await client.set_gui("All 6 (°)", "-30, 60, 60, 30, 60, 0")
+        await client.set_gui("Set these values", True)
+        await until(lambda: np.allclose(np.degrees(session.state.last.q), [-30, 60, 60, 30, 60, 0]), what="the start pose")
+        await client.set_gui("Remember this pose as the start", True)
+        await until(lambda: session.motion.start is not None, what="the start remembered")
+        await client.set_gui("All 6 (°)", "30, 45, 26, 50, 60, 80")
+        await client.set_gui("Set these values", True)
+        await until(lambda: np.allclose(np.degrees(session.state.last.q), [30, 45, 26, 50, 60, 80]), what="the goal pose")
+        goal = session.state.last.q.copy()
+        await client.set_gui("Go from the start to here along", "straight tool line")
+        await until(lambda: "leaves the straight line by up to" in session.motion.summary.content, what="the summary")
+        path = paths.straight_line(session.arm, session.motion.start, session.arm.fk(goal), 4.0, 240)
+        summary = session.motion.summary.content
+        assert f"**{1000 * paths.line_deviation(path):.0f} mm**" in summary  # the true figure (hundreds of mm)
+        assert "leaves the arm's reach from" in summary and "shoulder cylinder" in summary
+        outside = paths.out_of_range(session.arm, path)
+        if outside:  # refused before the arm moves, with which joint and when
+            await until(lambda: any("cannot be played" in body for _, body in client.received.notifications), what="why")
+            assert not session.motion.player.playing and np.allclose(session.state.last.q, goal)
+        else:  # played to its end: the arm never stops halfway
+            await until(lambda: not session.motion.player.playing and session.state.last.cause == "motion", what="the end")
+            assert not any("outside" in body for _, body in client.received.notifications)
         await client.close()
 
     asyncio.run(scenario())
@@ -321,7 +383,12 @@ def test_presses_fold_into_one_run_on_one_thread_and_none_for_a_browser_that_lef
 
 
 def test_the_rate_charts_name_each_distinct_limit_once_with_its_joints():
-    from ur10teach.features.motion_lessons import limit_groups, rate_chart_data, spoken_list
+    from ur10teach.features.motion_lessons import (
+        limit_groups,
+        rate_chart_data,
+        spoken_list,
+    )
+
     from ur10core.paths import joint_interpolation
 
     arm = Arm.preset("course")
@@ -341,6 +408,7 @@ def test_a_press_whose_browser_leaves_before_a_thread_is_free_leaves_the_player_
     import concurrent.futures
 
     from ur10teach.features import animation
+
     from ur10dev.waiting import wait_for
 
     class Session:

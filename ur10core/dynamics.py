@@ -19,6 +19,8 @@ from .differential import cross
 
 #: Standard gravity (m/s²), acting along −z of the base frame.
 GRAVITY = 9.81
+#: Largest turn of any joint (rad) in one Runge–Kutta step of :func:`release`.
+MAX_SUBSTEP_TURN = 0.1
 
 
 @dataclass(frozen=True)
@@ -218,11 +220,14 @@ class Motion:
     qd: np.ndarray
 
 
-def release(arm, q0, duration: float = 2.0, dt: float = 0.01, payload_kg: float = 0.0) -> Motion:
+def release(arm, q0, duration: float = 2.0, dt: float = 0.01, payload_kg: float = 0.0, stop=None) -> Motion:
     """The arm let go at rest at ``q0``, every joint free (no torque, no friction), under gravity.
 
-    The course's gravity-drop simulation (docs/kinematics.md §8.8), integrated with the
-    classical fourth-order Runge–Kutta method at step ``dt``.
+    The course's gravity-drop simulation (docs/kinematics.md §8.8), sampled every ``dt``
+    and integrated with the classical fourth-order Runge–Kutta method in steps that turn no
+    joint more than :data:`MAX_SUBSTEP_TURN`. ``stop(q)``, if given, ends the motion at the
+    first sample where it is true (that sample included): the floor, say
+    (:func:`ur10core.workspace.through_floor`).
     """
     if not (isinstance(duration, (int, float)) and 0.0 < duration <= 60.0):
         raise ValueError(f"duration must be from 0 to 60 s, got {duration!r:.40}")
@@ -241,11 +246,19 @@ def release(arm, q0, duration: float = 2.0, dt: float = 0.01, payload_kg: float 
         return velocity, forward_dynamics(arm, position, velocity, rest, payload_kg)
 
     for k in range(steps):
-        k1 = rates(q, qd)
-        k2 = rates(q + dt / 2 * k1[0], qd + dt / 2 * k1[1])
-        k3 = rates(q + dt / 2 * k2[0], qd + dt / 2 * k2[1])
-        k4 = rates(q + dt * k3[0], qd + dt * k3[1])
-        q = q + dt / 6 * (k1[0] + 2 * k2[0] + 2 * k3[0] + k4[0])
-        qd = qd + dt / 6 * (k1[1] + 2 * k2[1] + 2 * k3[1] + k4[1])
+        # a fast-spinning wrist turns a radian or more in 10 ms, where a fixed step of RK4 drifted by
+        # 0.1–1 J: each sample is reached in substeps that turn no joint more than MAX_SUBSTEP_TURN
+        substeps = max(1, math.ceil(float(np.abs(qd).max()) * dt / MAX_SUBSTEP_TURN))
+        h = dt / substeps
+        for _ in range(substeps):
+            k1 = rates(q, qd)
+            k2 = rates(q + h / 2 * k1[0], qd + h / 2 * k1[1])
+            k3 = rates(q + h / 2 * k2[0], qd + h / 2 * k2[1])
+            k4 = rates(q + h * k3[0], qd + h * k3[1])
+            q = q + h / 6 * (k1[0] + 2 * k2[0] + 2 * k3[0] + k4[0])
+            qd = qd + h / 6 * (k1[1] + 2 * k2[1] + 2 * k3[1] + k4[1])
         qs[k + 1], qds[k + 1] = q, qd
-    return Motion(np.arange(steps + 1) * dt, qs, qds)
+        if stop is not None and stop(q):
+            steps = k + 1
+            break
+    return Motion(np.arange(steps + 1) * dt, qs[:steps + 1], qds[:steps + 1])

@@ -63,6 +63,18 @@ MEANINGS: dict[str, tuple[tuple[str, str], ...]] = {
 }
 
 
+def mathml(expression: sp.Expr, joint_types: str) -> str:
+    """Inline presentation MathML of a factor, in the course's joint names: θ_i for a revolute joint
+    q_i, d_i for a prismatic one (sympy's own printer, which the browser renders).
+
+    >>> mathml(sp.Symbol("q3") ** 2, "RRP")
+    '<math><msup><msub><mi>d</mi><mi>3</mi></msub><mn>2</mn></msup></math>'
+    """
+    names = {f"q{i + 1}": sp.Symbol(f"{'θ' if kind == 'R' else 'd'}_{i + 1}") for i, kind in enumerate(joint_types)}
+    renamed = expression.xreplace({symbol: names[symbol.name] for symbol in expression.free_symbols if symbol.name in names})
+    return f"<math>{sp.printing.mathml(renamed, printer='presentation')}</math>"
+
+
 def joint_symbols(n: int) -> tuple[sp.Symbol, ...]:
     return sp.symbols(f"q1:{n + 1}", real=True)
 

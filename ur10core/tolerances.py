@@ -52,3 +52,5 @@ GIMBAL_TOLERANCE = 1e-10
 #: Squared joint distances (rad²) closer than this count as a tie when the nearest branch
 #: is chosen (:func:`ur10core.ik.nearest_branch`).
 TIE_TOLERANCE = 1e-10
+#: A body this far below z = 0 is through the floor (m): the base's own underside sits on it.
+FLOOR_TOLERANCE = 1e-3

@@ -14,6 +14,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ._validate import as_float_array, check_finite
+from .tolerances import FLOOR_TOLERANCE
 
 
 def _points(points) -> np.ndarray:
@@ -57,6 +58,21 @@ def horizontal_section(points, height: float, thickness: float = 0.02) -> tuple[
     out = points[keep].copy()
     out[:, 2] = height
     return out, keep
+
+
+def through_floor(arm, q, body_points=None, tolerance: float = FLOOR_TOLERANCE) -> np.ndarray:
+    """(...,) bool: at joints ``q`` (..., n) some body point of the arm is below the floor z = 0.
+
+    ``body_points`` (L, P, 3) as for :func:`lowest_points`; the frame origins alone by default.
+
+    >>> from ur10core import Arm
+    >>> arm = Arm.preset("ur10")
+    >>> through_floor(arm, np.radians([[0, 60, 0, 0, 0, 0], [0, -90, 0, -90, 0, 0]])).tolist()   # up, then down
+    [False, True]
+    """
+    frames = arm.frames(q)
+    points = np.zeros((frames.shape[-3], 1, 3)) if body_points is None else body_points
+    return lowest_points(frames, points)[..., 2] < -tolerance
 
 
 def lowest_points(frames, body_points) -> np.ndarray:

@@ -1,8 +1,8 @@
 """Run the app in its own process, as in class, and read the figures it reports (tests and benchmarks).
 
 The load generator must not share the server's interpreter (and its GIL): the server
-runs as ``python -m ur10teach`` with ``UR10_TEACH_METRICS`` set, and writes its handler
-latencies, CPU time and resident memory to a JSON file every second.
+runs as ``python -m ur10dev.metered_app`` (the app, writing its handler latencies, CPU time
+and resident memory to a JSON file every second).
 """
 
 from __future__ import annotations
@@ -68,8 +68,12 @@ def running_app(*args: str, timeout: float = 60.0, env: dict[str, str] | None = 
     with tempfile.TemporaryDirectory() as folder:
         metrics = Path(folder) / "metrics.json"
         environment = dict(os.environ, **(env or {}), UR10_TEACH_METRICS=str(metrics))
-        # a checkout from before the app was installed as ur10teach runs as ``-m app`` (bench_page --against)
-        module = "ur10teach" if "ur10teach" in (root / "pyproject.toml").read_text() else "app"
+        # an older checkout (bench_page --against) measured itself when UR10_TEACH_METRICS was set, and
+        # before the app was installed as ur10teach it ran as ``-m app``
+        if (root / "ur10dev" / "metered_app.py").exists():
+            module = "ur10dev.metered_app"
+        else:
+            module = "ur10teach" if "ur10teach" in (root / "pyproject.toml").read_text() else "app"
         command = [sys.executable, "-m", module, "--port", "0", *args]
         with serving(command, root, environment, timeout) as (process, output):
             url = next(URL.search(line).group(1) for line in output if line.startswith("    ") and URL.search(line))

@@ -150,9 +150,21 @@ def set_checkbox(page, handle, value: bool) -> None:
 
 
 def choose(page, dropdown, option: str) -> None:
-    """Pick ``option`` in a viser dropdown, with the mouse, and wait until the server holds it."""
-    page.locator(dom_id(dropdown)).click()
-    page.get_by_role("option", name=option, exact=True).click()
+    """Pick ``option`` in a viser dropdown, with the mouse, and wait until the server holds it.
+
+    A dropdown clicked while its folder is still unfolding opens its list out of sight, or not at
+    all: it is clicked again until the option shows."""
+    choice = page.get_by_role("option", name=option, exact=True)
+
+    def opened() -> bool:
+        if not choice.is_visible():
+            page.locator(dom_id(dropdown)).click()
+            with contextlib.suppress(Exception):
+                choice.wait_for(state="visible", timeout=1000 * LOST_PRESS)
+        return choice.is_visible()
+
+    wait_for(opened, what=f"{option!r} in the open list")
+    choice.click()
     wait_for(lambda: dropdown.value == option, what=f"the server to hold {option!r}")
 
 

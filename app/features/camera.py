@@ -1,9 +1,10 @@
-"""The "View" folder: frame the arm in the part of the window the panel leaves, the standard views, lecture mode.
+"""The "View" folder: frame what is drawn in the part of the window the panel leaves, the standard views, lecture mode.
 
 The panel is docked at the right edge (``main_panel.dock_right``), so the 3D canvas is
-the window minus the panel and nothing of the arm hides under it. The camera then frames
-the arm and its target in that canvas, from the direction the student chose, whenever
-the canvas changes size (a new window, a resize, the browser's zoom) or on "Frame the arm".
+the window minus the panel and nothing of the arm hides under it. The camera frames the
+arm, its ghosts, its target and whatever else is shown (a cloud, a path) in that canvas,
+from the direction the student chose: when the canvas changes size, on "Frame the arm",
+and after a change that moves the arm far (a singularity button, a typed target, a path).
 """
 
 from __future__ import annotations
@@ -40,7 +41,7 @@ def framing(points: np.ndarray, direction, fov: float, aspect: float, margin: fl
 
     >>> position, look_at = framing(np.array([[1.0, 0, 0], [-1.0, 0, 0]]), (0, -1, 0), np.radians(90), 1.0, margin=0.0)
     >>> position.round(6).tolist(), look_at.tolist()
-    [[0.0, -1.0, 0.0], [0.0, 0.0, 0.0]]
+    ([0.0, -1.0, 0.0], [0.0, 0.0, 0.0])
     """
     points = np.asarray(points, dtype=float)
     back = np.asarray(direction, dtype=float)
@@ -61,8 +62,11 @@ def framing(points: np.ndarray, direction, fov: float, aspect: float, margin: fl
 
 
 def arm_points(snapshot: Snapshot, body_radius: float = BODY_RADIUS) -> np.ndarray:
-    """What the camera must show: the joints and the target, each with ``body_radius`` of room around it."""
-    centres = np.vstack([snapshot.frames[:, :3, 3], snapshot.target[:3, 3], snapshot.lowest[0]])
+    """What the camera must show: the joints, every branch's joints (the ghosts) and the target,
+    each with ``body_radius`` of room around it."""
+    solution = getattr(snapshot, "solution", None)
+    ghosts = snapshot.ghost_frames[solution.valid, :, :3, 3].reshape(-1, 3) if solution is not None else np.zeros((0, 3))
+    centres = np.vstack([snapshot.frames[:, :3, 3], ghosts, snapshot.target[:3, 3], snapshot.lowest[0]])
     corners = np.array([[sx, sy, sz] for sx in (-1, 1) for sy in (-1, 1) for sz in (-1, 1)]) * body_radius
     return (centres[:, None, :] + corners[None]).reshape(-1, 3)
 
@@ -92,6 +96,10 @@ class CameraControls(View):
         self._guard = guard
         self.closed = False
         self._framed_size: tuple[int, int] | None = None
+        #: called whenever the camera moves (the branch numbers are placed for it)
+        self.on_moved: list[Callable[[], None]] = []
+        #: what else is drawn and framed with the arm, by what draws it: a cloud, a path
+        self.extra: dict[str, np.ndarray] = {}
         self._lock = threading.Lock()
         gui = client.gui
         gui.main_panel.dock_right()  # the canvas is what the panel leaves: nothing hides under it
@@ -99,7 +107,8 @@ class CameraControls(View):
         self.folders = (folder,)
         with folder:
             self.direction = gui.add_dropdown("Look from", tuple(VIEWS), initial_value="Course figure")
-            self.frame_button = gui.add_button("Frame the arm", icon=viser.Icon.FOCUS_CENTERED)
+            self.frame_button = gui.add_button("Frame the arm", icon=viser.Icon.FOCUS_CENTERED,
+                                               hint="The arm, its ghosts, its target and what else is shown")
         self.lecture = LectureMode(gui, folder, lecture, guard)
         self.direction.on_update(guard(lambda _: self.frame()))
         self.frame_button.on_click(guard(lambda _: self.frame()))
@@ -111,6 +120,8 @@ class CameraControls(View):
     def _camera_moved(self, camera: viser.CameraHandle) -> None:
         if self.closed:
             return
+        for moved in self.on_moved:
+            moved()
         size = (camera.image_width, camera.image_height)
         with self._lock:
             if size == self._framed_size or 0 in size:
@@ -122,16 +133,24 @@ class CameraControls(View):
         """Point this browser's camera at the arm and its target, from the chosen direction."""
         self.look_from(VIEWS[chosen(self.direction, "look from")])
 
-    def look_from(self, direction, points: np.ndarray | None = None) -> None:
-        """Frame the arm, its target and ``points`` (n, 3; a section of the workspace, say) from ``direction``."""
+    def show_also(self, name: str, points: np.ndarray | None) -> None:
+        """Keep ``points`` (n, 3; None: no more) in view with the arm from now on, and frame them now."""
+        if points is None:
+            self.extra.pop(name, None)
+        else:
+            self.extra[name] = np.asarray(points, dtype=float).reshape(-1, 3)
+        self.frame()
+
+    def look_from(self, direction) -> None:
+        """Frame everything drawn (the arm, its ghosts, its target, :attr:`extra`) from ``direction``."""
         if self.closed:
             return
         camera = self._client.camera
-        shown = arm_points(self._snapshot(), self.body_radius)
-        if points is not None:
-            shown = np.vstack([shown, points])
+        shown = np.vstack([arm_points(self._snapshot(), self.body_radius), *self.extra.values()])
         position, look_at = framing(shown, direction, camera.fov, camera.aspect)
         with self._client.atomic():
             camera.up_direction = (0.0, 0.0, 1.0)
             camera.position = position
             camera.look_at = look_at  # after the position: viser moves both together otherwise
+        for moved in self.on_moved:  # placed for where the camera is going (the browser reports only a change)
+            moved()

@@ -14,9 +14,10 @@ import viser
 from ur10core import Arm
 
 from ..view import View
-from ..viser_internals.fast_updates import set_positions
+from .branch_labels import BranchLabels
 
 X_AXIS_RED, Z_AXIS_BLUE = (220, 30, 30), (30, 60, 230)
+AXIS_NAME_SCALE = 1.2
 #: A highlighted row's parameters (Okabe-Ito): d blue, a vermilion, θ bluish green, α reddish purple.
 PARAMETER_COLORS = {"d": (0, 114, 178), "a": (213, 94, 0), "theta": (0, 158, 115), "alpha": (204, 121, 167)}
 #: Which axes the frames show: none, the z axes only (the walkthrough's first step), or x and z.
@@ -47,20 +48,25 @@ class DHFrames(View):
         nothing = np.zeros((count, 2, 3))
         self.z_axes = scene.add_line_segments(f"{root}/frames/z", nothing, Z_AXIS_BLUE, thickness=0.008 * size, visible=False)
         self.x_axes = scene.add_line_segments(f"{root}/frames/x", nothing, X_AXIS_RED, thickness=0.008 * size, visible=False)
-        self.axis_labels = [
-            (scene.add_label(f"{root}/frame_labels/x{i}", f"x{i}", font_screen_scale=1.1, anchor="center-left", visible=False),
-             scene.add_label(f"{root}/frame_labels/z{i}", f"z{i}", font_screen_scale=1.1, anchor="center-left", visible=False))
-            for i in range(count)
-        ]
+        #: each axis named at its tip; names that would overlap on screen read as one ("x4 · x6")
+        self.names = BranchLabels(scene, f"{root}/frame_labels", 2 * count, scale=AXIS_NAME_SCALE,
+                                  colours=[X_AXIS_RED] * count + [Z_AXIS_BLUE] * count, merge_px=4.0)
+        self._tips = np.zeros((2 * count, 3))
         self.parameters = {key: scene.add_line_segments(f"{root}/row/{key}", np.zeros((1, 2, 3)), colour,
                                                         thickness=0.016 * size, visible=False)
                            for key, colour in PARAMETER_COLORS.items()}
-        self.parameter_labels = {key: scene.add_label(f"{root}/row/{key}/value", key, font_screen_scale=1.3,
-                                                      anchor="bottom-center", visible=False)
-                                 for key in PARAMETER_COLORS}
+        #: the highlighted row's values, by its segments and arcs, placed apart on the screen
+        self.values = BranchLabels(scene, f"{root}/row/values", len(PARAMETER_COLORS), scale=1.3,
+                                   colours=list(PARAMETER_COLORS.values()), merge_px=4.0)
+        self._value_points, self._value_texts = np.zeros((len(PARAMETER_COLORS), 3)), [""] * len(PARAMETER_COLORS)
         self._drawn = False  #: something is on screen (hidden frames cost a drag nothing)
-        self._nodes = (self.z_axes, self.x_axes, *(label for pair in self.axis_labels for label in pair),
-                       *self.parameters.values())
+        self._nodes = (self.z_axes, self.x_axes, *self.names.labels, *self.values.labels, *self.parameters.values())
+
+    @property
+    def parameter_labels(self) -> dict[str, viser.LabelHandle]:
+        """The label showing each of the highlighted row's values ("d", "a", "theta", "alpha")."""
+        keys = list(PARAMETER_COLORS)
+        return {keys[k]: label for (members, _, _), label in zip(self.values.placed, self.values.labels) for k in members}
 
     def render(self, snapshot) -> None:
         frames = snapshot.frames
@@ -77,21 +83,23 @@ class DHFrames(View):
             self.z_axes.points = np.stack([origins, origins + length * frames[:, :3, 2]], axis=1)
         if shown == FRAMES_XZ:
             self.x_axes.points = np.stack([origins, origins + length * frames[:, :3, 0]], axis=1)
-        for x_label, z_label in self.axis_labels:
-            show(z_label, shown != FRAMES_NONE)
-            show(x_label, shown == FRAMES_XZ)
-        if shown != FRAMES_NONE:
-            tip = 0.14 * self.size
-            x_labels, z_labels = zip(*self.axis_labels)
-            set_positions(list(x_labels) + list(z_labels),
-                          np.concatenate([origins + tip * frames[:, :3, 0], origins + tip * frames[:, :3, 2]]))
+        tip = 0.14 * self.size
+        self._tips = np.concatenate([origins + tip * frames[:, :3, 0], origins + tip * frames[:, :3, 2]])
         self._render_row()
+
+    def render_panel(self, snapshot) -> None:
+        """The row's values and the axes' names, placed apart on the screen at the panel's pace."""
+        self.values.show(self._value_points, self._value_texts)
+        count = len(self._tips) // 2
+        texts = [*(f"x{i}" if self.shown == FRAMES_XZ else "" for i in range(count)),
+                 *(f"z{i}" if self.shown != FRAMES_NONE else "" for i in range(count))]
+        self.names.show(self._tips, texts)
 
     def _render_row(self) -> None:
         row = self.highlight_row
         for key in PARAMETER_COLORS:
             show(self.parameters[key], row is not None)
-            show(self.parameter_labels[key], row is not None)
+        self._value_texts = [""] * len(PARAMETER_COLORS)
         if row is None:
             return
         geometry = self._arm.dh.row_geometry(self._q, row)
@@ -101,20 +109,23 @@ class DHFrames(View):
         previous = row if self._arm.convention == "standard" else row - 1
         index = {"d": row, "theta": row, "a": previous, "alpha": previous}
         names = {"d": "d", "a": "a", "theta": "θ", "alpha": "α"}
-        for key in ("d", "a", "theta", "alpha"):  # a zero parameter has nothing to draw (the panel lists it)
+        keys = list(PARAMETER_COLORS)
+        for key in keys:  # a zero parameter has nothing to draw (the panel lists it)
             show(self.parameters[key], abs(values[key]) > 1e-9)
-            show(self.parameter_labels[key], abs(values[key]) > 1e-9)
         for key in ("d", "a"):
             segment = geometry.d if key == "d" else geometry.a
             self.parameters[key].points = segment[None]
-            self.parameter_labels[key].position = segment.mean(axis=0)
-            self.parameter_labels[key].text = f"{names[key]}{index[key]} = {1000 * values[key]:.1f} mm"
+            self._value_points[keys.index(key)] = segment.mean(axis=0)
+            self._value_texts[keys.index(key)] = f"{names[key]}{index[key]} = {1000 * values[key]:.1f} mm"
         for key in ("theta", "alpha"):
             turn = geometry.theta if key == "theta" else geometry.alpha
             arc = turn.points(radius)
             self.parameters[key].points = np.stack([arc[:-1], arc[1:]], axis=1)
-            self.parameter_labels[key].position = arc[len(arc) // 2]
-            self.parameter_labels[key].text = f"{names[key]}{index[key]} = {np.degrees(values[key]):.1f}°"
+            self._value_points[keys.index(key)] = arc[len(arc) // 2]
+            self._value_texts[keys.index(key)] = f"{names[key]}{index[key]} = {np.degrees(values[key]):.1f}°"
+        for key in keys:
+            if abs(values[key]) <= 1e-9:
+                self._value_texts[keys.index(key)] = ""
 
     def close(self) -> None:
         """The session has gone: so do the frames, even from a scene everyone shares."""

@@ -58,7 +58,7 @@ class DHTableView(View):
         self._session = session
         self._frames = frames
         arm = session.arm
-        folder = gui.add_folder("DH table")
+        folder = gui.add_folder("DH table", expand_by_default=False)
         self.folders = (folder,)
         if arm.dh is None:
             with folder:

@@ -1,15 +1,6 @@
 """How an arm is drawn in 3D, chosen per arm: UR's meshes, its DH skeleton, or the desktop arm's own drawing.
 
-Every drawing offers the session and the features the same things: ``render(snapshot)`` (on
-every change) and ``render_panel(snapshot)`` (≤ 10 Hz); ``root``, the node the features hang
-their own drawings from; ``roots``, every top node it draws (a classroom explorer's browser
-hides the class's); ``world``, where the arm's base frame is; ``size``, the arm's reach (m),
-which sizes axes, rods and the gizmo; ``framed(snapshot)``, what the camera keeps in view;
-``body_radius``, the room the camera keeps around each joint; ``dh_frames``; ``overlay``
-(det J's factors in 3D, or None); ``show_ghosts`` and ``focus`` (which branches are drawn);
-``on_select`` (called with (client, slot) when a ghost is clicked); ``target`` (a marker
-for the shared scene, where only the presenter has a gizmo); ``names`` and ``show(model)``
-(the models it can be drawn as).
+Why it is built so: docs/architecture.md §2.
 """
 
 from __future__ import annotations
@@ -21,12 +12,13 @@ from ur10core import Arm
 
 from ..meshes import ArmModels
 from ..state import Snapshot
+from .branch_labels import chain
 from .camera import BODY_RADIUS
 from .course_arms.desktop_arm import DesktopArmScene
 from .course_arms.scene import CourseArmScene
 from .dh_frames import FRAMES_NONE, DHFrames
 from .floor import FloorScene
-from .ik_target import BranchesScene
+from .ik_target import GHOST_STYLES, BranchesScene
 from .robot import RobotScene, node_name
 from .singularity import SingularityOverlay
 
@@ -71,11 +63,22 @@ class MeshArm:
         self.names = self.robot.names
         # the floor after the branches: it marks the ghosts they drew
         self._views = (self.robot, self.branches, self.overlay, self.floor, self.dh_frames)
+        #: the 3D labels placed apart for a camera, in order, each pool clear of those before it
+        self.label_sets = chain((self.overlay.names, self.dh_frames.values, self.dh_frames.names, self.branches.numbers))
 
     # which ghosts are drawn, and who hears a click on one: the mesh ghosts' own
     show_ghosts = _of_branches("show_ghosts")
     focus = _of_branches("focus")
     on_select = _of_branches("on_select")
+
+    ghost_styles = GHOST_STYLES
+
+    @property
+    def ghost_style(self) -> str:
+        return self.branches.style
+
+    def set_ghost_style(self, style: str) -> None:
+        self.branches.set_style(style)
 
     def show(self, model: str) -> None:
         """Draw the solid arm and its ghosts as ``model`` ("Real UR10", "Schematic")."""
@@ -90,7 +93,8 @@ class MeshArm:
             view.render(snapshot)
 
     def render_panel(self, snapshot: Snapshot) -> None:
-        for view in self._views:
+        # the labels of the overlay and the frames first: the branch numbers keep clear of them
+        for view in (self.overlay, self.dh_frames, self.robot, self.branches, self.floor):
             view.render_panel(snapshot)
 
 

@@ -4,7 +4,8 @@ The velocity ellipsoid (sky blue) holds the flange velocities of all joint rates
 norm that keep the tool's orientation; the force ellipsoid (vermilion) the forces the joints
 hold with torques of unit norm. Same axes, reciprocal lengths: near a singularity that costs
 the flange a direction of travel, the first flattens and the second stretches along it.
-Both follow the drag; their axis lengths are in the panel.
+Both follow the drag, each named in 3D; their axis lengths and the scales they are drawn at are in
+the panel, and the force ellipsoid is drawn smaller where it would leave the screen.
 """
 
 from __future__ import annotations
@@ -18,16 +19,33 @@ from ur10core.orientation import quaternion
 
 from ..feedback import chosen
 from ..state import Snapshot
-from ..style import number
+from ..style import number, swatch
 from ..view import Session, View
 from ..viser_internals.fast_updates import set_orientations, set_positions, set_scales
 
 VELOCITY_COLOR, FORCE_COLOR = (86, 180, 233), (213, 94, 0)
-#: Drawn size: metres per unit of σ (m/s per rad/s) and of 1/σ (N per N·m).
+#: Drawn size: metres per unit of σ (m/s per rad/s) and, at most, of 1/σ (N per N·m).
 VELOCITY_METRES, FORCE_METRES = 0.3, 0.05
-#: The force ellipsoid's drawn semi-axes stop here (m): it grows without bound at a singularity.
-LONGEST_DRAWN = 0.8
+#: The force ellipsoid's longest drawn semi-axis, as a share of the arm's reach: it grows without bound
+#: near a singularity, so it is drawn smaller there (at a scale the panel prints) and stays on screen.
+LONGEST_SHARE = 0.35
 SHOWN = {"velocity": (True, False), "force": (False, True), "both": (True, True)}
+
+
+def force_scale(force: np.ndarray, reach: float) -> float:
+    """Metres drawn per N per N·m: :data:`FORCE_METRES`, or less, so that the longest semi-axis fits.
+
+    >>> force_scale(np.array([1.0, 2.0, 4.0]), 1.0), force_scale(np.array([1.0, 2.0, 70.0]), 1.0)
+    (0.05, 0.005)
+    """
+    longest = float(np.max(np.where(np.isfinite(force), force, 0.0), initial=0.0))
+    return FORCE_METRES if longest * FORCE_METRES <= LONGEST_SHARE * reach else LONGEST_SHARE * reach / longest
+
+
+def key_html() -> str:
+    """Which colour is which ellipsoid, for the panel."""
+    return (f"{swatch(VELOCITY_COLOR)} **velocity ellipsoid**: where joint rates of norm 1 can move the tool  \n"
+            f"{swatch(FORCE_COLOR)} **force ellipsoid**: the forces joint torques of norm 1 can hold")
 
 
 def ellipsoid_pose(axes: np.ndarray) -> np.ndarray:
@@ -38,15 +56,18 @@ def ellipsoid_pose(axes: np.ndarray) -> np.ndarray:
     return quaternion(rotation, check=False)
 
 
-def lengths_markdown(velocity: np.ndarray, force: np.ndarray, place: str = "tool", held: str = "the tool's orientation held") -> str:
+def lengths_markdown(velocity: np.ndarray, force: np.ndarray, place: str = "tool", held: str = "the tool's orientation held",
+                     scales: tuple[float, float] = (VELOCITY_METRES, FORCE_METRES)) -> str:
     def listed(values: np.ndarray) -> str:
         return ", ".join("∞" if not np.isfinite(v) else number(v, ".3g") for v in values)
 
     return (f"The {place}'s ellipsoids{' with ' + held if held else ''} (docs §8.4).  \n"
-            f"**Velocity ellipsoid** semi-axes (m/s per rad/s of joint rate): {listed(velocity)}  \n"
-            f"**Force ellipsoid** semi-axes (N per N·m of joint torque): {listed(force)}  \n"
+            f"**Velocity ellipsoid** semi-axes (m/s per rad/s of joint rate): {listed(velocity)}; "
+            f"drawn at {number(1000 * scales[0], '.3g')} mm per m/s per rad/s  \n"
+            f"**Force ellipsoid** semi-axes (N per N·m of joint torque): {listed(force)}; "
+            f"drawn at {number(1000 * scales[1], '.3g')} mm per N per N·m  \n"
             "Same axes; each force axis is 1 / the velocity axis. Drag towards a singularity and watch "
-            "one velocity axis shrink while its force axis grows.")
+            "one velocity axis shrink while its force axis grows (drawn smaller, to stay on screen).")
 
 
 #: What an arm keeps still for its translational ellipsoid, by what it controls (``arm.task``).
@@ -60,8 +81,10 @@ class EllipsoidsView(View):
     """
 
     def __init__(self, scene: viser.SceneApi, gui: viser.GuiApi, session: Session, root: str = "/ellipsoids",
-                 tool: Callable[[Any], np.ndarray] = lambda snapshot: snapshot.flange, place: str = "tool") -> None:
+                 tool: Callable[[Any], np.ndarray] = lambda snapshot: snapshot.flange, place: str = "tool",
+                 reach: float = 1.3) -> None:
         self._arm = session.arm
+        self._reach = reach
         self._tool = tool
         self._place = place
         folder = gui.add_folder("Manipulability ellipsoids", expand_by_default=False)
@@ -69,6 +92,7 @@ class EllipsoidsView(View):
         with folder:
             self.enabled = gui.add_checkbox(f"Show at the {place}", False)
             self.which = gui.add_dropdown("Ellipsoid", tuple(SHOWN), initial_value="both")
+            self.key = gui.add_markdown(key_html())
             self.lengths = gui.add_markdown("", visible=False)
         # one frame at the tool, turned to the ellipsoids' axes (they share them), so a drag moves one node;
         # in it, a unit sphere per ellipsoid scaled per axis, tiny until first sized, so it never shows a metre wide
@@ -79,6 +103,10 @@ class EllipsoidsView(View):
         self.force = scene.add_icosphere(f"{root}/force", radius=1.0, color=FORCE_COLOR, opacity=0.3,
                                          subdivisions=3, cast_shadow=False, receive_shadow=False, visible=False,
                                          scale=(1e-4, 1e-4, 1e-4))
+        # each named in 3D at the end of its longest axis: colour alone does not say which is which
+        self.names = (scene.add_label(f"{root}/velocity_name", "velocity", font_screen_scale=1.3, visible=False),
+                      scene.add_label(f"{root}/force_name", "force", font_screen_scale=1.3, visible=False))
+
         def changed(_) -> None:
             chosen(self.which, "ellipsoid")  # refuses a value that is not offered, with a message
             session.redraw()
@@ -92,20 +120,25 @@ class EllipsoidsView(View):
             translation = self._arm.translation_ellipsoid(snapshot.q)
             set_orientations([self.frame], ellipsoid_pose(translation.axes)[None])
             set_positions([self.frame], self._tool(snapshot)[None, :3, 3])
+            force = np.where(np.isfinite(translation.force), translation.force, 0.0)
             sizes = np.maximum([VELOCITY_METRES * translation.velocity,
-                                np.minimum(FORCE_METRES * translation.force, LONGEST_DRAWN)], 1e-4)
+                                force_scale(translation.force, self._reach) * force], 1e-4)
             shown = [show_velocity, show_force]  # sized before they show; a zero axis makes a flat disc
             set_scales([node for node, on in zip((self.velocity, self.force), shown) if on], sizes[shown])
-        for node, shown in ((self.velocity, show_velocity), (self.force, show_force)):
+            longest = np.argmax(sizes, axis=1)
+            set_positions([name for name, on in zip(self.names, shown) if on],
+                          np.array([np.eye(3)[k] * size[k] for k, size in zip(longest, sizes)])[shown])
+        for node, name, shown in ((self.velocity, self.names[0], show_velocity), (self.force, self.names[1], show_force)):
             if node.visible != shown:
-                node.visible = shown
+                node.visible = name.visible = shown
 
     def render_panel(self, snapshot: Snapshot) -> None:
         self.lengths.visible = bool(self.enabled.value)
         if self.lengths.visible:
             translation = self._arm.translation_ellipsoid(snapshot.q)
             self.lengths.content = lengths_markdown(translation.velocity, translation.force, self._place,
-                                                    HELD.get(getattr(self._arm, "task", "pose"), ""))
+                                                    HELD.get(getattr(self._arm, "task", "pose"), ""),
+                                                    (VELOCITY_METRES, force_scale(translation.force, self._reach)))
 
     def close(self) -> None:
         """The session has gone: so do its ellipsoids, even from a scene everyone shares."""

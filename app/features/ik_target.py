@@ -1,14 +1,7 @@
 """The draggable IK target and every branch it has, drawn as ghost arms, for any arm.
 
-Each slot k keeps its colour and label for every pose (``arm.slot_labels``); a branch that
-does not exist for the target is hidden. The arm follows the branch nearest its joints
-(``ArmState.move_target``); clicking a ghost, or a number in the branch list, puts the arm
-on that branch.
-
-:class:`IKTarget` is one browser's gizmo and "IK target" folder, for any arm. The ghosts are
-drawn by the arm's drawing (:mod:`.drawings`): :class:`BranchesScene` draws a UR-family
-arm's as meshes. In the classroom's shared mode the drawing is shared by everyone while
-only the presenter has the controls.
+Each slot keeps its colour and number for every pose (``arm.slot_labels``); clicking a ghost,
+or a number in the branch list, puts the arm on that branch.
 """
 
 from __future__ import annotations
@@ -28,8 +21,8 @@ from ur10core.orientation import (
     transform_from_quaternion,
 )
 
-from ..feedback import chosen
-from ..meshes import ArmModels
+from ..feedback import Beside, chosen
+from ..meshes import SKELETON, ArmModels, skeleton_links
 from ..state import ArmState, Snapshot, joint_value_text
 from ..style import (
     DANGER_RED,
@@ -41,7 +34,8 @@ from ..style import (
     swatch,
 )
 from ..view import Session, View
-from ..viser_internals.fast_updates import set_instances, set_positions, stop_echo
+from ..viser_internals.fast_updates import set_instances, stop_echo
+from .branch_labels import BranchLabels
 from .robot import model_slug
 
 log = logging.getLogger(__name__)
@@ -49,6 +43,8 @@ log = logging.getLogger(__name__)
 #: What the "Ghosts shown" dropdown offers: every branch, one branch, or (for the UR family's
 #: eight) the arm's branch and the one that differs from it in a single choice.
 ALL_BRANCHES = "All branches"
+#: How a mesh arm's ghosts are drawn: skeletons (the default: the solid arm stands out) or its meshes.
+GHOST_STYLES = ("Skeletons", "Meshes")
 FLIPS = {"Flip the shoulder": "shoulder", "Flip the elbow": "elbow", "Flip the wrist": "wrist"}
 #: Branches whose frame origins all lie this close (m) are drawn as one, labelled "3 = 4".
 SAME_POSE = 1e-3
@@ -120,14 +116,14 @@ def same_pose_groups(ghost_frames: np.ndarray, valid: np.ndarray, tolerance: flo
     >>> same_pose_groups(frames, np.array([True, True, False, True, False, False, False, False]))
     ((0, 1), (3,))
     """
-    # frames {3} and {4} alone: {0}..{2} sit on the base and {5}, {6} are fixed by the target (§4)
-    origins = ghost_frames[:, 3:5, :3, 3]
+    origins = ghost_frames[..., :3, 3]
     apart = np.abs(origins[:, None] - origins[None]).max(axis=(2, 3)) > tolerance
     valid = np.asarray(valid, bool)
-    if apart.sum() == 56:  # no two coincide (away from singularities): every valid slot alone
+    slots = len(valid)
+    if apart.sum() == slots * (slots - 1):  # no two coincide (away from singularities): every valid slot alone
         return tuple((int(k),) for k in valid.nonzero()[0])
     groups, taken = [], ~valid
-    for k in range(8):
+    for k in range(slots):
         if not taken[k]:
             members = (~apart[k] & ~taken).nonzero()[0]
             taken[members] = True
@@ -169,7 +165,8 @@ def branch_table(snapshot: Snapshot) -> str:
     for k, label in enumerate(solution.labels):
         colour = swatch(SLOT_COLORS[k % len(SLOT_COLORS)])
         if not solution.valid[k]:
-            rows.append(f"| {colour} | {k + 1} | {label} | — no solution | |")
+            if solution.method != "found numerically":  # a search's empty slots are room, not branches
+                rows.append(f"| {colour} | {k + 1} | {label} | — no solution | |")
             continue
         flags = []
         if k == snapshot.slot:
@@ -184,6 +181,22 @@ def branch_table(snapshot: Snapshot) -> str:
     return "\n".join(rows)
 
 
+def reach_count(solution) -> str:
+    """How many branches reach, in words that fit the arm: "**6 of 8 branches** reach this target".
+
+    >>> from ur10core import Arm
+    >>> cylindrical = Arm.preset("cylindrical")
+    >>> reach_count(cylindrical.ik(cylindrical.fk(cylindrical.specs.home)))
+    '**Its one branch** reaches this target'
+    """
+    slots, found = len(solution.labels), int(solution.valid.sum())
+    if slots == 1:
+        return "**Its one branch** reaches this target"
+    if solution.method == "found numerically":
+        return f"**{found} solution{'s' * (found != 1)}** found (this chain has at most {slots})"
+    return f"**{found} of {slots} branches** reach this target"
+
+
 def status_markdown(snapshot: Snapshot) -> str:
     """How many branches reach the target and which the arm is on, or why none does."""
     solution = snapshot.solution
@@ -193,8 +206,7 @@ def status_markdown(snapshot: Snapshot) -> str:
     if solution is None:  # a typed table, not searched yet
         return ("The arm follows the target from its own joints (damped least squares). "
                 "**Find every branch** searches from many starts for the others.")
-    notes = [f"**{int(solution.valid.sum())} of {len(solution.labels)} branches** reach this target "
-             f"({solution.method}; the arm places its {solution.task}); the arm is on "
+    notes = [f"{reach_count(solution)} ({solution.method}; the arm places its {solution.task}); the arm is on "
              f"**{snapshot.slot + 1}: {solution.labels[snapshot.slot]}**."]
     if has_flips(snapshot.arm):  # the UR family names which of its choices a singularity merges
         if solution.shoulder_singular:
@@ -224,6 +236,8 @@ def add_unreachable_halo(scene: viser.SceneApi, parent: str) -> viser.IcosphereH
 class BranchesScene(View):
     """The eight ghost arms, one batched mesh per moving link with an instance per slot.
 
+    Drawn as thick coloured skeletons (:func:`ur10teach.meshes.skeleton_links`) by default, so
+    that the solid arm is unmistakable among them, or as the arm's own meshes, translucent.
     With ``target_marker`` it also draws the target itself (axes and the red halo): the
     shared scene of the classroom needs that, since only the presenter has a gizmo.
     """
@@ -232,6 +246,7 @@ class BranchesScene(View):
                  target_marker: bool = False) -> None:
         self.show_ghosts = True
         self.focus = ALL_BRANCHES  #: one of focus_options(arm)
+        self.style = GHOST_STYLES[0]  #: one of GHOST_STYLES
         self.shown = np.zeros(8, bool)  #: the ghosts drawn by the last render
         #: called with (client, slot) when a ghost is clicked; set by whoever drives this scene
         self.on_select: Callable[[viser.ClientHandle | None, int], None] | None = None
@@ -241,31 +256,39 @@ class BranchesScene(View):
                                           wxyz=first.flange_wxyz, position=first.flange[:3, 3])
             self.unreachable = add_unreachable_halo(scene, "/target")
         self._scene, self._models = scene, models
-        #: each model's batched ghost meshes, links 1..6, sent when the model is first shown
+        self._geometries = {SKELETON: skeleton_links(first.arm.dh), **models.by_name}
+        #: each geometry's batched ghost meshes, links 1..6, sent when first shown
         #: (every branch shares the base with the solid arm)
         self.models: dict[str, list[viser.BatchedMeshHandle]] = {}
-        self.model = models.names[0]
-        self.ghosts = self._send(self.model)  #: the shown model's; only these follow the arm
+        self.model = models.names[0]  #: the solid arm's model, which "Meshes" draws the ghosts as
+        self.ghosts = self._send(self.geometry)  #: the shown geometry's; only these follow the arm
         self._forget_sent()
         # each branch's number by its elbow, as in the table: colours alone cannot tell eight apart for everyone
-        self.labels = [scene.add_label(f"/ghosts/number{k + 1}", str(k + 1), visible=False, font_screen_scale=1.6,
-                                       anchor="bottom-center") for k in range(8)]
-        self._label_state: tuple = ()
+        self.numbers = BranchLabels(scene, "/ghosts", 8, colours=list(SLOT_COLORS))
+
+    @property
+    def geometry(self) -> str:
+        """What the ghosts are drawn as now: the skeleton, or the solid arm's model."""
+        return SKELETON if self.style == GHOST_STYLES[0] else self.model
+
+    @property
+    def labels(self) -> list[viser.LabelHandle]:
+        return self.numbers.labels
 
     def _forget_sent(self) -> None:
-        self._scales = b""
+        self._scales = {i: b"" for i in range(1, 7)}
         self._positions = {i: b"" for i in range(1, 7)}  # last sent, to skip unchanged ones
 
     def _send(self, name: str) -> list[viser.BatchedMeshHandle]:
         identity = np.tile([1.0, 0.0, 0.0, 0.0], (8, 1))
         ghosts = []
-        for link in self._models.by_name[name][1:]:
+        for link in self._geometries[name][1:]:
             vertices, faces = link.ghost
             ghost = self._scene.add_batched_meshes_simple(
                 f"/ghosts/{model_slug(name)}/link{link.index}", vertices, faces,
                 batched_wxyzs=identity, batched_positions=np.zeros((8, 3)), batched_scales=np.zeros(8),
-                batched_colors=np.array(SLOT_COLORS, dtype=np.uint8), opacity=GHOST_OPACITY, lod="off",
-                material=self._models.material, cast_shadow=False, receive_shadow=False,
+                batched_colors=np.array(SLOT_COLORS, dtype=np.uint8), opacity=1.0 if name == SKELETON else GHOST_OPACITY,
+                lod="off", material=self._models.material, cast_shadow=False, receive_shadow=False,
             )
             ghost.on_click(self._clicked)
             ghosts.append(ghost)
@@ -273,16 +296,26 @@ class BranchesScene(View):
         return ghosts
 
     def show(self, model: str) -> None:
-        """Draw the ghosts as ``model``; the next render poses them."""
+        """The solid arm is drawn as ``model``: so are the ghosts, when drawn as meshes."""
         if model not in self._models.names:
             raise ValueError(f"no arm model {model!r}; the models are {', '.join(self._models.names)}")
+        self.model = model
+        self._draw_as(self.geometry)
+
+    def set_style(self, style: str) -> None:
+        """Draw the ghosts as skeletons or as meshes (one of :data:`GHOST_STYLES`); the next render poses them."""
+        if style not in GHOST_STYLES:
+            raise ValueError(f"ghosts drawn as: {style!r:.40} is not one of the choices")
+        self.style = style
+        self._draw_as(self.geometry)
+
+    def _draw_as(self, geometry: str) -> None:
         for ghost in self.ghosts:
             ghost.visible = False
-        self.ghosts = self.models[model] if model in self.models else self._send(model)
+        self.ghosts = self.models[geometry] if geometry in self.models else self._send(geometry)
         for ghost in self.ghosts:
             ghost.visible = True
         self._forget_sent()
-        self.model = model  # named once drawn: whoever reads it finds its ghosts
 
     def _clicked(self, event) -> None:
         if self.on_select is not None and event.instance_index is not None:
@@ -306,14 +339,16 @@ class BranchesScene(View):
                 # one ghost per pose, none where the solid arm is: the arm is never tinted by a ghost
                 shown[group[0]] = self.show_ghosts and focus[list(group)].any() and snapshot.slot not in group
         self.shown = shown
-        scales = shown.astype(np.float32)
-        update_scales = scales.tobytes() != self._scales  # which branches exist rarely changes mid-drag
-        self._scales = scales.tobytes()
+        # a ghost's link where the solid arm's is (the shoulder, for the branches on the arm's side) is
+        # not drawn: the two surfaces would flicker through each other
+        apart = np.abs(snapshot.ghost_frames[:, 1:] - snapshot.frames[None, 1:]).max(axis=(2, 3)) > SAME_POSE
         # link-major float32 copies, made once: each link's (8, 3) and (8, 4) rows are then contiguous
         all_positions = np.ascontiguousarray(np.swapaxes(snapshot.ghost_frames[:, 1:, :3, 3], 0, 1), dtype=np.float32)
         all_wxyzs = np.ascontiguousarray(np.swapaxes(snapshot.ghost_wxyz[:, 1:], 0, 1), dtype=np.float32)
         for i, ghost in enumerate(self.ghosts, start=1):  # links 1..6
-            if update_scales:
+            scales = (shown & apart[:, i - 1]).astype(np.float32)
+            if scales.tobytes() != self._scales[i]:  # which branches exist rarely changes mid-drag
+                self._scales[i] = scales.tobytes()
                 ghost.batched_scales = scales
             positions = all_positions[i - 1]
             if positions.tobytes() == self._positions[i]:  # frames 1 and 2 sit on the shoulder whatever q is
@@ -324,24 +359,19 @@ class BranchesScene(View):
 
     def render_panel(self, snapshot: Snapshot) -> None:
         """The branch numbers, at the panel's pace (≤ 10 Hz): off the drag path, which they would double."""
-        groups = same_pose_groups(snapshot.ghost_frames, snapshot.solution.valid)
-        focus = focused(self.focus, snapshot.slot, snapshot.arm)
-        texts = branch_labels(snapshot, groups)
-        visible = [False] * 8
-        for group in groups:  # a group's label is its first slot's; the arm's is shown whatever the focus
-            visible[group[0]] = snapshot.slot in group or (self.show_ghosts and bool(focus[list(group)].any()))
-        state = (tuple(texts), tuple(visible))
-        if state != self._label_state:  # which branches exist, and where they coincide, rarely changes mid-drag
-            self._label_state = state
-            for label, text, show in zip(self.labels, texts, visible):
-                if show and label.text != text:
-                    label.text = text
-                if label.visible != show:
-                    label.visible = show
         elbows = snapshot.ghost_frames[:, 3, :3, 3] + (0.0, 0.0, LABEL_LIFT)
-        set_positions([self.labels[k] for k in range(8) if visible[k]], elbows[np.array(visible)])
+        self.numbers.show(elbows, numbered(snapshot, self.show_ghosts, self.focus))
 
 
+def numbered(snapshot: Snapshot, show_ghosts: bool, focus: str) -> list[str]:
+    """The number each slot's ghost carries ("" for none): one per pose, the arm's always, the others as shown."""
+    groups = same_pose_groups(snapshot.ghost_frames, snapshot.solution.valid)
+    shown_focus = focused(focus, snapshot.slot, snapshot.arm)
+    texts = branch_labels(snapshot, groups)
+    for group in groups:  # a group's label is its first slot's; the arm's is shown whatever the focus
+        if not (snapshot.slot in group or (show_ghosts and bool(shown_focus[list(group)].any()))):
+            texts[group[0]] = ""
+    return texts
 
 
 class IKTarget(View):
@@ -366,7 +396,7 @@ class IKTarget(View):
         # the halo rides on the gizmo unless the (shared) scene draws the target itself
         self.unreachable = None if drawing.target is not None else add_unreachable_halo(controls, f"{drawing.root}/ik_target")
         slots = len(arm.slot_labels)
-        folder = gui.add_folder(f"IK target: all {slots} branches" if not arm.numerical else "IK target")
+        folder = gui.add_folder(f"IK target: all {slots} branches" if slots > 1 and not arm.numerical else "IK target")
         self.folders = (folder,)
         label, hint = TYPED_TARGET[arm.task]
         with folder:
@@ -375,10 +405,15 @@ class IKTarget(View):
             self.show_ghosts = gui.add_checkbox("Show ghost arms", drawing.show_ghosts)
             self.focus = gui.add_dropdown("Ghosts shown", focus_options(arm), initial_value=drawing.focus,
                                           hint="One branch, or the arm's branch beside the one a single choice away")
+            styles = getattr(drawing, "ghost_styles", ())
+            self.ghost_style = (gui.add_dropdown("Ghosts drawn as", styles, initial_value=drawing.ghost_style,
+                                                 hint="Coloured skeletons, so the solid arm stands out; or the arm's own "
+                                                      "meshes, translucent") if len(styles) > 1 else None)
             self.branch_buttons = gui.add_button_group("Use branch", tuple(str(k + 1) for k in range(slots)))
             self.branches = gui.add_markdown(branches_markdown(snapshot))
             self.typed_pose = gui.add_text(label, "", hint=hint)
             self.move_button = gui.add_button("Move target here", icon=viser.Icon.TARGET)
+            self.refusal = Beside(gui)
             self.snap_button = gui.add_button("Put target back on the tool", icon=viser.Icon.ARROW_BACK_UP)
 
         drawing.on_select = self._ghost_clicked
@@ -386,7 +421,9 @@ class IKTarget(View):
         self.branch_buttons.on_click(session.guard(self._branch_button))
         self.show_ghosts.on_update(session.guard(self._toggle_ghosts))
         self.focus.on_update(session.guard(self._choose_focus))
-        self.move_button.on_click(session.guard(self._typed_target))
+        if self.ghost_style is not None:
+            self.ghost_style.on_update(session.guard(self._choose_style))
+        self.move_button.on_click(session.guard(self._typed_target, beside=self.refusal))
         self.snap_button.on_click(session.guard(lambda _: session.apply(lambda state: state.set_joints(state.q))))
 
     def thicken(self, lecture: bool) -> None:
@@ -431,6 +468,12 @@ class IKTarget(View):
 
     def _choose_focus(self, _: viser.GuiEvent) -> None:
         self._drawing.focus = chosen(self.focus, "ghosts shown")
+        self._session.redraw()
+
+    def _choose_style(self, _: viser.GuiEvent) -> None:
+        style = chosen(self.ghost_style, "ghosts drawn as")
+        with self._session.state.lock:
+            self._drawing.set_ghost_style(style)
         self._session.redraw()
 
     def _typed_target(self, _: viser.GuiEvent) -> None:

@@ -18,7 +18,7 @@ import viser
 
 from ur10core import to_controller
 
-from ..feedback import chosen
+from ..feedback import Beside, chosen
 from ..state import ArmState, Snapshot, joint_value_text
 from ..style import number
 from ..view import Session, View
@@ -96,14 +96,17 @@ class JointPanel(View):
             for k, kind in enumerate(arm.joint_types):
                 low, high = (round(float(to_display(kind, v)), 1) for v in arm.limits[k])
                 unit = "°" if kind == "R" else " mm"
-                self.sliders.append(gui.add_slider(
-                    slider_label(arm, k), min=low, max=high, step=0.1 if kind == "R" else 1.0, initial_value=shown[k],
+                slider = gui.add_slider(
+                    slider_label(arm, k), min=low, max=high, step=1.0, initial_value=shown[k],
                     hint=f"Joint {k + 1} ({arm.joint_names[k]}): {'revolute' if kind == 'R' else 'prismatic'}, "
-                         f"{low:g}…{high:g}{unit}. Type an exact value in the box."))
+                         f"{low:g}…{high:g}{unit}. Type an exact value in the box.")
+                slider.precision = 1  # an arrow key moves it a whole degree (or mm); the box takes tenths
+                self.sliders.append(slider)
             self.poses = gui.add_button_group("Pose", self.pose_names)
             self.typed = gui.add_text(typed_label(arm), display_text(arm, q),
                                       hint="Every joint, separated by commas or spaces: degrees, or mm for a prismatic joint")
             self.apply_typed = gui.add_button("Set these values", icon=viser.Icon.CHECK)
+            self.refusal = Beside(gui)
             self.controller = (gui.add_checkbox("UR controller angles", False,
                                                 hint="Show what a real UR teach pendant displays for this pose")
                                if arm.name in arm.UR_PRESETS else None)
@@ -112,7 +115,7 @@ class JointPanel(View):
         for index, slider in enumerate(self.sliders):
             slider.on_update(session.guard(self._slider_moved(index)))
         self.poses.on_click(session.guard(self._pose_button))
-        self.apply_typed.on_click(session.guard(self._typed_values))
+        self.apply_typed.on_click(session.guard(self._typed_values, beside=self.refusal))
         if self.controller is not None:
             self.controller.on_update(session.guard(lambda _: session.refresher.request(session)))
 

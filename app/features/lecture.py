@@ -2,8 +2,8 @@
 
 One switch per browser, in its "View" folder; ``ur10-teach --lecture`` starts every browser
 with it on (in shared mode the viewers' too). It sets the page's type to at least 20 px
-(the panel's default is about 13 px), widens the docked panel to hold it, and thickens the
-gizmo's lines; "Hide the panel" folds the panel to a strip at the edge, leaving the whole
+(the panel's default is about 13 px) and every 3D label to at least 24 px, widens the docked
+panel to hold it, and thickens the gizmo's lines; "Hide the panel" folds the panel to a strip at the edge, leaving the whole
 window to the arm (a click on the strip brings it back).
 """
 
@@ -13,9 +13,12 @@ from typing import Callable
 
 import viser
 
+from ..style import label_scale
+from ..viser_internals import labels_of
+
 #: The page's root size: viser's panel text is 0.8125 rem, so this makes it 20.8 px.
 ROOT_FONT_PX = 25.6
-PANEL_WIDTH_PX = {False: 384, True: 540}  #: viser's "large" panel, and the lecture one
+PANEL_WIDTH_PX = {False: 330, True: 540}  #: a third of a 1024 px window at most, and the lecture one
 STYLE = (
     "<style>"
     f"html {{ font-size: {ROOT_FONT_PX}px !important; }}"
@@ -56,3 +59,14 @@ class LectureMode:
         self._gui.main_panel.set_width(PANEL_WIDTH_PX[on])
         for callback in self.on_change:
             callback(on)
+
+
+def size_labels(scene: viser.SceneApi, lecture: bool) -> None:
+    """Every 3D label of ``scene`` at its size in lecture mode or out of it (``style.label_scale``)."""
+    for label in labels_of(scene):
+        base = getattr(label, "_base_scale", None)
+        if base is None:
+            base = label._base_scale = label.font_screen_scale
+        wanted = label_scale(base, lecture)
+        if label.font_screen_scale != wanted:
+            label.font_screen_scale = wanted

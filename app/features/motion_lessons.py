@@ -8,6 +8,7 @@ a Python loop) and then played on the arm in real time (``ur10teach.features.ani
 
 from __future__ import annotations
 
+import functools
 import itertools
 from typing import Callable
 
@@ -17,6 +18,7 @@ import viser.uplot
 
 from ur10core import dynamics, paths
 from ur10core.branches import wrap
+from ur10core.workspace import through_floor
 
 from ..feedback import chosen
 from ..serving.workers import APART, HEAVY
@@ -85,8 +87,9 @@ def rate_chart(gui: viser.GuiApi, kind: str, labels: tuple[str, ...], kinds: str
 
 
 def path_summary(path: paths.Path, kind: str, limits: np.ndarray | None, labels: tuple[str, ...],
-                 kinds: str) -> str:
-    """What a student should notice: each joint's fastest rate against its limit, and where damping acted."""
+                 kinds: str, out_of_reach: tuple[float, float, str] | None = None) -> str:
+    """What a student should notice: each joint's fastest rate against its limit, where damping acted,
+    how far the tool gets from the straight line, and where that line is out of the arm's reach."""
     fastest = np.abs(shown_rates(path.qdot, kinds)).max(axis=0)
     over_limit = fastest > limits if limits is not None else np.zeros(len(fastest), bool)
     cells = " · ".join((f"<b style='color:#dc2626'>{label} {number(rate, '.0f')}{unit}</b>" if over
@@ -102,8 +105,14 @@ def path_summary(path: paths.Path, kind: str, limits: np.ndarray | None, labels:
                      else "Every joint within the arm's speed limits.")
     damped = np.flatnonzero(path.damping > 0)
     if len(damped):
-        lines.append(f"Near a singularity from {path.t[damped[0]]:.2f} s to {path.t[damped[-1]]:.2f} s: the rates were damped "
-                     "(the tool leaves the line a little there).")
+        lines.append(f"Near a singularity from {path.t[damped[0]]:.2f} s to {path.t[damped[-1]]:.2f} s: the rates were damped.")
+    if kind == PATHS[0] and out_of_reach is not None:
+        first, last, why = out_of_reach
+        lines.append(f"The straight line leaves the arm's reach from {first:.0%} to {last:.0%} of the way "
+                     f"({why.removeprefix('unreachable: ')}): no arm can follow it there.")
+    deviation = 1000 * paths.line_deviation(path)
+    lines.append(f"The tool keeps to the straight line (within {number(deviation, '.2g')} mm)." if deviation < 1
+                 else f"The tool leaves the straight line by up to **{number(deviation, '.0f')} mm**.")
     return "  \n".join(lines)
 
 
@@ -158,14 +167,22 @@ class MotionLessons(View):
 
     def _release(self) -> None:
         session = self._session
-        arm, start = session.arm, session.state.last.q.copy()
+        arm, start, points = session.arm, session.state.last.q.copy(), session.state.body_points
         dynamics.link_masses(arm)  # an arm without published masses: refused here, with the reason
         self._before()
 
+        # the equations of motion know no floor: the drop ends where the arm first touches it, as a real one would
+        floor = None if through_floor(arm, start, points) else functools.partial(through_floor, arm, body_points=points)
+
         def compute() -> tuple[np.ndarray, np.ndarray]:
-            motion = HEAVY.run(session.client, lambda: APART.run(dynamics.release, arm, start, duration=DROP_SECONDS),
-                               cancelled=self.player.cancelled)
-            return motion.t, wrap(motion.q)  # a joint that swung round is shown within one turn
+            motion = HEAVY.run(session.client, lambda: APART.run(dynamics.release, arm, start, duration=DROP_SECONDS,
+                                                                  stop=floor), cancelled=self.player.cancelled)
+            hit = floor is not None and bool(floor(motion.q[-1]))
+            self.summary.content = (f"**Gravity.** The arm hits the floor at {motion.t[-1]:.2f} s: the drop stops there "
+                                    "(the equations of motion know no floor)." if hit else
+                                    f"**Gravity.** {motion.t[-1]:.0f} s of free fall, clear of the floor.")
+            end = len(motion.t) - hit  # shown up to the touch, not through the floor
+            return motion.t[:end], wrap(motion.q[:end])  # a joint that swung round is shown within one turn
 
         self.player.play(compute, "motion")
 
@@ -188,12 +205,19 @@ class MotionLessons(View):
                                                           PATH_SECONDS, PATH_STEPS),
                                         cancelled=self.player.cancelled),
                     PATHS[1]: paths.joint_interpolation(arm, start, goal, PATH_SECONDS, PATH_STEPS)}
-            self.summary.content = "\n\n".join(path_summary(both[k], k, self._limits, self._labels, self._kinds)
+            out_of_reach = paths.line_out_of_reach(arm, start, arm.fk(goal))
+            self.summary.content = "\n\n".join(path_summary(both[k], k, self._limits, self._labels, self._kinds, out_of_reach)
                                                 for k in (kind, *(k for k in PATHS if k != kind)))
             with session.client.atomic():
                 for name, path in both.items():
                     self.charts[name].data = rate_chart_data(path, self._limits, self._kinds)
                     self.charts[name].visible = True
+            camera, world = session.camera, session.drawing.world
+            if camera is not None:  # the whole way in view, both ways
+                camera.show_also("path", np.vstack([path.tool for path in both.values()]) @ world[:3, :3].T + world[:3, 3])
+            outside = paths.out_of_range(arm, both[kind])
+            if outside:  # said before the arm moves, not when it stops halfway
+                raise ValueError(f"the {kind} cannot be played: {outside}. Its summary and chart are in Motion.")
             return both[kind].t, np.hstack([both[kind].q, both[kind].qdot])
 
         n = arm.n_joints  # each frame carries its rates: the velocity arrows show them while it plays

@@ -1,13 +1,7 @@
-"""The branch-count map: for the tool's current orientation, how many IK branches reach each point of a plane.
+"""The branch-count map: how many IK branches reach each point of a plane, for the tool's orientation.
 
-``ur10core.workspace.branch_count_map`` solves 200 × 200 poses in one batch (100 × 100 for the
-course's other arms, whose IK is numpy's alone); the map is
-drawn as one small PNG image lying in the plane (a few KB, where 40 000 coloured points
-would be 600 KB). It is recomputed off the drag path: the panel's pace (≤ 10 Hz) asks
-for it, a background thread computes it, and requests that come meanwhile are folded into
-one more computation with the newest target (``ur10teach.serving.workers.FoldedRuns``). Maps are made
-one at a time in the server, each address's at most half the time (``ur10teach.serving.workers.MAPS``):
-eight tabs turning their gizmos cost what one does.
+One batch IK of 200 × 200 poses (100 × 100 for the numpy-only arms), drawn as a PNG of a few
+KB lying in the plane, recomputed off the drag path (``FoldedRuns``, ``MAPS``: docs/architecture.md §3).
 """
 
 from __future__ import annotations
@@ -187,7 +181,8 @@ class ReachMapView(View):
             direction = side * normal
         else:
             direction = FROM_ABOVE
-        camera.look_from(direction, reached[:: max(1, len(reached) // 2000)] if len(reached) else None)
+        camera.extra["reach map"] = reached[:: max(1, len(reached) // 2000)]
+        camera.look_from(direction)
 
     def clear(self) -> None:
         with self._lock:
@@ -195,6 +190,9 @@ class ReachMapView(View):
                 self.image.remove()
                 self.image = None
             self.shown_key = None
+        camera = getattr(self._session, "camera", None)
+        if camera is not None:
+            camera.extra.pop("reach map", None)
 
     def close(self) -> None:
         with self._lock:

@@ -62,7 +62,7 @@ class Readouts(View):
     """The "Tool pose" folder."""
 
     def __init__(self, gui: viser.GuiApi, first: Snapshot) -> None:
-        folder = gui.add_folder(pose_title(first))
+        folder = gui.add_folder(pose_title(first), expand_by_default=False)
         with folder:
             self.pose = gui.add_markdown(flange_markdown(first))
         self.folders = (folder,)

@@ -1,19 +1,6 @@
-"""Singularities, for any arm whose model factors det J (docs/kinematics.md §5, §7.6).
+"""Singularities, for any arm whose model factors det J: gauges, a rolling plot, the formula and a 3D overlay.
 
-The "Singularities" folder shows each factor the model gives as a gauge that turns from
-green to red as it approaches zero, with what makes it zero, a short rolling plot, the
-UR family's factored formula (rendered MathML from ``ur10core.symbolic``), and buttons that
-put the arm exactly on each singularity where the model can. In 3D each arm's drawing
-shows the geometry each factor measures (:class:`SingularityOverlay`): for the UR family
-
-* shoulder — the cylinder of radius d4 about axis 1 and the wrist-2 point P5, marked by a
-  cross (singular when P5 touches the cylinder);
-* elbow — the reach circles (a2 + a3 stretched, |a2 − a3| folded) of the frame-4 origin P4
-  about the shoulder, in the arm's plane, and P4 (singular on a circle);
-* wrist — axes 4 and 6 (singular when they are parallel);
-
-for the course's other arms (§7.6) the same for their own factors (the Stanford arm's stroke,
-the cylindrical arm's reach; a SCARA's or a planar arm's elbow seen along axis 1).
+What each factor's overlay draws: docs/kinematics.md §5.1.
 """
 
 from __future__ import annotations
@@ -44,7 +31,7 @@ from ..style import (
     number,
 )
 from ..view import Session, View
-from ..viser_internals.fast_updates import set_positions
+from .branch_labels import BranchLabels
 
 #: Below this share of its largest value a factor is drawn fully red.
 ALARM_AT = 0.05
@@ -86,18 +73,21 @@ def factor_levels(arm: Arm, factors: np.ndarray) -> np.ndarray:
     return np.clip(np.abs(factors) / factor_scales(arm), 0.0, 1.0)
 
 
+@functools.lru_cache(maxsize=64)  # typed tables come and go: a bounded few
 def factor_words(arm: Arm) -> tuple[str, list[tuple[str, str, str]]] | None:
-    """(what det J is, [(name, expression, what makes it zero)] per factor) as the model gives them, or None
-    for a typed table (its det J is not derived)."""
+    """(what det J is, [(name, expression as HTML, what makes it zero)] per factor) as the model gives them,
+    or None for a typed table (its det J is not derived). A derived expression is rendered math (MathML)."""
     if arm.name in PRESETS:
         derivation = symbolic_arms.load(arm.name)
+        types = "".join(arm.joint_types)
         return (f"det J = {derivation.constant} × the factors (derived with sympy from the DH table)",
-                [(f.name, str(f.expression), f.meaning) for f in derivation.factors])
+                [(f.name, symbolic_arms.mathml(f.expression, types), f.meaning) for f in derivation.factors])
     words = getattr(arm.solver, "factor_words", None)
     if words is None:
         return None
     what = "det J" if arm.task == "pose" else "det J_v"
-    return f"{what} = {arm.solver.det_constant} × the factors (the course's closed form)", list(words)
+    return (f"{what} = {arm.solver.det_constant} × the factors (the course's closed form)",
+            [(name, f"<code>{expression}</code>", meaning) for name, expression, meaning in words])
 
 
 def factors_html(arm: Arm, q: np.ndarray) -> str:
@@ -113,7 +103,7 @@ def factors_html(arm: Arm, q: np.ndarray) -> str:
     for (name, expression, meaning), value, level in zip(factors, values, factor_levels(arm, values)):
         colour = hex_color(blend(SAFE_GREEN, DANGER_RED, alarm(level)))
         parts.append(
-            f"<div style='margin:4px 0'><b>{name}</b> <code>{expression}</code> = {number(value, '+.4f')}"
+            f"<div style='margin:4px 0'><b>{name}</b> {expression} = {number(value, '+.4f')}"
             "<div style='height:8px;background:#e9ecef;border-radius:4px'>"
             f"<div class='gauge-{name}' style='height:8px;width:{100 * level:.1f}%;border-radius:4px;"
             f"background:{colour}'></div></div><div style='font-size:0.85em'>zero when {meaning}</div></div>")
@@ -234,7 +224,8 @@ class SingularityOverlay(View):
         if anchored is None:
             anchored = {name: [(None, segments)] for name, segments in factor_geometry(arm, first.q, first.frames, size).items()}
         self.parts: dict[str, list[viser.LineSegmentsHandle]] = {}
-        self.labels: dict[str, viser.LabelHandle] = {}
+        #: each name by its factor's last part (the point or the axis that matters): (link or None, point in it)
+        self._name_points: list[tuple[int | None, np.ndarray]] = []
         for name, parts in anchored.items():
             self.parts[name] = []
             for k, (anchor, segments) in enumerate(parts):
@@ -242,25 +233,44 @@ class SingularityOverlay(View):
                 self.parts[name].append(scene.add_line_segments(
                     f"{parent}/{name}{k}", segments.astype(np.float32), line_color(FACTOR_COLORS[name]),
                     thickness=0.01 * size, visible=False))
-            anchor, segments = parts[-1]  # the name by the last part: the point or the axis that matters
-            parent = f"{root}/singular" if anchor is None else link_node(anchor)
-            self.labels[name] = scene.add_label(f"{parent}/{name}_label", name, font_screen_scale=1.3, anchor="bottom-center",
-                                                position=segments.mean(axis=(0, 1)), visible=False)
+            anchor, segments = parts[-1]
+            self._name_points.append((anchor, segments.mean(axis=(0, 1))))
+        #: the factors' names, placed apart on the screen with the drawing's other labels
+        self.names = BranchLabels(scene, f"{root}/singular/names", len(self.parts), scale=1.3,
+                                  colours=[FACTOR_COLORS[name] for name in self.parts])
         #: each factor's first line drawing
         self.lines = {name: parts[0] for name, parts in self.parts.items()}
 
+    @property
+    def labels(self) -> dict[str, viser.LabelHandle]:
+        """The label that shows each factor's name (one label may show several)."""
+        names = list(self.parts)
+        return {names[k]: label for (members, _, _), label in zip(self.names.placed, self.names.labels) for k in members}
+
     def set_enabled(self, enabled: bool) -> None:
-        """Show or hide it; the next render draws it (the session redraws at once)."""
+        """Show or hide it; the next render draws it, the names at the panel's pace (the session redraws at once)."""
         self.enabled = enabled
-        for node in (*(part for parts in self.parts.values() for part in parts), *self.labels.values()):
+        for node in (part for parts in self.parts.values() for part in parts):
             node.visible = enabled
+        if not enabled:
+            self.names.show(np.zeros((0, 3)), [])
+
+    def render_panel(self, snapshot: Snapshot) -> None:
+        if not self.enabled:
+            return
+        if self._moving:
+            points = [segments.mean(axis=(0, 1)) for segments in factor_geometry(self._arm, snapshot.q, snapshot.frames,
+                                                                                  self._size).values()]
+        else:
+            points = [point if anchor is None else snapshot.frames[anchor, :3, :3] @ point + snapshot.frames[anchor, :3, 3]
+                      for anchor, point in self._name_points]
+        self.names.show(np.array(points), list(self.parts))
 
     def render(self, snapshot: Snapshot) -> None:
         if not self.enabled:
             return
         if self._moving:
             geometry = factor_geometry(self._arm, snapshot.q, snapshot.frames, self._size)
-            set_positions(list(self.labels.values()), np.array([segments.mean(axis=(0, 1)) for segments in geometry.values()]))
             for name, segments in geometry.items():
                 self.lines[name].points = segments.astype(np.float32)
         for name, value, scale in zip(self.parts, snapshot.factors.tolist(), self._scales):  # a few floats: plain Python
@@ -276,6 +286,24 @@ def has_overlay(arm: Arm) -> bool:
     return factor_words(arm) is not None and arm.dh is not None
 
 
+def held_levels(history, now: float, seconds: float = PLOT_SECONDS) -> np.ndarray:
+    """(m, 1 + k) float32 rows (time − now, levels…) of the last ``seconds``: each sample's levels held
+    until the next change and the last until now, the first from the window's start, so an arm at
+    rest draws level lines, not a dot.
+
+    >>> held_levels([(0.0, 0.5), (4.0, 0.25)], now=6.0).tolist()
+    [[-10.0, 0.5], [-2.0, 0.5], [-2.0, 0.25], [0.0, 0.25]]
+    """
+    samples = np.array(history, dtype=float)
+    start = np.searchsorted(samples[:, 0], now - seconds, side="right") - 1  # the levels in force at the window's start
+    samples = samples[max(start, 0):]
+    samples[0, 0] = now - seconds  # at rest since the window's start (or since the arm was shown)
+    steps = np.repeat(samples, 2, axis=0)
+    steps[1::2, 0] = np.append(samples[1:, 0], now)  # each row held until the next one's time
+    steps[:, 0] -= now
+    return steps.astype(np.float32)
+
+
 class Singularities(View):
     """The "Singularities" folder, for any arm: the 3D switch, the formula, gauges, rolling plot, demo buttons.
 
@@ -289,7 +317,7 @@ class Singularities(View):
         self._words = factor_words(arm)
         self._history: collections.deque = collections.deque(maxlen=PLOT_SAMPLES)
         self._started = time.monotonic()
-        folder = gui.add_folder("Singularities")
+        folder = gui.add_folder("Singularities", expand_by_default=False)
         self.folders = (folder,)
         names = [name for name, _, _ in self._words[1]] if self._words else []
         with folder:
@@ -336,8 +364,4 @@ class Singularities(View):
             return
         now = time.monotonic() - self._started
         self._history.append((now, *factor_levels(self._arm, snapshot.factors)))
-        history = np.array([h for h in self._history if h[0] >= now - PLOT_SECONDS], dtype=np.float32)
-        if len(history) < 2:
-            history = np.vstack([history, history])
-        history[:, 0] -= np.float32(now)
-        self.plot.data = tuple(np.ascontiguousarray(column) for column in history.T)
+        self.plot.data = tuple(np.ascontiguousarray(column) for column in held_levels(self._history, now).T)

@@ -16,8 +16,9 @@ from typing import Any, Callable
 import numpy as np
 import viser
 
+from ..feedback import Beside
 from ..state import Snapshot
-from ..style import number
+from ..style import number, swatch
 from ..view import Session, View
 
 LINEAR_COLOR, ANGULAR_COLOR = (0, 114, 178), (204, 121, 167)
@@ -93,8 +94,11 @@ class VelocityView(View):
         folder = gui.add_folder("Velocities", expand_by_default=False)
         self.folders = (folder,)
         with folder:
-            gui.add_markdown(f"Turn the joints at these rates: the arrows are the {place}'s velocity v (blue) and "
-                             "its turning rate ω (purple), v = J q̇.")
+            gui.add_markdown(f"Turn the joints at these rates: the arrows are the {place}'s velocity and turning "
+                             f"rate, [v; ω] = J q̇.  \n{swatch(LINEAR_COLOR)} **v**: velocity, "
+                             f"{number(1000 * METRES_PER_SPEED, '.0f')} mm drawn per m/s  \n{swatch(ANGULAR_COLOR)} **ω**: "
+                             f"turning rate (about the arrow, right hand), {number(1000 * METRES_PER_TURN_RATE, '.0f')} "
+                             "mm drawn per rad/s")
             self.sliders = [gui.add_slider(f"{'θ̇' if kind == 'R' else 'ḋ'}{i + 1} {name} ({'°/s' if kind == 'R' else 'mm/s'})",
                                            min=-MAX_RATE[kind], max=MAX_RATE[kind], step=1.0, initial_value=0.0)
                             for i, (name, kind) in enumerate(zip(self._labels, self._kinds))]
@@ -102,16 +106,19 @@ class VelocityView(View):
             gui.add_markdown(f"Or ask for a {place} velocity and see the joint rates it needs, q̇ = J⁻¹ v:")
             self.typed = gui.add_text("vx vy vz (mm/s) ωx ωy ωz (°/s)", "100 0 0 0 0 0")
             self.solve = gui.add_button("Find the joint rates")
+            self.refusal = Beside(gui)
             self.rates = gui.add_markdown("")
         self.linear = scene.add_arrows(f"{root}/linear", np.zeros((1, 2, 3)), LINEAR_COLOR, shaft_radius=0.008,
                                        head_radius=0.02, head_length=0.04, visible=False)
         self.angular = scene.add_arrows(f"{root}/angular", np.zeros((1, 2, 3)), ANGULAR_COLOR, shaft_radius=0.008,
                                         head_radius=0.02, head_length=0.04, visible=False)
-        self.labels = (scene.add_label(f"{root}/linear_label", "v", font_screen_scale=1.4, anchor="center-left", visible=False),
-                       scene.add_label(f"{root}/angular_label", "ω", font_screen_scale=1.4, anchor="center-left", visible=False))
+        self.labels = (scene.add_label(f"{root}/linear_label", "v velocity", font_screen_scale=1.4, anchor="center-left",
+                                       visible=False),
+                       scene.add_label(f"{root}/angular_label", "ω turning rate", font_screen_scale=1.4, anchor="center-left",
+                                       visible=False))
         for slider in self.sliders:
             slider.on_update(session.guard(lambda _: session.redraw()))
-        self.solve.on_click(session.guard(lambda _: self._solve()))
+        self.solve.on_click(session.guard(lambda _: self._solve(), beside=self.refusal))
 
     def joint_rates(self) -> np.ndarray:
         """(n,) the sliders' joint rates, rad/s (m/s for a prismatic joint)."""

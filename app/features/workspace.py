@@ -1,13 +1,7 @@
-"""The workspace point cloud, coloured by manipulability |det J|, with an optional section.
+"""The workspace point cloud, coloured by manipulability |det J|, with a section and its revolved hull.
 
-Sampled by ``Arm.sample_workspace`` off the event loop, as a slow job (``ur10teach.serving.workers.HEAVY``:
-one at a time in the server, each address's a share of the time), and kept for every
-client in :data:`CLOUDS`, whose memory is a fixed budget; each client is sent only the
-cloud it asked for. 200 k points (the default) is about 1.8 MB per client. A vertical section turns
-every sample into the arm's plane; a horizontal one is sampled in its plane
-(``Arm.sample_horizontal_section``). The camera turns to face a section square-on. The
-translucent hull is the cloud's outer surface and hole, turned about the base axis
-(``ur10core.workspace.revolved_boundary``): one light mesh instead of the points.
+Sampled off the event loop as a slow job (docs/architecture.md §3) and kept in :data:`CLOUDS`,
+whose memory is a fixed budget: 200 k points (the default) are about 1.8 MB per browser.
 """
 
 from __future__ import annotations
@@ -232,7 +226,7 @@ class WorkspaceView(View):
         self._lock = threading.Lock()
         self._closed = False
         self._clouds = FoldedRuns(self._update_or_explain)
-        folder = gui.add_folder("Workspace")
+        folder = gui.add_folder("Workspace", expand_by_default=False)
         self.folders = (folder,)
         with folder:
             self.enabled = gui.add_checkbox("Show workspace cloud", False)
@@ -325,9 +319,13 @@ class WorkspaceView(View):
         return np.array([-math.sin(azimuth), math.cos(azimuth), 0.0])
 
     def _look_square_on(self, section: str, points: np.ndarray) -> None:
-        """A section is seen square-on: the camera turns to face its plane (and frames the whole hull)."""
+        """The cloud is framed with the arm; a section is seen square-on (the camera turns to face its plane)."""
         camera = self._session.camera
-        if camera is None or section == SECTIONS[0]:
+        if camera is None:
+            return
+        camera.extra["cloud"] = points[:: max(1, len(points) // 2000)]
+        if section == SECTIONS[0]:
+            camera.frame()
             return
         if section == HULL:  # the whole of it in view, from the course's three-quarter angle
             direction = VIEWS["Course figure"]
@@ -337,15 +335,18 @@ class WorkspaceView(View):
             direction = self._plane_normal()  # from the open side, onto the cut face
         else:
             direction = FROM_ABOVE
-        camera.look_from(direction, points[:: max(1, len(points) // 2000)])
+        camera.look_from(direction)
 
     def clear(self) -> None:
-        """Take the cloud out of the scene (toggled off)."""
+        """Take the cloud out of the scene (toggled off), and out of the camera's framing."""
         CLOUDS.release(self)
         with self._lock:
             if self._cloud is not None:
                 self._cloud.remove()  # and the legend under it
                 self._cloud = self.legend_label = None
+        camera = getattr(self._session, "camera", None)
+        if camera is not None and "cloud" in camera.extra and not self._closed:
+            camera.show_also("cloud", None)
 
     def close(self) -> None:
         """The session has gone: its cloud goes too, even from a scene everyone shares."""

@@ -1,21 +1,6 @@
 """Shared demo mode (``--shared``): everyone watches the presenter's arm.
 
-The demo arm lives in viser's *shared* scene and a shared, read-only "Live from the
-presenter" panel, so a redraw is serialised once and broadcast to every browser —
-thirty students cost the server one redraw, not thirty.
-
-* A browser starts as a **viewer**: it sees the presenter's arm, target, branches and
-  overlays move live; its camera is its own.
-* viser has no authentication, so the server prints a short **join code** at start-up;
-  the browser that enters it becomes the **presenter** and gets the full panel and the
-  gizmo (its own, client-scoped: a shared gizmo would let anyone drag it). Entering the
-  code elsewhere hands the role over. Wrong codes from one address lock the code for that
-  address for a while, longer each time, however many tabs it guesses from; every wrong
-  code is logged on the teacher's console (grouped by address), and this machine, where
-  the teacher sits, is never locked out.
-* A viewer can **explore on their own**: a private arm starting from the presenter's
-  pose, drawn in the browser's own scope, where the shared arm is hidden for that browser
-  only. **Back to the presenter's arm** removes it again.
+Why it is built so: docs/architecture.md §5.
 """
 
 from __future__ import annotations
@@ -47,6 +32,7 @@ from ..features.drawings import arm_drawing
 from ..features.floor import add_floor_grid
 from ..features.ik_target import branches_markdown
 from ..features.joint_panel import joints_markdown
+from ..features.lecture import size_labels
 from ..features.readouts import flange_markdown
 from ..features.singularity import factors_html
 from ..feedback import guard
@@ -108,6 +94,7 @@ class LivePanel:
         self._overlay = overlay  #: the class's singularity overlay: its gauges show with it (or always, without one)
         self.presenter_here = presenter_here
         self.closed = False  # the refresher's protocol
+        self.on_render: list = []  #: called before each redraw (the shared scene's labels sized for the hall)
         # last in every panel: below the presenter's or an explorer's own controls
         self.folder = gui.add_folder("Live from the presenter", order=1e9)
         with self.folder:
@@ -130,6 +117,8 @@ class LivePanel:
 
     def render_panel(self) -> None:
         snapshot, arm = self._state.last, self._state.arm
+        for sized in self.on_render:
+            sized()
         self.status.content = self._status()
         self.joints.content = joints_markdown(arm, snapshot.q)
         self.branches.content = branches_markdown(snapshot)
@@ -163,7 +152,7 @@ class Classroom:
         self.states: dict[str, ArmState] = {}
         self.state = self._state_of(UR10)
         self.drawing = self._draw()
-        self.live = LivePanel(app.server.gui, self.state, UR10, self.drawing.overlay)
+        self.live = self._live_panel(UR10)
         self._last_switch = -math.inf
         self.members: dict[int, Member] = {}
         self.presenter: Member | None = None
@@ -181,6 +170,12 @@ class Classroom:
     def _models(self, arm: Arm):
         """UR's meshes for the server's own UR10; other arms are drawn from their tables."""
         return self.app.models if arm == self.app.arm else None
+
+    def _live_panel(self, title: str, presenter_here: bool = False) -> LivePanel:
+        """The live panel of the class's arm; before each redraw the shared scene's 3D labels are sized for the hall."""
+        live = LivePanel(self.app.server.gui, self.state, title, self.drawing.overlay, presenter_here)
+        live.on_render.append(lambda: size_labels(self.app.server.scene, self.app.lecture))
+        return live
 
     def _draw(self):
         """The class's arm in the shared scene, with a marker for its target (only the presenter has a gizmo)."""
@@ -273,7 +268,7 @@ class Classroom:
                              server=app.server, drawing=self.drawing, own_camera=False)
         session.follow_lecture_mode(member.camera.lecture)
         session.observers.append(lambda _: app.refresher.request(self.live))
-        session.camera = member.camera  # the browser's own camera, for the workspace sections
+        session.watch_camera(member.camera)  # the browser's own camera, for the workspace sections
         return session
 
     def _wrong_code(self, address: str, member: Member, now: float) -> None:
@@ -323,7 +318,7 @@ class Classroom:
             self.choice = label
             self.state = self._state_of(label)
             self.drawing = self._draw()
-            self.live = LivePanel(app.server.gui, self.state, label, self.drawing.overlay, True)
+            self.live = self._live_panel(label, presenter_here=True)
             self.choice = label
             app.server.gui.set_panel_label(panel_title(label, app.arm.name))
             member.session = self._presenter_session(member)
@@ -362,7 +357,7 @@ class Classroom:
                 state=ArmState(arm, self.state.q, body_points=None if models is None else models.outline),
                 root=DESKTOP_EXPLORER_ROOT if arm.dh is None else EXPLORER_ROOT)
             member.session.follow_lecture_mode(member.camera.lecture)
-            member.session.camera = member.camera
+            member.session.watch_camera(member.camera)
             member.role = EXPLORER
             self._hide_class_arm(member)
         self._draw_controls(member)

@@ -1,36 +1,6 @@
 """What the server accepts from a browser: one gate on viser's websocket, in every mode.
 
-viser accepts any message of up to 50 MB from any page, decodes it on the event loop,
-and dispatches every message type it knows (share tunnels, file uploads, form
-broadcasts), to anyone. A classroom needs less. The gate sits on the websocket server
-that viser starts (``websockets.asyncio.server.serve``, viser's only call into it, is
-given these settings for as long as the server starts up) and does four things:
-
-* **Size.** No incoming message over :data:`MAX_MESSAGE_BYTES`: the app's largest is a
-  typed text of at most 1000 characters. A bigger frame closes that connection (1009)
-  before a byte of it is decoded.
-* **Arrival.** Before a message is decoded, it takes a token from its connection's
-  message and byte buckets (:data:`ARRIVALS_PER_SECOND`, :data:`ARRIVAL_BYTES_PER_SECOND`,
-  far above what a browser sends); without one it is dropped undecoded, and a connection
-  that keeps sending over its rate is closed (1008). The reader lets the event loop run
-  between two frames, so a flooding socket cannot keep the others waiting.
-* **Kind.** Each message is decoded once. Only the messages the app has a use for pass
-  (:data:`ALLOWED`), with every field of the type viser's own class declares: widget
-  values, the gizmo, clicks on the arm, the camera. Anything else — a share-tunnel
-  request, a file upload, a form broadcast, a widget property other than its value, a
-  click without its fields — is dropped, and the first of each kind is logged.
-* **Rate.** Each connection's messages pass at most :data:`MESSAGES_PER_SECOND` (after a
-  burst), one at a time, and while one waits, a newer message for the same widget or
-  gizmo replaces it: a flood of slider updates costs the server one update per tick, and
-  only the flooding student waits.
-* **Who.** A websocket must come from a page the server itself served (its ``Origin``
-  names the host the browser asked for) or from an origin the teacher allowed
-  (``--allow-origin``), and name this machine or an IP address as its host (no DNS
-  rebinding). Apart from loopback (this machine: the teacher's own tabs and tools), an
-  address may hold :data:`CONNECTIONS_PER_ADDRESS` websockets and open new ones at
-  :data:`NEW_CONNECTIONS_PER_SECOND` after a burst of :data:`NEW_CONNECTION_BURST`, and hold
-  :data:`TCP_CONNECTIONS_PER_ADDRESS` TCP connections of any kind (a half-sent request
-  included, which waits at most :data:`OPEN_TIMEOUT`).
+Why it is built so: docs/architecture.md §4.
 """
 
 from __future__ import annotations

@@ -2,7 +2,7 @@
 
 The drag benchmark and the classroom load test read them; nothing here is shown to
 students. ``UR10_TEACH_METRICS=<path>`` makes the server write a JSON summary to
-``<path>`` every second (see ``ur10teach.serving.server``).
+``<path>`` every second when the app runs as ``python -m ur10dev.metered_app``.
 """
 
 from __future__ import annotations
@@ -25,7 +25,7 @@ class LatencyLog:
 
     def __init__(self, capacity: int = CAPACITY) -> None:
         self._capacity = capacity
-        # re-entrant: the garbage collector's callback (``ur10teach.serving.server``, with metrics on) records
+        # re-entrant: the garbage collector's callback (``ur10dev.metered_app``) records
         # its pause on whichever thread allocated, which may be inside record() or summary();
         # with a plain lock that thread waited on itself and every thread recording after it
         # (the event loop's included) waited too: the whole server froze

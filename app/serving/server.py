@@ -2,18 +2,14 @@
 
 from __future__ import annotations
 
-import asyncio
 import ctypes
 import gc
-import json
 import logging
 import math
-import os
 import socket
 import threading
 import time
 import warnings
-from pathlib import Path
 
 import viser
 
@@ -27,6 +23,7 @@ from ..features.arm_picker import (
     ArmPicker,
     panel_title,
 )
+from ..features.branch_labels import CAMERA_FOV_DEGREES, CAMERA_LOOK_AT, CAMERA_POSITION
 from ..features.course_arms.editor import STARTING_TABLE, parse_table
 from ..features.floor import add_floor_grid
 from ..features.singularity import factor_scales
@@ -37,7 +34,6 @@ from ..style import BRAND_BLUE
 from ..viser_internals import fast_updates, shared_frames
 from .classroom import Classroom
 from .gate import Gate, TokenBucket, budget_of, gated_serve
-from .metrics import LATENCY
 from .workers import APART, JOINS, Cancelled, DragQueue, PanelRefresher
 
 log = logging.getLogger(__name__)
@@ -46,11 +42,6 @@ log = logging.getLogger(__name__)
 # gone; viser warns about each such connection. The session stops drawing as soon as it
 # hears, so nothing accumulates: the warning would only clutter the teacher's console.
 warnings.filterwarnings("ignore", message=r"Queued a \w+ on a closed connection", category=UserWarning)
-
-#: Where the camera starts (and "reset view" returns): the whole arm, a little from above.
-CAMERA_POSITION = (2.1, -1.9, 1.4)
-CAMERA_LOOK_AT = (0.2, 0.0, 0.5)
-CAMERA_FOV_DEGREES = 50.0
 
 
 def lan_addresses() -> list[str]:
@@ -95,55 +86,6 @@ def raise_open_file_limit(wanted: int = OPEN_FILES) -> int:
         except (ValueError, OSError):
             log.info("could not raise the open-file limit from %d", soft)
     return soft
-
-
-def _resident_bytes() -> int:
-    try:
-        for line in Path("/proc/self/status").read_text().splitlines():
-            if line.startswith("VmRSS:"):
-                return int(line.split()[1]) * 1024
-    except OSError:
-        pass
-    return 0
-
-
-async def _watch_event_loop(stop: threading.Event, period: float = 0.02) -> None:
-    """How late viser's event loop runs a callback it was asked to run ``period`` s from now.
-
-    Everything a browser sends and receives passes through that loop, so its lag adds to
-    every round trip; recorded as the ``event_loop_lag`` latency.
-    """
-    while not stop.is_set():
-        expected = time.perf_counter() + period
-        await asyncio.sleep(period)
-        LATENCY.record("event_loop_lag", max(0.0, time.perf_counter() - expected))
-
-
-def _watch_garbage_collector() -> None:
-    """Record each collection's pause as the ``gc`` latency (it stops every thread)."""
-    started: dict[str, float] = {}
-
-    def callback(phase: str, info: dict) -> None:
-        if phase == "start":
-            started["t"] = time.perf_counter()
-        elif "t" in started:
-            LATENCY.record(f"gc{info['generation']}", time.perf_counter() - started.pop("t"))
-
-    gc.callbacks.append(callback)
-
-
-def _thread_cpu_seconds() -> dict[str, float]:
-    """CPU seconds per kind of thread (the event loop, the workers, viser's pool), from /proc."""
-    ticks = os.sysconf("SC_CLK_TCK")
-    out: dict[str, float] = {}
-    for thread in threading.enumerate():
-        kind = "viser pool" if thread.name.startswith("ThreadPoolExecutor") else thread.name
-        try:
-            fields = Path(f"/proc/self/task/{thread.native_id}/stat").read_text().rsplit(") ", 1)[1].split()
-        except (OSError, IndexError):
-            continue
-        out[kind] = out.get(kind, 0.0) + (int(fields[11]) + int(fields[12])) / ticks
-    return out
 
 
 class Janitor:
@@ -252,20 +194,14 @@ class TeachingServer:
         self._sessions_lock = threading.Lock()
         #: shared demo mode (``--shared``): everyone watches the presenter (``ur10teach.serving.classroom``)
         self.classroom = Classroom(self) if shared else None
-        self._janitor = Janitor(forget=(CLOUDS.forget_unheld,))
+        self.janitor = Janitor(forget=(CLOUDS.forget_unheld,))
         self.server.on_client_connect(self._connected)
         self.server.on_client_disconnect(self._disconnected)
-        self._metrics_stop = threading.Event()
         # Everything loaded so far (numpy, sympy, viser, the meshes) lives as long as the
         # server: keep the collector from rescanning it, which paused every client for
         # ~0.1 s at each full collection under a classroom's load.
         gc.collect()
         gc.freeze()
-        metrics_path = os.environ.get("UR10_TEACH_METRICS")
-        if metrics_path:
-            _watch_garbage_collector()
-            asyncio.run_coroutine_threadsafe(_watch_event_loop(self._metrics_stop), self.server.get_event_loop())
-            threading.Thread(target=self._write_metrics, args=(Path(metrics_path),), daemon=True).start()
 
     @property
     def port(self) -> int:
@@ -392,31 +328,9 @@ class TeachingServer:
                 self._left_arms.pop(client.client_id, None)
             if session is not None:
                 session.close()
-        self._janitor.soon()
-
-    def _write_metrics(self, path: Path) -> None:
-        """Once a second: clients, handler latencies, CPU and memory of this process (for benchmarks)."""
-        while not self._metrics_stop.wait(1.0):
-            try:
-                report = {
-                    "time": time.time(),
-                    "clients": len(self.server.get_clients()),
-                    "sessions": len(self.sessions),
-                    "janitor_sweeps": self._janitor.sweeps,
-                    "latency": LATENCY.summary(),
-                    "cpu_seconds": sum(os.times()[:2]),
-                    "rss_bytes": _resident_bytes(),
-                    "threads": threading.active_count(),
-                    "thread_cpu_seconds": _thread_cpu_seconds(),
-                }
-                partial = path.with_suffix(".tmp")
-                partial.write_text(json.dumps(report))
-                partial.replace(path)  # readers never see half a file
-            except Exception:  # one failed report must not end the reports (a benchmark waits on them)
-                log.exception("metrics report failed")
+        self.janitor.soon()
 
     def stop(self) -> None:
-        self._metrics_stop.set()
         self.refresher.stop()
         self.drags.stop()
         APART.stop()

@@ -1,48 +1,6 @@
 """The two background workers every session shares, running on viser's own event loop.
 
-**Why on the event loop.** Everything a browser sends and receives goes through viser's
-asyncio loop. CPython runs one thread at a time; a thread that gives up the GIL for a
-socket call must wait for a busy worker thread to hand it back. With thirty students
-dragging, CPU-bound worker *threads* made the loop wait at every one of its thousands
-of socket calls a second, and drag events reached the server tens of milliseconds late.
-So the workers are asyncio tasks on that loop: they take turns with the sockets instead
-of fighting them for the GIL, and each turn is short (a drag update or a panel redraw
-takes about a millisecond).
-
-**Drags** (:class:`DragQueue`). Thirty students dragging at 20 Hz send 600 gizmo events
-a second. The gizmo callback only files the newest target of its session; the drag
-task takes the waiting sessions in turn and solves and redraws each for its newest
-target. A session waits in the queue at most once, so a busy server shows every student
-their newest target a little later rather than working through stale ones.
-
-**Panels** (:class:`PanelRefresher`). The side panel's text (joint sliders, branch
-table, readouts, gauges, plot) cannot be read faster than a few times a second, yet
-redrawing it costs more than the 3D update. So a change redraws the 3D view at once and
-only *asks* for a panel redraw; the refresher serves those requests, each session at
-most every :data:`PANEL_INTERVAL` seconds, always with its newest state, and rests
-between redraws so that it never takes more than :data:`DUTY` of the time. A burst of
-drag events costs one panel redraw, a click is answered at once, and thirty students
-dragging at once slow the panels down rather than the arms.
-
-**Slow one-off jobs** (:data:`HEAVY`). A typed arm's branch search or workspace cloud takes
-tens of milliseconds to over a second, on a thread of :data:`BACKGROUND`, a bounded pool
-(:meth:`FoldedRuns.start`): presses that come while one runs fold into one more run. At
-most one such job runs at a time in the whole server, so the drags always keep the other
-core, and each address's jobs (each browser's, on the teacher's own machine) take at most
-:data:`HEAVY_DUTY` of the time: a student clicking "Find every branch" over and over, from
-one tab or eight, waits between runs instead of keeping a core busy. A job whose browser
-has gone, or whose motion was stopped, is not started.
-
-**Joins** (:data:`JOINS`). A newcomer's session takes tens of milliseconds to build. A
-lecture hall opening the page at once is built one at a time, at most :data:`JOIN_DUTY` of
-the time, so that the students already dragging keep their arms moving.
-
-**Python loops in a process of their own** (:data:`APART`). A job that is a Python loop over
-small numpy calls (the arm let go under gravity, a path's resolved rates, a typed table's
-search from many starts) holds the GIL for most of its second, and a thread running it
-made the event loop wait at every socket call: eight tabs pressing *Release* took a
-dragging student's p99 from 4 to over 300 ms (``bench_hostile.py``). Such jobs run in
-one worker process, started at the first one, at a lower priority than the server.
+Why it is built so: docs/architecture.md §3.
 """
 
 from __future__ import annotations

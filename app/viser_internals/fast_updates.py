@@ -1,29 +1,6 @@
 """Per-frame pose updates straight into viser's message queue: the drag path's hot spot.
 
-viser's public setters (``node.wxyz = …``, ``mesh.batched_positions = …``) cast the
-value, compare it with the previous one and queue one message per property: about
-60 µs each on the classroom machine. A drag event turns six link nodes and moves six
-ghost links; with thirty students dragging, those setters were most of the server's
-time. These helpers queue viser's own messages directly — one per node, both instance
-arrays of a batched mesh in one message — and keep each handle's stored value in step,
-so reading a handle afterwards still tells the truth.
-
-The messages also encode themselves. viser encodes every outgoing message by walking
-its type hints (12–19 µs for these two kinds); the two subclasses below build the same
-dictionary straight from fields whose types are known (under 4 µs). With thirty
-students dragging that was another tenth of a core.
-
-Handles are also made faster. Each new scene node or widget handle had viser evaluate
-its props class's type hints afresh (``typing.get_type_hints``, per handle): 40 % of the
-server's time in building a browser's session. :func:`share_type_hints` evaluates them
-once per class.
-
-They rely on viser 1.1 internals (``SceneApi._queue_scene_message``, the handles'
-``_impl``), so viser is pinned exactly (pyproject.toml) and ``tests/test_fast_updates.py``
-holds what they send to what the public setters send: a viser upgrade that changes those
-internals fails the tests instead of drawing wrong. ``UR10_TEACH_PUBLIC_SETTERS=1`` draws
-through the public setters instead; ``benchmarks/bench_drag.py`` measures both, which is
-what keeps this module here (BENCHMARKS.md).
+Why it is built so: docs/architecture.md §6.
 """
 
 from __future__ import annotations

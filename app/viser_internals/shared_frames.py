@@ -1,25 +1,6 @@
 """Encode a broadcast window once, for every browser that receives it: the lecture hall's hot spot.
 
-viser sends each browser its windows of queued messages through its own
-``_message_producer``, which turns the window into dictionaries, msgpack-encodes them and
-zstd-compresses the result for that one browser. In shared mode the presenter's redraw is
-the same window of the same message objects for every viewer, so a hall of a hundred
-encoded every redraw a hundred times: about 45 % of the server's event loop (py-spy,
-BENCHMARKS.md, *lecture hall*). :func:`install` puts in a producer that keeps the frames
-of recent windows of viser's shared (broadcast) queue and sends the same bytes to every
-browser whose window holds the same messages. Each browser's own queue is encoded as
-viser does it, since no other browser receives those windows.
-
-It also gives every send :data:`SEND_TIMEOUT`: a browser that stops reading its socket
-(a paused laptop, or a client that never reads) would otherwise keep its connection, and
-everything queued for it, for as long as the server runs; it is dropped instead, and
-viser's teardown frees its queue.
-
-This replaces a private function of viser 1.1.1, which is pinned exactly
-(pyproject.toml). ``tests/test_shared_frames.py`` checks that the frames decode to what
-viser's own producer sends and fails when viser's producer changes.
-``UR10_TEACH_ENCODE_PER_CLIENT=1`` encodes every window per browser, as viser does (the
-benchmark's comparison row).
+Why it is built so: docs/architecture.md §7.
 """
 
 from __future__ import annotations

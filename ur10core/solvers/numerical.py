@@ -62,17 +62,32 @@ def rotation_log(R: np.ndarray) -> np.ndarray:
     return vector
 
 
+def most_solutions(n_joints: int) -> int:
+    """How many IK solutions a chain of ``n_joints`` can have for its task (docs/kinematics.md §7.4).
+
+    A joint reaching a point: 1; two joints: 2; three (the position of the tool): 4; six (the
+    pose): 16. Four, five or more than six joints are redundant (a continuum of solutions):
+    at most 16 of them are kept.
+
+    >>> [most_solutions(n) for n in (1, 2, 3, 6)]
+    [1, 2, 4, 16]
+    """
+    return {1: 1, 2: 2, 3: 4}.get(n_joints, 16)
+
+
 class NumericalIK:
-    """Damped least squares from ``starts`` starts; up to ``slots`` distinct solutions per pose."""
+    """Damped least squares from ``starts`` starts; up to ``slots`` distinct solutions per pose
+    (by default as many as the chain can have, :func:`most_solutions`)."""
 
     method = "found numerically"
 
     def __init__(self, table: DHTable, limits: np.ndarray, starts: int = 48, iterations: int = 150,
-                 slots: int = 16, seed: int = 0) -> None:
+                 slots: int | None = None, seed: int = 0) -> None:
         self.table = table
         self.limits = np.asarray(limits, dtype=float)
         self.starts, self.iterations, self.seed = starts, iterations, seed
         self.task = "pose" if table.n_joints >= 6 else "position"
+        slots = most_solutions(table.n_joints) if slots is None else slots
         self.labels = tuple(f"found numerically {k + 1}" for k in range(slots))
         self.revolute = np.array([t == "R" for t in table.joint_types])
 

@@ -19,6 +19,7 @@ from ur10core.orientation import quaternion
 
 from ...state import Snapshot
 from ...style import JOINT_CAP_GREY, SHOULDER_COLOR
+from ..branch_labels import BranchLabels, chain
 from .scene import LineDrawing
 
 ROOT = "/desktop_arm"
@@ -31,6 +32,9 @@ COURSE_TO_WORLD = np.array([[1.0, 0.0, 0.0], [0.0, 0.0, -1.0], [0.0, 1.0, 0.0]])
 #: Length of the parallelogram's crank at the shoulder (m): the drive is drawn to scale with it.
 CRANK = 0.3
 LINK_GREY = (90, 94, 102)
+#: What the drawing names in 3D: the base frame's axes (at their tips), the joints' angles and the tool.
+NAMES = ("x₀", "y₀ (up)", "z₀", "θ2", "θ3 (absolute)", "tool")
+AXIS_TIPS = np.array([[0.5, 0.0, 0.0], [0.0, 0.5, 0.0], [0.0, 0.0, 0.5]])
 DRIVE_COLOR = SHOULDER_COLOR
 
 
@@ -76,12 +80,14 @@ class DesktopArmScene(LineDrawing):
         self.joints = [scene.add_icosphere(f"{root}/joint_{k}", radius=0.07, color=JOINT_CAP_GREY, position=p)
                        for k, p in enumerate(points[1:3])]
         scene.add_frame(f"{root}/base_frame", axes_length=0.45, axes_radius=0.012)
-        for name, axis in (("x₀", (0.5, 0, 0)), ("y₀ (up)", (0, 0.5, 0)), ("z₀", (0, 0, 0.5))):
-            scene.add_label(f"{root}/base_frame/{name}", name, font_screen_scale=1.3, position=axis)
         self.tool = scene.add_frame(f"{root}/tool", axes_length=0.3, axes_radius=0.01)
-        self.labels = [scene.add_label(f"{root}/label_{k}", text, font_screen_scale=1.4, anchor="bottom-left")
-                       for k, text in enumerate(("θ2", "θ3 (absolute)", "tool"))]
-        self._add_ghosts(scene, arm, self._links(points)[1:], 0.02)
+        #: the base frame's axes and what the joints are, named apart on the screen like the branch numbers
+        self.captions = BranchLabels(scene, f"{root}/names", len(NAMES), scale=1.3, merge_px=4.0)
+        self.captions.world = self.world
+        self._name_points = np.zeros((len(NAMES), 3))
+        self._add_ghosts(scene, arm, self._links(points)[1:], 0.03, 0.09)
+        self.numbers.world = self.world
+        self.label_sets = chain((self.captions, self.numbers))  # the numbers keep clear of the captions
         if target_marker:
             self._add_target_marker(scene)
         self.render(first)
@@ -121,12 +127,18 @@ class DesktopArmScene(LineDrawing):
             joint.position = point
         self.tool.wxyz = quaternion(snapshot.flange[:3, :3], check=False)
         self.tool.position = points[3]
-        for label, point in zip(self.labels, (points[1], drive[0, 1], points[3])):
-            label.position = point
+        self._name_points = np.vstack([AXIS_TIPS, points[1], drive[0, 1], points[3]])
         self._render_ghosts(snapshot)
+
+    def render_panel(self, snapshot: Snapshot) -> None:
+        self.captions.show(self._name_points, list(NAMES))  # before the numbers, which keep clear of them
+        super().render_panel(snapshot)
 
     def _ghost_lines(self, frames: np.ndarray) -> np.ndarray:
         return self._links(self._points(frames))[1:]
 
     def _ghost_label(self, frames: np.ndarray) -> np.ndarray:
         return self._points(frames)[2]  # the elbow
+
+    def _ghost_joints(self, frames: np.ndarray) -> np.ndarray:
+        return self._points(frames)[2:]  # the elbow and the tool (the shoulder is the solid arm's)

@@ -55,7 +55,7 @@ class CoursePathLesson(View):
         q, qdot = course_path(t)
         twist = session.arm.tool_twist(q, qdot)
         self.path = (t, np.hstack([q, qdot]))
-        folder = gui.add_folder("Velocities along the course's path", order=2.0)
+        folder = gui.add_folder("Velocities along the course's path", order=2.0, expand_by_default=False)
         self.folders = (folder,)
         xyz = ("x", "y", "z")
         with folder:

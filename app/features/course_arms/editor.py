@@ -16,7 +16,7 @@ import viser
 
 from ur10core import Arm
 
-from ...feedback import chosen
+from ...feedback import Beside, chosen
 from ...view import Session, View
 
 #: What the editor starts with: the lecture notes' articulated arm without its wrist.
@@ -101,7 +101,8 @@ class DHEditor(View):
             self.convention = gui.add_dropdown("Convention", tuple(CONVENTIONS), initial_value=label)
             self.rows = gui.add_text("Rows", text, multiline=True)
             self.build = gui.add_button("Build this arm", icon=viser.Icon.HAMMER)
-        self.build.on_click(session.guard(lambda _: self._build(rebuild)))
+            self.refusal = Beside(gui)
+        self.build.on_click(session.guard(lambda _: self._build(rebuild), beside=self.refusal))
 
     def _build(self, rebuild: Callable[[Arm, str, str], None]) -> None:
         convention = CONVENTIONS[chosen(self.convention, "convention")]

@@ -11,6 +11,7 @@ import viser
 from ur10core.orientation import rotation_from_xyz_fixed, xyz_fixed
 from ur10core.serial import kr210_from_urdf, kr210_to_urdf
 
+from ...feedback import Beside
 from ...state import Snapshot
 from ...style import number
 from ...view import Session, View
@@ -45,7 +46,7 @@ class GripperPose(View):
 
     def __init__(self, gui: viser.GuiApi, session: Session) -> None:
         self._session = session
-        folder = gui.add_folder("Gripper pose")
+        folder = gui.add_folder("Gripper pose", expand_by_default=False)
         self.folders = (folder,)
         with folder:
             self.urdf = gui.add_checkbox("ROS/Gazebo gripper convention", False,
@@ -53,8 +54,9 @@ class GripperPose(View):
             self.readout = gui.add_markdown("")
             self.typed = gui.add_text("x y z (mm) roll pitch yaw (°)", pose_text(session.state.last.target))
             self.go = gui.add_button("Go to this pose", icon=viser.Icon.ARROW_RIGHT)
+            self.refusal = Beside(gui)
         self.urdf.on_update(session.guard(lambda _: self._convention_changed()))
-        self.go.on_click(session.guard(lambda _: self._go()))
+        self.go.on_click(session.guard(lambda _: self._go(), beside=self.refusal))
 
     def _shown(self, T: np.ndarray) -> np.ndarray:
         return kr210_to_urdf(T) if self.urdf.value else T

@@ -2,8 +2,8 @@
 
 The arm is drawn as the DH method builds it: from each frame origin to the next along d
 and a (:func:`skeleton`), a short rod along each joint axis (a box for a prismatic joint),
-and, optionally, the x and z axes of every frame with their names (:mod:`..dh_frames`). Each IK slot is a thin ghost skeleton in
-its slot colour with its number at the tool, as the UR10's ghosts are.
+and, optionally, the x and z axes of every frame with their names (:mod:`..dh_frames`). Each IK slot is a ghost skeleton in
+its slot colour with discs at its joints and its number by its middle joint, as the UR10's ghosts are.
 """
 
 from __future__ import annotations
@@ -18,8 +18,9 @@ from ur10core.orientation import quaternion
 from ...state import Snapshot
 from ...style import JOINT_CAP_GREY, SLOT_COLORS
 from ...viser_internals.fast_updates import set_orientations, set_positions
+from ..branch_labels import BranchLabels, chain
 from ..dh_frames import DHFrames, show
-from ..ik_target import ALL_BRANCHES, add_unreachable_halo, focused
+from ..ik_target import ALL_BRANCHES, add_unreachable_halo, focused, numbered
 from ..singularity import SingularityOverlay, has_overlay
 
 ROOT = "/course_arm"
@@ -98,29 +99,44 @@ class LineDrawing:
         return shown
 
     def render_panel(self, snapshot: Snapshot) -> None:
-        pass
+        """The DH axes' names and the branch numbers, placed apart on the screen, at the panel's pace."""
+        for labelled in (getattr(self, "overlay", None), self.dh_frames):  # before the numbers, which keep clear of them
+            if labelled is not None:
+                labelled.render_panel(snapshot)
+        if snapshot.solution is None:  # a typed table not searched yet: no branches to number
+            self.numbers.show(np.zeros((0, 3)), [])
+            return
+        anchors = np.array([self._ghost_label(frames) for frames in snapshot.ghost_frames])
+        self.numbers.show(anchors, numbered(snapshot, self.show_ghosts, self.focus))
 
-    def _add_ghosts(self, scene: viser.SceneApi, arm: Arm, segments: np.ndarray, thickness: float) -> None:
-        """One line drawing per slot in its colour, with its number (hidden until a branch is there)."""
+    def _add_ghosts(self, scene: viser.SceneApi, arm: Arm, segments: np.ndarray, thickness: float, disc: float) -> None:
+        """One skeleton per slot in its colour with a disc at each joint, and the numbers (hidden until a branch is there)."""
         slots = range(len(arm.slot_labels))
         self.ghosts = [scene.add_line_segments(f"{self.root}/ghosts/slot{k + 1}", segments, SLOT_COLORS[k % len(SLOT_COLORS)],
                                                thickness=thickness, visible=False) for k in slots]
-        self.ghost_labels = [scene.add_label(f"{self.root}/ghosts/slot{k + 1}/number", str(k + 1), font_screen_scale=1.4,
-                                             anchor="bottom-center", visible=False) for k in slots]
+        self.ghost_joints = [scene.add_point_cloud(f"{self.root}/ghosts/slot{k + 1}/joints", np.zeros((1, 3), np.float32),
+                                                   SLOT_COLORS[k % len(SLOT_COLORS)], point_size=disc, point_shape="circle",
+                                                   visible=False) for k in slots]
+        self.numbers = BranchLabels(scene, f"{self.root}/ghosts", len(slots),
+                                    colours=[SLOT_COLORS[k % len(SLOT_COLORS)] for k in slots])
+        self.label_sets = (self.numbers,)
 
     def _render_ghosts(self, snapshot: Snapshot) -> None:
-        """The target marker, and each branch shown as the drawing draws an arm (``_ghost_lines``), numbered
-        where branches differ (``_ghost_label``): they share the tool, not their elbows."""
+        """The target marker, and each branch shown as the drawing draws an arm (``_ghost_lines``), with
+        its joints (``_ghost_joints``); what lies on the solid arm is left to it (the two would flicker)."""
         self._render_target(snapshot)
         shown = self.shown_ghosts(snapshot, len(self.ghosts))
-        labelled = np.flatnonzero(shown)
-        frames = snapshot.ghost_frames[shown[:len(snapshot.ghost_frames)]]
-        for k, ghost_frames in zip(labelled, frames):
-            self.ghosts[k].points = self._ghost_lines(ghost_frames)
-        set_positions([self.ghost_labels[k] for k in labelled], np.array([self._ghost_label(f) for f in frames]).reshape(-1, 3))
-        for k, (ghost, label) in enumerate(zip(self.ghosts, self.ghost_labels)):
-            show(ghost, shown[k])
-            show(label, shown[k])
+        solid = self._ghost_lines(snapshot.frames)
+        for k in np.flatnonzero(shown):
+            lines = self._ghost_lines(snapshot.ghost_frames[k])
+            own = np.array([not np.isclose(line, solid, atol=1e-6).all(axis=(1, 2)).any() for line in lines])
+            shown[k] = own.any()
+            if shown[k]:
+                self.ghosts[k].points = lines[own]
+                self.ghost_joints[k].points = self._ghost_joints(snapshot.ghost_frames[k]).astype(np.float32)
+        for ghost, joints, show_it in zip(self.ghosts, self.ghost_joints, shown):
+            show(ghost, show_it)
+            show(joints, show_it)
 
 
 class CourseArmScene(LineDrawing):
@@ -146,9 +162,12 @@ class CourseArmScene(LineDrawing):
         #: the DH frames, x and z named, and a row's parameters (the DH folders switch them)
         self.dh_frames = DHFrames(scene, arm, first.frames, size, root)
         self._label_frame = arm.dh.joint_rows[min(2, arm.n_joints - 1)] + (0 if arm.convention == "standard" else 1)
-        self._add_ghosts(scene, arm, segments, 0.006 * size)
+        self._add_ghosts(scene, arm, segments, 0.009 * size, 0.04 * size)
         #: det J's factors in 3D (a preset's; a typed table's det J is not derived)
         self.overlay = SingularityOverlay(scene, arm, first, size, root) if has_overlay(arm) else None
+        #: the 3D labels placed apart for a camera, in order, each pool clear of those before it
+        self.label_sets = chain(((self.overlay.names,) if self.overlay is not None else ())
+                                + (self.dh_frames.values, self.dh_frames.names, self.numbers))
         if target_marker:
             self._add_target_marker(scene)
 
@@ -175,3 +194,6 @@ class CourseArmScene(LineDrawing):
 
     def _ghost_label(self, frames: np.ndarray) -> np.ndarray:
         return frames[self._label_frame, :3, 3]  # the middle joint
+
+    def _ghost_joints(self, frames: np.ndarray) -> np.ndarray:
+        return self._arm.dh.joint_axes(frames)[1]

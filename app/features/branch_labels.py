@@ -1,0 +1,240 @@
+"""The branch numbers (and the DH frames' names) in 3D, placed so that no two overlap on the screen, for any arm.
+
+Numbers whose boxes would overlap from the camera (the elbow arm's four branches that share
+an elbow, "1" beside "8") become one label, "1 · 8", placed between them; a number that would
+cover a fixed label is lifted clear of it. Placed for the browser's own camera as it moves,
+and for the default camera in the classroom's shared scene.
+"""
+
+from __future__ import annotations
+
+import functools
+import math
+import threading
+from dataclasses import dataclass
+from typing import Callable
+
+import numpy as np
+import viser
+
+from ..style import NUMBER_SCALE
+from ..viser_internals.fast_updates import set_positions
+
+#: Where the camera starts (and "reset view" returns): the whole arm, a little from above.
+CAMERA_POSITION = (2.1, -1.9, 1.4)
+CAMERA_LOOK_AT = (0.2, 0.0, 0.5)
+CAMERA_FOV_DEGREES = 50.0
+#: viser draws a screen-sized label's em at 12 CSS px times its scale.
+EM_PX = 12.0
+#: Room kept between two labels (px).
+GAP_PX = 6.0
+#: What joins the numbers of one label: "arm: 6 · 3".
+JOIN = " · "
+#: A leader line's colour where a label's point has none of its own.
+LEADER_GREY = (90, 94, 102)
+#: Labels whose points are this close on the screen (px) read as one: the elbow arm's four branches that
+#: share an elbow. Farther apart, a label is lifted clear of the others instead, at most LIFTS times.
+MERGE_PX = 14.0
+#: Where a label that would overlap another is tried instead, in label heights from its point, nearest first:
+#: up, then the other seven directions, out to four heights (a leader line joins it to its point).
+OFFSETS = [(0.0, 0.0)] + [(radius * dx, radius * dy) for radius in (1, 2, 3, 4)
+                          for dx, dy in ((0, 1), (1, 1), (-1, 1), (1, 0), (-1, 0), (0, -1), (1, -1), (-1, -1))]
+
+
+@dataclass(frozen=True)
+class ScreenView:
+    """A perspective camera as viser has it: vertical field of view ``fov`` (rad), canvas ``height`` (px)."""
+
+    position: tuple[float, float, float]
+    look_at: tuple[float, float, float]
+    up: tuple[float, float, float] = (0.0, 0.0, 1.0)
+    fov: float = math.radians(CAMERA_FOV_DEGREES)
+    height: float = 700.0  #: the smallest canvas a class looks at: apart there, apart on larger ones
+    width: float = 900.0
+
+    @classmethod
+    def of(cls, camera: viser.CameraHandle) -> ScreenView:
+        return cls(tuple(camera.position), tuple(camera.look_at), tuple(camera.up_direction), float(camera.fov),
+                   float(camera.image_height or 700.0), float(camera.image_width or 900.0))
+
+    @functools.cached_property
+    def _axes(self) -> np.ndarray:
+        forward = np.subtract(self.look_at, self.position, dtype=float)
+        forward /= np.linalg.norm(forward)
+        right = np.cross(forward, self.up)
+        right /= np.linalg.norm(right)
+        return np.array([right, np.cross(right, forward), forward])
+
+    def axes(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(right, up, forward) unit vectors of the camera."""
+        right, up, forward = self._axes
+        return right, up, forward
+
+    def to_screen(self, points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """(n, 2) pixels from the canvas centre (x right, y up) and (n,) depths of ``points`` (n, 3).
+
+        >>> view = ScreenView((0.0, -2.0, 0.0), (0.0, 0.0, 0.0), fov=math.radians(90), height=400)
+        >>> pixels, depth = view.to_screen(np.array([[1.0, 0.0, 0.0]]))
+        >>> pixels.round(6).tolist(), depth.tolist()
+        ([[100.0, 0.0]], [2.0])
+        """
+        seen = (np.asarray(points, dtype=float) - self.position) @ self._axes.T  # (right, up, depth)
+        depth = seen[:, 2]
+        pixels_per_unit = self.height / 2 / math.tan(self.fov / 2) / np.maximum(depth, 1e-9)
+        return seen[:, :2] * pixels_per_unit[:, None], depth
+
+
+DEFAULT_VIEW = ScreenView(CAMERA_POSITION, CAMERA_LOOK_AT)
+
+
+def label_size(text: str, scale: float) -> tuple[float, float]:
+    """(width, height) px of a label's box: its background quad, a little generous."""
+    em = EM_PX * scale
+    return em * (0.62 * len(text) + 0.7), em * 1.45
+
+
+def boxes(pixels: np.ndarray, texts: list[str], scale: float, anchor: str = "bottom-center") -> np.ndarray:
+    """(n, 4) (left, bottom, right, top) px of labels anchored at ``pixels`` (n, 2) as viser anchors them."""
+    sizes = np.array([label_size(text, scale) for text in texts]).reshape(-1, 2)
+    vertical, horizontal = anchor.split("-")
+    left = pixels[:, 0] - sizes[:, 0] * {"left": 0.0, "center": 0.5, "right": 1.0}[horizontal]
+    bottom = pixels[:, 1] - sizes[:, 1] * {"bottom": 0.0, "center": 0.5, "top": 1.0}[vertical]
+    return np.column_stack([left, bottom, left + sizes[:, 0], bottom + sizes[:, 1]])
+
+
+def overlapping(a: np.ndarray, b: np.ndarray, gap: float = GAP_PX) -> bool:
+    return bool(a[0] < b[2] + gap and b[0] < a[2] + gap and a[1] < b[3] + gap and b[1] < a[3] + gap)
+
+
+def place(anchors: np.ndarray, texts: list[str], view: ScreenView, scale: float,
+          fixed: list[tuple[np.ndarray, str, float, str]] = (), merge_px: float = MERGE_PX,
+          ) -> list[tuple[tuple[int, ...], str, np.ndarray, np.ndarray]]:
+    """The labels to draw, no two boxes overlapping: (indices, text, position (3,), the point they name (3,)).
+
+    ``anchors`` (n, 3) and ``texts`` (n,) are each label's point and text ("" for none). Labels
+    whose points lie within ``merge_px`` of each other on the screen read as one ("1 · 8"), left
+    to right; a label that would overlap another, or one of ``fixed`` ((position, text, scale,
+    anchor): labels drawn by something else), moves to the nearest free spot on the canvas
+    (:data:`OFFSETS`; a leader line then joins it to its point).
+
+    >>> view = ScreenView((0.0, -3.0, 0.0), (0.0, 0.0, 0.0))
+    >>> placed = place(np.array([[0.0, 0, 0], [0.001, 0, 0], [0.2, 0, 0]]), ["1", "8", "3"], view, 1.6)
+    >>> [(members, text, bool(np.allclose(position, point))) for members, text, position, point in placed]
+    [((0, 1), '1 · 8', True), ((2,), '3', False)]
+    """
+    anchors = np.asarray(anchors, dtype=float)
+    named = [k for k, text in enumerate(texts) if text]
+    if not named:
+        return []
+    pixels = dict(zip(named, view.to_screen(anchors[named])[0]))
+    groups: list[list[int]] = []
+    for k in sorted(named, key=lambda k: pixels[k][0]):  # left to right: a merged label reads in screen order
+        near = next((g for g in groups if np.linalg.norm(pixels[g[0]] - pixels[k]) <= merge_px), None)
+        if near is None:
+            groups.append([k])
+        else:
+            near.append(k)
+    if fixed:
+        fixed_pixels = view.to_screen(np.array([p for p, _, _, _ in fixed], dtype=float))[0]
+        obstacles = [boxes(pixel[None], [t], fixed_scale, anchor)[0]
+                     for pixel, (_, t, fixed_scale, anchor) in zip(fixed_pixels, fixed)]
+    else:
+        obstacles = []
+    right, up, _ = view.axes()
+    canvas = np.array([-view.width / 2, -view.height / 2, view.width / 2, view.height / 2])
+    placed: list[tuple[tuple[int, ...], str, np.ndarray, np.ndarray, np.ndarray]] = []  # with each one's box
+    for group in groups:
+        text, point = JOIN.join(texts[k] for k in group), anchors[group].mean(axis=0)
+        pixel, depth = view.to_screen(point[None])
+        own = boxes(pixel, [text], scale)[0]
+        step = own[3] - own[1] + GAP_PX
+        taken = obstacles + [entry[4] for entry in placed]
+        for dx, dy in OFFSETS:  # the nearest free spot: in place, else a box height away, then two, ...
+            moved = own + step * np.array([dx, dy, dx, dy])
+            inside = moved[0] >= canvas[0] and moved[1] >= canvas[1] and moved[2] <= canvas[2] and moved[3] <= canvas[3]
+            if inside and not any(overlapping(moved, other) for other in taken):
+                break
+        else:
+            dx = dy = 0.0  # nowhere free: where it belongs
+        world_per_px = 2 * math.tan(view.fov / 2) * depth[0] / view.height
+        position = point + (right * dx + up * dy) * step * world_per_px
+        placed.append((tuple(sorted(group)), text, position, point, own + step * np.array([dx, dy, dx, dy])))
+    return [entry[:4] for entry in sorted(placed, key=lambda entry: entry[0])]
+
+
+class BranchLabels:
+    """One drawing's 3D labels of one kind (the branch numbers, the DH axes' names): a pool of labels,
+    placed apart for a camera (:func:`place`), each lifted one with a leader line back to its point.
+
+    ``view`` gives the camera to place for (the browser's own, or the default one of the
+    shared scene); ``fixed`` the labels drawn by something else that these keep clear of;
+    ``world`` (4, 4) where the labels' parent node is in the world (both in its frame);
+    ``colours[k]`` the leader line's colour for label k's point.
+    """
+
+    def __init__(self, scene: viser.SceneApi, root: str, count: int, scale: float = NUMBER_SCALE,
+                 colours=None, merge_px: float = MERGE_PX) -> None:
+        self.labels = [scene.add_label(f"{root}/number{k + 1}", "", visible=False, font_screen_scale=scale,
+                                       anchor="bottom-center") for k in range(count)]
+        # one per label, each one colour: viser's browser reads per-vertex uint8 colours as 0…1 (white)
+        self.leaders = [scene.add_line_segments(f"{root}/leader{k + 1}", np.zeros((1, 2, 3)), LEADER_GREY, thickness=2.0,
+                                                thickness_units="screen", visible=False) for k in range(count)]
+        self.colours = colours or [LEADER_GREY] * count
+        self.merge_px = merge_px
+        self.view: Callable[[], ScreenView] = lambda: DEFAULT_VIEW
+        self.fixed: Callable[[], list[viser.LabelHandle]] = lambda: []
+        self.world = np.eye(4)
+        self.placed: list[tuple[tuple[int, ...], str, np.ndarray]] = []  #: what the labels show now
+        self._wanted: tuple[np.ndarray, list[str]] = (np.zeros((0, 3)), [])
+        self._leaders: list[bytes] = [b""] * count
+        self._positions = b""
+        self._lock = threading.Lock()
+
+    def show(self, anchors: np.ndarray, texts: list[str]) -> None:
+        """Label the points ``anchors`` (n, 3) with ``texts`` ("" for none)."""
+        with self._lock:
+            self._wanted = (np.asarray(anchors, dtype=float), list(texts))
+        self.place()
+
+    def place(self) -> None:
+        """Place the labels again (the camera moved, or lecture mode changed their size)."""
+        with self._lock:
+            anchors, texts = self._wanted
+            if not any(texts) and not self.placed:
+                return  # nothing to show, and nothing shown
+            scale = self.labels[0].font_screen_scale if self.labels else NUMBER_SCALE  # grown in lecture mode
+            R, t = self.world[:3, :3], self.world[:3, 3]
+            fixed = [(np.asarray(label.position) @ R.T + t, label.text, label.font_screen_scale, label.anchor)
+                     for label in self.fixed() if label.visible]
+            placed = place(anchors @ R.T + t, texts, self.view(), scale, fixed, self.merge_px) if any(texts) else []
+            self.placed = [(members, text, (position - t) @ R) for members, text, position, _ in placed]
+            shown = len(self.placed)
+            for label, (_, text, _) in zip(self.labels, self.placed):
+                if label.text != text:
+                    label.text = text
+            if shown:  # moved in one message each, as the ghosts are (at the panel's pace, but for every browser)
+                positions = np.array([point for _, _, point in self.placed], np.float32)
+                if positions.tobytes() != self._positions:
+                    self._positions = positions.tobytes()
+                    set_positions(self.labels[:shown], positions)
+            for k, label in enumerate(self.labels):
+                if label.visible != (k < shown):
+                    label.visible = k < shown
+            for k, leader in enumerate(self.leaders):  # a moved label's line back to its point, in its point's colour
+                members, _, position, point = placed[k] if k < shown else ((), "", None, None)
+                moved = position is not None and bool(np.any(position != point))
+                if moved:
+                    segment = np.array([[(point - t) @ R, (position - t) @ R]], np.float32)
+                    colour = np.array(self.colours[members[0]], np.uint8)
+                    if segment.tobytes() + colour.tobytes() != self._leaders[k]:
+                        self._leaders[k] = segment.tobytes() + colour.tobytes()
+                        leader.points, leader.colors = segment, colour
+                if leader.visible != moved:
+                    leader.visible = moved
+
+
+def chain(pools: tuple[BranchLabels, ...]) -> tuple[BranchLabels, ...]:
+    """``pools`` placed in order, each keeping clear of every label of the pools before it."""
+    for k, pool in enumerate(pools):
+        pool.fixed = lambda earlier=pools[:k]: [label for other in earlier for label in other.labels]
+    return pools
