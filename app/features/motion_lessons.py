@@ -222,7 +222,14 @@ class MotionLessons(View):
 
         n = arm.n_joints  # each frame carries its rates: the velocity arrows show them while it plays
         self.player.play(compute, "motion", show=lambda state, row: state.set_joints(row[:n], "motion", rates=row[n:]),
-                         done=lambda: session.apply(lambda state: state.set_joints(state.q, "motion")))
+                         done=lambda: self._done(session))
+
+    @staticmethod
+    def _done(session) -> None:
+        """The path has been played: the arm at rest, and the path no longer kept in view (it is not drawn)."""
+        if session.camera is not None:
+            session.camera.extra.pop("path", None)
+        session.apply(lambda state: state.set_joints(state.q, "motion"))
 
     def close(self) -> None:
         self.player.stop()
