@@ -1,9 +1,9 @@
 """The branch numbers (and the DH frames' names) in 3D, placed so that no two overlap on the screen, for any arm.
 
-Numbers whose boxes would overlap from the camera (the elbow arm's four branches that share
-an elbow, "1" beside "8") become one label, "1 · 8", placed between them; a number that would
-cover a fixed label is lifted clear of it. Placed for the browser's own camera as it moves,
-and for the default camera in the classroom's shared scene.
+Numbers whose points fall together on the screen (the elbow arm's four branches that share an
+elbow) become one label, "1 · 2 · 5 · 6"; a label whose spot is taken moves to the nearest free
+one, with a leader line back to its point. Placed for the browser's own camera as it moves, and
+for the default camera in the classroom's shared scene (docs/architecture.md §8).
 """
 
 from __future__ import annotations
@@ -33,7 +33,7 @@ JOIN = " · "
 #: A leader line's colour where a label's point has none of its own.
 LEADER_GREY = (90, 94, 102)
 #: Labels whose points are this close on the screen (px) read as one: the elbow arm's four branches that
-#: share an elbow. Farther apart, a label is lifted clear of the others instead, at most LIFTS times.
+#: share an elbow. Farther apart, a label that overlaps another moves to a free spot (OFFSETS) instead.
 MERGE_PX = 14.0
 #: Where a label that would overlap another is tried instead, in label heights from its point, nearest first:
 #: up, then the other seven directions, out to four heights (a leader line joins it to its point).
@@ -164,7 +164,7 @@ def place(anchors: np.ndarray, texts: list[str], view: ScreenView, scale: float,
 
 class BranchLabels:
     """One drawing's 3D labels of one kind (the branch numbers, the DH axes' names): a pool of labels,
-    placed apart for a camera (:func:`place`), each lifted one with a leader line back to its point.
+    placed apart for a camera (:func:`place`), each moved one with a leader line back to its point.
 
     ``view`` gives the camera to place for (the browser's own, or the default one of the
     shared scene); ``fixed`` the labels drawn by something else that these keep clear of;
@@ -189,6 +189,10 @@ class BranchLabels:
         self._leaders: list[bytes] = [b""] * count
         self._positions = b""
         self._lock = threading.Lock()
+
+    def carriers(self, keys: list[str]) -> dict[str, viser.LabelHandle]:
+        """The label that shows each point's text, by the points' ``keys`` (one label may show several)."""
+        return {keys[k]: label for (members, _, _), label in zip(self.placed, self.labels) for k in members}
 
     def show(self, anchors: np.ndarray, texts: list[str]) -> None:
         """Label the points ``anchors`` (n, 3) with ``texts`` ("" for none)."""

@@ -65,8 +65,7 @@ class DHFrames(View):
     @property
     def parameter_labels(self) -> dict[str, viser.LabelHandle]:
         """The label showing each of the highlighted row's values ("d", "a", "theta", "alpha")."""
-        keys = list(PARAMETER_COLORS)
-        return {keys[k]: label for (members, _, _), label in zip(self.values.placed, self.values.labels) for k in members}
+        return self.values.carriers(list(PARAMETER_COLORS))
 
     def render(self, snapshot) -> None:
         frames = snapshot.frames

@@ -244,8 +244,7 @@ class SingularityOverlay(View):
     @property
     def labels(self) -> dict[str, viser.LabelHandle]:
         """The label that shows each factor's name (one label may show several)."""
-        names = list(self.parts)
-        return {names[k]: label for (members, _, _), label in zip(self.names.placed, self.names.labels) for k in members}
+        return self.names.carriers(list(self.parts))
 
     def set_enabled(self, enabled: bool) -> None:
         """Show or hide it; the next render draws it, the names at the panel's pace (the session redraws at once)."""

@@ -65,6 +65,7 @@ class LineDrawing:
     show_ghosts = True
     focus = ALL_BRANCHES
     on_select = None  #: the ghosts are lines: nothing to click
+    overlay = None  #: det J's factors in 3D, where the arm has them
     target = unreachable = None
     top: str
     root: str
@@ -100,7 +101,7 @@ class LineDrawing:
 
     def render_panel(self, snapshot: Snapshot) -> None:
         """The DH axes' names and the branch numbers, placed apart on the screen, at the panel's pace."""
-        for labelled in (getattr(self, "overlay", None), self.dh_frames):  # before the numbers, which keep clear of them
+        for labelled in (self.overlay, self.dh_frames):  # before the numbers, which keep clear of them
             if labelled is not None:
                 labelled.render_panel(snapshot)
         if snapshot.solution is None:  # a typed table not searched yet: no branches to number
