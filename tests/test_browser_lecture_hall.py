@@ -210,8 +210,12 @@ def test_lecture_mode_labels_math_and_refusals(open_page, light_app):
     page.locator(dom_id(editor.editor.build)).click()
     message = page.get_by_text("line 2: a row is five entries", exact=False).first
     wait_for(lambda: message.count() > 0 and message.is_visible(), what="the refusal on the page")
+    def gap() -> float:  # measured once the panel has settled (lecture mode's type may still be re-laying it out)
+        below, under = rows.bounding_box(), message.bounding_box()
+        return under["y"] - (below["y"] + below["height"])
+
+    wait_for(lambda: 0 <= gap() < 120, what="the refusal right below the table, in the panel")
     below, under = rows.bounding_box(), message.bounding_box()
-    assert 0 <= under["y"] - (below["y"] + below["height"]) < 120, (below, under)  # right below the table, in the panel
     # under the table in the panel (spanning it), not in a notice at the window's far edge
     assert under["x"] < below["x"] + below["width"] and under["x"] + under["width"] > below["x"], (below, under)
     assert page.locator(".mantine-Notification-root", has_text="five entries").count() == 0
