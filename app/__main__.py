@@ -34,6 +34,7 @@ hand_back_large_buffers()  # before numpy and the rest allocate
 
 import ur10core  # noqa: E402
 from ur10core import Arm  # noqa: E402
+from ur10core.challenges import builtin, load  # noqa: E402
 
 from .serving import logs  # noqa: E402
 
@@ -57,7 +58,21 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
     parser.add_argument("--allow-origin", action="append", default=[], metavar="URL",
                         help="a web page besides the app's own that may connect, e.g. http://course-site:8000 "
                              "(repeat for more; by default only the app's own page can)")
+    parser.add_argument("--challenges", metavar="FILE",
+                        help="with --shared: the teacher's own class challenges, a TOML file (README, For teachers); "
+                             "the built-in ones stay offered after them")
     args = parser.parse_args(argv)
+    args.challenge_list = builtin()
+    if args.challenges is not None:
+        if not args.shared:
+            parser.error("--challenges needs --shared (challenges are set by the presenter)")
+        try:
+            args.challenge_list = (*load(args.challenges), *builtin())
+        except (OSError, ValueError) as error:
+            parser.error(f"--challenges: {error}")
+        titles = [c.title for c in args.challenge_list]
+        if len(set(titles)) != len(titles):
+            parser.error("--challenges: a challenge in the file has the title of a built-in one; give it another")
     for origin in args.allow_origin:
         if not origin.startswith(("http://", "https://")) or "/" in origin.split("://", 1)[1].rstrip("/"):
             parser.error(f"--allow-origin takes a page's origin such as http://host:8000, got {origin!r}")
@@ -71,7 +86,8 @@ def main(argv: list[str] | None = None, started=None) -> None:
     from .serving.server import TeachingServer
 
     app = TeachingServer(preset=args.preset, host=args.host, port=args.port, shared=args.shared,
-                         allowed_origins=args.allow_origin, lecture=args.lecture, light=args.light)
+                         allowed_origins=args.allow_origin, lecture=args.lecture, light=args.light,
+                         challenges=args.challenge_list)
     moved = "" if args.port in (0, app.port) else f" (port {args.port} was busy)"
     mode = "shared demo mode" if args.shared else "every browser has its own arm"
     kernel = "compiled kernel" if ur10core.BACKEND == "compiled" else "numpy, no compiled kernel"
@@ -82,6 +98,7 @@ def main(argv: list[str] | None = None, started=None) -> None:
         print("Students on the same network use one of the addresses above.", flush=True)
     if app.classroom is not None:
         print(f"Join code for the presenter: {app.classroom.code}", flush=True)
+        print(f"Class challenges: {len(args.challenge_list)} (the presenter's Challenge folder)", flush=True)
     if started is not None:
         started(app)
     print("Press Ctrl+C to stop.", flush=True)

@@ -13,7 +13,7 @@ import viser
 
 from ur10core import Arm
 
-from .features.branch_labels import DEFAULT_VIEW, ScreenView
+from .features.branch_labels import ScreenView, screen_view
 from .features.branch_search import BranchSearch
 from .features.camera import CameraControls
 from .features.course_arms.desktop_lessons import desktop_lessons
@@ -258,10 +258,7 @@ class ArmSession:
 
     def _screen_view(self) -> ScreenView:
         """This browser's camera, to place the branch numbers for (the default one until it reports)."""
-        try:
-            return ScreenView.of(self.client.camera)
-        except Exception:  # no camera message yet, or the browser has gone
-            return DEFAULT_VIEW
+        return screen_view(self.client)
 
     def notify(self, title: str, body: str, color: str = "yellow") -> None:
         if not self.closed:

@@ -88,8 +88,8 @@ async def connect_all(url: str, count: int) -> list[ViserClient]:
     return clients
 
 
-def planned_drag(client: ViserClient, seconds: float, phase_offset: int) -> list[tuple[DragStep, np.ndarray]]:
-    """``seconds`` of 20 Hz gizmo events along a loop from the client's flange, encoded in advance.
+def planned_drag(client: ViserClient, seconds: float, phase_offset: int, rate: float = RATE_HZ) -> list[tuple[DragStep, np.ndarray]]:
+    """``seconds`` of gizmo events at ``rate`` (20 Hz) along a loop from the client's flange, encoded in advance.
 
     A browser's sending costs the server's machine nothing; encoding the events before the
     clock starts keeps the load generator's share of the two cores as small as it can be.
@@ -97,7 +97,7 @@ def planned_drag(client: ViserClient, seconds: float, phase_offset: int) -> list
     T0 = np.eye(4)
     T0[:3, :3] = HOME_ROTATION
     T0[:3, 3] = client.received.flange_updates[-1][1]
-    n = int(seconds * RATE_HZ)
+    n = int(seconds * rate)
     path = loop_path(T0, n + phase_offset)[phase_offset:]
     return [
         (client.drag_step(T[:3, 3], wxyz_of(T), "start" if k == 0 else ("end" if k == n - 1 else "update")), T[:3, 3])
@@ -106,8 +106,8 @@ def planned_drag(client: ViserClient, seconds: float, phase_offset: int) -> list
 
 
 async def drag_loop(client: ViserClient, steps: list[tuple[DragStep, np.ndarray]], sends: list, clock_phase: float,
-                    dropped: list[str]) -> None:
-    """Send ``steps`` at 20 Hz, this client's clock starting ``clock_phase`` s late.
+                    dropped: list[str], rate: float = RATE_HZ) -> None:
+    """Send ``steps`` at ``rate`` (20 Hz), this client's clock starting ``clock_phase`` s late.
 
     A student the server disconnects stops dragging and is noted in ``dropped`` (the
     run goes on: it is one student, and the verdict says so).
@@ -117,7 +117,7 @@ async def drag_loop(client: ViserClient, steps: list[tuple[DragStep, np.ndarray]
     try:
         for k, (step, position) in enumerate(steps):
             sends.append((await client.send_drag(step), position))
-            await asyncio.sleep(max(0.0, start + (k + 1) / RATE_HZ - time.perf_counter()))
+            await asyncio.sleep(max(0.0, start + (k + 1) / rate - time.perf_counter()))
     except websockets.ConnectionClosed as error:
         dropped.append(f"{error} after {time.perf_counter() - start:.0f} s")
 

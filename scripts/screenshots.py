@@ -5,7 +5,8 @@ docs/images/lecture_mode.png (``--lecture``: big type, the panel beside the arm)
 docs/images/wrist_singularity.png (the arm on the wrist singularity, its overlay and gauges),
 docs/images/branch_count_map.png (the map in the arm's plane, the ghosts hidden) and
 docs/images/kr210_dh_frames.png (the KR210 with its DH frames and row 3 drawn on it) and
-docs/images/desktop_arm_branches.png (the desktop arm on its IK target, its other branches as ghosts).
+docs/images/desktop_arm_branches.png (the desktop arm on its IK target, its other branches as ghosts) and
+docs/images/challenge_projector.png (the projector during a class challenge, eight students at it).
 ``python scripts/screenshots.py kr210_dh_frames.png`` takes only the ones named.
 """
 
@@ -20,7 +21,7 @@ sys.path.insert(0, str(ROOT))
 from playwright.sync_api import sync_playwright  # noqa: E402
 
 from ur10teach.serving.server import TeachingServer  # noqa: E402
-from ur10dev.browser import CONNECTED, dom_id, launch, wait_for  # noqa: E402
+from ur10dev.browser import CONNECTED, dismiss_software_notice, dom_id, launch, wait_for  # noqa: E402
 
 OUT = ROOT / "docs" / "images"
 WINDOW = {"width": 1280, "height": 720}
@@ -76,22 +77,89 @@ def shoot(name: str, lecture: bool, prepare=None) -> None:
     server = SERVER["now"] = TeachingServer(port=0, lecture=lecture)
     try:
         with sync_playwright() as playwright:
-            browser = launch(playwright)
-            page = browser.new_page(viewport=WINDOW)
-            page.goto(f"http://127.0.0.1:{server.port}")
-            page.wait_for_selector(CONNECTED, state="attached", timeout=30_000)
+            browser, page = open_page(playwright, server)
             wait_for(lambda: server.sessions, what="the session")
             session = next(iter(server.sessions.values()))
             wait_for(lambda: session.drawing.branches.numbers.placed, what="the numbers")
             if prepare is not None:
                 prepare(page, session)
-            page.wait_for_timeout(8000)  # the real meshes take a while to draw in software WebGL
-            for close in page.get_by_role("button").filter(has=page.locator("svg.tabler-icon-x")).all():
-                close.click()  # the software-WebGL notice
-            page.wait_for_timeout(1000)
-            page.screenshot(path=str(OUT / name))
+            photograph(page, name)
             browser.close()
     finally:
+        server.stop()
+
+
+def open_page(playwright, server: TeachingServer):
+    """A browser on ``server``'s page, once connected: (browser, page)."""
+    browser = launch(playwright)
+    page = browser.new_page(viewport=WINDOW)
+    page.goto(f"http://127.0.0.1:{server.port}")
+    page.wait_for_selector(CONNECTED, state="attached", timeout=30_000)
+    return browser, page
+
+
+def photograph(page, name: str) -> None:
+    page.wait_for_timeout(8000)  # the real meshes take a while to draw in software WebGL
+    dismiss_software_notice(page)
+    page.wait_for_timeout(1000)
+    page.screenshot(path=str(OUT / name))
+
+
+#: A class of eight for the projector's screenshot: (nickname, what their arm does: "target" solves it, else an offset in m)
+CLASS = (("Ada", "target"), ("Bo", "target"), ("", (0.0, 0.0, 0.06)), ("Chen", (0.0, 0.0, 0.09)), ("", (0.05, 0.0, 0.0)),
+         ("Dee", "target"), ("", (0.0, -0.12, 0.04)), ("Eli", (0.0, 0.0, 0.05)))
+
+
+def shoot_a_challenge(name: str) -> None:
+    """The projector during *Reach the target*: eight headless students, five of whom have it wrong so far."""
+    import asyncio
+    import threading
+
+    import numpy as np
+
+    from ur10dev.browser import ask_to_present
+    from ur10dev.viser_client import ViserClient
+
+    server = TeachingServer(port=0, shared=True)
+    room, leave = server.classroom, threading.Event()
+
+    async def students() -> None:
+        clients = [await ViserClient(f"http://127.0.0.1:{server.port}", local_address=f"127.0.0.{20 + k}").connect()
+                   for k in range(len(CLASS))]
+        await asyncio.to_thread(leave.wait)
+        for client in clients:
+            await client.close()
+
+    thread = threading.Thread(target=asyncio.run, args=(students(),))
+    try:
+        with sync_playwright() as playwright:
+            browser, page = open_page(playwright, server)
+            wait_for(lambda: room.members, what="the projector")
+            teacher = next(iter(room.members.values()))
+            thread.start()
+            wait_for(lambda: len(room.members) == 1 + len(CLASS), what="the class")
+            ask_to_present(page, teacher, room.code)
+            wait_for(lambda: teacher.desk is not None, what="the Challenge folder")
+            room.challenges.start(teacher, next(c for c in room.challenges.offered if c.title == "Reach the target"), 600.0)
+            members = [m for m in room.members.values() if m is not teacher]
+            wait_for(lambda: all(m.card is not None for m in members), what="every student's card")
+            arm, goal = room.challenges.run.arm, np.array(room.challenges.run.challenge.joints)
+            for member, (nickname, doing) in zip(members, CLASS):
+                room.challenges.run.rename(member.student, nickname)
+                target = arm.fk(goal)
+                if doing != "target":
+                    target[:3, 3] += doing
+                q = arm.ik(target).nearest(goal).q
+                member.session.apply(lambda state: state.set_joints(q))
+                room.challenges.check(member)
+            page.get_by_text("Classroom", exact=True).first.click()  # folded: the board near the top
+            wait_for(lambda: page.get_by_text("3 solved").count() > 0, what="the board")
+            photograph(page, name)
+            browser.close()
+    finally:
+        leave.set()
+        if thread.is_alive():
+            thread.join()
         server.stop()
 
 
@@ -106,5 +174,8 @@ SHOTS = {
 
 if __name__ == "__main__":
     OUT.mkdir(parents=True, exist_ok=True)
-    for name in sys.argv[1:] or SHOTS:
-        shoot(name, **SHOTS[name])
+    for name in sys.argv[1:] or [*SHOTS, "challenge_projector.png"]:
+        if name == "challenge_projector.png":
+            shoot_a_challenge(name)
+        else:
+            shoot(name, **SHOTS[name])

@@ -556,8 +556,9 @@ def test_a_course_arm_moves_from_a_remembered_pose_along_both_paths(app, label):
         await until(lambda: motion.player.playing, what="the path to start")
         # while it plays, the tool's v is the path's own: J q̇ at the pose shown (the arrow, from its rates)
         await until(lambda: session.state.last.rates is not None and session.velocity.linear.visible, what="v while it plays")
-        shown = session.state.last
-        tip, end = session.velocity.linear.points[0]
+        with session.state.lock:  # a frame is drawn under the lock: the arrow and the pose it was drawn for, together
+            shown = session.state.last
+            tip, end = session.velocity.linear.points[0]
         np.testing.assert_allclose(end - tip, METRES_PER_SPEED * session.arm.tool_twist(shown.q, shown.rates)[:3], atol=1e-5)
         await until(lambda: not motion.player.playing, what="the path to end")
         await until(lambda: session.state.last.rates is None and not session.velocity.linear.visible, what="the arrows gone")

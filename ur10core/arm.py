@@ -16,6 +16,7 @@ Units are metres and radians. Every method accepts any leading batch shape ``...
 from __future__ import annotations
 
 import dataclasses
+import functools
 import math
 
 import numpy as np
@@ -29,7 +30,7 @@ from .serial import PRESETS as COURSE_ARMS
 from .solvers.ur import DESCRIPTIONS, DH_ALPHA, JOINT_LIMIT, JOINT_NAMES, LENGTHS, SingularityGeometry, URFamily
 from ._validate import homogeneous_transform
 
-__all__ = ["Arm", "DH_ALPHA", "JOINT_LIMIT", "JOINT_NAMES", "SingularityGeometry"]
+__all__ = ["Arm", "DH_ALPHA", "JOINT_LIMIT", "JOINT_NAMES", "SingularityGeometry", "factor_scales"]
 
 _PI = math.pi
 #: The UR family's presets (:class:`ur10core.solvers.ur.URFamily`).
@@ -327,6 +328,22 @@ class Arm(JacobianUses, HasSpecs):
             raise ValueError(f"{self.name!r} has no derived factors (a custom table): use smallest_singular_value or manipulability")
         return symbolic_arms.load(self.name).evaluate(self.joints(q))
 
+    @property
+    def factor_names(self) -> tuple[str, ...]:
+        """The names of :meth:`singularity_factors`, in order (the UR family's: shoulder, elbow, wrist).
+
+        >>> Arm.preset("stanford").factor_names
+        ('stroke', 'shoulder', 'wrist')
+        """
+        if self.name in COURSE_ARMS:
+            from . import symbolic_arms
+
+            return tuple(factor.name for factor in symbolic_arms.load(self.name).factors)
+        words = getattr(self.solver, "factor_words", None)
+        if words is None:
+            raise ValueError(f"{self.name!r} has no derived factors (a custom table)")
+        return tuple(name for name, _, _ in words)
+
     def wrist_centre(self, q) -> np.ndarray:
         """The point nearest the last three joint axes at joints ``q`` (..., n), shape (..., 3).
 
@@ -425,3 +442,15 @@ class Arm(JacobianUses, HasSpecs):
         if return_joints:
             return points, manipulability, q
         return points, manipulability
+
+
+@functools.lru_cache(maxsize=64)
+def factor_scales(arm: Arm) -> np.ndarray:
+    """Per factor of det J, its typical size: the 99th percentile of ``|factor|`` over the arm's joint range, (k,).
+
+    What "close to zero" means for a factor with units of its own (the UR10's shoulder factor is
+    a length, its wrist factor a sine): the overlay's gauges are full at it, and a challenge's
+    tolerance is a share of it. ``ValueError`` for a typed table (no factors).
+    """
+    q = arm.sample_joints(20_000, seed=1)
+    return np.maximum(np.percentile(np.abs(arm.singularity_factors(q)), 99, axis=0), 1e-12)

@@ -314,27 +314,35 @@ def canvas_changed(page, before: np.ndarray, at_least: float, what: str) -> np.n
 
 
 @contextlib.contextmanager
-def teacher_and_student(app) -> Iterator[tuple]:
-    """Two browsers on a classroom server (``--shared``), each in a process of its own.
+def class_browsers(app, count: int = 2, viewport: dict = SMALL_VIEWPORT) -> Iterator[tuple[list, list]]:
+    """``count`` browsers on a classroom server (``--shared``), each in a process of its own.
 
-    Yields (teacher page, student page, teacher's member, student's member), the members
-    being ``ur10teach.serving.classroom``'s, both still watching; closes both browsers after, and fails
-    if either page asked anything of another host.
+    Yields (pages, members) in the order they joined, the members being ``ur10teach.serving.classroom``'s,
+    all still watching; closes the browsers after, and fails if any page asked anything of another host.
     """
     from playwright.sync_api import sync_playwright
 
     url = f"http://127.0.0.1:{app.port}"
     with sync_playwright() as playwright:
-        browsers = [launch(playwright), launch(playwright)]
+        browsers = [launch(playwright) for _ in range(count)]
         try:
-            pages = [open_app(browser, url, SMALL_VIEWPORT) for browser in browsers]
-            wait_for(lambda: len(app.classroom.members) == 2, what="both browsers")
-            yield (*pages, *app.classroom.members.values())
+            pages = []
+            for browser in browsers:  # one at a time: the members' order is the pages'
+                pages.append(open_app(browser, url, viewport))
+                wait_for(lambda: len(app.classroom.members) == len(pages), what="the browser to join")
+            yield pages, list(app.classroom.members.values())
             for page in pages:
                 assert not foreign_requests(page, url), f"requests that leave the app's host: {foreign_requests(page, url)}"
         finally:
             for browser in browsers:
                 browser.close()
+
+
+@contextlib.contextmanager
+def teacher_and_student(app) -> Iterator[tuple]:
+    """Two browsers on a classroom server: (teacher page, student page, teacher's member, student's member)."""
+    with class_browsers(app, 2) as (pages, members):
+        yield (*pages, *members)
 
 
 def ask_to_present(page, member, code: str) -> None:

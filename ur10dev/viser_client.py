@@ -133,6 +133,7 @@ class ViserClient:
         self.local_address = local_address
         self.received = Received()
         self.gui: dict[str, dict[str, Any]] = {}  # label -> {"uuid", "type", "value"}
+        self.markdown: dict[str, str] = {}  # uuid -> the content of each markdown widget shown
         self.gizmo_owner: str | None = None
         self.owners_seen: set[str] = set()  # scene scopes this client was sent messages for
         self.ready = asyncio.Event()
@@ -225,6 +226,7 @@ class ViserClient:
             self.received.visible[name] = message["visible"]
         elif kind == "GuiRemoveMessage":
             self.received.removed_gui.add(message["uuid"])
+            self.markdown.pop(message["uuid"], None)
             # a label now means the widget that replaced it (a rebuilt panel), not the removed one
             for label in [label for label, entry in self.gui.items() if entry["uuid"] == message["uuid"]]:
                 del self.gui[label]
@@ -240,7 +242,11 @@ class ViserClient:
                 self.received.ghost_flanges_read.append(self._read_at)
         if kind == "TransformControlsMessage" and message.get("owner"):  # a gizmo of this browser's own
             self.gizmo_owner = message["owner"]
-        elif kind == "GuiMarkdownMessage" and "p (mm)" in message.get("props", {}).get("_markdown", ""):
+        if kind == "GuiMarkdownMessage":
+            self.markdown[message["uuid"]] = message.get("props", {}).get("_markdown", "")
+        elif kind == "GuiUpdateMessage" and "_markdown" in message.get("updates", {}) and message["uuid"] in self.markdown:
+            self.markdown[message["uuid"]] = message["updates"]["_markdown"]
+        if kind == "GuiMarkdownMessage" and "p (mm)" in message.get("props", {}).get("_markdown", ""):
             self._read_flange(now, message["props"]["_markdown"])
         elif kind.startswith("Gui") and kind.endswith("Message") and "props" in message:
             label = message["props"].get("label")
@@ -272,6 +278,10 @@ class ViserClient:
             self.received.flange_updates.append((now, tuple(v / 1000.0 for v in values)))
 
     # ------------------------------------------------------------------ acting
+
+    def shown(self, words: str) -> list[str]:
+        """The markdown widgets of the panel that contain ``words``."""
+        return [text for text in list(self.markdown.values()) if words in text]
 
     async def set_gui(self, label: str, value: Any, timeout: float = HANG_TIMEOUT) -> None:
         """What the browser sends when a student changes a widget (or clicks a button: value True).

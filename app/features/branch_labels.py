@@ -162,6 +162,14 @@ def place(anchors: np.ndarray, texts: list[str], view: ScreenView, scale: float,
     return [entry[:4] for entry in sorted(placed, key=lambda entry: entry[0])]
 
 
+def screen_view(client) -> ScreenView:
+    """``client``'s camera, to place labels for (the default one until it reports, or once it has gone)."""
+    try:
+        return ScreenView.of(client.camera)
+    except Exception:  # no camera message yet, or the browser has gone
+        return DEFAULT_VIEW
+
+
 class BranchLabels:
     """One drawing's 3D labels of one kind (the branch numbers, the DH axes' names): a pool of labels,
     placed apart for a camera (:func:`place`), each moved one with a leader line back to its point.

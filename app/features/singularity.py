@@ -15,6 +15,7 @@ import viser
 import viser.uplot
 
 from ur10core import Arm, symbolic, symbolic_arms
+from ur10core.arm import factor_scales
 from ur10core.orientation import in_frame
 from ur10core.serial import PRESETS
 
@@ -59,13 +60,6 @@ def circle_segments(center: np.ndarray, u: np.ndarray, v: np.ndarray, radius: fl
     angles = np.linspace(0.0, 2 * np.pi, CIRCLE_SEGMENTS + 1)
     points = center + radius * (np.cos(angles)[:, None] * u + np.sin(angles)[:, None] * v)
     return np.stack([points[:-1], points[1:]], axis=1)
-
-
-@functools.lru_cache(maxsize=64)
-def factor_scales(arm: Arm) -> np.ndarray:
-    """Per factor, the 99th percentile of its size over the arm's workspace: a gauge is full there."""
-    q = arm.sample_joints(20_000, seed=1)
-    return np.maximum(np.percentile(np.abs(arm.singularity_factors(q)), 99, axis=0), 1e-12)
 
 
 def factor_levels(arm: Arm, factors: np.ndarray) -> np.ndarray:
@@ -158,8 +152,7 @@ def _placed(frames: np.ndarray, parts: list[tuple[int | None, np.ndarray]]) -> n
 
 
 def factor_names(arm: Arm) -> list[str]:
-    described = factor_words(arm)
-    return [] if described is None else [name for name, _, _ in described[1]]
+    return list(arm.factor_names) if arm.name in PRESETS or hasattr(arm.solver, "factor_words") else []
 
 
 def _foot(point: np.ndarray, axis_point: np.ndarray, axis: np.ndarray) -> np.ndarray:

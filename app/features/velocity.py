@@ -100,7 +100,7 @@ class VelocityView(View):
                              f"turning rate (about the arrow, right hand), {number(1000 * METRES_PER_TURN_RATE, '.0f')} "
                              "mm drawn per rad/s")
             self.sliders = [gui.add_slider(f"{'θ̇' if kind == 'R' else 'ḋ'}{i + 1} {name} ({'°/s' if kind == 'R' else 'mm/s'})",
-                                           min=-MAX_RATE[kind], max=MAX_RATE[kind], step=1.0, initial_value=0.0)
+                                           min=-MAX_RATE[kind], max=MAX_RATE[kind], step=0.1, initial_value=0.0)
                             for i, (name, kind) in enumerate(zip(self._labels, self._kinds))]
             self.readout = gui.add_markdown("")
             gui.add_markdown(f"Or ask for a {place} velocity and see the joint rates it needs, q̇ = J⁻¹ v:")

@@ -26,6 +26,7 @@ from ..features.arm_picker import (
     panel_title,
 )
 from ..features.camera import CameraControls
+from ..features.challenge import ChallengeCard, ChallengeDesk, ClassTools, GoalMarker  # a member's parts
 from ..features.course_arms.desktop_arm import EXPLORER_ROOT as DESKTOP_EXPLORER_ROOT
 from ..features.course_arms.scene import EXPLORER_ROOT
 from ..features.drawings import arm_drawing
@@ -38,6 +39,7 @@ from ..features.singularity import factors_html
 from ..feedback import guard
 from ..session import ArmSession
 from ..state import ArmState
+from .class_challenges import ClassChallenges
 from .gate import address_of
 
 if TYPE_CHECKING:
@@ -140,6 +142,12 @@ class Member:
         self.picker: ArmPicker | None = None  #: the presenter's: which arm the class sees
         self.camera: CameraControls | None = None
         self.join_code: viser.GuiInputHandle | None = None  #: a viewer's box for the presenter's code
+        self.desk: ChallengeDesk | None = None  #: the presenter's "Challenge" folder
+        self.tools: ClassTools | None = None  #: the presenter's view of every student's tool
+        self.student = None  #: a student's attempt at the running challenge (``challenge_run.Student``)
+        self.card: ChallengeCard | None = None  #: and their "Challenge" folder
+        self.goal: GoalMarker | None = None
+        self.observer = None  #: what the student's session calls after each change
         self.closed = False
 
 
@@ -158,6 +166,7 @@ class Classroom:
         self.presenter: Member | None = None
         self.guesses: dict[str, Guesses] = {}  #: by address
         self.claims = 0  #: join codes answered, right or wrong (for the tests)
+        self.challenges = ClassChallenges(self, app.challenges)  #: the presenter's challenges to the class
         self._lock = threading.RLock()
 
     def _state_of(self, label: str) -> ArmState:
@@ -195,6 +204,8 @@ class Classroom:
             body_radius=self._body_radius(),
         )
         self._draw_controls(member)
+        if self.challenges.running:
+            self.challenges.enlist(member)
 
     def _watched(self, member: Member):
         """The newest snapshot of the arm ``member`` looks at: its own, or the class's."""
@@ -213,6 +224,9 @@ class Classroom:
             member.closed = True
             if member.camera is not None:
                 member.camera.close()
+            self.challenges.step_out(member)
+            if member.desk is not None:
+                member.desk.closed = True
             if member.session is not None:
                 member.session.close()
                 member.session = None
@@ -253,6 +267,7 @@ class Classroom:
             if previous is not None:
                 self._leave_role(previous)
                 self._draw_controls(previous)
+            self.challenges.step_out(member)  # a student who presents now: their attempt is kept
             self._leave_role(member)
             member.session, member.role = self._presenter_session(member), PRESENTER
             self.presenter = member
@@ -293,12 +308,12 @@ class Classroom:
         """Whether the class's arm may change now (:data:`SWITCH_INTERVAL` after the last change)."""
         return time.monotonic() - self._last_switch >= SWITCH_INTERVAL
 
-    def show_arm(self, member: Member, label: str) -> None:
+    def show_arm(self, member: Member, label: str, paced: bool = True) -> None:
         """The presenter shows the class another arm (``CLASS_CHOICES``): everyone's scene and live panel follow.
 
         Each arm comes back where the presenter left it; a new one starts at its home pose.
-        ``ValueError`` for anyone but the presenter, or sooner than :data:`SWITCH_INTERVAL`
-        after the last change.
+        ``ValueError`` for anyone but the presenter, or (``paced``) sooner than
+        :data:`SWITCH_INTERVAL` after the last change.
         """
         if label not in CLASS_CHOICES:
             raise ValueError(f"arm: {label!r:.40} is not one of the choices")
@@ -308,7 +323,7 @@ class Classroom:
                 raise ValueError("only the presenter chooses the class's arm")
             if label == self.choice:
                 return
-            if not self.can_switch():
+            if paced and not self.can_switch():
                 raise ValueError(f"one change of arm every {SWITCH_INTERVAL:g} s, please: try again in a moment")
             member.session.remove()
             member.session = None
@@ -360,6 +375,7 @@ class Classroom:
             member.session.watch_camera(member.camera)
             member.role = EXPLORER
             self._hide_class_arm(member)
+            self.challenges.watch(member)  # a student of a running challenge back on their own arm
         self._draw_controls(member)
 
     def _hide_class_arm(self, member: Member) -> None:
@@ -399,6 +415,12 @@ class Classroom:
 
         if member.folder is not None:
             member.folder.remove()  # and the picker in it
+        if member.desk is not None and member.role != PRESENTER:
+            member.desk.remove()
+            member.desk = None
+            self.challenges.step_out(member, keep=False)  # and the class's tools from its scene
+        if member.desk is None and member.role == PRESENTER:
+            member.desk = self.challenges.desk(member)
         member.folder, member.picker = gui.add_folder("Classroom", order=0.0), None
         with member.folder:
             if member.role == PRESENTER:

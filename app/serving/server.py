@@ -14,6 +14,8 @@ import warnings
 import viser
 
 from ur10core import Arm, symbolic, symbolic_arms
+from ur10core.arm import factor_scales
+from ur10core.challenges import Challenge, builtin
 
 from ..features.arm_picker import (
     ARM_CHOICES,
@@ -26,7 +28,6 @@ from ..features.arm_picker import (
 from ..features.branch_labels import CAMERA_FOV_DEGREES, CAMERA_LOOK_AT, CAMERA_POSITION
 from ..features.course_arms.editor import STARTING_TABLE, parse_table
 from ..features.floor import add_floor_grid
-from ..features.singularity import factor_scales
 from ..features.workspace import CLOUDS
 from ..meshes import load_models
 from ..session import ArmSession
@@ -150,11 +151,15 @@ class TeachingServer:
     light : bool
         The arm and its ghosts shaded for laptops without a graphics driver (``--light``,
         :class:`ur10teach.meshes.ArmModels`).
+    challenges : tuple of Challenge
+        What the classroom's presenter can set (``--challenges``; the built-in ones by default).
     """
 
     def __init__(self, preset: str = "course", host: str = "127.0.0.1", port: int = 8080, shared: bool = False,
-                 allowed_origins=(), gate: Gate | None = None, lecture: bool = False, light: bool = False) -> None:
+                 allowed_origins=(), gate: Gate | None = None, lecture: bool = False, light: bool = False,
+                 challenges: tuple[Challenge, ...] | None = None) -> None:
         self.arm = Arm.preset(preset)
+        self.challenges = builtin() if challenges is None else tuple(challenges)
         self.lecture = lecture
         self.models = load_models(preset, light)
         symbolic.load()  # read the cached derivations now rather than in the first student's callback
@@ -332,6 +337,8 @@ class TeachingServer:
 
     def stop(self) -> None:
         self.refresher.stop()
+        if self.classroom is not None:
+            self.classroom.challenges.boards.stop()
         self.drags.stop()
         APART.stop()
         self.server.stop()

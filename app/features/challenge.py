@@ -1,0 +1,239 @@
+"""Class challenges in the panel and the scene: the teacher's desk, each student's card, the class's tools on the projector.
+
+What is checked and how is ``ur10core.challenges``; who is in a run, ``ur10teach.serving.challenge_run``.
+"""
+
+from __future__ import annotations
+
+import html
+from typing import Callable
+
+import numpy as np
+import viser
+
+from ur10core import Arm
+from ur10core.challenges import QUANTITIES, Challenge, Verdict, number_names
+
+from ..feedback import Beside, chosen
+from ..serving.challenge_run import MAX_NICKNAME, ChallengeRun, Student, summary_markdown
+from ..style import SAFE_GREEN, hex_color, label_scale
+from .branch_labels import BranchLabels, ScreenView
+from .course_arms.editor import CONVENTIONS, STARTING_TABLE
+
+#: Okabe-Ito: a student still working (orange) and one who has solved it (bluish green), told apart by any eye.
+WORKING_COLOR, SOLVED_COLOR = (230, 159, 0), (0, 158, 115)
+GOAL_ROOT = "/challenge/goal"
+CLASS_ROOT = "/challenge/class"
+MAX_TIME_LIMIT_MINUTES = 120
+#: Names the projector shows at most (a lecture hall's hundred read as dots beyond it).
+MAX_NAMES = 120
+
+
+def challenge_markdown(challenge: Challenge, time_limit: float | None = None) -> str:
+    """The task as a student reads it."""
+    lines = [f"### {html.escape(challenge.title, quote=False)}", challenge.text]
+    if time_limit:
+        lines.append(f"Time limit: {time_limit / 60:g} min.")
+    if challenge.kind == "numbers":
+        lines.append(f"Asked: {QUANTITIES[challenge.quantity]}.")
+    return "\n\n".join(lines)
+
+
+def verdict_markdown(verdict: Verdict, attempts: int) -> str:
+    if verdict.solved:
+        return f"<span style='color:{hex_color(SAFE_GREEN)}'>**✓ {html.escape(verdict.message)}**</span> (check {attempts})"
+    return f"**Not yet** (check {attempts}): {html.escape(verdict.message)}"
+
+
+class ChallengeDesk:
+    """The presenter's "Challenge" folder: pick, start, watch the class, end, download the results.
+
+    A panel the refresher redraws (``render_panel``), at most twice a second: the projector's
+    summary is at most a second behind the class.
+    """
+
+    panel_interval = 0.5
+
+    def __init__(self, gui: viser.GuiApi, challenges: tuple[Challenge, ...], guard: Callable[[Callable], Callable],
+                 start: Callable[[Challenge, float | None], None], end: Callable[[], None], download: Callable[[], None],
+                 run: Callable[[], ChallengeRun | None], on_render: Callable[[], None] = lambda: None) -> None:
+        self.closed = False
+        self._on_render = on_render  #: the scene's part of the board (every student's tool)
+        self._challenges = {c.title: c for c in challenges}
+        self._run = run
+        # each callback right after its widget: a widget reaches the browser as it is made, and a click on
+        # a button without its callback yet is lost
+        self.folder = gui.add_folder("Challenge", order=0.05)
+        with self.folder:
+            self.picker = gui.add_dropdown("Challenge", tuple(self._challenges), hint="Built in, or from --challenges FILE")
+            self.preview = gui.add_markdown("")
+            self.picker.on_update(guard(lambda _: self._preview()))
+            self.minutes = gui.add_number("Time limit (min, 0: none)", 0, min=0, max=MAX_TIME_LIMIT_MINUTES, step=1)
+            self.refusal = Beside(gui)
+            self.start = gui.add_button("Start the challenge", icon=viser.Icon.PLAYER_PLAY, order=self.refusal.line.order - 0.5)
+            self.start.on_click(guard(lambda _: start(self.chosen(), self.time_limit()), beside=self.refusal))
+            self.board = gui.add_markdown("")
+            self.end = gui.add_button("End and show the solution", icon=viser.Icon.FLAG, visible=False)
+            self.end.on_click(guard(lambda _: end(), beside=self.refusal))
+            self.download = gui.add_button("Download results (CSV)", icon=viser.Icon.DOWNLOAD, visible=False)
+            self.download.on_click(guard(lambda _: download(), beside=self.refusal))
+        self._preview()
+        self.render_panel()
+
+    def chosen(self) -> Challenge:
+        return self._challenges[chosen(self.picker, "challenge")]
+
+    def time_limit(self) -> float | None:
+        minutes = float(self.minutes.value)
+        if not 0 <= minutes <= MAX_TIME_LIMIT_MINUTES:
+            raise ValueError(f"time limit: 0 to {MAX_TIME_LIMIT_MINUTES} minutes")
+        return 60 * minutes if minutes else None
+
+    def _preview(self) -> None:
+        challenge = self.chosen()
+        self.preview.content = f"{challenge_markdown(challenge)}\n\n*{challenge.kind.replace('_', ' ')}, {challenge.arm} arm*"
+        if challenge.time_limit and not self.minutes.value:
+            self.minutes.value = round(challenge.time_limit / 60)
+
+    def render_panel(self) -> None:
+        self._on_render()  # first: a change from here on asks for the next redraw
+        run = self._run()
+        running = run is not None and not run.ended
+        for handle, show in ((self.picker, not running), (self.minutes, not running), (self.start, not running),
+                             (self.preview, not running), (self.end, running), (self.download, run is not None)):
+            if handle.visible != show:
+                handle.visible = show
+        self.board.content = summary_markdown(run) if run is not None else "No challenge running."
+
+    def remove(self) -> None:
+        self.closed = True
+        self.folder.remove()
+
+
+class ChallengeCard:
+    """A student's "Challenge" folder: the task, their nickname, what they type, "Check my answer" and its verdict."""
+
+    def __init__(self, gui: viser.GuiApi, run: ChallengeRun, student: Student, guard: Callable[..., Callable],
+                 check: Callable[[], None]) -> None:
+        challenge = run.challenge
+        self.challenge = challenge
+        self.folder = gui.add_folder("Challenge", order=0.05)
+        self.numbers = self.rows = self.convention = None
+        kept = student.kept
+        with self.folder:
+            self.task = gui.add_markdown(challenge_markdown(challenge, run.time_limit))
+            self.nickname = gui.add_text(f"Your nickname (up to {MAX_NICKNAME} characters)", student.nickname,
+                                         hint="What the projector shows by your tool; your student number if empty")
+            self.named = Beside(gui)
+            if challenge.kind == "numbers":
+                names = ", ".join(number_names(challenge, run.arm))
+                self.numbers = gui.add_text(f"Your numbers ({names})", kept.get("numbers", ""))
+            elif challenge.kind == "dh_table":
+                self.convention = gui.add_dropdown("Convention", tuple(CONVENTIONS), initial_value=kept.get("convention", tuple(CONVENTIONS)[0]))
+                self.rows = gui.add_text("Your DH table (a α d θ type, mm and °)", kept.get("rows", STARTING_TABLE), multiline=True)
+            self.refusal = Beside(gui)
+            self.check = gui.add_button("Check my answer", icon=viser.Icon.CHECK, order=self.refusal.line.order - 0.5)
+            self.check.on_click(guard(lambda _: check(), beside=self.refusal))
+            self.verdict = gui.add_markdown(verdict_markdown(student.verdict, student.attempts) if student.verdict else "")
+        self.nickname.on_update(guard(lambda _: self._renamed(run, student), beside=self.named))
+        for typed in (self.numbers, self.rows):
+            if typed is not None:
+                typed.on_update(guard(lambda _: run.moved(student)))
+
+    def _renamed(self, run: ChallengeRun, student: Student) -> None:
+        name = run.rename(student, self.nickname.value)
+        if name != self.nickname.value:
+            self.nickname.value = name
+
+    def typed(self) -> dict:
+        """What the student has typed, to keep while they are away."""
+        kept = {}
+        if self.numbers is not None:
+            kept["numbers"] = str(self.numbers.value)
+        if self.rows is not None:
+            kept["rows"], kept["convention"] = str(self.rows.value), str(self.convention.value)
+        return kept
+
+    def convention_chosen(self) -> str:
+        return CONVENTIONS[chosen(self.convention, "convention")]
+
+    def show(self, verdict: Verdict, attempts: int) -> None:
+        self.verdict.content = verdict_markdown(verdict, attempts)
+
+    def ended(self, words: str) -> None:
+        self.check.visible = False
+        self.task.content += f"\n\n**The challenge has ended.** {html.escape(words)}"
+
+    def remove(self) -> None:
+        self.folder.remove()
+
+
+class GoalMarker:
+    """The pose a reach challenge asks for, in one browser's scene: a frame and a label, in the arm's world."""
+
+    def __init__(self, scene: viser.SceneApi, pose: np.ndarray, lecture: bool = False) -> None:
+        from ur10core.orientation import quaternion
+
+        self.frame = scene.add_frame(GOAL_ROOT, wxyz=quaternion(pose[:3, :3], check=False), position=pose[:3, 3],
+                                     axes_length=0.15, axes_radius=0.01, origin_radius=0.02)
+        self.label = scene.add_label(f"{GOAL_ROOT}/name", "challenge target", font_screen_scale=label_scale(1.4, lecture),
+                                     anchor="bottom-left")
+
+    def remove(self) -> None:
+        self.frame.remove()
+
+
+class ClassTools:
+    """Every student's tool on the projector: a dot each (orange working, green solved) and their names,
+    placed apart for the projector's camera as the branch numbers are (names at one spot read as one)."""
+
+    def __init__(self, scene: viser.SceneApi, world: np.ndarray, view: Callable[[], ScreenView], lecture: bool = False,
+                 fixed: Callable[[], list[viser.LabelHandle]] = lambda: []) -> None:
+        self._scene, self._world, self._view, self._scale = scene, world, view, label_scale(1.2, lecture)
+        self._fixed = fixed  #: the labels already on the projector (branch numbers, the target's name): kept clear of
+        self.dots = scene.add_point_cloud(f"{CLASS_ROOT}/dots", np.zeros((1, 3), np.float32), np.zeros((1, 3), np.uint8),
+                                          point_size=0.03, point_shape="circle", visible=False)
+        self.names: BranchLabels | None = None
+
+    def _pool(self, count: int) -> BranchLabels:
+        """Labels for ``count`` names: the pool grows (to :data:`MAX_NAMES`) as the class does."""
+        if self.names is None or len(self.names.labels) < count:
+            self._remove_names()
+            capacity = min(MAX_NAMES, max(16, 2 * count))
+            self.names = BranchLabels(self._scene, f"{CLASS_ROOT}/names{capacity}", capacity, scale=self._scale)
+            self.names.view, self.names.fixed = self._view, self._fixed
+        return self.names
+
+    def show(self, run: ChallengeRun) -> None:
+        names, poses, solved = run.flanges()
+        points = poses[:, :3, 3] @ self._world[:3, :3].T + self._world[:3, 3]
+        if len(names):
+            self.dots.points = points.astype(np.float32)
+            self.dots.colors = np.where(solved[:, None], SOLVED_COLOR, WORKING_COLOR).astype(np.uint8)
+        if self.dots.visible != bool(len(names)):
+            self.dots.visible = bool(len(names))
+        shown = min(len(names), MAX_NAMES)  # beyond it, a dot without a name
+        if shown or self.names is not None:
+            self._pool(shown).show(points[:shown], names[:shown])
+
+    def place(self) -> None:
+        """The projector's camera moved: its names placed apart again."""
+        if self.names is not None:
+            self.names.place()
+
+    def _remove_names(self) -> None:
+        if self.names is not None:
+            for node in (*self.names.labels, *self.names.leaders):
+                node.remove()
+            self.names = None
+
+    def remove(self) -> None:
+        self.dots.remove()
+        self._remove_names()
+
+
+def goal_pose(challenge: Challenge, arm: Arm, world: np.ndarray) -> np.ndarray | None:
+    """Where a reach challenge's target is in the scene (None for other kinds)."""
+    if challenge.kind != "reach":
+        return None
+    return world @ arm.fk(np.array(challenge.joints))

@@ -1,0 +1,223 @@
+"""The class challenges of a classroom: the presenter starts one, every other browser becomes a student, the server checks.
+
+What is checked is ``ur10core.challenges``; who is in a run, ``challenge_run``; the panels and the
+projector's scene, ``ur10teach.features.challenge``. Why it is built so: docs/architecture.md §9.
+"""
+
+from __future__ import annotations
+
+import logging
+import time
+from typing import TYPE_CHECKING
+
+from ur10core import Arm
+from ur10core.challenges import Answer, Challenge, number_names, solution
+
+from ..features.arm_picker import ARM_CHOICES, UR10
+from ..features.branch_labels import screen_view
+from ..features.challenge import ChallengeCard, ChallengeDesk, ClassTools, GoalMarker, goal_pose
+from ..features.course_arms.editor import parse_table
+from ..feedback import guard
+from ..state import ArmState
+from .challenge_run import ChallengeRun
+from .gate import address_of
+from .workers import PanelRefresher
+
+if TYPE_CHECKING:
+    from .classroom import Classroom, Member
+
+log = logging.getLogger(__name__)
+
+
+class ClassChallenges:
+    """The challenges the presenter can set (``offered``), the one started last (``run``), and the board.
+
+    Each member keeps its own part (``desk``, ``tools``; ``student``, ``card``, ``goal``,
+    ``observer``); the classroom calls :meth:`enlist`, :meth:`watch` and :meth:`step_out` as
+    browsers come, explore and go.
+    """
+
+    def __init__(self, room: Classroom, challenges: tuple[Challenge, ...]) -> None:
+        self.room = room
+        self.offered = challenges
+        self.run: ChallengeRun | None = None  #: the challenge started last (running, or ended and its results kept)
+        self._board_due = False  #: a redraw of the presenter's board is requested
+        #: the board's own refresher: behind a hundred students' panels in the shared one, it fell 7 s behind
+        #: (BENCHMARKS.md, *a class challenge in a lecture hall*); alone in this one it is due every 0.5 s
+        self.boards = PanelRefresher(room.app.server.get_event_loop(), interval=ChallengeDesk.panel_interval, duty=0.5)
+        self.clock = time.monotonic  #: what a challenge's times and check pacing are kept by (a test sets its own)
+
+    @property
+    def running(self) -> bool:
+        return self.run is not None and not self.run.ended
+
+    def desk(self, member: Member) -> ChallengeDesk:
+        """The presenter's "Challenge" folder."""
+        return ChallengeDesk(member.client.gui, self.offered, lambda handler, beside=None: self._guard(member, handler, beside),
+                             start=lambda challenge, limit: self.start(member, challenge, limit),
+                             end=lambda: self.end(member), download=lambda: self.download(member),
+                             run=lambda: self.run, on_render=lambda: self._render_board(member))
+
+    def start(self, member: Member, challenge: Challenge, time_limit: float | None) -> None:
+        """The presenter starts ``challenge``: the class is shown its arm, and every other browser gets its own copy and the task."""
+        with self.room._lock:
+            if member.closed or self.room.presenter is not member:
+                raise ValueError("only the presenter starts a challenge")
+            if self.run is not None and not self.run.ended:
+                raise ValueError("a challenge is running: end it first")
+            label = UR10 if challenge.arm in Arm.UR_PRESETS else next(k for k, v in ARM_CHOICES.items() if v == challenge.arm)
+            self.room.show_arm(member, label, paced=False)
+            for other in self.room.members.values():  # the last run's cards and targets go
+                self.step_out(other, keep=False)
+            self.run = ChallengeRun(challenge, self.room.state.arm, time_limit, clock=lambda: self.clock())
+            members = [m for m in self.room.members.values() if m is not member]
+        self._show_goal(member)
+        for other in members:
+            try:
+                self.enlist(other)
+            except Exception:  # one browser's trouble (it left meanwhile, say) must not keep the task from the rest
+                if not other.closed:
+                    log.exception("could not give browser %s the challenge", other.client.client_id)
+        self._board_changed()
+        log.info("challenge %r started with %d students", challenge.title, len(members))
+
+    def enlist(self, member: Member) -> None:
+        """Make ``member`` a student of the running challenge: their own arm (as it was if they left and came back) and the task."""
+        run = self.run
+        if member.closed or member is self.room.presenter or run is None or run.ended:
+            return
+        student = run.join(address_of(member.client))
+        member.student = student
+        if member.session is not None and member.session.arm != run.arm:
+            self.room.rejoin(member)
+        self.room.explore(member)
+        session = member.session
+        kept = student.kept
+        if "q" in kept:  # back from the same computer: their arm as they left it
+            session.apply(lambda state: state.set_joints(kept["q"], cause="typed"))
+            if not kept.get("reached", True):
+                session.apply(lambda state: state.move_target(kept["target"], cause="typed"))
+        elif run.challenge.kind == "branch_count" and run.challenge.joints is not None:
+            session.apply(lambda state: state.set_joints(run.challenge.joints, cause="typed"))
+        member.observer = lambda snapshot: self._moved(member, snapshot)  # from here on, a change is the student's
+        self.watch(member)
+        member.card = ChallengeCard(member.client.gui, run, student, lambda handler, beside=None: self._guard(member, handler, beside),
+                                    check=lambda: self.check(member))
+        if run.challenge.is_pose:
+            student.flange = session.state.last.flange  # drawn on the projector from the start; not yet working
+        self._show_goal(member)
+        self._board_changed()
+
+    def watch(self, member: Member) -> None:
+        """A student's own arm tells the challenge each change (however they came to have it: the start, Explore on my own)."""
+        if member.observer is not None and member.session is not None and member.observer not in member.session.observers:
+            member.session.observers.append(member.observer)
+
+    def _show_goal(self, member: Member) -> None:
+        pose = goal_pose(self.run.challenge, self.run.arm, self.room.drawing.world)
+        if pose is not None and member.goal is None:
+            member.goal = GoalMarker(member.client.scene, pose, self.room.app.lecture)
+
+    def _moved(self, member: Member, snapshot) -> None:
+        """A student's arm changed: they are working; the projector draws their tool."""
+        run, student = self.run, member.student
+        if run is None or student is None or run.ended:
+            return
+        run.moved(student, snapshot.flange if run.challenge.is_pose else None)
+        self._board_changed()
+
+    def check(self, member: Member) -> None:
+        """Check what ``member`` has on the server (their joints, target, rates, typed answer): never what a browser claims."""
+        run, student, session, card = self.run, member.student, member.session, member.card
+        if run is None or student is None or card is None:
+            raise ValueError("there is no challenge to answer")
+        if session is None:
+            raise ValueError("your own arm is needed: press Explore on my own")
+        challenge, snapshot = run.challenge, session.state.last
+        numbers = table = rates = None
+        if challenge.kind == "numbers":
+            numbers = ArmState.parse_numbers(str(card.numbers.value), len(number_names(challenge, run.arm)), "your numbers")
+        elif challenge.kind == "dh_table":
+            text = str(card.rows.value)
+            if len(text) > 1000:
+                raise ValueError("the table is too long (at most 1000 characters)")
+            table = parse_table(text, card.convention_chosen()).dh
+        elif challenge.kind == "velocity":
+            rates = session.velocity.joint_rates()
+        verdict = run.check(student, Answer(q=snapshot.q, target=snapshot.target, table=table, numbers=numbers, rates=rates))
+        card.show(verdict, student.attempts)
+        self._board_changed()
+
+    def end(self, member: Member) -> None:
+        """The presenter ends the challenge: everyone is shown the solution (a pose: every arm moves to it)."""
+        with self.room._lock:
+            if member.closed or self.room.presenter is not member:
+                raise ValueError("only the presenter ends a challenge")
+            run = self.run
+            if run is None or run.ended:
+                raise ValueError("no challenge is running")
+            run.ended = True
+            members = list(self.room.members.values())
+        challenge, arm = run.challenge, run.arm
+        common = solution(challenge, arm, self.room.state.q)
+        run.solution_words = common[1]
+        for other in members:
+            session = other.session
+            if session is None or session.arm != arm:
+                continue
+            # a velocity's joint rates depend on where each arm is; any other answer is everyone's
+            q, words = solution(challenge, arm, session.state.q) if challenge.kind == "velocity" else common
+            if q is not None:
+                session.apply(lambda state: state.set_joints(q, cause="typed"))
+            if other.card is not None:
+                other.card.ended(words)
+        self._board_changed()
+        log.info("challenge %r ended: %d of %d solved", challenge.title, run.summary().solved, run.summary().joined)
+
+    def download(self, member: Member) -> None:
+        if self.room.presenter is not member or self.run is None:
+            raise ValueError("only the presenter downloads the results, after starting a challenge")
+        member.client.send_file_download(f"challenge-{self.run.challenge.key}.csv", self.run.results_csv())
+
+    def step_out(self, member: Member, keep: bool = True) -> None:
+        """``member`` leaves the challenge (their browser went: ``keep`` their attempt and arm for their return)."""
+        run, student = self.run, member.student
+        if student is not None and run is not None and keep:
+            kept = {} if member.card is None else member.card.typed()
+            if member.session is not None:
+                last = member.session.state.last
+                kept.update(q=last.q.copy(), target=last.target.copy(), reached=last.reachable)
+            run.leave(student, kept)
+            self._board_changed()
+        if member.session is not None and member.observer in member.session.observers:
+            member.session.observers.remove(member.observer)
+        if member.tools is not None and member.camera is not None and member.tools.place in member.camera.on_moved:
+            member.camera.on_moved.remove(member.tools.place)
+        for part in ("card", "goal", "tools"):
+            shown = getattr(member, part)
+            if shown is not None and not member.closed:
+                shown.remove()
+            setattr(member, part, None)
+        member.student = member.observer = None
+
+    def _board_changed(self) -> None:
+        """The presenter's board redraws soon (at its own pace: a hundred students moving ask for it once)."""
+        presenter = self.room.presenter
+        if presenter is None or presenter.desk is None or self._board_due:
+            return
+        self._board_due = True
+        self.boards.request(presenter.desk)
+
+    def _render_board(self, member: Member) -> None:
+        self._board_due = False
+        if self.run is not None and member.tools is None and self.run.challenge.is_pose:
+            drawing = self.room.drawing
+            member.tools = ClassTools(member.client.scene, drawing.world, lambda: screen_view(member.client), self.room.app.lecture,
+                                      fixed=lambda: [label for pool in drawing.label_sets for label in pool.labels]
+                                      + ([member.goal.label] if member.goal is not None else []))
+            member.camera.on_moved.append(member.tools.place)
+        if member.tools is not None and self.run is not None:
+            member.tools.show(self.run)
+
+    def _guard(self, member: Member, handler, beside=None):
+        return guard(member.client, handler, is_closed=lambda: member.closed, beside=beside)

@@ -1,0 +1,333 @@
+"""Class challenges' checks (ur10core.challenges): each kind's verdicts and mistake groups, against independent numbers."""
+
+from __future__ import annotations
+
+import math
+import textwrap
+
+import numpy as np
+import pytest
+
+from ur10core import Arm
+from ur10core import challenges as C
+from ur10core.dh import DHTable
+from ur10core.workspace import branch_count_map
+
+pytestmark = pytest.mark.core
+COURSE = Arm.preset("course")
+
+
+def arm_of(challenge: C.Challenge) -> Arm:
+    return COURSE if challenge.arm == "ur10" else Arm.preset(challenge.arm)
+
+
+def by_title(title: str) -> C.Challenge:
+    return next(c for c in C.builtin() if c.title == title)
+
+
+def right_answer(challenge: C.Challenge, arm: Arm) -> C.Answer:
+    q, _ = C.solution(challenge, arm)
+    home = arm.specs.home
+    if challenge.kind == "velocity":
+        return C.Answer(q=home, rates=arm.joint_rates(home, np.r_[challenge.velocity, 0, 0, 0]).qdot)
+    return C.Answer(q=q, target=None if q is None else arm.fk(q), table=arm.dh,
+                    numbers=C.expected_numbers(challenge, arm) if challenge.kind == "numbers" else None)
+
+
+@pytest.mark.parametrize("challenge", C.builtin(), ids=lambda c: c.key)
+def test_every_built_in_challenge_is_solved_by_its_own_solution(challenge):
+    arm = arm_of(challenge)
+    verdict = C.check(challenge, arm, right_answer(challenge, arm))
+    assert verdict.solved and verdict.group == "" and verdict.message.startswith("Solved")
+
+
+@pytest.mark.parametrize("challenge", C.builtin(), ids=lambda c: c.key)
+def test_the_home_pose_and_empty_answers_are_not_solutions(challenge):
+    """The arm as it starts solves nothing (a task a student need not touch would count nobody)."""
+    arm = arm_of(challenge)
+    home = arm.specs.home
+    answer = C.Answer(q=home, target=arm.fk(home), table=Arm.preset("elbow").dh if arm.name != "elbow" else COURSE.dh,
+                      numbers=np.zeros_like(C.expected_numbers(challenge, arm)) if challenge.kind == "numbers" else None,
+                      rates=np.zeros(arm.n_joints))
+    verdict = C.check(challenge, arm, answer)
+    assert not verdict.solved and verdict.group and verdict.message
+
+
+# ---------------------------------------------------------------------- reach
+
+
+def test_reach_says_how_far_and_which_way():
+    reach = by_title("Reach the target")
+    goal = COURSE.fk(reach.joints)
+    high = goal.copy()
+    high[:3, 3] += (0.0, 0.0, 0.012)
+    q = COURSE.ik(high).nearest(np.array(reach.joints)).q
+    verdict = C.check(reach, COURSE, C.Answer(q=q))
+    assert not verdict.solved and verdict.group == "tool too high"
+    assert "12 mm from the target: 12 mm too high" in verdict.message
+    aside = goal.copy()
+    aside[:3, 3] += (-0.020, 0.0, 0.001)
+    verdict = C.check(reach, COURSE, C.Answer(q=COURSE.ik(aside).nearest(np.array(reach.joints)).q))
+    assert verdict.group == "tool too far towards −x" and "20 mm too far towards −x" in verdict.message
+    # within the tolerance: 4 mm off is solved
+    near = goal.copy()
+    near[:3, 3] += (0.0, 0.004, 0.0)
+    assert C.check(reach, COURSE, C.Answer(q=COURSE.ik(near).nearest(np.array(reach.joints)).q)).solved
+
+
+def test_reach_notices_a_turned_tool():
+    reach = by_title("Reach the target")
+    turned = COURSE.fk(reach.joints) @ np.array([[math.cos(0.2), -math.sin(0.2), 0, 0], [math.sin(0.2), math.cos(0.2), 0, 0],
+                                                 [0, 0, 1, 0], [0, 0, 0, 1]])
+    verdict = C.check(reach, COURSE, C.Answer(q=COURSE.ik(turned).nearest(np.array(reach.joints)).q))
+    assert verdict.group == "tool turned" and "turned 11°" in verdict.message
+
+
+@pytest.mark.parametrize("slot", range(8))
+def test_reach_elbow_down_names_the_branch_each_slot_is(slot):
+    reach = by_title("Reach it elbow down")
+    solution = COURSE.ik(COURSE.fk(reach.joints))
+    label = solution.labels[slot]
+    q = solution.q[slot] + np.where(np.arange(6) == 5, 2 * np.pi, 0.0)  # a whole turn of joint 6 is the same branch
+    verdict = C.check(reach, COURSE, C.Answer(q=q))
+    assert verdict.solved == ("elbow down" in label)
+    if not verdict.solved:
+        assert verdict.group == "elbow up instead of elbow down"
+        assert f"branch {slot + 1}" in verdict.message
+
+
+def test_reach_by_branch_number_and_on_other_arms():
+    reach = C.Challenge("five", "reach", "kr210", "", joints=by_title("KR210: reach with the wrist flipped").joints, branch=3)
+    arm = Arm.preset("kr210")
+    solution = arm.ik(arm.fk(reach.joints))
+    valid = np.flatnonzero(solution.valid)
+    assert 2 in valid
+    other = int(next(k for k in valid if k != 2))
+    assert C.check(reach, arm, C.Answer(q=solution.q[2])).solved
+    assert C.check(reach, arm, C.Answer(q=solution.q[other])).group == f"branch {other + 1} instead of 3"
+    # a position-only arm is not asked for an orientation
+    planar = Arm.preset("planar_elbow")
+    task = C.Challenge("p", "reach", "planar_elbow", "", joints=(0.4, 0.9), branch="elbow up")
+    goal = planar.fk(task.joints)
+    up = planar.ik(goal)
+    slot = int(next(k for k, label in enumerate(up.labels) if "elbow up" in label))
+    assert C.check(task, planar, C.Answer(q=up.q[slot])).solved
+    assert C.check(task, planar, C.Answer(q=up.q[1 - slot])).group == "elbow down instead of elbow up"
+
+
+# ---------------------------------------------------------------------- singularity
+
+
+def test_singularity_checks_the_asked_factor_against_the_closed_form():
+    wrist = by_title("Wrist singularity, tool up high")
+    q = np.radians([30, 80, -40, 50, 0.0, 80])  # sin θ5 = 0: the course's wrist singularity, tool high
+    assert COURSE.fk(q)[2, 3] > 0.5
+    assert C.check(wrist, COURSE, C.Answer(q=q)).solved
+    elbow_q = np.radians([30, 80, 0.0, 50, 60, 80])  # sin θ3 = 0: the elbow instead
+    verdict = C.check(wrist, COURSE, C.Answer(q=elbow_q))
+    assert verdict.group == "elbow instead of wrist" and "elbow singularity" in verdict.message
+    low = np.radians([30, -30, 20, 50, 0.0, 80])  # the wrist, but the tool is low
+    assert COURSE.fk(low)[2, 3] < 0.5
+    assert C.check(wrist, COURSE, C.Answer(q=low)).group == "tool below 500 mm"
+    # 1 % of the wrist factor's usual size (≈ 1) is about 0.6° of θ5 either side
+    assert C.check(wrist, COURSE, C.Answer(q=q + np.radians([0, 0, 0, 0, 0.4, 0]))).solved
+    verdict = C.check(wrist, COURSE, C.Answer(q=q + np.radians([0, 0, 0, 0, 5, 0])))
+    assert verdict.group == "wrist factor not zero" and f"{math.sin(math.radians(5)):+.3g}" in verdict.message
+
+
+@pytest.mark.parametrize("name", Arm.PRESETS)
+def test_a_singular_pose_exists_for_every_factor_of_every_arm(name):
+    arm = Arm.preset(name)
+    for k, factor in enumerate(arm.factor_names):
+        if (name, factor) == ("cylindrical", "reach"):  # d3 = 0 is beyond its stroke (0.1 to 0.6 m): refused
+            with pytest.raises(ValueError, match="within its limits"):
+                C.singular_pose(arm, factor)
+            continue
+        q = C.singular_pose(arm, factor)
+        assert arm.within_limits(q)
+        assert abs(arm.singularity_factors(q)[k]) <= 1e-9 * C.factor_scales(arm)[k]
+        assert arm.manipulability(q) <= 1e-6  # det J itself vanishes there: an independent view of the same claim
+
+
+# ---------------------------------------------------------------------- branch count
+
+
+def test_branch_count_agrees_with_the_reach_map():
+    task = by_title("Four branches only")
+    start = COURSE.fk(task.joints)
+    grid = branch_count_map(COURSE, start, resolution=40)
+    points, seen = grid.points(), set()
+    for (i, j), count in np.ndenumerate(grid.counts):
+        if count in seen:
+            continue
+        seen.add(int(count))
+        T = start.copy()
+        T[:3, 3] = points[i, j]
+        verdict = C.check(task, COURSE, C.Answer(target=T))
+        assert verdict.solved == (count == 4), (count, verdict)
+        if count != 4:
+            assert verdict.group == f"{count} branches instead of 4"
+    assert {0, 4, 8} <= seen
+    turned = start @ np.diag([1.0, -1.0, -1.0, 1.0])
+    assert C.check(task, COURSE, C.Answer(target=turned)).group == "target turned"
+
+
+# ---------------------------------------------------------------------- DH table
+
+
+@pytest.mark.parametrize("name", ["ur10", "kr210", "stanford", "elbow"])
+def test_a_dh_table_in_either_convention_is_right_and_a_flipped_alpha_is_named(name):
+    arm = COURSE if name == "ur10" else Arm.preset(name)
+    task = C.Challenge("dh", "dh_table", name, "")
+    for convention in ("standard", "modified"):
+        table = arm.dh.converted(convention)
+        assert C.check(task, arm, C.Answer(table=table)).solved
+        rows = list(table.rows)
+        k = next(k for k, row in enumerate(rows) if abs(math.sin(row.alpha)) > 0.5)
+        row = rows[k]
+        rows[k] = (row.a, -row.alpha, row.d, row.theta, row.joint)
+        verdict = C.check(task, arm, C.Answer(table=DHTable(rows, convention)))
+        assert not verdict.solved and verdict.group == f"row {k + 1}: α has the wrong sign"
+        assert f"Row {k + 1}'s α has the wrong sign" in verdict.message
+
+
+def test_a_dh_table_with_lengths_in_metres_or_other_joints():
+    arm = COURSE
+    task = by_title("Type the UR10's DH table")
+    rows = list(arm.dh.rows)
+    k = next(k for k, row in enumerate(rows) if row.d)
+    rows[k] = (rows[k].a, rows[k].alpha, rows[k].d / 1000, rows[k].theta, rows[k].joint)
+    assert C.check(task, arm, C.Answer(table=DHTable(rows, arm.dh.convention))).group == f"row {k + 1}: d is in metres where mm are asked"
+    assert C.check(task, arm, C.Answer(table=Arm.preset("stanford").dh)).group == "wrong joints"
+
+
+# ---------------------------------------------------------------------- numbers
+
+
+def test_numbers_against_independent_closed_forms():
+    position, det_j, torque = (by_title(t) for t in ("Where is the flange?", "det J by hand", "Holding a weight"))
+    # p of T06 from the DH table's own product of matrices (not the UR family's closed form)
+    assert np.allclose(C.expected_numbers(position, COURSE), 1000 * COURSE.dh.fk(position.joints)[:3, 3])
+    # det J = a2 a3 (a2 c2 + a3 c23 − d5 s234) s3 s5 (docs/kinematics.md §5), with the course's own signs
+    q = np.array(det_j.joints)
+    factors = COURSE.singularity_factors(q)
+    det = float(np.linalg.det(COURSE.dh.jacobian(q)))
+    assert math.isclose(C.expected_numbers(det_j, COURSE)[0], det, rel_tol=1e-9)
+    assert math.isclose(abs(det), abs(COURSE.a2 * COURSE.a3 * np.prod(factors)), rel_tol=1e-9)
+    # τ = Jᵀ F by virtual work: τ_i is the force times how fast the flange moves with joint i (finite differences)
+    q = np.array(torque.joints)
+    step = 1e-6
+    rates = [(COURSE.fk(q + step * e)[:3, 3] - COURSE.fk(q - step * e)[:3, 3]) / (2 * step) for e in np.eye(6)]
+    assert np.allclose(C.expected_numbers(torque, COURSE), [np.dot(torque.force, v) for v in rates], atol=1e-6)
+
+
+def test_numbers_name_the_kind_of_mistake():
+    position = by_title("Where is the flange?")
+    p = C.expected_numbers(position, COURSE)
+    cases = {
+        "y has the wrong sign": p * [1, -1, 1],
+        "x and y swapped": p[[1, 0, 2]],
+        "x, y, z are in metres, not mm": p / 1000,
+        "z is off": p + [0, 0, 50],
+        "2 numbers off": p * [-1, 1, 1.5],
+    }
+    for group, typed in cases.items():
+        verdict = C.check(position, COURSE, C.Answer(numbers=typed))
+        assert not verdict.solved and verdict.group == group, (group, verdict.group)
+    assert C.check(position, COURSE, C.Answer(numbers=p * 1.009)).solved  # within 1 %
+    with pytest.raises(ValueError, match="type 3 numbers"):
+        C.check(position, COURSE, C.Answer(numbers=p[:2]))
+
+
+# ---------------------------------------------------------------------- velocity
+
+
+def test_velocity_groups():
+    task = by_title("Straight up")
+    q = COURSE.specs.home
+    right = COURSE.joint_rates(q, [0, 0, 0.1, 0, 0, 0]).qdot
+    assert C.check(task, COURSE, C.Answer(q=q, rates=right)).solved
+    assert C.check(task, COURSE, C.Answer(q=q, rates=-right)).group == "wrong sign"
+    assert C.check(task, COURSE, C.Answer(q=q, rates=0 * right)).group == "not moving"
+    assert C.check(task, COURSE, C.Answer(q=q, rates=2 * right)).group == "too fast"
+    sideways = COURSE.joint_rates(q, [0.1, 0, 0, 0, 0, 0]).qdot
+    assert C.check(task, COURSE, C.Answer(q=q, rates=sideways)).group == "wrong direction"
+    turning = COURSE.joint_rates(q, [0, 0, 0.1, 0, 0, 0.1]).qdot
+    verdict = C.check(task, COURSE, C.Answer(q=q, rates=turning))
+    assert verdict.group == "tool turns" and "5.7 °/s" in verdict.message
+
+
+# ---------------------------------------------------------------------- files
+
+
+GOOD = textwrap.dedent("""\
+    # a teacher's file
+    [[challenge]]
+    title = "Reach it"
+    kind = "reach"
+    arm = "kr210"
+    joints = [10, 20, -30, 40, 50, 60]
+    branch = "wrist flipped"
+    position_tolerance_mm = 3
+
+    [[challenge]]
+    title = "Stroke"
+    kind = "singularity"
+    arm = "stanford"
+    factor = "wrist"
+    time_limit_s = 120
+    """)
+
+
+def test_a_teachers_file_is_read_in_its_units():
+    reach, singular = C.parse(GOOD)
+    assert reach.arm == "kr210" and np.allclose(np.degrees(reach.joints), [10, 20, -30, 40, 50, 60])
+    assert reach.position_tolerance == pytest.approx(0.003) and reach.branch == "wrist flipped"
+    assert singular.time_limit == 120 and singular.factor == "wrist" and singular.text == "Stroke"
+
+
+@pytest.mark.parametrize("change, line, words", [
+    (("arm = \"kr210\"", "arm = \"kr2100\""), 5, "arm must be one of"),
+    (("joints = [10, 20, -30, 40, 50, 60]", "joints = [10, 20, -30, 40, 50]"), 6, "list of 6 numbers"),
+    (("joints = [10, 20, -30, 40, 50, 60]", "joints = [10, 100, -30, 40, 50, 60]"), 6, "outside the kr210 arm's limits"),
+    (("branch = \"wrist flipped\"", "branch = \"wrist upside down\""), 7, "words of a branch's name"),
+    (("position_tolerance_mm = 3", "position_tolerance_mm = -3"), 8, "position_tolerance_mm must be a number"),
+    (("factor = \"wrist\"", "factor = \"elbow\""), 14, "factors are stroke, shoulder, wrist"),
+    (("time_limit_s = 120", "time_limt_s = 120"), 15, "unknown key 'time_limt_s'"),
+    (("factor = \"wrist\"", "count = 3"), 12, "needs 'factor'"),
+    (("kind = \"singularity\"", "kind = \"singularity\"\nvelocity_mm_s = [0, 0, 1]"), 13, "not used by a singularity"),
+    (("title = \"Stroke\"", "title = \"Reach it\""), 11, "two challenges titled"),
+    (("title = \"Stroke\"", "title = \"Stroke"), 11, "Illegal character"),
+    (("factor = \"wrist\"", "factor = \"stroke\"\nmin_tool_height_mm = 5000"), 14, "5000 mm above the floor"),  # TOML's own syntax error names its line
+])
+def test_a_bad_file_is_refused_naming_the_line(change, line, words):
+    text = GOOD.replace(*change)
+    with pytest.raises(ValueError) as error:
+        C.parse(text, source="class.toml")
+    assert f"line {line}" in str(error.value) and words in str(error.value), str(error.value)
+
+
+def test_files_are_bounded_and_branch_counts_must_exist(tmp_path):
+    with pytest.raises(ValueError, match="no \\[\\[challenge\\]\\]"):
+        C.parse("")
+    many = "".join(f'[[challenge]]\ntitle = "t{k}"\nkind = "velocity"\nvelocity_mm_s = [1, 0, 0]\n' for k in range(101))
+    with pytest.raises(ValueError, match="at most 100"):
+        C.parse(many)
+    with pytest.raises(ValueError, match="line 4: no target .* exactly 3 branches"):
+        C.parse('[[challenge]]\ntitle = "x"\nkind = "branch_count"\ncount = 3\n')
+    big = tmp_path / "big.toml"
+    big.write_text("#" * 200_000)
+    with pytest.raises(ValueError, match="at most 100 kB"):
+        C.load(big)
+    good = tmp_path / "good.toml"
+    good.write_text(GOOD)
+    assert len(C.load(good)) == 2
+
+
+def test_the_readmes_example_file_is_a_valid_challenge_file():
+    from pathlib import Path
+
+    readme = (Path(__file__).resolve().parent.parent / "README.md").read_text()
+    example = readme.split("```toml\n", 1)[1].split("```", 1)[0]
+    reach, numbers = C.parse(example)
+    assert reach.branch == "elbow down" and reach.time_limit == 300 and numbers.relative_tolerance == 0.005

@@ -1,0 +1,261 @@
+"""Class challenges end to end: a presenter and thirty headless students, every built-in kind, the projector's numbers exact."""
+
+from __future__ import annotations
+
+import asyncio
+import math
+import re
+
+import numpy as np
+import pytest
+
+from ur10core import challenges as C
+from ur10core.orientation import zyx_euler
+from ur10teach.features.branch_labels import JOIN
+from ur10teach.features.joint_panel import display_text, typed_label
+from ur10teach.serving.gate import address_of
+from ur10teach.serving.challenge_run import ChallengeRun, clean_nickname, spreadsheet_safe
+from ur10dev.viser_client import ViserClient, messages
+
+from .server_support import become_presenter, until, url
+
+pytestmark = pytest.mark.server
+
+STUDENTS = 30
+#: What each student does in each challenge: "right", a wrong answer of group "a" or "b", "idle" (never touches
+#: it) or "leave" (answers wrong, group "a", then closes the browser; back from the same computer afterwards).
+PLAN = ["right"] * 9 + ["a"] * 7 + ["b"] * 5 + ["idle"] * 3 + ["leave"] * 3 + ["right", "a", "b"]
+KIND_TITLES = {"reach": "Reach it elbow down", "singularity": "Wrist singularity, tool up high",
+               "branch_count": "Four branches only", "numbers": "Where is the flange?",
+               "velocity": "Straight up", "dh_table": "Type the UR10's DH table"}
+GROUPS = {"reach": ("elbow up instead of elbow down", "tool too high"),
+          "singularity": ("elbow instead of wrist", "tool below 500 mm"),
+          "branch_count": ("8 branches instead of 4", "0 branches instead of 4"),
+          "numbers": ("y has the wrong sign", "x, y, z are in metres, not mm"),
+          "velocity": ("wrong sign", "not moving"),
+          "dh_table": ("row 2: α has the wrong sign", "wrong joints")}
+
+
+def board_numbers(text: str) -> dict | None:
+    """What the projector's board says: the counts, and each mistake's count (None for another markdown)."""
+    counts = re.search(r"\*\*(\d+)\*\* solved · \*\*(\d+)\*\* working · \*\*(\d+)\*\* joined", text)
+    if counts is None:
+        return None
+    solved, working, joined = (int(v) for v in counts.groups())
+    away = re.search(r"\((\d+) away\)", text)
+    groups = {g.strip(): int(n) for n, g in re.findall(r"^\| (\d+) \| (.+) \|$", text, re.M)}
+    return {"solved": solved, "working": working, "joined": joined, "away": int(away.group(1)) if away else 0, "groups": groups}
+
+
+def table_text(table) -> str:
+    return "\n".join(f"{1000 * r.a:.4f} {math.degrees(r.alpha):.6f} {1000 * r.d:.4f} {math.degrees(r.theta):.6f} "
+                     f"{r.joint or 'F'}" for r in table.rows)
+
+
+def pose_text(T: np.ndarray) -> str:
+    return " ".join(f"{v:.6f}" for v in [*(1000 * T[:3, 3]), *np.degrees(zyx_euler(T[:3, :3]))])
+
+
+class Answers:
+    """What a student types or sets, through the panel as a browser would, for each kind and plan."""
+
+    def __init__(self, server) -> None:
+        self.room = server.classroom
+        self.arm = server.arm
+
+    def challenge(self, kind: str) -> C.Challenge:
+        return next(c for c in self.room.challenges.offered if c.title == KIND_TITLES[kind])
+
+    async def give(self, client: ViserClient, member, kind: str, plan: str) -> None:
+        arm, challenge = self.arm, self.challenge(kind)
+        wrong = {"a": 0, "leave": 0, "b": 1}.get(plan)
+        if kind in ("reach", "singularity"):
+            if kind == "reach":
+                goal = arm.fk(challenge.joints)
+                if plan == "b":
+                    goal[2, 3] += 0.03
+                q = (C.solution(challenge, arm)[0] if plan == "right" else
+                     np.array(challenge.joints) if wrong == 0 else arm.ik(goal).q[1])  # slot 2: elbow down, 30 mm high
+            else:
+                q = np.radians([[30, 80, -40, 50, 0, 80], [30, 80, 0, 50, 60, 80], [30, -30, 20, 50, 0, 80]][
+                    0 if plan == "right" else 1 + wrong])
+            # the panel shows the joints it last drew there: once it shows the arm's own, it will not overwrite the typing
+            await until(lambda: client.gui.get(typed_label(arm), {}).get("value") == display_text(arm, member.session.state.q),
+                        what="the panel's joints up to date")
+            await client.set_gui(typed_label(arm), " ".join(f"{v:.9f}" for v in np.degrees(q)))
+            await client.set_gui("Set these values", True)
+            await until(lambda: np.allclose(member.session.state.q, q, atol=1e-6), what="the typed joints")
+        elif kind == "branch_count":
+            T = arm.fk(challenge.joints)
+            T[:3, 3] = {"right": (0.0, -1.1, 0.2), 0: (0.6, -0.16, 0.5), 1: (3.0, 0.0, 0.5)}[plan if plan == "right" else wrong]
+            await client.set_gui("Target x y z (mm), α β γ (°)", pose_text(T))
+            await client.set_gui("Move target here", True)
+            await until(lambda: np.allclose(member.session.state.last.target[:3, 3], T[:3, 3], atol=1e-6), what="the typed target")
+        elif kind == "numbers":
+            p = C.expected_numbers(challenge, arm)
+            typed = p if plan == "right" else p * [1, -1, 1] if wrong == 0 else p / 1000
+            await client.set_gui("Your numbers (x, y, z)", " ".join(f"{v:.6f}" for v in typed))
+        elif kind == "velocity":
+            if plan != "b":  # "b": never moves a slider
+                q = member.session.state.q
+                rates = np.degrees(arm.joint_rates(q, [0, 0, 0.1, 0, 0, 0]).qdot) * (1 if plan == "right" else -1)
+                for k, rate in enumerate(rates):
+                    label = next(label for label in client.gui if label.startswith(f"θ̇{k + 1} "))
+                    await client.set_gui(label, round(float(rate), 1))
+                await until(lambda: np.allclose(np.degrees(member.session.velocity.joint_rates()), np.round(rates, 1), atol=1e-9),
+                            what="the joint rates")
+        elif kind == "dh_table":
+            rows = list(arm.dh.rows)
+            if plan != "right" and wrong == 0:
+                rows[1] = (rows[1].a, -rows[1].alpha, rows[1].d, rows[1].theta, rows[1].joint)
+            if wrong == 1:
+                rows = rows[:5]
+            from ur10core.dh import DHTable
+
+            await client.set_gui("Your DH table (a α d θ type, mm and °)", table_text(DHTable(rows, arm.dh.convention)))
+            await client.set_gui("Convention", next(k for k, v in __import__("ur10teach.features.course_arms.editor", fromlist=["x"])
+                                                    .CONVENTIONS.items() if v == arm.dh.convention))
+        await client.set_gui("Check my answer", True)
+
+
+def test_thirty_students_every_kind_and_the_projector_counts_exactly(classroom):
+    answers = Answers(classroom)
+    room = classroom.classroom
+    assert room.challenges.offered == C.builtin()
+
+    async def scenario():
+        teacher = await ViserClient(url(classroom)).connect()
+        await become_presenter(teacher, classroom)
+        addresses = [f"127.0.0.{10 + k}" for k in range(STUDENTS)]
+        students = [await ViserClient(url(classroom), local_address=a).connect() for a in addresses]
+
+        def member_of(k: int):
+            return next((m for m in list(room.members.values()) if address_of(m.client) == addresses[k]), None)
+
+        for kind in ("numbers", "reach", "singularity", "branch_count", "velocity", "dh_table"):
+            challenge = answers.challenge(kind)
+            await teacher.set_gui("Challenge", challenge.title)
+            await teacher.set_gui("Start the challenge", True)
+            await until(lambda: room.challenges.run is not None and room.challenges.run.challenge is challenge and not room.challenges.run.ended
+                        and all(m.card is not None and m.session is not None and m.session.built
+                                for m in room.members.values() if m is not room.presenter), what=f"every card of {kind}")
+            # every student's browser shows the task
+            await until(lambda: all(s.shown(challenge.text[:30]) for s in students), what="the task on every screen")
+            await asyncio.gather(*(answers.give(s, member_of(k), kind, plan if plan != "leave" else "a")
+                                   for k, (s, plan) in enumerate(zip(students, PLAN)) if plan != "idle"))
+            await until(lambda: room.challenges.run.summary().checked == STUDENTS - PLAN.count("idle"), what=f"every check of {kind}")
+            leaving = [k for k, plan in enumerate(PLAN) if plan == "leave"]
+            kept = {k: member_of(k).student for k in leaving}
+            for k in leaving:
+                await students[k].close()
+            right, a, b = PLAN.count("right"), PLAN.count("a") + len(leaving), PLAN.count("b")
+            expected = {"solved": right, "working": a + b, "joined": STUDENTS, "away": len(leaving),
+                        "groups": {GROUPS[kind][0]: a, GROUPS[kind][1]: b}}
+            await until(lambda: any(board_numbers(t) == expected for t in teacher.shown(f"### {challenge.title}")),
+                        what=f"the projector's exact counts for {kind}: {expected}, shown {teacher.shown('### ')}")
+            # each student read what is off, specifically
+            for k, plan in enumerate(PLAN):
+                if plan in ("right", "a", "b"):
+                    verdicts = students[k].shown("(check 1)")
+                    assert verdicts and ("✓ Solved" in verdicts[0]) == (plan == "right"), (kind, k, verdicts)
+            if challenge.is_pose:  # every student here is named in 3D on the projector (names at one spot read as one)
+                here = {member_of(k).student.name for k in range(STUDENTS) if k not in leaving}
+
+                def named() -> set[str]:  # what the server has drawn in the presenter's scene
+                    tools = room.presenter.tools
+                    return set() if tools is None or tools.names is None else {
+                        name for label in tools.names.labels if label.visible for name in label.text.split(JOIN)}
+
+                await until(lambda: named() == here, what="the students' names in 3D")
+            # back from the same computers: the attempt is theirs again
+            for k in leaving:
+                students[k] = await ViserClient(url(classroom), local_address=addresses[k]).connect()
+            await until(lambda: all(member_of(k) is not None and member_of(k).student is kept[k] for k in leaving),
+                        what="the returning students' attempts")
+            assert all(kept[k].attempts == 1 and kept[k].verdict.group == GROUPS[kind][0] for k in leaving)
+            await until(lambda: all(students[k].shown("(check 1)") for k in leaving), what="their verdict shown again")
+            await teacher.set_gui("End and show the solution", True)
+            await until(lambda: room.challenges.run.ended and all(s.shown("The challenge has ended") for s in students),
+                        what="the end on every screen")
+            if challenge.is_pose:  # every arm moved to the solution
+                q, _ = C.solution(challenge, classroom.arm)
+                assert all(np.allclose(member_of(k).session.state.q, q) for k in range(STUDENTS))
+                assert np.allclose(room.state.q, q)
+            rows = room.challenges.run.results_csv().decode().splitlines()
+            assert len(rows) == 1 + STUDENTS and rows[0] == "student,nickname,attempts,solved,seconds_to_solve,final_answer"
+            assert sum(",yes," in row for row in rows) == PLAN.count("right")
+        for client in (teacher, *students):
+            await client.close()
+
+    asyncio.run(scenario())
+
+
+def test_a_client_cannot_claim_solved_and_checks_are_paced(classroom):
+    room = classroom.classroom
+    room.challenges.clock = lambda: 100.0  # time stands still: a second check is always within the second
+
+    async def scenario():
+        teacher = await ViserClient(url(classroom)).connect()
+        await become_presenter(teacher, classroom)
+        student = await ViserClient(url(classroom), local_address="127.0.0.7").connect()
+        await teacher.set_gui("Challenge", "Where is the flange?")
+        await teacher.set_gui("Start the challenge", True)
+        await until(lambda: any(m.card is not None for m in room.members.values()), what="the card")
+        member = next(m for m in room.members.values() if m.card is not None)
+        # whatever a client sends to any widget of its card, saying "solved", changes nothing on the server
+        await until(lambda: student.shown("Where is the flange"), what="the task")
+        for uuid in list(student.markdown):
+            await student.send(messages.GuiUpdateMessage(uuid, {"value": "✓ Solved", "_markdown": "✓ Solved"}))
+        await student.set_gui("Your nickname (up to 20 characters)", "<b>Bo</b>\x07\u202e and a very long tail")
+        await student.set_gui("Check my answer", True)  # nothing typed yet: refused beside the button, not counted
+        await until(lambda: student.shown("expected 3 numbers, got 0"), what="the refusal of an empty answer")
+        assert member.student.attempts == 0
+        await student.set_gui("Your numbers (x, y, z)", "1 2 3")
+        await student.set_gui("Check my answer", True)
+        await until(lambda: member.student.attempts == 1, what="the first check")
+        assert member.student.solved_after is None and member.student.nickname == "<b>Bo</b> and a very l"[:20]
+        # a second check within the second is refused beside the button, and not counted
+        await student.set_gui("Check my answer", True)
+        await until(lambda: student.shown("One check a second"), what="the refusal")
+        assert member.student.attempts == 1 and room.challenges.run.summary().solved == 0
+        # only the presenter ends it
+        await student.send(messages.GuiUpdateMessage(teacher.gui["End and show the solution"]["uuid"], {"value": True}))
+        # one connection's messages are handled in order: once the next one has been, the forged one has been too
+        await student.set_gui("Your nickname (up to 20 characters)", "Bo")
+        await until(lambda: member.student.nickname == "Bo", what="the student's next message")
+        assert not room.challenges.run.ended
+        for client in (teacher, student):
+            await client.close()
+
+    asyncio.run(scenario())
+
+
+def test_run_bookkeeping_bounds_and_time_limit():
+    now = [0.0]
+    challenge = next(c for c in C.builtin() if c.kind == "numbers")
+    from ur10core import Arm
+
+    arm = Arm.preset("course")
+    run = ChallengeRun(challenge, arm, time_limit=60, clock=lambda: now[0])
+    ada = run.join("10.0.0.1")
+    right = C.Answer(numbers=C.expected_numbers(challenge, arm))
+    assert run.check(ada, right).solved
+    with pytest.raises(ValueError, match="one check a second"):
+        run.check(ada, right)
+    now[0] = 61.0
+    with pytest.raises(ValueError, match="time is up"):
+        run.check(ada, right)
+    assert run.summary().seconds_left == 0.0 and run.summary().solved == 1
+    assert clean_nickname("a\nb\tc\u200bd") == "a b cd" and len(clean_nickname("x" * 100)) == 20
+    assert spreadsheet_safe("=HYPERLINK(1)") == "'=HYPERLINK(1)" and spreadsheet_safe("Ada") == "Ada"
+    # one computer's departed attempt goes back to it, and only to it
+    run.leave(ada, {"numbers": "1 2 3"})
+    bo = run.join("10.0.0.2")
+    assert bo is not ada and run.join("10.0.0.1") is ada and ada.kept == {"numbers": "1 2 3"}
+    from ur10teach.serving import challenge_run
+
+    small = ChallengeRun(challenge, arm)
+    for k in range(challenge_run.MAX_STUDENTS):
+        small.join(f"10.1.{k // 250}.{k % 250}")
+    with pytest.raises(ValueError, match="already has"):
+        small.join("10.9.9.9")

@@ -1,0 +1,740 @@
+"""Class challenges: a kinematics task, the exact check of a student's answer, and the kind of mistake it is.
+
+docs/kinematics.md §9. A :class:`Challenge` is built in (:func:`builtin`) or read from a
+teacher's TOML file (:func:`load`); :func:`check` takes the student's own state (an
+:class:`Answer`: joints, target, typed table, typed numbers, joint rates) and returns a
+:class:`Verdict`: solved or not, what is off and by how much, and the group the mistake falls
+in (the projector counts students by it); :func:`solution` is what everyone is shown at the end.
+
+Units are metres and radians here; a challenge file and the messages use mm and degrees.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import functools
+import math
+import re
+import sys
+
+import numpy as np
+
+from .arm import PRESETS, Arm, factor_scales
+from .dh import DHTable
+
+if sys.version_info >= (3, 11):
+    import tomllib
+else:  # pragma: no cover - Python 3.10
+    import tomli as tomllib
+
+__all__ = ["KINDS", "QUANTITIES", "Answer", "Challenge", "Verdict", "builtin", "check", "load", "parse", "solution"]
+
+KINDS = ("reach", "singularity", "branch_count", "dh_table", "numbers", "velocity")
+#: What a "numbers" challenge asks for at its joints.
+QUANTITIES = {"position": "p of the tool frame (x, y, z in mm)", "det_j": "det J (lengths in metres)",
+              "torque": "the joint torques τ = Jᵀ [F; M] (N·m, N for a sliding joint)"}
+MAX_CHALLENGES = 100
+MAX_FILE_BYTES = 100_000
+MAX_TEXT = 1000
+#: Joint values a "dh_table" answer is compared at (with the arm's home and zero joints).
+DH_SAMPLES = 24
+
+
+@dataclasses.dataclass(frozen=True)
+class Challenge:
+    """One task. Only the fields its ``kind`` uses are set (:func:`parse` checks them).
+
+    Lengths in metres and angles in radians; a challenge file gives them in mm and degrees.
+    """
+
+    title: str
+    kind: str
+    arm: str  #: an ``Arm.preset`` name ("ur10": the app's own UR10, whichever preset the server runs)
+    text: str  #: the task as the students read it
+    joints: tuple[float, ...] | None = None  #: reach: the target's joints; numbers: where to compute; branch_count: the orientation's
+    branch: str | int | None = None  #: reach: a slot number (1-based) or words of its label ("elbow down")
+    factor: str | None = None  #: singularity: which factor of det J is zero
+    min_tool_height: float | None = None  #: singularity: the tool at least this far above the floor (m)
+    count: int | None = None  #: branch_count: how many branches reach
+    quantity: str | None = None  #: numbers: a key of :data:`QUANTITIES`
+    force: tuple[float, ...] = (0.0, 0.0, 0.0)  #: numbers, torque: the force at the tool (N), base frame
+    moment: tuple[float, ...] = (0.0, 0.0, 0.0)  #: and the moment (N·m)
+    velocity: tuple[float, ...] | None = None  #: velocity: the tool's asked velocity (m/s)
+    still: bool = False  #: velocity: the tool must not turn as it moves
+    position_tolerance: float = 0.005  #: m
+    orientation_tolerance: float = math.radians(2.0)
+    factor_tolerance: float = 0.01  #: singularity: |factor| as a share of its typical size (``factor_scales``)
+    relative_tolerance: float = 0.01  #: numbers
+    velocity_tolerance: float = 0.005  #: m/s
+    time_limit: float | None = None  #: s
+
+    @property
+    def key(self) -> str:
+        return re.sub(r"[^a-z0-9]+", "-", self.title.lower()).strip("-")[:60]
+
+    @property
+    def is_pose(self) -> bool:
+        """Its answer is where the arm is: the projector draws every student's tool, and the end moves the arm."""
+        return self.kind in ("reach", "singularity", "branch_count")
+
+
+@dataclasses.dataclass(frozen=True)
+class Answer:
+    """What the server reads from one student's session when they ask for a check."""
+
+    q: np.ndarray | None = None  #: (n,) their arm's joints
+    target: np.ndarray | None = None  #: (4, 4) their IK target
+    table: DHTable | None = None  #: the table they typed
+    numbers: np.ndarray | None = None  #: what they typed, in the challenge's units (mm, N·m, ...)
+    rates: np.ndarray | None = None  #: (n,) their joint rates (rad/s, m/s)
+
+
+@dataclasses.dataclass(frozen=True)
+class Verdict:
+    solved: bool
+    message: str  #: what the student reads: what is off, and by how much
+    group: str = ""  #: the kind of mistake, counted on the projector ("" when solved)
+    answer: str = ""  #: the answer in a few words, for the results file
+
+
+# ---------------------------------------------------------------------- built in
+
+
+def builtin() -> tuple[Challenge, ...]:
+    """The course's challenges, in the order it teaches them (docs/kinematics.md §9.2)."""
+    return _BUILTIN
+
+
+def _deg(*values: float) -> tuple[float, ...]:
+    return tuple(math.radians(v) for v in values)
+
+
+_REACH = _deg(20, 70, -100, 120, 90, 30)
+_BUILTIN = (
+    Challenge("Reach the target", "reach", "ur10",
+              "Put the tool on the orange target, position and orientation, on any branch (drag the target "
+              "or move the joints). Within 5 mm and 2°.", joints=_REACH),
+    Challenge("Reach it elbow down", "reach", "ur10",
+              "Put the tool on the target **with the elbow down**. Within 5 mm and 2°.", joints=_REACH, branch="elbow down"),
+    Challenge("Wrist singularity, tool up high", "singularity", "ur10",
+              "Find a pose where the **wrist** factor of det J is zero, with the tool at least 500 mm above the floor.",
+              factor="wrist", min_tool_height=0.5),
+    Challenge("Elbow singularity", "singularity", "ur10", "Find a pose where the **elbow** factor of det J is zero.",
+              factor="elbow"),
+    Challenge("Four branches only", "branch_count", "ur10",
+              "Keep the tool pointing straight down, as it starts, and move the target to where **exactly 4** "
+              "branches reach it (Branches table).", joints=_deg(0, 60, -90, 120, -90, 0), count=4,
+              orientation_tolerance=math.radians(5)),
+    Challenge("Where is the flange?", "numbers", "ur10",
+              "Compute p of T06 at q = (30°, 60°, −80°, 110°, 90°, 0°). Type x y z in mm (1 % tolerance).",
+              joints=_deg(30, 60, -80, 110, 90, 0), quantity="position"),
+    Challenge("det J by hand", "numbers", "ur10",
+              "Compute det J at q = (0°, −60°, 90°, −30°, 45°, 0°) from its factors, lengths in metres (1 %).",
+              joints=_deg(0, -60, 90, -30, 45, 0), quantity="det_j"),
+    Challenge("Holding a weight", "numbers", "ur10",
+              "At q = (0°, 0°, 0°, 90°, 0°, 0°), the arm stretched out, the flange pushes down with 100 N. Type the "
+              "six joint torques τ = Jᵀ F in N·m (1 %).", joints=_deg(0, 0, 0, 90, 0, 0), quantity="torque",
+              force=(0.0, 0.0, -100.0)),
+    Challenge("Straight up", "velocity", "ur10",
+              "Set the joint rates (Velocities folder) so that the flange moves **straight up at 100 mm/s** without "
+              "turning. Within 5 mm/s and 1 °/s.", velocity=(0.0, 0.0, 0.1), still=True),
+    Challenge("Type the UR10's DH table", "dh_table", "ur10",
+              "Type the DH table of the UR10 (either convention): its forward kinematics must match the arm's."),
+    Challenge("KR210: reach with the wrist flipped", "reach", "kr210",
+              "Put the KR210's tool on the target **with the wrist flipped**. Within 5 mm and 2°.",
+              joints=_deg(10, 20, -30, 40, 50, 60), branch="wrist flipped"),
+    Challenge("Stanford arm's DH table", "dh_table", "stanford",
+              "Type the Stanford arm's DH table (either convention): its forward kinematics must match the arm's."),
+    Challenge("SCARA: one branch only", "branch_count", "scara",
+              "Move the SCARA's target to where **only 1** of its 2 branches reaches.", count=1),
+)
+
+
+# ---------------------------------------------------------------------- files
+
+
+def load(path) -> tuple[Challenge, ...]:
+    """The challenges of a teacher's TOML file; ``ValueError`` naming the line of whatever is wrong."""
+    with open(path, "rb") as file:
+        raw = file.read(MAX_FILE_BYTES + 1)
+    if len(raw) > MAX_FILE_BYTES:
+        raise ValueError(f"{path}: a challenge file is at most {MAX_FILE_BYTES // 1000} kB")
+    try:
+        text = raw.decode("utf-8")
+    except UnicodeDecodeError as error:
+        raise ValueError(f"{path}: not UTF-8 text (byte {error.start})") from None
+    return parse(text, source=str(path))
+
+
+def parse(text: str, source: str = "challenges") -> tuple[Challenge, ...]:
+    """Challenges from TOML text: one ``[[challenge]]`` table each (docs/kinematics.md §9.3).
+
+    >>> [c.title for c in parse('[[challenge]]\\ntitle = "Up"\\nkind = "velocity"\\nvelocity_mm_s = [0, 0, 100]')]
+    ['Up']
+    >>> parse('[[challenge]]\\ntitle = "Up"\\nkind = "velocty"')
+    Traceback (most recent call last):
+    ...
+    ValueError: challenges, line 3: kind must be one of reach, singularity, branch_count, dh_table, numbers, velocity, got 'velocty'
+    """
+    try:
+        document = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as error:
+        raise ValueError(f"{source}: {error}") from None
+    unknown = set(document) - {"challenge"}
+    if unknown:
+        raise ValueError(f"{source}, line {_line(text, -1, sorted(unknown)[0])}: only [[challenge]] tables, "
+                         f"got {sorted(unknown)[0]!r}")
+    tables = document.get("challenge", [])
+    if not isinstance(tables, list) or not tables:
+        raise ValueError(f"{source}: no [[challenge]] table")
+    if len(tables) > MAX_CHALLENGES:
+        raise ValueError(f"{source}: at most {MAX_CHALLENGES} challenges, got {len(tables)}")
+    challenges = []
+    for index, table in enumerate(tables):
+        try:
+            challenges.append(_from_table(table))
+        except _FieldError as error:
+            raise ValueError(f"{source}, line {_line(text, index, error.field)}: {error}") from None
+    keys = [c.key for c in challenges]
+    for index, key in enumerate(keys):
+        if keys.index(key) != index:
+            raise ValueError(f"{source}, line {_line(text, index, 'title')}: two challenges titled {challenges[index].title!r}")
+    return tuple(challenges)
+
+
+class _FieldError(ValueError):
+    def __init__(self, field: str, message: str) -> None:
+        super().__init__(message)
+        self.field = field
+
+
+def _line(text: str, index: int, field: str | None) -> int:
+    """The line of ``field`` in the ``index``-th ``[[challenge]]`` (its header's line without one)."""
+    lines = text.splitlines()
+    headers = [k for k, line in enumerate(lines) if re.match(r"\s*\[\[\s*challenge\s*\]\]", line)]
+    start = headers[index] if headers and -len(headers) <= index < len(headers) and index >= 0 else 0
+    end = headers[index + 1] if 0 <= index < len(headers) - 1 else len(lines)
+    if field:
+        for k in range(start, end):
+            if re.match(rf"\s*{re.escape(field)}\s*=", lines[k]):
+                return k + 1
+    return start + 1
+
+
+#: Every key a challenge table may have, and what it becomes.
+_FIELDS = {"title", "kind", "arm", "text", "joints", "branch", "factor", "min_tool_height_mm", "count", "quantity",
+           "force_n", "moment_nm", "velocity_mm_s", "still", "position_tolerance_mm", "orientation_tolerance_deg",
+           "factor_tolerance", "relative_tolerance", "velocity_tolerance_mm_s", "time_limit_s"}
+#: The keys each kind needs, and those it may have beyond the common ones.
+_NEEDS = {"reach": ({"joints"}, {"branch", "position_tolerance_mm", "orientation_tolerance_deg"}),
+          "singularity": ({"factor"}, {"min_tool_height_mm", "factor_tolerance"}),
+          "branch_count": ({"count"}, {"joints", "orientation_tolerance_deg"}),
+          "dh_table": (set(), {"position_tolerance_mm"}),
+          "numbers": ({"joints", "quantity"}, {"force_n", "moment_nm", "relative_tolerance"}),
+          "velocity": ({"velocity_mm_s"}, {"still", "velocity_tolerance_mm_s"})}
+_COMMON = {"title", "kind", "arm", "text", "time_limit_s"}
+
+
+def _from_table(table: dict) -> Challenge:
+    if not isinstance(table, dict):
+        raise _FieldError("", "each [[challenge]] is a table of keys")
+    for field in table:
+        if field not in _FIELDS:
+            raise _FieldError(field, f"unknown key {field!r}")
+    kind = table.get("kind")
+    if kind not in KINDS:
+        raise _FieldError("kind", f"kind must be one of {', '.join(KINDS)}, got {kind!r:.40}")
+    needs, may = _NEEDS[kind]
+    for field in needs:
+        if field not in table:
+            raise _FieldError("kind", f"a {kind} challenge needs {field!r}")
+    for field in table:
+        if field not in needs | may | _COMMON:
+            raise _FieldError(field, f"{field!r} is not used by a {kind} challenge")
+    title = _text(table, "title", 80, required=True)
+    arm_name = table.get("arm", "ur10")
+    if arm_name not in PRESETS:
+        raise _FieldError("arm", f"arm must be one of {', '.join(PRESETS)}, got {arm_name!r:.40}")
+    arm = Arm.preset(arm_name)
+    values: dict = {"title": title, "kind": kind, "arm": arm_name, "text": _text(table, "text", MAX_TEXT) or title}
+    if "joints" in table:
+        values["joints"] = _joints(table, arm)
+    if "branch" in table:
+        values["branch"] = _branch(table["branch"], arm)
+    if "factor" in table:
+        names = arm.factor_names
+        if table["factor"] not in names:
+            raise _FieldError("factor", f"the {arm_name} arm's det J factors are {', '.join(names)}, got {table['factor']!r:.40}")
+        values["factor"] = table["factor"]
+    if "count" in table:
+        values["count"] = _integer(table, "count", 0, len(arm.slot_labels))
+    if "quantity" in table:
+        if table["quantity"] not in QUANTITIES:
+            raise _FieldError("quantity", f"quantity must be one of {', '.join(QUANTITIES)}, got {table['quantity']!r:.40}")
+        values["quantity"] = table["quantity"]
+    for field, name, scale, size in (("force_n", "force", 1.0, 3), ("moment_nm", "moment", 1.0, 3),
+                                     ("velocity_mm_s", "velocity", 1e-3, 3)):
+        if field in table:
+            values[name] = tuple(scale * v for v in _numbers(table, field, size, 1e6))
+    if "still" in table:
+        if not isinstance(table["still"], bool):
+            raise _FieldError("still", "still is true or false")
+        values["still"] = table["still"]
+    for field, name, scale, low, high in (
+            ("min_tool_height_mm", "min_tool_height", 1e-3, -1e4, 1e4),
+            ("position_tolerance_mm", "position_tolerance", 1e-3, 1e-3, 1000.0),
+            ("orientation_tolerance_deg", "orientation_tolerance", math.pi / 180, 1e-3, 180.0),
+            ("factor_tolerance", "factor_tolerance", 1.0, 1e-6, 1.0),
+            ("relative_tolerance", "relative_tolerance", 1.0, 1e-9, 1.0),
+            ("velocity_tolerance_mm_s", "velocity_tolerance", 1e-3, 1e-3, 1e4),
+            ("time_limit_s", "time_limit", 1.0, 10.0, 86_400.0)):
+        if field in table:
+            values[name] = scale * _number(table, field, low, high)
+    challenge = Challenge(**values)
+    if challenge.quantity == "torque" and not any(challenge.force) and not any(challenge.moment):
+        raise _FieldError("quantity", "a torque question needs force_n or moment_nm")
+    if challenge.velocity is not None and not any(challenge.velocity):
+        raise _FieldError("velocity_mm_s", "the asked velocity must not be zero")
+    if kind == "singularity":  # a factor that is zero nowhere within the limits is a task nobody can do
+        try:
+            singular_pose(arm, challenge.factor, challenge.min_tool_height)
+        except ValueError as error:
+            raise _FieldError("factor", str(error)) from None
+    if kind == "branch_count":  # so is a count no target has
+        try:
+            _count_pose(challenge, arm)
+        except ValueError as error:
+            raise _FieldError("count", str(error)) from None
+    return challenge
+
+
+def _text(table: dict, field: str, limit: int, required: bool = False) -> str:
+    value = table.get(field, "")
+    if not isinstance(value, str) or (required and not value.strip()):
+        raise _FieldError(field, f"{field} must be {'a non-empty' if required else 'a'} string")
+    if len(value) > limit:
+        raise _FieldError(field, f"{field} is at most {limit} characters, got {len(value)}")
+    return value.strip()
+
+
+def _number(table: dict, field: str, low: float, high: float) -> float:
+    value = table[field]
+    if isinstance(value, bool) or not isinstance(value, (int, float)) or not low <= value <= high:
+        raise _FieldError(field, f"{field} must be a number from {low:g} to {high:g}, got {value!r:.40}")
+    return float(value)
+
+
+def _integer(table: dict, field: str, low: int, high: int) -> int:
+    value = table[field]
+    if isinstance(value, bool) or not isinstance(value, int) or not low <= value <= high:
+        raise _FieldError(field, f"{field} must be a whole number from {low} to {high}, got {value!r:.40}")
+    return value
+
+
+def _numbers(table: dict, field: str, size: int, bound: float) -> list[float]:
+    values = table[field]
+    if (not isinstance(values, list) or len(values) != size
+            or any(isinstance(v, bool) or not isinstance(v, (int, float)) or not abs(v) <= bound for v in values)):
+        raise _FieldError(field, f"{field} must be a list of {size} numbers, got {values!r:.60}")
+    return [float(v) for v in values]
+
+
+def _joints(table: dict, arm: Arm) -> tuple[float, ...]:
+    """The file's joints (degrees, mm for a sliding joint), within the arm's limits."""
+    shown = _numbers(table, "joints", arm.n_joints, 1e5)
+    q = np.where(arm.revolute, np.radians(shown), np.array(shown) / 1000.0)
+    if not arm.within_limits(q):
+        raise _FieldError("joints", f"joints {shown} are outside the {arm.name} arm's limits")
+    return tuple(q.tolist())
+
+
+def _branch(value, arm: Arm) -> str | int:
+    labels = arm.slot_labels
+    if isinstance(value, int) and not isinstance(value, bool):
+        if not 1 <= value <= len(labels):
+            raise _FieldError("branch", f"branch is 1 to {len(labels)} on the {arm.name} arm, got {value}")
+        return value
+    if not isinstance(value, str) or not _slots_named(value, labels):
+        raise _FieldError("branch", f"branch is a number or words of a branch's name ({labels[0]!r}, ...), got {value!r:.40}")
+    return value
+
+
+def _label_parts(label: str) -> list[str]:
+    """"elbow up (θ2 ≤ 0), wrist flipped" → ["elbow up", "wrist flipped"]: the words a student names a branch by."""
+    return [re.sub(r"\(.*?\)", "", part).strip().lower() for part in label.split(",")]
+
+
+def _slots_named(words: str, labels: tuple[str, ...]) -> list[int]:
+    """The slots whose label has every comma-separated part of ``words`` ("elbow down, wrist flipped")."""
+    parts = [p.strip().lower() for p in words.split(",") if p.strip()]
+    named = [k for k, label in enumerate(labels) if all(p in _label_parts(label) for p in parts)]
+    return named if parts else []
+
+
+# ---------------------------------------------------------------------- checks
+
+
+def check(challenge: Challenge, arm: Arm, answer: Answer) -> Verdict:
+    """Whether ``answer`` solves ``challenge`` on ``arm``, what is off and by how much, and the mistake's group.
+
+    The answer is the student's own state on the server; nothing a browser claims counts.
+
+    Example: the built-in "Reach it elbow down", answered with the elbow up.
+
+    >>> reach = builtin()[1]
+    >>> arm = Arm.preset("course")
+    >>> T = arm.fk(reach.joints)
+    >>> up = arm.ik(T).q[0]                                    # slot 1: shoulder left, elbow up
+    >>> check(reach, arm, Answer(q=up)).group
+    'elbow up instead of elbow down'
+    >>> check(reach, arm, Answer(q=arm.ik(T).q[1])).solved     # slot 2: elbow down
+    True
+    """
+    return _CHECKS[challenge.kind](challenge, arm, answer)
+
+
+def _needs(value, what: str):
+    if value is None:
+        raise ValueError(f"the answer has no {what}")
+    return value
+
+
+def _direction(offset: np.ndarray) -> str:
+    """"1181 mm from the target: 1180 mm too high, 40 mm too far towards −x": the parts of ``offset`` (m) that matter."""
+    words = []
+    largest = np.abs(offset).max()
+    for axis, value in zip("xyz", offset):
+        if abs(value) >= 0.3 * largest and abs(value) >= 5e-4:
+            side = ("too high" if value > 0 else "too low") if axis == "z" else f"too far towards {'+' if value > 0 else '−'}{axis}"
+            words.append(f"{1000 * abs(value):.0f} mm {side}")
+    return f"{1000 * np.linalg.norm(offset):.0f} mm from the target: {', '.join(words)}"
+
+
+def _main_axis(offset: np.ndarray) -> str:
+    axis = int(np.argmax(np.abs(offset)))
+    if axis == 2:
+        return "too high" if offset[2] > 0 else "too low"
+    return f"too far towards {'+' if offset[axis] > 0 else '−'}{'xyz'[axis]}"
+
+
+def _turn_between(arm: Arm, R: np.ndarray, R_goal: np.ndarray) -> float:
+    """How far (rad) ``R`` is turned from ``R_goal`` in what the arm controls of it (none for a position-only arm)."""
+    if arm.task == "position":
+        return 0.0
+    if arm.task == "position and yaw":  # the tool axis is the arm's own: the yaw of its x axis
+        return abs(math.remainder(math.atan2(R[1, 0], R[0, 0]) - math.atan2(R_goal[1, 0], R_goal[0, 0]), math.tau))
+    cosine = (np.trace(R_goal.T @ R) - 1.0) / 2.0
+    return math.acos(min(1.0, max(-1.0, cosine)))
+
+
+def _joints_text(arm: Arm, q) -> str:
+    return " ".join(f"{math.degrees(v):.1f}" if kind == "R" else f"{1000 * v:.1f}" for v, kind in zip(q, arm.joint_types))
+
+
+def _check_reach(challenge: Challenge, arm: Arm, answer: Answer) -> Verdict:
+    q = np.asarray(_needs(answer.q, "joints"), dtype=float)
+    goal = arm.fk(np.array(challenge.joints))
+    T = arm.fk(q)
+    text = _joints_text(arm, q)
+    offset = T[:3, 3] - goal[:3, 3]
+    if np.linalg.norm(offset) > challenge.position_tolerance:
+        return Verdict(False, f"Your tool is {_direction(offset)}.", f"tool {_main_axis(offset)}", text)
+    turn = _turn_between(arm, T[:3, :3], goal[:3, :3])
+    if turn > challenge.orientation_tolerance:
+        return Verdict(False, f"The tool is on the target but turned {math.degrees(turn):.0f}° from its orientation.",
+                       "tool turned", text)
+    if challenge.branch is None:
+        return Verdict(True, "Solved: your tool is on the target.", "", text)
+    solution = arm.ik(goal)
+    wanted = _wanted_slots(challenge, arm)
+    on = _slot_of(arm, solution, q)
+    labels = solution.labels
+    if on in wanted:
+        return Verdict(True, f"Solved: on the target on branch {on + 1} ({labels[on]}).", "", text)
+    if isinstance(challenge.branch, int):
+        return Verdict(False, f"That is branch {on + 1} ({labels[on]}); the task asks for branch {challenge.branch}.",
+                       f"branch {on + 1} instead of {challenge.branch}", text)
+    asked = [p.strip().lower() for p in challenge.branch.split(",")]
+    differ = [part for part in _label_parts(labels[on]) if part not in asked and any(part.split()[0] == a.split()[0] for a in asked)]
+    return Verdict(False, f"That is the {labels[on]} branch (branch {on + 1}); the task asks for {challenge.branch}.",
+                   f"{', '.join(differ) or labels[on]} instead of {challenge.branch}", text)
+
+
+def _wanted_slots(challenge: Challenge, arm: Arm) -> list[int]:
+    if isinstance(challenge.branch, int):
+        return [challenge.branch - 1]
+    return _slots_named(challenge.branch, arm.slot_labels)
+
+
+def _slot_of(arm: Arm, solution, q: np.ndarray) -> int:
+    """The valid slot of ``solution`` whose joints are ``q`` (whole turns apart for a revolute joint)."""
+    difference = np.where(arm.revolute, np.remainder(solution.q - q + math.pi, math.tau) - math.pi, solution.q - q)
+    distance = np.where(solution.valid, np.abs(difference).max(axis=-1), np.inf)
+    return int(np.argmin(distance))
+
+
+def _check_singularity(challenge: Challenge, arm: Arm, answer: Answer) -> Verdict:
+    q = np.asarray(_needs(answer.q, "joints"), dtype=float)
+    names = arm.factor_names
+    levels = np.abs(arm.singularity_factors(q)) / factor_scales(arm)
+    asked = names.index(challenge.factor)
+    text = _joints_text(arm, q)
+    if levels[asked] > challenge.factor_tolerance:
+        zero = [name for name, level in zip(names, levels) if level <= challenge.factor_tolerance]
+        value = float(arm.singularity_factors(q)[asked])
+        if zero:
+            return Verdict(False, f"That is a {' and '.join(zero)} singularity; the task asks for the {challenge.factor} "
+                           f"factor to be zero (it is {value:+.3g}).", f"{' and '.join(zero)} instead of {challenge.factor}", text)
+        return Verdict(False, f"The {challenge.factor} factor is {value:+.3g}, {100 * levels[asked]:.0f} % of its usual size: "
+                       f"not zero yet (within {100 * challenge.factor_tolerance:g} %).", f"{challenge.factor} factor not zero", text)
+    height = float(arm.fk(q)[2, 3])
+    if challenge.min_tool_height is not None and height < challenge.min_tool_height:
+        return Verdict(False, f"A {challenge.factor} singularity, but the tool is {1000 * height:.0f} mm above the floor: "
+                       f"it must be at least {1000 * challenge.min_tool_height:.0f} mm.",
+                       f"tool below {1000 * challenge.min_tool_height:.0f} mm", text)
+    return Verdict(True, f"Solved: the {challenge.factor} factor is zero here.", "", text)
+
+
+def _goal_orientation(challenge: Challenge, arm: Arm) -> np.ndarray:
+    return arm.fk(np.array(challenge.joints if challenge.joints is not None else arm.specs.home))[:3, :3]
+
+
+def _check_branch_count(challenge: Challenge, arm: Arm, answer: Answer) -> Verdict:
+    T = np.asarray(_needs(answer.target, "target"), dtype=float)
+    p = T[:3, 3]
+    text = f"target {1000 * p[0]:.0f} {1000 * p[1]:.0f} {1000 * p[2]:.0f} mm"
+    turn = _turn_between(arm, T[:3, :3], _goal_orientation(challenge, arm))
+    if turn > challenge.orientation_tolerance:
+        return Verdict(False, f"Keep the tool's orientation as given: your target is turned {math.degrees(turn):.0f}° from it.",
+                       "target turned", text)
+    goal = T.copy()
+    goal[:3, :3] = _goal_orientation(challenge, arm)  # within the tolerance: counted at the asked orientation
+    count = _count(arm, goal)
+    if count != challenge.count:
+        return Verdict(False, f"{_branches(count)} your target; the task asks for {challenge.count}.",
+                       f"{count} branches instead of {challenge.count}", f"{text}: {count}")
+    return Verdict(True, f"Solved: exactly {_branches(count)} your target.", "", f"{text}: {count}")
+
+
+def _branches(count: int) -> str:
+    return f"{count} branch reaches" if count == 1 else f"{count} branches reach"
+
+
+def _count(arm: Arm, T: np.ndarray) -> int:
+    """How many branches reach ``T`` (4, 4) within the joint limits, as the reach map counts them."""
+    solution = arm.ik(T)
+    return int((solution.valid & solution.within_limits).sum())
+
+
+@functools.lru_cache(maxsize=64)
+def _count_pose(challenge: Challenge, arm: Arm) -> tuple[float, ...]:
+    """Joints of a pose whose target has exactly ``challenge.count`` branches at the asked orientation (a solution)."""
+    rotation = _goal_orientation(challenge, arm)
+    q = arm.sample_joints(4000, seed=7)
+    T = arm.fk(q)
+    T[:, :3, :3] = rotation
+    solution = arm.ik(T)
+    counts = (solution.valid & solution.within_limits).sum(axis=-1)
+    above = T[:, 2, 3] > 0.1  # a target above the floor, where one exists
+    found = np.flatnonzero((counts == challenge.count) & (counts > 0) & above)
+    if not len(found):
+        found = np.flatnonzero((counts == challenge.count) & (counts > 0))
+    if not len(found):  # (zero branches has no pose to show: any far target is an answer)
+        if challenge.count == 0:
+            return tuple(arm.specs.home.tolist())
+        raise ValueError(f"no target of the {arm.name} arm at this orientation has exactly {challenge.count} branches")
+    pose = int(found[0])
+    slot = int(np.flatnonzero(solution.within_limits[pose])[0])
+    return tuple(solution.q[pose, slot].tolist())
+
+
+def _check_dh_table(challenge: Challenge, arm: Arm, answer: Answer) -> Verdict:
+    table = _needs(answer.table, "typed table")
+    text = "; ".join(f"{1000 * r.a:.1f} {math.degrees(r.alpha):.1f} {1000 * r.d:.1f} {math.degrees(r.theta):.1f} "
+                     f"{r.joint or 'F'}" for r in table.rows)
+    if table.joint_types != arm.joint_types:
+        return Verdict(False, f"Your table's joints are {table.joint_types or 'none'}; the arm's are {arm.joint_types}.",
+                       "wrong joints", text)
+    q = np.concatenate([[np.zeros(arm.n_joints), arm.specs.home], arm.sample_joints(DH_SAMPLES, seed=3)])
+    error = np.abs(table.fk(q)[:, :3, :] - arm.fk(q)[:, :3, :])
+    tolerance = challenge.position_tolerance / 10
+    if error.max() <= tolerance:
+        return Verdict(True, "Solved: your table's forward kinematics is the arm's.", "", text)
+    at_zero = 1000 * float(np.linalg.norm(table.fk(q[0])[:3, 3] - arm.fk(q[0])[:3, 3]))
+    row, what = _wrong_row(table, arm.dh.converted(table.convention))
+    if row is None:
+        return Verdict(False, f"Your table's tool is not where the arm's is ({at_zero:.0f} mm apart at zero joints).",
+                       "different rows", text)
+    return Verdict(False, f"Row {row + 1}'s {what}. (At zero joints your tool is {at_zero:.0f} mm from the arm's.)",
+                   f"row {row + 1}: {what}", text)
+
+
+def _wrong_row(table: DHTable, reference: DHTable) -> tuple[int | None, str]:
+    """The first row of ``table`` that differs from ``reference`` (same convention) and how, or None if they do not line up."""
+    rows, goal = [r for r in table.rows if r.joint or r.a or r.alpha or r.d or r.theta], \
+        [r for r in reference.rows if r.joint or r.a or r.alpha or r.d or r.theta]
+    if len(rows) != len(goal):
+        return None, ""
+    for k, (mine, theirs) in enumerate(zip(rows, goal)):
+        if mine.joint != theirs.joint:
+            return k, "type is wrong"
+        for name, symbol, angle in (("alpha", "α", True), ("a", "a", False), ("d", "d", False), ("theta", "θ", True)):
+            value, wanted = getattr(mine, name), getattr(theirs, name)
+            if angle:
+                value, wanted = math.remainder(value, math.tau), math.remainder(wanted, math.tau)
+            if math.isclose(value, wanted, abs_tol=1e-4):
+                continue
+            if math.isclose(value, -wanted, abs_tol=1e-4):
+                return k, f"{symbol} has the wrong sign"
+            if not angle and math.isclose(value, wanted / 1000, abs_tol=1e-6):
+                return k, f"{symbol} is in metres where mm are asked"
+            return k, f"{symbol} is wrong"
+    return None, ""
+
+
+def expected_numbers(challenge: Challenge, arm: Arm) -> np.ndarray:
+    """What a "numbers" challenge's answer is, in the units the student types (mm, m³…, N·m)."""
+    q = np.array(challenge.joints)
+    if challenge.quantity == "position":
+        return 1000 * arm.fk(q)[:3, 3]
+    if challenge.quantity == "det_j":
+        return np.array([np.linalg.det(arm.jacobian(q))])
+    return arm.static_torques(q, challenge.force, challenge.moment)
+
+
+def number_names(challenge: Challenge, arm: Arm) -> tuple[str, ...]:
+    if challenge.quantity == "position":
+        return ("x", "y", "z")
+    if challenge.quantity == "det_j":
+        return ("det J",)
+    return tuple(f"τ{k + 1}" for k in range(arm.n_joints))
+
+
+def _check_numbers(challenge: Challenge, arm: Arm, answer: Answer) -> Verdict:
+    typed = np.asarray(_needs(answer.numbers, "numbers"), dtype=float).reshape(-1)
+    expected = expected_numbers(challenge, arm)
+    names = number_names(challenge, arm)
+    if typed.shape != expected.shape:
+        raise ValueError(f"type {len(expected)} number{'s' * (len(expected) != 1)} ({', '.join(names)}), got {typed.size}")
+    text = " ".join(f"{v:.6g}" for v in typed)
+    # relative to each number, with a floor of the tolerance times the largest (a zero torque is within reach)
+    allowed = challenge.relative_tolerance * np.maximum(np.abs(expected), np.abs(expected).max() * 0.01)
+    wrong = np.abs(typed - expected) > allowed
+    if not wrong.any():
+        return Verdict(True, "Solved: every number is right.", "", text)
+    kinds = []
+    for k in np.flatnonzero(wrong):
+        if abs(typed[k] + expected[k]) <= allowed[k]:
+            kinds.append("has the wrong sign")
+        elif abs(typed[k] - expected[k] / 1000) <= allowed[k] / 1000:
+            kinds.append("is in metres, not mm" if challenge.quantity == "position" else "is 1000 times too small")
+        elif abs(typed[k] - 1000 * expected[k]) <= 1000 * allowed[k]:
+            kinds.append("is 1000 times too big")
+        else:
+            kinds.append("is off")
+    off = [names[k] for k in np.flatnonzero(wrong)]
+    swapped = [(names[i], names[j]) for i in np.flatnonzero(wrong) for j in np.flatnonzero(wrong)
+               if i < j and abs(typed[i] - expected[j]) <= allowed[j] and abs(typed[j] - expected[i]) <= allowed[i]]
+    if swapped:
+        group = f"{swapped[0][0]} and {swapped[0][1]} swapped"
+    elif len(set(kinds)) == 1:
+        group = f"{', '.join(off)} {kinds[0] if len(off) == 1 else kinds[0].replace('has', 'have').replace('is', 'are', 1)}"
+    else:
+        group = f"{len(off)} numbers off"
+    details = "; ".join(f"{name} {kind}" for name, kind in zip(off, kinds))
+    return Verdict(False, f"{details[0].upper()}{details[1:]} (each within {100 * challenge.relative_tolerance:g} %).", group, text)
+
+
+def _check_velocity(challenge: Challenge, arm: Arm, answer: Answer) -> Verdict:
+    q = np.asarray(_needs(answer.q, "joints"), dtype=float)
+    rates = np.asarray(_needs(answer.rates, "joint rates"), dtype=float)
+    twist = arm.tool_twist(q, rates)
+    v, asked = twist[:3], np.array(challenge.velocity)
+    text = "q̇ " + " ".join(f"{math.degrees(r) if kind == 'R' else 1000 * r:.1f}" for r, kind in zip(rates, arm.joint_types))
+    shown = ", ".join(f"{1000 * c:+.0f}" for c in v)
+    miss = float(np.linalg.norm(v - asked))
+    turning = float(np.linalg.norm(twist[3:])) if challenge.still and arm.task == "pose" else 0.0
+    if miss > challenge.velocity_tolerance:
+        speed, asked_speed = float(np.linalg.norm(v)), float(np.linalg.norm(asked))
+        if speed < challenge.velocity_tolerance:
+            group = "not moving"
+        elif np.linalg.norm(v + asked) <= challenge.velocity_tolerance:
+            group = "wrong sign"
+        elif np.dot(v, asked) / (speed * asked_speed) > math.cos(math.radians(5)):
+            group = "too fast" if speed > asked_speed else "too slow"
+        else:
+            group = "wrong direction"
+        return Verdict(False, f"Your tool moves at ({shown}) mm/s: {1000 * miss:.0f} mm/s from the asked velocity.", group, text)
+    if turning > math.radians(1.0):
+        return Verdict(False, f"The velocity is right, but the tool turns at {math.degrees(turning):.1f} °/s: it must not turn.",
+                       "tool turns", text)
+    return Verdict(True, f"Solved: your tool moves at ({shown}) mm/s.", "", text)
+
+
+_CHECKS = {"reach": _check_reach, "singularity": _check_singularity, "branch_count": _check_branch_count,
+           "dh_table": _check_dh_table, "numbers": _check_numbers, "velocity": _check_velocity}
+
+
+# ---------------------------------------------------------------------- solutions
+
+
+def solution(challenge: Challenge, arm: Arm, q_current=None) -> tuple[np.ndarray | None, str]:
+    """What the class is shown when the challenge ends: joints to move the arm to (None for a typed answer), and words.
+
+    ``q_current``: where a velocity task's arm is (its rates depend on it; the arm's home otherwise).
+    """
+    if challenge.kind == "reach":
+        goal = arm.fk(np.array(challenge.joints))
+        if challenge.branch is None:
+            q = np.array(challenge.joints)
+        else:
+            solution_ = arm.ik(goal, hint=np.array(challenge.joints))
+            slot = next((s for s in _wanted_slots(challenge, arm) if solution_.within_limits[s]),
+                        next(s for s in _wanted_slots(challenge, arm) if solution_.valid[s]))
+            q = solution_.take(slot, np.array(challenge.joints))
+        return q, f"One answer: joints {_joints_text(arm, q)}."
+    if challenge.kind == "singularity":
+        q = singular_pose(arm, challenge.factor, challenge.min_tool_height)
+        return q, f"One answer: joints {_joints_text(arm, q)}."
+    if challenge.kind == "branch_count":
+        q = np.array(_count_pose(challenge, arm))
+        return q, f"One answer: the target at {', '.join(f'{1000 * v:.0f}' for v in arm.fk(q)[:3, 3])} mm."
+    if challenge.kind == "dh_table":
+        rows = "  \n".join(f"{1000 * r.a:.1f} {math.degrees(r.alpha):.0f} {1000 * r.d:.1f} {math.degrees(r.theta):.0f} "
+                           f"{r.joint or 'F'}" for r in arm.dh.rows)
+        return None, f"The arm's table ({arm.dh.convention} convention, a α d θ type):  \n{rows}"
+    if challenge.kind == "numbers":
+        values = expected_numbers(challenge, arm)
+        return None, "The answer: " + ", ".join(f"{name} = {value:.6g}" for name, value in zip(number_names(challenge, arm), values))
+    q = np.asarray(arm.specs.home if q_current is None else q_current, dtype=float)
+    rates = arm.joint_rates(q, np.concatenate([challenge.velocity, np.zeros(3)])).qdot
+    return None, ("At your pose, one answer: q̇ = (" + ", ".join(
+        f"{math.degrees(r) if kind == 'R' else 1000 * r:+.1f}" for r, kind in zip(rates, arm.joint_types)) + ") °/s (mm/s).")
+
+
+def singular_pose(arm: Arm, factor: str, min_tool_height: float | None = None, seed: int = 5) -> np.ndarray:
+    """Joints within the limits where ``factor`` of det J is zero (to rounding) and the tool is high enough.
+
+    Newton's method on the one factor from many starts, the smallest step each time
+    (``Δq = −f ∇f / |∇f|²``, the gradient by central differences).
+    """
+    k = arm.factor_names.index(factor)
+    low, high = arm.limits[:, 0], arm.limits[:, 1]
+    starts = np.concatenate([[arm.specs.home], arm.sample_joints(200, seed=seed)])
+    scale = float(factor_scales(arm)[k])
+    for q in starts:
+        for _ in range(30):
+            f = float(arm.singularity_factors(q)[k])
+            if abs(f) <= 1e-12 * scale:
+                break
+            step = 1e-6 * np.eye(arm.n_joints)
+            gradient = (arm.singularity_factors(q + step)[:, k] - arm.singularity_factors(q - step)[:, k]) / 2e-6
+            norm = float(gradient @ gradient)
+            if norm < 1e-20:
+                break
+            q = np.clip(q - f * gradient / norm, low, high)
+        if abs(float(arm.singularity_factors(q)[k])) <= 1e-9 * scale and (
+                min_tool_height is None or arm.fk(q)[2, 3] >= min_tool_height + 0.01):
+            return q
+    where = "" if min_tool_height is None else f" and the tool {1000 * min_tool_height:.0f} mm above the floor"
+    raise ValueError(f"no pose of the {arm.name} arm within its limits has its {factor} factor zero{where}")
