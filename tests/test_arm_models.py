@@ -28,13 +28,14 @@ def test_the_dropdown_switches_the_arm_and_its_ghosts_and_refuses_other_values(a
         assert SCHEMATIC not in robot.meshes and SCHEMATIC not in branches.models
         assert not any(SCHEMATIC.lower() in name for name in client.received.nodes)
         await client.set_gui("Ghosts drawn as", "Meshes")  # one click away: the ghosts as the arm is drawn
-        await until(lambda: branches.geometry == REAL and [g.visible for g in branches.models[REAL]] == [True] * 6
+        # (the geometry is named before its ghosts are made: both are waited for)
+        await until(lambda: branches.geometry == REAL and [g.visible for g in branches.models.get(REAL, ())] == [True] * 6
                     and [g.visible for g in branches.models[SKELETON]] == [False] * 6, what="the mesh ghosts")
         await client.set_gui("Arm drawn as", SCHEMATIC)
         # the model is named before it is drawn: wait for the drawing, arm and ghosts
         await until(lambda: robot.model == SCHEMATIC and branches.model == SCHEMATIC
                     and all(m.visible for m in robot.meshes[SCHEMATIC]) and not any(m.visible for m in robot.meshes[REAL])
-                    and [g.visible for g in branches.models[SCHEMATIC]] == [True] * 6
+                    and [g.visible for g in branches.models.get(SCHEMATIC, ())] == [True] * 6
                     and [g.visible for g in branches.models[REAL]] == [False] * 6, what="the schematic arm and ghosts")
         # the newly shown ghosts were posed at once, where the branches are
         shown = branches.shown

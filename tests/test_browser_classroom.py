@@ -73,6 +73,7 @@ def test_a_class_follows_the_presenter_and_a_student_explores(tmp_path):
             wait_for(lambda: app.classroom.choice == UR10, what="the class's UR10")
             # the class's UR10 reaches the student's browser, hidden there by a node of the student's own
             # (viser draws a client's node over the shared one of the same name)
+            steady(student_member.session)  # its own labels at rest again, as before the switch
             still_exploring = settled_canvas(student)
             student.screenshot(path=str(tmp_path / "explorer.png"))
             # the class's UR10 would cover a good part of the view (about a third when it replaced the

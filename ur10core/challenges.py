@@ -212,7 +212,7 @@ def _line(text: str, index: int, field: str | None) -> int:
     """The line of ``field`` in the ``index``-th ``[[challenge]]`` (its header's line without one)."""
     lines = text.splitlines()
     headers = [k for k, line in enumerate(lines) if re.match(r"\s*\[\[\s*challenge\s*\]\]", line)]
-    start = headers[index] if headers and -len(headers) <= index < len(headers) and index >= 0 else 0
+    start = headers[index] if 0 <= index < len(headers) else 0
     end = headers[index + 1] if 0 <= index < len(headers) - 1 else len(lines)
     if field:
         for k in range(start, end):
