@@ -13,6 +13,7 @@ import viser
 
 from ur10core import Arm
 from ur10core.challenges import QUANTITIES, Challenge, Verdict, number_names
+from ur10core.orientation import quaternion
 
 from ..feedback import Beside, chosen
 from ..serving.challenge_run import MAX_NICKNAME, ChallengeRun, Student, summary_markdown
@@ -172,8 +173,6 @@ class GoalMarker:
     """The pose a reach challenge asks for, in one browser's scene: a frame and a label, in the arm's world."""
 
     def __init__(self, scene: viser.SceneApi, pose: np.ndarray, lecture: bool = False) -> None:
-        from ur10core.orientation import quaternion
-
         self.frame = scene.add_frame(GOAL_ROOT, wxyz=quaternion(pose[:3, :3], check=False), position=pose[:3, 3],
                                      axes_length=0.15, axes_radius=0.01, origin_radius=0.02)
         self.label = scene.add_label(f"{GOAL_ROOT}/name", "challenge target", font_screen_scale=label_scale(1.4, lecture),
