@@ -3,9 +3,8 @@
 #   - Debian's chromium for the browser tests (playwright drives it; it never downloads one)
 #   - a virtual environment ($UR10_TEST_VENV, default .venv-test) with the project and its
 #     test extras; .ci/run points it at a new, empty folder every time
-# Three runs share the two cores: the browser and install tests (mostly Chromium's and pip's work);
-# the core, app and server tests; the symbolic derivations, then the core's tests on numpy. Each
-# run's output is printed when it ends.
+# Two runs share the two cores: the browser and install tests (mostly Chromium's and pip's work),
+# then the core's tests on numpy, beside everything else. Each run's output is printed when it ends.
 # Extra arguments go to one pytest run on the default backend, e.g. scripts/test.sh -k ik
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -54,35 +53,31 @@ numpy_run() {
         echo "no C compiler here: the compiled backend is not built, its comparison tests are skipped"
     fi
 }
-# Three runs, not two: the test processes wait on conditions much of the time (CI on 2026-12-02,
-# two runs: 526 s of CPU in 601 s on two cores), so a third keeps the cores busier. The symbolic
-# derivations (sympy, about 130 s) and the core's tests on numpy have a run of their own.
+# the numpy run follows the browser run, the shorter of the two (CI on 2026-12-02: 406 + 46 s against 453 s; 542 s in all)
 browser_run() {
-    "$PYTHON" -m pytest -m "browser or install" --durations=10
-}
-other_run() {
-    "$PYTHON" -m pytest -m "not browser and not install and not slow" --durations=10
-}
-slow_run() {
-    "$PYTHON" -m pytest -m "slow and not browser and not install" --durations=5 || return
+    "$PYTHON" -m pytest -m "browser or install" --durations=10 || return
     numpy_run
 }
+other_run() {
+    "$PYTHON" -m pytest -m "not browser and not install" --durations=10
+}
 
-stage "three runs side by side, on the $BACKEND backend: the browser and install tests; the core, app and server tests; the derivations, then the core on numpy"
-declare -A NAME LOG
-for run in browser_run other_run slow_run; do
-    "$run" > "$LOGS/$run.log" 2>&1 &
-    LOG[$!]="$LOGS/$run.log"
-    NAME[$!]="$run"
-done
+stage "two runs side by side, on the $BACKEND backend: the browser and install tests, and everything else"
+declare -A NAME
+browser_run > "$LOGS/browser.log" 2>&1 &
+NAME[$!]="browser and install tests, then the core's tests on numpy"
+other_run > "$LOGS/other.log" 2>&1 &
+NAME[$!]="core, app and server tests"
 FAILED=0
-for _ in 1 2 3; do
+for _ in 1 2; do
     set +e
     wait -n -p DONE
     CODE=$?
     set -e
+    LOG="$LOGS/other.log"
+    if [ "${NAME[$DONE]}" = "browser and install tests, then the core's tests on numpy" ]; then LOG="$LOGS/browser.log"; fi
     stage "${NAME[$DONE]}: $([ $CODE -eq 0 ] && echo passed || echo "FAILED (exit $CODE)")"
-    cat "${LOG[$DONE]}"
+    cat "$LOG"
     if [ $CODE -ne 0 ]; then FAILED=1; fi
 done
 rm -rf "$LOGS"

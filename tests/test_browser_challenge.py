@@ -7,7 +7,7 @@ import pytest
 
 from ur10teach.features.joint_panel import display_text
 from ur10teach.serving.classroom import EXPLORER
-from ur10dev.browser import HANG_TIMEOUT_MS, VIEWPORT, ask_to_present, choose, class_browsers, click, dom_id, type_text
+from ur10dev.browser import HANG_TIMEOUT_MS, ask_to_present, choose, class_browsers, click, dom_id, type_text
 from ur10dev.waiting import wait_for
 
 pytestmark = pytest.mark.browser
@@ -19,7 +19,7 @@ def test_a_presenter_and_two_students_run_a_reach_challenge(tmp_path):
     app = TeachingServer(port=0, shared=True, light=True)
     room = app.classroom
     try:
-        with class_browsers(app, 3, VIEWPORT) as (pages, members):
+        with class_browsers(app, 3) as (pages, members):
             teacher, ada, bo = pages
             teacher_member, ada_member, bo_member = members
             ask_to_present(teacher, teacher_member, room.code)
