@@ -83,11 +83,11 @@ class ClassChallenges:
 
     def enlist(self, member: Member) -> None:
         """Make ``member`` a student of the running challenge: their own arm (as it was if they left and came back) and the task."""
-        run = self.run
-        if member.closed or member is self.room.presenter or run is None or run.ended:
-            return
-        student = run.join(address_of(member.client))
-        member.student = student
+        with self.room._lock:  # the start and the browser's own arrival may both enlist it: once
+            run = self.run
+            if member.closed or member is self.room.presenter or run is None or run.ended or member.student is not None:
+                return
+            student = member.student = run.join(address_of(member.client))
         if member.session is not None and member.session.arm != run.arm:
             self.room.rejoin(member)
         self.room.explore(member)
