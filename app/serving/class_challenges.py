@@ -167,10 +167,14 @@ class ClassChallenges:
                 continue
             # a velocity's joint rates depend on where each arm is; any other answer is everyone's
             q, words = solution(challenge, arm, session.state.q) if challenge.kind == "velocity" else common
-            if q is not None:
-                session.apply(lambda state: state.set_joints(q, cause="typed"))
-            if other.card is not None:
-                other.card.ended(words)
+            try:
+                if q is not None:
+                    session.apply(lambda state: state.set_joints(q, cause="typed"))
+                if other.card is not None:
+                    other.card.ended(words)
+            except Exception:  # one browser's trouble must not keep the solution from the rest
+                if not other.closed:
+                    log.exception("could not show browser %s the solution", other.client.client_id)
         self._board_changed()
         log.info("challenge %r ended: %d of %d solved", challenge.title, run.summary().solved, run.summary().joined)
 
