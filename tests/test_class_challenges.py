@@ -10,8 +10,10 @@ import numpy as np
 import pytest
 
 from ur10core import challenges as C
+from ur10core.dh import DHTable
 from ur10core.orientation import zyx_euler
 from ur10teach.features.branch_labels import JOIN
+from ur10teach.features.course_arms.editor import CONVENTIONS
 from ur10teach.features.joint_panel import display_text, typed_label
 from ur10teach.serving.gate import address_of
 from ur10teach.serving.challenge_run import ChallengeRun, clean_nickname, spreadsheet_safe
@@ -110,11 +112,8 @@ class Answers:
                 rows[1] = (rows[1].a, -rows[1].alpha, rows[1].d, rows[1].theta, rows[1].joint)
             if wrong == 1:
                 rows = rows[:5]
-            from ur10core.dh import DHTable
-
             await client.set_gui("Your DH table (a α d θ type, mm and °)", table_text(DHTable(rows, arm.dh.convention)))
-            await client.set_gui("Convention", next(k for k, v in __import__("ur10teach.features.course_arms.editor", fromlist=["x"])
-                                                    .CONVENTIONS.items() if v == arm.dh.convention))
+            await client.set_gui("Convention", next(k for k, v in CONVENTIONS.items() if v == arm.dh.convention))
         await client.set_gui("Check my answer", True)
 
 

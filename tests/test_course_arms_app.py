@@ -195,7 +195,7 @@ def test_parse_table_refuses_what_is_not_a_table():
                         ("\n".join(["100 0 0 0 R"] * 11), "at most 10 rows"), ("nan 0 0 0 R", "finite"),
                         ("1 0 0 0 R 90 -90", "min < max"), ("1 0 0 0 R -400 0", "±360°"), ("1 0 0 0 P 0 9000", "±5000 mm"),
                         ("1 0 0 0 R 10", "five entries"), ("1 0 0 0 R\n1 0 0 0 F 0 1", "fixed row has no limits"),
-                        ("1 0 0 0 R x 1", "must be numbers")):
+                        ("1 0 0 0 R x 1", "must be numbers"), ("# " + "x" * 1000 + "\n1 0 0 0 R", "too long")):
         with pytest.raises(ValueError, match=words):
             parse_table(text, "standard")
     arm = parse_table("# a comment\n0, 90, 400, 0, R  # base\n400 0 0 0 r\n0 0 100 0 P", "modified")

@@ -427,8 +427,15 @@ def _turn_between(arm: Arm, R: np.ndarray, R_goal: np.ndarray) -> float:
     return math.acos(min(1.0, max(-1.0, cosine)))
 
 
-def _joints_text(arm: Arm, q) -> str:
-    return " ".join(f"{math.degrees(v):.1f}" if kind == "R" else f"{1000 * v:.1f}" for v, kind in zip(q, arm.joint_types))
+def _joints_text(arm: Arm, q, spec: str = ".1f") -> str:
+    """Joint values (or rates) as a student reads them: degrees for a revolute joint, mm for a sliding one."""
+    return " ".join(format(math.degrees(v) if kind == "R" else 1000 * v, spec) for v, kind in zip(q, arm.joint_types))
+
+
+def _rows_text(table: DHTable, separator: str) -> str:
+    """A table's rows as the DH editor takes them: a α d θ type, mm and degrees."""
+    return separator.join(f"{1000 * r.a:.1f} {math.degrees(r.alpha):.1f} {1000 * r.d:.1f} {math.degrees(r.theta):.1f} "
+                          f"{r.joint or 'F'}" for r in table.rows)
 
 
 def _check_reach(challenge: Challenge, arm: Arm, answer: Answer) -> Verdict:
@@ -476,12 +483,13 @@ def _slot_of(arm: Arm, solution, q: np.ndarray) -> int:
 def _check_singularity(challenge: Challenge, arm: Arm, answer: Answer) -> Verdict:
     q = np.asarray(_needs(answer.q, "joints"), dtype=float)
     names = arm.factor_names
-    levels = np.abs(arm.singularity_factors(q)) / factor_scales(arm)
+    factors = arm.singularity_factors(q)
+    levels = np.abs(factors) / factor_scales(arm)
     asked = names.index(challenge.factor)
     text = _joints_text(arm, q)
     if levels[asked] > challenge.factor_tolerance:
         zero = [name for name, level in zip(names, levels) if level <= challenge.factor_tolerance]
-        value = float(arm.singularity_factors(q)[asked])
+        value = float(factors[asked])
         if zero:
             return Verdict(False, f"That is a {' and '.join(zero)} singularity; the task asks for the {challenge.factor} "
                            f"factor to be zero (it is {value:+.3g}).", f"{' and '.join(zero)} instead of {challenge.factor}", text)
@@ -503,12 +511,13 @@ def _check_branch_count(challenge: Challenge, arm: Arm, answer: Answer) -> Verdi
     T = np.asarray(_needs(answer.target, "target"), dtype=float)
     p = T[:3, 3]
     text = f"target {1000 * p[0]:.0f} {1000 * p[1]:.0f} {1000 * p[2]:.0f} mm"
-    turn = _turn_between(arm, T[:3, :3], _goal_orientation(challenge, arm))
+    orientation = _goal_orientation(challenge, arm)
+    turn = _turn_between(arm, T[:3, :3], orientation)
     if turn > challenge.orientation_tolerance:
         return Verdict(False, f"Keep the tool's orientation as given: your target is turned {math.degrees(turn):.0f}° from it.",
                        "target turned", text)
     goal = T.copy()
-    goal[:3, :3] = _goal_orientation(challenge, arm)  # within the tolerance: counted at the asked orientation
+    goal[:3, :3] = orientation  # within the tolerance: counted at the asked orientation
     count = _count(arm, goal)
     if count != challenge.count:
         return Verdict(False, f"{_branches(count)} your target; the task asks for {challenge.count}.",
@@ -550,8 +559,7 @@ def _count_pose(challenge: Challenge, arm: Arm) -> tuple[float, ...]:
 
 def _check_dh_table(challenge: Challenge, arm: Arm, answer: Answer) -> Verdict:
     table = _needs(answer.table, "typed table")
-    text = "; ".join(f"{1000 * r.a:.1f} {math.degrees(r.alpha):.1f} {1000 * r.d:.1f} {math.degrees(r.theta):.1f} "
-                     f"{r.joint or 'F'}" for r in table.rows)
+    text = _rows_text(table, "; ")
     if table.joint_types != arm.joint_types:
         return Verdict(False, f"Your table's joints are {table.joint_types or 'none'}; the arm's are {arm.joint_types}.",
                        "wrong joints", text)
@@ -650,7 +658,7 @@ def _check_velocity(challenge: Challenge, arm: Arm, answer: Answer) -> Verdict:
     rates = np.asarray(_needs(answer.rates, "joint rates"), dtype=float)
     twist = arm.tool_twist(q, rates)
     v, asked = twist[:3], np.array(challenge.velocity)
-    text = "q̇ " + " ".join(f"{math.degrees(r) if kind == 'R' else 1000 * r:.1f}" for r, kind in zip(rates, arm.joint_types))
+    text = "q̇ " + _joints_text(arm, rates)
     shown = ", ".join(f"{1000 * c:+.0f}" for c in v)
     miss = float(np.linalg.norm(v - asked))
     turning = float(np.linalg.norm(twist[3:])) if challenge.still and arm.task == "pose" else 0.0
@@ -700,16 +708,14 @@ def solution(challenge: Challenge, arm: Arm, q_current=None) -> tuple[np.ndarray
         q = np.array(_count_pose(challenge, arm))
         return q, f"One answer: the target at {', '.join(f'{1000 * v:.0f}' for v in arm.fk(q)[:3, 3])} mm."
     if challenge.kind == "dh_table":
-        rows = "  \n".join(f"{1000 * r.a:.1f} {math.degrees(r.alpha):.0f} {1000 * r.d:.1f} {math.degrees(r.theta):.0f} "
-                           f"{r.joint or 'F'}" for r in arm.dh.rows)
-        return None, f"The arm's table ({arm.dh.convention} convention, a α d θ type):  \n{rows}"
+        line_break = "  \n"  # markdown's
+        return None, f"The arm's table ({arm.dh.convention} convention, a α d θ type):{line_break}{_rows_text(arm.dh, line_break)}"
     if challenge.kind == "numbers":
         values = expected_numbers(challenge, arm)
         return None, "The answer: " + ", ".join(f"{name} = {value:.6g}" for name, value in zip(number_names(challenge, arm), values))
     q = np.asarray(arm.specs.home if q_current is None else q_current, dtype=float)
     rates = arm.joint_rates(q, np.concatenate([challenge.velocity, np.zeros(3)])).qdot
-    return None, ("At your pose, one answer: q̇ = (" + ", ".join(
-        f"{math.degrees(r) if kind == 'R' else 1000 * r:+.1f}" for r, kind in zip(rates, arm.joint_types)) + ") °/s (mm/s).")
+    return None, f"At your pose, one answer: q̇ = ({_joints_text(arm, rates, '+.1f')}) °/s (mm/s)."
 
 
 def singular_pose(arm: Arm, factor: str, min_tool_height: float | None = None, seed: int = 5) -> np.ndarray:

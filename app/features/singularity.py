@@ -152,7 +152,11 @@ def _placed(frames: np.ndarray, parts: list[tuple[int | None, np.ndarray]]) -> n
 
 
 def factor_names(arm: Arm) -> list[str]:
-    return list(arm.factor_names) if arm.name in PRESETS or hasattr(arm.solver, "factor_words") else []
+    """The names of det J's factors, none for a typed table (its det J is not derived)."""
+    try:
+        return list(arm.factor_names)
+    except ValueError:
+        return []
 
 
 def _foot(point: np.ndarray, axis_point: np.ndarray, axis: np.ndarray) -> np.ndarray:

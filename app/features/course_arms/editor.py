@@ -25,6 +25,7 @@ STARTING_TABLE = """# a (mm)  alpha (deg)  d (mm)  theta (deg)  type  [min max]
 400    0     0   0   R
 300    0     0   0   R"""
 MAX_ROWS = 10
+MAX_TEXT = 1000
 MAX_LENGTH_MM = 5000.0
 MAX_TURN_DEGREES = 360.0
 #: A joint's limits when its row gives none: degrees for R, millimetres for P.
@@ -39,6 +40,8 @@ def parse_table(text: str, convention: str, name: str = "custom") -> Arm:
     >>> arm.joint_types, [round(r.a, 3) for r in arm.dh.rows], [round(math.degrees(v)) for v in arm.limits.ravel()]
     ('RR', [0.5, 0.4], [-90, 90, -180, 180])
     """
+    if len(text) > MAX_TEXT:  # the gate (ur10teach.serving.gate) lets no longer text through from a browser
+        raise ValueError(f"the table is too long (at most {MAX_TEXT} characters)")
     rows, limits = [], []
     for number, line in enumerate(text.splitlines(), start=1):
         line = line.split("#", 1)[0].strip()
@@ -107,6 +110,4 @@ class DHEditor(View):
     def _build(self, rebuild: Callable[[Arm, str, str], None]) -> None:
         convention = CONVENTIONS[chosen(self.convention, "convention")]
         text = str(self.rows.value)
-        if len(text) > 1000:  # the gate (app.gate) lets no longer text through from a browser
-            raise ValueError("the table is too long (at most 1000 characters)")
         rebuild(parse_table(text, convention), text, convention)
