@@ -9,7 +9,9 @@ one, all in the same run:
 * one-pose IK (all 8 slots), without and with a hint, vs ur-analytic-ik's UR10
   ``inverse_kinematics`` (C++), and with a huge hint vs an ordinary one;
 * batch IK of 1 M poses vs the plain numpy vectorisation in ``numpy_baseline_ik.py``;
-* one-pose FK vs the 10 µs target (and ur-analytic-ik's FK);
+* one-pose FK vs the 10 µs target (and ur-analytic-ik's FK), and FK and the Jacobian vs
+  pinocchio's on the same DH table (when pinocchio is installed: ``pip install pin``; a
+  benchmark reference only, not a test dependency);
 * ``sample_workspace(1_000_000)`` vs the 0.5 s target.
 
 Figures are medians over repeats.
@@ -87,8 +89,45 @@ def measure() -> dict:
                                        [(poses[k], np.append(q[k, :5], h)) for k in range(300) for h in (1e9, 1e16, 1e300)]),
         "batch_per_s": BATCH / seconds(lambda: arm.ik(T_batch), repeats=3),
         "fk_one_us": per_call_us(arm.fk, [(x,) for x in q]),
+        "jacobian_one_us": per_call_us(arm.jacobian, [(x,) for x in q]),
         "workspace_s": seconds(lambda: arm.sample_workspace(1_000_000), repeats=5),
     }
+
+
+def pinocchio_model(arm):
+    """pinocchio's model of ``arm``'s modified DH table: joint i about z after RotX(α) TransX(a) TransZ(d)."""
+    import pinocchio as pin
+
+    model = pin.Model()
+    parent = 0
+    for k, row in enumerate(arm.dh.rows):
+        c, s = np.cos(row.alpha), np.sin(row.alpha)
+        rotation = np.array([[1.0, 0.0, 0.0], [0.0, c, -s], [0.0, s, c]])
+        placement = pin.SE3(rotation, np.array([row.a, -s * row.d, c * row.d]))
+        parent = model.addJoint(parent, pin.JointModelRZ(), placement, f"joint{k + 1}")
+    return model
+
+
+def pinocchio_times(arm, q: np.ndarray) -> dict:
+    """pinocchio's one-pose FK (T06) and flange Jacobian in the base frame, checked against ours first."""
+    import pinocchio as pin
+
+    model = pinocchio_model(arm)
+    data = model.createData()
+    world = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
+
+    def fk(x):
+        pin.forwardKinematics(model, data, x)
+        return data.oMi[6].homogeneous
+
+    def jacobian(x):
+        pin.computeJointJacobians(model, data, x)
+        return pin.getJointJacobian(model, data, 6, world)
+
+    for x in q[:200]:
+        assert np.abs(fk(x) - arm.fk(x)).max() < 1e-12 and np.abs(jacobian(x) - arm.jacobian(x)).max() < 1e-12
+    return {"pinocchio_fk_us": per_call_us(fk, [(x,) for x in q]),
+            "pinocchio_jacobian_us": per_call_us(jacobian, [(x,) for x in q])}
 
 
 def references() -> dict:
@@ -114,7 +153,12 @@ def references() -> dict:
     found = ~np.isnan(ik_numpy(arm, T_singular)).any(-1)
     correct = found & (np.abs(arm.fk(np.nan_to_num(ik_numpy(arm, T_singular))) - T_singular[:, None]).max((-2, -1)) < 1e-9)
     assert arm.ik(T_singular).reachable.all()
+    try:
+        pinocchio = pinocchio_times(arm, q)
+    except ImportError:
+        pinocchio = {"pinocchio_fk_us": float("nan"), "pinocchio_jacobian_us": float("nan")}
     return {
+        **pinocchio,
         "numpy_baseline_singular_solved": float(correct.any(-1).mean()),
         "ur_analytic_ik_us": per_call_us(ur_analytic_ik.ur10.inverse_kinematics, [(T,) for T in controller_poses]),
         "ur_analytic_fk_us": per_call_us(ur_analytic_ik.ur10.forward_kinematics, [tuple(x) for x in q.tolist()]),
@@ -232,6 +276,13 @@ def main() -> None:
         ["`arm.fk(q)`, one pose", f"{c['fk_one_us']:.2f} µs", f"{n['fk_one_us']:.2f} µs",
          f"target ≤ 10 µs; ur-analytic-ik FK: {ref['ur_analytic_fk_us']:.1f} µs",
          pass_if(max(c["fk_one_us"], n["fk_one_us"]) <= 10)],
+        ["`arm.fk(q)`, one pose, against pinocchio on the same DH table", f"{c['fk_one_us']:.2f} µs", f"{n['fk_one_us']:.2f} µs",
+         f"pinocchio `forwardKinematics` and T06: {ref['pinocchio_fk_us']:.2f} µs; target (compiled) ≤ 1.5×",
+         f"compiled {pass_if(c['fk_one_us'] <= 1.5 * ref['pinocchio_fk_us'])}"],
+        ["`arm.jacobian(q)`, one pose, flange, base frame", f"{c['jacobian_one_us']:.2f} µs", f"{n['jacobian_one_us']:.2f} µs",
+         f"pinocchio `computeJointJacobians` and `getJointJacobian` (same answer to 1e-12): "
+         f"{ref['pinocchio_jacobian_us']:.2f} µs; target (compiled) ≤ 2×",
+         f"compiled {pass_if(c['jacobian_one_us'] <= 2 * ref['pinocchio_jacobian_us'])}"],
         ["`arm.sample_workspace(1_000_000)` with manipulability", f"{c['workspace_s']:.3f} s", f"{n['workspace_s']:.3f} s",
          "target < 0.5 s", pass_if(max(c["workspace_s"], n["workspace_s"]) < 0.5)],
     ]

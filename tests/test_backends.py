@@ -150,6 +150,34 @@ def test_backends_agree_on_random_poses(course):
     _assert_same(_batch(compiled, course, T, hints), _batch(_numpy_kernels, course, T, hints), "random")
 
 
+@pytest.mark.parametrize("preset", ["ur10", "ur10e"])
+def test_backends_agree_at_the_triple_singularity(preset):
+    """Elbow folded or stretched, wrist singular and the wrist centre on the d4 cylinder, each
+    within 1e-16…1e-6 of exact, then the pose moved by up to 2 ulp: flags and failure codes
+    equal, with no hint and with the generating joints (an issue's fuzz found 2 of 1.3 M apart)."""
+    arm = Arm.preset(preset)
+    rng = np.random.default_rng(43)
+    n = 20000
+
+    def offset(low: float, high: float) -> np.ndarray:
+        return rng.choice([-1.0, 1.0], n) * 10.0 ** rng.uniform(low, high, n)
+
+    q = random_joints(n, seed=44)
+    q[:, 2] = rng.choice([0.0, np.pi, -np.pi], n) + offset(-16, -6)
+    q[:, 4] = rng.choice([0.0, np.pi, -np.pi], n) + offset(-16, -6)
+    t2, t3 = q[:, 1], q[:, 2]  # θ2 and θ4 so that the shoulder factor a2 c2 + a3 c23 − d5 s234 is tiny
+    t2 = np.where(np.abs(arm.a2 * np.cos(t2) + arm.a3 * np.cos(t2 + t3)) > arm.d5,
+                  np.arctan2(arm.a2 + arm.a3 * np.cos(t3), arm.a3 * np.sin(t3)), t2)
+    ratio = (arm.a2 * np.cos(t2) + arm.a3 * np.cos(t2 + t3) - offset(-16, -7)) / arm.d5
+    q[:, 1], q[:, 3] = t2, np.arcsin(np.clip(ratio, -1, 1)) - t2 - t3
+    T = arm.fk(q)
+    T[:, :3] += rng.integers(-2, 3, (n, 3, 4)) * np.spacing(T[:, :3])
+    for hints in (np.tile([0.0, np.nan, np.nan], (n, 1)), _hints(arm, q)):
+        c, m = _batch(compiled, arm, T, hints), _batch(_numpy_kernels, arm, T, hints)
+        for name in ("valid", "failure", "wrist_singular", "elbow_singular", "shoulder_singular"):
+            np.testing.assert_array_equal(c[name], m[name], err_msg=name)
+
+
 def test_far_and_huge_poses_agree(course):
     T = np.tile(np.eye(4), (6, 1, 1))
     T[:, :3, 3] = [[2.5, 0.3, 0.4], [1e150] * 3, [1e300] * 3, [-1e308] * 3, [0.05, 0.02, 0.6], [0.0, 0.0, 0.0]]
@@ -188,6 +216,19 @@ def test_a_huge_hint_returns():
     done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=HANG_TIMEOUT, cwd=ROOT)
     assert done.returncode == 0, done.stderr
     assert done.stdout.strip() == "True"
+
+
+def test_jacobians_agree_one_pose_and_many(course):
+    q = np.concatenate([random_joints(300, seed=45), np.zeros((1, 6))])
+    J_c, J_n = np.empty((len(q), 6, 6)), np.empty((len(q), 6, 6))
+    compiled.jacobians(q, course.dh_lengths, J_c)
+    _numpy_kernels.jacobians(q, course.dh_lengths, J_n)
+    np.testing.assert_allclose(J_c, J_n, rtol=0, atol=1e-14)
+    for k in range(0, len(q), 30):
+        for module in (compiled, _numpy_kernels):
+            np.testing.assert_array_equal(module.jacobian_one(q[k], course.dh_lengths), (J_c if module is compiled else J_n)[k])
+    for module in (compiled, _numpy_kernels):
+        assert module.jacobian_one(np.array([0, 0, np.inf, 0, 0, 0]), course.dh_lengths) is None
 
 
 def test_frames_fk_and_quaternions_agree(course):

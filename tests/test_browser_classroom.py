@@ -77,8 +77,9 @@ def test_a_class_follows_the_presenter_and_a_student_explores(tmp_path):
             still_exploring = settled_canvas(student)
             student.screenshot(path=str(tmp_path / "explorer.png"))
             # the class's UR10 would cover a good part of the view (about a third when it replaced the
-            # SCARA above); the explorer's own arm stays as it was
-            assert changed(exploring, still_exploring) < 0.005, (
+            # SCARA above); the explorer's own arm stays as it was, but for a label or an edge redrawn a
+            # pixel apart (0.58 % changed once on a loaded machine, scattered over the arm)
+            assert changed(exploring, still_exploring) < 0.03, (
                 f"the class's UR10 showed over the explorer's own arm: {where_changed(exploring, still_exploring)}")
     finally:
         app.stop()

@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 import viser
 
+from ur10teach.features import motion_lessons
 from ur10teach.features.arm_picker import ARM_CHOICES, CUSTOM, UR10
 from ur10teach.features.dh_table import dh_table_markdown
 from ur10teach.features.ik_target import branches_markdown
@@ -536,10 +537,11 @@ def test_going_back_to_an_arm_finds_its_pose_target_typed_table_and_display_as_l
 
 
 @pytest.mark.parametrize("label", [label for label in ARM_CHOICES if label not in (UR10, CUSTOM)])
-def test_a_course_arm_moves_from_a_remembered_pose_along_both_paths(app, label):
+def test_a_course_arm_moves_from_a_remembered_pose_along_both_paths(app, label, monkeypatch):
     """Issue 29: the Motion folder was the UR10's alone. On the course's arms and its desktop arm: a
     straight tool line, the rates of a sliding joint in mm/s, no speed limits an arm does not have,
     and no gravity drop without link masses."""
+    monkeypatch.setattr(motion_lessons, "PATH_SECONDS", 1.0)  # played in real time: 4 s an arm is waiting, not testing
     async def scenario():
         client = await ViserClient(url(app)).connect()
         session = await pick(app, client, label)

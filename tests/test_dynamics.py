@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 import roboticstoolbox as rtb  # test-only reference: a missing test extra fails here, loudly
 
-from ur10core import Arm
+from ur10core import Arm, dynamics
 from ur10core.controller import CONTROLLER_OFFSET, FLANGE_TURN
 from ur10core.dynamics import GRAVITY, UR10_MASSES, ur_standard_table
 
@@ -125,3 +125,31 @@ def test_a_released_arm_keeps_its_energy(start):
     assert np.abs(motion.q[-1] - motion.q[0]).max() > 0.3  # and it did fall
     with pytest.raises(ValueError, match="dt must be"):
         dynamics.release(arm, np.zeros(6), dt=1.0)
+
+
+@pytest.mark.parametrize("call", [
+    lambda arm, bad: dynamics.mass_matrix(arm, bad),
+    lambda arm, bad: dynamics.forward_dynamics(arm, bad, np.zeros(6), np.zeros(6)),
+    lambda arm, bad: dynamics.forward_dynamics(arm, np.zeros(6), np.zeros(6), bad),
+    lambda arm, bad: dynamics.inverse_dynamics(arm, np.zeros(6), bad, np.zeros(6)),
+    lambda arm, bad: dynamics.coriolis_torques(arm, np.zeros(6), bad),
+])
+def test_dynamics_refuses_what_is_not_six_finite_joint_values(call):
+    """NaN in gave NaN out silently, and a wrong shape numpy's broadcast error (an issue's fuzz)."""
+    arm = Arm.preset("ur10")
+    with pytest.raises(ValueError, match="non-finite"):
+        call(arm, np.array([0.0, np.nan, 0.0, 0.0, 0.0, 0.0]))
+    with pytest.raises(ValueError, match=r"shape \(\.\.\., 6\)"):
+        call(arm, np.zeros(5))
+    with pytest.raises(ValueError, match="real numbers"):
+        call(arm, ["a"] * 6)
+
+
+def test_dynamics_names_shapes_that_do_not_broadcast():
+    arm = Arm.preset("ur10")
+    with pytest.raises(ValueError, match=r"q, qd, qdd must have shapes that broadcast together, got q \(3, 6\), qd \(2, 6\)"):
+        dynamics.inverse_dynamics(arm, np.zeros((3, 6)), np.zeros((2, 6)), np.zeros(6))
+    with pytest.raises(ValueError, match="gravity must be a number or broadcast"):
+        dynamics.inverse_dynamics(arm, np.zeros((3, 6)), np.zeros(6), np.zeros(6), gravity=np.ones(4))
+    with pytest.raises(ValueError, match="gravity contains a non-finite"):
+        dynamics.inverse_dynamics(arm, np.zeros(6), np.zeros(6), np.zeros(6), gravity=np.inf)

@@ -194,8 +194,8 @@ def test_fk_of_ik_and_the_generating_joints(name, kind):
         if hint is not None:
             distance = np.where(sol.valid, np.abs(wrapped(sol.q - q[:, None], arm.revolute)).max(axis=-1), np.inf)
             assert distance.min(axis=-1).max() < 1e-6
-    assert len(sol.labels) == sol.q.shape[-2] == {"kr210": 8, "elbow": 8, "stanford": 4, "scara": 2,
-                                                   "planar_elbow": 2, "cylindrical": 1}[name]
+    assert len(sol.labels) == sol.q.shape[-2] == {"kr210": 8, "elbow": 8, "stanford": 8, "scara": 2,
+                                                   "planar_elbow": 2, "cylindrical": 2}[name]
 
 
 @pytest.mark.parametrize("name", ["kr210", "elbow", "stanford"])
@@ -332,7 +332,7 @@ def test_batches_and_hints_broadcast():
     arm = Arm.preset("stanford")
     q = random_joints(arm, 12, 8).reshape(3, 4, 6)
     sol = arm.ik(arm.fk(q), hint=q[0])
-    assert sol.q.shape == (3, 4, 4, 6) and sol.valid.shape == (3, 4, 4)
+    assert sol.q.shape == (3, 4, 8, 6) and sol.valid.shape == (3, 4, 8)
     one = arm.ik(arm.fk(q[1, 2]), hint=q[0, 2])
     np.testing.assert_allclose(one.q, sol.q[1, 2], atol=1e-15)
 
@@ -368,8 +368,10 @@ def test_a_custom_arm_typed_by_a_student():
     assert sol.method == "found numerically"
     assert arm.pose_error(sol.q[sol.valid], arm.fk(q)).max() < 1e-9
     far = np.eye(4)
-    far[:3, 3] = (3.0, 0.0, 0.0)
+    far[:3, 3] = (1.5, 0.0, 0.0)
     assert "numerical search found no joints" in arm.ik(far).unreachable_reason()
+    far[:3, 3] = (3.0, 0.0, 0.0)  # beyond every length and stroke laid end to end: not searched
+    assert "reaches 1900.0 mm at most" in arm.ik(far).unreachable_reason()
 
 
 def test_arm_preset_serves_every_arm():
@@ -521,3 +523,32 @@ def test_a_typed_tables_slots_fit_its_chain(rows, slots):
     """Issue 30, bug 3: a typed 2-link arm had sixteen slots, fourteen always empty."""
     arm = Arm.from_dh([(0.3, 0.5, 0.1, 0.0)] * rows)
     assert len(arm.ik(arm.fk(np.full(rows, 0.3))).labels) == len(arm.slot_labels) == slots
+
+
+@pytest.mark.parametrize("name", ["stanford", "cylindrical"])
+def test_the_reversed_stroke_is_a_branch_flagged_beyond_the_range(name):
+    """(s2, c2) d3 = (u, z) also holds with θ2 + π and −d3 (the cylindrical arm: θ1 + π): the
+    numerical solver finds those joints too, so the closed form keeps them, valid, exact, and
+    flagged as beyond the prismatic joint's range (an issue's fuzz: 4 slots where it found 8)."""
+    arm = Arm.preset(name)
+    q = random_joints(arm, 40, 12)
+    T = arm.fk(q)
+    sol = arm.ik(T)
+    half = sol.q.shape[-2] // 2
+    assert sol.valid.all() and "stroke reversed" in sol.labels[half]
+    assert arm.pose_error(sol.q, T[:, None]).max() < 1e-9
+    stroke = arm.dh.joint_types.rindex("P")
+    assert (sol.q[:, half:, stroke] < 0).all() and (sol.q[:, :half, stroke] > 0).all()
+    assert not sol.within_limits[:, half:].any() and sol.within_limits[:, :half].any(axis=-1).all()
+    np.testing.assert_allclose(sol.nearest(q).q, q, atol=1e-9)  # the arm's own branch stays the one chosen
+    if name == "stanford":  # every branch the numerical search finds is one of ours, reversed ones included
+        numerical = Arm(arm.dh, arm.limits, None, "stanford (numerical)")
+        found = numerical.ik(T[:10])
+        reversed_found = 0
+        for k in range(10):
+            ours = sol.q[k]
+            for theirs in found.q[k][found.valid[k]]:
+                match = np.abs(wrapped(ours - theirs, arm.revolute)).max(axis=-1) < 1e-6
+                assert match.any()
+                reversed_found += bool(match[half:].any())
+        assert reversed_found > 0

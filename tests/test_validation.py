@@ -1,5 +1,7 @@
 """Bad input: a ValueError that names what is wrong; the core keeps working afterwards."""
 
+import warnings
+
 import numpy as np
 import pytest
 
@@ -219,3 +221,53 @@ def test_equal_upper_arm_and_forearm_are_refused():
 def test_bad_workspace_seed(course, seed):
     with pytest.raises(ValueError, match="seed must be a non-negative integer"):
         course.sample_workspace(10, seed=seed)
+
+
+# --------------------------------------------------------------------------- an issue's fuzz: the last edge cases
+
+
+@pytest.mark.parametrize("name", ["course", "kr210", "scara"])
+def test_a_current_joint_value_beyond_reason_is_refused_not_answered_with_nan(name):
+    arm = Arm.preset(name)
+    q = np.zeros(arm.n_joints)
+    sol = arm.ik(arm.fk(q))
+    for current in (np.full(arm.n_joints, 1e300), np.full((2, arm.n_joints), -1e12)):
+        with pytest.raises(ValueError, match="q_current has .* joint values beyond"):
+            (sol if current.ndim == 1 else arm.ik(arm.fk(np.zeros((2, arm.n_joints))))).nearest(current)
+    assert np.isfinite(sol.nearest(np.full(arm.n_joints, 1e6)).q).all()  # a million radians is still an answer
+
+
+@pytest.mark.parametrize("kind, joint", [("elbow", 2), ("wrist", 4)])
+@pytest.mark.parametrize("start", [6.2, -6.2, 0.3])
+def test_a_singular_configuration_turns_the_joint_to_the_nearest_whole_turn(kind, joint, start):
+    arm = Arm.preset("ur10")
+    q = np.array([0.1, -1.0, 0.5, -0.4, 0.7, 0.2])
+    q[joint] = start
+    moved = arm.singular_configuration(kind, q)
+    assert moved[joint] == pytest.approx(2 * np.pi * round(start / (2 * np.pi)), abs=1e-15)
+
+
+@pytest.mark.parametrize("name", ["scara", "planar_elbow", "three_dof", "cylindrical", "stanford", "kr210"])
+def test_a_target_at_1e300_is_too_far_without_an_overflow_warning(name):
+    arm = Arm.preset(name)
+    T = np.eye(4)
+    T[:3, 3] = 1e300
+    if name == "scara":  # its tool points straight down
+        T[:3, :3] = np.diag([1.0, -1.0, -1.0])
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        sol = arm.ik(T)
+    assert not sol.within_limits.any()  # the prismatic arms solve it, with a stroke of 1e300 m: far beyond their range
+
+
+def test_a_typed_table_refuses_absurd_lengths_and_answers_far_targets_at_once():
+    with pytest.raises(ValueError, match=r"DH row 2: d must be a length within ±1e\+06 m"):
+        Arm.from_dh([(0.5, 0, 0, 0), (0.4, 0, 1e300, 0)])
+    arm = Arm.from_dh([(0.5, 0, 0, 0), (0.4, 0, 0, 0)], joint_types="RR")
+    T = np.tile(np.eye(4), (2, 1, 1))
+    T[0, :3, 3], T[1, :3, 3] = 1e300, (0.6, 0.2, 0.0)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        sol = arm.ik(T)
+    assert not sol.valid[0].any() and sol.valid[1].any()
+    assert "reaches 900.0 mm at most" in sol.unreachable_reason((0,))

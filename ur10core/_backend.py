@@ -24,6 +24,7 @@ def configured(module: ModuleType) -> ModuleType:
         tolerances.ROTATION_TOLERANCE,
         tolerances.BOTTOM_ROW_TOLERANCE,
         tolerances.BAND_LEVERAGE,
+        tolerances.REACH_ROUNDING,
     )
     return module
 

@@ -22,7 +22,7 @@
 /* ur10core/tolerances.py, handed over by set_tolerances() when ur10core loads this module. */
 static int configured = 0;
 static double LENGTH_TOLERANCE, CHOICE_TOLERANCE, WRIST_TURN_TOLERANCE, WRIST_TOLERANCE, ROTATION_TOLERANCE,
-    BOTTOM_ROW_TOLERANCE, BAND_LEVERAGE;
+    BOTTOM_ROW_TOLERANCE, BAND_LEVERAGE, REACH_ROUNDING;
 
 enum { REACHABLE = 0, WRIST_INSIDE_CYLINDER = 1, ELBOW_TOO_FAR = 2, ELBOW_TOO_CLOSE = 3 };
 
@@ -90,6 +90,11 @@ static int in_reach(double r, const Params *P)
 static int within(double r, const Params *P) /* the exact reach, no tolerance; 0 for NaN */
 {
     return P->a2 + P->a3 >= r && r >= fabs(P->a2 - P->a3);
+}
+
+static int reaches(double r, const Params *P) /* ik_reference._reaches: but for rounding; 0 for NaN */
+{
+    return P->a2 + P->a3 + REACH_ROUNDING >= r && r >= fabs(P->a2 - P->a3) - REACH_ROUNDING;
 }
 
 /* ik_reference.nearest_reachable_theta234: the theta234 nearest `theta234` that puts the
@@ -258,12 +263,16 @@ static void solve_pose(const Params *P, const double *M, double theta6_hint, dou
         for (int j = 0; j < 2; j++) {
             const double sign = j == 0 ? 1.0 : -1.0;
             Slot s = wrist_and_elbow(P, &T, c1, s1, A, sign, hint);
-            if (!within(s.r, P)) {
+            if (!reaches(s.r, P)) {
                 /* where the band holds A = 0 the two shoulder slots are one branch: either may cross */
                 const double band_a = reach_low > 0.0 ? side * reach_low : -side * reach_high;
                 reach_within_band(P, &T, &s, A, band_a, side * reach_high, sign, hint);
             }
-            if (!within(s.r, P) && s.s5_abs <= theta1_band) {
+            if (!reaches(s.r, P)) { /* the hint's theta6 kept at a tiny |s5|: the pose's own may reach */
+                const Slot own = wrist_and_elbow(P, &T, c1, s1, A, sign, NAN);
+                if (reaches(own.r, P)) s = own;
+            }
+            if (!reaches(s.r, P) && s.s5_abs <= theta1_band) {
                 Slot better;
                 if (theta1_for_reach(P, &T, &s, sign, hint, &better)) s = better;
             }
@@ -314,11 +323,12 @@ static int check_configured(void)
     return configured;
 }
 
-/* set_tolerances(length, choice, wrist_turn, wrist, rotation, bottom_row, band_leverage): ur10core/tolerances.py. */
+/* set_tolerances(length, choice, wrist_turn, wrist, rotation, bottom_row, band_leverage, reach_rounding): ur10core/tolerances.py. */
 static PyObject *set_tolerances(PyObject *self, PyObject *args)
 {
-    if (!PyArg_ParseTuple(args, "ddddddd", &LENGTH_TOLERANCE, &CHOICE_TOLERANCE, &WRIST_TURN_TOLERANCE,
-                          &WRIST_TOLERANCE, &ROTATION_TOLERANCE, &BOTTOM_ROW_TOLERANCE, &BAND_LEVERAGE))
+    if (!PyArg_ParseTuple(args, "dddddddd", &LENGTH_TOLERANCE, &CHOICE_TOLERANCE, &WRIST_TURN_TOLERANCE,
+                          &WRIST_TOLERANCE, &ROTATION_TOLERANCE, &BOTTOM_ROW_TOLERANCE, &BAND_LEVERAGE,
+                          &REACH_ROUNDING))
         return NULL;
     configured = 1;
     Py_RETURN_NONE;
@@ -486,8 +496,52 @@ static PyObject *fk_one(PyObject *self, PyObject *args)
     return T_obj;
 }
 
-/* frames(q (n, 6), params, out (n, 7, 4, 4)): T0i = T01 T12 ... T(i-1,i) of the course's
- * modified DH table (docs/kinematics.md §2), every joint vector; ur10core.arm.Arm.frames. */
+/* Frames {0}..{6} of one joint vector into F (7 x 16, row-major 4 x 4): T0i = T01 T12 ... T(i-1,i)
+ * of the course's modified DH table (docs/kinematics.md §2). */
+static void chain_frames(const double *q, const Params *P, double *F)
+{
+    /* alpha_{i-1}: 0, +pi/2, 0, 0, -pi/2, +pi/2 as (cos, sin); a_{i-1}; d_i */
+    static const double ca[6] = {1.0, 0.0, 1.0, 1.0, 0.0, 0.0}, sa[6] = {0.0, 1.0, 0.0, 0.0, -1.0, 1.0};
+    const double a[6] = {0.0, 0.0, P->a2, P->a3, 0.0, 0.0}, d[6] = {P->d1, 0.0, 0.0, P->d4, P->d5, P->d6};
+    for (int k = 0; k < 16; k++) F[k] = (k % 5 == 0) ? 1.0 : 0.0; /* frame {0} = I */
+    for (int i = 0; i < 6; i++) {
+        const double ct = cos(q[i]), st = sin(q[i]);
+        /* T(i-1,i) = RotX(alpha) TransX(a) RotZ(theta) TransZ(d) */
+        const double L[12] = {ct, -st, 0.0, a[i],
+                              st * ca[i], ct * ca[i], -sa[i], -sa[i] * d[i],
+                              st * sa[i], ct * sa[i], ca[i], ca[i] * d[i]};
+        const double *A = F + 16 * i;
+        double *B = F + 16 * (i + 1);
+        for (int r = 0; r < 3; r++) {
+            for (int c = 0; c < 4; c++) {
+                double v = A[4 * r + 0] * L[c] + A[4 * r + 1] * L[4 + c] + A[4 * r + 2] * L[8 + c];
+                B[4 * r + c] = c == 3 ? v + A[4 * r + 3] : v;
+            }
+        }
+        B[12] = B[13] = B[14] = 0.0;
+        B[15] = 1.0;
+    }
+}
+
+/* The geometric Jacobian (6 x 6, row-major, rows [v; w]) at the flange origin from the frames F:
+ * column i is [z_i x (o_6 - o_i); z_i] (docs/kinematics.md §5). */
+static void jacobian_from_frames(const double *F, double *J)
+{
+    const double *o6 = F + 16 * 6;
+    for (int i = 0; i < 6; i++) {
+        const double *Fi = F + 16 * (i + 1);
+        const double zx = Fi[2], zy = Fi[6], zz = Fi[10];
+        const double dx = o6[3] - Fi[3], dy = o6[7] - Fi[7], dz = o6[11] - Fi[11];
+        J[i] = zy * dz - zz * dy;
+        J[6 + i] = zz * dx - zx * dz;
+        J[12 + i] = zx * dy - zy * dx;
+        J[18 + i] = zx;
+        J[24 + i] = zy;
+        J[30 + i] = zz;
+    }
+}
+
+/* frames(q (n, 6), params, out (n, 7, 4, 4)): chain_frames of every joint vector; ur10core.arm.Arm.frames. */
 static PyObject *frames(PyObject *self, PyObject *args)
 {
     PyObject *q_obj, *params, *out_obj;
@@ -505,33 +559,62 @@ static PyObject *frames(PyObject *self, PyObject *args)
     }
     const double *q = (const double *)PyArray_DATA((PyArrayObject *)q_obj);
     double *out = (double *)PyArray_DATA((PyArrayObject *)out_obj);
-    /* alpha_{i-1}: 0, +pi/2, 0, 0, -pi/2, +pi/2 as (cos, sin); a_{i-1}; d_i */
-    const double ca[6] = {1.0, 0.0, 1.0, 1.0, 0.0, 0.0}, sa[6] = {0.0, 1.0, 0.0, 0.0, -1.0, 1.0};
-    const double a[6] = {0.0, 0.0, P.a2, P.a3, 0.0, 0.0}, d[6] = {P.d1, 0.0, 0.0, P.d4, P.d5, P.d6};
     Py_BEGIN_ALLOW_THREADS
+    for (npy_intp m = 0; m < n; m++) chain_frames(q + 6 * m, &P, out + 112 * m);
+    Py_END_ALLOW_THREADS
+    Py_RETURN_NONE;
+}
+
+/* jacobians(q (n, 6), params, out (n, 6, 6)): the flange Jacobian of every joint vector; Arm.jacobian. */
+static PyObject *jacobians(PyObject *self, PyObject *args)
+{
+    PyObject *q_obj, *params, *out_obj;
+    Params P;
+    if (!PyArg_ParseTuple(args, "OOO", &q_obj, &params, &out_obj)) return NULL;
+    if (!parse_params(params, &P)) return NULL;
+    if (!is_c_array(q_obj, NPY_DOUBLE) || !is_c_array(out_obj, NPY_DOUBLE)) {
+        PyErr_SetString(PyExc_TypeError, "jacobians needs C-contiguous float64 arrays");
+        return NULL;
+    }
+    const npy_intp n = PyArray_SIZE((PyArrayObject *)q_obj) / 6;
+    if (PyArray_SIZE((PyArrayObject *)q_obj) != 6 * n || PyArray_SIZE((PyArrayObject *)out_obj) != 36 * n) {
+        PyErr_SetString(PyExc_ValueError, "jacobians: q must hold n x 6 angles and out n x 6 x 6");
+        return NULL;
+    }
+    const double *q = (const double *)PyArray_DATA((PyArrayObject *)q_obj);
+    double *out = (double *)PyArray_DATA((PyArrayObject *)out_obj);
+    Py_BEGIN_ALLOW_THREADS
+    double F[112];
     for (npy_intp m = 0; m < n; m++) {
-        double *F = out + 112 * m;
-        for (int k = 0; k < 16; k++) F[k] = (k % 5 == 0) ? 1.0 : 0.0; /* frame {0} = I */
-        for (int i = 0; i < 6; i++) {
-            const double ct = cos(q[6 * m + i]), st = sin(q[6 * m + i]);
-            /* T(i-1,i) = RotX(alpha) TransX(a) RotZ(theta) TransZ(d) */
-            const double L[12] = {ct, -st, 0.0, a[i],
-                                  st * ca[i], ct * ca[i], -sa[i], -sa[i] * d[i],
-                                  st * sa[i], ct * sa[i], ca[i], ca[i] * d[i]};
-            const double *A = F + 16 * i;
-            double *B = F + 16 * (i + 1);
-            for (int r = 0; r < 3; r++) {
-                for (int c = 0; c < 4; c++) {
-                    double v = A[4 * r + 0] * L[c] + A[4 * r + 1] * L[4 + c] + A[4 * r + 2] * L[8 + c];
-                    B[4 * r + c] = c == 3 ? v + A[4 * r + 3] : v;
-                }
-            }
-            B[12] = B[13] = B[14] = 0.0;
-            B[15] = 1.0;
-        }
+        chain_frames(q + 6 * m, &P, F);
+        jacobian_from_frames(F, out + 36 * m);
     }
     Py_END_ALLOW_THREADS
     Py_RETURN_NONE;
+}
+
+/* jacobian_one(q, params) -> (6, 6) array, or None if q is not finite. q must be a C-contiguous
+ * float64 array of 6 angles (the caller's fast path checks it). */
+static PyObject *jacobian_one(PyObject *self, PyObject *args)
+{
+    PyObject *q_obj, *params;
+    Params P;
+    if (!PyArg_ParseTuple(args, "OO", &q_obj, &params)) return NULL;
+    if (!parse_params(params, &P)) return NULL;
+    if (!is_c_array(q_obj, NPY_DOUBLE) || PyArray_SIZE((PyArrayObject *)q_obj) != 6) {
+        PyErr_SetString(PyExc_TypeError, "jacobian_one needs a C-contiguous float64 array of 6 angles");
+        return NULL;
+    }
+    const double *q = (const double *)PyArray_DATA((PyArrayObject *)q_obj);
+    for (int k = 0; k < 6; k++)
+        if (!isfinite(q[k])) Py_RETURN_NONE;
+    npy_intp dims[2] = {6, 6};
+    PyObject *J_obj = PyArray_SimpleNew(2, dims, NPY_DOUBLE);
+    if (!J_obj) return NULL;
+    double F[112];
+    chain_frames(q, &P, F);
+    jacobian_from_frames(F, (double *)PyArray_DATA((PyArrayObject *)J_obj));
+    return J_obj;
 }
 
 /* quaternions(R (n, 3, 3), out (n, 4)): unit (w, x, y, z), w >= 0, by Shepperd's method;
@@ -632,6 +715,8 @@ static PyMethodDef methods[] = {
     {"set_tolerances", set_tolerances, METH_VARARGS, "Hand over ur10core/tolerances.py's values."},
     {"nearest_one", nearest_one, METH_VARARGS, "The valid IK slot nearest the current joints, shifted next to them."},
     {"frames", frames, METH_VARARGS, "Frames {0}..{6} of n joint vectors into a preallocated array."},
+    {"jacobians", jacobians, METH_VARARGS, "Flange Jacobians of n joint vectors into a preallocated array."},
+    {"jacobian_one", jacobian_one, METH_VARARGS, "The flange Jacobian of one joint vector."},
     {"quaternions", quaternions, METH_VARARGS, "Unit quaternions (w >= 0) of n rotation matrices."},
     {"fk_one", fk_one, METH_VARARGS, "Closed-form T06 of one joint vector."},
     {"ik_one", ik_one, METH_VARARGS, "IK of one validated-on-the-fly 4x4 pose (all eight slots)."},

@@ -18,6 +18,7 @@ from .tolerances import (
     BOTTOM_ROW_TOLERANCE,
     CHOICE_TOLERANCE,
     LENGTH_TOLERANCE,
+    REACH_ROUNDING,
     ROTATION_TOLERANCE,
     WRIST_TOLERANCE,
     WRIST_TURN_TOLERANCE,
@@ -85,6 +86,27 @@ def frames(q: np.ndarray, params, out: np.ndarray) -> None:
     out[:, 0] = np.eye(4)
     for i in range(6):
         np.matmul(out[:, i], link[:, i], out=out[:, i + 1])
+
+
+def jacobians(q: np.ndarray, params, out: np.ndarray) -> None:
+    """Flange Jacobians (n, 6, 6) of n joint vectors (n, 6) into ``out``: column i is [z_i × (o_6 − o_i); z_i]."""
+    F = np.empty((len(q), 7, 4, 4))
+    frames(q, params, F)
+    z, o = F[:, 1:, :3, 2], F[:, 1:, :3, 3]  # (n, 6, 3)
+    lever = o[:, 5:6] - o
+    out[:, 0] = z[..., 1] * lever[..., 2] - z[..., 2] * lever[..., 1]
+    out[:, 1] = z[..., 2] * lever[..., 0] - z[..., 0] * lever[..., 2]
+    out[:, 2] = z[..., 0] * lever[..., 1] - z[..., 1] * lever[..., 0]
+    out[:, 3:] = np.swapaxes(z, -1, -2)
+
+
+def jacobian_one(q: np.ndarray, params) -> np.ndarray | None:
+    """The flange Jacobian (6, 6) of one joint vector; None if q is not finite."""
+    if not all(map(math.isfinite, q.tolist())):
+        return None
+    J = np.empty((1, 6, 6))
+    jacobians(q.reshape(1, 6), params, J)
+    return J[0]
 
 
 def _frames_one(q: list[float], params, out: np.ndarray) -> None:
@@ -251,6 +273,11 @@ def _within(r, outer, inner):
     return (inner <= r) & (r <= outer)
 
 
+def _reaches(r, outer, inner):
+    """Vectorised :func:`ur10core.ik_reference._reaches`."""
+    return (inner - REACH_ROUNDING <= r) & (r <= outer + REACH_ROUNDING)
+
+
 def _wrist_and_elbow(R, p5, c1, s1, A, sign, hint, params):
     """Vectorised :func:`ur10core.ik_reference._wrist_and_elbow`: every argument (m,) or (m, 3, 3)/(m, 3)."""
     d1, a2, a3, d4, d5, d6 = params
@@ -387,7 +414,7 @@ def _solve(T, theta6_hint, reach_hint, theta3_hint, params, q, valid, wrist, elb
     hint = wrap(theta6_hint)[pose]
     slot = list(_wrist_and_elbow(R, P5, c1, s1, A, sign, hint, params))
     outer, inner = a2 + a3, abs(a2 - a3)
-    beyond = np.flatnonzero(~_within(slot[-1], outer, inner))
+    beyond = np.flatnonzero(~_reaches(slot[-1], outer, inner))
     if len(beyond):
         band_a = np.where(reach_low > 0.0, side * reach_low, -side * reach_high)
         better, found = _reach_within_band(
@@ -396,7 +423,14 @@ def _solve(T, theta6_hint, reach_hint, theta3_hint, params, q, valid, wrist, elb
         )
         for value, new in zip(slot, better):
             value[beyond[found]] = new[found]
-    retry = np.flatnonzero(~_within(slot[-1], outer, inner) & (slot[4] <= theta1_band))
+    beyond = np.flatnonzero(~_reaches(slot[-1], outer, inner))
+    if len(beyond):
+        own = _wrist_and_elbow(R[beyond], P5[beyond], c1[beyond], s1[beyond], A[beyond], sign[beyond],
+                               np.full(len(beyond), np.nan), params)
+        found = _reaches(own[-1], outer, inner)
+        for value, new in zip(slot, own):
+            value[beyond[found]] = new[found]
+    retry = np.flatnonzero(~_reaches(slot[-1], outer, inner) & (slot[4] <= theta1_band))
     if len(retry):
         better, found = _theta1_for_reach(
             R[retry], P5[retry], [value[retry] for value in slot], sign[retry], hint[retry], params

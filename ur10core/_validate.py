@@ -60,6 +60,23 @@ def vectors(value, name: str, size: int) -> np.ndarray:
     return array
 
 
+#: Radians (or metres). A current joint value beyond this is refused where branches are turned
+#: next to it: no joint turns that far, and its squared distance to a branch would overflow.
+MAX_JOINT_VALUE = 1e9
+
+
+def within_reason(array: np.ndarray, name: str) -> np.ndarray:
+    """``array`` (finite), or ``ValueError`` where a value is beyond ±:data:`MAX_JOINT_VALUE`."""
+    if array.size <= 16 and all(abs(value) <= MAX_JOINT_VALUE for value in array.ravel().tolist()):
+        return array
+    beyond = np.abs(array) > MAX_JOINT_VALUE
+    if beyond.any():
+        where = _first_index(beyond)
+        raise ValueError(f"{name} has {float(array[where]):g} at index {where}: joint values beyond "
+                         f"±{MAX_JOINT_VALUE:g} are refused (no joint turns that far)")
+    return array
+
+
 def joint_vector(q, name: str = "q") -> np.ndarray:
     """Validate joint angles of shape ``(..., 6)`` in radians; returns a float array."""
     q = as_float_array(q, name)

@@ -14,6 +14,8 @@ from typing import TYPE_CHECKING, NamedTuple
 
 import numpy as np
 
+from ._validate import within_reason
+
 if TYPE_CHECKING:
     from .arm import Arm
 
@@ -204,7 +206,7 @@ def _nearest_within_limits(solution: IKSolution, q_current, prefer) -> Branch:
     from .tolerances import TIE_TOLERANCE
 
     arm = solution.arm
-    q_current = arm.joints(q_current, "q_current")
+    q_current = within_reason(arm.joints(q_current, "q_current"), "q_current")
     prefer = _preferred_slot(prefer, len(solution.labels))
     low, high = arm.limits[:, 0], arm.limits[:, 1]
     if solution.q.ndim == 2 and type(prefer) is int:  # one pose (the drag path): a dozen floats, not numpy calls

@@ -26,6 +26,9 @@ STANDARD = "standard"
 MODIFIED = "modified"
 REVOLUTE = "R"
 PRISMATIC = "P"
+#: Metres. A DH length beyond this is refused: no arm is a thousand kilometres long, and the
+#: squares of such lengths in the IK and the workspace would overflow.
+MAX_LENGTH = 1e6
 CONVENTIONS = (STANDARD, MODIFIED)
 
 
@@ -81,6 +84,8 @@ class DHRow:
             value = getattr(self, name)
             if isinstance(value, bool) or not isinstance(value, (int, float, np.floating, np.integer)) or not math.isfinite(value):
                 raise ValueError(f"DH row: {name} must be a finite number, got {value!r}")
+            if name in ("a", "d") and abs(value) > MAX_LENGTH:
+                raise ValueError(f"DH row: {name} must be a length within ±{MAX_LENGTH:g} m, got {value!r}")
             object.__setattr__(self, name, float(value))
         if self.joint not in (REVOLUTE, PRISMATIC, None):
             raise ValueError(f"DH row: joint must be 'R' (revolute), 'P' (prismatic) or None (fixed), got {self.joint!r}")

@@ -14,6 +14,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ._validate import as_float_array, check_finite, vectors
 from .dh import DHRow, DHTable
 from .differential import cross
 
@@ -125,6 +126,29 @@ def with_payload(masses: LinkMasses, payload_kg: float) -> LinkMasses:
                       np.concatenate([masses.inertias[:5], combined[None]]), masses.source)
 
 
+def _joint_arrays(**named) -> list[np.ndarray]:
+    """Each named value as finite (..., 6) floats whose leading shapes broadcast; ``ValueError`` naming the culprit."""
+    arrays = [vectors(value, name, 6) for name, value in named.items()]
+    try:
+        np.broadcast_shapes(*(array.shape for array in arrays))
+    except ValueError:
+        shapes = ", ".join(f"{name} {array.shape}" for name, array in zip(named, arrays))
+        raise ValueError(f"{', '.join(named)} must have shapes that broadcast together, got {shapes}") from None
+    return arrays
+
+
+def _gravity(gravity, leading: tuple[int, ...]) -> np.ndarray:
+    """``gravity`` (m/s²) as finite floats broadcast with the joints' leading shape ``leading``."""
+    gravity = as_float_array(gravity, "gravity")
+    check_finite(gravity, "gravity")
+    try:
+        np.broadcast_shapes(gravity.shape, leading)
+    except ValueError:
+        raise ValueError(f"gravity must be a number or broadcast with the joints' leading shape {leading}, "
+                         f"got shape {gravity.shape}") from None
+    return gravity
+
+
 def inverse_dynamics(arm, q, qd, qdd, gravity=GRAVITY, payload_kg: float = 0.0) -> np.ndarray:
     """τ = M(q) q̈ + C(q, q̇) q̇ + g(q), (..., 6) N·m, by the recursive Newton–Euler equations (docs/kinematics.md §8.8).
 
@@ -133,9 +157,17 @@ def inverse_dynamics(arm, q, qd, qdd, gravity=GRAVITY, payload_kg: float = 0.0) 
     link passes to the one before it, whose component along the joint axis is τ. In UR's
     standard-DH link frames (:func:`ur_standard_table`), with the course's angles.
     ``gravity`` (m/s², along −z) may differ per pose: an array broadcast with the leading shape.
+    ``ValueError`` for joints that are not finite (..., 6) arrays, or shapes that do not broadcast.
     """
+    q, qd, qdd = _joint_arrays(q=q, qd=qd, qdd=qdd)
+    gravity = _gravity(gravity, np.broadcast_shapes(q.shape, qd.shape, qdd.shape)[:-1])
+    return _newton_euler(arm, q, qd, qdd, gravity, payload_kg)
+
+
+def _newton_euler(arm, q, qd, qdd, gravity, payload_kg: float) -> np.ndarray:
+    """:func:`inverse_dynamics` of validated arrays."""
     table = ur_standard_table(arm)
-    q, qd, qdd = np.broadcast_arrays(*(np.asarray(v, dtype=float) for v in (q, qd, qdd)))
+    q, qd, qdd = np.broadcast_arrays(q, qd, qdd)
     q, qd, qdd = (np.broadcast_to(v, np.broadcast_shapes(q.shape, np.shape(gravity) + (6,))) for v in (q, qd, qdd))
     links = with_payload(link_masses(arm), _check_payload(payload_kg))
     rows = table.rows
@@ -185,30 +217,36 @@ def inverse_dynamics(arm, q, qd, qdd, gravity=GRAVITY, payload_kg: float = 0.0) 
 
 def mass_matrix(arm, q, payload_kg: float = 0.0) -> np.ndarray:
     """M(q), (..., 6, 6): column j is the torque for q̈ = e_j at rest without gravity (docs/kinematics.md §8.8)."""
-    q = np.asarray(q, dtype=float)
+    (q,) = _joint_arrays(q=q)
     unit = np.eye(6)
-    columns = inverse_dynamics(arm, q[..., None, :], np.zeros(6), unit, gravity=0.0, payload_kg=payload_kg)
+    columns = _newton_euler(arm, q[..., None, :], np.zeros(6), unit, 0.0, payload_kg)
     return np.swapaxes(columns, -1, -2)
 
 
 def coriolis_torques(arm, q, qd, payload_kg: float = 0.0) -> np.ndarray:
     """C(q, q̇) q̇, (..., 6): the centrifugal and Coriolis torques of moving joints (docs/kinematics.md §8.8)."""
-    return inverse_dynamics(arm, q, qd, np.zeros(6), gravity=0.0, payload_kg=payload_kg)
+    q, qd = _joint_arrays(q=q, qd=qd)
+    return _newton_euler(arm, q, qd, np.zeros(6), 0.0, payload_kg)
 
 
 def forward_dynamics(arm, q, qd, tau, payload_kg: float = 0.0) -> np.ndarray:
     """q̈ = M⁻¹ (τ − C q̇ − g), (..., 6): how the joints accelerate under torques ``tau``.
 
     One Newton–Euler pass over seven problems at once: M's six columns (q̈ = e_j, at rest,
-    no gravity) and the bias C q̇ + g (q̈ = 0).
+    no gravity) and the bias C q̇ + g (q̈ = 0). ``ValueError`` as :func:`inverse_dynamics`.
     """
-    q, qd = np.broadcast_arrays(np.asarray(q, dtype=float), np.asarray(qd, dtype=float))
+    return _forward(arm, *_joint_arrays(q=q, qd=qd, tau=tau), payload_kg)
+
+
+def _forward(arm, q, qd, tau, payload_kg: float) -> np.ndarray:
+    """:func:`forward_dynamics` of validated arrays (the simulation's inner loop)."""
+    q, qd = np.broadcast_arrays(q, qd)
     rates = np.concatenate([np.zeros(q.shape[:-1] + (6, 6)), qd[..., None, :]], axis=-2)
     accelerations = np.concatenate([np.eye(6), np.zeros((1, 6))])
     gravity = np.append(np.zeros(6), GRAVITY)
-    torques = inverse_dynamics(arm, q[..., None, :], rates, accelerations, gravity, payload_kg)
+    torques = _newton_euler(arm, q[..., None, :], rates, accelerations, gravity, payload_kg)
     M, bias = np.swapaxes(torques[..., :6, :], -1, -2), torques[..., 6, :]
-    return np.linalg.solve(M, (np.asarray(tau, dtype=float) - bias)[..., None])[..., 0]
+    return np.linalg.solve(M, (tau - bias)[..., None])[..., 0]
 
 
 @dataclass(frozen=True)
@@ -243,7 +281,7 @@ def release(arm, q0, duration: float = 2.0, dt: float = 0.01, payload_kg: float 
     rest = np.zeros(6)
 
     def rates(position: np.ndarray, velocity: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        return velocity, forward_dynamics(arm, position, velocity, rest, payload_kg)
+        return velocity, _forward(arm, position, velocity, rest, payload_kg)
 
     for k in range(steps):
         # a fast-spinning wrist turns a radian or more in 10 ms, where a fixed step of RK4 drifted by

@@ -59,7 +59,7 @@ import numpy as np
 
 from . import _numpy_kernels, ik_reference
 from ._backend import kernels
-from ._validate import as_float_array, homogeneous_transform, joint_vector
+from ._validate import as_float_array, homogeneous_transform, joint_vector, within_reason
 from .branches import Branch, IKSolution
 from .ik_reference import ELBOW_TOO_CLOSE, ELBOW_TOO_FAR, REACHABLE, WRIST_INSIDE_CYLINDER
 from .tolerances import LENGTH_TOLERANCE, TIE_TOLERANCE, WRIST_TOLERANCE, WRIST_TURN_TOLERANCE
@@ -153,7 +153,7 @@ def nearest_branch(solution: IKSolution, q_current, joint_limit: float = _TAU, p
     >>> np.degrees(branch.q).round(6).tolist(), int(branch.slot)
     ([30.0, 45.0, 26.0, 50.0, 60.0, -280.0], 4)
     """
-    q_current = joint_vector(q_current, "q_current")
+    q_current = within_reason(joint_vector(q_current, "q_current"), "q_current")
     joint_limit = _joint_limit(joint_limit)
     prefer = _preferred_slot(prefer)
     if solution.q.shape == (8, 6) and q_current.shape == (6,) and type(prefer) is int:

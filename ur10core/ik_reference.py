@@ -11,7 +11,9 @@ from __future__ import annotations
 import math
 
 from .branches import INSIDE_OFFSET, REACHED, TOO_CLOSE, TOO_FAR
-from .tolerances import BAND_LEVERAGE, CHOICE_TOLERANCE, LENGTH_TOLERANCE, WRIST_TOLERANCE, WRIST_TURN_TOLERANCE
+from .tolerances import (
+    BAND_LEVERAGE, CHOICE_TOLERANCE, LENGTH_TOLERANCE, REACH_ROUNDING, WRIST_TOLERANCE, WRIST_TURN_TOLERANCE,
+)
 
 #: Why a slot has no solution (``IKSolution.failure``): every arm's codes, by the UR family's names.
 REACHABLE = REACHED
@@ -121,13 +123,18 @@ def solve_pose(rows, theta6_hint: float, reach_hint: float, theta3_hint: float, 
         s1 = (p5[1] * A + p5[0] * d4) / scale
         for j, sign in ((0, 1.0), (1, -1.0)):
             slot = _wrist_and_elbow(R, p5, c1, s1, A, sign, hint, lengths)
-            if not inner <= slot[-1] <= outer:
+            if not _reaches(slot[-1], outer, inner):
                 # Beyond the reach, if only just: move A within its band instead of putting
                 # the frame-4 origin on the boundary (docs/kinematics.md §4.3).
                 # Where the band holds A = 0 the two shoulder slots are one branch, and either may cross.
                 band_a = side * reach_low if reach_low > 0.0 else -side * reach_high
                 slot = _reach_within_band(R, p5, slot, A, band_a, side * reach_high, sign, hint, lengths) or slot
-            if not inner <= slot[-1] <= outer and slot[4] <= theta1_band:
+            if not _reaches(slot[-1], outer, inner):
+                # The hint's θ6 (or the default 0) may be kept where |s5| is tiny and still
+                # leave the elbow out of reach: the pose's own θ6 then may reach.
+                own = _wrist_and_elbow(R, p5, c1, s1, A, sign, math.nan, lengths)
+                slot = own if _reaches(own[-1], outer, inner) else slot
+            if not _reaches(slot[-1], outer, inner) and slot[4] <= theta1_band:
                 # Shoulder and wrist both nearly singular: θ1 is uncertain and the wrist's
                 # split of θ234 ± θ6 swings with it. Turn θ1 within its band to where the
                 # wrist gives a θ6 that reaches.
@@ -163,6 +170,11 @@ def solve_pose(rows, theta6_hint: float, reach_hint: float, theta3_hint: float, 
 def in_reach(r: float, outer: float, inner: float) -> bool:
     """The frame-4 origin at distance ``r`` from the shoulder is within the elbow's reach."""
     return inner - LENGTH_TOLERANCE <= r <= outer + LENGTH_TOLERANCE
+
+
+def _reaches(r: float, outer: float, inner: float) -> bool:
+    """The frame-4 origin at ``r`` is within the elbow's reach but for rounding (``REACH_ROUNDING``)."""
+    return inner - REACH_ROUNDING <= r <= outer + REACH_ROUNDING
 
 
 def _wrist_and_elbow(R, p5, c1, s1, A, sign, hint, lengths) -> tuple:

@@ -23,6 +23,13 @@ LENGTH_TOLERANCE = 1e-9
 #: the frame-4 origin within this much of where the pose puts it.
 CHOICE_TOLERANCE = 1e-12
 
+#: Metres. How far beyond the elbow's exact reach rounding alone puts the frame-4 origin of
+#: a reachable pose (a few ulp of metre-sized lengths). Only a slot beyond this looks for
+#: another choice that reaches (another A, θ6 or θ1): such a search can turn the wrist's
+#: split of θ234 ± θ6 by up to π at a triple singularity, and lose the hint's branch, to
+#: save a clamp of c3 that moves the pose by less than this.
+REACH_ROUNDING = 1e-14
+
 #: Not a tolerance but a bound that saves work: moving the reach A within its band moves
 #: the elbow's distance r by at most about this many times as much (more only near the
 #: wrist singularity, where θ1 is turned instead), so a band this many times narrower than

@@ -186,8 +186,8 @@ def reach_count(solution) -> str:
 
     >>> from ur10core import Arm
     >>> cylindrical = Arm.preset("cylindrical")
-    >>> reach_count(cylindrical.ik(cylindrical.fk(cylindrical.specs.home)))
-    '**Its one branch** reaches this target'
+    >>> reach_count(cylindrical.ik(cylindrical.fk(cylindrical.specs.home)))  # the second with its stroke reversed
+    '**2 of 2 branches** reach this target'
     """
     slots, found = len(solution.labels), int(solution.valid.sum())
     if slots == 1:

@@ -20,8 +20,9 @@ import math
 
 import numpy as np
 
-from ..branches import NOT_FOUND, empty_branches, wrap
+from ..branches import NOT_FOUND, TOO_FAR, empty_branches, wrap
 from ..dh import DHTable
+from ..tolerances import LENGTH_TOLERANCE
 
 #: A start has converged when its error (m and rad) is below this.
 CONVERGED = 1e-12
@@ -90,8 +91,14 @@ class NumericalIK:
         slots = most_solutions(table.n_joints) if slots is None else slots
         self.labels = tuple(f"found numerically {k + 1}" for k in range(slots))
         self.revolute = np.array([t == "R" for t in table.joint_types])
+        # no joint values put the tool farther from the base origin than every length and stroke laid end to end
+        strokes = [max(abs(low), abs(high)) for (low, high), kind in zip(self.limits, table.joint_types) if kind == "P"]
+        self.reach = sum(abs(row.a) + abs(row.d) for row in table.rows) + sum(strokes)
 
     def explain(self, failure: int, detail: float) -> str:
+        if failure == TOO_FAR:
+            return (f"the target is {1000 * detail:.1f} mm from the base; this chain, every length and stroke laid "
+                    f"end to end, reaches {1000 * self.reach:.1f} mm at most")
         what = "pose" if self.task == "pose" else "position"
         return (f"the numerical search found no joints that reach this {what} from {self.starts} starts "
                 f"(the nearest came within {1000 * detail:.3g} mm / mrad)")
@@ -148,12 +155,26 @@ class NumericalIK:
         joints are a start that converges in a few steps, in about a millisecond per step;
         the other branches come from :meth:`solve`'s many starts.
         """
-        q, size = self._descend(np.array(hint, dtype=float)[None], np.asarray(T, dtype=float)[None], iterations)
+        T = np.asarray(T, dtype=float)
+        distance = math.hypot(*T[:3, 3].tolist())  # scaled: no overflow
+        if distance > self.reach + LENGTH_TOLERANCE:  # nowhere to go (and a huge error's square would overflow)
+            return np.array(hint, dtype=float), distance - self.reach
+        q, size = self._descend(np.array(hint, dtype=float)[None], T[None], iterations)
         return q[0], float(size[0])
 
     def solve(self, T: np.ndarray, hint: np.ndarray | None) -> dict[str, np.ndarray]:
         N, n, slots = len(T), self.table.n_joints, len(self.labels)
         out = empty_branches((N,), slots, n)
+        distance = np.hypot(np.hypot(T[:, 0, 3], T[:, 1, 3]), T[:, 2, 3])  # scaled: no overflow
+        too_far = distance > self.reach + LENGTH_TOLERANCE
+        out["failure"][too_far], out["detail"][too_far] = TOO_FAR, distance[too_far, None]
+        if too_far.any():  # not searched: nothing reaches, and a huge error's square would overflow
+            near = np.flatnonzero(~too_far)
+            if len(near):
+                part = self.solve(T[near], None if hint is None else hint[near])
+                for key, value in part.items():
+                    out[key][near] = value
+            return out
         starts = self._starts(hint, N)
         target = np.broadcast_to(T[:, None], starts.shape[:-1] + (4, 4))
         q, size = self._descend(starts, target, self.iterations)

@@ -7,7 +7,9 @@ says which part, and FK(IK(T)) matches T there:
   plane, elbow down (θ2 ≥ 0) or up: 2 slots.
 * :class:`Scara` (RRP + roll, standard DH with α2 = π): the position and the yaw about the
   vertical; its tool always points straight down. 2 slots (elbow left / right).
-* :class:`Cylindrical` (RPP): the position; one slot (the stroke d3 ≥ 0 is the radius).
+* :class:`Cylindrical` (RPP): the position; two slots, the stroke d3 the radius (slot 0) or
+  θ1 turned by π and the stroke negative (slot 1, beyond a real arm's range: flagged by
+  ``within_limits``).
 """
 
 from __future__ import annotations
@@ -25,7 +27,8 @@ def _two_link(x: np.ndarray, y: np.ndarray, a1: float, a2: float, down: bool):
     """θ1, θ2 of a planar 2R arm reaching (x, y), clipped at the boundary; and where it is out of reach."""
     r = np.hypot(x, y)
     too_far, too_close = r > a1 + a2 + LENGTH_TOLERANCE, r < abs(a1 - a2) - LENGTH_TOLERANCE
-    c2 = np.clip((r * r - a1 * a1 - a2 * a2) / (2 * a1 * a2), -1.0, 1.0)
+    span = np.clip(r, abs(a1 - a2), a1 + a2)  # c2 = ±1 beyond either limit, and r² of a far target does not overflow
+    c2 = np.clip((span * span - a1 * a1 - a2 * a2) / (2 * a1 * a2), -1.0, 1.0)
     theta2 = np.arccos(c2) * (1.0 if down else -1.0)
     theta1 = np.arctan2(y, x) - np.arctan2(a2 * np.sin(theta2), a1 + a2 * np.cos(theta2))
     return wrap(theta1), theta2, too_far, too_close, r
@@ -118,7 +121,7 @@ class Cylindrical:
     """RPP: rows (0, 0, d1, θ1), (0, −π/2, d2, 0) prismatic, (0, 0, d3, 0) prismatic."""
 
     task = "position"
-    labels = ("the only branch (d3 ≥ 0)",)
+    labels = ("stroke forward", "stroke reversed")
 
     def __init__(self, table: DHTable) -> None:
         rows = table.rows
@@ -132,14 +135,15 @@ class Cylindrical:
         return "no branch reaches this pose"
 
     def solve(self, T: np.ndarray, hint: np.ndarray | None) -> dict[str, np.ndarray]:
-        out = empty_branches((len(T),), 1, 3)
+        out = empty_branches((len(T),), 2, 3)
         x, y, z = T[:, 0, 3], T[:, 1, 3], T[:, 2, 3]
         rho = np.hypot(x, y)  # x = −s1 d3, y = c1 d3
         hint1 = np.zeros(len(T)) if hint is None else hint[:, 0]
-        theta1 = np.arctan2(-x, y)
-        # near the column θ1 barely moves the tool: the hint's wherever it moves it by at most the tolerance
-        theta1 = np.where(rho * np.abs(wrap(theta1 - hint1)) <= CHOICE_TOLERANCE, hint1, theta1)
-        out["q"][:, 0] = np.stack([wrap(theta1), z - self.base - self.lift_offset, rho - self.stroke_offset], axis=-1)
-        out["valid"][:, 0] = True
-        out["singular"][:, 0] = rho <= LENGTH_TOLERANCE
+        for slot, stroke in ((0, rho), (1, -rho)):
+            theta1 = np.arctan2(-x, y) + math.pi * slot
+            # near the column θ1 barely moves the tool: the hint's wherever it moves it by at most the tolerance
+            theta1 = np.where(rho * np.abs(wrap(theta1 - hint1)) <= CHOICE_TOLERANCE, hint1, theta1)
+            out["q"][:, slot] = np.stack([wrap(theta1), z - self.base - self.lift_offset, stroke - self.stroke_offset], axis=-1)
+            out["valid"][:, slot] = True
+            out["singular"][:, slot] = rho <= LENGTH_TOLERANCE
         return out

@@ -12,7 +12,9 @@ in the tool frame), joints 4–6 then turn the tool to ``R3_6 = R0_3ᵀ R``.
   shoulder, upper arm, forearm and their angles — is read from the table's own FK, so
   the same code serves both arms and any table of their shape.
 * :class:`StanfordArm` (RRP + wrist): θ1 from the shoulder offset d2 (two choices), θ2
-  and the stroke d3 ≥ 0 to WC, the wrist flipped or not: 4 slots, ``k = 2 shoulder + wrist``.
+  and the stroke to WC (forward, or reversed: θ2 + π and the stroke negative), the wrist
+  flipped or not: 8 slots, ``k = 4 reversed + 2 shoulder + wrist``. A reversed stroke is
+  beyond a real arm's range (d3 ≥ 0), so those slots come flagged by ``within_limits``.
 """
 
 from __future__ import annotations
@@ -351,11 +353,11 @@ class ArticulatedArm:
 
 
 class StanfordArm:
-    """RRP + spherical wrist (standard DH as in docs/kinematics.md §7.5): 4 slots."""
+    """RRP + spherical wrist (standard DH as in docs/kinematics.md §7.5): 8 slots, the last four with the stroke reversed."""
 
     task = "pose"
-    labels = tuple(f"shoulder {shoulder}, wrist {wrist}" for shoulder in ("right", "left")
-                   for wrist in ("not flipped", "flipped"))
+    labels = tuple(f"shoulder {shoulder}, wrist {wrist}{stroke}" for stroke in ("", ", stroke reversed")
+                   for shoulder in ("right", "left") for wrist in ("not flipped", "flipped"))
 
     def __init__(self, table: DHTable) -> None:
         if table.joint_types != "RRPRRR" or table.convention != STANDARD:
@@ -377,7 +379,7 @@ class StanfordArm:
         if len(T) == 1:
             return self._solve_one(T[0], None if hint is None else hint[0].tolist())
         N = len(T)
-        out = empty_branches((N,), 4, 6)
+        out = empty_branches((N,), 8, 6)
         q, valid, singular = out["q"], out["valid"], out["singular"]
         R, centre = _pose_parts(self.centre_in_tool, T)
         x, y, z = centre[:, 0], centre[:, 1], centre[:, 2] - self.d1
@@ -391,11 +393,10 @@ class StanfordArm:
         # θ1 is fixed only to √rounding where WC is on the d2 cylinder: the hint's wherever it puts
         # WC within the tolerance of the offset (−s1 x + c1 y = d2)
         hint_fits = np.abs(-s1h * x + c1h * y - d2) <= CHOICE_TOLERANCE
+        out["failure"][:] = np.where(inside, INSIDE_OFFSET, 0)[:, None]
+        out["detail"][:] = rho[:, None]
+        ok = ~inside
         for shoulder in (0, 1):
-            slot = 2 * shoulder
-            out["failure"][:, slot:slot + 2] = np.where(inside, INSIDE_OFFSET, 0)[:, None]
-            out["detail"][:, slot:slot + 2] = rho[:, None]
-            ok = ~inside
             sign = 1.0 if shoulder == 0 else -1.0
             # −s1 x + c1 y = d2 and c1 x + s1 y = ±reach
             theta1 = np.arctan2(y, x) - np.arctan2(d2, sign * reach)
@@ -403,20 +404,24 @@ class StanfordArm:
             theta1 = np.where(chosen1, hint[:, 0], theta1)
             u = np.cos(theta1) * x + np.sin(theta1) * y  # = s2 d3
             stroke = np.hypot(u, z)
-            theta2 = np.arctan2(u, z)
-            # near d3 = 0, θ2 barely moves WC: the hint's wherever it moves WC by at most the tolerance
-            chosen2 = stroke * np.abs(wrap(theta2 - hint[:, 1])) <= CHOICE_TOLERANCE
-            theta2 = np.where(chosen2, hint[:, 1], theta2)
-            q[ok, slot, :3] = np.stack([wrap(theta1), wrap(theta2), stroke - self.stroke_offset], axis=-1)[ok]
-            valid[ok, slot] = True
             # singular where the pose leaves a value free: WC on the d2 cylinder, or on the shoulder
-            singular[ok, slot] = ((np.abs(u) <= LENGTH_TOLERANCE) | (stroke <= LENGTH_TOLERANCE))[ok]
+            at_singularity = (np.abs(u) <= LENGTH_TOLERANCE) | (stroke <= LENGTH_TOLERANCE)
+            for reversed_ in (0, 1):  # (s2, c2) d3 = (u, z): θ2 and the stroke, or θ2 + π and minus the stroke
+                slot = 4 * reversed_ + 2 * shoulder
+                theta2 = np.arctan2(u, z) + math.pi * reversed_
+                # near d3 = 0, θ2 barely moves WC: the hint's wherever it moves WC by at most the tolerance
+                chosen2 = stroke * np.abs(wrap(theta2 - hint[:, 1])) <= CHOICE_TOLERANCE
+                theta2 = np.where(chosen2, hint[:, 1], theta2)
+                d3 = (-stroke if reversed_ else stroke) - self.stroke_offset
+                q[ok, slot, :3] = np.stack([wrap(theta1), wrap(theta2), d3], axis=-1)[ok]
+                valid[ok, slot] = True
+                singular[ok, slot] = at_singularity[ok]
         _wrist_slots(self.table, self.wrist, out, R, hint)
         return out
 
     def _solve_one(self, T: np.ndarray, hint: list[float] | None) -> dict[str, np.ndarray]:
         """:meth:`solve` for one pose in floats, step for step the same decisions."""
-        out = empty_branches((1,), 4, 6)
+        out = empty_branches((1,), 8, 6)
         q, valid, singular, failure, detail = (out[key][0] for key in ("q", "valid", "singular", "failure", "detail"))
         R = T[:3, :3]
         x, y, z = (T[:3, 3] + R @ self.centre_in_tool).tolist()
@@ -429,23 +434,22 @@ class StanfordArm:
         c1h, s1h = math.cos(h[0]), math.sin(h[0])
         hint_u = c1h * x + s1h * y
         hint_fits = abs(-s1h * x + c1h * y - d2) <= CHOICE_TOLERANCE
-        for shoulder in (0, 1):
-            slot = 2 * shoulder
-            failure[slot:slot + 2] = INSIDE_OFFSET if inside else 0
-            detail[slot:slot + 2] = rho
-            if inside:
-                continue
+        failure[:] = INSIDE_OFFSET if inside else 0
+        detail[:] = rho
+        for shoulder in () if inside else (0, 1):
             sign = 1.0 if shoulder == 0 else -1.0
             theta1 = math.atan2(y, x) - math.atan2(d2, sign * reach)
             if hint_fits and (sign * hint_u >= 0 or abs(hint_u) <= 1e-6):
                 theta1 = h[0]
             u = math.cos(theta1) * x + math.sin(theta1) * y
             stroke = math.hypot(u, z)
-            theta2 = math.atan2(u, z)
-            if stroke * abs(_wrap1(theta2 - h[1])) <= CHOICE_TOLERANCE:
-                theta2 = h[1]
-            q[slot, :3] = (_wrap1(theta1), _wrap1(theta2), stroke - self.stroke_offset)
-            valid[slot] = True
-            singular[slot] = abs(u) <= LENGTH_TOLERANCE or stroke <= LENGTH_TOLERANCE
+            for reversed_ in (0, 1):
+                slot = 4 * reversed_ + 2 * shoulder
+                theta2 = math.atan2(u, z) + math.pi * reversed_
+                if stroke * abs(_wrap1(theta2 - h[1])) <= CHOICE_TOLERANCE:
+                    theta2 = h[1]
+                q[slot, :3] = (_wrap1(theta1), _wrap1(theta2), (-stroke if reversed_ else stroke) - self.stroke_offset)
+                valid[slot] = True
+                singular[slot] = abs(u) <= LENGTH_TOLERANCE or stroke <= LENGTH_TOLERANCE
         _wrist_slots_one(self.table, self.wrist, out, R, hint)
         return out

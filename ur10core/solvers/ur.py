@@ -33,7 +33,6 @@ from .. import ik_reference
 from .._backend import kernels
 from .._validate import as_float_array, check_finite, homogeneous_transform, joint_vector
 from ..branches import INSIDE_OFFSET, TOO_FAR, IKSolution
-from ..differential import cross
 
 if TYPE_CHECKING:
     from ..arm import Arm
@@ -356,15 +355,23 @@ class URFamily:
         """Geometric Jacobian at the flange origin in the base frame, (..., 6, 6), rows [v; w].
 
         docs/kinematics.md §5: column i is ``[z_i × (o_6 − o_i); z_i]`` with z_i, o_i the axis
-        and origin of frame {i} (every joint revolute).
+        and origin of frame {i} (every joint revolute), from the frames of :meth:`frames`
+        (computed by the kernel, one pose without numpy's per-call overhead).
+
+        >>> from ur10core import Arm
+        >>> J = Arm.preset("course").jacobian(np.zeros(6))
+        >>> (J[:3, 0] * 1000 + 0.0).round(1).tolist(), J[3:, 0].tolist()  # joint 1 turns the flange about z0
+        ([256.1, 1184.5, 0.0], [0.0, 0.0, 1.0])
         """
-        frames = self.frames(q)
-        z = frames[..., 1:, :3, 2]  # (..., 6, 3)
-        o = frames[..., 1:, :3, 3]
-        J = np.empty(frames.shape[:-3] + (6, 6))
-        J[..., :3, :] = np.swapaxes(cross(z, o[..., 5:6, :] - o), -1, -2)
-        J[..., 3:, :] = np.swapaxes(z, -1, -2)
-        return J
+        if type(q) is np.ndarray and q.shape == (6,) and q.dtype == np.float64 and q.flags.c_contiguous:
+            J = kernels.jacobian_one(q, self.dh_lengths)
+            if J is not None:
+                return J
+        q = joint_vector(q)
+        flat = np.ascontiguousarray(q.reshape(-1, 6))
+        out = np.empty((len(flat), 6, 6))
+        kernels.jacobians(flat, self.dh_lengths, out)
+        return out.reshape(q.shape[:-1] + (6, 6))
 
     def singularity_factors(self, q) -> np.ndarray:
         """The three factors of det J, (..., 3): shoulder, elbow, wrist (docs/kinematics.md §5).
@@ -415,8 +422,8 @@ class URFamily:
     def singular_configuration(self, kind: str, q) -> np.ndarray:
         """Joints ``q`` changed as little as needed to sit exactly on one singularity (docs/kinematics.md §5).
 
-        * ``"elbow"``: θ3 = 0, the arm stretched (s3 = 0).
-        * ``"wrist"``: θ5 = 0, axes 4 and 6 parallel (s5 = 0).
+        * ``"elbow"``: θ3 = 0 (or the whole turn of it nearest θ3), the arm stretched (s3 = 0).
+        * ``"wrist"``: θ5 = 0 (or the whole turn of it nearest θ5), axes 4 and 6 parallel (s5 = 0).
         * ``"shoulder"``: θ4 chosen so that ``a2 c2 + a3 c23 − d5 s234 = 0`` (P5 on the d4
           cylinder); if no θ4 can do it for these θ2, θ3, θ2 is first turned so that
           ``a2 c2 + a3 c23 = 0`` and then s234 = 0.
@@ -432,9 +439,9 @@ class URFamily:
         """
         q = joint_vector(q).copy()
         if kind == "elbow":
-            q[..., 2] = 0.0
+            q[..., 2] = _ik.equivalent_near(0.0, q[..., 2], JOINT_LIMIT)
         elif kind == "wrist":
-            q[..., 4] = 0.0
+            q[..., 4] = _ik.equivalent_near(0.0, q[..., 4], JOINT_LIMIT)
         elif kind == "shoulder":
             t2, t3 = q[..., 1], q[..., 2]
             ratio = (self.a2 * np.cos(t2) + self.a3 * np.cos(t2 + t3)) / self.d5
