@@ -8,7 +8,8 @@ one, all in the same run:
 
 * one-pose IK (all 8 slots), without and with a hint, vs ur-analytic-ik's UR10
   ``inverse_kinematics`` (C++), and with a huge hint vs an ordinary one;
-* batch IK of 1 M poses vs the plain numpy vectorisation in ``numpy_baseline_ik.py``;
+* batch IK of 200 000 poses vs the plain numpy vectorisation in ``numpy_baseline_ik.py``, and
+  as a share of what the hardware could do (:data:`HARDWARE_POSES_PER_CORE`);
 * one-pose FK vs the 10 µs target (and ur-analytic-ik's FK), and FK and the Jacobian vs
   pinocchio's on the same DH table (when pinocchio is installed: ``pip install pin``; a
   benchmark reference only, not a test dependency);
@@ -42,7 +43,10 @@ sys.path.insert(0, os.environ.get("UR10_BENCH_CHECKOUT", str(Path(__file__).reso
 
 from _report import machine, table, write_section  # noqa: E402
 
-BATCH = 1_000_000
+BATCH = 200_000
+#: An 8-branch solve is about 1.2 kFLOP (some 200 arithmetic operations and 20 atan2); at about
+#: 22 GFLOP/s of double precision per core (AVX-512) that is about 15 M poses/s per core.
+HARDWARE_POSES_PER_CORE = 15e6
 
 
 def per_call_us(function, arguments, repeats: int = 7) -> float:
@@ -223,7 +227,7 @@ def before_after(ref: str, rounds: int = 3) -> None:
     rows = [
         ["`arm.ik(T, hint=q)`, one pose (the drag handler's call)", f"{b['ik_one_hint_us']:.2f} µs", f"{a['ik_one_hint_us']:.2f} µs",
          f"{a['ik_one_hint_us'] / b['ik_one_hint_us']:.2f}"],
-        [f"`arm.ik(T)`, {BATCH // 1_000_000} M poses", f"{b['batch_per_s'] / 1e6:.2f} M poses/s", f"{a['batch_per_s'] / 1e6:.2f} M poses/s",
+        [f"`arm.ik(T)`, {BATCH:,} poses", f"{b['batch_per_s'] / 1e6:.2f} M poses/s", f"{a['batch_per_s'] / 1e6:.2f} M poses/s",
          f"{b['batch_per_s'] / a['batch_per_s']:.2f}"],
         ["`arm.fk(q)`, one pose", f"{b['fk_one_us']:.2f} µs", f"{a['fk_one_us']:.2f} µs", f"{a['fk_one_us'] / b['fk_one_us']:.2f}"],
         ["drag step: `ArmState.move_target(T)` and what the mesh drawing reads of it (IK with hint, nearest branch, frames, ghost poses)", f"{b['drag_step_us']:.1f} µs",
@@ -268,11 +272,13 @@ def main() -> None:
         ["`arm.ik(T, hint=q)`, one pose, θ6's hint 1e9, 1e16 or 1e300 rad", f"{c['ik_huge_hint_us']:.1f} µs",
          f"{n['ik_huge_hint_us']:.1f} µs", "within 2× of an ordinary hint (the row above)",
          pass_if(c["ik_huge_hint_us"] <= 2 * c["ik_one_hint_us"] and n["ik_huge_hint_us"] <= 2 * n["ik_one_hint_us"])],
-        [f"`arm.ik(T)`, {BATCH // 1_000_000} M poses, 8 slots", f"{c['batch_per_s'] / 1e6:.2f} M poses/s",
+        [f"`arm.ik(T)`, {BATCH:,} poses, 8 slots (both cores)", f"{c['batch_per_s'] / 1e6:.2f} M poses/s "
+         f"({c['batch_per_s'] / ref['numpy_baseline_per_s']:.1f}× the baseline; "
+         f"{100 * c['batch_per_s'] / (os.cpu_count() * HARDWARE_POSES_PER_CORE):.0f} % of ~{HARDWARE_POSES_PER_CORE / 1e6:.0f} M/s a core)",
          f"{n['batch_per_s'] / 1e6:.2f} M poses/s",
          f"plain numpy of the course's steps (no singular cases): {ref['numpy_baseline_per_s'] / 1e6:.2f} M poses/s; "
-         "target (compiled) ≥ 1 M/s and ≥ 2×",
-         f"compiled {pass_if(c['batch_per_s'] >= 1e6 and c['batch_per_s'] >= 2 * ref['numpy_baseline_per_s'])}"],
+         "target (compiled) ≥ 5×",
+         f"compiled {pass_if(c['batch_per_s'] >= 5 * ref['numpy_baseline_per_s'])}"],
         ["`arm.fk(q)`, one pose", f"{c['fk_one_us']:.2f} µs", f"{n['fk_one_us']:.2f} µs",
          f"target ≤ 10 µs; ur-analytic-ik FK: {ref['ur_analytic_fk_us']:.1f} µs",
          pass_if(max(c["fk_one_us"], n["fk_one_us"]) <= 10)],

@@ -50,6 +50,10 @@ typedef struct {          /* one (theta1, wrist sign) pair: ik_reference._wrist_
     double theta1, theta5, theta6, theta234, s5_abs, h4, v4, r;
 } Slot;
 
+typedef struct {          /* what both wrist signs of one theta1 share: steps 1 and 2 */
+    double c1, s1, A, theta1, c5, c6s5, s6s5, s5_abs, theta5; /* theta5 of the wrist not flipped */
+} Shoulder;
+
 /* Into (-pi, pi], exactly (IEEE remainder), in O(1) for any finite angle: ik_reference.wrap. */
 static double wrap(double angle)
 {
@@ -109,19 +113,32 @@ static double nearest_reachable_theta234(double A, double V, double theta234, do
     return theta234 + (fabs(first) <= fabs(second) ? first : second);
 }
 
-/* ik_reference._wrist_and_elbow: steps 2-5 for one theta1 (c1, s1, reach A) and one wrist sign. */
-static Slot wrist_and_elbow(const Params *P, const Pose *T, double c1, double s1, double A, double sign,
-                            double hint)
+/* Steps 1 and 2 for one theta1 (c1, s1, reach A): theta1, c5 = z4 . z6 and |s5| from the row pair of step 3. */
+static Shoulder shoulder_at(const Pose *T, double c1, double s1, double A)
+{
+    Shoulder h;
+    h.c1 = c1;
+    h.s1 = s1;
+    h.A = A;
+    h.theta1 = wrap(atan2(s1, c1));
+    h.c5 = T->r13 * s1 - T->r23 * c1;
+    h.c6s5 = T->r21 * c1 - T->r11 * s1;
+    h.s6s5 = T->r12 * s1 - T->r22 * c1;
+    h.s5_abs = sqrt(h.c6s5 * h.c6s5 + h.s6s5 * h.s6s5); /* O(1) values: no hypot needed (nor in the reference) */
+    h.theta5 = wrap(atan2(h.s5_abs, h.c5));
+    return h;
+}
+
+/* ik_reference._wrist_and_elbow: steps 2-5 for one theta1 (its Shoulder) and one wrist sign. */
+static Slot wrist_and_elbow(const Params *P, const Pose *T, const Shoulder *h, double sign, double hint)
 {
     Slot o;
-    o.theta1 = wrap(atan2(s1, c1));
-    /* Step 2: c5 = z4 . z6; |s5| from the row pair of step 3. */
-    const double c5 = T->r13 * s1 - T->r23 * c1;
-    const double c6s5 = T->r21 * c1 - T->r11 * s1;
-    const double s6s5 = T->r12 * s1 - T->r22 * c1;
-    o.s5_abs = sqrt(c6s5 * c6s5 + s6s5 * s6s5); /* O(1) values: no hypot needed (nor in the reference) */
+    const double c1 = h->c1, s1 = h->s1, A = h->A, c5 = h->c5, c6s5 = h->c6s5, s6s5 = h->s6s5;
+    o.theta1 = h->theta1;
+    o.s5_abs = h->s5_abs;
     const double s5 = sign * o.s5_abs;
-    o.theta5 = wrap(atan2(s5, c5));
+    /* atan2(-y, x) = -atan2(y, x) exactly; wrap() sends -pi (s5 = -0, c5 < 0) to pi as it would atan2's */
+    o.theta5 = sign > 0.0 ? h->theta5 : wrap(-h->theta5);
     /* Step 3: theta6 from the pose, or the hint's wherever that reproduces the pose. */
     double c6 = 1.0, s6 = 0.0;
     if (o.s5_abs > 0.0) {
@@ -147,10 +164,10 @@ static Slot wrist_and_elbow(const Params *P, const Pose *T, double c1, double s1
     const double V = T->p5z - P->d1;
     o.h4 = A + P->d5 * s234;
     o.v4 = V - P->d5 * c234;
-    o.r = hypot(o.h4, o.v4);
+    o.r = sqrt(o.h4 * o.h4 + o.v4 * o.v4);
     /* a turn that could not fit the tolerance is not tried: r moves at most d5 |(A, V)| / r per radian */
     const double beyond = o.r > P->a2 + P->a3 ? o.r - (P->a2 + P->a3) : fabs(P->a2 - P->a3) - o.r;
-    const double R = hypot(A, V);
+    const double R = beyond > 0.0 ? hypot(A, V) : 0.0;
     if (beyond > 0.0 && R > 0.0 && o.s5_abs * beyond * o.r <= 2.0 * WRIST_TURN_TOLERANCE * P->d5 * R) {
         /* beyond the reach (if only just): slide along the wrist's singular direction */
         const double turn = c5 >= 0.0 ? 1.0 : -1.0;
@@ -162,7 +179,7 @@ static Slot wrist_and_elbow(const Params *P, const Pose *T, double c1, double s1
             o.theta6 = theta6_moved;
             o.h4 = A + P->d5 * sin(o.theta234);
             o.v4 = V - P->d5 * cos(o.theta234);
-            o.r = hypot(o.h4, o.v4);
+            o.r = sqrt(o.h4 * o.h4 + o.v4 * o.v4);
         }
     }
     return o;
@@ -184,10 +201,11 @@ static int reach_within_band(const Params *P, const Pose *T, Slot *slot, double 
     for (int k = 0; k < 4; k++) {
         const double moved = fmin(high, fmax(low, A + step));
         if (moved == A) break;
-        const double scale = rho * hypot(moved, P->d4);
+        const double scale = rho * sqrt(moved * moved + P->d4 * P->d4);
         const double c1 = (T->p5x * moved - T->p5y * P->d4) / scale;
         const double s1 = (T->p5y * moved + T->p5x * P->d4) / scale;
-        const Slot better = wrist_and_elbow(P, T, c1, s1, moved, sign, hint);
+        const Shoulder h = shoulder_at(T, c1, s1, moved);
+        const Slot better = wrist_and_elbow(P, T, &h, sign, hint);
         if (within(better.r, P)) {
             *slot = better;
             return 1;
@@ -217,7 +235,8 @@ static int theta1_for_reach(const Params *P, const Pose *T, const Slot *slot, do
     candidate += PI * nearbyint((slot->theta1 - candidate) / PI);
     const double c1 = cos(candidate), s1 = sin(candidate);
     if (fabs(T->p5x * s1 - T->p5y * c1 - P->d4) > CHOICE_TOLERANCE) return 0;
-    *better = wrist_and_elbow(P, T, c1, s1, T->p5x * c1 + T->p5y * s1, sign, hint);
+    const Shoulder h = shoulder_at(T, c1, s1, T->p5x * c1 + T->p5y * s1);
+    *better = wrist_and_elbow(P, T, &h, sign, hint);
     return in_reach(better->r, P);
 }
 
@@ -257,19 +276,18 @@ static void solve_pose(const Params *P, const double *M, double theta6_hint, dou
     for (int i = 0; i < 2; i++) {
         const double side = i == 0 ? -1.0 : 1.0;
         const double A = side * ((reach_low <= fabs(reach_hint) && fabs(reach_hint) <= reach_high) ? fabs(reach_hint) : reach);
-        const double scale = rho * hypot(A, d4);
-        const double c1 = (T.p5x * A - T.p5y * d4) / scale;
-        const double s1 = (T.p5y * A + T.p5x * d4) / scale;
+        const double scale = rho * sqrt(A * A + d4 * d4);
+        const Shoulder h = shoulder_at(&T, (T.p5x * A - T.p5y * d4) / scale, (T.p5y * A + T.p5x * d4) / scale, A);
         for (int j = 0; j < 2; j++) {
             const double sign = j == 0 ? 1.0 : -1.0;
-            Slot s = wrist_and_elbow(P, &T, c1, s1, A, sign, hint);
+            Slot s = wrist_and_elbow(P, &T, &h, sign, hint);
             if (!reaches(s.r, P)) {
                 /* where the band holds A = 0 the two shoulder slots are one branch: either may cross */
                 const double band_a = reach_low > 0.0 ? side * reach_low : -side * reach_high;
                 reach_within_band(P, &T, &s, A, band_a, side * reach_high, sign, hint);
             }
             if (!reaches(s.r, P)) { /* the hint's theta6 kept at a tiny |s5|: the pose's own may reach */
-                const Slot own = wrist_and_elbow(P, &T, c1, s1, A, sign, NAN);
+                const Slot own = wrist_and_elbow(P, &T, &h, sign, NAN);
                 if (reaches(own.r, P)) s = own;
             }
             if (!reaches(s.r, P) && s.s5_abs <= theta1_band) {

@@ -304,7 +304,7 @@ def _wrist_and_elbow(R, p5, c1, s1, A, sign, hint, params):
     theta234 = np.arctan2(s234, c234)
     V = p5[:, 2] - d1
     h4, v4 = A + d5 * s234, V - d5 * c234
-    r = np.hypot(h4, v4)
+    r = np.sqrt(h4 * h4 + v4 * v4)
     outer, inner = a2 + a3, abs(a2 - a3)
     beyond, reach = np.where(r > outer, r - outer, inner - r), np.hypot(A, V)
     slide = np.flatnonzero((beyond > 0.0) & (reach > 0.0) & (s5_abs * beyond * r <= 2.0 * WRIST_TURN_TOLERANCE * d5 * reach))
@@ -318,7 +318,7 @@ def _wrist_and_elbow(R, p5, c1, s1, A, sign, hint, params):
         theta234[take], theta6[take] = moved[allowed], theta6_moved[allowed]
         h4[take] = A[take] + d5 * np.sin(theta234[take])
         v4[take] = V[take] - d5 * np.cos(theta234[take])
-        r[take] = np.hypot(h4[take], v4[take])
+        r[take] = np.sqrt(h4[take] * h4[take] + v4[take] * v4[take])
     return theta1, theta5, theta6, theta234, s5_abs, h4, v4, r
 
 
@@ -342,7 +342,7 @@ def _reach_within_band(R, p5, slot, A, band_a, band_b, sign, hint, params):
         active, moved = active[~stuck], moved[~stuck]
         if not len(active):
             break
-        scale = rho[active] * np.hypot(moved, d4)
+        scale = rho[active] * np.sqrt(moved * moved + d4 * d4)
         c1 = (p5[active, 0] * moved - p5[active, 1] * d4) / scale
         s1 = (p5[active, 1] * moved + p5[active, 0] * d4) / scale
         better = _wrist_and_elbow(R[active], p5[active], c1, s1, moved, sign[active], hint[active], params)
@@ -408,7 +408,7 @@ def _solve(T, theta6_hint, reach_hint, theta3_hint, params, q, valid, wrist, elb
     theta1_band = (reach_high - reach_low) * d4 / (reach * reach + d4 * d4)
     A_hint = reach_hint[pose]
     A = side * np.where((reach_low <= np.abs(A_hint)) & (np.abs(A_hint) <= reach_high), np.abs(A_hint), reach)
-    scale = rho * np.hypot(A, d4)
+    scale = rho * np.sqrt(A * A + d4 * d4)
     c1 = (P5[:, 0] * A - P5[:, 1] * d4) / scale
     s1 = (P5[:, 1] * A + P5[:, 0] * d4) / scale
     hint = wrap(theta6_hint)[pose]

@@ -87,7 +87,7 @@ def solve_pose(rows, theta6_hint: float, reach_hint: float, theta3_hint: float, 
     R = [row[:3] for row in rows[:3]]
     (_, _, r13, px), (_, _, r23, py), (_, _, r33, pz) = rows[:3]
     d1, a2, a3, d4, d5, d6 = lengths
-    sqrt, atan2, hypot, cos, sin = math.sqrt, math.atan2, math.hypot, math.cos, math.sin
+    sqrt, atan2, cos, sin = math.sqrt, math.atan2, math.cos, math.sin
 
     # Step 1: the wrist-2 point P5 = p − d6 z6 and its distance ρ from the base axis.
     p5 = (px - d6 * r13, py - d6 * r23, pz - d6 * r33)
@@ -118,7 +118,7 @@ def solve_pose(rows, theta6_hint: float, reach_hint: float, theta3_hint: float, 
     for i, side in ((0, -1.0), (1, 1.0)):
         A = side * (abs(reach_hint) if reach_low <= abs(reach_hint) <= reach_high else reach)
         # θ1 from A: x1 = (c1, s1) with P5 = A x1 + d4 (s1, −c1)
-        scale = rho * hypot(A, d4)
+        scale = rho * sqrt(A * A + d4 * d4)
         c1 = (p5[0] * A - p5[1] * d4) / scale
         s1 = (p5[1] * A + p5[0] * d4) / scale
         for j, sign in ((0, 1.0), (1, -1.0)):
@@ -211,7 +211,7 @@ def _wrist_and_elbow(R, p5, c1, s1, A, sign, hint, lengths) -> tuple:
     # Step 5: the frame-4 origin in the arm plane.
     V = p5[2] - d1
     h4, v4 = A + d5 * s234, V - d5 * c234
-    r = hypot(h4, v4)
+    r = sqrt(h4 * h4 + v4 * v4)
     outer, inner = a2 + a3, abs(a2 - a3)
     # r changes by at most d5·|(A, V)|/r per radian of θ234: a turn that could not fit the
     # tolerance (twice over: θ6 may be the hint's already) is not tried.
@@ -226,7 +226,7 @@ def _wrist_and_elbow(R, p5, c1, s1, A, sign, hint, lengths) -> tuple:
         if s5_abs * abs(wrap(theta6_moved - theta6_pose)) <= WRIST_TURN_TOLERANCE:
             theta234, theta6 = moved, theta6_moved
             h4, v4 = A + d5 * sin(theta234), V - d5 * cos(theta234)
-            r = hypot(h4, v4)
+            r = sqrt(h4 * h4 + v4 * v4)
     return theta1, theta5, theta6, theta234, s5_abs, h4, v4, r
 
 
@@ -253,7 +253,7 @@ def _reach_within_band(R, p5, slot, A, band_a, band_b, sign, hint, lengths) -> t
         moved = min(high, max(low, A + step))
         if moved == A:
             break
-        scale = rho * math.hypot(moved, d4)
+        scale = rho * math.sqrt(moved * moved + d4 * d4)
         c1, s1 = (p5[0] * moved - p5[1] * d4) / scale, (p5[1] * moved + p5[0] * d4) / scale
         better = _wrist_and_elbow(R, p5, c1, s1, moved, sign, hint, lengths)
         if inner <= better[-1] <= outer:
