@@ -231,9 +231,10 @@ def test_a_current_joint_value_beyond_reason_is_refused_not_answered_with_nan(na
     arm = Arm.preset(name)
     q = np.zeros(arm.n_joints)
     sol = arm.ik(arm.fk(q))
-    for current in (np.full(arm.n_joints, 1e300), np.full((2, arm.n_joints), -1e12)):
-        with pytest.raises(ValueError, match="q_current has .* joint values beyond"):
-            (sol if current.ndim == 1 else arm.ik(arm.fk(np.zeros((2, arm.n_joints))))).nearest(current)
+    with pytest.raises(ValueError, match="q_current has .* joint values beyond"):
+        sol.nearest(np.full(arm.n_joints, 1e300))  # one pose
+    with pytest.raises(ValueError, match="q_current has .* joint values beyond"):
+        arm.ik(arm.fk(np.zeros((2, arm.n_joints)))).nearest(np.full((2, arm.n_joints), -1e12))  # a batch
     assert np.isfinite(sol.nearest(np.full(arm.n_joints, 1e6)).q).all()  # a million radians is still an answer
 
 

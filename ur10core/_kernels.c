@@ -471,21 +471,54 @@ static PyObject *ik_batch(PyObject *self, PyObject *args)
     return PyLong_FromSsize_t(first_bad);
 }
 
+/* The arguments (q, params) of a one-pose call `name`: 1 with *P and *q set, 0 if q is not finite,
+ * -1 with an exception set. q must be a C-contiguous float64 array of 6 angles. */
+static int one_joint_vector(PyObject *args, const char *name, Params *P, const double **q)
+{
+    PyObject *q_obj, *params;
+    if (!PyArg_ParseTuple(args, "OO", &q_obj, &params)) return -1;
+    if (!parse_params(params, P)) return -1;
+    if (!is_c_array(q_obj, NPY_DOUBLE) || PyArray_SIZE((PyArrayObject *)q_obj) != 6) {
+        PyErr_Format(PyExc_TypeError, "%s needs a C-contiguous float64 array of 6 angles", name);
+        return -1;
+    }
+    *q = (const double *)PyArray_DATA((PyArrayObject *)q_obj);
+    for (int k = 0; k < 6; k++)
+        if (!isfinite((*q)[k])) return 0;
+    return 1;
+}
+
+/* The arguments (q (n, 6), params, out (n, ...)) of a batch call `name` writing `per_pose` values a
+ * joint vector (`shape` names them in the message): 1 with everything set, 0 with an exception. */
+static int joint_batch(PyObject *args, const char *name, npy_intp per_pose, const char *shape, Params *P,
+                       const double **q, double **out, npy_intp *n)
+{
+    PyObject *q_obj, *params, *out_obj;
+    if (!PyArg_ParseTuple(args, "OOO", &q_obj, &params, &out_obj)) return 0;
+    if (!parse_params(params, P)) return 0;
+    if (!is_c_array(q_obj, NPY_DOUBLE) || !is_c_array(out_obj, NPY_DOUBLE)) {
+        PyErr_Format(PyExc_TypeError, "%s needs C-contiguous float64 arrays", name);
+        return 0;
+    }
+    *n = PyArray_SIZE((PyArrayObject *)q_obj) / 6;
+    if (PyArray_SIZE((PyArrayObject *)q_obj) != 6 * *n || PyArray_SIZE((PyArrayObject *)out_obj) != per_pose * *n) {
+        PyErr_Format(PyExc_ValueError, "%s: q must hold n x 6 angles and out n x %s", name, shape);
+        return 0;
+    }
+    *q = (const double *)PyArray_DATA((PyArrayObject *)q_obj);
+    *out = (double *)PyArray_DATA((PyArrayObject *)out_obj);
+    return 1;
+}
+
 /* fk_one(q, params) -> (4, 4) array T06 in closed form (docs/kinematics.md §3), or None if q is
  * not finite. q must be a C-contiguous float64 array of 6 joint angles. */
 static PyObject *fk_one(PyObject *self, PyObject *args)
 {
-    PyObject *q_obj, *params;
     Params P;
-    if (!PyArg_ParseTuple(args, "OO", &q_obj, &params)) return NULL;
-    if (!parse_params(params, &P)) return NULL;
-    if (!is_c_array(q_obj, NPY_DOUBLE) || PyArray_SIZE((PyArrayObject *)q_obj) != 6) {
-        PyErr_SetString(PyExc_TypeError, "fk_one needs a C-contiguous float64 array of 6 angles");
-        return NULL;
-    }
-    const double *q = (const double *)PyArray_DATA((PyArrayObject *)q_obj);
-    for (int k = 0; k < 6; k++)
-        if (!isfinite(q[k])) Py_RETURN_NONE;
+    const double *q;
+    const int read = one_joint_vector(args, "fk_one", &P, &q);
+    if (read < 0) return NULL;
+    if (read == 0) Py_RETURN_NONE;
     const double c1 = cos(q[0]), s1 = sin(q[0]), c2 = cos(q[1]), s2 = sin(q[1]);
     const double c5 = cos(q[4]), s5 = sin(q[4]), c6 = cos(q[5]), s6 = sin(q[5]);
     const double c23 = cos(q[1] + q[2]), s23 = sin(q[1] + q[2]);
@@ -562,21 +595,11 @@ static void jacobian_from_frames(const double *F, double *J)
 /* frames(q (n, 6), params, out (n, 7, 4, 4)): chain_frames of every joint vector; ur10core.arm.Arm.frames. */
 static PyObject *frames(PyObject *self, PyObject *args)
 {
-    PyObject *q_obj, *params, *out_obj;
     Params P;
-    if (!PyArg_ParseTuple(args, "OOO", &q_obj, &params, &out_obj)) return NULL;
-    if (!parse_params(params, &P)) return NULL;
-    if (!is_c_array(q_obj, NPY_DOUBLE) || !is_c_array(out_obj, NPY_DOUBLE)) {
-        PyErr_SetString(PyExc_TypeError, "frames needs C-contiguous float64 arrays");
-        return NULL;
-    }
-    const npy_intp n = PyArray_SIZE((PyArrayObject *)q_obj) / 6;
-    if (PyArray_SIZE((PyArrayObject *)q_obj) != 6 * n || PyArray_SIZE((PyArrayObject *)out_obj) != 112 * n) {
-        PyErr_SetString(PyExc_ValueError, "frames: q must hold n x 6 angles and out n x 7 x 4 x 4");
-        return NULL;
-    }
-    const double *q = (const double *)PyArray_DATA((PyArrayObject *)q_obj);
-    double *out = (double *)PyArray_DATA((PyArrayObject *)out_obj);
+    const double *q;
+    double *out;
+    npy_intp n;
+    if (!joint_batch(args, "frames", 112, "7 x 4 x 4", &P, &q, &out, &n)) return NULL;
     Py_BEGIN_ALLOW_THREADS
     for (npy_intp m = 0; m < n; m++) chain_frames(q + 6 * m, &P, out + 112 * m);
     Py_END_ALLOW_THREADS
@@ -586,23 +609,13 @@ static PyObject *frames(PyObject *self, PyObject *args)
 /* jacobians(q (n, 6), params, out (n, 6, 6)): the flange Jacobian of every joint vector; Arm.jacobian. */
 static PyObject *jacobians(PyObject *self, PyObject *args)
 {
-    PyObject *q_obj, *params, *out_obj;
     Params P;
-    if (!PyArg_ParseTuple(args, "OOO", &q_obj, &params, &out_obj)) return NULL;
-    if (!parse_params(params, &P)) return NULL;
-    if (!is_c_array(q_obj, NPY_DOUBLE) || !is_c_array(out_obj, NPY_DOUBLE)) {
-        PyErr_SetString(PyExc_TypeError, "jacobians needs C-contiguous float64 arrays");
-        return NULL;
-    }
-    const npy_intp n = PyArray_SIZE((PyArrayObject *)q_obj) / 6;
-    if (PyArray_SIZE((PyArrayObject *)q_obj) != 6 * n || PyArray_SIZE((PyArrayObject *)out_obj) != 36 * n) {
-        PyErr_SetString(PyExc_ValueError, "jacobians: q must hold n x 6 angles and out n x 6 x 6");
-        return NULL;
-    }
-    const double *q = (const double *)PyArray_DATA((PyArrayObject *)q_obj);
-    double *out = (double *)PyArray_DATA((PyArrayObject *)out_obj);
-    Py_BEGIN_ALLOW_THREADS
+    const double *q;
+    double *out;
+    npy_intp n;
     double F[112];
+    if (!joint_batch(args, "jacobians", 36, "6 x 6", &P, &q, &out, &n)) return NULL;
+    Py_BEGIN_ALLOW_THREADS
     for (npy_intp m = 0; m < n; m++) {
         chain_frames(q + 6 * m, &P, F);
         jacobian_from_frames(F, out + 36 * m);
@@ -615,17 +628,11 @@ static PyObject *jacobians(PyObject *self, PyObject *args)
  * float64 array of 6 angles (the caller's fast path checks it). */
 static PyObject *jacobian_one(PyObject *self, PyObject *args)
 {
-    PyObject *q_obj, *params;
     Params P;
-    if (!PyArg_ParseTuple(args, "OO", &q_obj, &params)) return NULL;
-    if (!parse_params(params, &P)) return NULL;
-    if (!is_c_array(q_obj, NPY_DOUBLE) || PyArray_SIZE((PyArrayObject *)q_obj) != 6) {
-        PyErr_SetString(PyExc_TypeError, "jacobian_one needs a C-contiguous float64 array of 6 angles");
-        return NULL;
-    }
-    const double *q = (const double *)PyArray_DATA((PyArrayObject *)q_obj);
-    for (int k = 0; k < 6; k++)
-        if (!isfinite(q[k])) Py_RETURN_NONE;
+    const double *q;
+    const int read = one_joint_vector(args, "jacobian_one", &P, &q);
+    if (read < 0) return NULL;
+    if (read == 0) Py_RETURN_NONE;
     npy_intp dims[2] = {6, 6};
     PyObject *J_obj = PyArray_SimpleNew(2, dims, NPY_DOUBLE);
     if (!J_obj) return NULL;
