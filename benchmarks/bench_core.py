@@ -17,12 +17,12 @@ one, all in the same run:
 
 Figures are medians over repeats.
 
-    python benchmarks/bench_core.py --against REF
+    python benchmarks/bench_core.py --against REF [--rounds N] [--section NAME]
 
 times the UR10's one-pose IK, batch IK, FK and the app's drag step (``ArmState.move_target``)
-on this checkout and on git revision ``REF`` (a worktree, the compiled kernel copied in),
-alternately in their own processes, and writes the section "before_after": what a
-refactoring of the core cost the UR10.
+on this checkout and on git revision ``REF`` (a worktree, the compiled kernel copied in or,
+if its C differs, built there), alternately in their own processes, ``N`` rounds (3), and
+writes the section ``NAME`` ("before_after"): what a change of the core cost the UR10.
 """
 
 from __future__ import annotations
@@ -198,7 +198,7 @@ def measure_speed() -> dict:
     }
 
 
-def before_after(ref: str, rounds: int = 3) -> None:
+def before_after(ref: str, rounds: int = 3, section: str = "before_after") -> None:
     import shutil
     import tempfile
 
@@ -206,8 +206,11 @@ def before_after(ref: str, rounds: int = 3) -> None:
     tree = Path(tempfile.mkdtemp()) / "before"
     subprocess.run(["git", "-C", str(root), "worktree", "add", "--detach", str(tree), ref], check=True, capture_output=True)
     try:
-        for built in (root / "ur10core").glob("_kernels*.so"):  # the C source is the same: the same kernel
-            shutil.copy(built, tree / "ur10core")
+        if (tree / "ur10core" / "_kernels.c").read_bytes() == (root / "ur10core" / "_kernels.c").read_bytes():
+            for built in (root / "ur10core").glob("_kernels*.so"):  # the same C source: the same kernel
+                shutil.copy(built, tree / "ur10core")
+        else:  # the kernel changed too: build the old one in its checkout
+            subprocess.run([sys.executable, "setup.py", "-q", "build_ext", "--inplace"], cwd=tree, check=True, capture_output=True)
 
         def run(checkout: Path) -> dict:
             env = dict(os.environ, UR10CORE_BACKEND="compiled", UR10_BENCH_CHECKOUT=str(checkout))
@@ -242,7 +245,7 @@ def before_after(ref: str, rounds: int = 3) -> None:
         "",
         table(["what", "before", "after", "after / before (time)"], rows),
     ])
-    write_section("before_after", body)
+    write_section(section, body)
     print(body)
 
 
@@ -324,7 +327,14 @@ if __name__ == "__main__":
         print(json.dumps(measure()))
     elif sys.argv[1:] == ["--measure-speed"]:
         print(json.dumps(measure_speed()))
-    elif sys.argv[1:2] == ["--against"] and len(sys.argv) == 3:
-        before_after(sys.argv[2])
+    elif sys.argv[1:2] == ["--against"]:
+        import argparse
+
+        parser = argparse.ArgumentParser(prog="bench_core.py")
+        parser.add_argument("--against", required=True)
+        parser.add_argument("--rounds", type=int, default=3)
+        parser.add_argument("--section", default="before_after")
+        arguments = parser.parse_args()
+        before_after(arguments.against, arguments.rounds, arguments.section)
     else:
         main()
