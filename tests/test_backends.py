@@ -351,3 +351,63 @@ def test_the_kernel_is_iso_c99_that_msvc_also_compiles():
          str(ROOT / "ur10core" / "_kernels.c")],
         capture_output=True, text=True, timeout=120)
     assert done.returncode == 0, done.stderr
+
+
+# ---------------------------------------------------------------------------- the spherical-wrist arms
+
+
+@pytest.mark.parametrize("name", ["kr210", "elbow", "stanford"])
+@pytest.mark.parametrize("kind", ["random", "near singular", "out of reach"])
+def test_the_spherical_wrist_arms_compiled_decide_as_on_numpy(name, kind, monkeypatch):
+    """``wrist_ik`` (C) against the solvers' numpy batch path, on the same poses and hints, one pose at
+    a time and in a batch: the same slots valid, singular and failing, with the same numbers to rounding."""
+    from ur10core.solvers import spherical_wrist
+
+    from .test_serial_arms import near_singular_joints, random_joints, wrapped
+
+    monkeypatch.setattr(spherical_wrist, "_WRIST_IK", compiled.wrist_ik)  # whichever backend this run is on
+    arm = Arm.preset(name)
+    n = 3000
+    q = random_joints(arm, n, 31) if kind != "near singular" else near_singular_joints(arm, n, 32)
+    T = arm.fk(q)
+    if kind == "out of reach":
+        T[:, :3, 3] *= np.random.default_rng(33).choice([0.05, 1.0, 3.0], n)[:, None]
+    for hint in (None, q, random_joints(arm, n, 34)):
+        reference = arm.solver.solve(T, hint)
+        batch = arm.solver._compiled_ik(arm, T, hint)
+        ones = [arm.solver._compiled_ik(arm, T[k], None if hint is None else hint[k]) for k in range(0, n, 30)]
+        for key in ("valid", "failure") + (() if kind == "near singular" else ("singular",)):
+            np.testing.assert_array_equal(getattr(batch, key), reference[key], err_msg=key)
+            np.testing.assert_array_equal([getattr(one, key) for one in ones], reference[key][::30], err_msg=key)
+        np.testing.assert_allclose(batch.detail, reference["detail"], rtol=1e-12, atol=1e-15)
+        valid = batch.valid
+        if kind != "near singular":
+            np.testing.assert_allclose(wrapped(batch.q - reference["q"], arm.revolute)[valid], 0.0, atol=1e-9)
+        assert arm.pose_error(np.where(valid[..., None], batch.q, 0.0), T[:, None])[valid].max() < 1e-9
+        assert np.isnan(batch.q[~valid]).all()
+        for one, k in zip(ones, range(0, n, 30)):
+            np.testing.assert_array_equal(np.isnan(one.q), np.isnan(batch.q[k]))
+            np.testing.assert_allclose(np.nan_to_num(one.q), np.nan_to_num(batch.q[k]), rtol=0, atol=0)
+
+
+def test_the_spherical_wrist_kernel_refuses_what_is_not_a_pose(monkeypatch):
+    from ur10core.solvers import spherical_wrist
+
+    monkeypatch.setattr(spherical_wrist, "_WRIST_IK", compiled.wrist_ik)
+    arm = Arm.preset("kr210")
+    T = arm.fk(np.zeros((5, 6)))
+    T[3, 0, 0] = 2.0
+    with pytest.raises(ValueError, match=r"T\[3\]: rotation part is not orthonormal"):
+        arm.solver._compiled_ik(arm, T)
+    with pytest.raises(ValueError, match="hint of shape"):
+        arm.solver._compiled_ik(arm, T, np.zeros((2, 6)))
+    with pytest.raises(ValueError, match="shape"):
+        arm.solver._compiled_ik(arm, np.eye(3))
+    geometry = arm.solver.compiled_geometry()
+    out = (np.empty((1, 8, 6)), np.empty((1, 8), bool), np.empty((1, 8), bool), np.empty((1, 8), np.int8), np.empty((1, 8)))
+    with pytest.raises(ValueError, match="geometry"):
+        compiled.wrist_ik(np.eye(4).reshape(1, 16), None, geometry[:-1], *out)
+    with pytest.raises(ValueError, match="sizes"):
+        compiled.wrist_ik(np.eye(4).reshape(1, 16), np.zeros((2, 6)), geometry, *out)
+    with pytest.raises(TypeError, match="C-contiguous"):
+        compiled.wrist_ik(np.eye(4).reshape(1, 16), None, geometry, np.empty((1, 8, 6), np.float32), *out[1:])

@@ -25,6 +25,8 @@ def configured(module: ModuleType) -> ModuleType:
         tolerances.BOTTOM_ROW_TOLERANCE,
         tolerances.BAND_LEVERAGE,
         tolerances.REACH_ROUNDING,
+        tolerances.SIDE_TOLERANCE,
+        tolerances.STRETCHED_TOLERANCE,
     )
     return module
 

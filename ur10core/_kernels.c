@@ -1,9 +1,10 @@
 /*
  * ur10core's compiled kernel: the UR family's eight-slot IK, the closed-form FK, the DH
- * frames, quaternions and the nearest-branch pick, in C.
+ * frames, quaternions and the nearest-branch pick, and the spherical-wrist arms' IK, in C.
  *
  * An accelerator, not a second method: every function follows its Python counterpart
- * step for step (the IK: ur10core/ik_reference.py; the rest: ur10core/_numpy_kernels.py),
+ * step for step (the IK: ur10core/ik_reference.py; the other arms' IK: _solve_one in
+ * ur10core/solvers/spherical_wrist.py; the rest: ur10core/_numpy_kernels.py),
  * with the same formulas in the same order, and the tests compare the two backends,
  * flags, failure codes and distances included. ur10core runs without it
  * (UR10CORE_BACKEND=numpy, or no C compiler at install time).
@@ -15,6 +16,7 @@
 #define NPY_NO_DEPRECATED_API NPY_1_7_API_VERSION
 #include <numpy/arrayobject.h>
 #include <math.h>
+#include <string.h>
 
 #define PI 3.14159265358979323846
 #define TAU (2.0 * PI)
@@ -22,9 +24,11 @@
 /* ur10core/tolerances.py, handed over by set_tolerances() when ur10core loads this module. */
 static int configured = 0;
 static double LENGTH_TOLERANCE, CHOICE_TOLERANCE, WRIST_TURN_TOLERANCE, WRIST_TOLERANCE, ROTATION_TOLERANCE,
-    BOTTOM_ROW_TOLERANCE, BAND_LEVERAGE, REACH_ROUNDING;
+    BOTTOM_ROW_TOLERANCE, BAND_LEVERAGE, REACH_ROUNDING, SIDE_TOLERANCE, STRETCHED_TOLERANCE;
 
 enum { REACHABLE = 0, WRIST_INSIDE_CYLINDER = 1, ELBOW_TOO_FAR = 2, ELBOW_TOO_CLOSE = 3 };
+/* ur10core/branches.py's failure codes, for the other arms */
+enum { INSIDE_OFFSET_CODE = 1, TOO_FAR_CODE = 2, TOO_CLOSE_CODE = 3 };
 
 typedef struct {
     double d1, a2, a3, d4, d5, d6;
@@ -344,9 +348,9 @@ static int check_configured(void)
 /* set_tolerances(length, choice, wrist_turn, wrist, rotation, bottom_row, band_leverage, reach_rounding): ur10core/tolerances.py. */
 static PyObject *set_tolerances(PyObject *self, PyObject *args)
 {
-    if (!PyArg_ParseTuple(args, "dddddddd", &LENGTH_TOLERANCE, &CHOICE_TOLERANCE, &WRIST_TURN_TOLERANCE,
+    if (!PyArg_ParseTuple(args, "dddddddddd", &LENGTH_TOLERANCE, &CHOICE_TOLERANCE, &WRIST_TURN_TOLERANCE,
                           &WRIST_TOLERANCE, &ROTATION_TOLERANCE, &BOTTOM_ROW_TOLERANCE, &BAND_LEVERAGE,
-                          &REACH_ROUNDING))
+                          &REACH_ROUNDING, &SIDE_TOLERANCE, &STRETCHED_TOLERANCE))
         return NULL;
     configured = 1;
     Py_RETURN_NONE;
@@ -736,6 +740,282 @@ static PyObject *nearest_one(PyObject *self, PyObject *args)
     return Py_BuildValue("(iN)", best, out);
 }
 
+/* ------------------------------------------------------------------------------------------------
+ * The spherical-wrist arms (KR210, the elbow arm, the Stanford arm and any table of their shape):
+ * ur10core/solvers/spherical_wrist.py's _solve_one, step for step, for one pose or a batch.
+ * ------------------------------------------------------------------------------------------------ */
+
+enum { WRIST_ARTICULATED = 0, WRIST_STANFORD = 1, MAX_PRE_ROWS = 8, WRIST_HEADER = 39 };
+
+typedef struct {
+    int kind, standard, n_pre;
+    double centre[3];          /* the wrist centre in the tool frame */
+    double P[9], post[9];      /* W = P^T R_pre^T R post^T = Rz(a) Ry(b) Rz(c) */
+    double s5, s6, offset[3];
+    double arm[10];            /* articulated: u0 w0 sigma a2 o2 L phi s3 near far; Stanford: d1 d2 stroke_offset */
+    double ca[MAX_PRE_ROWS], sa[MAX_PRE_ROWS], theta[MAX_PRE_ROWS]; /* the rows before the wrist */
+    int joint[MAX_PRE_ROWS];   /* the revolute joint turning that row, or -1 */
+} WristArm;
+
+/* Python's float %: angle in (-pi, pi] as ur10core.branches.wrap and spherical_wrist._wrap1 write it. */
+static double wrap_mod(double angle)
+{
+    double m = fmod(-angle + PI, TAU);
+    if (m != 0.0) {
+        if (m < 0.0) m += TAU;
+    } else {
+        m = 0.0;
+    }
+    return -m + PI;
+}
+
+/* The geometry array spherical_wrist.compiled_geometry() writes: 1, or 0 with an exception set. */
+static int parse_wrist_arm(PyObject *obj, WristArm *G)
+{
+    if (!is_c_array(obj, NPY_DOUBLE)) {
+        PyErr_SetString(PyExc_TypeError, "wrist_ik needs the geometry as a C-contiguous float64 array");
+        return 0;
+    }
+    const double *g = (const double *)PyArray_DATA((PyArrayObject *)obj);
+    const npy_intp size = PyArray_SIZE((PyArrayObject *)obj);
+    if (size < WRIST_HEADER || g[2] < 0 || g[2] > MAX_PRE_ROWS || size != WRIST_HEADER + 4 * (npy_intp)g[2] ||
+        (g[0] != WRIST_ARTICULATED && g[0] != WRIST_STANFORD)) {
+        PyErr_SetString(PyExc_ValueError, "wrist_ik: the geometry array is not compiled_geometry()'s");
+        return 0;
+    }
+    G->kind = (int)g[0];
+    G->standard = g[1] != 0.0;
+    G->n_pre = (int)g[2];
+    memcpy(G->centre, g + 3, 3 * sizeof(double));
+    memcpy(G->P, g + 6, 9 * sizeof(double));
+    memcpy(G->post, g + 15, 9 * sizeof(double));
+    G->s5 = g[24];
+    G->s6 = g[25];
+    memcpy(G->offset, g + 26, 3 * sizeof(double));
+    memcpy(G->arm, g + 29, 10 * sizeof(double));
+    for (int k = 0; k < G->n_pre; k++) {
+        const double *row = g + WRIST_HEADER + 4 * k;
+        G->ca[k] = row[0];
+        G->sa[k] = row[1];
+        G->theta[k] = row[2];
+        G->joint[k] = (int)row[3];
+        if (row[3] < -1 || row[3] > 2) {
+            PyErr_SetString(PyExc_ValueError, "wrist_ik: a row before the wrist is turned by joint 1, 2 or 3 only");
+            return 0;
+        }
+    }
+    return 1;
+}
+
+static void matmul3(const double *A, const double *B, double *C) /* C = A B, row-major 3x3 */
+{
+    for (int i = 0; i < 3; i++)
+        for (int j = 0; j < 3; j++)
+            C[3 * i + j] = A[3 * i] * B[j] + A[3 * i + 1] * B[3 + j] + A[3 * i + 2] * B[6 + j];
+}
+
+static void transpose3(const double *A, double *B)
+{
+    for (int i = 0; i < 3; i++)
+        for (int j = 0; j < 3; j++) B[3 * j + i] = A[3 * i + j];
+}
+
+/* The rotation of the frame before the wrist's first row at joints 1-3 (DHTable.frames' product). */
+static void rotation_before_wrist(const WristArm *G, const double *q3, double *R_pre)
+{
+    double R[9] = {1, 0, 0, 0, 1, 0, 0, 0, 1}, link[9], next[9];
+    for (int k = 0; k < G->n_pre; k++) {
+        const double theta = G->theta[k] + (G->joint[k] >= 0 ? q3[G->joint[k]] : 0.0);
+        const double ct = cos(theta), st = sin(theta), ca = G->ca[k], sa = G->sa[k];
+        if (G->standard) { /* Rz(theta) Rx(alpha) */
+            const double L[9] = {ct, -st * ca, st * sa, st, ct * ca, -ct * sa, 0.0, sa, ca};
+            memcpy(link, L, sizeof L);
+        } else {           /* Rx(alpha) Rz(theta) */
+            const double L[9] = {ct, -st, 0.0, st * ca, ct * ca, -sa, st * sa, ct * sa, ca};
+            memcpy(link, L, sizeof L);
+        }
+        matmul3(R, link, next);
+        memcpy(R, next, sizeof R);
+    }
+    memcpy(R_pre, R, sizeof R);
+}
+
+/* Wrist.solve_one: joints 4-6 of slot `base` (not flipped) and base + 1 (flipped). */
+static void wrist_joints(const WristArm *G, const double *R, double hint4, double *q, npy_bool *valid, npy_bool *singular,
+                         int base)
+{
+    double R_pre[9], PT[9], RpreT[9], postT[9], A[9], B[9], W[9];
+    rotation_before_wrist(G, q + 6 * base, R_pre);
+    transpose3(G->P, PT);
+    transpose3(R_pre, RpreT);
+    transpose3(G->post, postT);
+    matmul3(PT, RpreT, A);
+    matmul3(A, R, B);
+    matmul3(B, postT, W);
+    const double sin_b = hypot(W[2], W[5]);
+    const int aligned = sin_b <= WRIST_TOLERANCE;
+    const double row_hint = hint4 + G->offset[0];
+    for (int flip = 0; flip < 2; flip++) {
+        const double sign = (flip ? -1.0 : 1.0) * G->s5;
+        const double b = atan2(sign * sin_b, W[8]);
+        double a = atan2(sign * W[5], sign * W[2]);
+        if (sin_b * fabs(wrap_mod(a - row_hint)) <= WRIST_TURN_TOLERANCE) a = row_hint;
+        const double ca = cos(a), sa = sin(a), cb = cos(b), sb = sin(b);
+        const double c = atan2(-sa * W[0] + ca * W[3], cb * (ca * W[0] + sa * W[3]) - sb * W[6]);
+        double *slot = q + 6 * (base + flip);
+        for (int j = 0; j < 3; j++) slot[j] = q[6 * base + j];
+        slot[3] = wrap_mod(a - G->offset[0]);
+        slot[4] = wrap_mod(b * G->s5 - G->offset[1]);
+        slot[5] = wrap_mod(c * G->s6 - G->offset[2]);
+        valid[base + flip] = 1;
+        singular[base + flip] = singular[base] || aligned;
+    }
+}
+
+/* ArticulatedArm._solve_one's joints 1-3 (every even slot); the wrist centre c. */
+static void articulated_arm(const WristArm *G, const double *c, const double *h, double *q, npy_bool *valid,
+                            npy_bool *singular, npy_int8 *failure, double *detail)
+{
+    const double u0 = G->arm[0], w0 = G->arm[1], sigma = G->arm[2], a2 = G->arm[3], o2 = G->arm[4], L = G->arm[5],
+                 phi = G->arm[6], s3 = G->arm[7], near = G->arm[8], far = G->arm[9];
+    const double rho = hypot(c[0], c[1]);
+    const double towards = atan2(c[1], c[0]);
+    const double hint_beta = wrap_mod(s3 * h[2] + phi);
+    const double hint_reach = sqrt(a2 * a2 + L * L + 2 * a2 * L * cos(hint_beta));
+    for (int shoulder = 0; shoulder < 2; shoulder++) {
+        double theta1 = wrap_mod(towards + shoulder * PI);
+        if (rho * fabs(wrap_mod(theta1 - h[0])) <= CHOICE_TOLERANCE) theta1 = h[0];
+        const double u = cos(theta1) * c[0] + sin(theta1) * c[1] - u0;
+        const double w = sigma * c[2] - w0;
+        const double r = hypot(u, w);
+        const double cos_beta = (r * r - a2 * a2 - L * L) / (2 * a2 * L);
+        const int too_far = r > far + LENGTH_TOLERANCE, too_close = r < near - LENGTH_TOLERANCE;
+        for (int elbow = 0; elbow < 2; elbow++) {
+            const int slot = 4 * shoulder + 2 * elbow;
+            failure[slot] = failure[slot + 1] = too_far ? TOO_FAR_CODE : (too_close ? TOO_CLOSE_CODE : 0);
+            detail[slot] = detail[slot + 1] = r;
+            if (too_far || too_close) continue;
+            const double sign = -sigma * (((elbow == 0) == (shoulder == 0)) ? 1.0 : -1.0);
+            double beta = sign * acos(clamp_unit(cos_beta));
+            const int same_side = sign * sin(hint_beta) >= 0 || fabs(sin(hint_beta)) <= SIDE_TOLERANCE;
+            if (same_side && fabs(hint_reach - r) <= CHOICE_TOLERANCE) beta = hint_beta;
+            const double x = a2 + L * cos(beta), y = L * sin(beta);
+            const double theta2 = atan2(w, u) - atan2(y, x) - o2;
+            q[6 * slot] = theta1;
+            q[6 * slot + 1] = wrap_mod(theta2);
+            q[6 * slot + 2] = wrap_mod((beta - phi) * s3);
+            valid[slot] = 1;
+            singular[slot] = rho <= LENGTH_TOLERANCE || fabs(sin(beta)) <= STRETCHED_TOLERANCE;
+        }
+    }
+}
+
+/* StanfordArm._solve_one's joints 1-3 (every even slot); the wrist centre c. */
+static void stanford_arm(const WristArm *G, const double *c, const double *h, double *q, npy_bool *valid,
+                         npy_bool *singular, npy_int8 *failure, double *detail)
+{
+    const double d1 = G->arm[0], d2 = G->arm[1], stroke_offset = G->arm[2];
+    const double x = c[0], y = c[1], z = c[2] - d1;
+    const double rho = hypot(x, y);
+    const int inside = rho < fabs(d2) - LENGTH_TOLERANCE;
+    const double reach = sqrt(fmax(rho * rho - d2 * d2, 0.0));
+    const double c1h = cos(h[0]), s1h = sin(h[0]);
+    const double hint_u = c1h * x + s1h * y;
+    const int hint_fits = fabs(-s1h * x + c1h * y - d2) <= CHOICE_TOLERANCE;
+    for (int k = 0; k < 8; k++) {
+        failure[k] = inside ? INSIDE_OFFSET_CODE : 0;
+        detail[k] = rho;
+    }
+    if (inside) return;
+    for (int shoulder = 0; shoulder < 2; shoulder++) {
+        const double sign = shoulder == 0 ? 1.0 : -1.0;
+        double theta1 = atan2(y, x) - atan2(d2, sign * reach);
+        if (hint_fits && (sign * hint_u >= 0 || fabs(hint_u) <= SIDE_TOLERANCE)) theta1 = h[0];
+        const double u = cos(theta1) * x + sin(theta1) * y;
+        const double stroke = hypot(u, z);
+        for (int reversed = 0; reversed < 2; reversed++) {
+            const int slot = 4 * reversed + 2 * shoulder;
+            double theta2 = atan2(u, z) + PI * reversed;
+            if (stroke * fabs(wrap_mod(theta2 - h[1])) <= CHOICE_TOLERANCE) theta2 = h[1];
+            q[6 * slot] = wrap_mod(theta1);
+            q[6 * slot + 1] = wrap_mod(theta2);
+            q[6 * slot + 2] = (reversed ? -stroke : stroke) - stroke_offset;
+            valid[slot] = 1;
+            singular[slot] = fabs(u) <= LENGTH_TOLERANCE || stroke <= LENGTH_TOLERANCE;
+        }
+    }
+}
+
+/* Every slot of one valid pose T (row-major 4x4); h: the hint's six joints. */
+static void wrist_arm_pose(const WristArm *G, const double *T, const double *h, double *q, npy_bool *valid,
+                           npy_bool *singular, npy_int8 *failure, double *detail)
+{
+    const double R[9] = {T[0], T[1], T[2], T[4], T[5], T[6], T[8], T[9], T[10]};
+    double c[3];
+    for (int i = 0; i < 3; i++)
+        c[i] = T[4 * i + 3] + (R[3 * i] * G->centre[0] + R[3 * i + 1] * G->centre[1] + R[3 * i + 2] * G->centre[2]);
+    for (int k = 0; k < 8; k++) {
+        valid[k] = singular[k] = 0;
+        for (int j = 0; j < 6; j++) q[6 * k + j] = NAN;
+    }
+    if (G->kind == WRIST_ARTICULATED)
+        articulated_arm(G, c, h, q, valid, singular, failure, detail);
+    else
+        stanford_arm(G, c, h, q, valid, singular, failure, detail);
+    for (int base = 0; base < 8; base += 2)
+        if (valid[base]) wrist_joints(G, R, h[3], q, valid, singular, base);
+}
+
+/* wrist_ik(T (n,4,4), hint (n,6) or None, geometry, q (n,8,6), valid, singular (n,8) bool, failure (n,8) int8,
+ *          detail (n,8)) -> int: every slot of n poses without the GIL; the index of the first pose that is
+ * not a valid transform (its outputs are not written; the caller raises), or -1. */
+static PyObject *wrist_ik(PyObject *self, PyObject *args)
+{
+    PyObject *T_obj, *hint_obj, *geometry, *q, *valid, *singular, *failure, *detail;
+    WristArm G;
+    if (!check_configured()) return NULL;
+    if (!PyArg_ParseTuple(args, "OOOOOOOO", &T_obj, &hint_obj, &geometry, &q, &valid, &singular, &failure, &detail))
+        return NULL;
+    if (!parse_wrist_arm(geometry, &G)) return NULL;
+    const int hinted = hint_obj != Py_None;
+    if (!is_c_array(T_obj, NPY_DOUBLE) || (hinted && !is_c_array(hint_obj, NPY_DOUBLE)) ||
+        !is_c_array(q, NPY_DOUBLE) || !is_c_array(valid, NPY_BOOL) || !is_c_array(singular, NPY_BOOL) ||
+        !is_c_array(failure, NPY_INT8) || !is_c_array(detail, NPY_DOUBLE)) {
+        PyErr_SetString(PyExc_TypeError, "wrist_ik needs C-contiguous arrays of the documented dtypes");
+        return NULL;
+    }
+    const npy_intp n = PyArray_SIZE((PyArrayObject *)T_obj) / 16;
+    if (PyArray_SIZE((PyArrayObject *)T_obj) != 16 * n || (hinted && PyArray_SIZE((PyArrayObject *)hint_obj) != 6 * n) ||
+        PyArray_SIZE((PyArrayObject *)q) != 48 * n || PyArray_SIZE((PyArrayObject *)valid) != 8 * n ||
+        PyArray_SIZE((PyArrayObject *)singular) != 8 * n || PyArray_SIZE((PyArrayObject *)failure) != 8 * n ||
+        PyArray_SIZE((PyArrayObject *)detail) != 8 * n) {
+        PyErr_SetString(PyExc_ValueError, "wrist_ik: the hint's and outputs' sizes do not match the number of poses");
+        return NULL;
+    }
+    const double *T = (const double *)PyArray_DATA((PyArrayObject *)T_obj);
+    const double *hint = hinted ? (const double *)PyArray_DATA((PyArrayObject *)hint_obj) : NULL;
+    double *q_data = (double *)PyArray_DATA((PyArrayObject *)q);
+    npy_bool *valid_data = (npy_bool *)PyArray_DATA((PyArrayObject *)valid);
+    npy_bool *singular_data = (npy_bool *)PyArray_DATA((PyArrayObject *)singular);
+    npy_int8 *failure_data = (npy_int8 *)PyArray_DATA((PyArrayObject *)failure);
+    double *detail_data = (double *)PyArray_DATA((PyArrayObject *)detail);
+    static const double no_hint[6] = {0, 0, 0, 0, 0, 0};
+    npy_intp first_bad = -1;
+
+    Py_BEGIN_ALLOW_THREADS
+    for (npy_intp m = 0; m < n; m++) {
+        if (!pose_is_valid(T + 16 * m)) {
+            if (first_bad < 0) first_bad = m;
+            continue;
+        }
+        wrist_arm_pose(&G, T + 16 * m, hinted ? hint + 6 * m : no_hint, q_data + 48 * m, valid_data + 8 * m,
+                       singular_data + 8 * m, failure_data + 8 * m, detail_data + 8 * m);
+    }
+    Py_END_ALLOW_THREADS
+
+    return PyLong_FromSsize_t(first_bad);
+}
+
 static PyMethodDef methods[] = {
     {"set_tolerances", set_tolerances, METH_VARARGS, "Hand over ur10core/tolerances.py's values."},
     {"nearest_one", nearest_one, METH_VARARGS, "The valid IK slot nearest the current joints, shifted next to them."},
@@ -746,6 +1026,7 @@ static PyMethodDef methods[] = {
     {"fk_one", fk_one, METH_VARARGS, "Closed-form T06 of one joint vector."},
     {"ik_one", ik_one, METH_VARARGS, "IK of one validated-on-the-fly 4x4 pose (all eight slots)."},
     {"ik_batch", ik_batch, METH_VARARGS, "IK of n poses into preallocated outputs, without the GIL."},
+    {"wrist_ik", wrist_ik, METH_VARARGS, "Every IK slot of n poses of a spherical-wrist arm, without the GIL."},
     {NULL, NULL, 0, NULL},
 };
 

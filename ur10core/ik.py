@@ -53,7 +53,7 @@ from __future__ import annotations
 import math
 import os
 from concurrent.futures import ThreadPoolExecutor
-from typing import TYPE_CHECKING, NamedTuple
+from typing import TYPE_CHECKING, Callable, NamedTuple
 
 import numpy as np
 
@@ -266,6 +266,16 @@ def _pool() -> ThreadPoolExecutor:
     return _POOL
 
 
+def in_blocks(n: int, run: Callable[[int], int]) -> int:
+    """``run(start)`` for the blocks of :data:`BLOCK` of ``n`` poses, on the pool when there are several.
+
+    ``run`` returns the index of the first invalid pose of its block, or −1; so does this.
+    """
+    bad = [run(0)] if n <= BLOCK else list(_pool().map(run, range(0, n, BLOCK)))
+    invalid = [index for index in bad if index >= 0]
+    return min(invalid) if invalid else -1
+
+
 def solve_one(arm: "Arm", T: np.ndarray, hints: tuple[float, float, float]) -> IKSolution | None:
     """The backend on one C-contiguous float64 (4, 4) pose; ``None`` if ``T`` is not a valid pose.
 
@@ -309,11 +319,9 @@ def solve_batch(arm: "Arm", T: np.ndarray, hints: np.ndarray) -> IKSolution | in
         )
         return -1 if bad < 0 else start + bad
 
-    starts = range(0, n, BLOCK)
-    bad = [run(0)] if n <= BLOCK else list(_pool().map(run, starts))
-    invalid = [index for index in bad if index >= 0]
-    if invalid:
-        return min(invalid)
+    bad = in_blocks(n, run)
+    if bad >= 0:
+        return bad
     return _solution(arm, q.reshape(shape + (8, 6)), valid.reshape(shape + (8,)), wrist.reshape(shape + (8,)),
                      elbow.reshape(shape + (8,)), shoulder.reshape(shape), failure.reshape(shape + (8,)),
                      rho.reshape(shape), distance.reshape(shape + (8,)))

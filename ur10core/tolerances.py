@@ -46,6 +46,16 @@ WRIST_TURN_TOLERANCE = 1e-10
 #: axes 4 and 6 parallel, and θ6 is chosen rather than computed.
 WRIST_TOLERANCE = WRIST_TURN_TOLERANCE / math.pi
 
+#: The spherical-wrist arms (:mod:`ur10core.solvers.spherical_wrist`): a hint this close to
+#: the line between two branches counts as on both sides of it, so that where the branches
+#: meet the hint's value is kept for either (the sine of the hint's elbow angle β of an
+#: articulated arm; the hint's reach along the Stanford arm's boom, in metres).
+SIDE_TOLERANCE = 1e-6
+
+#: |sin β| at most this: an articulated arm's elbow is stretched or folded, β fixed only to
+#: √rounding, and the slot is flagged singular.
+STRETCHED_TOLERANCE = 1e-9
+
 #: A pose's rotation part may deviate from orthonormal by this much (max |Rᵀ R − I|).
 ROTATION_TOLERANCE = 1e-6
 

@@ -23,15 +23,26 @@ import math
 
 import numpy as np
 
+from .. import ik as _ik
+from .._backend import kernels
+from .._validate import as_float_array, homogeneous_transform
 from ..branches import (
     INSIDE_OFFSET,
     TOO_CLOSE,
     TOO_FAR,
+    IKSolution,
     empty_branches,
     wrap,
 )
 from ..dh import MODIFIED, STANDARD, DHTable
-from ..tolerances import CHOICE_TOLERANCE, LENGTH_TOLERANCE, WRIST_TOLERANCE, WRIST_TURN_TOLERANCE
+from ..tolerances import (
+    CHOICE_TOLERANCE,
+    LENGTH_TOLERANCE,
+    SIDE_TOLERANCE,
+    STRETCHED_TOLERANCE,
+    WRIST_TOLERANCE,
+    WRIST_TURN_TOLERANCE,
+)
 
 _TAU = 2.0 * math.pi
 
@@ -195,6 +206,81 @@ def _wrist_slots_one(table: DHTable, wrist: Wrist, out: dict, R: np.ndarray, hin
             singular[base + flip] = singular[base] or aligned
 
 
+#: The compiled kernel's solver of these arms (``None`` on the numpy backend: :meth:`Arm.ik` then runs the numpy code).
+_WRIST_IK = getattr(kernels, "wrist_ik", None)
+_ARTICULATED, _STANFORD = 0, 1  # the kernel's WRIST_ARTICULATED, WRIST_STANFORD
+
+
+class _CompiledWristArm:
+    """What the two solvers share: the compiled kernel's path (``_kernels.c``, ``wrist_ik``), one pose or many.
+
+    The kernel follows ``_solve_one`` step for step; the geometry it needs is one float
+    array (:meth:`compiled_geometry`), the layout of the kernel's ``WristArm``.
+    """
+
+    table: DHTable
+    wrist: Wrist
+    centre_in_tool: np.ndarray
+
+    def _arm_numbers(self) -> tuple[int, list[float]]:
+        raise NotImplementedError
+
+    def compiled_geometry(self) -> np.ndarray:
+        """[kind, standard, rows before the wrist, c (3), P (9), post (9), s5, s6, offsets (3), the arm's numbers (10),
+        then (cos α, sin α, θ offset, revolute joint or −1) for each row before the wrist]."""
+        kind, numbers = self._arm_numbers()
+        table, wrist = self.table, self.wrist
+        rows = []
+        joint = 0
+        for k, row in enumerate(table.rows[: wrist.first_row]):
+            rows += [table._ca[k], table._sa[k], row.theta, joint if row.joint == "R" else -1]
+            joint += row.joint is not None
+        header = [kind, float(table.convention == STANDARD), wrist.first_row, *self.centre_in_tool, *wrist.P.ravel(),
+                  *wrist.post.ravel(), wrist.s5, wrist.s6, *wrist.offsets, *numbers, *[0.0] * (10 - len(numbers))]
+        return np.array(header + rows, dtype=float)
+
+    def _compiled_ik(self, arm, T, hint=None) -> IKSolution:
+        """:meth:`Arm.ik` on the compiled kernel: poses validated there, blocks of poses on the pool."""
+        T = as_float_array(T, "T")
+        if hint is not None:
+            hint = arm.joints(hint, "hint")
+        one = T.shape == (4, 4) and (hint is None or hint.shape == (6,))  # a drag's one pose: nothing to broadcast
+        if not one and (T.ndim < 2 or T.shape[-2:] != (4, 4)):
+            homogeneous_transform(T)  # raises: wrong shape
+        batch = () if one else T.shape[:-2]
+        if hint is not None and not one:
+            try:
+                batch = np.broadcast_shapes(batch, hint.shape[:-1])
+            except ValueError:
+                raise ValueError(f"hint of shape {hint.shape} does not broadcast against poses of shape {T.shape}") from None
+            hint = np.broadcast_to(hint, batch + (6,))
+        flat = np.ascontiguousarray(T if one else np.broadcast_to(T, batch + (4, 4))).reshape(-1, 16)
+        if hint is not None:
+            hint = np.ascontiguousarray(hint).reshape(-1, 6)
+        n = len(flat)
+        q, detail = np.empty((n, 8, 6)), np.empty((n, 8))
+        valid, singular, failure = np.empty((n, 8), bool), np.empty((n, 8), bool), np.empty((n, 8), np.int8)
+
+        def run(start: int) -> int:
+            block = slice(start, start + _ik.BLOCK)
+            bad = _WRIST_IK(flat[block], None if hint is None else hint[block], self._geometry,
+                            q[block], valid[block], singular[block], failure[block], detail[block])
+            return -1 if bad < 0 else start + bad
+
+        bad = _ik.in_blocks(n, run)
+        if bad >= 0:
+            homogeneous_transform(T)  # words what is wrong
+            where = list(np.unravel_index(bad, batch)) if batch else ""
+            raise ValueError(f"T{where} is not a proper homogeneous transform (at the tolerance limit)")
+        return IKSolution(q.reshape(batch + (8, 6)), valid.reshape(batch + (8,)), failure.reshape(batch + (8,)), arm,
+                          detail=detail.reshape(batch + (8,)), singular=singular.reshape(batch + (8,)))
+
+    def _use_the_kernel(self) -> None:
+        """Solve on the compiled kernel where it is built (``ik`` is what :class:`Arm` calls); else numpy."""
+        self._geometry = self.compiled_geometry()
+        self.ik = self._compiled_ik if _WRIST_IK is not None else None
+
+
 def _planar_frame(table: DHTable) -> dict[str, float]:
     """The articulated arm's plane at θ1 = 0, read from the table's FK (checked, not assumed).
 
@@ -230,7 +316,7 @@ def _planar_frame(table: DHTable) -> dict[str, float]:
     return dict(u0=float(S[0]), w0=float(S[1]), sigma=sigma, a2=a2, o2=o2, L=L, phi=phi, s3=s3)
 
 
-class ArticulatedArm:
+class ArticulatedArm(_CompiledWristArm):
     """RRR with a vertical axis 1, parallel axes 2 and 3, and a spherical wrist: 8 slots."""
 
     task = "pose"
@@ -248,6 +334,11 @@ class ArticulatedArm:
         self.plane = _planar_frame(table)
         p = self.plane
         self.reach = (abs(p["a2"] - p["L"]), p["a2"] + p["L"])
+        self._use_the_kernel()
+
+    def _arm_numbers(self) -> tuple[int, list[float]]:
+        p = self.plane
+        return _ARTICULATED, [p[key] for key in ("u0", "w0", "sigma", "a2", "o2", "L", "phi", "s3")] + list(self.reach)
 
     def explain(self, failure: int, detail: float) -> str:
         near, far = (1000 * r for r in self.reach)
@@ -292,7 +383,7 @@ class ArticulatedArm:
                 sign = -p["sigma"] * (1.0 if (elbow == 0) == (shoulder == 0) else -1.0)
                 beta = sign * np.arccos(np.clip(cos_beta, -1.0, 1.0))
                 # stretched or folded, β is fixed only to √rounding: the hint's wherever it reaches within the tolerance
-                same_side = (sign * np.sin(hint_beta) >= 0) | (np.abs(np.sin(hint_beta)) <= 1e-6)
+                same_side = (sign * np.sin(hint_beta) >= 0) | (np.abs(np.sin(hint_beta)) <= SIDE_TOLERANCE)
                 chosen3 = same_side & (np.abs(hint_reach - r) <= CHOICE_TOLERANCE)
                 beta = np.where(chosen3, hint_beta, beta)
                 x = p["a2"] + p["L"] * np.cos(beta)
@@ -302,7 +393,7 @@ class ArticulatedArm:
                 q[ok, slot, :3] = np.stack([theta1, wrap(theta2), wrap(theta3)], axis=-1)[ok]
                 valid[ok, slot] = True
                 # singular where the pose leaves a value free: WC on axis 1, the elbow stretched or folded
-                singular[ok, slot] = ((rho <= LENGTH_TOLERANCE) | (np.abs(np.sin(beta)) <= 1e-9))[ok]
+                singular[ok, slot] = ((rho <= LENGTH_TOLERANCE) | (np.abs(np.sin(beta)) <= STRETCHED_TOLERANCE))[ok]
         _wrist_slots(self.table, self.wrist, out, R, hint)
         return out
 
@@ -340,19 +431,19 @@ class ArticulatedArm:
                     continue
                 sign = -p["sigma"] * (1.0 if (elbow == 0) == (shoulder == 0) else -1.0)
                 beta = sign * math.acos(min(max(cos_beta, -1.0), 1.0))
-                same_side = sign * math.sin(hint_beta) >= 0 or abs(math.sin(hint_beta)) <= 1e-6
+                same_side = sign * math.sin(hint_beta) >= 0 or abs(math.sin(hint_beta)) <= SIDE_TOLERANCE
                 if same_side and abs(hint_reach - r) <= CHOICE_TOLERANCE:
                     beta = hint_beta
                 x, y = a2 + L * math.cos(beta), L * math.sin(beta)
                 theta2 = math.atan2(w, u) - math.atan2(y, x) - p["o2"]
                 q[slot, :3] = (theta1, _wrap1(theta2), _wrap1((beta - p["phi"]) * p["s3"]))
                 valid[slot] = True
-                singular[slot] = rho <= LENGTH_TOLERANCE or abs(math.sin(beta)) <= 1e-9
+                singular[slot] = rho <= LENGTH_TOLERANCE or abs(math.sin(beta)) <= STRETCHED_TOLERANCE
         _wrist_slots_one(self.table, self.wrist, out, R, hint)
         return out
 
 
-class StanfordArm:
+class StanfordArm(_CompiledWristArm):
     """RRP + spherical wrist (standard DH as in docs/kinematics.md §7.5): 8 slots, the last four with the stroke reversed."""
 
     task = "pose"
@@ -368,6 +459,10 @@ class StanfordArm:
         self.d1 = table.rows[0].d
         self.d2 = table.rows[1].d
         self.stroke_offset = table.rows[2].d
+        self._use_the_kernel()
+
+    def _arm_numbers(self) -> tuple[int, list[float]]:
+        return _STANFORD, [self.d1, self.d2, self.stroke_offset]
 
     def explain(self, failure: int, detail: float) -> str:
         if failure == INSIDE_OFFSET:
@@ -400,7 +495,7 @@ class StanfordArm:
             sign = 1.0 if shoulder == 0 else -1.0
             # −s1 x + c1 y = d2 and c1 x + s1 y = ±reach
             theta1 = np.arctan2(y, x) - np.arctan2(d2, sign * reach)
-            chosen1 = hint_fits & ((sign * hint_u >= 0) | (np.abs(hint_u) <= 1e-6))
+            chosen1 = hint_fits & ((sign * hint_u >= 0) | (np.abs(hint_u) <= SIDE_TOLERANCE))
             theta1 = np.where(chosen1, hint[:, 0], theta1)
             u = np.cos(theta1) * x + np.sin(theta1) * y  # = s2 d3
             stroke = np.hypot(u, z)
@@ -439,7 +534,7 @@ class StanfordArm:
         for shoulder in () if inside else (0, 1):
             sign = 1.0 if shoulder == 0 else -1.0
             theta1 = math.atan2(y, x) - math.atan2(d2, sign * reach)
-            if hint_fits and (sign * hint_u >= 0 or abs(hint_u) <= 1e-6):
+            if hint_fits and (sign * hint_u >= 0 or abs(hint_u) <= SIDE_TOLERANCE):
                 theta1 = h[0]
             u = math.cos(theta1) * x + math.sin(theta1) * y
             stroke = math.hypot(u, z)
