@@ -26,12 +26,22 @@ def _numeric(expr, arm):
 
 @pytest.mark.slow
 def test_cache_equals_a_fresh_derivation(cached):
-    fresh = symbolic.derive()  # ~1 minute; also asserts J = M J_wrist, det M = 1, det J factored
+    fresh = symbolic.derive()  # ~15 s; also proves J = M J_wrist, det M = 1, det J factored
     for name in ("T06", "J", "J_wrist"):
         a, b = getattr(fresh, name), getattr(cached, name)
         # the cache is the derivation's srepr: identical unless sympy changed how it writes a term
         assert a == b or (a - b).applyfunc(sp.simplify) == sp.zeros(*a.shape), name
     assert fresh.det_J == cached.det_J or sp.simplify(fresh.det_J - cached.det_J) == 0
+
+
+def test_the_proof_of_the_factored_form_fails_on_a_wrong_one(cached):
+    """derive() proves det J_wrist = the course's factors with :func:`symbolic.vanishes`; a wrong factor is caught."""
+    det = cached.J_wrist.det(method="berkowitz")
+    assert symbolic.vanishes(det - symbolic.FACTORED_DET_J, THETA)
+    d5 = LENGTHS[4]
+    wrong_sign = symbolic.FACTORED_DET_J.subs(d5, -d5)
+    assert not symbolic.vanishes(det - wrong_sign, THETA)
+    assert not symbolic.vanishes(det - symbolic.FACTORED_DET_J.subs(sp.sin(THETA[2]), sp.cos(THETA[2])), THETA)
 
 
 def test_det_j_is_the_factored_form(cached):

@@ -19,7 +19,7 @@ SQUARE_ROWS = {"kr210": slice(0, 6), "elbow": slice(0, 6), "stanford": slice(0, 
 
 @pytest.mark.slow
 def test_cache_matches_a_fresh_derivation():
-    """~35 s: derives every arm again, proving det J = constant × factors symbolically."""
+    """~10 s: derives every arm again, proving det J = constant × factors symbolically."""
     for name in PRESETS:
         fresh, cached = symbolic_arms.derive(name), symbolic_arms.load(name)
         assert fresh.constant == cached.constant

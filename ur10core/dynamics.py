@@ -9,6 +9,7 @@ puts them whatever convention the student's angles are in.
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass
 
@@ -238,8 +239,75 @@ def forward_dynamics(arm, q, qd, tau, payload_kg: float = 0.0) -> np.ndarray:
     return _forward(arm, *_joint_arrays(q=q, qd=qd, tau=tau), payload_kg)
 
 
+@functools.lru_cache(maxsize=64)
+def _chain(arm, payload_kg: float) -> tuple:
+    """What one pose's Newton–Euler pass needs of ``arm`` that no joint changes: the UR standard table's
+    (cos α, sin α, θ offset) and its links' origins p*, masses, centres, inertias and their cross-product matrices."""
+    table = ur_standard_table(arm)
+    links = with_payload(link_masses(arm), _check_payload(payload_kg))
+    alpha = np.array([row.alpha for row in table.rows])
+    ca, sa = np.cos(alpha), np.sin(alpha)
+    a, d = np.array([row.a for row in table.rows]), np.array([row.d for row in table.rows])
+    pstar = np.stack([a, d * sa, d * ca], -1)
+
+    return (ca, sa, np.array([row.theta for row in table.rows]), pstar, links.masses, links.centres,
+            np.swapaxes(links.inertias, -1, -2), [_times(p) for p in pstar], [_times(r) for r in links.centres],
+            [_times(p + r) for p, r in zip(pstar, links.centres)])
+
+
+def _one_pose_forward(arm, q: np.ndarray, qd: np.ndarray, tau: np.ndarray, payload_kg: float) -> np.ndarray:
+    """:func:`_forward` of one state (6,) each: :func:`_newton_euler`'s recursion on its seven problems as (7, 3) rows.
+
+    The rows share q, so each link's rotation is made once and the constant cross products
+    are matrix products (the gravity drop calls this a thousand times a second of motion).
+    """
+    ca, sa, theta0, pstar, masses, centres, inertias_t, times_p, times_r, times_pr = _chain(arm, payload_kg)
+    theta = q + theta0
+    c, s = np.cos(theta), np.sin(theta)
+    R = np.empty((6, 3, 3))  # R_i = Rz(θ_i) Rx(α_i): frame i in frame i−1
+    R[:, 0, 0], R[:, 0, 1], R[:, 0, 2] = c, -s * ca, s * sa
+    R[:, 1, 0], R[:, 1, 1], R[:, 1, 2] = s, c * ca, -c * sa
+    R[:, 2, 0], R[:, 2, 1], R[:, 2, 2] = 0.0, sa, ca
+    rates = np.zeros(7)
+    w, wd, vd = np.zeros((7, 3)), np.zeros((7, 3)), np.zeros((7, 3))
+    vd[6, 2] = GRAVITY  # rows 0–5: q̈ = e_j at rest without gravity (M's columns); row 6: q̇ and gravity (the bias)
+    forces, moments = [], []
+    for i in range(6):
+        rates[6] = qd[i]
+        spun = wd.copy()  # ω̇ + z q̈ + ω × z q̇, with ω × z = (ω_y, −ω_x, 0)
+        spun[i, 2] += 1.0
+        spun[:, 0] += w[:, 1] * rates
+        spun[:, 1] -= w[:, 0] * rates
+        w = w.copy()
+        w[:, 2] += rates
+        wd, w = spun @ R[i], w @ R[i]
+        w_squared = (w * w).sum(axis=1)[:, None]
+        vd = wd @ times_p[i] + w * (w @ pstar[i])[:, None] - pstar[i] * w_squared + vd @ R[i]
+        centre_acceleration = wd @ times_r[i] + w * (w @ centres[i])[:, None] - centres[i] * w_squared + vd
+        forces.append(masses[i] * centre_acceleration)
+        spin = w @ inertias_t[i]
+        moments.append(wd @ inertias_t[i] + cross(w, spin))
+    torques = np.empty((7, 6))
+    n = moments[5] - forces[5] @ times_pr[5]
+    f = forces[5]
+    torques[:, 5] = n @ R[5, 2]
+    for i in reversed(range(5)):
+        Rn = R[i + 1]
+        n = (n - f @ _times(Rn.T @ pstar[i])) @ Rn.T - forces[i] @ times_pr[i] + moments[i]
+        f = f @ Rn.T + forces[i]
+        torques[:, i] = n @ R[i, 2]
+    return np.linalg.solve(torques[:6].T, tau - torques[6])
+
+
+def _times(v: np.ndarray) -> np.ndarray:
+    """K with ``x @ K = x × v`` for rows x (so ``v × x = −x @ K``)."""
+    return np.array([[0.0, -v[2], v[1]], [v[2], 0.0, -v[0]], [-v[1], v[0], 0.0]])
+
+
 def _forward(arm, q, qd, tau, payload_kg: float) -> np.ndarray:
     """:func:`forward_dynamics` of validated arrays (the simulation's inner loop)."""
+    if q.shape == qd.shape == (6,) and np.shape(tau) == (6,):
+        return _one_pose_forward(arm, q, qd, np.asarray(tau, dtype=float), payload_kg)
     q, qd = np.broadcast_arrays(q, qd)
     rates = np.concatenate([np.zeros(q.shape[:-1] + (6, 6)), qd[..., None, :]], axis=-2)
     accelerations = np.concatenate([np.eye(6), np.zeros((1, 6))])

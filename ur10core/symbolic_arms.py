@@ -1,6 +1,6 @@
 """det J of the course's other arms, derived with sympy from each preset's DH table (docs/kinematics.md §7.6).
 
-As for the UR10 (:mod:`ur10core.symbolic`), the derivation is slow (about 40 s for all
+As for the UR10 (:mod:`ur10core.symbolic`), the derivation takes seconds (about 10 s for all
 arms), so it is cached in ``symbolic_arms_cache.json``; :func:`load` reads it and the
 test-suite checks the cache against a fresh :func:`derive`. Regenerate it with
 ``python -m ur10core.symbolic_arms --write-cache``.
@@ -43,6 +43,7 @@ import sympy as sp
 
 from .arm import Arm
 from .serial import PRESETS
+from .symbolic import vanishes
 
 CACHE_PATH = Path(__file__).with_name("symbolic_arms_cache.json")
 
@@ -85,7 +86,11 @@ def _exact(value: float) -> sp.Expr:
 
 
 def symbolic_frames(arm: Arm) -> list[sp.Matrix]:
-    """T0i for every row, in the joint symbols q1..qn (the table's own convention, §7.1)."""
+    """T0i for every row, in the joint symbols q1..qn (the table's own convention, §7.1), as multiplied.
+
+    Not simplified: what is proved of them goes through :func:`vanishes`, which expands anyway
+    (simplifying every frame took 25 s for the KR210 alone).
+    """
     table = arm.dh
     q = joint_symbols(table.n_joints)
     frames = [sp.eye(4)]
@@ -101,7 +106,7 @@ def symbolic_frames(arm: Arm) -> list[sp.Matrix]:
             A = sp.Matrix([[ct, -st * ca, st * sa, a * ct], [st, ct * ca, -ct * sa, a * st], [0, sa, ca, d], [0, 0, 0, 1]])
         else:
             A = sp.Matrix([[ct, -st, 0, a], [st * ca, ct * ca, -sa, -sa * d], [st * sa, ct * sa, ca, ca * d], [0, 0, 0, 1]])
-        frames.append((frames[-1] * A).applyfunc(sp.simplify))
+        frames.append(frames[-1] * A)
     return frames
 
 
@@ -151,7 +156,7 @@ def _jacobian_blocks(arm: Arm, frames: list[sp.Matrix]) -> list[sp.Matrix]:
         else:
             Jv[:, column] = z
     if arm.task == "pose":
-        assert Jv[:, 3:].applyfunc(sp.simplify) == sp.zeros(3, 3), "the wrist joints move the wrist centre"
+        assert all(vanishes(entry, joint_symbols(n)) for entry in Jv[:, 3:]), "the wrist joints move the wrist centre"
         return [Jv[:, :3], Jw[:, 3:]]
     if arm.task == "position and yaw":
         return [Jv.col_join(Jw[2, :])]
@@ -180,24 +185,8 @@ def _expected_factors(arm: Arm, frames: list[sp.Matrix]) -> list[sp.Expr]:
     raise ValueError(f"no factored form is written for {arm.name!r}")
 
 
-def vanishes(expression: sp.Expr, n: int) -> bool:
-    """Whether a trigonometric polynomial in q1..qn is identically zero.
-
-    Expanded to sines and cosines of single joint angles, it becomes a polynomial in
-    (s_i, c_i); it is zero exactly when its remainder modulo s_i² + c_i² − 1 is (these
-    relations, one per joint in its own variables, already form a Gröbner basis).
-    """
-    q = joint_symbols(n)
-    s_, c_ = sp.symbols(f"s1:{n + 1}"), sp.symbols(f"c1:{n + 1}")
-    polynomial = sp.expand(sp.expand_trig(sp.expand(expression))).subs(
-        {**{sp.sin(x): si for x, si in zip(q, s_)}, **{sp.cos(x): ci for x, ci in zip(q, c_)}})
-    relations = [si ** 2 + ci ** 2 - 1 for si, ci in zip(s_, c_)]
-    _, remainder = sp.reduced(sp.expand(polynomial), relations, *s_, *c_, *q)
-    return sp.expand(remainder) == 0
-
-
 def derive(name: str) -> ArmDerivation:
-    """det J of preset ``name``, proved to be a constant times its meaningful factors; seconds to a minute."""
+    """det J of preset ``name``, proved to be a constant times its meaningful factors; up to a few seconds."""
     arm = Arm.preset(name)
     frames = symbolic_frames(arm)
     det = sp.Mul(*(block.det(method="berkowitz") for block in _jacobian_blocks(arm, frames)))
@@ -207,7 +196,7 @@ def derive(name: str) -> ArmDerivation:
     # the constant, read at a generic pose and made exact; then the identity is proved symbolically
     constant = sp.nsimplify(float(ratio(np.linspace(0.31, 1.37, arm.n_joints) + 0.1)), tolerance=1e-10, rational=True)
     assert constant != 0, f"{name}: det J vanishes identically"
-    assert vanishes(det - constant * sp.Mul(*factors), arm.n_joints), f"{name}: det J is not {constant} × the factors"
+    assert vanishes(det - constant * sp.Mul(*factors), q), f"{name}: det J is not {constant} × the factors"
     meanings = MEANINGS[name]
     return ArmDerivation(name, constant, tuple(Factor(label, f, words) for (label, words), f in zip(meanings, factors)))
 
