@@ -25,7 +25,11 @@ fi
 stage "installing ur10-teach with its test dependencies into $VENV"
 python3 -m venv "$VENV"
 PYTHON="$VENV/bin/python"
-"$PYTHON" -m pip install --quiet --disable-pip-version-check -e ".[test]"
+# pip compiling every module it installs (all of sympy's, scipy's, matplotlib's ...) took 36 of a new
+# venv's 83 s; Python compiles the few a test imports when it first imports them, and keeps them
+# (where PYTHONDONTWRITEBYTECODE is set, as on the CI machine, every process would compile them again)
+unset PYTHONDONTWRITEBYTECODE
+"$PYTHON" -m pip install --quiet --disable-pip-version-check --no-compile -e ".[test]"
 
 # CPython 3.11's tracebacks parse source lines to place their ^^^ markers; a traceback
 # formatted while the parser is busy in another frame trips a CPython bug

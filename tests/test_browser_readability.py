@@ -68,9 +68,13 @@ def test_the_arm_is_framed_beside_the_panel_in_any_window(open_page):
         page.set_viewport_size(window)
         wait_for(lambda: abs(page.locator("canvas").first.bounding_box()["width"] - session.client.camera.image_width) <= 1,
                  what=f"the browser to report its new canvas at {window}")
-        canvas = page.locator("canvas").first.bounding_box()
-        slider = page.locator(dom_id(session.joints.sliders[0])).bounding_box()
-        assert slider["x"] >= canvas["x"] + canvas["width"] - 1, f"the panel covers part of the 3D view at {window}"
+
+        def beside() -> bool:  # the panel docks once the page has laid it out (on a busy machine, a moment after)
+            canvas = page.locator("canvas").first.bounding_box()
+            slider = page.locator(dom_id(session.joints.sliders[0])).bounding_box()
+            return slider["x"] >= canvas["x"] + canvas["width"] - 1
+
+        wait_for(beside, what=f"the panel beside the 3D view, not over it, at {window}")
         wait_for(lambda: in_canvas(page, session, key_points(session)), what=f"the arm and target framed at {window}")
     # the stretched pose reaches highest: "Frame the arm" brings the target (the gizmo) back in view
     page.get_by_role("button", name="Stretched", exact=True).click()
