@@ -249,7 +249,6 @@ def _chain(arm, payload_kg: float) -> tuple:
     ca, sa = np.cos(alpha), np.sin(alpha)
     a, d = np.array([row.a for row in table.rows]), np.array([row.d for row in table.rows])
     pstar = np.stack([a, d * sa, d * ca], -1)
-
     return (ca, sa, np.array([row.theta for row in table.rows]), pstar, links.masses, links.centres,
             np.swapaxes(links.inertias, -1, -2), [_times(p) for p in pstar], [_times(r) for r in links.centres],
             [_times(p + r) for p, r in zip(pstar, links.centres)])

@@ -15,6 +15,9 @@ in the tool frame), joints 4–6 then turn the tool to ``R3_6 = R0_3ᵀ R``.
   and the stroke to WC (forward, or reversed: θ2 + π and the stroke negative), the wrist
   flipped or not: 8 slots, ``k = 4 reversed + 2 shoulder + wrist``. A reversed stroke is
   beyond a real arm's range (d3 ≥ 0), so those slots come flagged by ``within_limits``.
+
+Where the compiled kernel is built, both solve in C (``wrist_ik``, ``_solve_one``'s steps,
+docs/kinematics.md §7.3); the numpy code here is the method and the fallback.
 """
 
 from __future__ import annotations
