@@ -57,8 +57,8 @@ numpy_run() {
         echo "no C compiler here: the compiled backend is not built, its comparison tests are skipped"
     fi
 }
-# the numpy run follows the other run, now the shorter of the two (on 2026-12-02, with the symbolic
-# derivations cut from 160 s to 27 s: browser and install tests 514 s, the rest about 430 s)
+# the numpy run follows the other run, now the shorter of the two (CI on 2026-12-02, after the symbolic
+# derivations were cut from 160 s to 36 s: browser and install tests 465 s beside 412 + 62 s; 528 s in all)
 browser_run() {
     "$PYTHON" -m pytest -m "browser or install" --durations=10
 }
