@@ -13,6 +13,7 @@ import math
 import numpy as np
 
 from . import ik_reference as ref
+from .differential import cross
 from .tolerances import (
     BAND_LEVERAGE,
     BOTTOM_ROW_TOLERANCE,
@@ -93,10 +94,7 @@ def jacobians(q: np.ndarray, params, out: np.ndarray) -> None:
     F = np.empty((len(q), 7, 4, 4))
     frames(q, params, F)
     z, o = F[:, 1:, :3, 2], F[:, 1:, :3, 3]  # (n, 6, 3)
-    lever = o[:, 5:6] - o
-    out[:, 0] = z[..., 1] * lever[..., 2] - z[..., 2] * lever[..., 1]
-    out[:, 1] = z[..., 2] * lever[..., 0] - z[..., 0] * lever[..., 2]
-    out[:, 2] = z[..., 0] * lever[..., 1] - z[..., 1] * lever[..., 0]
+    out[:, :3] = np.swapaxes(cross(z, o[:, 5:6] - o), -1, -2)
     out[:, 3:] = np.swapaxes(z, -1, -2)
 
 

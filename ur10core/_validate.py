@@ -8,6 +8,7 @@ argument, what is wrong, and (for batches) the first offending index.
 from __future__ import annotations
 
 import math
+from typing import NoReturn
 
 import numpy as np
 
@@ -123,6 +124,25 @@ def homogeneous_transform(T, name: str = "T") -> np.ndarray:
             f"{det[where]:.6g}; a proper rotation has +1 (this one is a reflection)"
         )
     return T
+
+
+def poses_and_hints(T: np.ndarray, hint: np.ndarray) -> tuple[int, ...]:
+    """The leading shape poses ``T`` (..., 4, 4) and a hint (..., n) broadcast to; ``ValueError`` naming both."""
+    try:
+        return np.broadcast_shapes(T.shape[:-2], hint.shape[:-1])
+    except ValueError:
+        raise ValueError(f"hint of shape {hint.shape} does not broadcast against poses of shape {T.shape}") from None
+
+
+def refuse_pose(T, index: int, batch: tuple[int, ...]) -> NoReturn:
+    """Raise for the pose at flat ``index`` of poses ``T`` (leading shape ``batch``) that a kernel found invalid.
+
+    The kernels check a pose as :func:`homogeneous_transform` does, which words what is wrong; a
+    pose only they refuse (at the very limit of a tolerance) gets a plain message.
+    """
+    homogeneous_transform(T)
+    where = list(np.unravel_index(index, batch)) if batch else ""
+    raise ValueError(f"T{where} is not a proper homogeneous transform (at the tolerance limit)")
 
 
 def rotation_matrix(R, name: str = "R") -> np.ndarray:

@@ -28,7 +28,7 @@ from .specs import HasSpecs
 from .solvers.numerical import NumericalIK, sampling_range
 from .serial import PRESETS as COURSE_ARMS
 from .solvers.ur import DESCRIPTIONS, DH_ALPHA, JOINT_LIMIT, JOINT_NAMES, LENGTHS, SingularityGeometry, URFamily
-from ._validate import homogeneous_transform
+from ._validate import homogeneous_transform, poses_and_hints
 
 __all__ = ["Arm", "DH_ALPHA", "JOINT_LIMIT", "JOINT_NAMES", "SingularityGeometry", "factor_scales"]
 
@@ -286,10 +286,7 @@ class Arm(JacobianUses, HasSpecs):
         batch = T.shape[:-2]
         if hint is not None:
             hint = self.joints(hint, "hint")
-            try:
-                batch = np.broadcast_shapes(batch, hint.shape[:-1])
-            except ValueError:
-                raise ValueError(f"hint of shape {hint.shape} does not broadcast against poses of shape {T.shape}") from None
+            batch = poses_and_hints(T, hint)
             hint = np.broadcast_to(hint, batch + (self.n_joints,)).reshape(-1, self.n_joints)
         flat = np.ascontiguousarray(np.broadcast_to(T, batch + (4, 4)).reshape(-1, 4, 4))
         out = self.solver.solve(flat, hint)

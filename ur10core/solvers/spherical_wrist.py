@@ -28,7 +28,7 @@ import numpy as np
 
 from .. import ik as _ik
 from .._backend import kernels
-from .._validate import as_float_array, homogeneous_transform
+from .._validate import as_float_array, homogeneous_transform, poses_and_hints, refuse_pose
 from ..branches import (
     INSIDE_OFFSET,
     TOO_CLOSE,
@@ -252,10 +252,7 @@ class _CompiledWristArm:
             homogeneous_transform(T)  # raises: wrong shape
         batch = () if one else T.shape[:-2]
         if hint is not None and not one:
-            try:
-                batch = np.broadcast_shapes(batch, hint.shape[:-1])
-            except ValueError:
-                raise ValueError(f"hint of shape {hint.shape} does not broadcast against poses of shape {T.shape}") from None
+            batch = poses_and_hints(T, hint)
             hint = np.broadcast_to(hint, batch + (6,))
         flat = np.ascontiguousarray(T if one else np.broadcast_to(T, batch + (4, 4))).reshape(-1, 16)
         if hint is not None:
@@ -272,9 +269,7 @@ class _CompiledWristArm:
 
         bad = _ik.in_blocks(n, run)
         if bad >= 0:
-            homogeneous_transform(T)  # words what is wrong
-            where = list(np.unravel_index(bad, batch)) if batch else ""
-            raise ValueError(f"T{where} is not a proper homogeneous transform (at the tolerance limit)")
+            refuse_pose(T, bad, batch)
         return IKSolution(q.reshape(batch + (8, 6)), valid.reshape(batch + (8,)), failure.reshape(batch + (8,)), arm,
                           detail=detail.reshape(batch + (8,)), singular=singular.reshape(batch + (8,)))
 

@@ -31,7 +31,7 @@ import numpy as np
 from .. import ik as _ik
 from .. import ik_reference
 from .._backend import kernels
-from .._validate import as_float_array, check_finite, homogeneous_transform, joint_vector
+from .._validate import as_float_array, check_finite, homogeneous_transform, joint_vector, poses_and_hints, refuse_pose
 from ..branches import INSIDE_OFFSET, TOO_FAR, IKSolution
 
 if TYPE_CHECKING:
@@ -287,8 +287,7 @@ class URFamily:
                 ik_reference.hint_values(None if hint is None else hint.tolist(), self.dh_lengths),
             )
             if solution is None:
-                homogeneous_transform(T)  # words what is wrong
-                raise ValueError("T is not a proper homogeneous transform (at the tolerance limit)")
+                refuse_pose(T, 0, ())
             return solution
         if T.ndim < 2 or T.shape[-2:] != (4, 4):
             homogeneous_transform(T)  # raises: wrong shape
@@ -296,18 +295,11 @@ class URFamily:
             hints = np.array([0.0, np.nan, np.nan])
         else:
             hints = np.stack([hint[..., 5], self.singularity_factors(hint)[..., 0], hint[..., 2]], axis=-1)
-        try:
-            batch = np.broadcast_shapes(T.shape[:-2], hints.shape[:-1])
-        except ValueError:
-            raise ValueError(
-                f"hint of shape {hint.shape} does not broadcast against poses of shape {T.shape}"
-            ) from None
+        batch = T.shape[:-2] if hint is None else poses_and_hints(T, hint)
         T = np.broadcast_to(T, batch + (4, 4))
         solution = _ik.solve_batch(arm, T, hints)
         if isinstance(solution, int):
-            homogeneous_transform(T)  # words what is wrong
-            where = list(np.unravel_index(solution, batch))
-            raise ValueError(f"T{where} is not a proper homogeneous transform (at the tolerance limit)")
+            refuse_pose(T, solution, batch)
         return solution
 
     def derived(self, solution: IKSolution, name: str) -> np.ndarray:
