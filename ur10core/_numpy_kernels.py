@@ -356,27 +356,6 @@ def _reach_within_band(R, p5, slot, A, band_a, band_b, sign, hint, params):
     return best, _in_reach(best[-1], outer, inner) & np.isfinite(slot[7])
 
 
-def _theta1_for_reach(R, p5, slot, sign, hint, params):
-    """Vectorised :func:`ur10core.ik_reference._theta1_for_reach`: (better slot values, where found)."""
-    d1, a2, a3, d4, d5, d6 = params
-    theta1, _, theta6, theta234, _, h4, _, r = slot
-    A = h4 - d5 * np.sin(theta234)
-    V = p5[:, 2] - d1
-    usable = np.isfinite(r) & ((A != 0.0) | (V != 0.0))
-    outer, inner = a2 + a3, abs(a2 - a3)
-    moved = _nearest_reachable_theta234(A, V, theta234, d5, np.where(r > outer, outer, inner))
-    c5 = R[:, 0, 2] * np.sin(theta1) - R[:, 1, 2] * np.cos(theta1)
-    wanted = theta6 - np.where(c5 >= 0.0, 1.0, -1.0) * (moved - theta234)
-    ex, ey = np.cos(wanted), np.sin(wanted)
-    r11, r12, r21, r22 = R[:, 0, 0], R[:, 0, 1], R[:, 1, 0], R[:, 1, 1]
-    candidate = np.arctan2(r21 * ey + r22 * ex, r11 * ey + r12 * ex)
-    candidate = candidate + PI * np.round((theta1 - candidate) / PI)
-    c1, s1 = np.cos(candidate), np.sin(candidate)
-    usable &= np.abs(p5[:, 0] * s1 - p5[:, 1] * c1 - d4) <= CHOICE_TOLERANCE
-    better = _wrist_and_elbow(R, p5, c1, s1, p5[:, 0] * c1 + p5[:, 1] * s1, sign, hint, params)
-    return better, usable & _in_reach(better[-1], outer, inner)
-
-
 def _solve(T, theta6_hint, reach_hint, theta3_hint, params, q, valid, wrist, elbow, shoulder, failure, rho_out, distance) -> None:
     d1, a2, a3, d4, d5, d6 = params
     n = len(T)
@@ -411,6 +390,7 @@ def _solve(T, theta6_hint, reach_hint, theta3_hint, params, q, valid, wrist, elb
     s1 = (P5[:, 1] * A + P5[:, 0] * d4) / scale
     hint = wrap(theta6_hint)[pose]
     slot = list(_wrist_and_elbow(R, P5, c1, s1, A, sign, hint, params))
+    first_s5 = slot[4].copy()
     outer, inner = a2 + a3, abs(a2 - a3)
     beyond = np.flatnonzero(~_reaches(slot[-1], outer, inner))
     if len(beyond):
@@ -428,13 +408,12 @@ def _solve(T, theta6_hint, reach_hint, theta3_hint, params, q, valid, wrist, elb
         found = _reaches(own[-1], outer, inner)
         for value, new in zip(slot, own):
             value[beyond[found]] = new[found]
-    retry = np.flatnonzero(~_reaches(slot[-1], outer, inner) & (slot[4] <= theta1_band))
-    if len(retry):
-        better, found = _theta1_for_reach(
-            R[retry], P5[retry], [value[retry] for value in slot], sign[retry], hint[retry], params
-        )
-        for value, new in zip(slot, better):
-            value[retry[found]] = new[found]
+    # Shoulder and wrist both singular, where the reference turns θ1 within its band (its
+    # _theta1_for_reach): that step is ill-conditioned (an ulp of atan2 moves θ1 by 1e-10, and
+    # the wrist's split with it), and numpy's vectorised atan2, sin and cos differ from the C
+    # library's by an ulp on some CPUs (AVX-512). Those poses are solved by the reference, whose
+    # arithmetic is the compiled kernel's: both backends then give the same branches.
+    at_triple = np.unique(pose[(first_s5 <= theta1_band) | (slot[4] <= theta1_band)])
     theta1, theta5, theta6, theta234, s5_abs, h4, v4, r = slot
     # per slot pair: the two elbow slots 4 i + 2 j + l share everything above
     pair = 8 * pose + 4 * (side > 0) + 2 * (sign < 0)
@@ -466,3 +445,7 @@ def _solve(T, theta6_hint, reach_hint, theta3_hint, params, q, valid, wrist, elb
         flat_q[k] = np.stack([theta1, t2, t3, wrap(theta234 - t2 - t3), theta5, theta6], -1)[ok]
         flat_valid[k] = True
         flat_elbow[k] = at_limit[ok]
+    for m in at_triple:
+        result = ref.solve_pose(M[m].tolist(), float(theta6_hint[m]), float(reach_hint[m]), float(theta3_hint[m]), params)
+        for out, value in zip((q, valid, wrist, elbow, shoulder, failure, rho_out, distance), result):
+            out[m] = np.reshape(value, out[m].shape)

@@ -14,6 +14,9 @@ import numpy as np
 
 from .tolerances import BOTTOM_ROW_TOLERANCE, ROTATION_TOLERANCE
 
+#: Looked up once: ``np.ma`` goes through numpy's module ``__getattr__`` on every use (0.1 µs a call).
+_MASKED_ARRAY = np.ma.MaskedArray
+
 
 def _first_index(mask: np.ndarray) -> tuple[int, ...]:
     return tuple(int(i) for i in np.argwhere(mask)[0])
@@ -26,7 +29,7 @@ def as_float_array(value, name: str) -> np.ndarray:
     strings, masked arrays (their mask would be ignored), and integers too large for a
     float.
     """
-    if isinstance(value, np.ma.MaskedArray):
+    if isinstance(value, _MASKED_ARRAY):
         raise ValueError(f"{name} must be a plain array of numbers, not a masked array (its mask would be ignored)")
     if type(value) is np.ndarray and value.dtype == np.float64:
         return value
@@ -42,9 +45,17 @@ def as_float_array(value, name: str) -> np.ndarray:
     raise ValueError(f"{name} must be real numbers, got {kind}: {value!r:.80}")
 
 
+def _few_values(array: np.ndarray) -> list[float] | None:
+    """The values of a one-pose argument (16 at most) as plain floats, which beat a numpy reduction; else None."""
+    if array.size > 16:
+        return None
+    return array.tolist() if array.ndim == 1 else array.ravel().tolist()
+
+
 def check_finite(array: np.ndarray, name: str) -> None:
-    if array.size <= 16 and all(map(math.isfinite, array.ravel().tolist())):
-        return  # one pose or joint vector: plain floats beat a numpy reduction
+    values = _few_values(array)
+    if values is not None and math.isfinite(sum(values)):
+        return  # a sum that overflowed (finite values near 1e308) is checked again below
     if not np.isfinite(array).all():
         where = _first_index(~np.isfinite(array))
         raise ValueError(
@@ -68,7 +79,8 @@ MAX_JOINT_VALUE = 1e9
 
 def within_reason(array: np.ndarray, name: str) -> np.ndarray:
     """``array`` (finite), or ``ValueError`` where a value is beyond ±:data:`MAX_JOINT_VALUE`."""
-    if array.size <= 16 and all(abs(value) <= MAX_JOINT_VALUE for value in array.ravel().tolist()):
+    values = _few_values(array)
+    if values is not None and max(map(abs, values), default=0.0) <= MAX_JOINT_VALUE:
         return array
     beyond = np.abs(array) > MAX_JOINT_VALUE
     if beyond.any():
@@ -85,6 +97,20 @@ def joint_vector(q, name: str = "q") -> np.ndarray:
         raise ValueError(f"{name} must have shape (..., 6) (six joint angles), got shape {q.shape}")
     check_finite(q, name)
     return q
+
+
+def one_joint_vector(q, name: str = "q") -> list[float] | None:
+    """:func:`joint_vector`'s check; the six values as plain floats if ``q`` is one vector, else None.
+
+    The drag handler's hint is one float64 vector 20 times a second: a sum of its values is
+    its finiteness check, before anything more general is tried.
+    """
+    if type(q) is np.ndarray and q.dtype == np.float64 and q.shape == (6,):
+        values = q.tolist()
+        if math.isfinite(sum(values)):
+            return values
+    q = joint_vector(q, name)
+    return q.tolist() if q.shape == (6,) else None
 
 
 def homogeneous_transform(T, name: str = "T") -> np.ndarray:

@@ -31,7 +31,9 @@ import numpy as np
 from .. import ik as _ik
 from .. import ik_reference
 from .._backend import kernels
-from .._validate import as_float_array, check_finite, homogeneous_transform, joint_vector, poses_and_hints, refuse_pose
+from .._validate import (
+    as_float_array, check_finite, homogeneous_transform, joint_vector, one_joint_vector, poses_and_hints, refuse_pose,
+)
 from ..branches import INSIDE_OFFSET, TOO_FAR, IKSolution
 
 if TYPE_CHECKING:
@@ -279,16 +281,16 @@ class URFamily:
         'shoulder right, elbow down, wrist not flipped'
         """
         T = as_float_array(T, "T")
-        if hint is not None:
-            hint = joint_vector(hint, "hint")
-        if T.shape == (4, 4) and (hint is None or hint.shape == (6,)):
+        values = None if hint is None else one_joint_vector(hint, "hint")
+        if T.shape == (4, 4) and (hint is None or values is not None):
             solution = _ik.solve_one(
-                arm, T if T.flags.c_contiguous else np.ascontiguousarray(T),
-                ik_reference.hint_values(None if hint is None else hint.tolist(), self.dh_lengths),
+                arm, T if T.flags.c_contiguous else np.ascontiguousarray(T), ik_reference.hint_values(values, self.dh_lengths),
             )
             if solution is None:
                 refuse_pose(T, 0, ())
             return solution
+        if hint is not None:
+            hint = joint_vector(hint, "hint")
         if T.ndim < 2 or T.shape[-2:] != (4, 4):
             homogeneous_transform(T)  # raises: wrong shape
         if hint is None:
