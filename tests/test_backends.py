@@ -150,6 +150,50 @@ def test_backends_agree_on_random_poses(course):
     _assert_same(_batch(compiled, course, T, hints), _batch(_numpy_kernels, course, T, hints), "random")
 
 
+@pytest.mark.parametrize("preset", Arm.UR_PRESETS)
+def test_the_kernels_lanes_decide_as_one_pose_at_a_time(preset):
+    """``ik_batch`` solves poses eight at a time, with an atan2 of its own, and leaves every pose
+    with a slot near a singularity, a hint or a tolerance's edge to the one-pose steps: its flags
+    and distances are theirs, its angles theirs to a few ulp (never ±π spelled differently), on
+    random, partly unreachable, near- and exactly singular poses, at ±π, with and without hints."""
+    arm = Arm.preset(preset)
+    rng = np.random.default_rng(47)
+
+    def near(n: int) -> np.ndarray:  # 0 or ±π, or 1e-16…1e-6 from one
+        return rng.choice([0.0, math.pi, -math.pi], n) + rng.choice([-1, 0, 1], n) * 10.0 ** rng.uniform(-16, -6, n)
+
+    q = random_joints(5500, seed=46)
+    q[1000:1500, 4] = near(500)
+    q[1500:2000, 2] = near(500)
+    q[2000:2500] = arm.singular_configuration("shoulder", q[2000:2500])
+    q[2500:3000, rng.integers(0, 6, 500)] = math.pi
+    q[3500:5000, 2], q[3500:5000, 4] = near(1500), near(1500)  # elbow and wrist
+    q[4000:5000] = arm.singular_configuration("shoulder", q[4000:5000])  # and the shoulder
+    q, extra = q[:5000], q[5000:]
+    extra[:250, 4] = near(250)  # half of them with the wrist singular too
+    T = arm.fk(q)
+    T[3000:3500, :3, 3] *= rng.uniform(0.0, 2.0, (500, 1))  # some out of reach, some inside the shoulder cylinder
+    T[3500:, :3] += rng.integers(-2, 3, (1500, 3, 4)) * np.spacing(T[3500:, :3])  # up to 2 ulp off
+    # stretched at the shoulder singularity and moved 1e-9…1e-3 m beyond the reach along the arm (a
+    # shoulder reach within its band, or a wrist's turn, may then reach: one pose at a time decides)
+    stretched = arm.singular_configuration("shoulder", np.column_stack([extra[:, :2], np.zeros(500), extra[:, 3:]]))
+    geometry = arm.singularity_geometry(stretched)
+    along = geometry.p4 - geometry.elbow_center
+    T = np.concatenate([T, arm.fk(stretched)])
+    T[5000:, :3, 3] += 10.0 ** rng.uniform(-9, -3, (500, 1)) * along / np.linalg.norm(along, axis=-1, keepdims=True)
+    q = np.concatenate([q, stretched])
+    others = random_joints(len(q), seed=48)
+    elbow_and_reach = _hints(arm, q)
+    elbow_and_reach[:, 0] = others[:, 5]  # the generating θ3 and A, another θ6: not the wrist's hint alone
+    for hints in (np.tile([0.0, np.nan, np.nan], (len(q), 1)), _hints(arm, q), elbow_and_reach, _hints(arm, others)):
+        lanes = _batch(compiled, arm, T, hints)
+        for k in range(len(q)):
+            one = _one(compiled, arm, T[k], hints[k])
+            for name in ("valid", "wrist_singular", "elbow_singular", "shoulder_singular", "failure", "rho", "elbow_distance"):
+                np.testing.assert_array_equal(lanes[name][k], one[name], err_msg=f"{name}, pose {k}")
+            np.testing.assert_allclose(lanes["q"][k], one["q"], rtol=0, atol=1e-13, err_msg=f"q, pose {k}")
+
+
 @pytest.mark.parametrize("preset", ["ur10", "ur10e"])
 def test_backends_agree_at_the_triple_singularity(preset):
     """Elbow folded or stretched, wrist singular and the wrist centre on the d4 cylinder, each

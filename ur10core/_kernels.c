@@ -62,6 +62,9 @@ typedef struct {          /* what both wrist signs of one theta1 share: steps 1 
 static double wrap(double angle)
 {
     if (angle > -PI && angle <= PI) return angle; /* most are: what remainder() would return */
+    /* one turn out, as a sum or a difference of two angles is: one exact step (Sterbenz), remainder()'s result */
+    if (angle > PI && angle < 2.5 * PI) return angle - TAU;
+    if (angle <= -PI && angle > -2.5 * PI) return angle + TAU;
     angle = remainder(angle, TAU);
     return angle <= -PI ? angle + TAU : angle;
 }
@@ -339,6 +342,178 @@ static void solve_pose(const Params *P, const double *M, double theta6_hint, dou
     }
 }
 
+/* ---------------------------------------------------------------- many poses side by side
+ * solve_pose is one long chain of dependent steps, a third of it the C library's atan2: one pose
+ * at a time, the processor waits on each. ik_batch hands it LANES poses at once instead: each step
+ * of the regular case (no slot near a singularity, a hint or a tolerance's edge) runs over all of
+ * them before the next, so their chains overlap, with lane_atan2 (below) for the angles. A pose
+ * with any slot that is not regular is solved again by solve_pose: every decision is then
+ * solve_pose's own, and the angles differ from its by an ulp or so. */
+#define LANES 8
+
+/* atan2 for the lanes: Cephes' rational approximation of atan on [0, 0.66] after two reductions
+ * (min/max, and (t - 1)/(t + 1) above 0.66), within 2 ulp of the C library's; no branch a pose's
+ * numbers could make slow. NaN where both are zero (such a slot is left to solve_pose). pi_low is
+ * pi - PI, what the double PI leaves out, added back where a multiple of pi/4 is. */
+static inline double lane_atan2(double y, double x, double pi_low)
+{
+    const double ax = fabs(x), ay = fabs(y);
+    const int swap = ay > ax;
+    const double t = (swap ? ax : ay) / (swap ? ay : ax);
+    const int upper = t > 0.66;
+    const double u = (upper ? t - 1.0 : t) / (upper ? t + 1.0 : 1.0);
+    const double z = u * u;
+    const double p = (((-0.8750608600031904122785 * z - 16.15753718733365076637) * z - 75.00855792314704667340) * z
+                      - 122.8866684490136173410) * z - 64.85021904942025371773;
+    const double q = ((((z + 24.85846490142306297962) * z + 165.0270098316988542046) * z + 432.8810604912902668951) * z
+                      + 485.3903996359136964868) * z + 194.5506571482613964425;
+    double angle = (upper ? PI / 4 : 0.0) + (u * (z * p / q) + u + (upper ? 0.25 * pi_low : 0.0));
+    angle = swap ? (PI / 2 - angle) + 0.5 * pi_low : angle;
+    angle = x < 0.0 ? (PI - angle) + pi_low : angle;
+    return copysign(angle, y);
+}
+
+static void solve_lanes(const Params *P, const double *const *M, const double *theta6_hint, const double *reach_hint,
+                        const double *theta3_hint, const Out *o, int lanes)
+{
+    const double d1 = P->d1, a2 = P->a2, a3 = P->a3, d4 = P->d4, d5 = P->d5, d6 = P->d6;
+    const double outer = a2 + a3, inner = fabs(a2 - a3);
+    int regular[LANES];
+    Pose T[LANES];
+    double reach[LANES], reach_low[LANES], reach_high[LANES], band[LANES], hint[LANES], r_hint[LANES];
+    /* per lane and slot pair k = 2 i + j (side i, wrist sign j) */
+    double c1[LANES][4], s1[LANES][4], A[LANES][4], c5[LANES][4], s5_abs[LANES][4], c6[LANES][4], s6[LANES][4];
+    double c234[LANES][4], s234[LANES][4], h4[LANES][4], v4[LANES][4], r[LANES][4], c3[LANES][4], s3[LANES][4];
+    double theta1[LANES][4], theta5[LANES][4], theta6[LANES][4], theta234[LANES][4];
+    double theta3[LANES][4], beta[LANES][4], gamma[LANES][4];
+    /* an angle this near +-pi may come out as the other one (2 pi away) where the library's atan2 and
+     * lane_atan2 differ by an ulp: such a pose is left to solve_pose. 2^-46 is 32 ulp of pi. */
+    const double edge = PI - ldexp(1.0, -46);
+    const double pi_low = sin(PI); /* pi - PI, exactly as a double: sin(pi - x) = x to x^3 / 6 */
+
+    for (int l = 0; l < lanes; l++) { /* step 1 */
+        const double *m = M[l];
+        Pose *t = &T[l];
+        t->r11 = m[0]; t->r12 = m[1]; t->r13 = m[2];
+        t->r21 = m[4]; t->r22 = m[5]; t->r23 = m[6];
+        t->r31 = m[8]; t->r32 = m[9]; t->r33 = m[10];
+        t->p5x = m[3] - d6 * m[2];
+        t->p5y = m[7] - d6 * m[6];
+        t->p5z = m[11] - d6 * m[10];
+        const double rho2 = t->p5x * t->p5x + t->p5y * t->p5y;
+        const double rho = sqrt(rho2);
+        *o[l].rho = rho;
+        *o[l].shoulder = fabs(rho - d4) <= LENGTH_TOLERANCE;
+        regular[l] = rho >= d4 - LENGTH_TOLERANCE;
+        reach[l] = sqrt(fmax(rho2 - d4 * d4, 0.0));
+        const double low = rho - CHOICE_TOLERANCE, high = rho + CHOICE_TOLERANCE;
+        reach_low[l] = sqrt(fmax(low * low - d4 * d4, 0.0));
+        reach_high[l] = sqrt(fmax(high * high - d4 * d4, 0.0));
+        band[l] = (reach_high[l] - reach_low[l]) * d4 / (reach[l] * reach[l] + d4 * d4);
+        hint[l] = wrap(theta6_hint[l]);
+        const double elbow_hint = isfinite(theta3_hint[l]) ? fabs(wrap(theta3_hint[l])) : NAN;
+        r_hint[l] = sqrt(a2 * a2 + a3 * a3 + 2.0 * a2 * a3 * cos(elbow_hint)); /* NaN without a hint */
+        const double magnitude = (reach_low[l] <= fabs(reach_hint[l]) && fabs(reach_hint[l]) <= reach_high[l])
+                                     ? fabs(reach_hint[l]) : reach[l];
+        for (int i = 0; i < 2; i++) {
+            const double a = (i == 0 ? -1.0 : 1.0) * magnitude;
+            const double scale = rho * sqrt(a * a + d4 * d4);
+            const double c = (t->p5x * a - t->p5y * d4) / scale, s = (t->p5y * a + t->p5x * d4) / scale;
+            for (int j = 0; j < 2; j++) {
+                c1[l][2 * i + j] = c;
+                s1[l][2 * i + j] = s;
+                A[l][2 * i + j] = a;
+            }
+        }
+    }
+    for (int l = 0; l < lanes; l++) /* steps 2-5 of each slot pair, the pose's own theta6 */
+        for (int k = 0; k < 4; k++) {
+            const Pose *t = &T[l];
+            const double c = c1[l][k], s = s1[l][k], sign = (k & 1) ? -1.0 : 1.0;
+            const double c6s5 = t->r21 * c - t->r11 * s, s6s5 = t->r12 * s - t->r22 * c;
+            c5[l][k] = t->r13 * s - t->r23 * c;
+            s5_abs[l][k] = sqrt(c6s5 * c6s5 + s6s5 * s6s5);
+            const double s5 = sign * s5_abs[l][k];
+            c6[l][k] = s5_abs[l][k] > 0.0 ? sign * c6s5 / s5_abs[l][k] : 1.0;
+            s6[l][k] = s5_abs[l][k] > 0.0 ? sign * s6s5 / s5_abs[l][k] : 0.0;
+            double x = s5 * (t->r13 * c + t->r23 * s) + c5[l][k] * c5[l][k] * (s6[l][k] * t->r31 + c6[l][k] * t->r32);
+            double y = s5 * t->r33 + c5[l][k] * (c6[l][k] * t->r31 - s6[l][k] * t->r32);
+            const double norm = sqrt(x * x + y * y);
+            c234[l][k] = x / norm;
+            s234[l][k] = y / norm;
+            h4[l][k] = A[l][k] + d5 * s234[l][k];
+            v4[l][k] = (t->p5z - d1) - d5 * c234[l][k];
+            r[l][k] = sqrt(h4[l][k] * h4[l][k] + v4[l][k] * v4[l][k]);
+            const double cc = clamp_unit((r[l][k] * r[l][k] - a2 * a2 - a3 * a3) / (2.0 * a2 * a3));
+            c3[l][k] = cc;
+            s3[l][k] = sqrt(1.0 - cc * cc);
+        }
+    for (int l = 0; l < lanes; l++) /* every angle, side by side */
+        for (int k = 0; k < 4; k++) {
+            theta1[l][k] = lane_atan2(s1[l][k], c1[l][k], pi_low);
+            theta5[l][k] = lane_atan2(s5_abs[l][k], c5[l][k], pi_low);
+            theta6[l][k] = lane_atan2(s6[l][k], c6[l][k], pi_low);
+            theta234[l][k] = lane_atan2(s234[l][k], c234[l][k], pi_low);
+            theta3[l][k] = lane_atan2(s3[l][k], c3[l][k], pi_low);
+            beta[l][k] = lane_atan2(v4[l][k], h4[l][k], pi_low);
+            gamma[l][k] = lane_atan2(a3 * s3[l][k], a2 + a3 * c3[l][k], pi_low);
+        }
+    for (int l = 0; l < lanes; l++) { /* where solve_pose would decide otherwise, or the angles may differ */
+        for (int k = 0; k < 4 && regular[l]; k++) {
+            const double side = k < 2 ? -1.0 : 1.0, rk = r[l][k], s5 = s5_abs[l][k];
+            const double V = T[l].p5z - d1;
+            /* the hint's theta6 kept (with a margin for the ulp lane_atan2 may differ by) */
+            int ok = s5 * fabs(wrap(hint[l] - theta6[l][k])) > 2.0 * WRIST_TURN_TOLERANCE;
+            ok = ok && !(fabs(rk - r_hint[l]) <= CHOICE_TOLERANCE); /* the hint's theta3 kept */
+            /* wrist_and_elbow's slide along the singular direction (sqrt for hypot: a margin of 2) */
+            const double beyond = rk > outer ? rk - outer : inner - rk;
+            ok = ok && isfinite(rk) && !(beyond > 0.0 && s5 * beyond * rk <= 4.0 * WRIST_TURN_TOLERANCE * d5 *
+                                                                           sqrt(A[l][k] * A[l][k] + V * V));
+            if (ok && !reaches(rk, P)) { /* reach_within_band would start; theta1_for_reach would be tried */
+                const double band_a = reach_low[l] > 0.0 ? side * reach_low[l] : -side * reach_high[l];
+                const double band_b = side * reach_high[l];
+                const double limit = rk > outer ? outer : inner;
+                ok = (!(fabs(rk - limit) <= BAND_LEVERAGE * (fmax(band_a, band_b) - fmin(band_a, band_b))) ||
+                      fabs(v4[l][k]) > limit) && !(s5 <= band[l]);
+            }
+            regular[l] = ok;
+        }
+        const Out out = o[l];
+        for (int k = 0; k < 48; k++) out.q[k] = NAN;
+        for (int k = 0; k < 4; k++) {
+            const int base = 2 * k;
+            const double rk = r[l][k];
+            out.elbow_distance[base] = out.elbow_distance[base + 1] = rk;
+            out.wrist[base] = out.wrist[base + 1] = (npy_bool)(s5_abs[l][k] <= WRIST_TOLERANCE);
+            out.valid[base] = out.valid[base + 1] = 0;
+            out.elbow[base] = out.elbow[base + 1] = 0;
+            if (!(rk <= outer + LENGTH_TOLERANCE) || rk < inner - LENGTH_TOLERANCE) {
+                out.failure[base] = out.failure[base + 1] = rk < inner - LENGTH_TOLERANCE ? ELBOW_TOO_CLOSE : ELBOW_TOO_FAR;
+                continue;
+            }
+            const int at_limit = rk >= outer - LENGTH_TOLERANCE || rk <= inner + LENGTH_TOLERANCE;
+            const double t1 = wrap(theta1[l][k]), t5 = (k & 1) ? wrap(-wrap(theta5[l][k])) : wrap(theta5[l][k]);
+            const double t6 = wrap(theta6[l][k]);
+            for (int e = 0; e < 2; e++) {
+                double *qk = out.q + 6 * (base + e);
+                const double t3 = wrap(e == 0 ? theta3[l][k] : -theta3[l][k]);
+                const double t2 = wrap(e == 0 ? beta[l][k] - gamma[l][k] : beta[l][k] + gamma[l][k]);
+                qk[0] = t1;
+                qk[1] = t2;
+                qk[2] = t3;
+                qk[3] = wrap(theta234[l][k] - t2 - t3);
+                qk[4] = t5;
+                qk[5] = t6;
+                out.valid[base + e] = 1;
+                out.elbow[base + e] = (npy_bool)at_limit;
+                out.failure[base + e] = REACHABLE;
+                for (int joint = 0; joint < 6; joint++) regular[l] = regular[l] && fabs(qk[joint]) <= edge;
+            }
+        }
+        if (!regular[l]) solve_pose(P, M[l], theta6_hint[l], reach_hint[l], theta3_hint[l], out);
+    }
+}
+
 static int check_configured(void)
 {
     if (!configured) PyErr_SetString(PyExc_RuntimeError, "_kernels.set_tolerances() was not called");
@@ -460,15 +635,27 @@ static PyObject *ik_batch(PyObject *self, PyObject *args)
     npy_intp first_bad = -1;
 
     Py_BEGIN_ALLOW_THREADS
+    const double *lane_pose[LANES];
+    double lane_hint[LANES], lane_reach[LANES], lane_theta3[LANES];
+    Out lane_out[LANES];
+    int lanes = 0;
     for (npy_intp m = 0; m < n; m++) {
         const double *Tm = T + 16 * m;
-        Out o = {q_data + 48 * m, valid_data + 8 * m, wrist_data + 8 * m, elbow_data + 8 * m,
-                 failure_data + 8 * m, distance_data + 8 * m, rho_data + m, shoulder_data + m};
         if (!pose_is_valid(Tm)) {
             if (first_bad < 0) first_bad = m;
-            continue;
+        } else {
+            const Out o = {q_data + 48 * m, valid_data + 8 * m, wrist_data + 8 * m, elbow_data + 8 * m,
+                           failure_data + 8 * m, distance_data + 8 * m, rho_data + m, shoulder_data + m};
+            lane_pose[lanes] = Tm;
+            lane_hint[lanes] = hint[m];
+            lane_reach[lanes] = reach_hint[m];
+            lane_theta3[lanes] = theta3_hint[m];
+            lane_out[lanes++] = o;
         }
-        solve_pose(&P, Tm, hint[m], reach_hint[m], theta3_hint[m], o);
+        if (lanes == LANES || (m == n - 1 && lanes > 0)) {
+            solve_lanes(&P, lane_pose, lane_hint, lane_reach, lane_theta3, lane_out, lanes);
+            lanes = 0;
+        }
     }
     Py_END_ALLOW_THREADS
 
