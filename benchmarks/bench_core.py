@@ -4,8 +4,8 @@
 
 Each backend is measured in its own process (``UR10CORE_BACKEND=compiled`` and
 ``=numpy``; the backend is chosen when ur10core is imported), the references in this
-one, all in the same run (ur-analytic-ik's IK and the numpy baseline in each backend's, in
-turns with its own calls: the ratios are taken there):
+one, all in the same run (ur-analytic-ik's IK, pinocchio and the numpy baseline in each
+backend's, in turns with its own calls: the ratios are taken there):
 
 * one-pose IK (all 8 slots), without and with a hint, vs ur-analytic-ik's UR10
   ``inverse_kinematics`` (C++, timed in turns with them in each backend's process; target
@@ -130,8 +130,12 @@ def measure() -> dict:
             "batch_per_s": lambda: arm.ik(T_batch),
             "numpy_baseline_per_s": lambda: ik_numpy(arm, T_batch),
         }, repeats=3).items()},
-        "fk_one_us": per_call_us(arm.fk, [(x,) for x in q]),
-        "jacobian_one_us": per_call_us(arm.jacobian, [(x,) for x in q]),
+        "pinocchio_fk_us": float("nan"), "pinocchio_jacobian_us": float("nan"),
+        **side_by_side({
+            "fk_one_us": (arm.fk, [(x,) for x in q]),
+            "jacobian_one_us": (arm.jacobian, [(x,) for x in q]),
+            **pinocchio_calls(arm, q),
+        }),
         "workspace_s": seconds(lambda: arm.sample_workspace(1_000_000), repeats=5),
     }
 
@@ -150,9 +154,13 @@ def pinocchio_model(arm):
     return model
 
 
-def pinocchio_times(arm, q: np.ndarray) -> dict:
-    """pinocchio's one-pose FK (T06) and flange Jacobian in the base frame, checked against ours first."""
-    import pinocchio as pin
+def pinocchio_calls(arm, q: np.ndarray) -> dict:
+    """pinocchio's one-pose FK (T06) and flange Jacobian in the base frame, checked against ours
+    first, as :func:`side_by_side` takes them; none where pinocchio is not installed."""
+    try:
+        import pinocchio as pin
+    except ImportError:
+        return {}
 
     model = pinocchio_model(arm)
     data = model.createData()
@@ -168,8 +176,7 @@ def pinocchio_times(arm, q: np.ndarray) -> dict:
 
     for x in q[:200]:
         assert np.abs(fk(x) - arm.fk(x)).max() < 1e-12 and np.abs(jacobian(x) - arm.jacobian(x)).max() < 1e-12
-    return {"pinocchio_fk_us": per_call_us(fk, [(x,) for x in q]),
-            "pinocchio_jacobian_us": per_call_us(jacobian, [(x,) for x in q])}
+    return {"pinocchio_fk_us": (fk, [(x,) for x in q]), "pinocchio_jacobian_us": (jacobian, [(x,) for x in q])}
 
 
 def references() -> dict:
@@ -195,12 +202,7 @@ def references() -> dict:
     found = ~np.isnan(ik_numpy(arm, T_singular)).any(-1)
     correct = found & (np.abs(arm.fk(np.nan_to_num(ik_numpy(arm, T_singular))) - T_singular[:, None]).max((-2, -1)) < 1e-9)
     assert arm.ik(T_singular).reachable.all()
-    try:
-        pinocchio = pinocchio_times(arm, q)
-    except ImportError:
-        pinocchio = {"pinocchio_fk_us": float("nan"), "pinocchio_jacobian_us": float("nan")}
     return {
-        **pinocchio,
         "numpy_baseline_singular_solved": float(correct.any(-1).mean()),
         "ur_analytic_fk_us": per_call_us(ur_analytic_ik.ur10.forward_kinematics, [tuple(x) for x in q.tolist()]),
         "numpy_baseline_error": float(error.max()),
@@ -301,7 +303,7 @@ def main() -> None:
     def pass_if(ok: bool) -> str:
         return "PASS" if ok else "FAIL"
 
-    has_pinocchio = not np.isnan(ref["pinocchio_fk_us"])
+    has_pinocchio = not np.isnan(c["pinocchio_fk_us"])  # timed in turns with the compiled backend's calls
 
     def against_pinocchio(what: str, us: float, ratio: float) -> str:
         if not has_pinocchio:
@@ -332,12 +334,12 @@ def main() -> None:
          f"target ≤ 10 µs; ur-analytic-ik FK: {ref['ur_analytic_fk_us']:.1f} µs",
          pass_if(max(c["fk_one_us"], n["fk_one_us"]) <= 10)],
         ["`arm.fk(q)`, one pose, against pinocchio on the same DH table", f"{c['fk_one_us']:.2f} µs", f"{n['fk_one_us']:.2f} µs",
-         against_pinocchio("`forwardKinematics` and T06", ref["pinocchio_fk_us"], 1.5),
-         f"compiled {pass_if(c['fk_one_us'] <= 1.5 * ref['pinocchio_fk_us'])}" if has_pinocchio else "n/a"],
+         against_pinocchio("`forwardKinematics` and T06", c["pinocchio_fk_us"], 1.5),
+         f"compiled {pass_if(c['fk_one_us'] <= 1.5 * c['pinocchio_fk_us'])}" if has_pinocchio else "n/a"],
         ["`arm.jacobian(q)`, one pose, flange, base frame", f"{c['jacobian_one_us']:.2f} µs", f"{n['jacobian_one_us']:.2f} µs",
          against_pinocchio("`computeJointJacobians` and `getJointJacobian` (same answer to 1e-12)",
-                           ref["pinocchio_jacobian_us"], 2),
-         f"compiled {pass_if(c['jacobian_one_us'] <= 2 * ref['pinocchio_jacobian_us'])}" if has_pinocchio else "n/a"],
+                           c["pinocchio_jacobian_us"], 2),
+         f"compiled {pass_if(c['jacobian_one_us'] <= 2 * c['pinocchio_jacobian_us'])}" if has_pinocchio else "n/a"],
         ["`arm.sample_workspace(1_000_000)` with manipulability", f"{c['workspace_s']:.3f} s", f"{n['workspace_s']:.3f} s",
          "target < 0.5 s", pass_if(max(c["workspace_s"], n["workspace_s"]) < 0.5)],
     ]
@@ -346,7 +348,7 @@ def main() -> None:
             "## Kinematics core (`benchmarks/bench_core.py`)",
             "",
             f"Run: {machine()}. Medians of repeated runs, each backend in its own process, the",
-            "other references in a third, one after the other; ur-analytic-ik's IK and the numpy baseline",
+            "other references in a third, one after the other; ur-analytic-ik's IK, pinocchio and the numpy baseline",
             "are timed in each backend's process, in turns with its own IK calls (the ratios are taken",
             "there: on this shared machine, runs minutes apart differ by up to 2×). UR10 numbers (`Arm.preset(\"ur10\")`) so that",
             "ur-analytic-ik solves the same arm. The compiled kernel earns its place on the one-pose",
