@@ -436,8 +436,8 @@ static void solve_lanes(const Params *P, const double *const *M, const double *t
             const double s5 = sign * s5_abs[l][k];
             c6[l][k] = s5_abs[l][k] > 0.0 ? sign * c6s5 / s5_abs[l][k] : 1.0;
             s6[l][k] = s5_abs[l][k] > 0.0 ? sign * s6s5 / s5_abs[l][k] : 0.0;
-            double x = s5 * (t->r13 * c + t->r23 * s) + c5[l][k] * c5[l][k] * (s6[l][k] * t->r31 + c6[l][k] * t->r32);
-            double y = s5 * t->r33 + c5[l][k] * (c6[l][k] * t->r31 - s6[l][k] * t->r32);
+            const double x = s5 * (t->r13 * c + t->r23 * s) + c5[l][k] * c5[l][k] * (s6[l][k] * t->r31 + c6[l][k] * t->r32);
+            const double y = s5 * t->r33 + c5[l][k] * (c6[l][k] * t->r31 - s6[l][k] * t->r32);
             const double norm = sqrt(x * x + y * y);
             c234[l][k] = x / norm;
             s234[l][k] = y / norm;
