@@ -153,19 +153,24 @@ def choose(page, dropdown, option: str) -> None:
     """Pick ``option`` in a viser dropdown, with the mouse, and wait until the server holds it.
 
     A dropdown clicked while its folder is still unfolding opens its list out of sight, or not at
-    all: it is clicked again until the option shows."""
+    all; an open list closes when the panel beside it is rebuilt (a formula typeset, a folder
+    filled). So the list is opened and the option clicked again until the server holds it."""
     choice = page.get_by_role("option", name=option, exact=True)
 
-    def opened() -> bool:
+    def picked() -> bool:
+        if dropdown.value == option:
+            return True
         if not choice.is_visible():
             page.locator(dom_id(dropdown)).click()
             with contextlib.suppress(Exception):
                 choice.wait_for(state="visible", timeout=1000 * LOST_PRESS)
-        return choice.is_visible()
+        with contextlib.suppress(Exception):  # the list may have closed since it showed
+            choice.click(timeout=1000 * LOST_PRESS)
+        with contextlib.suppress(AssertionError):
+            wait_for(lambda: dropdown.value == option, timeout=1.0)
+        return dropdown.value == option
 
-    wait_for(opened, what=f"{option!r} in the open list")
-    choice.click()
-    wait_for(lambda: dropdown.value == option, what=f"the server to hold {option!r}")
+    wait_for(picked, what=f"the server to hold {option!r}, picked in the open list")
 
 
 def text_field(page, handle):
