@@ -343,8 +343,8 @@ static void solve_pose(const Params *P, const double *M, double theta6_hint, dou
 }
 
 /* ---------------------------------------------------------------- many poses side by side
- * solve_pose is one long chain of dependent steps, a third of it the C library's atan2: one pose
- * at a time, the processor waits on each. ik_batch hands it LANES poses at once instead: each step
+ * solve_pose is one long chain of dependent steps, about half its time the C library's atan2: one
+ * pose at a time, the processor waits on each. ik_batch hands solve_lanes LANES poses at once: each step
  * of the regular case (no slot near a singularity, a hint or a tolerance's edge) runs over all of
  * them before the next, so their chains overlap, with lane_atan2 (below) for the angles. A pose
  * with any slot that is not regular is solved again by solve_pose: every decision is then
