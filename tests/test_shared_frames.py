@@ -117,3 +117,36 @@ def test_viser_producer_is_the_one_copied():
 def test_the_app_sends_through_it(classroom):
     """Every connection of the running app, shared mode included, gets its frames from shared_frames."""
     assert _infra._message_producer is shared_frames.shared_message_producer
+
+
+@pytest.mark.server
+def test_what_one_browser_is_sent_after_the_broadcast_arrives_after_it(classroom):
+    """viser sends a browser the broadcast queue and its own on two tasks: ``after_broadcast`` holds
+    one browser's message until the shared scene's, queued before it, have left. A shared node drawn
+    anew and that browser's hidden node of the same name end hidden, every time (sent at once, the
+    shared one arrived last now and then, and a classroom explorer saw the class's arm on theirs)."""
+    from ur10teach.viser_internals import after_broadcast
+    from ur10dev.viser_client import ViserClient
+
+    server = classroom.server
+
+    async def scenario():
+        browser = await ViserClient(f"http://127.0.0.1:{classroom.port}").connect()
+        client = next(iter(server.get_clients().values()))
+        mine = str(client.client_id)
+        names = [f"/probe/{k}" for k in range(40)]
+        cloud = np.random.default_rng(0).uniform(-1, 1, (3000, 3)).astype(np.float32)  # a redrawn arm's size
+        for name in names:
+            server.scene.add_point_cloud(name, cloud, (200, 0, 0))
+            after_broadcast(client, lambda name=name: client.scene.add_frame(name, show_axes=False, visible=False))
+
+        def hidden() -> bool:
+            return all(browser.received.node_owners.get(n) == mine and browser.received.visible.get(n) is False for n in names)
+
+        await until(hidden, what="every probe hidden in the browser")
+        server.scene.add_frame("/probe_end")  # the broadcast queue's order: once this is there, all before it is
+        await until(lambda: "/probe_end" in browser.received.nodes, what="the shared marker")
+        assert hidden(), [n for n in names if browser.received.node_owners.get(n) != mine]
+        await browser.close()
+
+    asyncio.run(scenario())

@@ -52,6 +52,21 @@ def test_a_client_connection_is_found_where_it_was():
         server.stop()
 
 
+def test_the_broadcast_queue_is_where_after_broadcast_reads_it():
+    """Its count of queued messages and each connection's cursor in it (the message it has taken last)."""
+    server = viser.ViserServer(port=0, verbose=False)
+    try:
+        buffer = server._websock_server._broadcast_buffer
+        assert isinstance(buffer, AsyncMessageBuffer) and buffer.persistent_messages
+        before = buffer.message_counter
+        server.scene.add_frame("/probe")
+        assert buffer.message_counter > before  # the count goes up with what the scene queues
+        assert isinstance(buffer.generator_cursors, dict) and callable(buffer.flush)
+        assert "self.generator_cursors[client_id] = last_sent_id" in inspect.getsource(AsyncMessageBuffer._window_loop)
+    finally:
+        server.stop()
+
+
 def test_the_fast_updates_internals_are_there():
     server = viser.ViserServer(port=0, verbose=False)
     try:

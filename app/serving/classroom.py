@@ -39,6 +39,7 @@ from ..features.singularity import factors_html
 from ..feedback import guard
 from ..session import ArmSession
 from ..state import ArmState
+from ..viser_internals import after_broadcast
 from .class_challenges import ClassChallenges
 from .gate import address_of
 
@@ -382,10 +383,20 @@ class Classroom:
         """In an explorer's browser, hide what of the class's arm its own arm does not already cover.
 
         A private UR10 reuses the shared UR10's scene names, which hides all of it but the
-        presenter's target marker; a private course arm has a root of its own.
+        presenter's target marker; a private course arm has a root of its own. The hiding waits
+        for the class's arm, just drawn anew, to have left for that browser: sent first, it
+        could arrive after the class's arm and be replaced by it.
         """
-        for name in set(self.drawing.roots) - set(member.session.drawing.roots):
-            member.client.scene.add_frame(name, show_axes=False, visible=False)
+        drawing = self.drawing
+
+        def hide() -> None:  # on viser's event loop, which must not wait for the classroom's lock
+            session = member.session
+            if member.closed or member.role != EXPLORER or session is None or self.drawing is not drawing:
+                return  # gone, back to watching, or the class's arm changed again (that change hides it)
+            for name in set(drawing.roots) - set(session.drawing.roots):
+                member.client.scene.add_frame(name, show_axes=False, visible=False)
+
+        after_broadcast(member.client, hide)
 
     def rejoin(self, member: Member) -> None:
         """Back to watching the presenter: drop the private arm (the shared one shows again)."""

@@ -5,6 +5,8 @@
 * :mod:`.shared_frames` — viser's per-connection message producer, replaced by one that
   encodes a broadcast window once for every browser and drops a browser that stops reading;
 * :func:`connection_of` — the websocket connection behind a client (the gate's, with its address);
+* :func:`after_broadcast` — an action for one browser held until the shared scene's queued messages
+  have left for it (viser sends the two queues on two tasks, in no set order);
 * :data:`messages` — viser's message classes, which the gate validates every incoming message against;
 * :func:`labels_of` — every 3D label of a scene (lecture mode sizes them all).
 
@@ -14,9 +16,23 @@ a viser upgrade that moves one fails there, not in a classroom.
 
 from __future__ import annotations
 
+import asyncio
+import logging
+from typing import Callable
+
 from viser import _messages as messages
 
-__all__ = ["connection_of", "labels_of", "messages"]
+from .shared_frames import SEND_TIMEOUT
+
+__all__ = ["after_broadcast", "connection_of", "labels_of", "messages"]
+
+log = logging.getLogger(__name__)
+
+#: How often :func:`after_broadcast` looks whether the broadcast queue has reached a browser (s).
+BROADCAST_POLL = 0.005
+#: A broadcast window is written on its producer's next step after it leaves the queue: this much
+#: later, what the browser's own queue sends (itself a window of 1/60 s later) follows it.
+WINDOW_WRITTEN = 0.02
 
 
 def connection_of(client):  # noqa: ANN001, ANN201
@@ -29,3 +45,32 @@ def labels_of(scene):  # noqa: ANN001, ANN201
     import viser
 
     return [handle for handle in list(scene._handle_from_node_name.values()) if isinstance(handle, viser.LabelHandle)]
+
+
+def after_broadcast(client, action: Callable[[], None]) -> None:  # noqa: ANN001
+    """Run ``action()`` on viser's event loop once the broadcast messages queued so far have left for
+    ``client`` (a ``viser.ClientHandle``); at once if it has gone, at the latest after :data:`SEND_TIMEOUT`.
+
+    viser sends each browser the broadcast queue and the browser's own queue on two tasks, in no
+    set order: a node the shared scene has just drawn anew could otherwise reach the browser after
+    what ``action`` queues for that one browser under the same name, and replace it.
+    """
+    server = client._viser_server
+    websock = server._websock_server
+    buffer = websock._broadcast_buffer
+    last = buffer.message_counter - 1
+    buffer.flush()
+    loop = server.get_event_loop()
+
+    async def when_sent() -> None:
+        deadline = loop.time() + SEND_TIMEOUT
+        while (buffer.generator_cursors.get(client.client_id, last) < last and client.client_id in websock._live_connections
+               and loop.time() < deadline):
+            await asyncio.sleep(BROADCAST_POLL)
+        await asyncio.sleep(WINDOW_WRITTEN)
+        try:
+            action()
+        except Exception:  # one browser's trouble (it left meanwhile, say) is logged, not raised into the loop
+            log.exception("an action after the broadcast for browser %s failed", client.client_id)
+
+    asyncio.run_coroutine_threadsafe(when_sent(), loop)
