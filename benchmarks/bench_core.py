@@ -77,15 +77,6 @@ def side_by_side(calls: dict, repeats: int = 7) -> dict:
     return {name: statistics.median(values) for name, values in times.items()}
 
 
-def seconds_in_turns(functions: dict, repeats: int = 5) -> dict:
-    """:func:`seconds` of each ``name: function``, their repeats taken in turn (as :func:`side_by_side`)."""
-    times = {name: [] for name in functions}
-    for _ in range(repeats):
-        for name, function in functions.items():
-            times[name].append(seconds(function, repeats=1))
-    return {name: statistics.median(values) for name, values in times.items()}
-
-
 def seconds(function, repeats: int = 5) -> float:
     times = []
     for _ in range(repeats):
@@ -126,9 +117,9 @@ def measure() -> dict:
         # the old C wrap() subtracted 2π in a loop: 0.26 s at 1e9, forever from 1e16
         "ik_huge_hint_us": per_call_us(lambda T, h: arm.ik(T, hint=h),
                                        [(poses[k], np.append(q[k, :5], h)) for k in range(300) for h in (1e9, 1e16, 1e300)]),
-        **{key: BATCH / value for key, value in seconds_in_turns({
-            "batch_per_s": lambda: arm.ik(T_batch),
-            "numpy_baseline_per_s": lambda: ik_numpy(arm, T_batch),
+        **{key: BATCH / (us * 1e-6) for key, us in side_by_side({
+            "batch_per_s": (arm.ik, [(T_batch,)]),
+            "numpy_baseline_per_s": (ik_numpy, [(arm, T_batch)]),
         }, repeats=3).items()},
         "pinocchio_fk_us": float("nan"), "pinocchio_jacobian_us": float("nan"),
         **side_by_side({

@@ -120,38 +120,115 @@ static double nearest_reachable_theta234(double A, double V, double theta234, do
     return theta234 + (fabs(first) <= fabs(second) ? first : second);
 }
 
-/* Steps 1 and 2 for one theta1 (c1, s1, reach A): theta1, c5 = z4 . z6 and |s5| from the row pair of step 3. */
-static Shoulder shoulder_at(const Pose *T, double c1, double s1, double A)
+/* Step 1: the pose's rotation and wrist-2 point P5 = p - d6 z6 into *T; P5's distance rho from the base
+ * axis, the reach A it gives and the band of A within CHOICE_TOLERANCE of rho, and theta1's band with it. */
+typedef struct {
+    double rho, reach, reach_low, reach_high, theta1_band;
+} WristPoint;
+
+static WristPoint wrist_point(const Params *P, const double *M, Pose *T)
+{
+    const double d4 = P->d4;
+    WristPoint w;
+    T->r11 = M[0]; T->r12 = M[1]; T->r13 = M[2];
+    T->r21 = M[4]; T->r22 = M[5]; T->r23 = M[6];
+    T->r31 = M[8]; T->r32 = M[9]; T->r33 = M[10];
+    T->p5x = M[3] - P->d6 * M[2];
+    T->p5y = M[7] - P->d6 * M[6];
+    T->p5z = M[11] - P->d6 * M[10];
+    const double rho2 = T->p5x * T->p5x + T->p5y * T->p5y;
+    w.rho = sqrt(rho2);
+    w.reach = sqrt(fmax(rho2 - d4 * d4, 0.0));
+    const double low = w.rho - CHOICE_TOLERANCE, high = w.rho + CHOICE_TOLERANCE;
+    w.reach_low = sqrt(fmax(low * low - d4 * d4, 0.0));
+    w.reach_high = sqrt(fmax(high * high - d4 * d4, 0.0));
+    w.theta1_band = (w.reach_high - w.reach_low) * d4 / (w.reach * w.reach + d4 * d4);
+    return w;
+}
+
+/* |A| of both shoulder slots: the hint's where it lies in the band, else the pose's. */
+static double reach_magnitude(const WristPoint *w, double reach_hint)
+{
+    return (w->reach_low <= fabs(reach_hint) && fabs(reach_hint) <= w->reach_high) ? fabs(reach_hint) : w->reach;
+}
+
+/* Step 2 for one theta1 (c1, s1, reach A): c5 = z4 . z6 and |s5| from the row pair of step 3 (the angles NaN). */
+static Shoulder row_pair(const Pose *T, double c1, double s1, double A)
 {
     Shoulder h;
     h.c1 = c1;
     h.s1 = s1;
     h.A = A;
-    h.theta1 = wrap(atan2(s1, c1));
     h.c5 = T->r13 * s1 - T->r23 * c1;
     h.c6s5 = T->r21 * c1 - T->r11 * s1;
     h.s6s5 = T->r12 * s1 - T->r22 * c1;
     h.s5_abs = sqrt(h.c6s5 * h.c6s5 + h.s6s5 * h.s6s5); /* O(1) values: no hypot needed (nor in the reference) */
+    h.theta1 = h.theta5 = NAN;
+    return h;
+}
+
+/* row_pair of the theta1 that puts P5 at reach A: x1 = (c1, s1) with P5 = A x1 + d4 (s1, -c1). */
+static Shoulder row_pair_at_reach(const Pose *T, double rho, double d4, double A)
+{
+    const double scale = rho * sqrt(A * A + d4 * d4);
+    return row_pair(T, (T->p5x * A - T->p5y * d4) / scale, (T->p5y * A + T->p5x * d4) / scale, A);
+}
+
+/* Where the hint's elbow angle |theta3| puts the frame-4 origin: r at that angle (NaN without a hint). */
+static double hint_elbow_reach(const Params *P, double elbow_hint)
+{
+    return sqrt(P->a2 * P->a2 + P->a3 * P->a3 + 2.0 * P->a2 * P->a3 * cos(elbow_hint));
+}
+
+/* Steps 1 and 2 for one theta1: row_pair with theta1 and theta5 (of the wrist not flipped). */
+static Shoulder with_angles(Shoulder h)
+{
+    h.theta1 = wrap(atan2(h.s1, h.c1));
     h.theta5 = wrap(atan2(h.s5_abs, h.c5));
     return h;
+}
+
+static Shoulder shoulder_at(const Pose *T, double c1, double s1, double A)
+{
+    return with_angles(row_pair(T, c1, s1, A));
+}
+
+/* Step 3's theta6 of the pose as (c6, s6), for one wrist sign; (1, 0) where s5 = 0. */
+static void pose_theta6(const Shoulder *h, double sign, double *c6, double *s6)
+{
+    *c6 = h->s5_abs > 0.0 ? sign * h->c6s5 / h->s5_abs : 1.0;
+    *s6 = h->s5_abs > 0.0 ? sign * h->s6s5 / h->s5_abs : 0.0;
+}
+
+/* Steps 4 and 5 for a wrist sign (s5 = sign |s5|) and theta6 (c6, s6): theta234 as (c234, s234), blended
+ * with the third row so that it holds at every theta5, and the frame-4 origin in the arm plane (h4, v4) at r. */
+static void arm_plane(const Params *P, const Pose *T, const Shoulder *h, double s5, double c6, double s6,
+                      double *c234, double *s234, double *h4, double *v4, double *r)
+{
+    const double c1 = h->c1, s1 = h->s1, c5 = h->c5;
+    const double x = s5 * (T->r13 * c1 + T->r23 * s1) + c5 * c5 * (s6 * T->r31 + c6 * T->r32);
+    const double y = s5 * T->r33 + c5 * (c6 * T->r31 - s6 * T->r32);
+    const double norm = sqrt(x * x + y * y);
+    *c234 = x / norm;
+    *s234 = y / norm;
+    *h4 = h->A + P->d5 * *s234;
+    *v4 = (T->p5z - P->d1) - P->d5 * *c234;
+    *r = sqrt(*h4 * *h4 + *v4 * *v4);
 }
 
 /* ik_reference._wrist_and_elbow: steps 2-5 for one theta1 (its Shoulder) and one wrist sign. */
 static Slot wrist_and_elbow(const Params *P, const Pose *T, const Shoulder *h, double sign, double hint)
 {
     Slot o;
-    const double c1 = h->c1, s1 = h->s1, A = h->A, c5 = h->c5, c6s5 = h->c6s5, s6s5 = h->s6s5;
+    const double A = h->A, c5 = h->c5;
     o.theta1 = h->theta1;
     o.s5_abs = h->s5_abs;
     const double s5 = sign * o.s5_abs;
     /* atan2(-y, x) = -atan2(y, x) exactly; wrap() sends -pi (s5 = -0, c5 < 0) to pi as it would atan2's */
     o.theta5 = sign > 0.0 ? h->theta5 : wrap(-h->theta5);
     /* Step 3: theta6 from the pose, or the hint's wherever that reproduces the pose. */
-    double c6 = 1.0, s6 = 0.0;
-    if (o.s5_abs > 0.0) {
-        c6 = sign * c6s5 / o.s5_abs;
-        s6 = sign * s6s5 / o.s5_abs;
-    }
+    double c6, s6;
+    pose_theta6(h, sign, &c6, &s6);
     const double theta6_pose = atan2(s6, c6);
     if (o.s5_abs * fabs(wrap(hint - theta6_pose)) <= WRIST_TURN_TOLERANCE) {
         o.theta6 = hint;
@@ -160,18 +237,10 @@ static Slot wrist_and_elbow(const Params *P, const Pose *T, const Shoulder *h, d
     } else {
         o.theta6 = wrap(theta6_pose);
     }
-    /* Step 4, blended with the third row so that it holds at every theta5. */
-    double c234 = s5 * (T->r13 * c1 + T->r23 * s1) + c5 * c5 * (s6 * T->r31 + c6 * T->r32);
-    double s234 = s5 * T->r33 + c5 * (c6 * T->r31 - s6 * T->r32);
-    const double norm = sqrt(c234 * c234 + s234 * s234);
-    c234 /= norm;
-    s234 /= norm;
+    double c234, s234;
+    arm_plane(P, T, h, s5, c6, s6, &c234, &s234, &o.h4, &o.v4, &o.r);
     o.theta234 = atan2(s234, c234);
-    /* Step 5: the frame-4 origin in the arm plane. */
     const double V = T->p5z - P->d1;
-    o.h4 = A + P->d5 * s234;
-    o.v4 = V - P->d5 * c234;
-    o.r = sqrt(o.h4 * o.h4 + o.v4 * o.v4);
     /* a turn that could not fit the tolerance is not tried: r moves at most d5 |(A, V)| / r per radian */
     const double beyond = o.r > P->a2 + P->a3 ? o.r - (P->a2 + P->a3) : fabs(P->a2 - P->a3) - o.r;
     const double R = beyond > 0.0 ? hypot(A, V) : 0.0;
@@ -252,13 +321,9 @@ static void solve_pose(const Params *P, const double *M, double theta6_hint, dou
                        Out o)
 {
     const double d4 = P->d4, a2 = P->a2, a3 = P->a3;
-    Pose T = {M[0], M[1], M[2], M[4], M[5], M[6], M[8], M[9], M[10], 0.0, 0.0, 0.0};
-    /* Step 1: the wrist-2 point P5 = p - d6 z6 and its distance rho from the base axis. */
-    T.p5x = M[3] - P->d6 * M[2];
-    T.p5y = M[7] - P->d6 * M[6];
-    T.p5z = M[11] - P->d6 * M[10];
-    const double rho2 = T.p5x * T.p5x + T.p5y * T.p5y;
-    const double rho = sqrt(rho2);
+    Pose T;
+    const WristPoint w = wrist_point(P, M, &T);
+    const double rho = w.rho;
     *o.rho = rho;
     *o.shoulder = fabs(rho - d4) <= LENGTH_TOLERANCE;
     for (int k = 0; k < 8; k++) {
@@ -271,20 +336,15 @@ static void solve_pose(const Params *P, const double *M, double theta6_hint, dou
     for (int k = 0; k < 48; k++) o.q[k] = NAN;
     if (!(rho >= d4 - LENGTH_TOLERANCE)) return;
 
-    const double reach = sqrt(fmax(rho2 - d4 * d4, 0.0));
-    const double low = rho - CHOICE_TOLERANCE, high = rho + CHOICE_TOLERANCE;
-    const double reach_low = sqrt(fmax(low * low - d4 * d4, 0.0));
-    const double reach_high = sqrt(fmax(high * high - d4 * d4, 0.0));
-    const double theta1_band = (reach_high - reach_low) * d4 / (reach * reach + d4 * d4);
+    const double reach_low = w.reach_low, reach_high = w.reach_high;
     const double outer = a2 + a3, inner = fabs(a2 - a3);
     const double hint = wrap(theta6_hint);
     const double elbow_hint = isfinite(theta3_hint) ? fabs(wrap(theta3_hint)) : NAN;
-    const double r_hint = sqrt(a2 * a2 + a3 * a3 + 2.0 * a2 * a3 * cos(elbow_hint)); /* where the hint's elbow puts P4 */
+    const double r_hint = hint_elbow_reach(P, elbow_hint);
     for (int i = 0; i < 2; i++) {
         const double side = i == 0 ? -1.0 : 1.0;
-        const double A = side * ((reach_low <= fabs(reach_hint) && fabs(reach_hint) <= reach_high) ? fabs(reach_hint) : reach);
-        const double scale = rho * sqrt(A * A + d4 * d4);
-        const Shoulder h = shoulder_at(&T, (T.p5x * A - T.p5y * d4) / scale, (T.p5y * A + T.p5x * d4) / scale, A);
+        const double A = side * reach_magnitude(&w, reach_hint);
+        const Shoulder h = with_angles(row_pair_at_reach(&T, rho, d4, A));
         for (int j = 0; j < 2; j++) {
             const double sign = j == 0 ? 1.0 : -1.0;
             Slot s = wrist_and_elbow(P, &T, &h, sign, hint);
@@ -297,7 +357,7 @@ static void solve_pose(const Params *P, const double *M, double theta6_hint, dou
                 const Slot own = wrist_and_elbow(P, &T, &h, sign, NAN);
                 if (reaches(own.r, P)) s = own;
             }
-            if (!reaches(s.r, P) && s.s5_abs <= theta1_band) {
+            if (!reaches(s.r, P) && s.s5_abs <= w.theta1_band) {
                 Slot better;
                 if (theta1_for_reach(P, &T, &s, sign, hint, &better)) s = better;
             }
@@ -376,82 +436,50 @@ static inline double lane_atan2(double y, double x, double pi_low)
 static void solve_lanes(const Params *P, const double *const *M, const double *theta6_hint, const double *reach_hint,
                         const double *theta3_hint, const Out *o, int lanes)
 {
-    const double d1 = P->d1, a2 = P->a2, a3 = P->a3, d4 = P->d4, d5 = P->d5, d6 = P->d6;
+    const double a2 = P->a2, a3 = P->a3, d4 = P->d4, d5 = P->d5;
     const double outer = a2 + a3, inner = fabs(a2 - a3);
     int regular[LANES];
     Pose T[LANES];
-    double reach[LANES], reach_low[LANES], reach_high[LANES], band[LANES], hint[LANES], r_hint[LANES];
+    WristPoint w[LANES];
+    Shoulder h[LANES][2]; /* per lane and side i */
+    double hint[LANES], r_hint[LANES];
     /* per lane and slot pair k = 2 i + j (side i, wrist sign j) */
-    double c1[LANES][4], s1[LANES][4], A[LANES][4], c5[LANES][4], s5_abs[LANES][4], c6[LANES][4], s6[LANES][4];
-    double c234[LANES][4], s234[LANES][4], h4[LANES][4], v4[LANES][4], r[LANES][4], c3[LANES][4], s3[LANES][4];
-    double theta1[LANES][4], theta5[LANES][4], theta6[LANES][4], theta234[LANES][4];
-    double theta3[LANES][4], beta[LANES][4], gamma[LANES][4];
+    double c6[LANES][4], s6[LANES][4], c234[LANES][4], s234[LANES][4], h4[LANES][4], v4[LANES][4], r[LANES][4];
+    double c3[LANES][4], s3[LANES][4];
+    double theta1[LANES][2], theta5[LANES][2]; /* per side */
+    double theta6[LANES][4], theta234[LANES][4], theta3[LANES][4], beta[LANES][4], gamma[LANES][4];
     /* an angle this near +-pi may come out as the other one (2 pi away) where the library's atan2 and
      * lane_atan2 differ by an ulp: such a pose is left to solve_pose. 2^-46 is 32 ulp of pi. */
     const double edge = PI - ldexp(1.0, -46);
     const double pi_low = sin(PI); /* pi - PI, exactly as a double: sin(pi - x) = x to x^3 / 6 */
 
-    for (int l = 0; l < lanes; l++) { /* step 1 */
-        const double *m = M[l];
-        Pose *t = &T[l];
-        t->r11 = m[0]; t->r12 = m[1]; t->r13 = m[2];
-        t->r21 = m[4]; t->r22 = m[5]; t->r23 = m[6];
-        t->r31 = m[8]; t->r32 = m[9]; t->r33 = m[10];
-        t->p5x = m[3] - d6 * m[2];
-        t->p5y = m[7] - d6 * m[6];
-        t->p5z = m[11] - d6 * m[10];
-        const double rho2 = t->p5x * t->p5x + t->p5y * t->p5y;
-        const double rho = sqrt(rho2);
-        *o[l].rho = rho;
-        *o[l].shoulder = fabs(rho - d4) <= LENGTH_TOLERANCE;
-        regular[l] = rho >= d4 - LENGTH_TOLERANCE;
-        reach[l] = sqrt(fmax(rho2 - d4 * d4, 0.0));
-        const double low = rho - CHOICE_TOLERANCE, high = rho + CHOICE_TOLERANCE;
-        reach_low[l] = sqrt(fmax(low * low - d4 * d4, 0.0));
-        reach_high[l] = sqrt(fmax(high * high - d4 * d4, 0.0));
-        band[l] = (reach_high[l] - reach_low[l]) * d4 / (reach[l] * reach[l] + d4 * d4);
+    for (int l = 0; l < lanes; l++) { /* steps 1 and 2 */
+        w[l] = wrist_point(P, M[l], &T[l]);
+        *o[l].rho = w[l].rho;
+        *o[l].shoulder = fabs(w[l].rho - d4) <= LENGTH_TOLERANCE;
+        regular[l] = w[l].rho >= d4 - LENGTH_TOLERANCE;
         hint[l] = wrap(theta6_hint[l]);
-        const double elbow_hint = isfinite(theta3_hint[l]) ? fabs(wrap(theta3_hint[l])) : NAN;
-        r_hint[l] = sqrt(a2 * a2 + a3 * a3 + 2.0 * a2 * a3 * cos(elbow_hint)); /* NaN without a hint */
-        const double magnitude = (reach_low[l] <= fabs(reach_hint[l]) && fabs(reach_hint[l]) <= reach_high[l])
-                                     ? fabs(reach_hint[l]) : reach[l];
-        for (int i = 0; i < 2; i++) {
-            const double a = (i == 0 ? -1.0 : 1.0) * magnitude;
-            const double scale = rho * sqrt(a * a + d4 * d4);
-            const double c = (t->p5x * a - t->p5y * d4) / scale, s = (t->p5y * a + t->p5x * d4) / scale;
-            for (int j = 0; j < 2; j++) {
-                c1[l][2 * i + j] = c;
-                s1[l][2 * i + j] = s;
-                A[l][2 * i + j] = a;
-            }
-        }
+        r_hint[l] = hint_elbow_reach(P, isfinite(theta3_hint[l]) ? fabs(wrap(theta3_hint[l])) : NAN);
+        const double magnitude = reach_magnitude(&w[l], reach_hint[l]);
+        for (int i = 0; i < 2; i++) h[l][i] = row_pair_at_reach(&T[l], w[l].rho, d4, (i == 0 ? -1.0 : 1.0) * magnitude);
     }
-    for (int l = 0; l < lanes; l++) /* steps 2-5 of each slot pair, the pose's own theta6 */
+    for (int l = 0; l < lanes; l++) /* steps 3-5 of each slot pair, the pose's own theta6 */
         for (int k = 0; k < 4; k++) {
-            const Pose *t = &T[l];
-            const double c = c1[l][k], s = s1[l][k], sign = (k & 1) ? -1.0 : 1.0;
-            const double c6s5 = t->r21 * c - t->r11 * s, s6s5 = t->r12 * s - t->r22 * c;
-            c5[l][k] = t->r13 * s - t->r23 * c;
-            s5_abs[l][k] = sqrt(c6s5 * c6s5 + s6s5 * s6s5);
-            const double s5 = sign * s5_abs[l][k];
-            c6[l][k] = s5_abs[l][k] > 0.0 ? sign * c6s5 / s5_abs[l][k] : 1.0;
-            s6[l][k] = s5_abs[l][k] > 0.0 ? sign * s6s5 / s5_abs[l][k] : 0.0;
-            const double x = s5 * (t->r13 * c + t->r23 * s) + c5[l][k] * c5[l][k] * (s6[l][k] * t->r31 + c6[l][k] * t->r32);
-            const double y = s5 * t->r33 + c5[l][k] * (c6[l][k] * t->r31 - s6[l][k] * t->r32);
-            const double norm = sqrt(x * x + y * y);
-            c234[l][k] = x / norm;
-            s234[l][k] = y / norm;
-            h4[l][k] = A[l][k] + d5 * s234[l][k];
-            v4[l][k] = (t->p5z - d1) - d5 * c234[l][k];
-            r[l][k] = sqrt(h4[l][k] * h4[l][k] + v4[l][k] * v4[l][k]);
+            const Shoulder *hk = &h[l][k >> 1];
+            const double sign = (k & 1) ? -1.0 : 1.0;
+            pose_theta6(hk, sign, &c6[l][k], &s6[l][k]);
+            arm_plane(P, &T[l], hk, sign * hk->s5_abs, c6[l][k], s6[l][k], &c234[l][k], &s234[l][k], &h4[l][k], &v4[l][k],
+                      &r[l][k]);
             const double cc = clamp_unit((r[l][k] * r[l][k] - a2 * a2 - a3 * a3) / (2.0 * a2 * a3));
             c3[l][k] = cc;
             s3[l][k] = sqrt(1.0 - cc * cc);
         }
     for (int l = 0; l < lanes; l++) /* every angle, side by side */
         for (int k = 0; k < 4; k++) {
-            theta1[l][k] = lane_atan2(s1[l][k], c1[l][k], pi_low);
-            theta5[l][k] = lane_atan2(s5_abs[l][k], c5[l][k], pi_low);
+            if (!(k & 1)) {
+                theta1[l][k >> 1] = lane_atan2(h[l][k >> 1].s1, h[l][k >> 1].c1, pi_low);
+                theta5[l][k >> 1] = lane_atan2(h[l][k >> 1].s5_abs, h[l][k >> 1].c5, pi_low);
+            }
             theta6[l][k] = lane_atan2(s6[l][k], c6[l][k], pi_low);
             theta234[l][k] = lane_atan2(s234[l][k], c234[l][k], pi_low);
             theta3[l][k] = lane_atan2(s3[l][k], c3[l][k], pi_low);
@@ -460,21 +488,21 @@ static void solve_lanes(const Params *P, const double *const *M, const double *t
         }
     for (int l = 0; l < lanes; l++) { /* where solve_pose would decide otherwise, or the angles may differ */
         for (int k = 0; k < 4 && regular[l]; k++) {
-            const double side = k < 2 ? -1.0 : 1.0, rk = r[l][k], s5 = s5_abs[l][k];
-            const double V = T[l].p5z - d1;
+            const double side = k < 2 ? -1.0 : 1.0, rk = r[l][k], s5 = h[l][k >> 1].s5_abs, A = h[l][k >> 1].A;
+            const double V = T[l].p5z - P->d1;
             /* the hint's theta6 kept (with a margin for the ulp lane_atan2 may differ by) */
             int ok = s5 * fabs(wrap(hint[l] - theta6[l][k])) > 2.0 * WRIST_TURN_TOLERANCE;
             ok = ok && !(fabs(rk - r_hint[l]) <= CHOICE_TOLERANCE); /* the hint's theta3 kept */
             /* wrist_and_elbow's slide along the singular direction (sqrt for hypot: a margin of 2) */
             const double beyond = rk > outer ? rk - outer : inner - rk;
             ok = ok && isfinite(rk) && !(beyond > 0.0 && s5 * beyond * rk <= 4.0 * WRIST_TURN_TOLERANCE * d5 *
-                                                                           sqrt(A[l][k] * A[l][k] + V * V));
+                                                                           sqrt(A * A + V * V));
             if (ok && !reaches(rk, P)) { /* reach_within_band would start; theta1_for_reach would be tried */
-                const double band_a = reach_low[l] > 0.0 ? side * reach_low[l] : -side * reach_high[l];
-                const double band_b = side * reach_high[l];
+                const double band_a = w[l].reach_low > 0.0 ? side * w[l].reach_low : -side * w[l].reach_high;
+                const double band_b = side * w[l].reach_high;
                 const double limit = rk > outer ? outer : inner;
                 ok = (!(fabs(rk - limit) <= BAND_LEVERAGE * (fmax(band_a, band_b) - fmin(band_a, band_b))) ||
-                      fabs(v4[l][k]) > limit) && !(s5 <= band[l]);
+                      fabs(v4[l][k]) > limit) && !(s5 <= w[l].theta1_band);
             }
             regular[l] = ok;
         }
@@ -484,7 +512,7 @@ static void solve_lanes(const Params *P, const double *const *M, const double *t
             const int base = 2 * k;
             const double rk = r[l][k];
             out.elbow_distance[base] = out.elbow_distance[base + 1] = rk;
-            out.wrist[base] = out.wrist[base + 1] = (npy_bool)(s5_abs[l][k] <= WRIST_TOLERANCE);
+            out.wrist[base] = out.wrist[base + 1] = (npy_bool)(h[l][k >> 1].s5_abs <= WRIST_TOLERANCE);
             out.valid[base] = out.valid[base + 1] = 0;
             out.elbow[base] = out.elbow[base + 1] = 0;
             if (!(rk <= outer + LENGTH_TOLERANCE) || rk < inner - LENGTH_TOLERANCE) {
@@ -492,7 +520,8 @@ static void solve_lanes(const Params *P, const double *const *M, const double *t
                 continue;
             }
             const int at_limit = rk >= outer - LENGTH_TOLERANCE || rk <= inner + LENGTH_TOLERANCE;
-            const double t1 = wrap(theta1[l][k]), t5 = (k & 1) ? wrap(-wrap(theta5[l][k])) : wrap(theta5[l][k]);
+            const double t1 = wrap(theta1[l][k >> 1]);
+            const double t5 = (k & 1) ? wrap(-wrap(theta5[l][k >> 1])) : wrap(theta5[l][k >> 1]);
             const double t6 = wrap(theta6[l][k]);
             for (int e = 0; e < 2; e++) {
                 double *qk = out.q + 6 * (base + e);
