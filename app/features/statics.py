@@ -10,6 +10,7 @@ the arm.
 
 from __future__ import annotations
 
+import asyncio
 import math
 import threading
 
@@ -133,7 +134,7 @@ class StaticsView(View):
         stop_echo(self.handle)
         self.dragged = -np.asarray(arm.up, dtype=float)  #: the unit direction the handle was last dragged to (base frame)
         self._holding = False
-        self.handle.on_update(session.guard(self._handle_moved))
+        self.handle.on_update(self._handle_dragged)
         self._scene = scene
         self._map: viser.PointCloudHandle | None = None
         self._worst: tuple[viser.IcosphereHandle, viser.LabelHandle] | None = None
@@ -144,10 +145,17 @@ class StaticsView(View):
         for widget in (self.mapped, self.newtons, self.direction):
             widget.on_update(session.guard(lambda _: self._maps.start("torque-map", session.guard)))
 
-    def _handle_moved(self, event: viser.TransformControlsEvent) -> None:
-        """The student dragged the handle: the force points from the tool towards it."""
-        self._holding = event.phase != "end"
-        position = np.array(self.handle.position, dtype=float)
+    async def _handle_dragged(self, event: viser.TransformControlsEvent) -> None:
+        """On viser's event loop, as the IK target's drags are: the handle's position as this event left
+        it, before a redraw on another thread puts the handle back beside the tool (read later, on the
+        thread pool, it was sometimes that one, and the drag was lost)."""
+        position, released = np.array(self.handle.position, dtype=float), event.phase == "end"
+        asyncio.get_running_loop().run_in_executor(
+            None, self._session.guard(lambda _: self._handle_moved(position, released)), None)
+
+    def _handle_moved(self, position: np.ndarray, released: bool) -> None:
+        """The student dragged the handle to ``position``: the force points from the tool towards it."""
+        self._holding = not released
         offset = position - self._session.state.last.flange[:3, 3]
         length = float(np.linalg.norm(offset))
         if not np.isfinite(length):
