@@ -105,10 +105,14 @@ async def scenario(url: str, output: list[str], app, seconds: float, count: int)
     after["machine_ticks"] = cpu_ticks()
     samples.append(after)
     latencies = [v for s in students for v in staleness(sends[id(s)], s.received.ghost_flanges) if v is not None]
+    events = sum(len(v) for v in sends.values())
     for client in clients:
         await client.close()
     return {"enlisted": enlisted, "lags": lags, "latency_ms": np.percentile(latencies, [50, 99]) * 1e3,
             "handler": after["latency"].get("drag", {}), "samples": samples, "dropped": dropped,
+            "folded": 1.0 - after["latency"].get("drag", {}).get("count", 0) / max(1, events),
+            "wait": after["latency"].get("drag_wait", {}), "full_collections": after["latency"].get("gc2", {}),
+            "full_during": after["latency"].get("gc2", {}).get("count", 0) - before["latency"].get("gc2", {}).get("count", 0),
             "stolen": stolen_share(before["machine_ticks"], after["machine_ticks"]), "idle_lag_ms": idle[1] * 1e3}
 
 
@@ -124,12 +128,15 @@ def main() -> None:
     settled, end, _ = settled_growth(samples)
     lags = np.array(result["lags"])
     p50, p99 = result["latency_ms"]
-    handler = result["handler"]
+    handler, gc2 = result["handler"], result["full_collections"]
     ok = {"projector": bool(len(lags)) and lags.max() <= TARGET_LAG_S, "drags": p99 <= TARGET_P99_MS,
           "memory": end - settled <= FLAT_MIB, "dropped": not result["dropped"]}
     verdict = "PASS" if all(ok.values()) else "FAIL (" + ", ".join(k for k, v in ok.items() if not v) + ")"
     row = [f"1 + {args.students}", f"{len(lags)}: median {np.median(lags):.2f} s, max {lags.max():.2f} s",
            f"{p50:.0f} / {p99:.0f} ms", f"{handler.get('p50_ms', float('nan')):.2f} / {handler.get('p99_ms', float('nan')):.2f} ms",
+           f"{100 * max(0.0, result['folded']):.0f} %; {result['wait'].get('p50_ms', float('nan')):.0f} / "
+           f"{result['wait'].get('p99_ms', float('nan')):.0f} ms",
+           f"{result['full_during']}; longest {gc2.get('max_ms', float('nan')):.0f} ms",
            f"{result['enlisted']:.1f} s", f"{server_cpu(samples[0], samples[-1]):.0f} %", f"{settled:.0f} → {end:.0f} MiB",
            f"{100 * result['stolen']:.0f} %", verdict]
     body = "\n".join([
@@ -143,6 +150,8 @@ def main() -> None:
         f"memory flat (RSS at the end within {FLAT_MIB:.0f} MiB of its value {WARMUP_S:.0f} s in).",
         "",
         table(["browsers", "projector's lag (checks)", "own drags end to end p50 / p99", "drag handler p50 / p99",
+               "drag events folded into a newer one; wait for the drag worker p50 / p99",
+               "Python's full collections during the drags; the longest in the run",
                "every student's arm and task after Start", "server CPU (% of one core)",
                f"server RSS from {WARMUP_S:.0f} s to the end", "stolen by the host", "verdict"], [row]),
     ])

@@ -285,6 +285,7 @@ class Classroom:
         session.follow_lecture_mode(member.camera.lecture)
         session.observers.append(lambda _: app.refresher.request(self.live))
         session.watch_camera(member.camera)  # the browser's own camera, for the workspace sections
+        app.janitor.settle()
         return session
 
     def _wrong_code(self, address: str, member: Member, now: float) -> None:
@@ -374,6 +375,7 @@ class Classroom:
                 root=DESKTOP_EXPLORER_ROOT if arm.dh is None else EXPLORER_ROOT)
             member.session.follow_lecture_mode(member.camera.lecture)
             member.session.watch_camera(member.camera)
+            app.janitor.settle()
             member.role = EXPLORER
             self._hide_class_arm(member)
             self.challenges.watch(member)  # a student of a running challenge back on their own arm
@@ -410,6 +412,7 @@ class Classroom:
         if member.session is not None:
             member.session.remove()
             member.session = None
+            self.app.janitor.soon()
         if member.role == EXPLORER:
             member.client.scene.reset()  # the private arm goes; the shared one is visible again
         member.role = VIEWER

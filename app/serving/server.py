@@ -90,14 +90,17 @@ def raise_open_file_limit(wanted: int = OPEN_FILES) -> int:
 
 
 class Janitor:
-    """Hands the memory of departed clients back to the system, a little after they leave.
+    """Keeps the collector off the browsers' arms while they are here, and hands their memory back once they leave.
 
-    A class leaving at the bell frees thousands of small objects at once; Python keeps
-    the freed memory for reuse and glibc keeps the pages. Dropping the clouds no one shows,
-    a collection and a ``malloc_trim`` a few seconds after the last departure return the
-    server to its baseline instead (one pass however many leave, and never while a drag is
-    being drawn). Large buffers are handed back as soon as they are freed
-    (``ur10teach.__main__``).
+    A full collection scans every object; with a lecture hall's arms built, that paused
+    every browser for 0.1 to 0.17 s every few seconds (BENCHMARKS.md, *a class challenge in a
+    lecture hall*). Each arm is frozen once built (:meth:`settle`), out of the collector's
+    sight. A class leaving at the bell frees thousands of small objects at once; Python keeps
+    the freed memory for reuse and glibc keeps the pages. A few seconds after the last
+    departure or change of arm (:meth:`soon`), the sweep drops the clouds no one shows,
+    thaws, collects what the departed left (their arms hold cycles), freezes again and
+    calls ``malloc_trim``: one pass however many leave. Large buffers are handed back as
+    soon as they are freed (``ur10teach.__main__``).
     """
 
     DELAY = 3.0
@@ -120,10 +123,17 @@ class Janitor:
             self._timer.daemon = True
             self._timer.start()
 
+    @staticmethod
+    def settle() -> None:
+        """A browser's arm is built: it and whatever else lives now stay out of full collections until the next sweep."""
+        gc.freeze()
+
     def sweep(self) -> None:
         for forget in self._forget:
             forget()
+        gc.unfreeze()
         gc.collect()
+        gc.freeze()
         if self._trim is not None:
             self._trim(0)
         self.sweeps += 1
@@ -197,16 +207,14 @@ class TeachingServer:
         self._switches: dict[str, TokenBucket] = {}  # budget (an address) → its arm changes
         self.clock = time.monotonic  #: the time the arm changes of an address are paced by (a test sets its own)
         self._sessions_lock = threading.Lock()
+        self.janitor = Janitor(forget=(CLOUDS.forget_unheld,))
         #: shared demo mode (``--shared``): everyone watches the presenter (``ur10teach.serving.classroom``)
         self.classroom = Classroom(self) if shared else None
-        self.janitor = Janitor(forget=(CLOUDS.forget_unheld,))
         self.server.on_client_connect(self._connected)
         self.server.on_client_disconnect(self._disconnected)
-        # Everything loaded so far (numpy, sympy, viser, the meshes) lives as long as the
-        # server: keep the collector from rescanning it, which paused every client for
-        # ~0.1 s at each full collection under a classroom's load.
+        # everything loaded so far (numpy, sympy, viser, the meshes) lives as long as the server
         gc.collect()
-        gc.freeze()
+        self.janitor.settle()
 
     @property
     def port(self) -> int:
@@ -279,6 +287,7 @@ class TeachingServer:
             if client.client_id in self._last_switch:  # a change of arm: the interval starts before its picker shows
                 self._last_switch[client.client_id] = time.monotonic()
         session.arm_picker = ArmPicker(client.gui, choice, lambda label: self._switch(client, label), session.guard)
+        self.janitor.settle()
         with self._sessions_lock:
             self._sessions[client.client_id] = session
 
@@ -308,6 +317,7 @@ class TeachingServer:
             if old.camera is not None:
                 lecture = old.camera.lecture.on
             old.close()
+            self.janitor.soon()
         try:
             client.gui.reset()
             client.scene.reset()
