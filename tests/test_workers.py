@@ -264,3 +264,17 @@ def test_the_worker_process_ends_once_no_job_comes_and_starts_again_for_the_next
         assert apart.run(os.getpid) not in (first, os.getpid()) and apart.processes_started == 2
     finally:
         apart.stop()
+
+
+def test_a_stopped_servers_janitor_sweeps_no_more():
+    """A sweep thaws and scans everything the process holds: a server that has stopped must not start one later
+    (in the test run, the sweeps of finished servers ran during the tests after them)."""
+    from ur10teach.serving.server import Janitor
+
+    janitor = Janitor()
+    janitor.soon()
+    pending = janitor._timer
+    janitor.stop()
+    assert pending.finished.is_set()  # cancelled before its delay was up
+    janitor.soon()
+    assert janitor._timer is pending and janitor.sweeps == 0

@@ -205,10 +205,21 @@ def click(page, button, done, what: str) -> None:
 
 
 def unfold(page, title: str, widget) -> None:
-    """Open a folded folder by its title, as a student does, until ``widget`` shows."""
-    if not page.locator(dom_id(widget)).is_visible():
-        page.get_by_text(title, exact=True).first.click()
-        page.locator(dom_id(widget)).wait_for(state="visible", timeout=HANG_TIMEOUT_MS)
+    """Open a folded folder by its title, as a student does, until ``widget`` shows.
+
+    The title is clicked again if the widget has not shown within a few seconds: a click that lands
+    while the panel is being redrawn opens nothing (a CI run waited two minutes on one).
+    """
+    shown = page.locator(dom_id(widget))
+
+    def unfolded() -> bool:
+        if not shown.is_visible():
+            page.get_by_text(title, exact=True).first.click()
+            with contextlib.suppress(AssertionError):
+                wait_for(shown.is_visible, timeout=10.0)
+        return shown.is_visible()
+
+    wait_for(unfolded, what=f"the {title} folder open")
 
 
 def project(camera, point, box) -> tuple[float, float]:

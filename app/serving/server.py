@@ -109,6 +109,7 @@ class Janitor:
         self._forget = forget  #: what to drop first: caches nobody uses any more
         self.sweeps = 0  #: how many times it has swept (the memory tests wait for one)
         self._timer: threading.Timer | None = None
+        self._stopped = False
         self._lock = threading.Lock()
         try:
             self._trim = ctypes.CDLL("libc.so.6").malloc_trim
@@ -119,9 +120,18 @@ class Janitor:
         with self._lock:
             if self._timer is not None:
                 self._timer.cancel()
+            if self._stopped:
+                return
             self._timer = threading.Timer(self.DELAY, self.sweep)
             self._timer.daemon = True
             self._timer.start()
+
+    def stop(self) -> None:
+        """The server has stopped: no sweep is due any more (a sweep scans everything the process holds)."""
+        with self._lock:
+            self._stopped = True
+            if self._timer is not None:
+                self._timer.cancel()
 
     @staticmethod
     def settle() -> None:
@@ -350,5 +360,6 @@ class TeachingServer:
         if self.classroom is not None:
             self.classroom.challenges.boards.stop()
         self.drags.stop()
+        self.janitor.stop()
         APART.stop()
         self.server.stop()
