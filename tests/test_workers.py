@@ -278,3 +278,23 @@ def test_a_stopped_servers_janitor_sweeps_no_more():
     assert pending.finished.is_set()  # cancelled before its delay was up
     janitor.soon()
     assert janitor._timer is pending and janitor.sweeps == 0
+
+
+def test_departures_that_keep_coming_are_swept_within_the_longest_wait():
+    """Only a sweep frees a departed browser's frozen arm: a steady stream of departures and changes of arm,
+    each resetting the short delay, must not put the sweep off for ever."""
+    from ur10teach.serving.server import Janitor
+
+    now = [0.0]
+    janitor = Janitor(clock=lambda: now[0])
+    try:
+        janitor.soon()
+        assert janitor._timer.interval == Janitor.DELAY  # a lone departure: swept a few seconds later
+        for now[0] in (2.0, 4.0, 26.0, 28.5):  # each just before the last request's sweep was due
+            janitor.soon()
+        assert janitor._timer.interval == Janitor.LONGEST - 28.5  # due at the longest wait after the first
+        now[0] = 40.0
+        janitor.soon()
+        assert janitor._timer.interval == 0.0
+    finally:
+        janitor.stop()

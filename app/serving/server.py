@@ -99,16 +99,21 @@ class Janitor:
     the freed memory for reuse and glibc keeps the pages. A few seconds after the last
     departure or change of arm (:meth:`soon`), the sweep drops the clouds no one shows,
     thaws, collects what the departed left (their arms hold cycles), freezes again and
-    calls ``malloc_trim``: one pass however many leave. Large buffers are handed back as
-    soon as they are freed (``ur10teach.__main__``).
+    calls ``malloc_trim``: one pass however many leave. While they keep coming (a hundred
+    students trying arms), it still sweeps at least every :data:`LONGEST` seconds, since only
+    a sweep frees a frozen arm. Large buffers are handed back as soon as they are freed
+    (``ur10teach.__main__``).
     """
 
     DELAY = 3.0
+    LONGEST = 30.0
 
-    def __init__(self, forget=()) -> None:
+    def __init__(self, forget=(), clock=time.monotonic) -> None:
         self._forget = forget  #: what to drop first: caches nobody uses any more
         self.sweeps = 0  #: how many times it has swept (the memory tests wait for one)
         self._timer: threading.Timer | None = None
+        self._first: float | None = None  #: when the oldest request the next sweep answers came
+        self._clock = clock
         self._stopped = False
         self._lock = threading.Lock()
         try:
@@ -122,7 +127,10 @@ class Janitor:
                 self._timer.cancel()
             if self._stopped:
                 return
-            self._timer = threading.Timer(self.DELAY, self.sweep)
+            now = self._clock()
+            if self._first is None:
+                self._first = now
+            self._timer = threading.Timer(max(0.0, min(self.DELAY, self._first + self.LONGEST - now)), self.sweep)
             self._timer.daemon = True
             self._timer.start()
 
@@ -139,6 +147,8 @@ class Janitor:
         gc.freeze()
 
     def sweep(self) -> None:
+        with self._lock:
+            self._first = None  # a request from here on waits for the next sweep
         for forget in self._forget:
             forget()
         gc.unfreeze()
