@@ -190,36 +190,31 @@ def type_text(page, handle, text: str) -> None:
     wait_for(lambda: handle.value == text, what=f"the server to hold {text!r} for {handle.label!r}")
 
 
-def click(page, button, done, what: str) -> None:
-    """Click ``button`` until ``done()`` holds: a click may land while its folder is still opening."""
+def _press_until(press, done, what: str) -> None:
+    """``press()`` until ``done()`` holds, waiting a few seconds after each: a press may land while
+    its folder is still opening, or while the panel is being redrawn, and do nothing."""
 
-    def clicked() -> bool:
+    def pressed() -> bool:
         if done():
             return True
-        page.locator(dom_id(button)).click()
+        press()
         with contextlib.suppress(AssertionError):
             wait_for(done, timeout=10.0)
         return bool(done())
 
-    wait_for(clicked, what=what)
+    wait_for(pressed, what=what)
+
+
+def click(page, button, done, what: str) -> None:
+    """Click ``button`` until ``done()`` holds."""
+    _press_until(lambda: page.locator(dom_id(button)).click(), done, what)
 
 
 def unfold(page, title: str, widget) -> None:
-    """Open a folded folder by its title, as a student does, until ``widget`` shows.
-
-    The title is clicked again if the widget has not shown within a few seconds: a click that lands
-    while the panel is being redrawn opens nothing (a CI run waited two minutes on one).
-    """
-    shown = page.locator(dom_id(widget))
-
-    def unfolded() -> bool:
-        if not shown.is_visible():
-            page.get_by_text(title, exact=True).first.click()
-            with contextlib.suppress(AssertionError):
-                wait_for(shown.is_visible, timeout=10.0)
-        return shown.is_visible()
-
-    wait_for(unfolded, what=f"the {title} folder open")
+    """Open a folded folder by its title, as a student does, until ``widget`` shows (a CI run once
+    waited two minutes on a single click that opened nothing)."""
+    _press_until(lambda: page.get_by_text(title, exact=True).first.click(), page.locator(dom_id(widget)).is_visible,
+                 f"the {title} folder open")
 
 
 def project(camera, point, box) -> tuple[float, float]:
