@@ -16,6 +16,7 @@ from ur10dev.browser import (
 )
 from ur10dev.waiting import wait_for
 from ur10teach.features.arm_picker import ARM_CHOICES, CUSTOM
+from ur10teach.features.branch_labels import ScreenView
 from ur10teach.features.camera import arm_points
 from ur10teach.style import ALUMINIUM, JOINT_CAP_GREY
 from ur10teach.viser_internals import labels_of
@@ -77,13 +78,14 @@ def overlaps(boxes) -> list[str]:
 
 
 def steady(session) -> None:
-    """Wait until the camera and every label have stopped changing (a reframing camera glides)."""
+    """Wait until the camera and every label have stopped changing (a reframing camera glides; lecture
+    mode's wider panel resizes the canvas). The camera is all the labels are placed for, not only where it is."""
     scenes = (session.client.scene, session.client._viser_server.scene)
 
     def state():
-        labels = tuple((label.name, label.text, label.visible, tuple(np.round(label.position, 6))) for _, label in
-                       ((scene, label) for scene in scenes for label in labels_of(scene)))
-        return labels, tuple(np.round(session.client.camera.position, 5))
+        labels = tuple((label.name, label.text, label.visible, label.font_screen_scale, tuple(np.round(label.position, 6)))
+                       for _, label in ((scene, label) for scene in scenes for label in labels_of(scene)))
+        return labels, ScreenView.of(session.client.camera)
 
     seen = collections.deque(maxlen=15)
     wait_for(lambda: (seen.append(state()), len(seen) == seen.maxlen and len(set(seen)) == 1)[1] and not session.refresher._waiting,
