@@ -51,8 +51,9 @@ numpy_run() {
     if [ "$BACKEND" = "compiled" ]; then
         echo "== the core's tests again on the numpy backend (what a laptop without a C compiler runs)"
         UR10CORE_BACKEND=numpy "$PYTHON" -c 'import ur10core; print("backend:", ur10core.BACKEND)'
-        # (the symbolic derivations, marked slow, are sympy's alone: once is enough)
-        UR10CORE_BACKEND=numpy "$PYTHON" -m pytest -m "core and not slow"
+        # (the symbolic derivations, marked slow, are sympy's alone, and tests/test_backends.py calls
+        # both backends side by side itself: once is enough)
+        UR10CORE_BACKEND=numpy "$PYTHON" -m pytest -m "core and not slow" --ignore=tests/test_backends.py
     else
         echo "no C compiler here: the compiled backend is not built, its comparison tests are skipped"
     fi

@@ -23,6 +23,7 @@ from viser import _messages as messages
 from ur10teach.serving import gate as gate_module
 from ur10teach.serving.gate import MAX_MESSAGE_BYTES, MESSAGE_BURST, Gate, TokenBucket, gated_serve, message_key
 from ur10teach.serving.server import TeachingServer
+from ur10teach.viser_internals import connection_of
 
 from .server_support import drag_a_little, session_of, until, url
 from ur10dev.viser_client import ViserClient, encode
@@ -309,8 +310,12 @@ def test_a_flood_of_valid_messages_is_dropped_undecoded_and_its_connection_close
             T = flooded.state.last.flange.copy()
             frames = (flooder.drag_step(T[:3, 3] + (1e-5 * k, 0, 0), (1.0, 0, 0, 0)).update for k in range(20_000))
         decoded_before = sum(app.gate.passed.values()) + sum(app.gate.dropped.values())
+        connection = connection_of(flooded.client)
         sent = await flood(flooder, frames)
         await until(lambda: flooder._websocket.close_code == 1008, what="the flooder to be closed (policy violation)")
+        # closed by the closing handshake: the frames it had queued were read through to its Close (they
+        # stopped websockets reading the socket, and the connection was held open until a 10 s timeout)
+        assert connection.protocol.close_rcvd is not None
         assert app.gate.closed_for["kept sending over its rate"] == 1
         over_rate = app.gate.dropped["message over its connection's rate"]
         assert over_rate >= gate_module.OVER_RATE_ALLOWANCE

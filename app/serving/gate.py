@@ -326,6 +326,7 @@ class GatedConnection:
         self._arrivals = TokenBucket(ARRIVALS_PER_SECOND, ARRIVALS_PER_SECOND)
         self._arrival_bytes = TokenBucket(ARRIVAL_BYTES_PER_SECOND, ARRIVAL_BYTES_PER_SECOND)
         self._over_rate = TokenBucket(1.0, OVER_RATE_ALLOWANCE)
+        self._closing: asyncio.Task | None = None  #: closing it for sending over its rate
         self._reader = asyncio.get_running_loop().create_task(self._read())
 
     def __getattr__(self, name: str) -> Any:
@@ -335,12 +336,14 @@ class GatedConnection:
         try:
             while True:
                 raw = await self._connection.recv()
+                if self._closing is not None:
+                    continue  # read and dropped: websockets stops reading the socket while frames wait, and the client's Close is behind them
                 await asyncio.sleep(0)  # queued frames of this socket wait their turn with everyone else's
                 if not (self._arrivals.take() and self._arrival_bytes.take(len(raw))):
                     self._gate.note_dropped("message over its connection's rate")
                     if not self._over_rate.take():
                         self._gate.note_closed(_address(self._connection), "kept sending over its rate")
-                        await self._connection.close(1008, "too many messages")
+                        self._closing = asyncio.get_running_loop().create_task(self._connection.close(1008, "too many messages"))
                     continue
                 key, kind = classify(raw)
                 if key is None:
