@@ -336,9 +336,9 @@ class GatedConnection:
         try:
             while True:
                 raw = await self._connection.recv()
+                await asyncio.sleep(0)  # queued frames of this socket wait their turn with everyone else's
                 if self._closing is not None:
                     continue  # read and dropped: websockets stops reading the socket while frames wait, and the client's Close is behind them
-                await asyncio.sleep(0)  # queued frames of this socket wait their turn with everyone else's
                 if not (self._arrivals.take() and self._arrival_bytes.take(len(raw))):
                     self._gate.note_dropped("message over its connection's rate")
                     if not self._over_rate.take():
