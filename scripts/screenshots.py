@@ -21,7 +21,7 @@ sys.path.insert(0, str(ROOT))
 from playwright.sync_api import sync_playwright  # noqa: E402
 
 from ur10teach.serving.server import TeachingServer  # noqa: E402
-from ur10dev.browser import CONNECTED, dismiss_software_notice, dom_id, launch, wait_for  # noqa: E402
+from ur10dev.browser import CONNECTED, dismiss_software_notice, dom_id, launch, settled_canvas, wait_for  # noqa: E402
 
 OUT = ROOT / "docs" / "images"
 WINDOW = {"width": 1280, "height": 720}
@@ -99,9 +99,11 @@ def open_page(playwright, server: TeachingServer):
 
 
 def photograph(page, name: str) -> None:
-    page.wait_for_timeout(8000)  # the real meshes take a while to draw in software WebGL
+    """The page once its 3D view has settled (the real meshes take a while in software WebGL), without
+    viser's notice about software rendering."""
+    settled_canvas(page)
     dismiss_software_notice(page)
-    page.wait_for_timeout(1000)
+    settled_canvas(page)
     page.screenshot(path=str(OUT / name))
 
 

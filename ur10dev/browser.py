@@ -90,7 +90,9 @@ def dismiss_software_notice(page) -> None:
     """Close viser's "Software WebGL rendering detected" notice, which covers the 3D view's top left corner."""
     notice = page.locator(".mantine-Notification-root", has_text="Software WebGL")
     if notice.count():
-        notice.locator("button").first.click()
+        # the button's own click, not a pointer's: while software WebGL still draws, playwright never finds it
+        # "stable" enough to click (the README's screenshots were taken with the notice on)
+        notice.locator("button").first.dispatch_event("click")
         wait_for(lambda: notice.count() == 0, what="the software-rendering notice to close")
 
 
