@@ -13,8 +13,8 @@ server answers as the mode says, computing nothing:
   messages per drag, through the app's own cheap setters (``viser_internals.fast_updates``).
 
 Measured: the server's CPU per event and its share of one core, and the end to end latency as
-``bench_challenge.py`` measures a student's drag: an event sent → the answer that carries it (the
-flange link turned by the event's x) arriving, or a newer one.
+``bench_challenge.py`` measures a student's drag (``viser_client.staleness``): an event sent → the
+answer that carries it (the flange link turned by the event's x), or a newer one, arriving.
 """
 
 from __future__ import annotations
@@ -22,6 +22,7 @@ from __future__ import annotations
 import argparse
 import asyncio
 import os
+import socket
 import subprocess
 import sys
 import time
@@ -138,13 +139,17 @@ async def load(url: str, pid: int, count: int, seconds: float) -> dict:
     events1, cpu1, t1 = sum(len(s) for s, _ in logs), cpu_seconds(pid), time.perf_counter()
     stop.set()
     await asyncio.gather(*tasks)
-    found = [v for sends, answers in logs if answers for v in staleness(sends, answers) if v is not None]
+    found = [v for sends, answers in logs if answers
+             for (sent, _), v in zip(sends, staleness(sends, answers)) if v is not None and t0 <= sent <= t1]
     return {"rate": (events1 - events0) / (t1 - t0), "core": (cpu1 - cpu0) / (t1 - t0),
             "per_event_ms": 1e3 * (cpu1 - cpu0) / max(1, events1 - events0),
             "latency_ms": np.percentile(found, [50, 99]) * 1e3 if found else None}
 
 
-def run(mode: str, count: int, seconds: float, port: int = 8871) -> dict:
+def run(mode: str, count: int, seconds: float) -> dict:
+    with socket.socket() as probe:  # a free port
+        probe.bind(("127.0.0.1", 0))
+        port = probe.getsockname()[1]
     server = subprocess.Popen([sys.executable, __file__, "--serve", str(port), mode], stdout=subprocess.PIPE, text=True,
                               env={**os.environ, "PYTHONPATH": str(Path(__file__).resolve().parent.parent)})
     try:
