@@ -37,6 +37,12 @@ def cpu_ticks() -> list[int]:
         return [0] * 8
 
 
+def process_cpu_seconds(pid: int) -> float:
+    """CPU time (user and system, s) process ``pid`` has used so far (``/proc/PID/stat``)."""
+    fields = Path(f"/proc/{pid}/stat").read_text().rsplit(") ", 1)[1].split()
+    return (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")
+
+
 def stolen_share(before: list[int], after: list[int]) -> float:
     """Share of the machine's CPU time between two :func:`cpu_ticks` that the host gave to other guests.
 

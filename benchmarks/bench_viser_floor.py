@@ -29,10 +29,14 @@ import time
 from pathlib import Path
 
 import numpy as np
+import viser
+import zstandard
+from viser import _messages
+from websockets.asyncio.client import connect
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
-from benchmarks._report import machine, quiet_machine, table, write_section  # noqa: E402
+from benchmarks._report import machine, process_cpu_seconds, quiet_machine, table, write_section  # noqa: E402
 from ur10dev.viser_client import CAMERA, decode_frame, encode, staleness  # noqa: E402
 
 MODES = ("nothing", "solid arm", "arm and ghosts")
@@ -41,8 +45,6 @@ RATE_HZ = 10.0
 
 def serve(port: int, mode: str) -> None:
     """The server process: a gizmo per browser, answered as ``mode`` says."""
-    import viser
-
     from ur10teach.viser_internals.fast_updates import set_instances, set_orientations, stop_echo
 
     server = viser.ViserServer(port=port, verbose=False)
@@ -78,19 +80,9 @@ def serve(port: int, mode: str) -> None:
         time.sleep(60)
 
 
-def cpu_seconds(pid: int) -> float:
-    fields = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()
-    return (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")
-
-
 async def student(url: str, ready: list, start: asyncio.Event, stop: asyncio.Event, sends: list, answers: list) -> None:
     """One browser: its gizmo's events at RATE_HZ, (sent, position) into ``sends``, and (arrived, [position])
     of each answer into ``answers``, as ``ur10dev.viser_client.staleness`` reads them."""
-    import viser
-    import zstandard
-    from viser import _messages
-    from websockets.asyncio.client import connect
-
     websocket = await connect(url, subprotocols=[f"viser-v{viser.__version__}"], max_size=None, compression=None)
     await websocket.send(encode(CAMERA))
     owner: list[str] = []
@@ -134,9 +126,9 @@ async def load(url: str, pid: int, count: int, seconds: float) -> dict:
         await asyncio.sleep(0.1)
     start.set()
     await asyncio.sleep(3.0)
-    events0, cpu0, t0 = sum(len(s) for s, _ in logs), cpu_seconds(pid), time.perf_counter()
+    events0, cpu0, t0 = sum(len(s) for s, _ in logs), process_cpu_seconds(pid), time.perf_counter()
     await asyncio.sleep(seconds)
-    events1, cpu1, t1 = sum(len(s) for s, _ in logs), cpu_seconds(pid), time.perf_counter()
+    events1, cpu1, t1 = sum(len(s) for s, _ in logs), process_cpu_seconds(pid), time.perf_counter()
     stop.set()
     await asyncio.gather(*tasks)
     found = [v for sends, answers in logs if answers

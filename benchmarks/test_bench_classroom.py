@@ -6,15 +6,14 @@ They test the benchmark's machinery, not the product: marked ``harness``, out of
 from __future__ import annotations
 
 import asyncio
-import os
 import time
-from pathlib import Path
 
 import pytest
 
 import websockets
 from websockets.frames import Close
 
+from benchmarks._report import process_cpu_seconds
 from benchmarks.bench_classroom import (
     FLAT_MIB, TARGET_P99_MS, WARMUP_S, competing_load, drag_loop, sample_server, settled_growth, verdict,
 )
@@ -80,16 +79,11 @@ def test_a_run_shorter_than_the_warm_up_is_judged_from_its_last_sample():
     assert settled_growth(run) == (180.0, 180.0, 180.0)
 
 
-def cpu_seconds(pid: int) -> float:
-    fields = Path(f"/proc/{pid}/stat").read_text().rsplit(") ", 1)[1].split()
-    return (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")
-
-
 def test_the_competing_load_burns_cpu_and_is_gone_afterwards():
     """Each busy loop runs and burns CPU time (waited for, not timed) until the block ends; then it is gone."""
     with competing_load(2) as spinners:
         assert len(spinners) == 2
-        wait_for(lambda: all(cpu_seconds(spinner.pid) > 0.2 for spinner in spinners), what="the busy loops to burn CPU")
+        wait_for(lambda: all(process_cpu_seconds(spinner.pid) > 0.2 for spinner in spinners), what="the busy loops to burn CPU")
         assert all(spinner.poll() is None for spinner in spinners)
     assert all(spinner.returncode is not None for spinner in spinners)
 
