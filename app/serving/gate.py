@@ -233,10 +233,6 @@ class Gate:
             if counts[address] <= 0:
                 del counts[address]
 
-    def open_connections(self, address: str) -> int:
-        with self._lock:
-            return self._open[address]
-
     def tcp_opened(self, address: str) -> bool:
         """Count a new TCP connection from ``address``: False (and not counted) when it holds too many."""
         if self.trusted(address):
