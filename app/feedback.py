@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import functools
 import logging
+import math
 import time
 from typing import Any, Callable
 
@@ -113,3 +114,21 @@ def chosen(handle, what: str) -> str:
     if isinstance(handle, viser.GuiDropdownHandle):  # a button group holds no choice to show
         handle.value = getattr(handle, "_accepted_choice", options[0])
     raise ValueError(f"{what}: {value!r:.40} is not one of the choices")
+
+
+def within(handle, what: str) -> float:
+    """The value of a slider or number field, or ``ValueError`` when a client sent one outside its range.
+
+    A browser only sends values within a widget's range; a NaN or a value beyond it came from
+    something else. As :func:`chosen` does for a dropdown, the widget is put back to the last
+    value it accepted (or the value nearest 0 in its range) before the refusal: a value left
+    in it would be refused again at every redraw that reads it.
+    """
+    value = handle.value
+    low = -math.inf if handle.min is None else handle.min
+    high = math.inf if handle.max is None else handle.max
+    if isinstance(value, (int, float)) and not isinstance(value, bool) and low <= value <= high:  # NaN is not
+        handle._accepted_value = value
+        return float(value)
+    handle.value = getattr(handle, "_accepted_value", min(max(0.0, low), high))
+    raise ValueError(f"{what}: from {low:g} to {high:g}, got {value!r:.40}")

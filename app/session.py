@@ -81,6 +81,10 @@ class ArmSession:
 
     built = False
     panel_views: tuple = ()
+    #: built last: a click during the build finds none (no path playing to stop, no camera to reframe)
+    motion: MotionLessons | None = None
+    lessons: tuple = ()
+    camera: CameraControls | None = None
     _lecture: LectureMode | None = None  #: the lecture switch it follows, once it follows one
     #: the arm picker's label of this arm, and the typed table (arm, text, convention) it was
     #: built from: the server sets them, and keeps the state under them when the browser leaves the arm
@@ -204,7 +208,7 @@ class ArmSession:
             for sender in self._senders:
                 batch.enter_context(sender.atomic())
             for view in self.views:
-                view.render(snapshot)
+                self._refusing(view.render, snapshot)
         for sender in self._senders:
             sender.flush()
 
@@ -218,8 +222,16 @@ class ArmSession:
             if self._label_scene is not None and self._lecture is not None:
                 size_labels(self._label_scene, self._lecture.on)
             for view in self.views:  # the drawing's panel-paced parts too (the branch numbers, say)
-                view.render_panel(snapshot)
+                self._refusing(view.render_panel, snapshot)
         LATENCY.record("panel", time.perf_counter() - start)
+
+    def _refusing(self, draw: Callable[[Snapshot], None], snapshot: Snapshot) -> None:
+        """Draw one view; a value it refuses (a slider a client set out of range, which it puts back) is
+        explained, and the other views are drawn all the same: the change being drawn is not the refused one."""
+        try:
+            draw(snapshot)
+        except ValueError as refused:
+            self.notify("Not accepted", str(refused))
 
     # ------------------------------------------------------------------ display choices
 

@@ -79,7 +79,11 @@ def number(value: float, spec: str) -> str:
 
 
 def sentence(text: str) -> str:
-    """``text`` with a capital first letter (messages are written to follow a colon)."""
+    """``text`` with a capital first letter (messages are written to follow a colon); a variable that
+    starts it (θ2, d3, ḋ3) keeps its case: Θ2 or D3 would be another quantity."""
+    first = text.split(" ", 1)[0]
+    if not first[:1].isascii() or any(character.isdigit() for character in first):
+        return text
     return text[:1].upper() + text[1:]
 
 

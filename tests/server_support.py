@@ -41,7 +41,7 @@ async def drag_a_little(client: ViserClient, session, steps: int = 10, offset=(0
     T = session.state.last.flange.copy()
     for k in range(steps):
         T[:3, 3] += np.array([0.004, -0.003, 0.002]) + offset
-        await client.drag_target(T[:3, 3], wxyz_of(T), "start" if k == 0 else "update")
+        await client.drag_target(T[:3, 3], wxyz_of(T), "start" if k == 0 else "update", name=session.ik_target.gizmo.name)
         await asyncio.sleep(BROWSER_SEND_INTERVAL)
     return T
 

@@ -14,7 +14,7 @@ from ur10core.dh import DHTable
 from ur10core.orientation import zyx_euler
 from ur10teach.features.branch_labels import JOIN
 from ur10teach.features.course_arms.editor import CONVENTIONS
-from ur10teach.features.joint_panel import display_text, typed_label
+from ur10teach.features.joint_panel import display_text, rate_label, typed_label
 from ur10teach.serving.gate import address_of
 from ur10teach.serving.challenge_run import ChallengeRun, clean_nickname, spreadsheet_safe
 from ur10dev.viser_client import ViserClient, messages
@@ -102,8 +102,7 @@ class Answers:
                 q = member.session.state.q
                 rates = np.degrees(arm.joint_rates(q, [0, 0, 0.1, 0, 0, 0]).qdot) * (1 if plan == "right" else -1)
                 for k, rate in enumerate(rates):
-                    label = next(label for label in client.gui if label.startswith(f"θ̇{k + 1} "))
-                    await client.set_gui(label, round(float(rate), 1))
+                    await client.set_gui(rate_label(arm, k), round(float(rate), 1))
                 await until(lambda: np.allclose(np.degrees(member.session.velocity.joint_rates()), np.round(rates, 1), atol=1e-9),
                             what="the joint rates")
         elif kind == "dh_table":

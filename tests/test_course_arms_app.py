@@ -443,7 +443,7 @@ def test_a_course_arms_velocities_ellipsoids_and_forces(app):
         client = await ViserClient(url(app)).connect()
         session = await pick(app, client, "Stanford arm (RRP + wrist)")
         arm, root = session.arm, session.drawing.root
-        await client.set_gui("ḋ3 d3 (mm/s)", 100.0)  # the boom slides out at 0.1 m/s
+        await client.set_gui("ḋ3 (mm/s)", 100.0)  # the boom slides out at 0.1 m/s
         await until(lambda: session.velocity.linear.visible, what="the velocity arrow")
         snapshot = session.state.last
         tip = snapshot.frames[-1, :3, 3]

@@ -14,6 +14,7 @@ import numpy as np
 import pytest
 
 from ur10teach.features.arm_picker import ARM_CHOICES
+from ur10teach.features.joint_panel import rate_label
 from ur10teach.features.statics import bars_html
 from ur10teach.features.velocity import METRES_PER_SPEED
 
@@ -42,7 +43,7 @@ def test_velocity_and_forces_on_every_arm_match_finite_differences(app, label):
         arm, snapshot = session.arm, session.state.last
         q, tool = snapshot.q, snapshot.flange[:3, 3]
         # a base rate of 10°/s: the arrow is the tool's velocity
-        await client.set_gui(f"θ̇1 {arm.joint_names[0]} (°/s)", 10.0)
+        await client.set_gui(rate_label(arm, 0), 10.0)
         expected = tool + METRES_PER_SPEED * math.radians(10.0) * position_rate(arm, q, 0)
         await until(lambda: session.velocity.linear.visible
                     and np.allclose(session.velocity.linear.points[0], [tool, expected], atol=1e-5), what="the velocity arrow")

@@ -12,13 +12,16 @@ import time
 import msgspec
 import numpy as np
 import pytest
+import viser
 from viser import _messages as messages
 
 from ur10teach import feedback
 from ur10teach.viser_internals import shared_frames
+from ur10teach.features.arm_picker import ARM_CHOICES, UR10
 from ur10teach.features.workspace import SAMPLE_COUNTS
 from ur10dev.app_process import running_app
 from .server_support import drag_a_little, session_of, until, url, wait_for
+from .test_course_arms_app import arrived, pick
 from ur10dev.viser_client import BROWSER_SEND_INTERVAL, ViserClient, encode, wxyz_of
 from ur10dev.waiting import HANG_TIMEOUT
 
@@ -144,7 +147,7 @@ def test_refusals_are_shown_at_a_readable_pace(monkeypatch):
     assert len(shown) == feedback.NOTICE_BURST
     now[0] += 10.0
     feedback.notify(browser, "Not accepted", "θ2: not a number")
-    assert shown[-1] == f"Θ2: not a number ({600 - feedback.NOTICE_BURST} more messages were not shown.)"
+    assert shown[-1] == f"θ2: not a number ({600 - feedback.NOTICE_BURST} more messages were not shown.)"
 
 
 def test_garbage_and_out_of_range_input_is_refused(app):
@@ -201,6 +204,99 @@ def test_garbage_and_out_of_range_input_is_refused(app):
         await good.close()
 
     asyncio.run(scenario())
+
+
+def test_a_refused_rate_force_or_payload_is_put_back_and_the_arm_goes_on(app, caplog):
+    """A NaN or out-of-range value left in a velocity or force slider was refused again by every
+    redraw that read it: the panel stopped ("panel redraw failed") and each drag was refused,
+    until the student moved that slider back. The slider is now put back at once."""
+    rate = "θ̇1 base (°/s)"
+
+    async def scenario():
+        client = await ViserClient(url(app)).connect()
+        session = session_of(app, client)
+        await client.set_gui("Show the torques", True)
+        await until(lambda: session.statics.bars.visible, what="the torque bars")
+        still = session.velocity.readout.content
+        await client.set_gui(rate, 10.0)
+        await until(lambda: session.velocity.readout.content != still, what="the tool's velocity for 10 °/s")
+        bad = (("Force at the tool (N)", float("nan")), (rate, float("nan")), ("θ̇2 shoulder (°/s)", 1e6),
+               ("Payload (kg)", -1.0))
+        for label, value in bad:
+            await client.set_gui(label, value)
+        await until(lambda: [title for title, _ in client.received.notifications].count("Not accepted") >= len(bad),
+                    what="the refusals")
+        handles = (session.statics.newtons, *session.velocity.sliders[:2], session.statics.payload)
+        await until(lambda: [handle.value for handle in handles] == [50.0, 10.0, 0.0, 0.0], what="the last values accepted")
+        # the panel and the drags go on
+        panel = session.readouts.pose.content
+        target = await drag_a_little(client, session, steps=3)
+        await until(lambda: np.allclose(session.state.last.target, target, atol=1e-9), what="a drag after the refusals")
+        await until(lambda: session.readouts.pose.content != panel, what="the panel to follow the drag")
+        assert not any(title == "Something went wrong" for title, _ in client.received.notifications)
+        await client.close()
+
+    with caplog.at_level("ERROR"):
+        asyncio.run(scenario())
+    assert not [r.getMessage() for r in caplog.records if r.name.startswith("ur10teach")]  # the app's own failures
+
+
+def bad_value(kind: str):
+    """What a browser never sends to a widget of this kind (None: anything viser takes for it is one of its values)."""
+    if kind in ("GuiSliderMessage", "GuiNumberMessage"):
+        return float("nan")
+    if kind in ("GuiDropdownMessage", "GuiButtonGroupMessage"):
+        return "no such choice"
+    if kind == "GuiTextMessage":
+        return "1, x, nan"
+    return None  # buttons and checkboxes
+
+
+def input_handles(session) -> dict:
+    """The session's widgets by uuid, as its views hold them (a list of sliders included)."""
+    found = {}
+    for view in (*session.panel_views, session.arm_picker):
+        for held in vars(view).values():
+            for handle in held if isinstance(held, (list, tuple)) else (held,):
+                if isinstance(handle, (viser.GuiInputHandle, viser.GuiButtonGroupHandle)):
+                    found[handle._impl.uuid] = handle
+    return found
+
+
+def holds_one_of_its_values(handle) -> bool:
+    """A slider within its range, a dropdown on one of its options (a text may hold anything)."""
+    if isinstance(handle, (viser.GuiSliderHandle, viser.GuiNumberHandle)):
+        return (handle.min is None or handle.min <= handle.value) and (handle.max is None or handle.value <= handle.max)
+    return not isinstance(handle, viser.GuiDropdownHandle) or handle.value in handle.options
+
+
+@pytest.mark.parametrize("label", list(ARM_CHOICES))
+def test_every_widget_of_every_arm_refuses_what_a_browser_never_sends(app, label, caplog):
+    """A NaN in a slider, or a choice not among a dropdown's options, is refused and the widget put
+    back, in every arm's panel: nothing fails, and the arm still drags. (A velocity slider left
+    at NaN stopped the panel and refused every drag.)"""
+
+    async def scenario():
+        client = await ViserClient(url(app)).connect()
+        session = session_of(app, client) if label == UR10 else await pick(app, client, label)
+        await arrived(client, session)  # the whole panel
+        handles = input_handles(session)
+        sent = {entry["uuid"]: bad_value(entry["type"]) for entry in client.gui.values() if bad_value(entry["type"]) is not None}
+        assert set(sent) <= set(handles), [name for name, entry in client.gui.items() if entry["uuid"] not in handles]
+        for uuid, value in sent.items():
+            await client.send(messages.GuiUpdateMessage(uuid, {"value": value}))
+        await until(lambda: all(holds_one_of_its_values(handles[uuid]) for uuid in sent), what="every widget put back")
+        await until(lambda: "Not accepted" in {title for title, _ in client.received.notifications}, what="the refusals")
+        before, panel = session.state.last.target, session.readouts.pose.content
+        await drag_a_little(client, session, steps=3)  # (a planar arm's target is kept in its plane)
+        await until(lambda: not np.allclose(session.state.last.target, before), what="a drag after the refusals")
+        await until(lambda: session.readouts.pose.content != panel, what="the panel to follow the drag")
+        assert not any(title == "Something went wrong" for title, _ in client.received.notifications)
+        await client.close()
+
+    with caplog.at_level("ERROR"):
+        asyncio.run(scenario())
+    assert not [r.getMessage() for r in caplog.records if r.name.startswith("ur10teach")]  # the app's own failures
 
 
 def test_students_never_see_each_others_arms(app):

@@ -22,7 +22,7 @@ from ur10teach.state import joint_value_text
 from ur10teach.style import number, sentence
 
 from .server_support import become_presenter, drag_a_little, member_of, session_of, until, url
-from ur10dev.viser_client import ViserClient
+from ur10dev.viser_client import ViserClient, wxyz_of
 from ur10dev.waiting import HANG_TIMEOUT
 
 pytestmark = pytest.mark.server
@@ -136,8 +136,10 @@ def test_every_redraw_holds_the_arms_lock(app):
 
 def test_a_click_while_the_session_is_being_built_is_not_an_error(app, monkeypatch):
     """A widget reaches the browser as soon as it is made: a click before the session's constructor
-    had finished redrew a session without its views yet ("Something went wrong", AttributeError).
-    The UR10's session and a course arm's, with the click made while their velocity folder is built."""
+    had finished redrew a session without its views yet ("Something went wrong", AttributeError),
+    and a change that reframes the arm (a singularity demonstrated) or a drag found no camera or
+    no lessons yet. The UR10's session and a course arm's, with the clicks made while their
+    velocity folder is built."""
     from ur10teach.features import velocity
 
     from .test_course_arms_app import pick
@@ -150,6 +152,9 @@ def test_a_click_while_the_session_is_being_built_is_not_an_error(app, monkeypat
         # the checkboxes made before this folder are in the browser: a quick student clicks one now
         session.guard(lambda _: session.redraw())(None)
         session.guard(lambda _: session.render_panel())(None)
+        session.guard(lambda _: session.apply(lambda state: state.move_target(state.last.target, cause="typed")))(None)
+        T = session.state.last.target
+        session.drag_to((tuple(wxyz_of(T)), tuple(T[:3, 3]), False))
         built.append(session)
 
     monkeypatch.setattr(velocity.VelocityView, "__init__", init)
@@ -329,6 +334,8 @@ def test_numbers_never_read_minus_zero():
     assert joint_value_text("R", -1e-9) == "0.0°" and joint_value_text("P", -1e-9) == "0.0 mm"  # the branch table, the sliders' text
     assert joint_panel.display_text(Arm.preset("course"), np.radians([-0.001, 0.0, -0.0, 12.345, -200.0, 0.5])) == "0, 0, 0, 12.35, -200, 0.5"
     assert sentence("elbow reach — the wrist") == "Elbow reach — the wrist"
+    assert [sentence(variable) for variable in ("θ2: not a number", "d3: from 0 mm", "ḋ3 (mm/s): from -500")] == [
+        "θ2: not a number", "d3: from 0 mm", "ḋ3 (mm/s): from -500"]  # Θ2 and D3 would be other quantities
 
 
 def test_an_arrow_key_moves_a_joint_slider_a_whole_degree_or_millimetre(app):

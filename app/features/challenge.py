@@ -15,7 +15,7 @@ from ur10core import Arm
 from ur10core.challenges import QUANTITIES, Challenge, Verdict, number_names
 from ur10core.orientation import quaternion
 
-from ..feedback import Beside, chosen
+from ..feedback import Beside, chosen, within
 from ..serving.challenge_run import MAX_NICKNAME, ChallengeRun, Student, summary_markdown
 from ..style import SAFE_GREEN, hex_color, label_scale
 from .branch_labels import BranchLabels, ScreenView
@@ -85,9 +85,7 @@ class ChallengeDesk:
         return self._challenges[chosen(self.picker, "challenge")]
 
     def time_limit(self) -> float | None:
-        minutes = float(self.minutes.value)
-        if not 0 <= minutes <= MAX_TIME_LIMIT_MINUTES:
-            raise ValueError(f"time limit: 0 to {MAX_TIME_LIMIT_MINUTES} minutes")
+        minutes = within(self.minutes, "time limit (min)")
         return 60 * minutes if minutes else None
 
     def _preview(self) -> None:
@@ -140,6 +138,12 @@ class ChallengeCard:
         for typed in (self.numbers, self.rows):
             if typed is not None:
                 typed.on_update(guard(lambda _: run.moved(student)))
+        if self.convention is not None:
+            self.convention.on_update(guard(lambda _: self._convention_changed(run, student)))
+
+    def _convention_changed(self, run: ChallengeRun, student: Student) -> None:
+        self.convention_chosen()  # refused (and put back) as it comes: the card keeps it when rebuilt
+        run.moved(student)
 
     def _renamed(self, run: ChallengeRun, student: Student) -> None:
         name = run.rename(student, self.nickname.value)

@@ -43,12 +43,23 @@ def from_display(kind: str, value):
     return np.radians(value) if kind == "R" else np.asarray(value) / 1000.0
 
 
-def slider_label(arm, index: int) -> str:
-    """``θ1 base (°)``, ``d3 (mm)``: the joint's variable, its name, its unit."""
+def joint_label(arm, index: int) -> str:
+    """``θ1 base``, ``d3``, ``A1``: the joint's variable and its name, once each."""
     name, kind = arm.joint_names[index], arm.joint_types[index]
     if not re.match(r"^(θ\d|d\d|A\d|joint )", name):  # a name that is not already a variable (a typed table's "joint 3")
         name = f"{'θ' if kind == 'R' else 'd'}{index + 1} {name}"
-    return f"{name} ({'°' if kind == 'R' else 'mm'})"
+    return name
+
+
+def slider_label(arm, index: int) -> str:
+    """``θ1 base (°)``, ``d3 (mm)``: the joint's variable, its name, its unit."""
+    return f"{joint_label(arm, index)} ({'°' if arm.joint_types[index] == 'R' else 'mm'})"
+
+
+def rate_label(arm, index: int) -> str:
+    """``θ̇1 base (°/s)``, ``ḋ3 (mm/s)``: the joint's rate, named as its slider is."""
+    name = re.sub(r"^[θd](?=\d)", lambda variable: {"θ": "θ̇", "d": "ḋ"}[variable[0]], joint_label(arm, index))
+    return f"{name} ({'°/s' if arm.joint_types[index] == 'R' else 'mm/s'})"
 
 
 def typed_label(arm) -> str:

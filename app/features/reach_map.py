@@ -114,6 +114,7 @@ class ReachMapView(View):
         self.plane.on_update(session.guard(self._toggled))
 
     def _toggled(self, _: viser.GuiEvent) -> None:
+        chosen(self.plane, "plane")
         self.legend.visible = self.enabled.value
         if self.enabled.value:
             self._face_next = True

@@ -20,7 +20,7 @@ import viser
 from ur10core.dynamics import MASSES
 from ur10core.specs import torque_map
 
-from ..feedback import chosen
+from ..feedback import chosen, within
 from ..serving.workers import HEAVY, FoldedRuns
 from ..state import Snapshot
 from ..style import DANGER_RED, SAFE_GREEN, blend, hex_color, number
@@ -141,9 +141,15 @@ class StaticsView(View):
         self._map_lock = threading.Lock()
         self._maps = FoldedRuns(self._draw_map)
         for widget in (self.enabled, self.newtons, self.direction, self.payload):
-            widget.on_update(session.guard(lambda _: session.redraw()))
+            widget.on_update(session.guard(lambda _: self._changed()))
         for widget in (self.mapped, self.newtons, self.direction):
             widget.on_update(session.guard(lambda _: self._maps.start("torque-map", session.guard)))
+
+    def _changed(self) -> None:
+        # a size refused here is explained (and put back) at once, not in a redraw; the payload even where hidden
+        within(self.payload, "payload (kg)")
+        self.loads(self._session.state.last)
+        self._session.redraw()
 
     async def _handle_dragged(self, event: viser.TransformControlsEvent) -> None:
         """On viser's event loop, as the IK target's drags are: the handle's position as this event left
@@ -172,19 +178,17 @@ class StaticsView(View):
         force = self._force(chosen(self.direction, "force direction"), snapshot)
         gravity = np.zeros(arm.n_joints)
         if arm.name in MASSES:  # otherwise (the UR10e, the course's other arms): the force's torques alone
-            payload = float(self.payload.value)
-            rated = arm.specs.payload_kg
-            if not 0.0 <= payload <= rated:
-                raise ValueError(f"payload: from 0 to {rated:g} kg, got {payload:g}")
+            payload = within(self.payload, "payload (kg)")
             gravity = arm.gravity_torques(snapshot.q, payload)
         return force, arm.static_torques(snapshot.q, force), gravity
 
     def _force(self, direction: str, snapshot, strict: bool = True) -> np.ndarray:
         """The force; a size out of range is refused (``strict``) or, while drawing the arm, held to the range."""
-        newtons = float(self.newtons.value)
-        if strict and not 0.0 <= newtons <= MAX_FORCE_N:
-            raise ValueError(f"force: from 0 to {MAX_FORCE_N:g} N, got {newtons:g}")
-        newtons = min(max(newtons, 0.0), MAX_FORCE_N) if math.isfinite(newtons) else 0.0
+        if strict:
+            newtons = within(self.newtons, "force (N)")
+        else:
+            newtons = float(self.newtons.value)
+            newtons = min(max(newtons, 0.0), MAX_FORCE_N) if math.isfinite(newtons) else 0.0
         return force_vector(direction, newtons, snapshot.flange, self.dragged, self._directions)
 
     def fixed_force(self) -> np.ndarray:

@@ -16,10 +16,11 @@ from typing import Any, Callable
 import numpy as np
 import viser
 
-from ..feedback import Beside
+from ..feedback import Beside, within
 from ..state import Snapshot
 from ..style import number, swatch
 from ..view import Session, View
+from .joint_panel import rate_label
 
 LINEAR_COLOR, ANGULAR_COLOR = (0, 114, 178), (204, 121, 167)
 #: Drawn length: metres per m/s of the flange, and per rad/s of its turning.
@@ -99,9 +100,9 @@ class VelocityView(View):
                              f"{number(1000 * METRES_PER_SPEED, '.0f')} mm drawn per m/s  \n{swatch(ANGULAR_COLOR)} **ω**: "
                              f"turning rate (about the arrow, right hand), {number(1000 * METRES_PER_TURN_RATE, '.0f')} "
                              "mm drawn per rad/s")
-            self.sliders = [gui.add_slider(f"{'θ̇' if kind == 'R' else 'ḋ'}{i + 1} {name} ({'°/s' if kind == 'R' else 'mm/s'})",
-                                           min=-MAX_RATE[kind], max=MAX_RATE[kind], step=0.1, initial_value=0.0)
-                            for i, (name, kind) in enumerate(zip(self._labels, self._kinds))]
+            self.sliders = [gui.add_slider(rate_label(self._arm, i), min=-MAX_RATE[kind], max=MAX_RATE[kind], step=0.1,
+                                           initial_value=0.0)
+                            for i, kind in enumerate(self._kinds)]
             self.readout = gui.add_markdown("")
             gui.add_markdown(f"Or ask for a {place} velocity and see the joint rates it needs, q̇ = J⁻¹ v:")
             self.typed = gui.add_text("vx vy vz (mm/s) ωx ωy ωz (°/s)", "100 0 0 0 0 0")
@@ -122,10 +123,7 @@ class VelocityView(View):
 
     def joint_rates(self) -> np.ndarray:
         """(n,) the sliders' joint rates, rad/s (m/s for a prismatic joint)."""
-        shown = np.array([float(s.value) for s in self.sliders])
-        largest = np.array([MAX_RATE[kind] for kind in self._kinds])
-        if not np.isfinite(shown).all() or (np.abs(shown) > largest).any():
-            raise ValueError("joint rates: from −180 to 180 °/s (−500 to 500 mm/s for a sliding joint)")
+        shown = np.array([within(slider, slider.label) for slider in self.sliders])
         return np.where(np.array(list(self._kinds)) == "R", np.radians(shown), shown / 1000.0)
 
     def _solve(self) -> None:

@@ -16,7 +16,7 @@ import viser
 from ur10core import Arm
 from ur10core.workspace import revolved_boundary, vertical_section
 
-from ..feedback import chosen
+from ..feedback import chosen, within
 from ..serving.workers import HEAVY, FoldedRuns
 from ..style import hex_color
 from ..view import Session, View
@@ -242,6 +242,7 @@ class WorkspaceView(View):
             widget.on_update(session.guard(self._changed))
 
     def _changed(self, _: viser.GuiEvent) -> None:
+        within(self.height, "section height (mm)")  # refused as it comes, shown or not
         self._clouds.start("workspace", self._session.guard)  # a run under way picks up the newest choices
 
     def _slow_job(self, make):
@@ -306,7 +307,7 @@ class WorkspaceView(View):
             azimuth = float(self._session.state.last.q[0])  # the plane the arm moves in
             return vertical_section(points, azimuth).astype(np.float32), colors
         if section == SECTIONS[2]:  # sampled in the plane itself: a slab of the cloud holds only a few hundred
-            return coloured_horizontal_section(self._session.arm, self.height.value / 1000.0,
+            return coloured_horizontal_section(self._session.arm, within(self.height, "section height (mm)") / 1000.0,
                                                min(SECTION_POINTS, len(points)), top, self._slow_job, holder=self)
         if section == SECTIONS[3]:  # the cut face shows the inside: the hole about the base axis, the dexterous core
             behind = points[:, :2] @ self._plane_normal()[:2] < 0

@@ -106,6 +106,7 @@ class DHEditor(View):
             self.build = gui.add_button("Build this arm", icon=viser.Icon.HAMMER)
             self.refusal = Beside(gui)
         self.build.on_click(session.guard(lambda _: self._build(rebuild), beside=self.refusal))
+        self.convention.on_update(session.guard(lambda _: chosen(self.convention, "convention")))
 
     def _build(self, rebuild: Callable[[Arm, str, str], None]) -> None:
         convention = CONVENTIONS[chosen(self.convention, "convention")]
