@@ -228,28 +228,38 @@ def test_a_refused_rate_force_or_payload_is_put_back_and_the_arm_goes_on(app, ca
                     what="the refusals")
         handles = (session.statics.newtons, *session.velocity.sliders[:2], session.statics.payload)
         await until(lambda: [handle.value for handle in handles] == [50.0, 10.0, 0.0, 0.0], what="the last values accepted")
-        # the panel and the drags go on
-        panel = session.readouts.pose.content
-        target = await drag_a_little(client, session, steps=3)
-        await until(lambda: np.allclose(session.state.last.target, target, atol=1e-9), what="a drag after the refusals")
-        await until(lambda: session.readouts.pose.content != panel, what="the panel to follow the drag")
-        assert not any(title == "Something went wrong" for title, _ in client.received.notifications)
+        await goes_on(client, session)
         await client.close()
 
+    without_failures(scenario, caplog)
+
+
+async def goes_on(client: ViserClient, session) -> None:
+    """After refusals: nothing failed, a drag is taken and the panel follows it."""
+    before, panel = session.state.last.target, session.readouts.pose.content
+    await drag_a_little(client, session, steps=3)  # (a planar arm's target is kept in its plane)
+    await until(lambda: not np.allclose(session.state.last.target, before), what="a drag after the refusals")
+    await until(lambda: session.readouts.pose.content != panel, what="the panel to follow the drag")
+    assert not any(title == "Something went wrong" for title, _ in client.received.notifications)
+
+
+def without_failures(scenario, caplog) -> None:
+    """Run ``scenario``; the app must log no failure meanwhile."""
     with caplog.at_level("ERROR"):
         asyncio.run(scenario())
-    assert not [r.getMessage() for r in caplog.records if r.name.startswith("ur10teach")]  # the app's own failures
+    assert not [r.getMessage() for r in caplog.records if r.name.startswith("ur10teach")]
 
 
 def bad_value(kind: str):
-    """What a browser never sends to a widget of this kind (None: anything viser takes for it is one of its values)."""
+    """A value a widget of this kind must refuse: what a browser never sends, or (a text) what no parser takes.
+    None: anything viser takes for a button or a checkbox is one of its values."""
     if kind in ("GuiSliderMessage", "GuiNumberMessage"):
         return float("nan")
     if kind in ("GuiDropdownMessage", "GuiButtonGroupMessage"):
         return "no such choice"
     if kind == "GuiTextMessage":
         return "1, x, nan"
-    return None  # buttons and checkboxes
+    return None
 
 
 def input_handles(session) -> dict:
@@ -287,16 +297,10 @@ def test_every_widget_of_every_arm_refuses_what_a_browser_never_sends(app, label
             await client.send(messages.GuiUpdateMessage(uuid, {"value": value}))
         await until(lambda: all(holds_one_of_its_values(handles[uuid]) for uuid in sent), what="every widget put back")
         await until(lambda: "Not accepted" in {title for title, _ in client.received.notifications}, what="the refusals")
-        before, panel = session.state.last.target, session.readouts.pose.content
-        await drag_a_little(client, session, steps=3)  # (a planar arm's target is kept in its plane)
-        await until(lambda: not np.allclose(session.state.last.target, before), what="a drag after the refusals")
-        await until(lambda: session.readouts.pose.content != panel, what="the panel to follow the drag")
-        assert not any(title == "Something went wrong" for title, _ in client.received.notifications)
+        await goes_on(client, session)
         await client.close()
 
-    with caplog.at_level("ERROR"):
-        asyncio.run(scenario())
-    assert not [r.getMessage() for r in caplog.records if r.name.startswith("ur10teach")]  # the app's own failures
+    without_failures(scenario, caplog)
 
 
 def test_students_never_see_each_others_arms(app):
