@@ -137,7 +137,7 @@ def test_every_redraw_holds_the_arms_lock(app):
 def test_a_click_while_the_session_is_being_built_is_not_an_error(app, monkeypatch):
     """A widget reaches the browser as soon as it is made: a click before the session's constructor
     had finished redrew a session without its views yet ("Something went wrong", AttributeError),
-    and a change that reframes the arm (a singularity demonstrated) or a drag found no camera or
+    and a change that reframes the arm (a typed target, a singularity shown) or a drag found no camera or
     no lessons yet. The UR10's session and a course arm's, with the clicks made while their
     velocity folder is built."""
     from ur10teach.features import velocity

@@ -97,6 +97,7 @@ class ArmModelControls(View):
     def __init__(self, gui: viser.GuiApi, folder: viser.GuiFolderHandle, views: "MeshArm",
                  session: Session) -> None:
         self._views, self._session = views, session
+        self._seen = views.robot.model  #: the model the dropdown last matched: another hand may draw another
         with folder:
             self.dropdown = gui.add_dropdown(
                 "Arm drawn as", views.robot.names, initial_value=views.robot.model,
@@ -107,8 +108,13 @@ class ArmModelControls(View):
         model = chosen(self.dropdown, "arm model")
         with self._session.state.lock:
             self._views.show(model)
+            self._seen = model
         self._session.redraw()
 
     def render_panel(self, snapshot: Snapshot) -> None:
-        if self.dropdown.value != self._views.robot.model:  # the classroom's presenter changed hands
-            self.dropdown.value = self._views.robot.model
+        # only a change of hands (the classroom's presenter) draws another model under this dropdown; while
+        # this browser's own choice is being drawn, the arm is still the old model and the choice must stand
+        model = self._views.robot.model
+        if model != self._seen:
+            self._seen = model
+            self.dropdown.value = model
