@@ -13,6 +13,7 @@ from ur10core import challenges as C
 from ur10core.dh import DHTable
 from ur10core.orientation import zyx_euler
 from ur10teach.features.branch_labels import JOIN
+from ur10teach.features.challenge import GOAL_ROOT
 from ur10teach.features.course_arms.editor import CONVENTIONS
 from ur10teach.features.joint_panel import display_text, rate_label, typed_label
 from ur10teach.serving.gate import address_of
@@ -257,3 +258,30 @@ def test_run_bookkeeping_bounds_and_time_limit():
         small.join(f"10.1.{k // 250}.{k % 250}")
     with pytest.raises(ValueError, match="already has"):
         small.join("10.9.9.9")
+
+
+def test_a_student_who_goes_back_to_watching_keeps_the_target_and_is_told_the_end(classroom):
+    """Going back to the presenter's arm clears the student's own scene: the reach target is drawn again. A student
+    watching when the teacher ends the challenge is shown the end and the solution, as one exploring is."""
+    room = classroom.classroom
+    reach = next(c for c in room.challenges.offered if c.kind == "reach")
+
+    async def scenario():
+        teacher = await ViserClient(url(classroom)).connect()
+        await become_presenter(teacher, classroom)
+        student = await ViserClient(url(classroom)).connect()
+        await teacher.set_gui("Challenge", reach.title)
+        await teacher.set_gui("Start the challenge", True)
+        await until(lambda: GOAL_ROOT in student.received.nodes, what="the target on the student's screen")
+        # each button's panel is drawn after the scene is changed: once the next button is there, so is the scene
+        for button, then in (("Back to the presenter's arm", "Explore on my own"), ("Explore on my own", "Back to the presenter's arm"),
+                             ("Back to the presenter's arm", "Explore on my own")):
+            await student.set_gui(button, True)
+            await until(lambda: then in student.gui, what=then)
+            assert GOAL_ROOT in student.received.nodes, button
+        await teacher.set_gui("End and show the solution", True)
+        await until(lambda: student.shown("The challenge has ended"), what="the end on the student's screen")
+        for client in (teacher, student):
+            await client.close()
+
+    asyncio.run(scenario())

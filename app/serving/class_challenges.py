@@ -71,7 +71,7 @@ class ClassChallenges:
                 self.step_out(other, keep=False)
             self.run = ChallengeRun(challenge, self.room.state.arm, time_limit, clock=lambda: self.clock())
             members = [m for m in self.room.members.values() if m is not member]
-        self._show_goal(member)
+        self.show_goal(member)
         for other in members:
             try:
                 self.enlist(other)
@@ -105,7 +105,7 @@ class ClassChallenges:
                                     check=lambda: self.check(member))
         if run.challenge.is_pose:
             student.flange = session.state.last.flange  # drawn on the projector from the start; not yet working
-        self._show_goal(member)
+        self.show_goal(member)
         self._board_changed()
 
     def watch(self, member: Member) -> None:
@@ -113,7 +113,8 @@ class ClassChallenges:
         if member.observer is not None and member.session is not None and member.observer not in member.session.observers:
             member.session.observers.append(member.observer)
 
-    def _show_goal(self, member: Member) -> None:
+    def show_goal(self, member: Member) -> None:
+        """The reach target, in ``member``'s own scene (once: a scene reset takes it, and the classroom draws it again)."""
         pose = goal_pose(self.run.challenge, self.run.arm, self.room.drawing.world)
         if pose is not None and member.goal is None:
             member.goal = GoalMarker(member.client.scene, pose, self.room.app.lecture)
@@ -160,12 +161,11 @@ class ClassChallenges:
         run.solution_words = common[1]
         for other in members:
             session = other.session
-            if session is None or session.arm != arm:
-                continue
+            own = session is not None and session.arm == arm  # a student watching the class's arm has none
             # a velocity's joint rates depend on where each arm is; any other answer is everyone's
-            q, words = solution(challenge, arm, session.state.q) if challenge.kind == "velocity" else common
+            q, words = solution(challenge, arm, session.state.q) if own and challenge.kind == "velocity" else common
             try:
-                if q is not None:
+                if own and q is not None:
                     session.apply(lambda state: state.set_joints(q, cause="typed"))
                 if other.card is not None:
                     other.card.ended(words)

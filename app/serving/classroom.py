@@ -415,6 +415,9 @@ class Classroom:
             self.app.janitor.soon()
         if member.role == EXPLORER:
             member.client.scene.reset()  # the private arm goes; the shared one is visible again
+            if member.goal is not None:  # and so did the challenge's target, which a student still needs
+                member.goal = None
+                self.challenges.show_goal(member)
         member.role = VIEWER
 
     # ------------------------------------------------------------------ the Classroom folder
