@@ -13,6 +13,7 @@ from ur10core import challenges as C
 from ur10core.dh import DHTable
 from ur10core.orientation import zyx_euler
 from ur10teach.features.branch_labels import JOIN
+from ur10teach.features.arm_picker import ARM_CHOICES
 from ur10teach.features.challenge import GOAL_ROOT
 from ur10teach.features.course_arms.editor import CONVENTIONS
 from ur10teach.features.joint_panel import display_text, rate_label, typed_label
@@ -20,11 +21,12 @@ from ur10teach.serving.gate import address_of
 from ur10teach.serving.challenge_run import ChallengeRun, clean_nickname, spreadsheet_safe
 from ur10dev.viser_client import ViserClient, messages
 
-from .server_support import become_presenter, until, url
+from .server_support import become_presenter, drag_a_little, until, url
 
 pytestmark = pytest.mark.server
 
 STUDENTS = 30
+SCARA = next(label for label, name in ARM_CHOICES.items() if name == "scara")
 #: What each student does in each challenge: "right", a wrong answer of group "a" or "b", "idle" (never touches
 #: it) or "leave" (answers wrong, group "a", then closes the browser; back from the same computer afterwards).
 PLAN = ["right"] * 9 + ["a"] * 7 + ["b"] * 5 + ["idle"] * 3 + ["leave"] * 3 + ["right", "a", "b"]
@@ -281,6 +283,42 @@ def test_a_student_who_goes_back_to_watching_keeps_the_target_and_is_told_the_en
             assert GOAL_ROOT in student.received.nodes, button
         await teacher.set_gui("End and show the solution", True)
         await until(lambda: student.shown("The challenge has ended"), what="the end on the student's screen")
+        for client in (teacher, student):
+            await client.close()
+
+    asyncio.run(scenario())
+
+
+def test_a_student_works_on_the_challenge_arm_whatever_the_class_is_shown(classroom):
+    """The teacher shows the class another arm while a UR10 challenge runs: a student who comes late, or explores
+    again after watching, gets the challenge's arm, not the one on the projector, and as they left it."""
+    room = classroom.classroom
+    reach = next(c for c in room.challenges.offered if c.kind == "reach")
+
+    async def scenario():
+        teacher = await ViserClient(url(classroom)).connect()
+        await become_presenter(teacher, classroom)
+        await teacher.set_gui("Challenge", reach.title)
+        await teacher.set_gui("Start the challenge", True)
+        await until(lambda: room.challenges.running, what="the challenge")
+        await teacher.set_gui("Which arm", SCARA)
+        await until(lambda: room.choice == SCARA and room.presenter.session is not None, what="the SCARA on the projector")
+        student = await ViserClient(url(classroom)).connect()
+        member = next(m for m in list(room.members.values()) if m is not room.presenter)
+        await until(lambda: member.card is not None and member.session is not None and member.session.built,
+                    what="the late student's card")
+        assert member.session.arm == room.challenges.run.arm
+        target = await drag_a_little(student, member.session)
+        await until(lambda: np.allclose(member.session.state.last.target[:3, 3], target[:3, 3]), what="the student's drag")
+        q = member.session.state.q
+        for button, then in (("Back to the presenter's arm", "Explore on my own"), ("Explore on my own", "Back to the presenter's arm")):
+            await student.set_gui(button, True)
+            await until(lambda: then in student.gui, what=then)
+        # their own arm again, as they left it
+        assert member.session.arm == room.challenges.run.arm and np.allclose(member.session.state.q, q)
+        await student.set_gui("Check my answer", True)
+        await until(lambda: student.shown("(check 1)"), what="the verdict")
+        assert not any(title == "Not accepted" for title, _ in student.received.notifications)
         for client in (teacher, student):
             await client.close()
 

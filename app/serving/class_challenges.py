@@ -90,15 +90,11 @@ class ClassChallenges:
             student = member.student = run.join(address_of(member.client))
         if member.session is not None and member.session.arm != run.arm:
             self.room.rejoin(member)
-        self.room.explore(member)
+        if member.session is not None:  # exploring the challenge's arm already
+            self.resume(member)
+        else:
+            self.room.explore(member)  # which resumes
         session = member.session
-        kept = student.kept
-        if "q" in kept:  # back from the same computer: their arm as they left it
-            session.apply(lambda state: state.set_joints(kept["q"], cause="typed"))
-            if not kept.get("reached", True):
-                session.apply(lambda state: state.move_target(kept["target"], cause="typed"))
-        elif run.challenge.kind == "branch_count" and run.challenge.joints is not None:
-            session.apply(lambda state: state.set_joints(run.challenge.joints, cause="typed"))
         member.observer = lambda snapshot: self._moved(member, snapshot)  # from here on, a change is the student's
         self.watch(member)
         member.card = ChallengeCard(member.client.gui, run, student, lambda handler, beside=None: self._guard(member, handler, beside),
@@ -108,6 +104,32 @@ class ClassChallenges:
         self.show_goal(member)
         self._board_changed()
 
+    def arm_for(self, member: Member) -> Arm | None:
+        """The arm a student of the running challenge works on, whatever the class is shown (None for anyone else)."""
+        run = self.run
+        return run.arm if run is not None and not run.ended and member.student is not None else None
+
+    def resume(self, member: Member) -> None:
+        """A student's own arm, just made: as they left it (back from watching, or from the same computer), else where
+        the task starts."""
+        run, student, session = self.run, member.student, member.session
+        if run is None or run.ended or student is None or session is None or session.arm != run.arm:
+            return
+        kept = student.kept
+        if "q" in kept:
+            session.apply(lambda state: state.set_joints(kept["q"], cause="typed"))
+            if not kept.get("reached", True):
+                session.apply(lambda state: state.move_target(kept["target"], cause="typed"))
+        elif run.challenge.kind == "branch_count" and run.challenge.joints is not None:
+            session.apply(lambda state: state.set_joints(run.challenge.joints, cause="typed"))
+
+    def set_aside(self, member: Member) -> None:
+        """A student's own arm is going (they watch the class, or leave): where it is, kept for :meth:`resume`."""
+        run, student, session = self.run, member.student, member.session
+        if run is not None and student is not None and session is not None and session.arm == run.arm:
+            last = session.state.last
+            student.kept.update(q=last.q.copy(), target=last.target.copy(), reached=last.reachable)
+
     def watch(self, member: Member) -> None:
         """A student's own arm tells the challenge each change (however they came to have it: the start, Explore on my own)."""
         if member.observer is not None and member.session is not None and member.observer not in member.session.observers:
@@ -115,7 +137,9 @@ class ClassChallenges:
 
     def show_goal(self, member: Member) -> None:
         """The reach target, in ``member``'s own scene (once: a scene reset takes it, and the classroom draws it again)."""
-        pose = goal_pose(self.run.challenge, self.run.arm, self.room.drawing.world)
+        session = member.session  # a student's own arm is the challenge's; the class may be shown another
+        drawing = session.drawing if session is not None and session.arm == self.run.arm else self.room.drawing
+        pose = goal_pose(self.run.challenge, self.run.arm, drawing.world)
         if pose is not None and member.goal is None:
             member.goal = GoalMarker(member.client.scene, pose, self.room.app.lecture)
 
@@ -185,11 +209,8 @@ class ClassChallenges:
         """``member`` leaves the challenge (their browser went: ``keep`` their attempt and arm for their return)."""
         run, student = self.run, member.student
         if student is not None and run is not None and keep:
-            kept = {} if member.card is None else member.card.typed()
-            if member.session is not None:
-                last = member.session.state.last
-                kept.update(q=last.q.copy(), target=last.target.copy(), reached=last.reachable)
-            run.leave(student, kept)
+            self.set_aside(member)
+            run.leave(student, {**student.kept, **({} if member.card is None else member.card.typed())})
             self._board_changed()
         if member.session is not None and member.observer in member.session.observers:
             member.session.observers.remove(member.observer)

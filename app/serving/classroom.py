@@ -361,24 +361,27 @@ class Classroom:
         self.app.refresher.request(self.live)
 
     def explore(self, member: Member) -> None:
-        """A private copy of the class's arm, starting from the presenter's pose."""
-        app, arm = self.app, self.state.arm
+        """A private copy of the class's arm, starting from the presenter's pose (a student's: the challenge's arm)."""
+        app = self.app
         with self._lock:
             if member.role == EXPLORER:
                 return
             if self.presenter is member:
                 self.stop_presenting(member)
+            arm = self.challenges.arm_for(member) or self.state.arm
             models = self._models(arm)
             member.session = ArmSession(
                 member.client, arm, app.refresher, app.drags, models=models, own_camera=False,
-                state=ArmState(arm, self.state.q, body_points=None if models is None else models.outline),
+                state=ArmState(arm, self.state.q if arm == self.state.arm else None,
+                               body_points=None if models is None else models.outline),
                 root=DESKTOP_EXPLORER_ROOT if arm.dh is None else EXPLORER_ROOT)
             member.session.follow_lecture_mode(member.camera.lecture)
             member.session.watch_camera(member.camera)
             app.janitor.settle()
             member.role = EXPLORER
             self._hide_class_arm(member)
-            self.challenges.watch(member)  # a student of a running challenge back on their own arm
+        self.challenges.resume(member)  # a student's arm as they left it, before it tells the challenge of changes
+        self.challenges.watch(member)
         self._draw_controls(member)
 
     def _hide_class_arm(self, member: Member) -> None:
@@ -409,6 +412,7 @@ class Classroom:
         self._draw_controls(member)
 
     def _leave_role(self, member: Member) -> None:
+        self.challenges.set_aside(member)
         if member.session is not None:
             member.session.remove()
             member.session = None
