@@ -288,7 +288,7 @@ def test_a_browser_that_left_cannot_become_the_presenter(classroom):
 
 def test_the_presenter_shows_the_class_another_arm(classroom):
     """The presenter's picker changes the class's arm: every viewer's scene and live panel follow,
-    an explorer gets a private copy of it, and the UR10 comes back where the presenter left it."""
+    an explorer gets a private copy of it, and the UR10 comes back where the presenter left it, showing what it showed."""
     from ur10teach.features.course_arms.scene import EXPLORER_ROOT, ROOT
     from ur10teach.features.arm_picker import UR10
     from ur10teach.session import ArmSession
@@ -304,11 +304,15 @@ def test_the_presenter_shows_the_class_another_arm(classroom):
         await become_presenter(teacher, classroom)
         presenter = member_of(classroom, 0)
         ur10_q = room.state.q.copy()
+        await teacher.set_gui("Show singularity overlay", True)  # what the presenter shows on the UR10
+        await teacher.set_gui("Show ghost arms", False)
+        await until(lambda: room.drawing.overlay.enabled and not room.drawing.show_ghosts, what="the choices applied")
         await until(room.can_switch, what="the class's arm to be ready for a change")
         await teacher.set_gui("Which arm", stanford)
         await until(lambda: room.choice == stanford and presenter.session is not None,
                     what="the class's Stanford arm")
         assert presenter.session.state is room.state and presenter.session.drawing is room.drawing
+        assert not room.drawing.overlay.enabled and room.drawing.show_ghosts  # a new arm: shown as any starts
         # every browser is sent the new arm in the shared scene, and the UR10's nodes go
         for client in (teacher, student):
             await until(lambda: client.received.node_owners.get(f"{ROOT}/body") == "", what="the shared Stanford arm")
@@ -340,6 +344,9 @@ def test_the_presenter_shows_the_class_another_arm(classroom):
         await teacher.set_gui("Which arm", UR10)
         await until(lambda: room.choice == UR10 and presenter.session is not None, what="the UR10 back")
         np.testing.assert_array_equal(room.state.q, ur10_q)
+        # and showing what the presenter had shown on it, in the panel and in 3D
+        assert presenter.session.singularities.enabled.value and room.drawing.overlay.enabled
+        assert not presenter.session.ik_target.show_ghosts.value and not room.drawing.show_ghosts
         await until(lambda: all(student.received.node_owners.get(name) == mine and student.received.visible.get(name) is False
                                 for name in set(room.drawing.roots) - {"/target"}), what="the shared UR10 hidden for the explorer")
         # at once again: too soon, refused with a message; the class keeps its arm

@@ -159,6 +159,7 @@ class Classroom:
         self.choice = UR10  #: the arm the class is shown (an ``ARM_CHOICES`` label)
         #: each arm the class has been shown, by label: it comes back where the presenter left it
         self.states: dict[str, ArmState] = {}
+        self.displays: dict[str, dict] = {}  #: and what the presenter had shown on it (overlay, cloud, ...)
         self.state = self._state_of(UR10)
         self.drawing = self._draw()
         self.live = self._live_panel(UR10)
@@ -327,6 +328,7 @@ class Classroom:
                 return
             if paced and not self.can_switch():
                 raise ValueError(f"one change of arm every {SWITCH_INTERVAL:g} s, please: try again in a moment")
+            self.displays[self.choice] = member.session.display_choices()
             member.session.remove()
             member.session = None
             self.live.remove()
@@ -339,6 +341,7 @@ class Classroom:
             self.choice = label
             app.server.gui.set_panel_label(panel_title(label, app.arm.name))
             member.session = self._presenter_session(member)
+            member.session.show_choices(self.displays.get(label, {}))
             self._last_switch = time.monotonic()
             members = list(self.members.values())
         self._draw_controls(member)
