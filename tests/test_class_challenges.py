@@ -323,3 +323,27 @@ def test_a_student_works_on_the_challenge_arm_whatever_the_class_is_shown(classr
             await client.close()
 
     asyncio.run(scenario())
+
+
+def test_a_presenter_who_takes_over_a_reach_challenge_shows_its_target(classroom):
+    """The teacher hands over mid-challenge (another laptop on the projector): its screen shows the target too."""
+    room = classroom.classroom
+    reach = next(c for c in room.challenges.offered if c.kind == "reach")
+
+    async def scenario():
+        teacher = await ViserClient(url(classroom)).connect()
+        await become_presenter(teacher, classroom)
+        other = await ViserClient(url(classroom)).connect()
+        await teacher.set_gui("Challenge", reach.title)
+        await teacher.set_gui("Start the challenge", True)
+        await until(lambda: GOAL_ROOT in other.received.nodes and GOAL_ROOT in teacher.received.nodes, what="the target on both screens")
+        await teacher.set_gui("Stop presenting", True)
+        await until(lambda: room.presenter is None, what="no presenter")
+        await other.set_gui("Back to the presenter's arm", True)  # a student explores; a watcher may present
+        await become_presenter(other, classroom)
+        await until(lambda: "End and show the solution" in other.gui, what="the new presenter's challenge folder")
+        assert GOAL_ROOT in other.received.nodes
+        for client in (teacher, other):
+            await client.close()
+
+    asyncio.run(scenario())

@@ -52,7 +52,9 @@ class ClassChallenges:
         return self.run is not None and not self.run.ended
 
     def desk(self, member: Member) -> ChallengeDesk:
-        """The presenter's "Challenge" folder."""
+        """The presenter's "Challenge" folder (and, for one who takes over a reach challenge, its target)."""
+        if self.run is not None:
+            self.show_goal(member)
         return ChallengeDesk(member.client.gui, self.offered, lambda handler, beside=None: self._guard(member, handler, beside),
                              start=lambda challenge, limit: self.start(member, challenge, limit),
                              end=lambda: self.end(member), download=lambda: self.download(member),
