@@ -340,8 +340,9 @@ class Classroom:
             self.live = self._live_panel(label, presenter_here=True)
             self.choice = label
             app.server.gui.set_panel_label(panel_title(label, app.arm.name))
-            member.session = self._presenter_session(member)
-            member.session.show_choices(self.displays.get(label, {}))
+            session = self._presenter_session(member)
+            session.show_choices(self.displays.get(label, {}))
+            member.session = session  # shown as left before anyone finds it
             self._last_switch = time.monotonic()
             members = list(self.members.values())
         self._draw_controls(member)
