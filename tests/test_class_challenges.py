@@ -262,18 +262,24 @@ def test_run_bookkeeping_bounds_and_time_limit():
         small.join("10.9.9.9")
 
 
+async def presenting_a_reach_challenge(classroom) -> ViserClient:
+    """A teacher presenting, the built-in reach challenge started (students who connect now join it on arrival)."""
+    reach = next(c for c in classroom.classroom.challenges.offered if c.kind == "reach")
+    teacher = await ViserClient(url(classroom)).connect()
+    await become_presenter(teacher, classroom)
+    await teacher.set_gui("Challenge", reach.title)
+    await teacher.set_gui("Start the challenge", True)
+    await until(lambda: classroom.classroom.challenges.running, what="the reach challenge")
+    return teacher
+
+
 def test_a_student_who_goes_back_to_watching_keeps_the_target_and_is_told_the_end(classroom):
     """Going back to the presenter's arm clears the student's own scene: the reach target is drawn again. A student
     watching when the teacher ends the challenge is shown the end and the solution, as one exploring is."""
-    room = classroom.classroom
-    reach = next(c for c in room.challenges.offered if c.kind == "reach")
 
     async def scenario():
-        teacher = await ViserClient(url(classroom)).connect()
-        await become_presenter(teacher, classroom)
+        teacher = await presenting_a_reach_challenge(classroom)
         student = await ViserClient(url(classroom)).connect()
-        await teacher.set_gui("Challenge", reach.title)
-        await teacher.set_gui("Start the challenge", True)
         await until(lambda: GOAL_ROOT in student.received.nodes, what="the target on the student's screen")
         # each button's panel is drawn after the scene is changed: once the next button is there, so is the scene
         for button, then in (("Back to the presenter's arm", "Explore on my own"), ("Explore on my own", "Back to the presenter's arm"),
@@ -293,14 +299,9 @@ def test_a_student_works_on_the_challenge_arm_whatever_the_class_is_shown(classr
     """The teacher shows the class another arm while a UR10 challenge runs: a student who comes late, or explores
     again after watching, gets the challenge's arm, not the one on the projector, and as they left it."""
     room = classroom.classroom
-    reach = next(c for c in room.challenges.offered if c.kind == "reach")
 
     async def scenario():
-        teacher = await ViserClient(url(classroom)).connect()
-        await become_presenter(teacher, classroom)
-        await teacher.set_gui("Challenge", reach.title)
-        await teacher.set_gui("Start the challenge", True)
-        await until(lambda: room.challenges.running, what="the challenge")
+        teacher = await presenting_a_reach_challenge(classroom)
         await teacher.set_gui("Which arm", SCARA)
         await until(lambda: room.choice == SCARA and room.presenter.session is not None, what="the SCARA on the projector")
         student = await ViserClient(url(classroom)).connect()
@@ -328,14 +329,10 @@ def test_a_student_works_on_the_challenge_arm_whatever_the_class_is_shown(classr
 def test_a_presenter_who_takes_over_a_reach_challenge_shows_its_target(classroom):
     """The teacher hands over mid-challenge (another laptop on the projector): its screen shows the target too."""
     room = classroom.classroom
-    reach = next(c for c in room.challenges.offered if c.kind == "reach")
 
     async def scenario():
-        teacher = await ViserClient(url(classroom)).connect()
-        await become_presenter(teacher, classroom)
+        teacher = await presenting_a_reach_challenge(classroom)
         other = await ViserClient(url(classroom)).connect()
-        await teacher.set_gui("Challenge", reach.title)
-        await teacher.set_gui("Start the challenge", True)
         await until(lambda: GOAL_ROOT in other.received.nodes and GOAL_ROOT in teacher.received.nodes, what="the target on both screens")
         await teacher.set_gui("Stop presenting", True)
         await until(lambda: room.presenter is None, what="no presenter")
