@@ -280,7 +280,7 @@ class ArmSession:
         """Thick gizmo lines and big 3D labels while the browser's lecture mode is on (until this session closes)."""
         lecture.on_change.append(self._lecture_changed)
         self._lecture = lecture
-        self.ik_target.thicken(lecture.on)
+        self._lecture_changed(lecture.on)  # a panel built before it followed one has not sized its labels
 
     def _lecture_changed(self, on: bool) -> None:
         """Lecture mode switched: thick gizmo lines, and the 3D labels sized at the next panel redraw."""

@@ -344,3 +344,34 @@ def test_a_presenter_who_takes_over_a_reach_challenge_shows_its_target(classroom
             await client.close()
 
     asyncio.run(scenario())
+
+
+def test_the_challenge_target_is_sized_once_by_a_students_lecture_mode():
+    """With ``--lecture``, a student's 3D labels are sized for lecture mode as soon as their arm is built (they waited
+    for the student's first change), and the target's label is sized once and follows their own switch (it was sized
+    twice: 3.58 for 2.24, and 2.24 out of lecture mode)."""
+    from ur10teach.serving.server import TeachingServer
+    from ur10teach.style import LECTURE_LABEL_MIN, label_scale
+
+    app = TeachingServer(port=0, shared=True, light=True, lecture=True)
+
+    async def scenario():
+        teacher = await presenting_a_reach_challenge(app)
+        student = await ViserClient(url(app)).connect()
+        member = next(m for m in list(app.classroom.members.values()) if m is not app.classroom.presenter)
+        await until(lambda: member.goal is not None and member.session is not None and member.session.built, what="the target")
+        numbers = [label for pool in member.session.drawing.label_sets for label in pool.labels]  # made out of lecture mode's size
+        await until(lambda: min(label.font_screen_scale for label in numbers) >= LECTURE_LABEL_MIN
+                    and member.goal.label.font_screen_scale == label_scale(1.4, True), what="the student's 3D labels sized once")
+        for lecture in (False, True):
+            await student.set_gui("Lecture mode", lecture)
+            await until(lambda: member.goal.label.font_screen_scale == label_scale(1.4, lecture),
+                        what=f"the target's label at {label_scale(1.4, lecture)}, lecture mode {lecture}")
+            assert member.goal.label.font_screen_scale == label_scale(1.4, lecture)
+        for client in (teacher, student):
+            await client.close()
+
+    try:
+        asyncio.run(scenario())
+    finally:
+        app.stop()

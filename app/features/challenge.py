@@ -20,6 +20,7 @@ from ..serving.challenge_run import MAX_NICKNAME, ChallengeRun, Student, summary
 from ..style import SAFE_GREEN, hex_color, label_scale
 from .branch_labels import BranchLabels, ScreenView
 from .course_arms.editor import CONVENTIONS, STARTING_TABLE
+from .lecture import add_label
 
 #: Okabe-Ito: a student still working (orange) and one who has solved it (bluish green), told apart by any eye.
 WORKING_COLOR, SOLVED_COLOR = (230, 159, 0), (0, 158, 115)
@@ -179,8 +180,7 @@ class GoalMarker:
     def __init__(self, scene: viser.SceneApi, pose: np.ndarray, lecture: bool = False) -> None:
         self.frame = scene.add_frame(GOAL_ROOT, wxyz=quaternion(pose[:3, :3], check=False), position=pose[:3, 3],
                                      axes_length=0.15, axes_radius=0.01, origin_radius=0.02)
-        self.label = scene.add_label(f"{GOAL_ROOT}/name", "challenge target", font_screen_scale=label_scale(1.4, lecture),
-                                     anchor="bottom-left")
+        self.label = add_label(scene, f"{GOAL_ROOT}/name", "challenge target", 1.4, lecture, anchor="bottom-left")
 
     def remove(self) -> None:
         self.frame.remove()

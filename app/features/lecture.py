@@ -61,6 +61,13 @@ class LectureMode:
             callback(on)
 
 
+def add_label(scene: viser.SceneApi, name: str, text: str, base: float, lecture: bool, **props) -> viser.LabelHandle:
+    """A 3D label made at its size in lecture mode or out of it; :func:`size_labels` sizes it from ``base`` later."""
+    label = scene.add_label(name, text, font_screen_scale=label_scale(base, lecture), **props)
+    label._base_scale = base
+    return label
+
+
 def size_labels(scene: viser.SceneApi, lecture: bool) -> None:
     """Every 3D label of ``scene`` at its size in lecture mode or out of it (``style.label_scale``)."""
     for label in labels_of(scene):
