@@ -298,3 +298,34 @@ def test_departures_that_keep_coming_are_swept_within_the_longest_wait():
         assert janitor._timer.interval == 0.0
     finally:
         janitor.stop()
+
+
+def test_the_panel_refresher_keeps_no_panel_it_has_drawn_or_dropped():
+    """Its loop held the last session it popped until the next one came: a browser that left while nobody else's
+    panel was redrawn stayed in memory (``test_sessions``' explore-and-back test caught it)."""
+    import gc
+    import weakref
+
+    class Panel:
+        closed = False
+
+        def __init__(self) -> None:
+            self.drawn = threading.Event()
+
+        def render_panel(self) -> None:
+            self.drawn.set()
+
+    with running_loop() as loop:
+        refresher = workers.PanelRefresher(loop)
+        drawn, dropped = Panel(), Panel()
+        refresher.request(drawn)
+        wait_for(drawn.drawn.is_set, what="the panel drawn")
+        dropped.closed = True
+        refresher.request(dropped)  # closed before its turn: popped, not drawn
+        gone = [weakref.ref(drawn), weakref.ref(dropped)]
+        refresher.forget(drawn)
+        refresher.forget(dropped)
+        del drawn, dropped
+        wait_for(lambda: gc.collect() is not None and all(ref() is None for ref in gone), what="both panels freed")
+        refresher.stop()
+        wait_for(refresher.done.done, what="the refresher's task to end")

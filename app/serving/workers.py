@@ -216,21 +216,24 @@ class PanelRefresher(_LoopWorker):
                 except asyncio.TimeoutError:
                     pass
                 continue
-            _, _, session = heapq.heappop(self._queue)
-            key = id(session)
-            self._waiting.discard(key)
-            if session.closed:
-                self._last.pop(key, None)
-                continue
-            self._last[key] = time.monotonic()
-            started = time.perf_counter()
-            try:
-                session.render_panel()
-            except Exception:
-                if not session.closed:
-                    log.exception("panel redraw failed")
-            spent = time.perf_counter() - started
+            spent = self._draw(heapq.heappop(self._queue)[2])  # no session stays referenced here while it rests
             await asyncio.sleep(spent * (1.0 / self.duty - 1.0))
+
+    def _draw(self, session: HasPanel) -> float:
+        """Redraw one session's panel (none once it has closed); the seconds it took."""
+        key = id(session)
+        self._waiting.discard(key)
+        if session.closed:
+            self._last.pop(key, None)
+            return 0.0
+        self._last[key] = time.monotonic()
+        started = time.perf_counter()
+        try:
+            session.render_panel()
+        except Exception:
+            if not session.closed:
+                log.exception("panel redraw failed")
+        return time.perf_counter() - started
 
 
 class FoldedRuns:
