@@ -414,3 +414,41 @@ def test_the_class_is_shown_the_desktop_arm_played_and_explored(classroom):
         await student.close()
 
     asyncio.run(scenario())
+
+
+def test_an_arm_that_cannot_be_drawn_leaves_the_class_on_the_arm_it_had(classroom, monkeypatch):
+    """The shared scene is cleared before the new arm is drawn: a drawing that failed (a race inside viser did, once)
+    left the class with no arm, no presenter panel and removed nodes, and every later change failed."""
+    from ur10teach.features.arm_picker import UR10
+    from ur10teach.serving import classroom as classroom_module
+
+    stanford = "Stanford arm (RRP + wrist)"
+    drawn = classroom_module.arm_drawing
+    failures = [RuntimeError("deque mutated during iteration")]
+
+    def failing_once(scene, arm, *args, **kwargs):
+        if arm.name == "stanford" and failures:
+            raise failures.pop()
+        return drawn(scene, arm, *args, **kwargs)
+
+    monkeypatch.setattr(classroom_module, "arm_drawing", failing_once)
+
+    async def scenario():
+        teacher = await ViserClient(f"http://127.0.0.1:{classroom.port}").connect()
+        await become_presenter(teacher, classroom)
+        room, presenter = classroom.classroom, member_of(classroom, 0)
+        await until(room.can_switch, what="the class's arm to be ready for a change")
+        await teacher.set_gui("Which arm", stanford)
+        await until(lambda: any(title == "Something went wrong" and "still sees the UR10" in body
+                                for title, body in teacher.received.notifications), what="the presenter told")
+        assert room.choice == UR10 and presenter.session is not None and presenter.session.drawing is room.drawing
+        assert room.live.title.content == f"**{UR10}**" and not room.live.closed
+        q = room.state.q
+        presenter.session.apply(lambda state: state.set_joints(q + 0.1))  # the class's arm draws: nothing removed
+        await until(room.can_switch, what="the class's arm to be ready for a change")
+        await teacher.set_gui("Which arm", stanford)  # and the next try works
+        await until(lambda: room.choice == stanford and presenter.session is not None and presenter.session.arm.name == "stanford",
+                    what="the Stanford arm")
+        await teacher.close()
+
+    asyncio.run(scenario())

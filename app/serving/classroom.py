@@ -320,7 +320,7 @@ class Classroom:
         """
         if label not in CLASS_CHOICES:
             raise ValueError(f"arm: {label!r:.40} is not one of the choices")
-        app = self.app
+        app, failed = self.app, None
         with self._lock:
             if member.closed or self.presenter is not member:
                 raise ValueError("only the presenter chooses the class's arm")
@@ -328,20 +328,18 @@ class Classroom:
                 return
             if paced and not self.can_switch():
                 raise ValueError(f"one change of arm every {SWITCH_INTERVAL:g} s, please: try again in a moment")
-            self.displays[self.choice] = member.session.display_choices()
+            previous = self.choice
+            self.displays[previous] = member.session.display_choices()
             member.session.remove()
             member.session = None
             self.live.remove()
-            app.server.scene.reset()  # the class's arm and everything drawn with it
-            add_floor_grid(app.server.scene)
-            self.choice = label
-            self.state = self._state_of(label)
-            self.drawing = self._draw()
-            self.live = self._live_panel(label, presenter_here=True)
-            self.choice = label
-            app.server.gui.set_panel_label(panel_title(label, app.arm.name))
+            try:
+                self._draw_class(label)
+            except Exception as error:  # the shared scene is cleared by then: the class sees the arm it had, not nothing
+                failed = error
+                self._draw_class(previous)
             session = self._presenter_session(member)
-            session.show_choices(self.displays.get(label, {}))
+            session.show_choices(self.displays.get(self.choice, {}))
             member.session = session  # shown as left before anyone finds it
             self._last_switch = time.monotonic()
             members = list(self.members.values())
@@ -353,7 +351,20 @@ class Classroom:
                 other.camera.body_radius = self._body_radius()
                 other.camera.frame()
         app.refresher.request(self.live)
+        if failed is not None:  # a challenge must not start on the arm the class had
+            raise RuntimeError(f"the {label} could not be drawn; the class still sees the {previous}") from failed
         log.info("the class is shown the %s", label)
+
+    def _draw_class(self, label: str) -> None:
+        """The arm ``label`` in the shared scene, in place of everything there, and its live panel."""
+        app = self.app
+        app.server.scene.reset()
+        add_floor_grid(app.server.scene)
+        self.choice = label
+        self.state = self._state_of(label)
+        self.drawing = self._draw()
+        self.live = self._live_panel(label, presenter_here=True)
+        app.server.gui.set_panel_label(panel_title(label, app.arm.name))
 
     def stop_presenting(self, member: Member) -> None:
         with self._lock:
