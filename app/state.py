@@ -11,9 +11,10 @@ values a user can type.
 from __future__ import annotations
 
 import functools
+import itertools
 import math
 import threading
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -49,6 +50,8 @@ class Snapshot:
     ghost_frames: np.ndarray  #: (k, L, 4, 4) frames of each branch (identity where it does not reach)
     rates: np.ndarray | None = None  #: (n,) the joints' rates while a path plays (None at rest)
     body_points: np.ndarray | None = None  #: (L, P, 3) outline points of each body in its frame, for the floor check
+    #: made after every snapshot of a lower order (a panel drawn late can tell what the student did since)
+    order: int = field(default_factory=itertools.count().__next__, compare=False)
 
     @property
     def reachable(self) -> bool:

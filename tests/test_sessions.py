@@ -436,6 +436,36 @@ def test_a_students_slider_value_is_not_put_back_by_a_redraw_before_its_callback
     asyncio.run(scenario())
 
 
+def test_what_a_student_types_in_the_all_six_box_outlives_a_late_redraw(app):
+    """On a loaded CI machine the redraw of the pose set before a student typed the next one came after
+    the typing: it wrote the old pose back into the box, *Set these values* applied it, and the goal was lost."""
+    from viser import GuiEvent
+
+    async def scenario():
+        client = await ViserClient(url(app)).connect()
+        session = session_of(app, client)
+        panel, handle = session.joints, app.server.get_clients()[int(client.gizmo_owner)]
+        session.state.set_joints(np.radians([-30, 60, 60, 30, 60, 0]))  # a change whose redraw is late
+        typed = "10, 20, 30, 40, 50, 60"
+        panel.typed._impl.value = typed  # what viser does with the student's text, before it runs the callback
+        panel.render_panel(session.state.last)
+        assert panel.typed.value == typed
+        for callback in panel.typed._impl.update_cb:
+            callback(GuiEvent(handle, handle.client_id, panel.typed))
+        panel.render_panel(session.state.last)  # the late redraw again, after the callback
+        assert panel.typed.value == typed
+        await client.set_gui("Set these values", True)
+        await until(lambda: np.allclose(np.degrees(session.state.q), [10, 20, 30, 40, 50, 60]), what="the typed pose")
+        panel.typed._impl.value = "1, 2"  # typed, then the arm moved by something else: the box shows the arm again
+        for callback in panel.typed._impl.update_cb:
+            callback(GuiEvent(handle, handle.client_id, panel.typed))
+        await client.set_gui("Pose", "Stretched")
+        await until(lambda: client.gui["All 6 (°)"]["value"] == "45, 90, 0, -90, 0, 60", what="the box to follow the arm")
+        await client.close()
+
+    asyncio.run(scenario())
+
+
 def test_a_browser_gone_before_its_turn_to_be_built_costs_nothing(app, monkeypatch):
     """A lecture hall joining at once is built one session at a time (``ur10teach.serving.workers.JOINS``):
     a browser that left while it waited for its turn is not built at all."""

@@ -99,6 +99,8 @@ class JointPanel(View):
         shown = [round(float(to_display(kind, v)), 2) for kind, v in zip(arm.joint_types, q)]
         self._received = list(shown)  # each slider's last value, as the browser sent or we set it
         self._shown_q = q
+        self._typed_text = display_text(arm, q)  # the box as we last wrote it or the student last sent it
+        self._typed_over = -1  # the order of the newest change the student's typing was made after
         self.pose_names = (*(name.capitalize() for name in arm.specs.poses), "Random")
         folder = gui.add_folder("Joints")
         self.folders = (folder,)
@@ -126,6 +128,7 @@ class JointPanel(View):
         for index, slider in enumerate(self.sliders):
             slider.on_update(session.guard(self._slider_moved(index)))
         self.poses.on_click(session.guard(self._pose_button))
+        self.typed.on_update(self._text_typed)
         self.apply_typed.on_click(session.guard(self._typed_values, beside=self.refusal))
         if self.controller is not None:
             self.controller.on_update(session.guard(lambda _: session.refresher.request(session)))
@@ -164,6 +167,12 @@ class JointPanel(View):
         self._before()
         self._session.apply(lambda state: state.set_joints(q))
 
+    def _text_typed(self, event: viser.GuiEvent) -> None:
+        if event.client is not None:  # the student's text stands until the arm changes after it
+            with self._typing_lock:
+                self._typed_text, self._typed_over = self.typed.value, self._session.state.last.order
+                self._shown_q = None
+
     def _typed_values(self, _: viser.GuiEvent) -> None:
         arm = self._arm
         values = ArmState.parse_numbers(self.typed.value, arm.n_joints, "joint values")
@@ -181,9 +190,11 @@ class JointPanel(View):
             if not abs(slider.value - value) <= 1e-9:  # true for a NaN a bad client left too
                 slider.value = value
                 self._received[index] = value
-        if not np.array_equal(snapshot.q, self._shown_q):  # leave the student's own typing alone otherwise
-            self._shown_q = snapshot.q
-            self.typed.value = display_text(self._arm, snapshot.q)
+        with self._typing_lock:  # a panel drawn late, or before the typing's callback has run, leaves the typing alone
+            typed_since = self.typed.value != self._typed_text or snapshot.order <= self._typed_over
+            if not typed_since and not np.array_equal(snapshot.q, self._shown_q):
+                self._shown_q = snapshot.q
+                self._typed_text = self.typed.value = display_text(self._arm, snapshot.q)
         with_controller = self.controller is not None and bool(self.controller.value)
         self.summary.content = joints_markdown(self._arm, snapshot.q, with_controller)
 
