@@ -5,6 +5,7 @@ from __future__ import annotations
 import asyncio
 import hashlib
 import inspect
+import threading
 
 import numpy as np
 import pytest
@@ -16,7 +17,7 @@ from viser.infra._async_message_buffer import AsyncMessageBuffer
 from ur10teach.viser_internals import shared_frames
 from ur10teach.viser_internals.fast_updates import _UpdateMessage
 from ur10dev.viser_client import decode_frame
-from ur10dev.waiting import HANG_TIMEOUT, until
+from ur10dev.waiting import HANG_TIMEOUT, until, wait_for
 
 #: viser 1.1.1's ``_message_producer``, which shared_frames.shared_message_producer copies.
 VISER_PRODUCER_SHA256 = "8283328d06cfa014576888930c49a857a2d79892dc89f9694444895945018ea3"
@@ -117,6 +118,47 @@ def test_viser_producer_is_the_one_copied():
 def test_the_app_sends_through_it(classroom):
     """Every connection of the running app, shared mode included, gets its frames from shared_frames."""
     assert _infra._message_producer is shared_frames.shared_message_producer
+
+
+def test_a_thread_setting_a_queues_event_wakes_its_waiter_on_the_loop_alone():
+    """A thread set viser's queue event while the loop added a waiter to it: "deque mutated during
+    iteration", and the redraw that queued the message failed. Now the thread touches nothing of the
+    event: the loop wakes the waiter."""
+    loop = asyncio.new_event_loop()
+    runner = threading.Thread(target=loop.run_forever, daemon=True)
+    runner.start()
+    try:
+        event = shared_frames.WakeOnLoop(loop)
+        waiting = asyncio.run_coroutine_threadsafe(event.wait(), loop)
+        wait_for(lambda: len(event._waiters) == 1, what="the waiter")
+        held, release = threading.Event(), threading.Event()
+        loop.call_soon_threadsafe(lambda: (held.set(), release.wait(HANG_TIMEOUT)))  # the loop is busy
+        held.wait(HANG_TIMEOUT)
+        event.set()  # from this thread
+        assert not event.is_set() and not waiting.done()  # left to the loop
+        release.set()
+        assert waiting.result(HANG_TIMEOUT) is True and event.is_set()
+    finally:
+        loop.call_soon_threadsafe(loop.stop)
+        runner.join(HANG_TIMEOUT)
+        loop.close()
+    event.set()  # the loop has closed: nothing to wake, and no error
+
+
+@pytest.mark.server
+def test_the_app_makes_its_queues_events_safe(classroom):
+    """The broadcast queue and each browser's own, from the first connection on."""
+    from ur10dev.viser_client import ViserClient
+
+    async def scenario():
+        browser = await ViserClient(f"http://127.0.0.1:{classroom.port}").connect()
+        websock = classroom.server._websock_server
+        client_buffer = next(iter(websock._client_state_from_id.values())).message_buffer
+        await until(lambda: all(isinstance(buffer.message_event, shared_frames.WakeOnLoop)
+                                for buffer in (websock._broadcast_buffer, client_buffer)), what="both queues' events")
+        await browser.close()
+
+    asyncio.run(scenario())
 
 
 @pytest.mark.server

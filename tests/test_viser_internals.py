@@ -7,6 +7,7 @@ beside it: tests/test_fast_updates.py, tests/test_shared_frames.py, tests/test_g
 
 from __future__ import annotations
 
+import asyncio
 import functools
 import importlib.metadata
 import inspect
@@ -87,3 +88,16 @@ def test_the_message_producer_is_what_shared_frames_replaces():
     parameters = list(inspect.signature(_infra._message_producer).parameters)
     assert parameters[:3] == ["websocket", "buffer", "client_id"]
     assert callable(_infra._append_aligned_buffers) and hasattr(AsyncMessageBuffer, "window_generator")
+
+
+def test_a_queues_event_is_what_shared_frames_makes_safe():
+    """viser sets a queue's ``message_event`` in ``push``, from whichever thread queues, and its window
+    loop waits on it: shared_frames swaps in a :class:`~ur10teach.viser_internals.shared_frames.WakeOnLoop`."""
+    loop = asyncio.new_event_loop()
+    try:
+        buffer = AsyncMessageBuffer(loop, persistent_messages=False)
+        assert type(buffer.message_event) is asyncio.Event and buffer.event_loop is loop
+    finally:
+        loop.close()
+    assert "self.message_event.set()" in inspect.getsource(AsyncMessageBuffer.push)
+    assert "await self.message_event.wait()" in inspect.getsource(AsyncMessageBuffer._window_loop)

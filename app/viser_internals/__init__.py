@@ -3,7 +3,8 @@
 * :mod:`.fast_updates` — pose updates queued straight as viser's own messages, type hints
   evaluated once per props class, a client gizmo's echo switched off;
 * :mod:`.shared_frames` — viser's per-connection message producer, replaced by one that
-  encodes a broadcast window once for every browser and drops a browser that stops reading;
+  encodes a broadcast window once for every browser, drops a browser that stops reading, and makes
+  each queue's event safe to set from a callback's thread;
 * :func:`connection_of` — the websocket connection behind a client (the gate's, with its address);
 * :func:`after_broadcast` — an action for one browser held until the shared scene's queued messages
   have left for it (viser sends the two queues on two tasks, in no set order);
