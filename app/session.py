@@ -236,15 +236,19 @@ class ArmSession:
     # ------------------------------------------------------------------ display choices
 
     def _switches(self):
-        """((view, label), handle) of each checkbox and dropdown of the panel: what is shown, not where the arm is."""
+        """((view, label), handle) of each checkbox, dropdown and slider of the panel: what is shown and the
+        settings of the lessons (joint rates, the force, a section's height), not where the arm is."""
         for view in self.panel_views:
-            if view is not self.camera:  # lecture mode follows the browser, not the arm
-                for handle in vars(view).values():
-                    if isinstance(handle, (viser.GuiCheckboxHandle, viser.GuiDropdownHandle)):
+            if view is self.camera or view is self.joints:  # lecture mode follows the browser; the state has the pose
+                continue
+            for value in vars(view).values():
+                for handle in value if isinstance(value, list) else (value,):  # the Velocities' rate sliders
+                    if isinstance(handle, (viser.GuiCheckboxHandle, viser.GuiDropdownHandle, viser.GuiSliderHandle)):
                         yield (type(view).__name__, handle.label), handle
 
     def display_choices(self) -> dict[tuple[str, str], Any]:
-        """What the student chose to show (ghosts, overlay, cloud, frames, …): the server keeps it with the arm."""
+        """What the student chose to show (ghosts, overlay, cloud, frames, …) and set (joint rates, the force,
+        the payload, a section's height): the server keeps it with the arm."""
         return {key: handle.value for key, handle in self._switches()}
 
     def show_choices(self, choices: dict[tuple[str, str], Any]) -> None:
