@@ -3,6 +3,7 @@ server carries on serving everyone else."""
 
 from __future__ import annotations
 
+import contextlib
 import functools
 import logging
 import math
@@ -99,6 +100,14 @@ def guard(
     return guarded
 
 
+def put_back(handle, value: Any) -> None:
+    """Show ``value`` in a widget again before a refusal, unless the widget has gone meanwhile: another
+    browser's action can rebuild this panel (a presenter's controls, when someone else takes over) while
+    the refused value is being checked, and the refusal is what the student must see."""
+    with contextlib.suppress(RuntimeError):  # viser's "Cannot assign to 'value' on a removed" widget
+        handle.value = value
+
+
 def chosen(handle, what: str) -> str:
     """The value of a dropdown or button group, or ``ValueError`` when a client sent one not among its options.
 
@@ -112,7 +121,7 @@ def chosen(handle, what: str) -> str:
         handle._accepted_choice = value
         return value
     if isinstance(handle, viser.GuiDropdownHandle):  # a button group holds no choice to show
-        handle.value = getattr(handle, "_accepted_choice", options[0])
+        put_back(handle, getattr(handle, "_accepted_choice", options[0]))
     raise ValueError(f"{what}: {value!r:.40} is not one of the choices")
 
 
@@ -130,5 +139,5 @@ def within(handle, what: str) -> float:
     if isinstance(value, (int, float)) and not isinstance(value, bool) and low <= value <= high:  # NaN is not
         handle._accepted_value = value
         return float(value)
-    handle.value = getattr(handle, "_accepted_value", min(max(0.0, low), high))
+    put_back(handle, getattr(handle, "_accepted_value", min(max(0.0, low), high)))
     raise ValueError(f"{what}: from {low:g} to {high:g}, got {value!r:.40}")

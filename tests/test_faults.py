@@ -17,7 +17,7 @@ from viser import _messages as messages
 
 from ur10teach import feedback
 from ur10teach.viser_internals import shared_frames
-from ur10teach.features.arm_picker import ARM_CHOICES, UR10
+from ur10teach.features.arm_picker import ARM_CHOICES, UR10, ArmPicker
 from ur10teach.features.workspace import SAMPLE_COUNTS
 from ur10dev.app_process import running_app
 from .server_support import drag_a_little, session_of, until, url, wait_for
@@ -148,6 +148,41 @@ def test_refusals_are_shown_at_a_readable_pace(monkeypatch):
     now[0] += 10.0
     feedback.notify(browser, "Not accepted", "θ2: not a number")
     assert shown[-1] == f"θ2: not a number ({600 - feedback.NOTICE_BURST} more messages were not shown.)"
+
+
+def test_a_refusal_reaches_the_student_when_the_widget_went_meanwhile():
+    """A classroom monkey (2026-12-03): a presenter picked an arm just as another browser took the
+    presenter's role over. The pick was refused ("only the presenter ...") and the picker, meanwhile
+    removed with the presenter's controls, could not be put back: the student saw "Something went
+    wrong" instead of why. The same holds for any widget a refused value is put back into."""
+    shown = []
+
+    class Browser:
+        client_id = 7
+
+        def add_notification(self, title, body, **_):
+            shown.append((title, body))
+
+    server = viser.ViserServer(host="127.0.0.1", port=0, verbose=False)
+    try:
+        def taken_over(label: str) -> None:  # the role went to someone else while this pick was on its way
+            picker.folder.remove()
+            raise ValueError("only the presenter chooses the class's arm")
+
+        picker = ArmPicker(server.gui, UR10, taken_over, lambda handler: feedback.guard(Browser(), handler))
+        picker.dropdown.value = "SCARA (RRP + roll)"
+        assert shown == [("Not accepted", "Only the presenter chooses the class's arm")]
+        slider = server.gui.add_slider("Force at the tool (N)", min=0.0, max=400.0, step=5.0, initial_value=50.0)
+        dropdown = server.gui.add_dropdown("Plane", ("vertical", "horizontal"))
+        for widget in (slider, dropdown):
+            widget._impl.value = "no such value"  # as viser stores what a browser sent, before the callback
+            widget.remove()
+        with pytest.raises(ValueError, match="force"):
+            feedback.within(slider, "force")
+        with pytest.raises(ValueError, match="plane"):
+            feedback.chosen(dropdown, "plane")
+    finally:
+        server.stop()
 
 
 def test_garbage_and_out_of_range_input_is_refused(app):

@@ -14,6 +14,8 @@ import viser
 
 from ur10core.serial import PRESETS
 
+from ..feedback import put_back
+
 #: Seconds between two rebuilds of one browser's arm (the picker, the DH editor's "Build"), or of
 #: the classroom's: building an arm costs tens of milliseconds, and a flicked picker must not load the server.
 SWITCH_INTERVAL = 0.5
@@ -62,12 +64,12 @@ class ArmPicker:
     def _picked(self, on_pick: Callable[[str], None]) -> None:
         label = self.dropdown.value
         if label not in self._choices:  # not from a browser: put back the arm this one drives, and refuse
-            self.dropdown.value = self._current
+            put_back(self.dropdown, self._current)
             raise ValueError(f"arm: {label!r:.40} is not one of the choices")
         if label != self._current:
             try:
                 on_pick(label)
             except ValueError:  # refused (too soon after the last change): show the arm this browser still drives
-                self.dropdown.value = self._current
+                put_back(self.dropdown, self._current)
                 raise
             self._current = label
