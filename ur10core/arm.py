@@ -221,6 +221,17 @@ class Arm(JacobianUses, HasSpecs):
         return isinstance(self.solver, NumericalIK)
 
     @property
+    def planar(self) -> bool:
+        """Its tool moves in one plane square to z0: revolute joints only, each axis parallel to z0 (every α
+        a multiple of 180°), as the course's planar elbow (docs/kinematics.md §7.5).
+
+        >>> Arm.preset("planar_elbow").planar, Arm.preset("scara").planar, Arm.preset("ur10").planar
+        (True, False, False)
+        """
+        return self.dh is not None and all(row.joint != PRISMATIC and abs(math.sin(row.alpha)) < 1e-12
+                                           for row in self.dh.rows)
+
+    @property
     def up(self) -> tuple[float, float, float]:
         """Its vertical in the base frame: z, or y for the course's desktop arm."""
         return getattr(self.solver, "up", (0.0, 0.0, 1.0))

@@ -390,7 +390,7 @@ class IKTarget(View):
         self.gizmo = controls.add_transform_controls(
             f"{drawing.root}/ik_target", scale=GIZMO_SHARE * drawing.size, line_width=GIZMO_LINE_WIDTH[False],
             depth_test=False, opacity=0.85, disable_rotations=arm.task == "position",
-            active_axes=(True, True, arm.name != "planar_elbow"),
+            active_axes=(True, True, not arm.planar),
             wxyz=quaternion(snapshot.target[:3, :3], check=False), position=snapshot.target[:3, 3])
         stop_echo(self.gizmo)
         # the halo rides on the gizmo unless the (shared) scene draws the target itself

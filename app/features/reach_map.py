@@ -29,6 +29,18 @@ RESOLUTION = 200  #: cells per side for the UR family (compiled batch IK): 40 00
 COURSE_RESOLUTION = 100
 
 
+def planes_of(arm) -> tuple[tuple[str, ...], str]:
+    """The planes ``arm``'s map offers, and what the folder says of the one it lacks ("" if none).
+
+    An arm that moves in one horizontal plane (the planar elbow) reaches a vertical plane along a
+    line only: its map is its own plane, the horizontal one at the target's height.
+    """
+    if arm.planar:
+        return tuple(PLANES)[1:], ("Only the horizontal plane for this arm: it moves in that plane, and a vertical "
+                                   "one would meet what it reaches along a line.")
+    return tuple(PLANES), ""
+
+
 def legend_counts(slots: int) -> tuple[int, ...]:
     """The branch counts the legend names for an arm of ``slots`` IK slots: 2, 4, 6, 8 for the UR10; 1 … 4 for four."""
     step = max(slots // 4, 1)
@@ -108,7 +120,8 @@ class ReachMapView(View):
                                  f"how many of the {self.slots} branches get there? Turn the gizmo and watch the "
                                  "rings change.")
             self.enabled = gui.add_checkbox("Show branch-count map", False, disabled=arm.numerical)
-            self.plane = gui.add_dropdown("Plane", tuple(PLANES), initial_value=tuple(PLANES)[0])
+            planes, missing = planes_of(arm)
+            self.plane = gui.add_dropdown("Plane", planes, initial_value=planes[0], hint=missing or None)
             self.legend = gui.add_html(legend_html(max(self.slots, 1)), visible=False)
         self.enabled.on_update(session.guard(self._toggled))
         self.plane.on_update(session.guard(self._toggled))

@@ -89,7 +89,7 @@ def gravity_words(arm) -> str:
     """What the folder says of the arm's weight: counted, or why not."""
     if arm.name in MASSES:
         return "plus the arm's own weight and its payload."
-    return "The arm's own weight is not counted: no link masses are published for this arm, so no gravity."
+    return "the arm's own weight is not counted: no link masses are published for this arm, so no gravity."
 
 
 class StaticsView(View):
