@@ -148,10 +148,21 @@ def test_exploring_on_your_own_and_back(classroom):
         assert abs(np.degrees(demo.q[0]) - 10.0) < 1e-9
         demo.set_joints(np.radians([40, -70, 80, -30, 60, 20]))
         assert abs(np.degrees(own.q[0]) - 25.0) < 1e-9
+        await student.set_gui("Show singularity overlay", True)  # and what the student shows and sets
+        rate = explorer.session.velocity.sliders[1].label
+        await student.set_gui(rate, -30.0)
+        await until(lambda: explorer.session.drawing.overlay.enabled and explorer.session.velocity.sliders[1].value == -30.0,
+                    what="the student's choices")
         # back to the class: the private arm is gone
         await student.set_gui("Back to the presenter's arm", True)
         await until(lambda: explorer.role == VIEWER and explorer.session is None, what="re-attaching")
         assert len(classroom.sessions) == 1  # only the presenter drives an arm
+        # exploring again starts from the class's pose, showing what the student showed (until 2026-12-03: reset)
+        await student.set_gui("Explore on my own", True)
+        await until(lambda: explorer.role == EXPLORER and explorer.session is not None, what="exploring again")
+        again = explorer.session
+        np.testing.assert_allclose(again.state.q, demo.q)
+        assert again.singularities.enabled.value and again.drawing.overlay.enabled and again.velocity.sliders[1].value == -30.0
         for client in (teacher, student):
             await client.close()
 

@@ -149,6 +149,8 @@ class Member:
         self.card: ChallengeCard | None = None  #: and their "Challenge" folder
         self.goal: GoalMarker | None = None
         self.observer = None  #: what the student's session calls after each change
+        #: what the student's own arm showed and its folders were set to, by arm: it comes back so next time they explore
+        self.displays: dict[Arm, dict] = {}
         self.closed = False
 
 
@@ -390,6 +392,7 @@ class Classroom:
                 state=ArmState(arm, self.state.q if arm == self.state.arm else None,
                                body_points=None if models is None else models.outline),
                 root=DESKTOP_EXPLORER_ROOT if arm.dh is None else EXPLORER_ROOT)
+            member.session.show_choices(member.displays.get(arm, {}))
             member.session.follow_lecture_mode(member.camera.lecture)
             member.session.watch_camera(member.camera)
             app.janitor.settle()
@@ -429,6 +432,8 @@ class Classroom:
     def _leave_role(self, member: Member) -> None:
         self.challenges.set_aside(member)
         if member.session is not None:
+            if member.role == EXPLORER:
+                member.displays[member.session.arm] = member.session.display_choices()
             member.session.remove()
             member.session = None
             self.app.janitor.soon()
