@@ -13,7 +13,7 @@ import viser
 
 from ur10core import Arm
 
-from .features.branch_labels import ScreenView, screen_view
+from .features.branch_labels import ScreenView, chain, screen_view
 from .features.branch_search import BranchSearch
 from .features.camera import CameraControls
 from .features.course_arms.desktop_lessons import desktop_lessons
@@ -135,6 +135,7 @@ class ArmSession:
             self.follow_lecture_mode(self.camera.lecture)
         #: the scene whose 3D labels this browser's lecture mode sizes: its own (a shared one follows the server's)
         self._label_scene = scene if server is None else None
+        chain(drawn.label_sets, outside=self._arrow_names)  # the placed labels keep clear of this session's arrows' names
         placed = self.guard(lambda _: [labels.place() for labels in drawn.label_sets])
         self._place_numbers = lambda: placed(None)  # on every camera move: the 3D labels placed for the new view
         if server is None:  # the 3D labels placed apart for this browser's camera, as it moves
@@ -272,6 +273,10 @@ class ArmSession:
         if self._label_scene is not None:
             camera.on_moved.append(self._place_numbers)
 
+    def _arrow_names(self) -> list:
+        """The names of the velocity and force arrows, where this session draws them (in the drawing's frame)."""
+        return [] if self.closed else [*self.velocity.labels, *self.statics.obstacles()]
+
     def _screen_view(self) -> ScreenView:
         """This browser's camera, to place the branch numbers for (the default one until it reports)."""
         return screen_view(self.client)
@@ -307,6 +312,9 @@ class ArmSession:
         if self.camera is not None and self._place_numbers in self.camera.on_moved:
             self.camera.on_moved.remove(self._place_numbers)
         self.closed = True
+        pools = self.drawing.label_sets
+        if pools and getattr(pools[0], "outside", None) == self._arrow_names:  # a shared drawing outlives this session
+            chain(pools)
         with self.state.lock:  # not while a drag is being drawn
             for view in self.panel_views:
                 how(view)

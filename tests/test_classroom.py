@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import asyncio
 import collections
+import threading
 import time
 
 import numpy as np
@@ -15,6 +16,7 @@ from ur10teach.serving.server import TeachingServer
 
 from .server_support import become_presenter, member_of, until
 from ur10dev.viser_client import ViserClient
+from ur10dev.waiting import HANG_TIMEOUT
 
 pytestmark = pytest.mark.server
 
@@ -177,16 +179,68 @@ def test_handing_over_and_leaving(classroom):
             await client.set_gui("Join code", classroom.classroom.code)
         await first.set_gui("Become presenter", True)  # after its own code: one connection's messages are handled in order
         await until(lambda: member_of(classroom, 0).role == PRESENTER, what="first presenter")
+        first_session = member_of(classroom, 0).session
         await second.set_gui("Become presenter", True)
         await until(lambda: member_of(classroom, 1).role == PRESENTER, what="hand-over")
         assert member_of(classroom, 0).role == VIEWER and member_of(classroom, 0).session is None
+        # the class's labels keep clear of the new presenter's arrows' names, and hold on to the old presenter no more
+        pools = classroom.classroom.drawing.label_sets
+        assert all(pool.outside == member_of(classroom, 1).session._arrow_names for pool in pools)
+        assert not any(pool.outside == first_session._arrow_names for pool in pools)
+        del first_session
         # the presenter leaves: the arm stays, the role is free again
         q = classroom.classroom.state.q
         await second.close()
         await until(lambda: classroom.classroom.presenter is None, what="the presenter's departure")
+        assert all(pool.outside() == [] and getattr(pool.outside, "__self__", None) is None for pool in pools)
         np.testing.assert_array_equal(classroom.classroom.state.q, q)
         assert len(classroom.classroom.members) == 1
         await first.close()
+
+    asyncio.run(scenario())
+
+
+def test_a_claim_while_the_presenters_controls_are_drawn_leaves_them_one_folder(classroom, monkeypatch):
+    """A second browser took the presenter's role over while the first one's controls were still being drawn
+    (a classroom test's warning, 2026-12-03): both drew the first browser's "Classroom" folder at once, which
+    left it two, and the presenter's "Challenge" folder in a viewer's panel."""
+    room = classroom.classroom
+    drawing_desk, go, handed_over = threading.Event(), threading.Event(), threading.Event()
+    desk, leave_role = room.challenges.desk, room._leave_role
+
+    def slow_desk(member):  # the first presenter's "Challenge" folder takes its time
+        if not drawing_desk.is_set():
+            drawing_desk.set()
+            go.wait(HANG_TIMEOUT)
+        return desk(member)
+
+    def leaving(member):
+        leave_role(member)
+        if member is member_of(classroom, 0):
+            handed_over.set()
+
+    monkeypatch.setattr(room.challenges, "desk", slow_desk)
+    monkeypatch.setattr(room, "_leave_role", leaving)
+
+    async def scenario():
+        first = await ViserClient(f"http://127.0.0.1:{classroom.port}").connect()
+        second = await ViserClient(f"http://127.0.0.1:{classroom.port}").connect()
+        for client in (first, second):
+            await client.set_gui("Join code", room.code)
+        await first.set_gui("Become presenter", True)
+        await until(drawing_desk.is_set, what="the first presenter's controls being drawn")
+        await second.set_gui("Become presenter", True)
+        await until(handed_over.is_set, what="the hand-over under way")
+        go.set()
+        await until(lambda: member_of(classroom, 1).role == PRESENTER and member_of(classroom, 1).desk is not None,
+                    what="the second presenter's controls")
+        await until(lambda: "Explore on my own" in first.gui and "Start the challenge" not in first.gui,
+                    what="the first browser's viewer controls, without the presenter's Challenge folder")
+        roles = [text for text in first.markdown.values() if text.startswith("You are **")]
+        assert roles == ["You are **watching** the presenter's arm."], roles
+        assert member_of(classroom, 0).desk is None
+        for client in (first, second):
+            await client.close()
 
     asyncio.run(scenario())
 

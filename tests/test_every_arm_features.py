@@ -149,3 +149,40 @@ def test_the_branch_count_map_of_every_arm_is_its_ik_s(app, label):
         await client.close()
 
     asyncio.run(scenario())
+
+
+@pytest.mark.parametrize("label", EVERY_ARM)
+def test_the_placed_labels_keep_clear_of_the_arrows_names(app, label):
+    """The DH axes' names, the branch numbers and the factors' names are placed apart on the screen; until
+    2026-12-03 they did not keep clear of the names the velocity and force arrows carry at the tool
+    ("ω turning rate" over "z3" and "x3" on the cylindrical arm, "F = 50 N" over "x4" on the Stanford arm)."""
+    from ur10teach.features.branch_labels import boxes, obstacle, overlapping, screen_view
+
+    async def scenario():
+        client = await ViserClient(url(app)).connect()
+        session = await pick(app, client, label)
+        arm, velocity = session.arm, session.velocity
+        for joint in (0, 1):
+            await client.set_gui(rate_label(arm, joint), 40.0 if arm.joint_types[joint] == "R" else 100.0)
+        await client.set_gui("Show the torques", True)
+        await until(lambda: velocity.labels[0].visible and session.statics.label.visible
+                    and np.allclose(velocity.labels[0].position, velocity.linear.points[0][1]), what="the arrows and their names")
+        view = screen_view(session.client)  # the camera the labels are placed for
+
+        world = session.drawing.world  # the arm's base frame in the scene (the desktop arm's y is up)
+
+        def box(position, text, scale, anchor):  # on the screen, from a position in the arm's base frame
+            seen = np.asarray(position, dtype=float) @ world[:3, :3].T + world[:3, 3]
+            return boxes(view.to_screen(seen[None])[0], [text], scale, anchor)[0]
+
+        arrows = [box(*name) for name in (*map(obstacle, velocity.labels), *session.statics.obstacles())]
+        for pool in session.drawing.label_sets:  # as a camera move places them
+            pool.place()
+        placed = [(text, box(position, text, pool.labels[0].font_screen_scale, "bottom-center"))
+                  for pool in session.drawing.label_sets for _, text, position in pool.placed]
+        assert placed, "no placed labels to check"
+        clashes = [text for text, placed_box in placed if any(overlapping(placed_box, arrow, gap=0.0) for arrow in arrows)]
+        assert not clashes, f"over an arrow's name: {clashes}"
+        await client.close()
+
+    asyncio.run(scenario())

@@ -175,7 +175,8 @@ class BranchLabels:
     placed apart for a camera (:func:`place`), each moved one with a leader line back to its point.
 
     ``view`` gives the camera to place for (the browser's own, or the default one of the
-    shared scene); ``fixed`` the labels drawn by something else that these keep clear of;
+    shared scene); ``fixed`` the labels drawn by something else that these keep clear of (label
+    nodes in the pool's frame, or :func:`obstacle` tuples);
     ``world`` (4, 4) where the labels' parent node is in the world (both in its frame);
     ``colours[k]`` the leader line's colour for label k's point.
     """
@@ -190,7 +191,7 @@ class BranchLabels:
         self.colours = colours or [LEADER_GREY] * count
         self.merge_px = merge_px
         self.view: Callable[[], ScreenView] = lambda: DEFAULT_VIEW
-        self.fixed: Callable[[], list[viser.LabelHandle]] = lambda: []
+        self.fixed: Callable[[], list] = lambda: []
         self.world = np.eye(4)
         self.placed: list[tuple[tuple[int, ...], str, np.ndarray]] = []  #: what the labels show now
         self._wanted: tuple[np.ndarray, list[str]] = (np.zeros((0, 3)), [])
@@ -216,8 +217,8 @@ class BranchLabels:
                 return  # nothing to show, and nothing shown
             scale = self.labels[0].font_screen_scale if self.labels else NUMBER_SCALE  # grown in lecture mode
             R, t = self.world[:3, :3], self.world[:3, 3]
-            fixed = [(np.asarray(label.position) @ R.T + t, label.text, label.font_screen_scale, label.anchor)
-                     for label in self.fixed() if label.visible]
+            fixed = [(np.asarray(position) @ R.T + t, text, scale, anchor)
+                     for position, text, scale, anchor in filter(None, map(obstacle, self.fixed()))]
             placed = place(anchors @ R.T + t, texts, self.view(), scale, fixed, self.merge_px) if any(texts) else []
             self.placed = [(members, text, (position - t) @ R) for members, text, position, _ in placed]
             shown = len(self.placed)
@@ -245,8 +246,18 @@ class BranchLabels:
                     leader.visible = moved
 
 
-def chain(pools: tuple[BranchLabels, ...]) -> tuple[BranchLabels, ...]:
-    """``pools`` placed in order, each keeping clear of every label of the pools before it."""
+def obstacle(label) -> tuple | None:
+    """(position (3,), text, scale, anchor) of a label node (None while hidden); a tuple stays as it is
+    (a label hung under a node of its own, placed by its owner in the pool's frame)."""
+    if isinstance(label, tuple):
+        return label
+    return (label.position, label.text, label.font_screen_scale, label.anchor) if label.visible else None
+
+
+def chain(pools: tuple[BranchLabels, ...], outside: Callable[[], list] = lambda: []) -> tuple[BranchLabels, ...]:
+    """``pools`` placed in order, each keeping clear of ``outside()`` (labels drawn by something else: the
+    velocity arrows' names, the force's) and of every label of the pools before it."""
     for k, pool in enumerate(pools):
-        pool.fixed = lambda earlier=pools[:k]: [label for other in earlier for label in other.labels]
+        pool.fixed = lambda earlier=pools[:k]: [*outside(), *(label for other in earlier for label in other.labels)]
+        pool.outside = outside
     return pools

@@ -223,6 +223,14 @@ class StaticsView(View):
             if node.visible != shown:
                 node.visible = shown
 
+    def obstacles(self) -> list[tuple]:
+        """The force's name where it is drawn, for the placed labels to keep clear of: at the arrow's tip,
+        under the arrow's node at the tool."""
+        label = self.label
+        if not label.visible:
+            return []
+        return [(np.add(self.arrow.position, label.position), label.text, label.font_screen_scale, label.anchor)]
+
     def render_panel(self, snapshot: Snapshot) -> None:
         self.bars.visible = bool(self.enabled.value)
         if self.bars.visible:

@@ -149,6 +149,7 @@ class Member:
         self.card: ChallengeCard | None = None  #: and their "Challenge" folder
         self.goal: GoalMarker | None = None
         self.observer = None  #: what the student's session calls after each change
+        self.controls_lock = threading.Lock()  #: held while its "Classroom" folder is drawn
         #: what the student's own arm showed and its folders were set to, by arm: it comes back so next time they explore
         self.displays: dict[Arm, dict] = {}
         self.closed = False
@@ -447,6 +448,12 @@ class Classroom:
     # ------------------------------------------------------------------ the Classroom folder
 
     def _draw_controls(self, member: Member) -> None:
+        """The "Classroom" folder for ``member``'s role (and a presenter's "Challenge" folder), one drawing at a
+        time: a claim from another browser redraws a presenter's controls while they may still be being drawn."""
+        with member.controls_lock:
+            self._draw_controls_now(member)
+
+    def _draw_controls_now(self, member: Member) -> None:
         if member.closed:
             return
         gui = member.client.gui
