@@ -691,3 +691,24 @@ def test_a_course_arms_ghosts_leave_out_what_lies_on_the_solid_arm_and_number_ev
         await client.close()
 
     asyncio.run(scenario())
+
+
+def test_the_planar_elbows_typed_target_is_a_point_of_its_plane(app):
+    """The planar elbow moves in its plane z = 0, but its typed target asked for x y z and dropped the z
+    it was given without a word (until 2026-12-03): it asks for x and y."""
+    async def scenario():
+        client = await ViserClient(url(app)).connect()
+        planar = await pick(app, client, "Planar elbow (2R)")
+        assert "Target x y (mm)" in client.gui and "Target x y z (mm)" not in client.gui
+        await client.set_gui("Target x y (mm)", "600, 200, 100")  # a height it cannot reach: refused, with why
+        await client.set_gui("Move target here", True)
+        await until(lambda: planar.ik_target.refusal.line.visible, what="the refusal")
+        assert "expected 2 numbers, got 3" in planar.ik_target.refusal.line.content
+        await client.set_gui("Target x y (mm)", "600, 200")
+        await client.set_gui("Move target here", True)
+        await until(lambda: planar.state.last.cause == "typed", what="the typed target")
+        np.testing.assert_allclose(planar.state.last.target[:3, 3], (0.6, 0.2, 0.0), atol=1e-12)
+        np.testing.assert_allclose(planar.state.last.flange[:3, 3], (0.6, 0.2, 0.0), atol=1e-9)  # and the arm is there
+        await client.close()
+
+    asyncio.run(scenario())

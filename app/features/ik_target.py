@@ -60,7 +60,16 @@ TYPED_TARGET = {"pose": ("Target x y z (mm), α β γ (°)", "Position in mm and
                          "e.g. 520, 57.7, 1110.7, -159.6, 25.6, -34.6"),
                 "position and yaw": ("Target x y z (mm), yaw (°)", "Position in mm and the tool's turn about z, "
                                      "e.g. 600, 200, 100, 30"),
-                "position": ("Target x y z (mm)", "Position in mm, e.g. 600, 200, 100")}
+                "position": ("Target x y z (mm)", "Position in mm, e.g. 600, 200, 100"),
+                "position in its plane": ("Target x y (mm)", "Position in the arm's plane z = 0, in mm, e.g. 600, 200")}
+#: How many numbers each kind of typed target takes.
+TYPED_COUNT = {"pose": 6, "position and yaw": 4, "position": 3, "position in its plane": 2}
+
+
+def typed_target_kind(arm) -> str:
+    """What a typed target gives for ``arm`` (a :data:`TYPED_TARGET` key): what it controls of a pose, and
+    for an arm that moves in a plane (the planar elbow) no height, which it could not reach."""
+    return "position in its plane" if arm.planar and arm.task == "position" else arm.task
 
 
 def has_flips(arm) -> bool:
@@ -398,7 +407,7 @@ class IKTarget(View):
         slots = len(arm.slot_labels)
         folder = gui.add_folder(f"IK target: all {slots} branches" if slots > 1 and not arm.numerical else "IK target")
         self.folders = (folder,)
-        label, hint = TYPED_TARGET[arm.task]
+        label, hint = TYPED_TARGET[typed_target_kind(arm)]
         with folder:
             gui.add_markdown("Drag the gizmo at the tool. Each ghost arm is one IK branch, numbered as in the "
                              "table; click a ghost or a number below to put the arm on it.")
@@ -478,10 +487,11 @@ class IKTarget(View):
 
     def _typed_target(self, _: viser.GuiEvent) -> None:
         arm = self._session.arm
-        count = {"pose": 6, "position and yaw": 4, "position": 3}[arm.task]
+        count = TYPED_COUNT[typed_target_kind(arm)]
         values = ArmState.parse_numbers(self.typed_pose.value, count=count, what="target")
         T = np.array(self._session.state.last.target)
-        T[:3, 3] = values[:3] / 1000.0
+        position = min(count, 3)  # x y, or x y z
+        T[:position, 3] = values[:position] / 1000.0
         if count == 6:
             T[:3, :3] = rotation_from_zyx_euler(np.radians(values[3:]))
         elif count == 4:
