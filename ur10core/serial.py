@@ -108,8 +108,8 @@ def project_target(arm, T, current) -> np.ndarray:
     own tool pose ``current`` (4, 4).
 
     A SCARA keeps its tool pointing down and takes only the target's yaw; an arm that places
-    only a position keeps its own orientation; the planar elbow stays in its plane z = 0
-    (docs/kinematics.md §7.5).
+    only a position keeps its own orientation; an arm that moves in a plane (the planar elbow, in
+    z = 0: ``Arm.planar``) stays in it (docs/kinematics.md §7.5).
     """
     out = np.array(T, dtype=float)
     if out.shape != (4, 4) or not np.isfinite(out).all():
@@ -120,6 +120,6 @@ def project_target(arm, T, current) -> np.ndarray:
         out[:3, :3] = np.array([[c, s, 0.0], [s, -c, 0.0], [0.0, 0.0, -1.0]])  # Rz(yaw) Rx(π)
     elif arm.task == "position":
         out[:3, :3] = np.asarray(current, dtype=float)[:3, :3]
-        if arm.name == "planar_elbow":
-            out[2, 3] = 0.0
+        if arm.planar:
+            out[2, 3] = np.asarray(current, dtype=float)[2, 3]  # the plane its tool never leaves
     return out
