@@ -269,7 +269,12 @@ class ArmState:
                 raise ValueError(f"branch must be 1..{slots}, got {slot!r} (counting from 0)")
             if not solution.valid[slot]:
                 raise ValueError(f"branch {slot + 1} ({solution.labels[slot]}) does not exist for this target")
-            return self._remember(solution.take(slot, self.last.q), self.last.target, solution, int(slot), "", "branch")
+            q = solution.take(slot, self.last.q)
+            try:  # a real arm cannot go there, and every slider would then be refused until a pose button
+                q = self.check_joints(q)
+            except ValueError as beyond:
+                raise ValueError(f"branch {slot + 1} ({solution.labels[slot]}) is beyond a joint limit ({beyond})") from None
+            return self._remember(q, self.last.target, solution, int(slot), "", "branch")
 
     def place_in_singularity(self, kind: str) -> Snapshot:
         """Move the arm exactly onto the shoulder, elbow or wrist singularity, and onto no other.

@@ -145,6 +145,20 @@ def test_select_missing_or_bad_branch(state, course):
             state.select_branch(bad)
 
 
+def test_a_branch_beyond_a_joint_limit_is_refused_and_says_which():
+    """A widget monkey (2026-12-03): the elbow arm could be put on a branch beyond its θ2 limit, after which
+    every slider, the typed joints and "Put target back on the tool" were refused ("θ2: from -90° to 150°")."""
+    state = ArmState(Arm.preset("elbow"))
+    solution, before = state.last.solution, state.last
+    beyond = int(np.flatnonzero(solution.valid & ~solution.within_limits)[0])
+    with pytest.raises(ValueError, match=rf"branch {beyond + 1} \(.*\) is beyond a joint limit \(θ2: from -90° to 150°, got"):
+        state.select_branch(beyond)
+    assert state.last is before
+    within = int(np.flatnonzero(solution.valid & solution.within_limits & (np.arange(len(solution.valid)) != before.slot))[0])
+    state.select_branch(within)
+    state.set_joints(state.q)  # and from there the arm moves on
+
+
 @pytest.mark.parametrize("kind, factor", [("shoulder", 0), ("elbow", 1), ("wrist", 2)])
 def test_place_in_singularity(state, kind, factor):
     snap = state.place_in_singularity(kind)
