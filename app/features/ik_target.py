@@ -61,7 +61,7 @@ TYPED_TARGET = {"pose": ("Target x y z (mm), α β γ (°)", "Position in mm and
                 "position and yaw": ("Target x y z (mm), yaw (°)", "Position in mm and the tool's turn about z, "
                                      "e.g. 600, 200, 100, 30"),
                 "position": ("Target x y z (mm)", "Position in mm, e.g. 600, 200, 100"),
-                "position in its plane": ("Target x y (mm)", "Position in the arm's plane z = 0, in mm, e.g. 600, 200")}
+                "position in its plane": ("Target x y (mm)", "Position in the plane the arm moves in, in mm, e.g. 600, 200")}
 #: How many numbers each kind of typed target takes.
 TYPED_COUNT = {"pose": 6, "position and yaw": 4, "position": 3, "position in its plane": 2}
 
