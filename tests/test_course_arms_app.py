@@ -608,6 +608,16 @@ def test_a_course_arm_has_its_branch_count_map_and_a_typed_table_says_why_not(ap
         assert str(slots) in legend_text(slots)
         typed = await pick(app, client, CUSTOM)
         assert typed.reach_map.slots == 0 and typed.reach_map.enabled.disabled
+        # a made-up "on" for the disabled checkbox (a browser cannot send it) is refused once and put back:
+        # until 2026-12-03 it stayed on, and every redraw of the panel refused it again
+        await client.set_gui("Show branch-count map", True)
+        await until(lambda: any("no branch-count map" in body for _, body in client.received.notifications), what="the refusal")
+        assert not typed.reach_map.enabled.value
+        redrawn = typed.reach_map.computed, len(client.received.notifications)
+        for _ in range(3):
+            typed.apply(lambda state: state.set_joints(state.q + 0.01))
+            await asyncio.to_thread(typed.render_panel)
+        assert (typed.reach_map.computed, len(client.received.notifications)) == redrawn
         await client.close()
 
     asyncio.run(scenario())

@@ -16,7 +16,7 @@ from ur10core.orientation import quaternion
 from ur10core.solvers.ur import URFamily
 from ur10core.workspace import BranchCountMap, branch_count_map
 
-from ..feedback import chosen
+from ..feedback import chosen, put_back
 from ..serving.workers import MAPS, FoldedRuns
 from ..state import Snapshot
 from ..style import REACH_COLORS, hex_color
@@ -27,6 +27,9 @@ PLANES = {"vertical, through the base axis and the target": "vertical", "horizon
 RESOLUTION = 200  #: cells per side for the UR family (compiled batch IK): 40 000 poses, about 1.4 cm each
 #: cells per side for the course's other arms, whose IK is numpy's alone (a KR210 map of 10 000 poses: 0.25 s)
 COURSE_RESOLUTION = 100
+
+
+NO_MAP = "a typed table's IK is numerical: it has no branch-count map"
 
 
 def planes_of(arm) -> tuple[tuple[str, ...], str]:
@@ -128,6 +131,9 @@ class ReachMapView(View):
 
     def _toggled(self, _: viser.GuiEvent) -> None:
         chosen(self.plane, "plane")
+        if self.enabled.value and not self.slots:  # its checkbox is disabled: only a made-up message gets here
+            put_back(self.enabled, False)  # refused once, not again at every redraw of the panel
+            raise ValueError(NO_MAP)
         self.legend.visible = self.enabled.value
         if self.enabled.value:
             self._face_next = True
@@ -157,7 +163,7 @@ class ReachMapView(View):
         if not self.enabled.value or key == self.shown_key:
             return
         if not self.slots:
-            raise ValueError("a typed table's IK is numerical: it has no branch-count map")
+            raise ValueError(NO_MAP)
         reach = MAPS.run(self._session.client,
                          lambda: branch_count_map(self._session.arm, self._target_of(snapshot), key[1], self.resolution),
                          cancelled=lambda: self._closed or self._session.closed)
