@@ -234,6 +234,11 @@ def test_numbers_name_the_kind_of_mistake():
     for group, typed in cases.items():
         verdict = C.check(position, COURSE, C.Answer(numbers=typed))
         assert not verdict.solved and verdict.group == group, (group, verdict.group)
+    # a name keeps its case where it starts the message: "X" and "Τ1" (a capital tau) named other quantities
+    assert C.check(position, COURSE, C.Answer(numbers=p + 50)).message == "x is off; y is off; z is off (each within 1 %)."
+    torque = by_title("Holding a weight")
+    message = C.check(torque, COURSE, C.Answer(numbers=1000 * C.expected_numbers(torque, COURSE))).message
+    assert message.startswith("τ2 is 1000 times too big; τ3 "), message  # (τ1 and τ6 hold next to nothing here)
     assert C.check(position, COURSE, C.Answer(numbers=p * 1.009)).solved  # within 1 %
     with pytest.raises(ValueError, match="type 3 numbers"):
         C.check(position, COURSE, C.Answer(numbers=p[:2]))

@@ -650,7 +650,8 @@ def _check_numbers(challenge: Challenge, arm: Arm, answer: Answer) -> Verdict:
     else:
         group = f"{len(off)} numbers off"
     details = "; ".join(f"{name} {kind}" for name, kind in zip(off, kinds))
-    return Verdict(False, f"{details[0].upper()}{details[1:]} (each within {100 * challenge.relative_tolerance:g} %).", group, text)
+    # a quantity's name keeps its case at the start (X or Τ1 would be another quantity)
+    return Verdict(False, f"{details} (each within {100 * challenge.relative_tolerance:g} %).", group, text)
 
 
 def _check_velocity(challenge: Challenge, arm: Arm, answer: Answer) -> Verdict:
