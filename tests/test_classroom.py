@@ -245,6 +245,56 @@ def test_a_claim_while_the_presenters_controls_are_drawn_leaves_them_one_folder(
     asyncio.run(scenario())
 
 
+@pytest.mark.parametrize("label", ["SCARA (RRP + roll)", "The course's 3-DOF desktop arm", "UR10 (as in the course)"])
+def test_the_class_arms_labels_are_placed_for_the_camera_a_watching_browser_has(classroom, label):
+    """The shared scene's 3D labels (DH axes, branch numbers) are placed apart for one camera. It was the UR10's
+    default camera whatever the arm: every browser frames the class's arm, much closer for a small one, and the
+    SCARA's axis names stood far from their axes at the end of long leader lines (a screenshot, 2026-12-03)."""
+    from ur10teach.features.arm_picker import ARM_CHOICES, UR10
+    from ur10teach.features.branch_labels import OFFSETS, boxes, overlapping, screen_view
+
+    label = UR10 if label.startswith("UR10") else label
+    assert label in ARM_CHOICES
+
+    async def scenario():
+        teacher = await ViserClient(f"http://127.0.0.1:{classroom.port}").connect()
+        student = await ViserClient(f"http://127.0.0.1:{classroom.port}").connect()
+        room = classroom.classroom
+        await become_presenter(teacher, classroom)
+        if label != UR10:
+            await until(room.can_switch, what="the class's arm to be ready for a change")
+            await teacher.set_gui("Which arm", label)
+            await until(lambda: room.choice == label and member_of(classroom, 0).session is not None, what=label)
+        viewer = member_of(classroom, 1)
+        viewer.camera.frame()  # as on its arrival, and whenever the class is shown another arm
+        view = screen_view(viewer.client)
+        drawing = room.drawing
+        world = drawing.world
+        furthest = max(np.hypot(dx, dy) for dx, dy in OFFSETS) + 0.5  # label heights: the farthest spot tried
+        shown = []
+        for pool in drawing.label_sets:
+            pool.place()
+            anchors = pool._wanted[0]
+            scale = pool.labels[0].font_screen_scale
+            for members, text, position in pool.placed:
+                point = anchors[list(members)].mean(axis=0) @ world[:3, :3].T + world[:3, 3]
+                seen = position @ world[:3, :3].T + world[:3, 3]
+                box = boxes(view.to_screen(seen[None])[0], [text], scale)[0]
+                at = view.to_screen(point[None])[0][0]
+                height = box[3] - box[1]
+                # how far the label's box is from its point, in label heights
+                away = np.hypot(max(box[0] - at[0], 0, at[0] - box[2]), max(box[1] - at[1], 0, at[1] - box[3])) / height
+                assert away <= furthest, f"{text!r} {away:.1f} label heights from its point in a watching browser"
+                shown.append((text, box))
+        assert len(shown) > 5
+        clashes = [(a, b) for k, (a, first) in enumerate(shown) for b, second in shown[k + 1:] if overlapping(first, second, 0.0)]
+        assert not clashes, clashes
+        for client in (teacher, student):
+            await client.close()
+
+    asyncio.run(scenario())
+
+
 async def guess(classroom, client, code):
     """One try, as a student types it; returns once the server has answered it."""
     answered = classroom.classroom.claims

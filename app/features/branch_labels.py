@@ -3,7 +3,7 @@
 Numbers whose points fall together on the screen (the elbow arm's four branches that share an
 elbow) become one label, "1 · 2 · 5 · 6"; a label whose spot is taken moves to the nearest free
 one, with a leader line back to its point. Placed for the browser's own camera as it moves, and
-for the default camera in the classroom's shared scene (docs/architecture.md §8).
+for the camera a browser frames the classroom's shared scene with (docs/architecture.md §8).
 """
 
 from __future__ import annotations
@@ -174,8 +174,8 @@ class BranchLabels:
     """One drawing's 3D labels of one kind (the branch numbers, the DH axes' names): a pool of labels,
     placed apart for a camera (:func:`place`), each moved one with a leader line back to its point.
 
-    ``view`` gives the camera to place for (the browser's own, or the default one of the
-    shared scene); ``fixed`` the labels drawn by something else that these keep clear of (label
+    ``view`` gives the camera to place for (the browser's own, or for the shared scene the one
+    each browser frames it with); ``fixed`` the labels drawn by something else that these keep clear of (label
     nodes in the pool's frame, or :func:`obstacle` tuples);
     ``world`` (4, 4) where the labels' parent node is in the world (both in its frame);
     ``colours[k]`` the leader line's colour for label k's point.

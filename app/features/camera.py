@@ -18,6 +18,7 @@ import viser
 from ..feedback import chosen
 from ..state import Snapshot
 from ..view import View
+from .branch_labels import DEFAULT_VIEW, ScreenView
 from .lecture import LectureMode
 
 #: Where each view looks from (a direction from the arm towards the camera; z is up).
@@ -59,6 +60,14 @@ def framing(points: np.ndarray, direction, fov: float, aspect: float, margin: fl
     distance = max(float(np.max(np.abs(x) / tan_h - depth)), float(np.max(np.abs(y) / tan_v - depth)),
                    float(np.max(-depth)) + 0.05)  # and never inside the arm
     return centre + distance * back, centre
+
+
+def framed_view(points: np.ndarray, direction=VIEWS["Course figure"]) -> ScreenView:
+    """The camera a browser has once it frames ``points`` from ``direction`` (:func:`framing`), on the
+    smallest canvas a class looks at: what a scene everyone shares places its 3D labels apart for."""
+    view = DEFAULT_VIEW
+    position, look_at = framing(points, direction, view.fov, view.width / view.height)
+    return ScreenView(tuple(position), tuple(look_at), fov=view.fov, height=view.height, width=view.width)
 
 
 def arm_points(snapshot: Snapshot, body_radius: float = BODY_RADIUS) -> np.ndarray:

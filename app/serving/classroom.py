@@ -25,7 +25,7 @@ from ..features.arm_picker import (
     ArmPicker,
     panel_title,
 )
-from ..features.camera import CameraControls
+from ..features.camera import CameraControls, arm_points, framed_view
 from ..features.challenge import ChallengeCard, ChallengeDesk, ClassTools, GoalMarker  # a member's parts
 from ..features.course_arms.desktop_arm import EXPLORER_ROOT as DESKTOP_EXPLORER_ROOT
 from ..features.course_arms.scene import EXPLORER_ROOT
@@ -193,8 +193,11 @@ class Classroom:
 
     def _draw(self):
         """The class's arm in the shared scene, with a marker for its target (only the presenter has a gizmo)."""
-        arm = self.state.arm
-        return arm_drawing(self.app.server.scene, arm, self.state.last, self._models(arm), target_marker=True)
+        arm, state = self.state.arm, self.state
+        drawing = arm_drawing(self.app.server.scene, arm, state.last, self._models(arm), target_marker=True)
+        for pool in drawing.label_sets:  # its 3D labels placed apart for the camera each browser frames it with
+            pool.view = lambda: framed_view(arm_points(drawing.framed(state.last), drawing.body_radius))
+        return drawing
 
     # ------------------------------------------------------------------ clients
 
