@@ -70,6 +70,23 @@ def framed_view(points: np.ndarray, direction=VIEWS["Course figure"]) -> ScreenV
     return ScreenView(tuple(position), tuple(look_at), fov=view.fov, height=view.height, width=view.width)
 
 
+class ClassView:
+    """:func:`framed_view` of a drawing's arm at its state's newest snapshot, worked out once per change (its
+    label pools each ask for it): the camera a browser watching a shared scene frames it with."""
+
+    def __init__(self, drawing, state) -> None:
+        self._drawing, self._state = drawing, state
+        self._for: tuple = (None, DEFAULT_VIEW)  #: (snapshot, its view)
+
+    def __call__(self) -> ScreenView:
+        snapshot, view = self._for
+        if snapshot is not self._state.last:
+            snapshot = self._state.last
+            view = framed_view(arm_points(self._drawing.framed(snapshot), self._drawing.body_radius))
+            self._for = (snapshot, view)
+        return view
+
+
 def arm_points(snapshot: Snapshot, body_radius: float = BODY_RADIUS) -> np.ndarray:
     """What the camera must show: the joints, every branch's joints (the ghosts) and the target,
     each with ``body_radius`` of room around it."""

@@ -25,7 +25,7 @@ from ..features.arm_picker import (
     ArmPicker,
     panel_title,
 )
-from ..features.camera import CameraControls, arm_points, framed_view
+from ..features.camera import CameraControls, ClassView
 from ..features.challenge import ChallengeCard, ChallengeDesk, ClassTools, GoalMarker  # a member's parts
 from ..features.course_arms.desktop_arm import EXPLORER_ROOT as DESKTOP_EXPLORER_ROOT
 from ..features.course_arms.scene import EXPLORER_ROOT
@@ -195,8 +195,9 @@ class Classroom:
         """The class's arm in the shared scene, with a marker for its target (only the presenter has a gizmo)."""
         arm, state = self.state.arm, self.state
         drawing = arm_drawing(self.app.server.scene, arm, state.last, self._models(arm), target_marker=True)
+        view = ClassView(drawing, state)
         for pool in drawing.label_sets:  # its 3D labels placed apart for the camera each browser frames it with
-            pool.view = lambda: framed_view(arm_points(drawing.framed(state.last), drawing.body_radius))
+            pool.view = view
         return drawing
 
     # ------------------------------------------------------------------ clients
