@@ -175,8 +175,8 @@ class BranchLabels:
     placed apart for a camera (:func:`place`), each moved one with a leader line back to its point.
 
     ``view`` gives the camera to place for (the browser's own, or for the shared scene the one
-    each browser frames it with); ``fixed`` the labels drawn by something else that these keep clear of (label
-    nodes in the pool's frame, or :func:`obstacle` tuples);
+    each browser frames it with); ``fixed`` the labels drawn by something else that these keep
+    clear of (label nodes in the pool's frame, or :func:`obstacle` tuples);
     ``world`` (4, 4) where the labels' parent node is in the world (both in its frame);
     ``colours[k]`` the leader line's colour for label k's point.
     """
