@@ -313,7 +313,7 @@ class ArmSession:
             self.camera.on_moved.remove(self._place_numbers)
         self.closed = True
         pools = self.drawing.label_sets
-        if pools and getattr(pools[0], "outside", None) == self._arrow_names:  # a shared drawing outlives this session
+        if pools and pools[0].outside == self._arrow_names:  # a shared drawing outlives this session
             chain(pools)
         with self.state.lock:  # not while a drag is being drawn
             for view in self.panel_views:

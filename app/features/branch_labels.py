@@ -192,6 +192,7 @@ class BranchLabels:
         self.merge_px = merge_px
         self.view: Callable[[], ScreenView] = lambda: DEFAULT_VIEW
         self.fixed: Callable[[], list] = lambda: []
+        self.outside: Callable[[], list] = lambda: []  #: what :func:`chain` keeps these clear of besides other pools
         self.world = np.eye(4)
         self.placed: list[tuple[tuple[int, ...], str, np.ndarray]] = []  #: what the labels show now
         self._wanted: tuple[np.ndarray, list[str]] = (np.zeros((0, 3)), [])
