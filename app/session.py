@@ -125,7 +125,7 @@ class ArmSession:
         self.reach_map = ReachMapView(scene, gui, self, root=f"{nodes}/reach_map", world=drawn.world)
         self.statics = StaticsView(scene, gui, self, root=f"{nodes}/statics", size=drawn.size)
         self.ellipsoids = EllipsoidsView(scene, gui, self, root=f"{nodes}/ellipsoids", reach=drawn.size)
-        self.velocity = VelocityView(scene, gui, self, root=f"{nodes}/velocity")
+        self.velocity = VelocityView(scene, gui, self, root=f"{nodes}/velocity", up=drawn.world[2, :3])
         self.motion = MotionLessons(gui, self, before=self.stop_lessons)
         self.gripper = GripperPose(gui, self) if arm.name == "kr210" else None
         self.lessons = LESSONS[arm.name](scene, gui, self) if arm.name in LESSONS else ()

@@ -186,3 +186,31 @@ def test_the_placed_labels_keep_clear_of_the_arrows_names(app, label):
         await client.close()
 
     asyncio.run(scenario())
+
+
+@pytest.mark.parametrize("label", EVERY_ARM)
+def test_the_velocity_arrows_names_are_never_one_over_the_other(app, label):
+    """A joint turned slowly gives two short arrows, both ending near the tool; until 2026-12-03 both names sat
+    centred on their ends, so "v velocity" and "ω turning rate" were drawn over each other."""
+    from ur10teach.features.branch_labels import boxes, obstacle, overlapping, screen_view
+
+    async def scenario():
+        client = await ViserClient(url(app)).connect()
+        session = await pick(app, client, label)
+        velocity, world = session.velocity, session.drawing.world
+        view = screen_view(session.client)
+        for joint, rate in ((0, 0.1), (0, 0.0), (1, 0.1)):  # short arrows, from one joint and then from another
+            await client.set_gui(rate_label(session.arm, joint), rate)
+            if rate == 0.0:
+                await until(lambda: not velocity.labels[0].visible, what="the arrows hidden")
+                continue
+            await until(lambda: velocity.labels[0].visible
+                        and np.allclose(velocity.labels[0].position, velocity.linear.points[0][1]), what="the arrows' names")
+            names = []
+            for position, text, scale, anchor in map(obstacle, velocity.labels):
+                seen = np.asarray(position, dtype=float) @ world[:3, :3].T + world[:3, 3]
+                names.append(boxes(view.to_screen(seen[None])[0], [text], scale, anchor)[0])
+            assert not overlapping(*names, gap=0.0), f"joint {joint}: the two names overlap on the screen"
+        await client.close()
+
+    asyncio.run(scenario())

@@ -80,13 +80,15 @@ class VelocityView(View):
     """The "Velocities" folder and the two arrows at the tool: for the sliders' joint rates, or a playing path's.
 
     ``root``: where its nodes hang; ``tool(snapshot)``: the (4, 4) pose the arrows start at
-    (the arm's tool by default); ``labels``: each joint's name. The kinds of joints and their
+    (the arm's tool by default); ``up`` (3,): the world's up in ``root``'s frame. The kinds of joints and their
     speed limits (``arm.specs``, where the maker publishes them) come from ``session.arm``.
     """
 
     def __init__(self, scene: viser.SceneApi, gui: viser.GuiApi, session: Session, root: str = "/velocity",
-                 tool: Callable[[Any], np.ndarray] = lambda snapshot: snapshot.flange, place: str = "tool") -> None:
+                 tool: Callable[[Any], np.ndarray] = lambda snapshot: snapshot.flange, place: str = "tool",
+                 up: np.ndarray = np.array([0.0, 0.0, 1.0])) -> None:
         self._session = session
+        self._up = np.asarray(up, dtype=float)
         self._arm = session.arm
         self._tool = tool
         self._kinds = "".join(self._arm.joint_types)
@@ -113,9 +115,9 @@ class VelocityView(View):
                                        head_radius=0.02, head_length=0.04, visible=False)
         self.angular = scene.add_arrows(f"{root}/angular", np.zeros((1, 2, 3)), ANGULAR_COLOR, shaft_radius=0.008,
                                         head_radius=0.02, head_length=0.04, visible=False)
-        self.labels = (scene.add_label(f"{root}/linear_label", "v velocity", font_screen_scale=1.4, anchor="center-left",
+        self.labels = (scene.add_label(f"{root}/linear_label", "v velocity", font_screen_scale=1.4, anchor="bottom-left",
                                        visible=False),
-                       scene.add_label(f"{root}/angular_label", "ω turning rate", font_screen_scale=1.4, anchor="center-left",
+                       scene.add_label(f"{root}/angular_label", "ω turning rate", font_screen_scale=1.4, anchor="top-left",
                                        visible=False))
         for slider in self.sliders:
             slider.on_update(session.guard(lambda _: session.redraw()))
@@ -141,9 +143,15 @@ class VelocityView(View):
             twist = self._arm.tool_twist(snapshot.q, qdot)
             tip = self._tool(snapshot)[:3, 3]
             ends = (tip + METRES_PER_SPEED * twist[:3], tip + METRES_PER_TURN_RATE * twist[3:])
-            for arrow, label, end in zip((self.linear, self.angular), self.labels, ends):
+            # the higher end's name above it, the lower's below: two ends close together (short arrows, or
+            # v and ω along one line) would otherwise put one name over the other
+            higher = 0 if self._up @ ends[0] >= self._up @ ends[1] else 1
+            for k, (arrow, label, end) in enumerate(zip((self.linear, self.angular), self.labels, ends)):
                 arrow.points = np.array([[tip, end]])
                 label.position = end
+                anchor = "bottom-left" if k == higher else "top-left"
+                if label.anchor != anchor:
+                    label.anchor = anchor
         for node in (self.linear, self.angular, *self.labels):
             if node.visible != moving:
                 node.visible = moving
