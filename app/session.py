@@ -135,7 +135,10 @@ class ArmSession:
             self.follow_lecture_mode(self.camera.lecture)
         #: the scene whose 3D labels this browser's lecture mode sizes: its own (a shared one follows the server's)
         self._label_scene = scene if server is None else None
-        chain(drawn.label_sets, outside=self._arrow_names)  # the placed labels keep clear of this session's arrows' names
+        #: (frame (4, 4)) -> the names drawn in this browser by something else (a challenge's target), as
+        #: ``branch_labels.obstacle`` tuples in that frame
+        self.names_elsewhere: Callable[[Any], list] = lambda frame: []
+        chain(drawn.label_sets, outside=self._names_beside)  # the placed labels keep clear of the arrows' names and those
         placed = self.guard(lambda _: [labels.place() for labels in drawn.label_sets])
         self._place_numbers = lambda: placed(None)  # on every camera move: the 3D labels placed for the new view
         if server is None:  # the 3D labels placed apart for this browser's camera, as it moves
@@ -273,9 +276,11 @@ class ArmSession:
         if self._label_scene is not None:
             camera.on_moved.append(self._place_numbers)
 
-    def _arrow_names(self) -> list:
-        """The names of the velocity and force arrows, where this session draws them (in the drawing's frame)."""
-        return [] if self.closed else [*self.velocity.labels, *self.statics.obstacles()]
+    def _names_beside(self) -> list:
+        """The names of the velocity and force arrows, and :attr:`names_elsewhere`, in the drawing's frame."""
+        if self.closed:
+            return []
+        return [*self.velocity.labels, *self.statics.obstacles(), *self.names_elsewhere(self.drawing.world)]
 
     def _screen_view(self) -> ScreenView:
         """This browser's camera, to place the branch numbers for (the default one until it reports)."""
@@ -313,7 +318,7 @@ class ArmSession:
             self.camera.on_moved.remove(self._place_numbers)
         self.closed = True
         pools = self.drawing.label_sets
-        if pools and pools[0].outside == self._arrow_names:  # a shared drawing outlives this session
+        if pools and pools[0].outside == self._names_beside:  # a shared drawing outlives this session
             chain(pools)
         with self.state.lock:  # not while a drag is being drawn
             for view in self.panel_views:

@@ -375,3 +375,65 @@ def test_the_challenge_target_is_sized_once_by_a_students_lecture_mode():
         asyncio.run(scenario())
     finally:
         app.stop()
+
+
+def test_the_placed_labels_keep_clear_of_the_challenge_targets_name(classroom):
+    """A student's arm on the KR210's target: its DH axes' names and branch numbers are placed apart from the
+    target's name, and so are the students' names on the projector. Until 2026-12-03 "z6" sat on "challenge
+    target", and the projector's names kept clear of a "challenge target" at the world's origin."""
+    from ur10teach.features.branch_labels import boxes, obstacle, overlapping
+    from ur10teach.features.camera import arm_points, framed_view
+
+    def box(view, world_position, text, scale, anchor):
+        return boxes(view.to_screen(np.asarray(world_position, dtype=float)[None])[0], [text], scale, anchor)[0]
+
+    def goal_name(goal):  # where the target's name is in the world: at its frame's origin, the label hangs under it
+        return goal.frame.position, goal.label.text, goal.label.font_screen_scale, goal.label.anchor
+
+    def clashes(pools, goal_box, view):  # the placed labels over the target's name, on the screen they are placed for
+        return [text for pool in pools for _, text, position in pool.placed
+                if overlapping(box(view, position @ pool.world[:3, :3].T + pool.world[:3, 3], text,
+                                   pool.labels[0].font_screen_scale, "bottom-center"), goal_box, gap=0.0)]
+
+    async def scenario():
+        room = classroom.classroom
+        teacher = await ViserClient(url(classroom)).connect()
+        await become_presenter(teacher, classroom)
+        await teacher.set_gui("Challenge", "KR210: reach with the wrist flipped")
+        await teacher.set_gui("Start the challenge", True)
+        await until(lambda: room.challenges.running, what="the KR210 challenge")
+        student = await ViserClient(url(classroom)).connect()
+        member = next(m for m in list(room.members.values()) if m is not room.presenter)
+        await until(lambda: member.goal is not None and member.session is not None and member.session.built, what="the target")
+        session = member.session
+        target_q = np.array(room.challenges.run.challenge.joints)
+        session.apply(lambda state: state.set_joints(target_q))  # the tool on the target, the DH frames around it
+        goal = goal_name(member.goal)
+        pools = session.drawing.label_sets
+        await until(lambda: any(text == "z6" for pool in pools for _, text, _ in pool.placed)
+                    and np.allclose(session.state.last.q, target_q), what="the student's labels placed at the target")
+        # the camera the student's browser frames the arm with (the headless client reports a fixed one)
+        view = framed_view(arm_points(session.drawing.framed(session.state.last), session.drawing.body_radius))
+        for pool in pools:  # as a camera move places them
+            pool.view = lambda: view
+            pool.place()
+        assert not clashes(pools, box(view, *goal), view), "over the target's name in the student's own scene"
+
+        await student.set_gui("Check my answer", True)  # the projector names the student by their tool, at the target
+        presenter = room.presenter
+
+        def named():
+            names = presenter.tools.names if presenter.tools is not None else None
+            return names if names is not None and names.placed else None
+
+        names = await until(named, what="the student's name on the projector")
+        names.view = lambda: view
+        names.place()
+        assert not clashes((names,), box(view, *goal_name(presenter.goal)), view), "over the target's name on the projector"
+        kept_clear_of = [entry for entry in map(obstacle, names.fixed()) if entry is not None and entry[1] == "challenge target"]
+        assert len(kept_clear_of) == 1 and np.allclose(kept_clear_of[0][0], presenter.goal.frame.position, atol=1e-6), \
+            f"the projector's names keep clear of a target's name at {kept_clear_of}, not at the target"
+        for client in (teacher, student):
+            await client.close()
+
+    asyncio.run(scenario())

@@ -185,8 +185,8 @@ def test_handing_over_and_leaving(classroom):
         assert member_of(classroom, 0).role == VIEWER and member_of(classroom, 0).session is None
         # the class's labels keep clear of the new presenter's arrows' names, and hold on to the old presenter no more
         pools = classroom.classroom.drawing.label_sets
-        assert all(pool.outside == member_of(classroom, 1).session._arrow_names for pool in pools)
-        assert not any(pool.outside == first_session._arrow_names for pool in pools)
+        assert all(pool.outside == member_of(classroom, 1).session._names_beside for pool in pools)
+        assert not any(pool.outside == first_session._names_beside for pool in pools)
         del first_session
         # the presenter leaves: the arm stays, the role is free again
         q = classroom.classroom.state.q

@@ -255,6 +255,12 @@ def obstacle(label) -> tuple | None:
     return (label.position, label.text, label.font_screen_scale, label.anchor) if label.visible else None
 
 
+def in_world(pools: tuple[BranchLabels, ...]) -> list[tuple]:
+    """The :func:`obstacle` tuples of every label ``pools`` show, their positions in the world (for labels hung elsewhere)."""
+    return [(np.asarray(position) @ pool.world[:3, :3].T + pool.world[:3, 3], text, scale, anchor)
+            for pool in pools for position, text, scale, anchor in filter(None, map(obstacle, pool.labels))]
+
+
 def chain(pools: tuple[BranchLabels, ...], outside: Callable[[], list] = lambda: []) -> tuple[BranchLabels, ...]:
     """``pools`` placed in order, each keeping clear of ``outside()`` (labels drawn by something else: the
     velocity arrows' names, the force's) and of every label of the pools before it."""

@@ -178,9 +178,16 @@ class GoalMarker:
     """The pose a reach challenge asks for, in one browser's scene: a frame and a label, in the arm's world."""
 
     def __init__(self, scene: viser.SceneApi, pose: np.ndarray, lecture: bool = False) -> None:
+        self.pose = pose  #: (4, 4) in the world
         self.frame = scene.add_frame(GOAL_ROOT, wxyz=quaternion(pose[:3, :3], check=False), position=pose[:3, 3],
                                      axes_length=0.15, axes_radius=0.01, origin_radius=0.02)
         self.label = add_label(scene, f"{GOAL_ROOT}/name", "challenge target", 1.4, lecture, anchor="bottom-left")
+
+    def name(self, frame: np.ndarray) -> tuple:
+        """Its label as the placed labels keep clear of it: (position (3,) in ``frame``, text, scale, anchor), where
+        ``frame`` (4, 4) is where their nodes hang in the world (the label itself hangs under the target's frame)."""
+        position = (self.pose[:3, 3] - frame[:3, 3]) @ frame[:3, :3]
+        return (position, self.label.text, self.label.font_screen_scale, self.label.anchor)
 
     def remove(self) -> None:
         self.frame.remove()
@@ -191,9 +198,9 @@ class ClassTools:
     placed apart for the projector's camera as the branch numbers are (names at one spot read as one)."""
 
     def __init__(self, scene: viser.SceneApi, world: np.ndarray, view: Callable[[], ScreenView], lecture: bool = False,
-                 fixed: Callable[[], list[viser.LabelHandle]] = lambda: []) -> None:
+                 fixed: Callable[[], list[tuple]] = lambda: []) -> None:
         self._scene, self._world, self._view, self._scale = scene, world, view, label_scale(1.2, lecture)
-        self._fixed = fixed  #: the labels already on the projector (branch numbers, the target's name): kept clear of
+        self._fixed = fixed  #: the labels already on the projector (branch numbers, the target's name), in the world: kept clear of
         self.dots = scene.add_point_cloud(f"{CLASS_ROOT}/dots", np.zeros((1, 3), np.float32), np.zeros((1, 3), np.uint8),
                                           point_size=0.03, point_shape="circle", visible=False)
         self.names: BranchLabels | None = None

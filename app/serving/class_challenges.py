@@ -10,11 +10,13 @@ import logging
 import time
 from typing import TYPE_CHECKING
 
+import numpy as np
+
 from ur10core import Arm
 from ur10core.challenges import Answer, Challenge, number_names, solution
 
 from ..features.arm_picker import ARM_CHOICES, UR10
-from ..features.branch_labels import screen_view
+from ..features.branch_labels import in_world, screen_view
 from ..features.challenge import ChallengeCard, ChallengeDesk, ClassTools, GoalMarker, goal_pose
 from ..features.course_arms.editor import parse_table
 from ..feedback import guard
@@ -144,6 +146,8 @@ class ClassChallenges:
         pose = goal_pose(self.run.challenge, self.run.arm, drawing.world)
         if pose is not None and member.goal is None:
             member.goal = GoalMarker(member.client.scene, pose, self.room.app.lecture)
+            if session is not None:  # its placed labels make way for the target's name (``ArmSession.names_elsewhere``)
+                session.refresher.request(session)
 
     def _moved(self, member: Member, snapshot) -> None:
         """A student's arm changed: they are working; the projector draws their tool."""
@@ -238,8 +242,7 @@ class ClassChallenges:
         if self.run is not None and member.tools is None and self.run.challenge.is_pose:
             drawing = self.room.drawing
             member.tools = ClassTools(member.client.scene, drawing.world, lambda: screen_view(member.client), self.room.app.lecture,
-                                      fixed=lambda: [label for pool in drawing.label_sets for label in pool.labels]
-                                      + ([member.goal.label] if member.goal is not None else []))
+                                      fixed=lambda: [*in_world(drawing.label_sets), *member.goal_name(np.eye(4))])
             member.camera.on_moved.append(member.tools.place)
         if member.tools is not None and self.run is not None:
             member.tools.show(self.run)

@@ -13,6 +13,7 @@ import threading
 import time
 from typing import TYPE_CHECKING
 
+import numpy as np
 import viser
 
 from ur10core import Arm
@@ -154,6 +155,11 @@ class Member:
         self.displays: dict[Arm, dict] = {}
         self.closed = False
 
+    def goal_name(self, frame: np.ndarray) -> list[tuple]:
+        """The challenge target's name where this browser shows it (``GoalMarker.name``), for placed labels to keep clear of."""
+        goal = self.goal
+        return [] if goal is None else [goal.name(frame)]
+
 
 class Classroom:
     def __init__(self, app: "TeachingServer") -> None:
@@ -291,6 +297,7 @@ class Classroom:
         session = ArmSession(member.client, arm, app.refresher, app.drags, models=self._models(arm), state=self.state,
                              server=app.server, drawing=self.drawing, own_camera=False)
         session.follow_lecture_mode(member.camera.lecture)
+        session.names_elsewhere = member.goal_name
         session.observers.append(lambda _: app.refresher.request(self.live))
         session.watch_camera(member.camera)  # the browser's own camera, for the workspace sections
         app.janitor.settle()
@@ -399,6 +406,7 @@ class Classroom:
                 root=DESKTOP_EXPLORER_ROOT if arm.dh is None else EXPLORER_ROOT)
             member.session.show_choices(member.displays.get(arm, {}))
             member.session.follow_lecture_mode(member.camera.lecture)
+            member.session.names_elsewhere = member.goal_name
             member.session.watch_camera(member.camera)
             app.janitor.settle()
             member.role = EXPLORER
