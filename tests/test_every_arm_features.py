@@ -155,7 +155,9 @@ def test_the_branch_count_map_of_every_arm_is_its_ik_s(app, label):
 def test_the_placed_labels_keep_clear_of_the_arrows_names(app, label):
     """The DH axes' names, the branch numbers and the factors' names are placed apart on the screen; until
     2026-12-03 they did not keep clear of the names the velocity and force arrows carry at the tool
-    ("ω turning rate" over "z3" and "x3" on the cylindrical arm, "F = 50 N" over "x4" on the Stanford arm)."""
+    ("ω turning rate" over "z3" and "x3" on the cylindrical arm, "F = 50 N" over "x4" on the Stanford arm),
+    nor of the ellipsoids' names ("force" over "x5" on the Stanford arm)."""
+    from ur10core.orientation import rotation_from_quaternion
     from ur10teach.features.branch_labels import boxes, obstacle, overlapping, screen_view
 
     async def scenario():
@@ -165,7 +167,9 @@ def test_the_placed_labels_keep_clear_of_the_arrows_names(app, label):
         for joint in (0, 1):
             await client.set_gui(rate_label(arm, joint), 40.0 if arm.joint_types[joint] == "R" else 100.0)
         await client.set_gui("Show the torques", True)
-        await until(lambda: velocity.labels[0].visible and session.statics.label.visible
+        ellipsoids = session.ellipsoids
+        await client.set_gui(ellipsoids.enabled.label, True)  # both ellipsoids, named at the ends of their longest axes
+        await until(lambda: velocity.labels[0].visible and session.statics.label.visible and all(n.visible for n in ellipsoids.names)
                     and np.allclose(velocity.labels[0].position, velocity.linear.points[0][1]), what="the arrows and their names")
         view = screen_view(session.client)  # the camera the labels are placed for
 
@@ -175,7 +179,10 @@ def test_the_placed_labels_keep_clear_of_the_arrows_names(app, label):
             seen = np.asarray(position, dtype=float) @ world[:3, :3].T + world[:3, 3]
             return boxes(view.to_screen(seen[None])[0], [text], scale, anchor)[0]
 
-        arrows = [box(*name) for name in (*map(obstacle, velocity.labels), *session.statics.obstacles())]
+        turned = rotation_from_quaternion(ellipsoids.frame.wxyz)  # the ellipsoids' names hang in their frame at the tool
+        names = [(ellipsoids.frame.position + turned @ name.position, name.text, name.font_screen_scale, name.anchor)
+                 for name in ellipsoids.names]
+        arrows = [box(*name) for name in (*map(obstacle, velocity.labels), *session.statics.obstacles(), *names)]
         for pool in session.drawing.label_sets:  # as a camera move places them
             pool.place()
         placed = [(text, box(position, text, pool.labels[0].font_screen_scale, "bottom-center"))

@@ -15,7 +15,7 @@ from typing import Any, Callable
 import numpy as np
 import viser
 
-from ur10core.orientation import quaternion
+from ur10core.orientation import quaternion, rotation_from_quaternion
 
 from ..feedback import chosen
 from ..state import Snapshot
@@ -131,6 +131,13 @@ class EllipsoidsView(View):
         for node, name, shown in ((self.velocity, self.names[0], show_velocity), (self.force, self.names[1], show_force)):
             if node.visible != shown:
                 node.visible = name.visible = shown
+
+    def obstacles(self) -> list[tuple]:
+        """The ellipsoids' names where they are drawn (in the drawing's frame: their frame is at the tool, turned
+        to the axes), for the placed labels to keep clear of."""
+        R = rotation_from_quaternion(self.frame.wxyz)
+        return [(np.add(self.frame.position, R @ name.position), name.text, name.font_screen_scale, name.anchor)
+                for name in self.names if name.visible]
 
     def render_panel(self, snapshot: Snapshot) -> None:
         self.lengths.visible = bool(self.enabled.value)
