@@ -135,9 +135,12 @@ class EllipsoidsView(View):
     def obstacles(self) -> list[tuple]:
         """The ellipsoids' names where they are drawn (in the drawing's frame: their frame is at the tool, turned
         to the axes), for the placed labels to keep clear of."""
+        shown = [name for name in self.names if name.visible]
+        if not shown:
+            return []
         R = rotation_from_quaternion(self.frame.wxyz)
         return [(np.add(self.frame.position, R @ name.position), name.text, name.font_screen_scale, name.anchor)
-                for name in self.names if name.visible]
+                for name in shown]
 
     def render_panel(self, snapshot: Snapshot) -> None:
         self.lengths.visible = bool(self.enabled.value)
