@@ -221,3 +221,53 @@ def test_the_velocity_arrows_names_are_never_one_over_the_other(app, label):
         await client.close()
 
     asyncio.run(scenario())
+
+
+@pytest.mark.parametrize("label", EVERY_ARM)
+def test_the_torque_map_and_the_cloud_are_framed_with_the_arm_and_the_legend_is_above_the_cloud(app, label):
+    """The camera frames the arm with the torque map, as it does with the cloud, and the cloud's legend stands over
+    it on the base axis. Until 2026-12-03 the torque map was not framed (the Stanford arm's camera sat inside it,
+    its points drawn as blobs over the arm), and the desktop arm's cloud was framed, and its legend placed, as if
+    its vertical were z (its y is up: the legend stood beside the cloud, over the arm's captions)."""
+    from ur10teach.features.branch_labels import ScreenView, boxes, overlapping, screen_view
+
+    async def scenario():
+        client = await ViserClient(url(app)).connect()
+        session = await pick(app, client, label)
+        world, statics, workspace = session.drawing.world, session.statics, session.workspace
+
+        def seen(points):  # (n, 3) from the arm's base frame into the scene
+            return np.asarray(points, dtype=float) @ world[:3, :3].T + world[:3, 3]
+
+        def in_view(points) -> bool:  # every one in front of this browser's camera and within its canvas
+            view = ScreenView.of(session.client.camera)
+            pixels, depth = view.to_screen(seen(points))
+            return bool((depth > 0).all() and (np.abs(pixels[:, 0]) <= view.width / 2).all()
+                        and (np.abs(pixels[:, 1]) <= view.height / 2).all())
+
+        await client.set_gui(workspace.count.label, "10 k")
+        await client.set_gui(workspace.enabled.label, True)
+        await until(lambda: workspace.legend_label is not None, what="the cloud")
+        cloud = seen(workspace._cloud.points.astype(float))
+        legend, base = seen([workspace.legend_label.position, (0.0, 0.0, 0.0)])
+        assert legend[2] > cloud[:, 2].max(), "the legend is not over the cloud"
+        np.testing.assert_allclose(legend[:2], base[:2], atol=1e-9, err_msg="the legend is not on the base axis")
+        await until(lambda: in_view(workspace._cloud.points[::20]), what="the whole cloud in view")
+        await client.set_gui(workspace.enabled.label, False)
+        await client.set_gui("Show the torques", True)
+        await client.set_gui(statics.mapped.label, True)
+        await until(lambda: statics._map is not None, what="the torque map")
+        await until(lambda: in_view(statics._map.points[::20]), what="the whole torque map in view")
+        # and the placed labels keep clear of its largest ‖τ‖ (hung under the map's red ball)
+        view = screen_view(session.client)
+        marker, name = statics._worst
+        worst = boxes(view.to_screen(seen([marker.position]))[0], [name.text], name.font_screen_scale, name.anchor)[0]
+        for pool in session.drawing.label_sets:
+            pool.place()
+        over = [text for pool in session.drawing.label_sets for _, text, position in pool.placed
+                if overlapping(boxes(view.to_screen(seen([position]))[0], [text], pool.labels[0].font_screen_scale,
+                                     "bottom-center")[0], worst, gap=0.0)]
+        assert not over, f"over {name.text!r}: {over}"
+        await client.close()
+
+    asyncio.run(scenario())

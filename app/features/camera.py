@@ -159,13 +159,19 @@ class CameraControls(View):
         """Point this browser's camera at the arm and its target, from the chosen direction."""
         self.look_from(VIEWS[chosen(self.direction, "look from")])
 
-    def show_also(self, name: str, points: np.ndarray | None) -> None:
-        """Keep ``points`` (n, 3; None: no more) in view with the arm from now on, and frame them now."""
+    def show_also(self, name: str, points: np.ndarray | None, world: np.ndarray | None = None, now: bool = True) -> None:
+        """Keep ``points`` (n, 3; None: no more) in view with the arm from now on, and (``now``) frame them now.
+
+        ``world`` (4, 4): where the frame ``points`` are in lies in the world (the arm's base frame: the
+        desktop arm's has y up); the world's own by default.
+        """
         if points is None:
             self.extra.pop(name, None)
         else:
-            self.extra[name] = np.asarray(points, dtype=float).reshape(-1, 3)
-        self.frame()
+            points = np.asarray(points, dtype=float).reshape(-1, 3)
+            self.extra[name] = points if world is None else points @ world[:3, :3].T + world[:3, 3]
+        if now:
+            self.frame()
 
     def look_from(self, direction) -> None:
         """Frame everything drawn (the arm, its ghosts, its target, :attr:`extra`) from ``direction``."""

@@ -49,6 +49,8 @@ HANDLE_DISTANCE, HANDLE_SCALE = 0.35, 0.12
 MAX_FORCE_N = 200.0
 ARROW_METRES_PER_N = 0.002
 FORCE_COLOR = (0, 114, 178)
+#: The torque map's name among what the camera frames with the arm (``CameraControls.extra``).
+MAP_VIEW = "torque map"
 #: Joint vectors sampled for the torque map (``ur10core.specs.torque_map``): the worst of them is marked.
 TORQUE_MAP_POINTS = 20_000
 
@@ -224,12 +226,15 @@ class StaticsView(View):
                 node.visible = shown
 
     def obstacles(self) -> list[tuple]:
-        """The force's name where it is drawn, for the placed labels to keep clear of: at the arrow's tip,
-        under the arrow's node at the tool."""
-        label = self.label
-        if not label.visible:
-            return []
-        return [(np.add(self.arrow.position, label.position), label.text, label.font_screen_scale, label.anchor)]
+        """The force's name and the torque map's largest ‖τ‖ where they are drawn, for the placed labels to keep
+        clear of: at the arrow's tip (under the arrow's node at the tool), and at the map's red ball."""
+        label, worst = self.label, self._worst
+        shown = [(np.add(self.arrow.position, label.position), label.text, label.font_screen_scale, label.anchor)] \
+            if label.visible else []
+        if worst is not None:
+            marker, name = worst
+            shown.append((np.add(marker.position, name.position), name.text, name.font_screen_scale, name.anchor))
+        return shown
 
     def render_panel(self, snapshot: Snapshot) -> None:
         self.bars.visible = bool(self.enabled.value)
@@ -249,7 +254,10 @@ class StaticsView(View):
                 return
             self._clear_map()
             self.map_legend.visible = shown is not None
+            camera = session.camera
             if shown is None:
+                if camera is not None and MAP_VIEW in camera.extra:  # the arm alone in view again
+                    camera.show_also(MAP_VIEW, None)
                 return
             force, (points, norms, worst) = shown
             top = float(norms[worst]) or 1.0
@@ -261,6 +269,9 @@ class StaticsView(View):
             label = self._scene.add_label(f"{self._root}/worst/label", f"largest ‖τ‖ = {top:.0f} {unit}", font_screen_scale=1.4,
                                           anchor="bottom-center")
             self._worst = (marker, label)
+            if camera is not None:  # framed with the arm (a small arm's camera sat inside it), once: not on each new force
+                camera.show_also(MAP_VIEW, points[:: max(1, len(points) // 2000)], session.drawing.world,
+                                 now=MAP_VIEW not in camera.extra)
             self.map_legend.content = (f"Colour: ‖Jᵀ F‖ for {np.linalg.norm(force):.0f} N, from 0 (purple) to "
                                        f"{top:.0f} {unit} (yellow), the largest of {len(norms):,} random joint vectors (red ball).")
 
@@ -278,3 +289,6 @@ class StaticsView(View):
         self.handle.remove()
         with self._map_lock:
             self._clear_map()
+        camera = self._session.camera
+        if camera is not None:  # a classroom's browser keeps its camera for its next arm
+            camera.show_also(MAP_VIEW, None, now=False)

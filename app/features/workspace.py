@@ -191,6 +191,17 @@ def legend_html(top: float, unit: str = " m³") -> str:
     )
 
 
+def above(points: np.ndarray, up) -> np.ndarray:
+    """(3,) where a cloud's legend goes: on the base axis, 12 cm over the highest of ``points`` (n, 3) along ``up``
+    (the arm's vertical, ``Arm.up``: the desktop arm's is its y).
+
+    >>> above(np.array([[0.3, 0.0, 1.0], [0.0, 2.0, 0.5]]), (0.0, 1.0, 0.0)).tolist()
+    [0.0, 2.12, 0.0]
+    """
+    up = np.asarray(up, dtype=float)
+    return up * (float((points @ up).max()) + 0.12)
+
+
 def sections_of(arm: Arm) -> tuple[tuple[str, ...], str]:
     """The sections ``arm``'s cloud offers, and what the folder says of the one it lacks ("" if none).
 
@@ -291,7 +302,7 @@ class WorkspaceView(View):
                 # above the cloud, in the same scene: it goes with the cloud and reaches every viewer
                 self.legend_label = self._scene.add_label(
                     f"{self._root}/workspace/legend", HULL_LEGEND if section == HULL else legend_text(top, self._unit),
-                    position=(0.0, 0.0, float(points[:, 2].max()) + 0.12), font_screen_scale=1.3, anchor="bottom-center",
+                    position=above(points, self._session.arm.up), font_screen_scale=1.3, anchor="bottom-center",
                 )
             self.legend.content = HULL_LEGEND if section == HULL else legend_html(top, self._unit)
             self.legend.visible = True
@@ -324,7 +335,7 @@ class WorkspaceView(View):
         camera = self._session.camera
         if camera is None:
             return
-        camera.extra["cloud"] = points[:: max(1, len(points) // 2000)]
+        camera.show_also("cloud", points[:: max(1, len(points) // 2000)], self._session.drawing.world, now=False)
         if section == SECTIONS[0]:
             camera.frame()
             return
@@ -346,8 +357,8 @@ class WorkspaceView(View):
                 self._cloud.remove()  # and the legend under it
                 self._cloud = self.legend_label = None
         camera = getattr(self._session, "camera", None)
-        if camera is not None and "cloud" in camera.extra and not self._closed:
-            camera.show_also("cloud", None)
+        if camera is not None and "cloud" in camera.extra:  # framed again without it (a classroom's camera outlives the arm)
+            camera.show_also("cloud", None, now=not self._closed)
 
     def close(self) -> None:
         """The session has gone: its cloud goes too, even from a scene everyone shares."""
