@@ -138,7 +138,6 @@ class ArmSession:
         #: (frame (4, 4)) -> the names drawn in this browser by something else (a challenge's target), as
         #: ``branch_labels.obstacle`` tuples in that frame
         self.names_elsewhere: Callable[[Any], list] = lambda frame: []
-        chain(drawn.label_sets, outside=self._names_beside)  # the placed labels keep clear of the arrows' names, and more
         placed = self.guard(lambda _: [labels.place() for labels in drawn.label_sets])
         self._place_numbers = lambda: placed(None)  # on every camera move: the 3D labels placed for the new view
         if server is None:  # the 3D labels placed apart for this browser's camera, as it moves
@@ -152,6 +151,7 @@ class ArmSession:
             self.singularities, self.dh_table, self.walkthrough, self.workspace, self.reach_map, self.statics,
             self.ellipsoids, self.velocity, self.motion, *self.lessons, self.camera) if view is not None)
         self.views = (drawn, *self.panel_views)
+        chain(drawn.label_sets, outside=self._names_beside)  # the placed labels keep clear of the arrows' names, and more
         self.built = True
         self.render(self.state.last)  # as a click during the build may have left it
         self.render_panel()
@@ -277,11 +277,11 @@ class ArmSession:
             camera.on_moved.append(self._place_numbers)
 
     def _names_beside(self) -> list:
-        """The names of the velocity and force arrows, the ellipsoids' and :attr:`names_elsewhere`, in the drawing's frame."""
+        """What the views draw in 3D outside the placed pools (``View.obstacles``: the arrows' names, say) and
+        :attr:`names_elsewhere`, in the drawing's frame."""
         if self.closed:
             return []
-        return [*self.velocity.labels, *self.statics.obstacles(), *self.ellipsoids.obstacles(),
-                *self.names_elsewhere(self.drawing.world)]
+        return [*(name for view in self.panel_views for name in view.obstacles()), *self.names_elsewhere(self.drawing.world)]
 
     def _screen_view(self) -> ScreenView:
         """This browser's camera, to place the branch numbers for (the default one until it reports)."""

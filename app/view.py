@@ -57,6 +57,11 @@ class View:
     def close(self) -> None:
         pass
 
+    def obstacles(self) -> list:
+        """The 3D labels it draws outside the drawing's placed pools (an arrow's name, say), as label nodes or
+        ``branch_labels.obstacle`` tuples in the drawing's frame: the placed labels keep clear of them."""
+        return []
+
     def remove(self) -> None:
         self.close()
         for folder in self.folders:

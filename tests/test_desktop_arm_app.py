@@ -86,6 +86,25 @@ def test_the_desktop_arm_is_picked_driven_played_and_searched(app):
         torques = session.arm.static_torques(worst, (0.0, -10.0, 0.0))
         assert np.linalg.norm(torques) == pytest.approx(10.0 * math.hypot(UPPER_ARM, FOREARM), rel=1e-9)
         await until(lambda: "F √(l5² + l1²) = 18.60 N·m" in session.lessons[2].result.content, what="the course's closed form")
+        # the captions and numbers keep clear of its "largest ‖τ‖" (until 2026-12-03 it sat on "y₀ (up)")
+        from ur10teach.features.branch_labels import boxes, overlapping
+        from ur10teach.features.course_arms.desktop_lessons import WORST_LABEL_RISE
+        from ur10teach.viser_internals import labels_of
+        world = session.drawing.world
+        worst = next(label for label in labels_of(session.client.scene) if label.text.startswith("largest"))
+        label = {"text": worst.text, "font_screen_scale": worst.font_screen_scale, "anchor": worst.anchor}
+        # on its stalk over the red ball, which is at the tool: the arm is put in the worst pose
+        worst_at = (session.state.last.flange[:3, 3] + (0.0, WORST_LABEL_RISE, 0.0)) @ world[:3, :3].T + world[:3, 3]
+        await until(lambda: session.drawing.label_sets[0].placed, what="the captions placed")
+        over = []
+        for pool in session.drawing.label_sets:
+            pool.place()
+            view = pool.view()
+            worst_box = boxes(view.to_screen(worst_at[None])[0], [label["text"]], label["font_screen_scale"], label["anchor"])[0]
+            over += [text for _, text, position in pool.placed
+                     if overlapping(boxes(view.to_screen((position @ world[:3, :3].T + world[:3, 3])[None])[0], [text],
+                                          pool.labels[0].font_screen_scale, "bottom-center")[0], worst_box, gap=0.0)]
+        assert not over, f"over the largest ‖τ‖: {over}"
         # sideways the closed form does not hold, and the result does not claim it
         await client.set_gui("Force direction", "+x")
         await client.set_gui("Find the pose that needs the largest ‖τ‖", True)

@@ -156,6 +156,9 @@ class VelocityView(View):
             if node.visible != moving:
                 node.visible = moving
 
+    def obstacles(self) -> list:
+        return list(self.labels)  # in the drawing's frame, hidden while nothing moves
+
     def render_panel(self, snapshot: Snapshot) -> None:
         qdot = self.joint_rates()
         twist = self._arm.tool_twist(snapshot.q, qdot)

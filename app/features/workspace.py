@@ -252,6 +252,10 @@ class WorkspaceView(View):
         for widget in (self.enabled, self.count, self.section, self.height):
             widget.on_update(session.guard(self._changed))
 
+    def obstacles(self) -> list:
+        legend = self.legend_label  # over the cloud, in the drawing's frame
+        return [] if legend is None else [legend]
+
     def _changed(self, _: viser.GuiEvent) -> None:
         within(self.height, "section height (mm)")  # refused as it comes, shown or not
         self._clouds.start("workspace", self._session.guard)  # a run under way picks up the newest choices

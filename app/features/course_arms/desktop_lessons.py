@@ -147,9 +147,9 @@ class StaticsExercise(View):
             # raised on a red stalk: at the ball it sat on the base frame's and the joints' labels
             rise = np.array([[[0.0, 0.0, 0.0], [0.0, WORST_LABEL_RISE, 0.0]]], np.float32)
             self._scene.add_line_segments(f"{self._root}/worst/stalk", rise, DANGER_RED, thickness=0.015)
-            self._scene.add_label(f"{self._root}/worst/label", f"largest ‖τ‖ = {top:.1f} N·m", font_screen_scale=1.4,
-                                  anchor="bottom-center", position=(0.0, WORST_LABEL_RISE, 0.0))
-            self._map = (cloud, marker)
+            label = self._scene.add_label(f"{self._root}/worst/label", f"largest ‖τ‖ = {top:.1f} N·m", font_screen_scale=1.4,
+                                          anchor="bottom-center", position=(0.0, WORST_LABEL_RISE, 0.0))
+            self._map = (cloud, marker, label)
         self.result.content = (
             f"Largest ‖τ‖ = **{norms[worst]:.2f} N·m** for {np.linalg.norm(force):.0f} N, at θ = ("
             + ", ".join(number(v, ".0f") for v in np.degrees(q[worst])) + f")° (red ball), of {len(q):,} poses "
@@ -162,8 +162,16 @@ class StaticsExercise(View):
         session.stop_lessons()
         session.apply(lambda state: state.set_joints(q[worst]))
 
+    def obstacles(self) -> list[tuple]:
+        """The largest ‖τ‖'s label, on its stalk over the red ball."""
+        shown = self._map
+        if not shown:
+            return []
+        marker, label = shown[1], shown[2]
+        return [(np.add(marker.position, label.position), label.text, label.font_screen_scale, label.anchor)]
+
     def _clear(self) -> None:
-        for node in self._map:
+        for node in self._map[:2]:
             node.remove()  # the marker's label and stalk go with it
         self._map = ()
 
