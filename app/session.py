@@ -9,11 +9,12 @@ import contextlib
 import time
 from typing import Any, Callable
 
+import numpy as np
 import viser
 
 from ur10core import Arm
 
-from .features.branch_labels import ScreenView, chain, screen_view
+from .features.branch_labels import BranchLabels, ScreenView, chain, screen_view
 from .features.branch_search import BranchSearch
 from .features.camera import CameraControls
 from .features.course_arms.desktop_lessons import desktop_lessons
@@ -38,6 +39,7 @@ from .meshes import ArmModels
 from .serving.metrics import LATENCY
 from .serving.workers import DragQueue, PanelRefresher
 from .state import ArmState, Snapshot
+from .style import NAME_SCALE
 
 #: Changes after which the camera frames the arm again: it may have gone far (a drag or a slider moves it gradually).
 REFRAMED = ("singularity", "typed")
@@ -125,7 +127,7 @@ class ArmSession:
         self.reach_map = ReachMapView(scene, gui, self, root=f"{nodes}/reach_map", world=drawn.world)
         self.statics = StaticsView(scene, gui, self, root=f"{nodes}/statics", size=drawn.size)
         self.ellipsoids = EllipsoidsView(scene, gui, self, root=f"{nodes}/ellipsoids", reach=drawn.size)
-        self.velocity = VelocityView(scene, gui, self, root=f"{nodes}/velocity", up=drawn.world[2, :3])
+        self.velocity = VelocityView(scene, gui, self, root=f"{nodes}/velocity")
         self.motion = MotionLessons(gui, self, before=self.stop_lessons)
         self.gripper = GripperPose(gui, self) if arm.name == "kr210" else None
         self.lessons = LESSONS[arm.name](scene, gui, self) if arm.name in LESSONS else ()
@@ -138,20 +140,27 @@ class ArmSession:
         #: (frame (4, 4)) -> the names drawn in this browser by something else (a challenge's target), as
         #: ``branch_labels.obstacle`` tuples in that frame
         self.names_elsewhere: Callable[[Any], list] = lambda frame: []
-        placed = self.guard(lambda _: [labels.place() for labels in drawn.label_sets])
-        self._place_numbers = lambda: placed(None)  # on every camera move: the 3D labels placed for the new view
-        if server is None:  # the 3D labels placed apart for this browser's camera, as it moves
-            for labels in drawn.label_sets:
-                labels.view = self._screen_view
-        if self.camera is not None:
-            self.watch_camera(self.camera)
         #: the views this session built in the browser's own panel (the drawing may be the classroom's)
         self.panel_views = tuple(view for view in (
             self.editor, self.search, self.gripper, self.joints, self.arm_model, self.ik_target, self.readouts,
             self.singularities, self.dh_table, self.walkthrough, self.workspace, self.reach_map, self.statics,
             self.ellipsoids, self.velocity, self.motion, *self.lessons, self.camera) if view is not None)
         self.views = (drawn, *self.panel_views)
-        chain(drawn.label_sets, outside=self._names_beside)  # the placed labels keep clear of the arrows' names, and more
+        #: what the views name at moving points (``View.names``: the arrows' tips), placed apart before the
+        #: drawing's own labels, which keep clear of them
+        named = [name for view in self.panel_views for name in view.names()]
+        self.names = BranchLabels(scene, f"{nodes}/view_names", len(named), scale=NAME_SCALE, colours=[c for *_, c in named],
+                                  merge_px=0.0)  # names of different things at one spot: each its own, not "a · b"
+        self.names.view, self.names.world, self.names.fixed = (lambda: drawn.label_sets[0].view()), drawn.world, self._fixed_labels
+        chain(drawn.label_sets, outside=self._names_beside)
+        pools = (self.names, *drawn.label_sets)
+        placed = self.guard(lambda _: [labels.place() for labels in pools])
+        self._place_numbers = lambda: placed(None)  # on every camera move: the 3D labels placed for the new view
+        if server is None:  # the 3D labels placed apart for this browser's camera, as it moves
+            for labels in drawn.label_sets:
+                labels.view = self._screen_view
+        if self.camera is not None:
+            self.watch_camera(self.camera)
         self.built = True
         self.render(self.state.last)  # as a click during the build may have left it
         self.render_panel()
@@ -225,6 +234,7 @@ class ArmSession:
         with self.client.atomic():
             if self._label_scene is not None and self._lecture is not None:
                 size_labels(self._label_scene, self._lecture.on)
+            self._refusing(lambda _: self._show_names(), snapshot)  # before the drawing's labels, which keep clear of them
             for view in self.views:  # the drawing's panel-paced parts too (the branch numbers, say)
                 self._refusing(view.render_panel, snapshot)
         LATENCY.record("panel", time.perf_counter() - start)
@@ -276,12 +286,20 @@ class ArmSession:
         if self._label_scene is not None:
             camera.on_moved.append(self._place_numbers)
 
-    def _names_beside(self) -> list:
-        """What the views draw in 3D outside the placed pools (``View.obstacles``: the arrows' names, say) and
-        :attr:`names_elsewhere`, in the drawing's frame."""
+    def _fixed_labels(self) -> list:
+        """The 3D labels drawn where they stay (``View.obstacles``: a map's largest ‖τ‖, say) and
+        :attr:`names_elsewhere`, in the drawing's frame: every placed label keeps clear of them."""
         if self.closed:
             return []
-        return [*(name for view in self.panel_views for name in view.obstacles()), *self.names_elsewhere(self.drawing.world)]
+        return [*(label for view in self.panel_views for label in view.obstacles()), *self.names_elsewhere(self.drawing.world)]
+
+    def _names_beside(self) -> list:
+        """What the drawing's placed labels keep clear of: the views' names (:attr:`names`) and the fixed labels."""
+        return [] if self.closed else [*self.names.labels, *self._fixed_labels()]
+
+    def _show_names(self) -> None:
+        named = [name for view in self.panel_views for name in view.names()]
+        self.names.show(np.array([point for point, _, _ in named], dtype=float).reshape(-1, 3), [text for _, text, _ in named])
 
     def _screen_view(self) -> ScreenView:
         """This browser's camera, to place the branch numbers for (the default one until it reports)."""
@@ -324,4 +342,5 @@ class ArmSession:
         with self.state.lock:  # not while a drag is being drawn
             for view in self.panel_views:
                 how(view)
+            self.names.remove()  # from a scene everyone shares too
         self.refresher.forget(self)

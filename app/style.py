@@ -49,6 +49,7 @@ WRIST_COLOR = (204, 121, 167)
 #: mode every 3D label grows by LECTURE_LABEL_FACTOR, to at least LECTURE_LABEL_MIN (an em of 24 px:
 #: read from the back of a lecture hall on a 1080p projector).
 NUMBER_SCALE = 1.6
+NAME_SCALE = 1.4  #: the arrows' and the ellipsoids' names
 LECTURE_LABEL_FACTOR, LECTURE_LABEL_MIN = 1.6, 2.0
 
 

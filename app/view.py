@@ -57,6 +57,12 @@ class View:
     def close(self) -> None:
         pass
 
+    def names(self) -> list[tuple]:
+        """What it names in 3D at points that move with the arm (an arrow's tip): ``(point (3,) in the drawing's
+        frame, text, leader colour)`` per name it can show, the same number every time, ``text`` "" while hidden.
+        The session places them apart, before the drawing's own labels."""
+        return []
+
     def obstacles(self) -> list:
         """The 3D labels it draws outside the drawing's placed pools (an arrow's name, say), as label nodes or
         ``branch_labels.obstacle`` tuples in the drawing's frame: the placed labels keep clear of them."""

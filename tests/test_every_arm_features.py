@@ -152,72 +152,43 @@ def test_the_branch_count_map_of_every_arm_is_its_ik_s(app, label):
 
 
 @pytest.mark.parametrize("label", EVERY_ARM)
-def test_the_placed_labels_keep_clear_of_the_arrows_names(app, label):
-    """The DH axes' names, the branch numbers and the factors' names are placed apart on the screen; until
-    2026-12-03 they did not keep clear of the names the velocity and force arrows carry at the tool
-    ("ω turning rate" over "z3" and "x3" on the cylindrical arm, "F = 50 N" over "x4" on the Stanford arm),
-    nor of the ellipsoids' names ("force" over "x5" on the Stanford arm)."""
-    from ur10core.orientation import rotation_from_quaternion
-    from ur10teach.features.branch_labels import boxes, obstacle, overlapping, screen_view
+@pytest.mark.parametrize("rate", [0.1, 40.0])
+def test_no_two_3d_labels_overlap_with_velocities_forces_and_ellipsoids_shown(app, label, rate):
+    """The names of the velocity and force arrows and of the ellipsoids (which move with the arm) are placed apart,
+    and then the DH axes' names, the branch numbers and the factors' names, keeping clear of them. Until
+    2026-12-03 the names at the tool were drawn where they fell: "ω turning rate" over "z3" and "x3" on the
+    cylindrical arm, "F = 50 N" over "x4" on the Stanford arm, "force" over "x5" on it, "force" over "v velocity"
+    on the KR210, four names in one spot on the desktop arm, and for a slow joint (short arrows) "v velocity"
+    over "ω turning rate" on every arm."""
+    from ur10teach.features.branch_labels import JOIN, boxes, overlapping
 
     async def scenario():
         client = await ViserClient(url(app)).connect()
         session = await pick(app, client, label)
-        arm, velocity = session.arm, session.velocity
+        arm, world = session.arm, session.drawing.world
         for joint in (0, 1):
-            await client.set_gui(rate_label(arm, joint), 40.0 if arm.joint_types[joint] == "R" else 100.0)
+            await client.set_gui(rate_label(arm, joint), rate if arm.joint_types[joint] == "R" else 2.5 * rate)
         await client.set_gui("Show the torques", True)
-        ellipsoids = session.ellipsoids
-        await client.set_gui(ellipsoids.enabled.label, True)  # both ellipsoids, named at the ends of their longest axes
-        await until(lambda: velocity.labels[0].visible and session.statics.label.visible and all(n.visible for n in ellipsoids.names)
-                    and np.allclose(velocity.labels[0].position, velocity.linear.points[0][1]), what="the arrows and their names")
-        view = screen_view(session.client)  # the camera the labels are placed for
+        await client.set_gui(session.ellipsoids.enabled.label, True)  # both, named at the ends of their longest axes
+        wanted = {"v velocity", "ω turning rate", "F = 50 N", "velocity", "force"}
 
-        world = session.drawing.world  # the arm's base frame in the scene (the desktop arm's y is up)
+        def named() -> set[str]:
+            return {name for _, text, _ in session.names.placed for name in text.split(JOIN)}
 
-        def box(position, text, scale, anchor):  # on the screen, from a position in the arm's base frame
-            seen = np.asarray(position, dtype=float) @ world[:3, :3].T + world[:3, 3]
-            return boxes(view.to_screen(seen[None])[0], [text], scale, anchor)[0]
-
-        turned = rotation_from_quaternion(ellipsoids.frame.wxyz)  # the ellipsoids' names hang in their frame at the tool
-        names = [(ellipsoids.frame.position + turned @ name.position, name.text, name.font_screen_scale, name.anchor)
-                 for name in ellipsoids.names]
-        arrows = [box(*name) for name in (*map(obstacle, velocity.labels), *session.statics.obstacles(), *names)]
-        for pool in session.drawing.label_sets:  # as a camera move places them
+        await until(lambda: wanted <= named(), what="the names at the tool placed")
+        pools = (session.names, *session.drawing.label_sets)
+        for pool in pools:  # as a camera move places them
             pool.place()
-        placed = [(text, box(position, text, pool.labels[0].font_screen_scale, "bottom-center"))
-                  for pool in session.drawing.label_sets for _, text, position in pool.placed]
-        assert placed, "no placed labels to check"
-        clashes = [text for text, placed_box in placed if any(overlapping(placed_box, arrow, gap=0.0) for arrow in arrows)]
-        assert not clashes, f"over an arrow's name: {clashes}"
-        await client.close()
-
-    asyncio.run(scenario())
-
-
-@pytest.mark.parametrize("label", EVERY_ARM)
-def test_the_velocity_arrows_names_are_never_one_over_the_other(app, label):
-    """A joint turned slowly gives two short arrows, both ending near the tool; until 2026-12-03 both names sat
-    centred on their ends, so "v velocity" and "ω turning rate" were drawn over each other."""
-    from ur10teach.features.branch_labels import boxes, obstacle, overlapping, screen_view
-
-    async def scenario():
-        client = await ViserClient(url(app)).connect()
-        session = await pick(app, client, label)
-        velocity, world = session.velocity, session.drawing.world
-        view = screen_view(session.client)
-        for joint, rate in ((0, 0.1), (0, 0.0), (1, 0.1)):  # short arrows, from one joint and then from another
-            await client.set_gui(rate_label(session.arm, joint), rate)
-            if rate == 0.0:
-                await until(lambda: not velocity.labels[0].visible, what="the arrows hidden")
-                continue
-            await until(lambda: velocity.labels[0].visible
-                        and np.allclose(velocity.labels[0].position, velocity.linear.points[0][1]), what="the arrows' names")
-            names = []
-            for position, text, scale, anchor in map(obstacle, velocity.labels):
+        view = pools[0].view()  # the camera they are placed for
+        placed = []
+        for pool in pools:
+            scale = pool.labels[0].font_screen_scale
+            for _, text, position in pool.placed:  # in the arm's base frame (the desktop arm's y is up)
                 seen = np.asarray(position, dtype=float) @ world[:3, :3].T + world[:3, 3]
-                names.append(boxes(view.to_screen(seen[None])[0], [text], scale, anchor)[0])
-            assert not overlapping(*names, gap=0.0), f"joint {joint}: the two names overlap on the screen"
+                placed.append((text, boxes(view.to_screen(seen[None])[0], [text], scale)[0]))
+        assert len(placed) > len(wanted), "no labels to check"
+        clashes = [(a, b) for k, (a, box_a) in enumerate(placed) for b, box_b in placed[k + 1:] if overlapping(box_a, box_b, gap=0.0)]
+        assert not clashes, f"overlapping: {clashes}"
         await client.close()
 
     asyncio.run(scenario())

@@ -34,7 +34,8 @@ def test_the_torque_bars_add_the_force_and_the_weight(app):
         size = session.drawing.size
         np.testing.assert_allclose(start, snapshot.flange[:3, 3], atol=1e-6)
         np.testing.assert_allclose(end - start, [0, 0, -0.1 * size], atol=1e-6)
-        np.testing.assert_allclose(statics.label.position, end - start, atol=1e-6)  # the label at the tip (in the arrow)
+        await until(lambda: statics.names()[0][1] == "F = 50 N", what="the force's name")
+        np.testing.assert_allclose(statics.names()[0][0], end, atol=1e-6)  # named at its tip
         # a payload adds its weight; a force along +x turns the arrow
         await client.set_gui("Payload (kg)", 5.0)
         await client.set_gui("Force direction", "+x")
@@ -143,8 +144,9 @@ def test_the_ellipsoids_follow_the_arm_and_flatten_towards_the_elbow_singularity
         assert longest < FORCE_METRES * force.max()  # it was drawn smaller
         shrunk = f"drawn at {1000 * longest / force.max():.3g} mm per N per N·m"
         await until(lambda: shrunk in view.lengths.content, what="the smaller scale in the panel")
-        assert view.names[1].visible and view.names[1].text == "force"  # named in 3D, at its longest axis
-        np.testing.assert_allclose(np.linalg.norm(view.names[1].position), longest, rtol=1e-6)
+        point, text, _ = view.names()[1]  # named in 3D, at the end of its longest axis from the flange
+        assert text == "force"
+        np.testing.assert_allclose(np.linalg.norm(point - session.state.last.flange[:3, 3]), longest, rtol=1e-6)
         await client.set_gui("Ellipsoid", "velocity")
         await until(lambda: view.velocity.visible and not view.force.visible, what="the velocity one alone")
         await client.close()

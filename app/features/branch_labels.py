@@ -204,6 +204,11 @@ class BranchLabels:
         """The label that shows each point's text, by the points' ``keys`` (one label may show several)."""
         return {keys[k]: label for (members, _, _), label in zip(self.placed, self.labels) for k in members}
 
+    def remove(self) -> None:
+        """Take its labels and leader lines out of the scene (a scene shared with others outlives it)."""
+        for node in (*self.labels, *self.leaders):
+            node.remove()
+
     def show(self, anchors: np.ndarray, texts: list[str]) -> None:
         """Label the points ``anchors`` (n, 3) with ``texts`` ("" for none)."""
         with self._lock:

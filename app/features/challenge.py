@@ -233,8 +233,7 @@ class ClassTools:
 
     def _remove_names(self) -> None:
         if self.names is not None:
-            for node in (*self.names.labels, *self.names.leaders):
-                node.remove()
+            self.names.remove()
             self.names = None
 
     def remove(self) -> None:

@@ -15,7 +15,7 @@ from typing import Any, Callable
 import numpy as np
 import viser
 
-from ur10core.orientation import quaternion, rotation_from_quaternion
+from ur10core.orientation import quaternion
 
 from ..feedback import chosen
 from ..state import Snapshot
@@ -103,9 +103,8 @@ class EllipsoidsView(View):
         self.force = scene.add_icosphere(f"{root}/force", radius=1.0, color=FORCE_COLOR, opacity=0.3,
                                          subdivisions=3, cast_shadow=False, receive_shadow=False, visible=False,
                                          scale=(1e-4, 1e-4, 1e-4))
-        # each named in 3D at the end of its longest axis: colour alone does not say which is which
-        self.names = (scene.add_label(f"{root}/velocity_name", "velocity", font_screen_scale=1.3, visible=False),
-                      scene.add_label(f"{root}/force_name", "force", font_screen_scale=1.3, visible=False))
+        # each named in 3D at the end of its longest axis (colour alone does not say which is which), by the session
+        self._name_points: list[np.ndarray | None] = [None, None]  #: (3,) in the drawing's frame, while it shows
 
         def changed(_) -> None:
             chosen(self.which, "ellipsoid")  # refuses a value that is not offered, with a message
@@ -118,29 +117,25 @@ class EllipsoidsView(View):
         show_velocity, show_force = SHOWN.get(self.which.value, (False, False)) if self.enabled.value else (False, False)
         if show_velocity or show_force:
             translation = self._arm.translation_ellipsoid(snapshot.q)
+            at = self._tool(snapshot)[:3, 3]
             set_orientations([self.frame], ellipsoid_pose(translation.axes)[None])
-            set_positions([self.frame], self._tool(snapshot)[None, :3, 3])
+            set_positions([self.frame], at[None])
             force = np.where(np.isfinite(translation.force), translation.force, 0.0)
             sizes = np.maximum([VELOCITY_METRES * translation.velocity,
                                 force_scale(translation.force, self._reach) * force], 1e-4)
             shown = [show_velocity, show_force]  # sized before they show; a zero axis makes a flat disc
             set_scales([node for node, on in zip((self.velocity, self.force), shown) if on], sizes[shown])
             longest = np.argmax(sizes, axis=1)
-            set_positions([name for name, on in zip(self.names, shown) if on],
-                          np.array([np.eye(3)[k] * size[k] for k, size in zip(longest, sizes)])[shown])
-        for node, name, shown in ((self.velocity, self.names[0], show_velocity), (self.force, self.names[1], show_force)):
+            self._name_points = [at + translation.axes[:, k] * size[k] if on else None for k, size, on in zip(longest, sizes, shown)]
+        else:
+            self._name_points = [None, None]
+        for node, shown in ((self.velocity, show_velocity), (self.force, show_force)):
             if node.visible != shown:
-                node.visible = name.visible = shown
+                node.visible = shown
 
-    def obstacles(self) -> list[tuple]:
-        """The ellipsoids' names where they are drawn (in the drawing's frame: their frame is at the tool, turned
-        to the axes), for the placed labels to keep clear of."""
-        shown = [name for name in self.names if name.visible]
-        if not shown:
-            return []
-        R = rotation_from_quaternion(self.frame.wxyz)
-        return [(np.add(self.frame.position, R @ name.position), name.text, name.font_screen_scale, name.anchor)
-                for name in shown]
+    def names(self) -> list[tuple]:
+        return [(np.zeros(3), "", colour) if point is None else (point, text, colour)
+                for point, text, colour in zip(self._name_points, ("velocity", "force"), (VELOCITY_COLOR, FORCE_COLOR))]
 
     def render_panel(self, snapshot: Snapshot) -> None:
         self.lengths.visible = bool(self.enabled.value)

@@ -126,10 +126,10 @@ class StaticsView(View):
         self._metres_per_n = ARROW_METRES_PER_N * size
         self.arrow = scene.add_arrows(f"{root}/force", np.zeros((1, 2, 3)), FORCE_COLOR, shaft_radius=0.012 * size,
                                       head_radius=0.03 * size, head_length=0.05 * size, visible=False)
-        # the arrow's node rides at the tool and its label at the arrow's tip, in it: a drag moves one node,
-        # and the arrow's shape is sent again only when the force itself turns or grows
-        self.label = scene.add_label(f"{root}/force/label", "F", font_screen_scale=1.4, anchor="center-left", visible=False)
+        # the arrow's node rides at the tool: a drag moves one node, and the arrow's shape is sent again
+        # only when the force itself turns or grows; its name is the session's to place (:meth:`names`)
         self._drawn_force: np.ndarray | None = None
+        self._name: tuple[np.ndarray, str] | None = None  #: (the arrow's tip, its text) while it shows
         #: the direction handle: this browser's own, like the IK target
         self.handle = session.client.scene.add_transform_controls(
             f"{root}/force_handle", scale=HANDLE_SCALE * size, disable_rotations=True, depth_test=False, visible=False)
@@ -213,28 +213,25 @@ class StaticsView(View):
             newtons = float(self.newtons.value)
             force = self._force(direction, snapshot, strict=False)
             if self._drawn_force is None or not np.array_equal(force, self._drawn_force):
-                end = self._metres_per_n * force
-                self.arrow.points = np.array([[np.zeros(3), end]])  # the way the tool pushes
-                set_positions([self.label], end[None])
+                self.arrow.points = np.array([[np.zeros(3), self._metres_per_n * force]])  # the way the tool pushes
                 self._drawn_force = force
             set_positions([self.arrow], tip[None])
-            text = f"F = {newtons:.0f} N"
-            if self.label.text != text:
-                self.label.text = text
-        for node in (self.arrow, self.label):
-            if node.visible != shown:
-                node.visible = shown
+            self._name = (tip + self._metres_per_n * force, f"F = {newtons:.0f} N")
+        else:
+            self._name = None
+        if self.arrow.visible != shown:
+            self.arrow.visible = shown
+
+    def names(self) -> list[tuple]:
+        name = self._name
+        return [(np.zeros(3), "", FORCE_COLOR) if name is None else (*name, FORCE_COLOR)]
 
     def obstacles(self) -> list[tuple]:
-        """The force's name and the torque map's largest ‖τ‖ where they are drawn, for the placed labels to keep
-        clear of: at the arrow's tip (under the arrow's node at the tool), and at the map's red ball."""
-        label, worst = self.label, self._worst
-        shown = [(np.add(self.arrow.position, label.position), label.text, label.font_screen_scale, label.anchor)] \
-            if label.visible else []
-        if worst is not None:
-            marker, name = worst
-            shown.append((np.add(marker.position, name.position), name.text, name.font_screen_scale, name.anchor))
-        return shown
+        """The torque map's largest ‖τ‖ at its red ball, for the placed labels to keep clear of."""
+        if self._worst is None:
+            return []
+        marker, name = self._worst
+        return [(np.add(marker.position, name.position), name.text, name.font_screen_scale, name.anchor)]
 
     def render_panel(self, snapshot: Snapshot) -> None:
         self.bars.visible = bool(self.enabled.value)
@@ -284,7 +281,6 @@ class StaticsView(View):
 
     def close(self) -> None:
         """The session has gone: so do its arrow and map, even from a scene everyone shares."""
-        self.label.remove()
         self.arrow.remove()
         self.handle.remove()
         with self._map_lock:

@@ -23,6 +23,7 @@ from ..view import Session, View
 from .joint_panel import rate_label
 
 LINEAR_COLOR, ANGULAR_COLOR = (0, 114, 178), (204, 121, 167)
+NAMES = ("v velocity", "ω turning rate")  #: the arrows' names in 3D
 #: Drawn length: metres per m/s of the flange, and per rad/s of its turning.
 METRES_PER_SPEED, METRES_PER_TURN_RATE = 0.5, 0.15
 MAX_TYPED = (2000.0, 360.0)  #: the largest typed speed (mm/s) and turning rate (°/s)
@@ -80,15 +81,13 @@ class VelocityView(View):
     """The "Velocities" folder and the two arrows at the tool: for the sliders' joint rates, or a playing path's.
 
     ``root``: where its nodes hang; ``tool(snapshot)``: the (4, 4) pose the arrows start at
-    (the arm's tool by default); ``up`` (3,): the world's up in ``root``'s frame. The kinds of joints and their
+    (the arm's tool by default). The arrows' names are the session's to place (:meth:`names`). The kinds of joints and their
     speed limits (``arm.specs``, where the maker publishes them) come from ``session.arm``.
     """
 
     def __init__(self, scene: viser.SceneApi, gui: viser.GuiApi, session: Session, root: str = "/velocity",
-                 tool: Callable[[Any], np.ndarray] = lambda snapshot: snapshot.flange, place: str = "tool",
-                 up: np.ndarray = np.array([0.0, 0.0, 1.0])) -> None:
+                 tool: Callable[[Any], np.ndarray] = lambda snapshot: snapshot.flange, place: str = "tool") -> None:
         self._session = session
-        self._up = np.asarray(up, dtype=float)
         self._arm = session.arm
         self._tool = tool
         self._kinds = "".join(self._arm.joint_types)
@@ -115,10 +114,7 @@ class VelocityView(View):
                                        head_radius=0.02, head_length=0.04, visible=False)
         self.angular = scene.add_arrows(f"{root}/angular", np.zeros((1, 2, 3)), ANGULAR_COLOR, shaft_radius=0.008,
                                         head_radius=0.02, head_length=0.04, visible=False)
-        self.labels = (scene.add_label(f"{root}/linear_label", "v velocity", font_screen_scale=1.4, anchor="bottom-left",
-                                       visible=False),
-                       scene.add_label(f"{root}/angular_label", "ω turning rate", font_screen_scale=1.4, anchor="top-left",
-                                       visible=False))
+        self._ends: tuple[np.ndarray, np.ndarray] | None = None  #: where the arrows end while they show
         for slider in self.sliders:
             slider.on_update(session.guard(lambda _: session.redraw()))
         self.solve.on_click(session.guard(lambda _: self._solve(), beside=self.refusal))
@@ -138,26 +134,24 @@ class VelocityView(View):
     def render(self, snapshot: Snapshot) -> None:
         playing = snapshot.rates is not None and bool(np.any(snapshot.rates))  # a path playing: its own rates
         moving = playing or any(slider.value != 0.0 for slider in self.sliders)  # on every drag: no arrays while all are still
+        ends = None
         if moving:
             qdot = snapshot.rates if playing else self.joint_rates()
             twist = self._arm.tool_twist(snapshot.q, qdot)
             tip = self._tool(snapshot)[:3, 3]
             ends = (tip + METRES_PER_SPEED * twist[:3], tip + METRES_PER_TURN_RATE * twist[3:])
-            # the higher end's name above it, the lower's below: two ends close together (short arrows, or
-            # v and ω along one line) would otherwise put one name over the other
-            higher = 0 if self._up @ ends[0] >= self._up @ ends[1] else 1
-            for k, (arrow, label, end) in enumerate(zip((self.linear, self.angular), self.labels, ends)):
+            for arrow, end in zip((self.linear, self.angular), ends):
                 arrow.points = np.array([[tip, end]])
-                label.position = end
-                anchor = "bottom-left" if k == higher else "top-left"
-                if label.anchor != anchor:
-                    label.anchor = anchor
-        for node in (self.linear, self.angular, *self.labels):
+        self._ends = ends
+        for node in (self.linear, self.angular):
             if node.visible != moving:
                 node.visible = moving
 
-    def obstacles(self) -> list:
-        return list(self.labels)  # in the drawing's frame, hidden while nothing moves
+    def names(self) -> list[tuple]:
+        ends = self._ends
+        shown = ends is not None
+        return [(ends[k] if shown else np.zeros(3), text if shown else "", colour)
+                for k, (text, colour) in enumerate(((NAMES[0], LINEAR_COLOR), (NAMES[1], ANGULAR_COLOR)))]
 
     def render_panel(self, snapshot: Snapshot) -> None:
         qdot = self.joint_rates()
@@ -168,5 +162,5 @@ class VelocityView(View):
 
     def close(self) -> None:
         """The session has gone: so do its arrows, even from a scene everyone shares."""
-        for node in (self.linear, self.angular, *self.labels):
+        for node in (self.linear, self.angular):
             node.remove()
