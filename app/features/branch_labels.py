@@ -199,15 +199,19 @@ class BranchLabels:
         self._leaders: list[bytes] = [b""] * count
         self._positions = b""
         self._lock = threading.Lock()
+        self._removed = False
 
     def carriers(self, keys: list[str]) -> dict[str, viser.LabelHandle]:
         """The label that shows each point's text, by the points' ``keys`` (one label may show several)."""
         return {keys[k]: label for (members, _, _), label in zip(self.placed, self.labels) for k in members}
 
     def remove(self) -> None:
-        """Take its labels and leader lines out of the scene (a scene shared with others outlives it)."""
-        for node in (*self.labels, *self.leaders):
-            node.remove()
+        """Take its labels and leader lines out of the scene (a scene shared with others outlives it); a placing
+        under way finishes first, and none comes after."""
+        with self._lock:
+            self._removed = True
+            for node in (*self.labels, *self.leaders):
+                node.remove()
 
     def show(self, anchors: np.ndarray, texts: list[str]) -> None:
         """Label the points ``anchors`` (n, 3) with ``texts`` ("" for none)."""
@@ -219,7 +223,7 @@ class BranchLabels:
         """Place the labels again (the camera moved, or lecture mode changed their size)."""
         with self._lock:
             anchors, texts = self._wanted
-            if not any(texts) and not self.placed:
+            if self._removed or (not any(texts) and not self.placed):
                 return  # nothing to show, and nothing shown
             scale = self.labels[0].font_screen_scale if self.labels else NUMBER_SCALE  # grown in lecture mode
             R, t = self.world[:3, :3], self.world[:3, 3]

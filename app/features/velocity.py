@@ -81,8 +81,9 @@ class VelocityView(View):
     """The "Velocities" folder and the two arrows at the tool: for the sliders' joint rates, or a playing path's.
 
     ``root``: where its nodes hang; ``tool(snapshot)``: the (4, 4) pose the arrows start at
-    (the arm's tool by default). The arrows' names are the session's to place (:meth:`names`). The kinds of joints and their
-    speed limits (``arm.specs``, where the maker publishes them) come from ``session.arm``.
+    (the arm's tool by default). The arrows' names are the session's to place (:meth:`names`). The
+    kinds of joints and their speed limits (``arm.specs``, where the maker publishes them) come
+    from ``session.arm``.
     """
 
     def __init__(self, scene: viser.SceneApi, gui: viser.GuiApi, session: Session, root: str = "/velocity",
