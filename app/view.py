@@ -64,7 +64,7 @@ class View:
         return []
 
     def obstacles(self) -> list:
-        """The 3D labels it draws outside the drawing's placed pools (an arrow's name, say), as label nodes or
+        """The 3D labels it draws where they stay (a map's largest ‖τ‖, say), as label nodes or
         ``branch_labels.obstacle`` tuples in the drawing's frame: the placed labels keep clear of them."""
         return []
 

@@ -272,7 +272,7 @@ def in_world(pools: tuple[BranchLabels, ...]) -> list[tuple]:
 
 def chain(pools: tuple[BranchLabels, ...], outside: Callable[[], list] = lambda: []) -> tuple[BranchLabels, ...]:
     """``pools`` placed in order, each keeping clear of ``outside()`` (labels drawn by something else: the
-    velocity arrows' names, the force's) and of every label of the pools before it."""
+    session's names at the tool, a map's largest ‖τ‖) and of every label of the pools before it."""
     for k, pool in enumerate(pools):
         pool.fixed = lambda earlier=pools[:k]: [*outside(), *(label for other in earlier for label in other.labels)]
         pool.outside = outside
