@@ -148,8 +148,8 @@ class ArmSession:
         self.views = (drawn, *self.panel_views)
         #: what the views name at moving points (``View.names``: the arrows' tips), placed apart before the
         #: drawing's own labels, which keep clear of them
-        named = [name for view in self.panel_views for name in view.names()]
-        self.names = BranchLabels(scene, f"{nodes}/view_names", len(named), scale=NAME_SCALE, colours=[c for *_, c in named],
+        colours = [colour for _, _, colour in self._named()]
+        self.names = BranchLabels(scene, f"{nodes}/view_names", len(colours), scale=NAME_SCALE, colours=colours,
                                   merge_px=0.0)  # names of different things at one spot: each its own, not "a · b"
         self.names.view, self.names.world, self.names.fixed = (lambda: drawn.label_sets[0].view()), drawn.world, self._fixed_labels
         chain(drawn.label_sets, outside=self._names_beside)
@@ -297,9 +297,13 @@ class ArmSession:
         """What the drawing's placed labels keep clear of: the views' names (:attr:`names`) and the fixed labels."""
         return [] if self.closed else [*self.names.labels, *self._fixed_labels()]
 
+    def _named(self) -> list[tuple]:
+        return [name for view in self.panel_views for name in view.names()]
+
     def _show_names(self) -> None:
-        named = [name for view in self.panel_views for name in view.names()]
-        self.names.show(np.array([point for point, _, _ in named], dtype=float).reshape(-1, 3), [text for _, text, _ in named])
+        named = self._named()
+        points = [np.zeros(3) if point is None else point for point, _, _ in named]
+        self.names.show(np.array(points, dtype=float).reshape(-1, 3), ["" if point is None else text for point, text, _ in named])
 
     def _screen_view(self) -> ScreenView:
         """This browser's camera, to place the branch numbers for (the default one until it reports)."""

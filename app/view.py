@@ -59,7 +59,7 @@ class View:
 
     def names(self) -> list[tuple]:
         """What it names in 3D at points that move with the arm (an arrow's tip): ``(point (3,) in the drawing's
-        frame, text, leader colour)`` per name it can show, the same number every time, ``text`` "" while hidden.
+        frame, or None while hidden; text; leader colour)`` per name it can show, the same number every time.
         The session places them apart, before the drawing's own labels."""
         return []
 

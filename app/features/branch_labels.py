@@ -256,12 +256,12 @@ class BranchLabels:
                     leader.visible = moved
 
 
-def obstacle(label) -> tuple | None:
-    """(position (3,), text, scale, anchor) of a label node (None while hidden); a tuple stays as it is
-    (a label hung under a node of its own, placed by its owner in the pool's frame)."""
-    if isinstance(label, tuple):
+def obstacle(label, under=(0.0, 0.0, 0.0)) -> tuple | None:
+    """(position (3,), text, scale, anchor) of a label node (None while hidden), ``under`` (3,) where the node
+    it hangs under is; a tuple (or None) stays as it is."""
+    if label is None or isinstance(label, tuple):
         return label
-    return (label.position, label.text, label.font_screen_scale, label.anchor) if label.visible else None
+    return (np.add(under, label.position), label.text, label.font_screen_scale, label.anchor) if label.visible else None
 
 
 def in_world(pools: tuple[BranchLabels, ...]) -> list[tuple]:

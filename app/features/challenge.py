@@ -13,12 +13,12 @@ import viser
 
 from ur10core import Arm
 from ur10core.challenges import QUANTITIES, Challenge, Verdict, number_names
-from ur10core.orientation import quaternion
+from ur10core.orientation import in_frame, quaternion
 
 from ..feedback import Beside, chosen, within
 from ..serving.challenge_run import MAX_NICKNAME, ChallengeRun, Student, summary_markdown
 from ..style import SAFE_GREEN, hex_color, label_scale
-from .branch_labels import BranchLabels, ScreenView
+from .branch_labels import BranchLabels, ScreenView, obstacle
 from .course_arms.editor import CONVENTIONS, STARTING_TABLE
 from .lecture import add_label
 
@@ -183,11 +183,10 @@ class GoalMarker:
                                      axes_length=0.15, axes_radius=0.01, origin_radius=0.02)
         self.label = add_label(scene, f"{GOAL_ROOT}/name", "challenge target", 1.4, lecture, anchor="bottom-left")
 
-    def name(self, frame: np.ndarray) -> tuple:
-        """Its label as the placed labels keep clear of it: (position (3,) in ``frame``, text, scale, anchor), where
-        ``frame`` (4, 4) is where their nodes hang in the world (the label itself hangs under the target's frame)."""
-        position = (self.pose[:3, 3] - frame[:3, 3]) @ frame[:3, :3]
-        return (position, self.label.text, self.label.font_screen_scale, self.label.anchor)
+    def name(self, frame: np.ndarray) -> tuple | None:
+        """Its label as the placed labels keep clear of it (``branch_labels.obstacle``), in ``frame`` (4, 4): where
+        their nodes hang in the world (the label itself hangs under the target's frame)."""
+        return obstacle(self.label, under=in_frame(frame, self.pose[:3, 3]))
 
     def remove(self) -> None:
         self.frame.remove()

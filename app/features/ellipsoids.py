@@ -134,8 +134,7 @@ class EllipsoidsView(View):
                 node.visible = shown
 
     def names(self) -> list[tuple]:
-        return [(np.zeros(3), "", colour) if point is None else (point, text, colour)
-                for point, text, colour in zip(self._name_points, ("velocity", "force"), (VELOCITY_COLOR, FORCE_COLOR))]
+        return list(zip(self._name_points, ("velocity", "force"), (VELOCITY_COLOR, FORCE_COLOR)))
 
     def render_panel(self, snapshot: Snapshot) -> None:
         self.lengths.visible = bool(self.enabled.value)

@@ -212,9 +212,9 @@ class MotionLessons(View):
                 for name, path in both.items():
                     self.charts[name].data = rate_chart_data(path, self._limits, self._kinds)
                     self.charts[name].visible = True
-            camera, world = session.camera, session.drawing.world
+            camera = session.camera
             if camera is not None:  # the whole way in view, both ways
-                camera.show_also("path", np.vstack([path.tool for path in both.values()]) @ world[:3, :3].T + world[:3, 3])
+                camera.show_also("path", np.vstack([path.tool for path in both.values()]), session.drawing.world)
             outside = paths.out_of_range(arm, both[kind])
             if outside:  # said before the arm moves, not when it stops halfway
                 raise ValueError(f"the {kind} cannot be played: {outside}. Its summary and chart are in Motion.")

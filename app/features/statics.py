@@ -26,6 +26,7 @@ from ..state import Snapshot
 from ..style import DANGER_RED, SAFE_GREEN, blend, hex_color, number
 from ..view import Session, View
 from ..viser_internals.fast_updates import set_positions, stop_echo
+from .branch_labels import obstacle
 from .workspace import POINT_SIZE, colormap
 
 DRAGGED = "drag the handle"
@@ -224,14 +225,14 @@ class StaticsView(View):
 
     def names(self) -> list[tuple]:
         name = self._name
-        return [(np.zeros(3), "", FORCE_COLOR) if name is None else (*name, FORCE_COLOR)]
+        return [(None, "F", FORCE_COLOR) if name is None else (*name, FORCE_COLOR)]
 
     def obstacles(self) -> list[tuple]:
         """The torque map's largest ‖τ‖ at its red ball, for the placed labels to keep clear of."""
         if self._worst is None:
             return []
         marker, name = self._worst
-        return [(np.add(marker.position, name.position), name.text, name.font_screen_scale, name.anchor)]
+        return [obstacle(name, under=marker.position)]
 
     def render_panel(self, snapshot: Snapshot) -> None:
         self.bars.visible = bool(self.enabled.value)

@@ -149,10 +149,8 @@ class VelocityView(View):
                 node.visible = moving
 
     def names(self) -> list[tuple]:
-        ends = self._ends
-        shown = ends is not None
-        return [(ends[k] if shown else np.zeros(3), text if shown else "", colour)
-                for k, (text, colour) in enumerate(((NAMES[0], LINEAR_COLOR), (NAMES[1], ANGULAR_COLOR)))]
+        ends = self._ends or (None, None)
+        return list(zip(ends, NAMES, (LINEAR_COLOR, ANGULAR_COLOR)))
 
     def render_panel(self, snapshot: Snapshot) -> None:
         qdot = self.joint_rates()

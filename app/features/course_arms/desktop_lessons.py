@@ -17,6 +17,7 @@ from ...state import Snapshot
 from ...style import DANGER_RED, SLOT_COLORS, hex_color, number
 from ...view import Session, View
 from ..animation import Player
+from ..branch_labels import obstacle
 from ..workspace import colormap
 
 #: The course's path: one period of its sin t, played in real time.
@@ -167,8 +168,7 @@ class StaticsExercise(View):
         shown = self._map
         if not shown:
             return []
-        marker, label = shown[1], shown[2]
-        return [(np.add(marker.position, label.position), label.text, label.font_screen_scale, label.anchor)]
+        return [obstacle(shown[2], under=shown[1].position)]  # the label, under the marker
 
     def _clear(self) -> None:
         for node in self._map[:2]:
