@@ -44,7 +44,7 @@ class Snapshot:
     slot: int  #: the branch the arm is on, −1 if none reaches (or not searched)
     reason: str  #: why the target is out of reach ("" if it is reached)
     #: what made this change: "joints", "target" (dragged, still held), "dropped" (the drag's end), "typed",
-    #: "branch", "singularity", "reset", "motion" (a played path)
+    #: "branch", "singularity", "reset", "motion" (a played path: the typing box is left to the student)
     cause: str
     arm: Arm
     ghost_frames: np.ndarray  #: (k, L, 4, 4) frames of each branch (identity where it does not reach)

@@ -466,6 +466,32 @@ def test_what_a_student_types_in_the_all_six_box_outlives_a_late_redraw(app):
     asyncio.run(scenario())
 
 
+def test_what_a_student_types_while_a_path_plays_is_not_written_over(app):
+    """Each frame of a playing path wrote the arm's joints into the *All 6* box: a student typing the
+    next pose while the last one played saw their text replaced between two keystrokes."""
+    from viser import GuiEvent
+
+    async def scenario():
+        client = await ViserClient(url(app)).connect()
+        session = session_of(app, client)
+        panel, handle = session.joints, app.server.get_clients()[int(client.gizmo_owner)]
+        panel.render_panel(session.state.set_joints(np.radians([0, 60, 60, 30, 60, 0]), cause="motion"))
+        typed = "10, 20, 30"  # half typed
+        panel.typed._impl.value = typed
+        for callback in panel.typed._impl.update_cb:
+            callback(GuiEvent(handle, handle.client_id, panel.typed))
+        for k in range(1, 4):  # the next frames of the path
+            panel.render_panel(session.state.set_joints(np.radians([k, 60, 60, 30, 60, 0]), cause="motion"))
+            assert panel.typed.value == typed
+        panel.render_panel(session.state.set_joints(np.radians([5, 60, 60, 30, 60, 0]), cause="joints"))
+        assert panel.typed.value == "5, 60, 60, 30, 60, 0"  # a move of the student's own: the box shows the arm again
+        panel.render_panel(session.state.set_joints(np.radians([6, 60, 60, 30, 60, 0]), cause="motion"))
+        assert panel.typed.value == "6, 60, 60, 30, 60, 0"  # and follows a path while nothing is typed
+        await client.close()
+
+    asyncio.run(scenario())
+
+
 def test_a_browser_gone_before_its_turn_to_be_built_costs_nothing(app, monkeypatch):
     """A lecture hall joining at once is built one session at a time (``ur10teach.serving.workers.JOINS``):
     a browser that left while it waited for its turn is not built at all."""

@@ -101,6 +101,7 @@ class JointPanel(View):
         self._shown_q = q
         self._typed_text = display_text(arm, q)  # the box as we last wrote it or the student last sent it
         self._typed_over = -1  # the order of the newest change the student's typing was made after
+        self._student_text = False  # the box holds what the student typed: a playing path does not write over it
         self.pose_names = (*(name.capitalize() for name in arm.specs.poses), "Random")
         folder = gui.add_folder("Joints")
         self.folders = (folder,)
@@ -172,6 +173,7 @@ class JointPanel(View):
             with self._typing_lock:
                 self._typed_text, self._typed_over = self.typed.value, self._session.state.last.order
                 self._shown_q = None
+                self._student_text = True
 
     def _typed_values(self, _: viser.GuiEvent) -> None:
         arm = self._arm
@@ -191,9 +193,10 @@ class JointPanel(View):
                 slider.value = value
                 self._received[index] = value
         with self._typing_lock:  # a panel drawn late, or before the typing's callback has run, leaves the typing alone
-            typed_since = self.typed.value != self._typed_text or snapshot.order <= self._typed_over
+            typed_since = (self.typed.value != self._typed_text or snapshot.order <= self._typed_over
+                           or (self._student_text and snapshot.cause == "motion"))
             if not typed_since and not np.array_equal(snapshot.q, self._shown_q):
-                self._shown_q = snapshot.q
+                self._shown_q, self._student_text = snapshot.q, False
                 self._typed_text = self.typed.value = display_text(self._arm, snapshot.q)
         with_controller = self.controller is not None and bool(self.controller.value)
         self.summary.content = joints_markdown(self._arm, snapshot.q, with_controller)

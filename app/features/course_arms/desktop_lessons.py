@@ -92,8 +92,8 @@ class CoursePathLesson(View):
 
     def start(self) -> None:
         session = self._session
-        self.player.play(lambda: self.path, "course path",
-                         show=lambda state, row: state.set_joints(row[:3], "course path", rates=row[3:]),
+        self.player.play(lambda: self.path, "motion",
+                         show=lambda state, row: state.set_joints(row[:3], "motion", rates=row[3:]),
                          done=lambda: session.apply(lambda state: state.set_joints(state.last.q)))
 
     def render_panel(self, snapshot: Snapshot) -> None:
