@@ -14,7 +14,7 @@ import viser
 
 from ur10core import Arm
 
-from .features.branch_labels import BranchLabels, ScreenView, chain, screen_view
+from .features.branch_labels import BranchLabels, ScreenView, chain, place_in_order, screen_view
 from .features.branch_search import BranchSearch
 from .features.camera import CameraControls
 from .features.course_arms.desktop_lessons import desktop_lessons
@@ -153,8 +153,9 @@ class ArmSession:
                                   merge_px=0.0)  # names of different things at one spot: each its own, not "a · b"
         self.names.view, self.names.world, self.names.fixed = (lambda: drawn.label_sets[0].view()), drawn.world, self._fixed_labels
         chain(drawn.label_sets, outside=self._names_beside)
+        self.names.placing = drawn.label_sets[0].placing  # placed first, in the same turn as the drawing's
         pools = (self.names, *drawn.label_sets)
-        placed = self.guard(lambda _: [labels.place() for labels in pools])
+        placed = self.guard(lambda _: place_in_order(pools))
         self._place_numbers = lambda: placed(None)  # on every camera move: the 3D labels placed for the new view
         if server is None:  # the 3D labels placed apart for this browser's camera, as it moves
             for labels in drawn.label_sets:
@@ -234,8 +235,10 @@ class ArmSession:
         with self.client.atomic():
             if self._label_scene is not None and self._lecture is not None:
                 size_labels(self._label_scene, self._lecture.on)
-            self._refusing(lambda _: self._show_names(), snapshot)  # before the drawing's labels, which keep clear of them
-            for view in self.views:  # the drawing's panel-paced parts too (the branch numbers, say)
+            with self.names.placing:  # the names before the drawing's labels, which keep clear of them; no camera move between
+                self._refusing(lambda _: self._show_names(), snapshot)
+                self._refusing(self.drawing.render_panel, snapshot)  # its panel-paced parts: the branch numbers, say
+            for view in self.panel_views:
                 self._refusing(view.render_panel, snapshot)
         LATENCY.record("panel", time.perf_counter() - start)
 

@@ -26,9 +26,6 @@ from ur10core.workspace import lowest_points
 
 from .style import number
 
-SINGULARITY_KINDS = ("shoulder", "elbow", "wrist")
-
-
 @dataclass(frozen=True)
 class Snapshot:
     """What one change left: the views draw from it (never from the live state).
@@ -277,13 +274,15 @@ class ArmState:
             return self._remember(q, self.last.target, solution, int(slot), "", "branch")
 
     def place_in_singularity(self, kind: str) -> Snapshot:
-        """Move the arm exactly onto the shoulder, elbow or wrist singularity, and onto no other.
+        """Move the arm exactly onto one singularity of its det J (``kind``: one of ``arm.factor_names``), and onto
+        no other where it can (:meth:`ur10core.Arm.singular_configuration`).
 
         Each one starts from the pose the arm had before the first of a row of these
         (pressing "wrist" after "elbow" must not leave the arm on both).
         """
-        if kind not in SINGULARITY_KINDS:
-            raise ValueError(f"kind must be one of {SINGULARITY_KINDS}, got {kind!r}")
+        kinds = self.arm.factor_names  # a typed table has none, and says so
+        if kind not in kinds:
+            raise ValueError(f"kind must be one of {kinds}, got {kind!r}")
         with self.lock:
             if self.last.cause != "singularity" or self._before_singularity is None:
                 self._before_singularity = self.last.q.copy()

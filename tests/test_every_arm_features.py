@@ -102,6 +102,45 @@ def test_the_ellipsoids_and_the_gauges_of_every_arm_are_its_own(app, label):
 
 
 @pytest.mark.parametrize("label", EVERY_ARM)
+def test_every_arm_is_put_on_each_of_its_singularities_by_its_buttons(app, label):
+    """Only the UR family had the buttons that put the arm on a singularity; every arm now has one per factor
+    of its det J. The pose reached is singular by differences of FK (the rows of J the arm controls lose
+    rank), and its gauge reads zero; the cylindrical arm's stroke keeps it off d3 = 0, and the browser says so.
+    With the overlay on, no two 3D labels overlap there: until 2026-12-03 the Stanford arm's eight branches as one
+    label ("arm: 1 = 2 = … = 8", on its stroke singularity) found no free spot and sat over "stroke · wrist"."""
+    async def scenario():
+        client = await ViserClient(url(app)).connect()
+        session = await pick(app, client, label)
+        arm = session.arm
+        assert session.singularities.demo.options == arm.factor_names
+        if session.singularities.enabled is not None:
+            await client.set_gui("Show singularity overlay", True)
+        rows = {"pose": slice(0, 6), "position and yaw": [0, 1, 2, 5]}.get(arm.task, slice(0, 3))
+        start_q = session.state.q
+        before = np.linalg.svd(jacobian_by_differences(arm, start_q)[rows], compute_uv=False)[-1]
+        for index, kind in enumerate(arm.factor_names):
+            await client.set_gui("Put the arm on the", kind)
+            if arm.name == "cylindrical":
+                await until(lambda: any("reach singularity" in body for _, body in client.received.notifications),
+                            what="the refusal")
+                assert np.array_equal(session.state.q, start_q)
+                continue
+            await until(lambda: session.state.last.cause == "singularity"
+                        and abs(session.state.last.factors[index]) < 1e-12, what=f"the arm on its {kind} singularity")
+            q = session.state.q
+            assert arm.within_limits(q)
+            after = np.linalg.svd(jacobian_by_differences(arm, q)[rows], compute_uv=False)[-1]
+            assert after < 1e-6 * before, (kind, after, before)
+            await until(lambda: f"<b>{kind}</b>" in session.singularities.gauges.content
+                        and "width:0.0%" in session.singularities.gauges.content, what="its gauge at zero")
+            placed, clashes = overlapping_labels(session)  # the panel drawn for this pose: the drawing's first
+            assert placed and not clashes, f"on the {kind} singularity, overlapping: {clashes}"
+        await client.close()
+
+    asyncio.run(scenario())
+
+
+@pytest.mark.parametrize("label", EVERY_ARM)
 def test_the_workspace_cloud_of_every_arm_is_its_own(app, label):
     """The cloud drawn is the arm's own sampled workspace, under the arm's own root."""
     async def scenario():
@@ -151,6 +190,27 @@ def test_the_branch_count_map_of_every_arm_is_its_ik_s(app, label):
     asyncio.run(scenario())
 
 
+def overlapping_labels(session) -> tuple[list[str], list[tuple[str, str]]]:
+    """Every placed 3D label of ``session`` (the names at the tool, then the drawing's pools), placed again in order
+    as a camera move places them, and the pairs whose boxes overlap on the screen they are placed for."""
+    from ur10teach.features.branch_labels import boxes, overlapping, place_in_order
+
+    world = session.drawing.world
+    pools = (session.names, *session.drawing.label_sets)
+    placed, view = [], None
+    with session.names.placing:  # not placed again by the panel's refresher while they are read
+        while view != pools[0].view():  # for one camera: a framing may still be arriving from the browser
+            view = pools[0].view()
+            place_in_order(pools)
+        for pool in pools:
+            scale = pool.labels[0].font_screen_scale if pool.labels else 1.0
+            for _, text, position in pool.placed:  # in the arm's base frame (the desktop arm's y is up)
+                seen = np.asarray(position, dtype=float) @ world[:3, :3].T + world[:3, 3]
+                placed.append((text, boxes(view.to_screen(seen[None])[0], [text], scale)[0]))
+    clashes = [(a, b) for k, (a, box_a) in enumerate(placed) for b, box_b in placed[k + 1:] if overlapping(box_a, box_b, gap=0.0)]
+    return [text for text, _ in placed], clashes
+
+
 @pytest.mark.parametrize("label", EVERY_ARM)
 @pytest.mark.parametrize("rate", [0.1, 40.0])
 def test_no_two_3d_labels_overlap_with_velocities_forces_and_ellipsoids_shown(app, label, rate):
@@ -160,12 +220,12 @@ def test_no_two_3d_labels_overlap_with_velocities_forces_and_ellipsoids_shown(ap
     cylindrical arm, "F = 50 N" over "x4" on the Stanford arm, "force" over "x5" on it, "force" over "v velocity"
     on the KR210, four names in one spot on the desktop arm, and for a slow joint (short arrows) "v velocity"
     over "ω turning rate" on every arm."""
-    from ur10teach.features.branch_labels import JOIN, boxes, overlapping
+    from ur10teach.features.branch_labels import JOIN
 
     async def scenario():
         client = await ViserClient(url(app)).connect()
         session = await pick(app, client, label)
-        arm, world = session.arm, session.drawing.world
+        arm = session.arm
         for joint in (0, 1):
             await client.set_gui(rate_label(arm, joint), rate if arm.joint_types[joint] == "R" else 2.5 * rate)
         await client.set_gui("Show the torques", True)
@@ -176,18 +236,8 @@ def test_no_two_3d_labels_overlap_with_velocities_forces_and_ellipsoids_shown(ap
             return {name for _, text, _ in session.names.placed for name in text.split(JOIN)}
 
         await until(lambda: wanted <= named(), what="the names at the tool placed")
-        pools = (session.names, *session.drawing.label_sets)
-        for pool in pools:  # as a camera move places them
-            pool.place()
-        view = pools[0].view()  # the camera they are placed for
-        placed = []
-        for pool in pools:
-            scale = pool.labels[0].font_screen_scale
-            for _, text, position in pool.placed:  # in the arm's base frame (the desktop arm's y is up)
-                seen = np.asarray(position, dtype=float) @ world[:3, :3].T + world[:3, 3]
-                placed.append((text, boxes(view.to_screen(seen[None])[0], [text], scale)[0]))
+        placed, clashes = overlapping_labels(session)
         assert len(placed) > len(wanted), "no labels to check"
-        clashes = [(a, b) for k, (a, box_a) in enumerate(placed) for b, box_b in placed[k + 1:] if overlapping(box_a, box_b, gap=0.0)]
         assert not clashes, f"overlapping: {clashes}"
         await client.close()
 

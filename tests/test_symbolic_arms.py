@@ -70,3 +70,47 @@ def test_a_stale_cache_is_refused(tmp_path):
     stale.write_text('{"fingerprint": "0", "arms": {}}')
     with pytest.raises(RuntimeError, match="stale"):
         symbolic_arms._cache.__wrapped__(stale)
+
+
+#: Every arm but the UR family's places itself on a singularity by search (``Arm.singular_configuration``).
+SEARCHED = (*PRESETS, "three_dof")
+
+
+@pytest.mark.parametrize("name", SEARCHED)
+def test_every_arm_is_put_on_each_of_its_singularities_within_its_limits(name):
+    """The pose found is singular by the DH Jacobian's own smallest singular value (not the factors it was
+    searched with), inside the limits, with one or two joints changed; the cylindrical arm's stroke keeps
+    it off its reach singularity, and it says so."""
+    arm = Arm.preset(name)
+    starts = arm.sample_joints(20, seed=11)
+    for kind in arm.factor_names:
+        if name == "cylindrical":
+            with pytest.raises(ValueError, match="reach singularity"):
+                arm.singular_configuration(kind, starts[0])
+            continue
+        found = arm.singular_configuration(kind, starts)
+        assert found.shape == starts.shape
+        assert arm.within_limits(found).all()
+        assert (arm.smallest_singular_value(found) < 1e-12).all(), kind
+        assert np.median(arm.smallest_singular_value(starts)) > 1e-2
+        changed = (np.abs(found - starts) > 1e-12).sum(axis=-1)
+        assert set(changed.tolist()) <= {1, 2}, kind
+    with pytest.raises(ValueError, match="no 'knee' singularity"):
+        arm.singular_configuration("knee", starts[0])
+
+
+@pytest.mark.parametrize("name, kind, start, expected", [
+    ("stanford", "wrist", [30, 60, 0.3, 20, 40, 10], [30, 60, 0.3, 20, 0, 10]),  # θ5 = 0
+    ("stanford", "stroke", [30, 60, 0.3, 20, 40, 10], [30, 60, 0.0, 20, 40, 10]),  # d3 = 0: a double zero, d3²
+    ("scara", "elbow", [30, 120, 0.1, 20], [30, 0, 0.1, 20]),  # θ2 = 180° is past its 157.5° stop: 0°, the zero in range
+    ("scara", "elbow", [30, -50, 0.1, 20], [30, 0, 0.1, 20]),
+    ("planar_elbow", "elbow", [30, 150], [30, 180]),  # folded, nearer than stretched
+    ("kr210", "elbow", [0, 15, -30, 20, 40, 10], [0, 15, -92.0618, 20, 40, 10]),  # 1.5 c3 = 0.054 s3
+])
+def test_the_searched_singularity_is_the_nearest_by_one_joint(name, kind, start, expected):
+    """Closed forms (docs/kinematics.md §7.6): the one joint its factor names, to the nearest zero in range."""
+    arm = Arm.preset(name)
+    to_joint = lambda values: np.where(arm.revolute, np.radians(values), values)  # noqa: E731
+    found = arm.singular_configuration(kind, to_joint(start))
+    shown = np.where(arm.revolute, np.degrees(found), found)
+    np.testing.assert_allclose(shown, expected, atol=1e-4)

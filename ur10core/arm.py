@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import dataclasses
 import functools
+import itertools
 import math
 
 import numpy as np
@@ -352,6 +353,39 @@ class Arm(JacobianUses, HasSpecs):
             raise ValueError(f"{self.name!r} has no derived factors (a custom table)")
         return tuple(name for name, _, _ in words)
 
+    def singular_configuration(self, kind: str, q) -> np.ndarray:
+        """Joints ``q`` (..., n) changed as little as needed to sit exactly on the singularity where the
+        factor ``kind`` of det J is zero, and on no other, (..., n) (docs/kinematics.md §5.2).
+
+        The UR family's are closed forms (:meth:`ur10core.solvers.ur.URFamily.singular_configuration`).
+        Every other arm with factors turns (or slides) the *one* joint that reaches a zero of that
+        factor with the least motion, as a share of the joint's range, within its limits: the zeros
+        are bracketed on a grid along each joint and refined to machine precision. Where no one joint
+        can, two of the joints the factor depends on move together, to the nearest zero on a grid over
+        the pair (the desktop arm's tool onto its base axis from its home pose). A pose on
+        which another factor is also (near) zero is not taken. ``ValueError`` naming the factor when
+        the arm has no such factor, or when no pose within the limits is found (the cylindrical arm's
+        stroke keeps d3 ≥ 100 mm, off its reach singularity d3 = 0).
+
+        >>> arm = Arm.preset("kr210")
+        >>> q = arm.singular_configuration("wrist", np.radians([10, 20, -30, 40, 50, 60]))
+        >>> np.degrees(q).round(9).tolist()   # θ5 turned to 0: axes 4 and 6 in line
+        [10.0, 20.0, -30.0, 40.0, 0.0, 60.0]
+        """
+        own = getattr(self.solver, "singular_configuration", None)
+        if own is not None:
+            return own(kind, q)
+        names = self.factor_names
+        if kind not in names:
+            raise ValueError(f"{self.name!r} has no {kind!r} singularity: its factors of det J are {', '.join(names)}")
+        q = self.joints(q)
+        flat = q.reshape(-1, self.n_joints)
+        found = np.stack([_onto_zero(self, names.index(kind), row) for row in flat])
+        if np.isnan(found).any():
+            raise ValueError(f"within its joint limits, no pose near this one puts the {self.name} arm on its {kind} "
+                             f"singularity: det J's {kind} factor stays clear of zero")
+        return found.reshape(q.shape)
+
     def wrist_centre(self, q) -> np.ndarray:
         """The point nearest the last three joint axes at joints ``q`` (..., n), shape (..., 3).
 
@@ -450,6 +484,144 @@ class Arm(JacobianUses, HasSpecs):
         if return_joints:
             return points, manipulability, q
         return points, manipulability
+
+
+#: Points along each joint's range where :func:`_onto_zero` looks for a factor's sign change or dip.
+_ZERO_GRID = 721
+#: Another factor at most this share of its scale: the pose is on that singularity too.
+_ALSO_SINGULAR = 0.02
+
+
+def _onto_zero(arm: Arm, k: int, q: np.ndarray) -> np.ndarray:
+    """(n,) ``q`` with the one joint changed that puts factor ``k`` of det J at zero with the least
+    motion (a share of that joint's range), else two joints, other factors clear of zero; failing
+    that, onto the nearest zero whatever the others (from where only θ3 moves the KR210's elbow factor,
+    its zero may lie on the shoulder singularity too); NaN where there is none.
+
+    Along each joint the factor is evaluated on a grid over the joint's limits; a sign change is
+    bisected and a dip of ``|factor|`` (a double zero, the Stanford arm's d3²) golden-sectioned.
+    """
+    for clear in (_clear_of_zero(arm, k, q), np.zeros(len(arm.factor_names) - 1)):
+        found = _moved_onto_zero(arm, k, q, clear)
+        if not np.isnan(found).any():
+            break
+    return found
+
+
+def _moved_onto_zero(arm: Arm, k: int, q: np.ndarray, clear: np.ndarray) -> np.ndarray:
+    """:func:`_onto_zero` with the other factors kept at least ``clear`` of zero (shares of their scales)."""
+    scales = factor_scales(arm)
+    n = arm.n_joints
+    low, high = arm.limits[:, 0], arm.limits[:, 1]
+
+    def along(joint: int, values: np.ndarray) -> np.ndarray:
+        poses = np.repeat(q[None], len(values), axis=0)
+        poses[:, joint] = values
+        return arm.singularity_factors(poses)
+
+    best, best_move = np.full(n, np.nan), np.inf
+    depends = np.zeros(n, bool)
+    for joint in range(n):
+        grid = np.linspace(low[joint], high[joint], _ZERO_GRID)
+        f = along(joint, grid)[:, k]
+        step = grid[1] - grid[0]
+        crossings = np.flatnonzero(np.signbit(f[:-1]) != np.signbit(f[1:]))
+        depends[joint] = np.ptp(f) > 1e-12 * scales[k]
+        if not depends[joint]:
+            continue
+        size = np.abs(f)
+        dips = np.flatnonzero((size < np.r_[np.inf, size[:-1]]) & (size <= np.r_[size[1:], np.inf])
+                              & (size <= _ALSO_SINGULAR * scales[k]))  # a double zero lies in a shallow dip
+        candidates = [_bisect(lambda x: along(joint, np.array([x]))[0, k], grid[i], grid[i + 1]) for i in crossings]
+        candidates += [_golden(lambda x: abs(along(joint, np.array([x]))[0, k]), max(grid[i] - step, low[joint]),
+                               min(grid[i] + step, high[joint])) for i in dips]
+        if not candidates:
+            continue
+        values = np.array(candidates)
+        factors = along(joint, values)
+        levels = np.abs(factors) / scales
+        good = (np.abs(factors[:, k]) <= 1e-10 * scales[k]) & (np.delete(levels, k, axis=1) >= clear).all(axis=1)
+        moves = np.abs(values - q[joint]) / max(high[joint] - low[joint], 1e-12)
+        moves[~good] = np.inf
+        pick = int(np.argmin(moves))
+        if moves[pick] < best_move:
+            best_move, best = moves[pick], q.copy()
+            best[joint] = values[pick]
+    if np.isnan(best).any():  # no one joint reaches it (the desktop arm's reach from its home): move them together
+        best = _two_onto_zero(arm, k, q, depends, clear)
+    return best
+
+
+def _clear_of_zero(arm: Arm, k: int, q: np.ndarray) -> np.ndarray:
+    """(k − 1,) how far from zero the other factors must stay, as shares of their scales: :data:`_ALSO_SINGULAR`,
+    or half as far as at ``q`` where ``q`` is already that near (a pose near two singularities keeps its second)."""
+    levels = np.delete(np.abs(arm.singularity_factors(q)) / factor_scales(arm), k)
+    return np.minimum(_ALSO_SINGULAR, 0.5 * levels)
+
+
+def _two_onto_zero(arm: Arm, k: int, q: np.ndarray, depends: np.ndarray, clear: np.ndarray) -> np.ndarray:
+    """(n,) ``q`` with two of the joints factor ``k`` ``depends`` on changed, onto one of its zeros with the
+    other factors ``clear`` of zero: the zero nearest ``q`` (in shares of the joints' ranges) found on a
+    grid over the pair's limits, refined along the second joint. NaN if none."""
+    scales = factor_scales(arm)
+    low, high = arm.limits[:, 0], arm.limits[:, 1]
+    span = np.maximum(high - low, 1e-12)
+    best, best_move = np.full(len(q), np.nan), np.inf
+    for i, j in itertools.permutations(np.flatnonzero(depends), 2):
+        rows, columns = np.linspace(low[i], high[i], 121), np.linspace(low[j], high[j], 241)
+        poses = np.broadcast_to(q, (len(rows), len(columns), len(q))).copy()
+        poses[..., i], poses[..., j] = rows[:, None], columns[None]
+        f = arm.singularity_factors(poses)[..., k]
+        r, c = np.nonzero(np.signbit(f[:, :-1]) != np.signbit(f[:, 1:]))
+        moves = np.hypot((rows[r] - q[i]) / span[i], (columns[c] - q[j]) / span[j])
+        for cell in np.argsort(moves)[:16]:  # the nearest crossings, until one is clear of the other factors
+            pose = q.copy()
+            pose[i] = rows[r[cell]]
+
+            def along(x: float, pose=pose) -> float:
+                pose[j] = x
+                return float(arm.singularity_factors(pose)[k])
+
+            pose[j] = _bisect(along, columns[c[cell]], columns[c[cell] + 1])
+            levels = np.abs(arm.singularity_factors(pose)) / scales
+            move = float(np.hypot((pose[i] - q[i]) / span[i], (pose[j] - q[j]) / span[j]))
+            if levels[k] * scales[k] <= 1e-10 * scales[k] and (np.delete(levels, k) >= clear).all():
+                if move < best_move:
+                    best, best_move = pose, move
+                break
+    return best
+
+
+def _bisect(f, a: float, b: float) -> float:
+    """A zero of ``f`` between ``a`` and ``b``, where ``f`` changes sign, to the last bit."""
+    fa = f(a)
+    for _ in range(200):
+        middle = 0.5 * (a + b)
+        if middle in (a, b):
+            break
+        fm = f(middle)
+        if fm == 0.0:
+            return middle
+        if np.signbit(fm) == np.signbit(fa):
+            a, fa = middle, fm
+        else:
+            b = middle
+    return a if abs(fa) <= abs(f(b)) else b
+
+
+def _golden(f, a: float, b: float) -> float:
+    """The least of ``f`` ≥ 0 over [a, b] (one dip), golden-section searched, the ends included."""
+    ratio = (math.sqrt(5.0) - 1.0) / 2.0
+    lo, hi = a, b
+    for _ in range(120):
+        c, d = hi - ratio * (hi - lo), lo + ratio * (hi - lo)
+        if f(c) <= f(d):
+            hi = d
+        else:
+            lo = c
+        if hi - lo <= 1e-15 * max(1.0, abs(lo)):
+            break
+    return min((a, b, 0.5 * (lo + hi)), key=f)
 
 
 @functools.lru_cache(maxsize=64)

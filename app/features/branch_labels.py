@@ -36,9 +36,10 @@ LEADER_GREY = (90, 94, 102)
 #: share an elbow. Farther apart, a label that overlaps another moves to a free spot (OFFSETS) instead.
 MERGE_PX = 14.0
 #: Where a label that would overlap another is tried instead, in label heights from its point, nearest first:
-#: up, then the other seven directions, out to four heights (a leader line joins it to its point).
-OFFSETS = [(0.0, 0.0)] + [(radius * dx, radius * dy) for radius in (1, 2, 3, 4)
-                          for dx, dy in ((0, 1), (1, 1), (-1, 1), (1, 0), (-1, 0), (0, -1), (1, -1), (-1, -1))]
+#: up, then the other seven directions, out to eight heights (a leader line joins it to its point). A long
+#: label among many (the Stanford arm's eight branches as one, on a singularity) needs the far rings.
+OFFSETS = np.array([(0.0, 0.0)] + [(radius * dx, radius * dy) for radius in range(1, 9)
+                                   for dx, dy in ((0, 1), (1, 1), (-1, 1), (1, 0), (-1, 0), (0, -1), (1, -1), (-1, -1))])
 
 
 @dataclass(frozen=True)
@@ -148,18 +149,27 @@ def place(anchors: np.ndarray, texts: list[str], view: ScreenView, scale: float,
         pixel, depth = view.to_screen(point[None])
         own = boxes(pixel, [text], scale)[0]
         step = own[3] - own[1] + GAP_PX
-        taken = obstacles + [entry[4] for entry in placed]
-        for dx, dy in OFFSETS:  # the nearest free spot: in place, else a box height away, then two, ...
-            moved = own + step * np.array([dx, dy, dx, dy])
-            inside = moved[0] >= canvas[0] and moved[1] >= canvas[1] and moved[2] <= canvas[2] and moved[3] <= canvas[3]
-            if inside and not any(overlapping(moved, other) for other in taken):
-                break
-        else:
-            dx = dy = 0.0  # nowhere free: where it belongs
+        dx, dy = OFFSETS[_free_spot(own + step * OFFSETS[:, [0, 1, 0, 1]], obstacles + [entry[4] for entry in placed], canvas)]
         world_per_px = 2 * math.tan(view.fov / 2) * depth[0] / view.height
         position = point + (right * dx + up * dy) * step * world_per_px
         placed.append((tuple(sorted(group)), text, position, point, own + step * np.array([dx, dy, dx, dy])))
     return [entry[:4] for entry in sorted(placed, key=lambda entry: entry[0])]
+
+
+def _free_spot(spots: np.ndarray, taken: list[np.ndarray], canvas: np.ndarray) -> int:
+    """The first of ``spots`` (k, 4) boxes on the ``canvas`` that overlaps none of ``taken``; if there is none,
+    the one on the canvas overlapping them least (else the first)."""
+    inside = (spots[:, :2] >= canvas[:2]).all(axis=1) & (spots[:, 2:] <= canvas[2:]).all(axis=1)
+    if not taken:
+        return int(np.argmax(inside))
+    others = np.array(taken)[None]
+    wide = np.minimum(spots[:, None, 2], others[..., 2] + GAP_PX) - np.maximum(spots[:, None, 0], others[..., 0] - GAP_PX)
+    high = np.minimum(spots[:, None, 3], others[..., 3] + GAP_PX) - np.maximum(spots[:, None, 1], others[..., 1] - GAP_PX)
+    covered = (np.clip(wide, 0.0, None) * np.clip(high, 0.0, None)).sum(axis=1)
+    free = inside & (covered == 0.0)
+    if free.any():
+        return int(np.argmax(free))
+    return int(np.argmin(np.where(inside, covered, np.inf))) if inside.any() else 0
 
 
 def screen_view(client) -> ScreenView:
@@ -200,6 +210,9 @@ class BranchLabels:
         self._positions = b""
         self._lock = threading.Lock()
         self._removed = False
+        #: held while pools are placed in order (:func:`chain` shares the first one's): a camera move's placing
+        #: cannot come between two pools of a panel's, leaving a later pool placed clear of where an earlier was
+        self.placing = threading.RLock()
 
     def carriers(self, keys: list[str]) -> dict[str, viser.LabelHandle]:
         """The label that shows each point's text, by the points' ``keys`` (one label may show several)."""
@@ -221,7 +234,7 @@ class BranchLabels:
 
     def place(self) -> None:
         """Place the labels again (the camera moved, or lecture mode changed their size)."""
-        with self._lock:
+        with self.placing, self._lock:
             anchors, texts = self._wanted
             if self._removed or (not any(texts) and not self.placed):
                 return  # nothing to show, and nothing shown
@@ -272,8 +285,17 @@ def in_world(pools: tuple[BranchLabels, ...]) -> list[tuple]:
 
 def chain(pools: tuple[BranchLabels, ...], outside: Callable[[], list] = lambda: []) -> tuple[BranchLabels, ...]:
     """``pools`` placed in order, each keeping clear of ``outside()`` (labels drawn by something else: the
-    session's names at the tool, a map's largest ‖τ‖) and of every label of the pools before it."""
+    session's names at the tool, a map's largest ‖τ‖) and of every label of the pools before it. They share
+    the first one's :attr:`BranchLabels.placing` lock, which whoever places them in turn holds."""
     for k, pool in enumerate(pools):
         pool.fixed = lambda earlier=pools[:k]: [*outside(), *(label for other in earlier for label in other.labels)]
         pool.outside = outside
+        pool.placing = pools[0].placing
     return pools
+
+
+def place_in_order(pools: tuple[BranchLabels, ...]) -> None:
+    """Place ``pools`` again, one after the other, none of them placed by anyone else meanwhile."""
+    with pools[-1].placing:
+        for pool in pools:
+            pool.place()

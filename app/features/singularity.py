@@ -20,7 +20,7 @@ from ur10core.orientation import in_frame
 from ur10core.serial import PRESETS
 
 from ..feedback import chosen
-from ..state import SINGULARITY_KINDS, Snapshot
+from ..state import Snapshot
 from ..style import (
     DANGER_RED,
     ELBOW_COLOR,
@@ -335,11 +335,8 @@ class Singularities(View):
                         "y": viser.uplot.Scale(range=(0.0, 1.0))},
                 axes=(viser.uplot.Axis(label="seconds (0 = now)"), viser.uplot.Axis(label="share of its scale")),
                 title="Factors over the last 10 s", aspect=2.0) if names else None
-            placeable = hasattr(arm.solver, "singular_configuration")
-            self.demo = gui.add_button_group("Put the arm on the", SINGULARITY_KINDS) if placeable else None
-            if not placeable and self._words:
-                gui.add_markdown("Drag the target or the sliders until a gauge turns red: this arm has no button that "
-                                 "places it on a singularity.")
+            self.demo = (gui.add_button_group("Put the arm on the", names, hint="Moves as few joints as it can, as "
+                                              "little as it can, onto where that factor is zero") if names else None)
         if self.enabled is not None:
             self.enabled.on_update(session.guard(self._toggled))
         if self.demo is not None:
