@@ -190,9 +190,10 @@ def test_the_branch_count_map_of_every_arm_is_its_ik_s(app, label):
     asyncio.run(scenario())
 
 
-def overlapping_labels(session) -> tuple[list[str], list[tuple[str, str]]]:
+def overlapping_labels(session, also=()) -> tuple[list[str], list[tuple[str, str]]]:
     """Every placed 3D label of ``session`` (the names at the tool, then the drawing's pools), placed again in order
-    as a camera move places them, and the pairs whose boxes overlap on the screen they are placed for."""
+    as a camera move places them, and the pairs whose boxes overlap on the screen they are placed for; ``also``:
+    labels that stay where they are, as (position (3,) in the scene, text, scale, anchor), checked against them."""
     from ur10teach.features.branch_labels import boxes, overlapping, place_in_order
 
     world = session.drawing.world
@@ -207,7 +208,10 @@ def overlapping_labels(session) -> tuple[list[str], list[tuple[str, str]]]:
             for _, text, position in pool.placed:  # in the arm's base frame (the desktop arm's y is up)
                 seen = np.asarray(position, dtype=float) @ world[:3, :3].T + world[:3, 3]
                 placed.append((text, boxes(view.to_screen(seen[None])[0], [text], scale)[0]))
-    clashes = [(a, b) for k, (a, box_a) in enumerate(placed) for b, box_b in placed[k + 1:] if overlapping(box_a, box_b, gap=0.0)]
+    stay = [(text, boxes(view.to_screen(np.array([position], dtype=float))[0], [text], scale, anchor)[0])
+            for position, text, scale, anchor in also]
+    clashes = [(a, b) for k, (a, box_a) in enumerate(placed) for b, box_b in [*placed[k + 1:], *stay]
+               if overlapping(box_a, box_b, gap=0.0)]
     return [text for text, _ in placed], clashes
 
 
@@ -239,6 +243,32 @@ def test_no_two_3d_labels_overlap_with_velocities_forces_and_ellipsoids_shown(ap
         placed, clashes = overlapping_labels(session)
         assert len(placed) > len(wanted), "no labels to check"
         assert not clashes, f"overlapping: {clashes}"
+        await client.close()
+
+    asyncio.run(scenario())
+
+
+@pytest.mark.parametrize("label, plane", [("SCARA (RRP + roll)", "horizontal, at the target's height"),
+                                          ("UR10 (the app's arm)", "vertical, through the base axis and the target")])
+def test_the_placed_labels_keep_clear_of_the_branch_count_maps_legend(app, label, plane):
+    """The map's legend hangs in the map's own turned frame, beside the map; until 2026-12-03 the placed labels
+    did not keep clear of it ("x4" under it on the SCARA's horizontal map)."""
+    from ur10core.orientation import transform_from_quaternion
+    from ur10teach.viser_internals import labels_of
+
+    async def scenario():
+        client = await ViserClient(url(app)).connect()
+        session = await pick(app, client, label)
+        view = session.reach_map
+        await client.set_gui("Plane", plane)
+        await client.set_gui("Show branch-count map", True)
+        await until(lambda: view.image is not None and view.shown_key is not None, what="the map")
+        image = view.image
+        legend = next(node for node in labels_of(session.client.scene) if node.name == f"{image.name}/legend")
+        pose = transform_from_quaternion(np.asarray(image.wxyz), np.asarray(image.position))
+        where = pose[:3, :3] @ np.asarray(legend.position) + pose[:3, 3]  # in the scene, from the image's own pose
+        placed, clashes = overlapping_labels(session, also=[(where, legend.text, legend.font_screen_scale, legend.anchor)])
+        assert placed and not clashes, f"overlapping: {clashes}"
         await client.close()
 
     asyncio.run(scenario())

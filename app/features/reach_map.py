@@ -106,6 +106,8 @@ class ReachMapView(View):
         self.resolution = RESOLUTION if isinstance(arm.solver, URFamily) else COURSE_RESOLUTION  # the kernels' speed
         self.slots = 0 if arm.numerical else int(arm.ik(arm.fk(arm.specs.home)).q.shape[-2])
         self.image: viser.ImageHandle | None = None
+        #: (the legend's label, where it is in the drawing's frame) while a map is shown
+        self._legend: tuple[viser.LabelHandle, np.ndarray] | None = None
         self.shown_key: tuple | None = None  #: (target bytes, plane) of the map on screen
         self.computed = 0  #: maps computed so far (tests and benchmarks read it)
         self._lock = threading.Lock()
@@ -128,6 +130,12 @@ class ReachMapView(View):
             self.legend = gui.add_html(legend_html(max(self.slots, 1)), visible=False)
         self.enabled.on_update(session.guard(self._toggled))
         self.plane.on_update(session.guard(self._toggled))
+
+    def obstacles(self) -> list:
+        if self._legend is None:
+            return []
+        label, where = self._legend  # hung in the map's turned frame, beside the map
+        return [(where, label.text, label.font_screen_scale, label.anchor)]
 
     def _toggled(self, _: viser.GuiEvent) -> None:
         chosen(self.plane, "plane")
@@ -169,6 +177,7 @@ class ReachMapView(View):
                          cancelled=lambda: self._closed or self._session.closed)
         self.computed += 1
         image, (wxyz, position) = map_image(reach.counts, self.slots), map_pose(reach, self._world)
+        top = reach.size / 2 - 0.06  # the legend, along the map's v, just inside its edge
         with self._lock:
             if self._closed or not self.enabled.value:
                 return
@@ -177,13 +186,18 @@ class ReachMapView(View):
                     self._root, image, reach.size, reach.size, format="png", wxyz=wxyz, position=position,
                     cast_shadow=False, receive_shadow=False)
                 # in the scene beside the map, so that viewers of a shared scene can read it too
-                self._scene.add_label(f"{self._root}/legend", legend_text(self.slots), position=(0.0, reach.size / 2 - 0.06, 0.0),
-                                      font_screen_scale=1.3, anchor="top-center")
+                label = self._scene.add_label(f"{self._root}/legend", legend_text(self.slots), position=(0.0, top, 0.0),
+                                              font_screen_scale=1.3, anchor="top-center")
             else:
+                label = self._legend[0]
                 self.image.image = image
                 if not np.allclose(self.image.position, position) or not np.allclose(self.image.wxyz, wxyz):
                     self.image.wxyz, self.image.position = wxyz, position
+            before, self._legend = self._legend, (label, reach.centre + top * reach.v)
+            moved = before is None or not np.allclose(before[1], self._legend[1])
             self.shown_key = key
+        if moved:
+            self._session.refresher.request(self._session)  # the placed labels keep clear of the legend where it now is
         if self._face_next:
             self._face_next = False
             self._face(reach)
@@ -207,8 +221,8 @@ class ReachMapView(View):
     def clear(self) -> None:
         with self._lock:
             if self.image is not None:
-                self.image.remove()
-                self.image = None
+                self.image.remove()  # and the legend under it
+                self.image = self._legend = None
             self.shown_key = None
         camera = getattr(self._session, "camera", None)
         if camera is not None:
