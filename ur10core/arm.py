@@ -382,8 +382,14 @@ class Arm(JacobianUses, HasSpecs):
         flat = q.reshape(-1, self.n_joints)
         found = np.stack([_onto_zero(self, names.index(kind), row) for row in flat])
         if np.isnan(found).any():
+            if self.name in COURSE_ARMS:
+                from . import symbolic_arms
+
+                meaning = symbolic_arms.load(self.name).factors[names.index(kind)].meaning
+            else:
+                meaning = self.solver.factor_words[names.index(kind)][2]
             raise ValueError(f"within its joint limits, no pose near this one puts the {self.name} arm on its {kind} "
-                             f"singularity: det J's {kind} factor stays clear of zero")
+                             f"singularity ({meaning}): det J's {kind} factor stays clear of zero")
         return found.reshape(q.shape)
 
     def wrist_centre(self, q) -> np.ndarray:
