@@ -437,3 +437,35 @@ def test_the_placed_labels_keep_clear_of_the_challenge_targets_name(classroom):
             await client.close()
 
     asyncio.run(scenario())
+
+
+def test_a_singularity_challenge_is_not_answered_by_the_singularity_buttons(classroom):
+    """*Put the arm on the: elbow* answered *Elbow singularity* in one click. While a singularity challenge runs,
+    a student's buttons are taken away and the folder says why (a forged click is refused, the arm stays); they are
+    back at its end."""
+    room = classroom.classroom
+
+    async def scenario():
+        teacher = await ViserClient(url(classroom)).connect()
+        await become_presenter(teacher, classroom)
+        student = await ViserClient(url(classroom), local_address="127.0.0.8").connect()
+        await teacher.set_gui("Challenge", "Elbow singularity")
+        await teacher.set_gui("Start the challenge", True)
+        await until(lambda: any(m.card is not None for m in room.members.values()), what="the card")
+        member = next(m for m in room.members.values() if m.card is not None)
+        buttons = member.session.singularities.demo
+        await until(lambda: student.gui.get("Put the arm on the", {}).get("visible") is False
+                    and student.shown("are off while the class challenge asks you to find one"), what="the buttons off")
+        q = member.session.state.q
+        await student.send(messages.GuiUpdateMessage(buttons._impl.uuid, {"value": "elbow"}))
+        await until(lambda: sum("are off while the class challenge" in body for _, body in student.received.notifications) == 1,
+                    what="the refusal")
+        assert np.array_equal(member.session.state.q, q) and member.session.state.last.cause != "singularity"
+        await teacher.set_gui("End and show the solution", True)
+        await until(lambda: student.gui.get("Put the arm on the", {}).get("visible") is True, what="the buttons back")
+        await student.set_gui("Put the arm on the", "wrist")
+        await until(lambda: member.session.state.last.cause == "singularity", what="the wrist button working again")
+        for client in (teacher, student):
+            await client.close()
+
+    asyncio.run(scenario())

@@ -246,12 +246,17 @@ class ViserClient:
             self.markdown[message["uuid"]] = message.get("props", {}).get("_markdown", "")
         elif kind == "GuiUpdateMessage" and "_markdown" in message.get("updates", {}) and message["uuid"] in self.markdown:
             self.markdown[message["uuid"]] = message["updates"]["_markdown"]
+        if kind == "GuiUpdateMessage" and "visible" in message.get("updates", {}):
+            for entry in self.gui.values():
+                if entry["uuid"] == message["uuid"]:
+                    entry["visible"] = message["updates"]["visible"]
         if kind == "GuiMarkdownMessage" and "p (mm)" in message.get("props", {}).get("_markdown", ""):
             self._read_flange(now, message["props"]["_markdown"])
         elif kind.startswith("Gui") and kind.endswith("Message") and "props" in message:
             label = message["props"].get("label")
             if label:
-                self.gui[label] = {"uuid": message["uuid"], "type": kind, "value": message.get("value")}
+                self.gui[label] = {"uuid": message["uuid"], "type": kind, "value": message.get("value"),
+                                   "visible": message["props"].get("visible", True)}
         elif kind == "GuiUpdateMessage" and "value" in message.get("updates", {}):
             for entry in self.gui.values():
                 if entry["uuid"] == message["uuid"]:

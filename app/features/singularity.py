@@ -337,6 +337,7 @@ class Singularities(View):
                 title="Factors over the last 10 s", aspect=2.0) if names else None
             self.demo = (gui.add_button_group("Put the arm on the", names, hint="Moves as few joints as it can, as "
                                               "little as it can, onto where that factor is zero") if names else None)
+            self.held_back = gui.add_markdown("", visible=False)  #: why the buttons are off (a class challenge)
         if self.enabled is not None:
             self.enabled.on_update(session.guard(self._toggled))
         if self.demo is not None:
@@ -347,7 +348,16 @@ class Singularities(View):
             self._overlay.set_enabled(bool(self.enabled.value))
         self._session.redraw()
 
+    def hold_back(self, reason: str | None) -> None:
+        """Take the buttons away, saying ``reason`` in their place (a class challenge asks the student to find a
+        singularity; viser's button groups cannot be disabled), or give them back (None)."""
+        self.held_back.content, self.held_back.visible = reason or "", reason is not None
+        if self.demo is not None:
+            self.demo.visible = reason is None
+
     def _demo(self, _: viser.GuiEvent) -> None:
+        if self.held_back.visible:  # a click a browser cannot send while they are off
+            raise ValueError(self.held_back.content)
         kind = chosen(self.demo, "singularity")
         self._session.apply(lambda state: state.place_in_singularity(kind))
 

@@ -30,6 +30,10 @@ if TYPE_CHECKING:
 
 log = logging.getLogger(__name__)
 
+#: What a student's Singularities folder says while a singularity challenge runs, in place of its buttons.
+HELD_BACK = ("The buttons that put the arm on a singularity are off while the class challenge asks you to find one: "
+             "they are back when the challenge ends.")
+
 
 class ClassChallenges:
     """The challenges the presenter can set (``offered``), the one started last (``run``), and the board.
@@ -119,6 +123,8 @@ class ClassChallenges:
         run, student, session = self.run, member.student, member.session
         if run is None or run.ended or student is None or session is None or session.arm != run.arm:
             return
+        if run.challenge.kind == "singularity":  # one click would answer it
+            session.singularities.hold_back(HELD_BACK)
         kept = student.kept
         if "q" in kept:
             session.apply(lambda state: state.set_joints(kept["q"], cause="typed"))
@@ -195,6 +201,8 @@ class ClassChallenges:
             # a velocity's joint rates depend on where each arm is; any other answer is everyone's
             q, words = solution(challenge, arm, session.state.q) if own and challenge.kind == "velocity" else common
             try:
+                if own:
+                    session.singularities.hold_back(None)
                 if own and q is not None:
                     session.apply(lambda state: state.set_joints(q, cause="typed"))
                 if other.card is not None:
