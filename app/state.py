@@ -26,6 +26,7 @@ from ur10core.workspace import lowest_points
 
 from .style import number
 
+
 @dataclass(frozen=True)
 class Snapshot:
     """What one change left: the views draw from it (never from the live state).
