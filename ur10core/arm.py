@@ -355,17 +355,17 @@ class Arm(JacobianUses, HasSpecs):
 
     def singular_configuration(self, kind: str, q) -> np.ndarray:
         """Joints ``q`` (..., n) changed as little as needed to sit exactly on the singularity where the
-        factor ``kind`` of det J is zero, and on no other, (..., n) (docs/kinematics.md §5.2).
+        factor ``kind`` of det J is zero, (..., n) (docs/kinematics.md §5.2).
 
         The UR family's are closed forms (:meth:`ur10core.solvers.ur.URFamily.singular_configuration`).
         Every other arm with factors turns (or slides) the *one* joint that reaches a zero of that
         factor with the least motion, as a share of the joint's range, within its limits: the zeros
         are bracketed on a grid along each joint and refined to machine precision. Where no one joint
         can, two of the joints the factor depends on move together, to the nearest zero on a grid over
-        the pair (the desktop arm's tool onto its base axis from its home pose). A pose on
-        which another factor is also (near) zero is not taken. ``ValueError`` naming the factor when
-        the arm has no such factor, or when no pose within the limits is found (the cylindrical arm's
-        stroke keeps d3 ≥ 100 mm, off its reach singularity d3 = 0).
+        the pair (the desktop arm's tool onto its base axis from its home pose). A pose on which
+        another factor is also near zero is passed over while another will do. ``ValueError`` naming
+        the factor when the arm has no such factor, or when no pose within the limits is found (the
+        cylindrical arm's stroke keeps d3 ≥ 100 mm, off its reach singularity d3 = 0).
 
         >>> arm = Arm.preset("kr210")
         >>> q = arm.singular_configuration("wrist", np.radians([10, 20, -30, 40, 50, 60]))
@@ -559,7 +559,7 @@ def _moved_onto_zero(arm: Arm, k: int, q: np.ndarray, clear: np.ndarray) -> np.n
 
 
 def _clear_of_zero(arm: Arm, k: int, q: np.ndarray) -> np.ndarray:
-    """(k − 1,) how far from zero the other factors must stay, as shares of their scales: :data:`_ALSO_SINGULAR`,
+    """(m − 1,) how far from zero the other factors must stay, as shares of their scales: :data:`_ALSO_SINGULAR`,
     or half as far as at ``q`` where ``q`` is already that near (a pose near two singularities keeps its second)."""
     levels = np.delete(np.abs(arm.singularity_factors(q)) / factor_scales(arm), k)
     return np.minimum(_ALSO_SINGULAR, 0.5 * levels)
@@ -591,7 +591,7 @@ def _two_onto_zero(arm: Arm, k: int, q: np.ndarray, depends: np.ndarray, clear: 
             pose[j] = _bisect(along, columns[c[cell]], columns[c[cell] + 1])
             levels = np.abs(arm.singularity_factors(pose)) / scales
             move = float(np.hypot((pose[i] - q[i]) / span[i], (pose[j] - q[j]) / span[j]))
-            if levels[k] * scales[k] <= 1e-10 * scales[k] and (np.delete(levels, k) >= clear).all():
+            if levels[k] <= 1e-10 and (np.delete(levels, k) >= clear).all():
                 if move < best_move:
                     best, best_move = pose, move
                 break
