@@ -453,3 +453,26 @@ def test_the_open_file_limit_is_raised_where_the_system_allows():
         assert raise_open_file_limit() == expected == resource.getrlimit(resource.RLIMIT_NOFILE)[0]
     finally:
         resource.setrlimit(resource.RLIMIT_NOFILE, (soft, hard))
+
+
+def test_a_value_of_another_type_than_its_widgets_is_dropped_at_the_gate(app):
+    """A string sent to a slider passed the gate, and viser's own conversion, ``float("x")``, raised inside its
+    handler (an error logged for every such message). It is dropped at the gate; a text box still takes text,
+    and the sender is still served."""
+
+    async def scenario():
+        client = await ViserClient(url(app)).connect()
+        session = session_of(app, client)
+        slider, box = session.joints.sliders[0], session.joints.typed
+        before = slider.value
+        await client.send(messages.GuiUpdateMessage(client.gui[slider.label]["uuid"], {"value": "x"}))
+        await until(lambda: app.gate.dropped["GuiUpdateMessage of another type than its widget's"] == 1,
+                    what="the string to be dropped")
+        await client.set_gui(box.label, "x")  # a text box's value is text
+        await until(lambda: box.value == "x", what="the text")
+        assert slider.value == before and app.gate.dropped["GuiUpdateMessage of another type than its widget's"] == 1
+        await click_is_applied(client, session)
+        assert client._websocket.close_code is None
+        await client.close()
+
+    asyncio.run(scenario())

@@ -101,3 +101,22 @@ def test_a_queues_event_is_what_shared_frames_makes_safe():
         loop.close()
     assert "self.message_event.set()" in inspect.getsource(AsyncMessageBuffer.push)
     assert "await self.message_event.wait()" in inspect.getsource(AsyncMessageBuffer._window_loop)
+
+
+def test_a_value_fits_its_widget_as_viser_converts_it():
+    """``value_fits`` makes the conversion viser's GUI handler makes before anything checks a value."""
+    from viser import _gui_api
+
+    assert "type(handle_state.value)(prop_value)" in inspect.getsource(_gui_api.GuiApi._handle_gui_updates)
+    server = viser.ViserServer(port=0, verbose=False)
+    try:
+        slider = server.gui.add_slider("s", min=0.0, max=1.0, step=0.1, initial_value=0.5)
+        text = server.gui.add_text("t", "a")
+        vector = server.gui.add_vector3("v", (0.0, 0.0, 0.0))
+        fits = functools.partial(viser_internals.value_fits, server)
+        assert fits(slider._impl.uuid, 1) and fits(slider._impl.uuid, "0.3") and not fits(slider._impl.uuid, "x")
+        assert not fits(slider._impl.uuid, [1.0])
+        assert fits(text._impl.uuid, "x") and fits(vector._impl.uuid, [1, 2, 3]) and not fits(vector._impl.uuid, ["a", 1, 2])
+        assert fits("no such widget", "x")  # viser ignores it
+    finally:
+        server.stop()

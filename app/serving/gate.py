@@ -16,7 +16,7 @@ import socket
 import threading
 import time
 import urllib.parse
-from typing import Any, Iterator
+from typing import Any, Callable, Iterator
 
 import msgspec
 import websockets.asyncio.server
@@ -95,9 +95,10 @@ class TokenBucket:
         return max(0.0, (1.0 - self.tokens) / self.rate)
 
 
-def classify(raw: bytes | str) -> tuple[tuple | None, str]:
+def classify(raw: bytes | str, value_fits=lambda uuid, value: True) -> tuple[tuple | None, str]:
     """``(key, kind)``: what the gate knows a browser's message by (None when the app does not take
-    it), and the kind it claims to be (for the log). The message is decoded once, here."""
+    it), and the kind it claims to be (for the log). The message is decoded once, here; a widget's
+    value must convert to its widget's type (``value_fits(uuid, value)``)."""
     if not isinstance(raw, bytes):
         return None, "text frame"
     try:
@@ -112,6 +113,8 @@ def classify(raw: bytes | str) -> tuple[tuple | None, str]:
         return None, kind
     if kind == "GuiUpdateMessage" and not _plain_value_update(message.get("updates")):
         return None, f"{kind} setting more than a value"
+    if kind == "GuiUpdateMessage" and not value_fits(message.get("uuid"), message["updates"]["value"]):
+        return None, f"{kind} of another type than its widget's"  # viser's conversion would raise in its handler
     try:
         msgspec.convert({k: v for k, v in message.items() if k != "type"}, _CLASSES[kind])
     except msgspec.ValidationError:  # viser would fail on it, closing the sender's connection (1011)
@@ -164,6 +167,8 @@ class Gate:
         self._tcp: collections.Counter = collections.Counter()  # address -> open TCP connections
         self._arrivals: dict[str, TokenBucket] = {}
         self._lock = threading.Lock()
+        #: ``(uuid, value)`` -> whether a widget's value converts to the widget's type (the server sets it)
+        self.value_fits: Callable[[Any, Any], bool] = lambda uuid, value: True
 
     # ------------------------------------------------------------------ connections
 
@@ -341,7 +346,7 @@ class GatedConnection:
                         self._gate.note_closed(_address(self._connection), "kept sending over its rate")
                         self._closing = asyncio.get_running_loop().create_task(self._connection.close(1008, "too many messages"))
                     continue
-                key, kind = classify(raw)
+                key, kind = classify(raw, self._gate.value_fits)
                 if key is None:
                     self._gate.note_dropped(kind)
                     continue

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import ctypes
+import functools
 import gc
 import logging
 import math
@@ -32,7 +33,7 @@ from ..features.workspace import CLOUDS
 from ..meshes import load_models
 from ..session import ArmSession
 from ..style import BRAND_BLUE
-from ..viser_internals import fast_updates, shared_frames
+from ..viser_internals import fast_updates, shared_frames, value_fits
 from .classroom import Classroom
 from .gate import Gate, TokenBucket, budget_of, gated_serve
 from .workers import APART, JOINS, Cancelled, DragQueue, PanelRefresher
@@ -207,6 +208,7 @@ class TeachingServer:
         fast_updates.share_type_hints()
         with gated_serve(self.gate):
             self.server = viser.ViserServer(host=host, port=port, label=label, verbose=False)
+        self.gate.value_fits = functools.partial(value_fits, self.server)
         self.server.gui.configure_theme(show_share_button=False, brand_color=BRAND_BLUE, control_width="large")
         self.server.initial_camera.position = CAMERA_POSITION
         self.server.initial_camera.look_at = CAMERA_LOOK_AT

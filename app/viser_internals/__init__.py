@@ -9,7 +9,9 @@
 * :func:`after_broadcast` — an action for one browser held until the shared scene's queued messages
   have left for it (viser sends the two queues on two tasks, in no set order);
 * :data:`messages` — viser's message classes, which the gate validates every incoming message against;
-* :func:`labels_of` — every 3D label of a scene (lecture mode sizes them all).
+* :func:`labels_of` — every 3D label of a scene (lecture mode sizes them all);
+* :func:`value_fits` — whether a browser's value converts to its widget's type as viser converts it
+  (the gate drops one that would raise inside viser's handler).
 
 ``tests/test_viser_internals.py`` checks that each of these is still where and what it was:
 a viser upgrade that moves one fails there, not in a classroom.
@@ -25,7 +27,7 @@ from viser import _messages as messages
 
 from .shared_frames import SEND_TIMEOUT
 
-__all__ = ["after_broadcast", "connection_of", "labels_of", "messages"]
+__all__ = ["after_broadcast", "connection_of", "labels_of", "messages", "value_fits"]
 
 log = logging.getLogger(__name__)
 
@@ -46,6 +48,26 @@ def labels_of(scene):  # noqa: ANN001, ANN201
     import viser
 
     return [handle for handle in list(scene._handle_from_node_name.values()) if isinstance(handle, viser.LabelHandle)]
+
+
+def value_fits(server, uuid: str, value) -> bool:  # noqa: ANN001
+    """Whether ``value`` converts to the type of the value of widget ``uuid`` of ``server`` (a ``viser.ViserServer``:
+    its own widgets and every browser's), as viser converts it before anything checks it: ``float("x")`` for a
+    slider would raise inside viser's handler. True for a widget it does not have (viser ignores those)."""
+    for gui in (server.gui, *(client.gui for client in server.get_clients().values())):
+        handle = gui._gui_input_handle_from_uuid.get(uuid)
+        if handle is None:
+            continue
+        current = handle._impl.value
+        try:
+            if isinstance(current, tuple):
+                tuple(type(current[0])(v) for v in value) if current else tuple(value)
+            else:
+                type(current)(value)
+        except (TypeError, ValueError, OverflowError):
+            return False
+        return True
+    return True
 
 
 def after_broadcast(client, action: Callable[[], None]) -> None:  # noqa: ANN001
