@@ -459,6 +459,11 @@ def test_a_value_of_another_type_than_its_widgets_is_dropped_at_the_gate(app):
     """A string sent to a slider passed the gate, and viser's own conversion, ``float("x")``, raised inside its
     handler (an error logged for every such message). It is dropped at the gate; a text box still takes text,
     and the sender is still served."""
+    from ur10teach.serving.gate import classify
+
+    # a uuid that is not a string is malformed before a widget is looked up by it (a list is no dict key)
+    odd = msgspec.msgpack.encode({"type": "GuiUpdateMessage", "uuid": [1], "updates": {"value": 1.0}})
+    assert classify(odd, value_fits=lambda uuid, value: {}.get(uuid) is None) == (None, "malformed GuiUpdateMessage")
 
     async def scenario():
         client = await ViserClient(url(app)).connect()

@@ -113,12 +113,12 @@ def classify(raw: bytes | str, value_fits=lambda uuid, value: True) -> tuple[tup
         return None, kind
     if kind == "GuiUpdateMessage" and not _plain_value_update(message.get("updates")):
         return None, f"{kind} setting more than a value"
-    if kind == "GuiUpdateMessage" and not value_fits(message.get("uuid"), message["updates"]["value"]):
-        return None, f"{kind} of another type than its widget's"  # viser's conversion would raise in its handler
     try:
         msgspec.convert({k: v for k, v in message.items() if k != "type"}, _CLASSES[kind])
     except msgspec.ValidationError:  # viser would fail on it, closing the sender's connection (1011)
         return None, f"malformed {kind}"
+    if kind == "GuiUpdateMessage" and not value_fits(message["uuid"], message["updates"]["value"]):
+        return None, f"{kind} of another type than its widget's"  # viser's conversion would raise in its handler
     key = tuple(message.get(field) for field in fields)
     if not all(value is None or isinstance(value, (str, int)) for value in key):
         return None, f"malformed {kind}"
