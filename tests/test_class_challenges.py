@@ -191,18 +191,25 @@ def test_thirty_students_every_kind_and_the_projector_counts_exactly(classroom):
     asyncio.run(scenario())
 
 
+async def a_student_in(classroom, title: str, address: str) -> tuple[ViserClient, ViserClient, object]:
+    """A teacher presenting, one student from ``address``, the challenge ``title`` started: (teacher, student, the
+    student's member) once the student has the task."""
+    room = classroom.classroom
+    teacher = await ViserClient(url(classroom)).connect()
+    await become_presenter(teacher, classroom)
+    student = await ViserClient(url(classroom), local_address=address).connect()
+    await teacher.set_gui("Challenge", title)
+    await teacher.set_gui("Start the challenge", True)
+    await until(lambda: any(m.card is not None for m in room.members.values()), what="the card")
+    return teacher, student, next(m for m in room.members.values() if m.card is not None)
+
+
 def test_a_client_cannot_claim_solved_and_checks_are_paced(classroom):
     room = classroom.classroom
     room.challenges.clock = lambda: 100.0  # time stands still: a second check is always within the second
 
     async def scenario():
-        teacher = await ViserClient(url(classroom)).connect()
-        await become_presenter(teacher, classroom)
-        student = await ViserClient(url(classroom), local_address="127.0.0.7").connect()
-        await teacher.set_gui("Challenge", "Where is the flange?")
-        await teacher.set_gui("Start the challenge", True)
-        await until(lambda: any(m.card is not None for m in room.members.values()), what="the card")
-        member = next(m for m in room.members.values() if m.card is not None)
+        teacher, student, member = await a_student_in(classroom, "Where is the flange?", "127.0.0.7")
         # whatever a client sends to any widget of its card, saying "solved", changes nothing on the server
         await until(lambda: student.shown("Where is the flange"), what="the task")
         for uuid in list(student.markdown):
@@ -443,16 +450,9 @@ def test_a_singularity_challenge_is_not_answered_by_the_singularity_buttons(clas
     """*Put the arm on the: elbow* answered *Elbow singularity* in one click. While a singularity challenge runs,
     a student's buttons are taken away and the folder says why (a forged click is refused, the arm stays); they are
     back at its end."""
-    room = classroom.classroom
 
     async def scenario():
-        teacher = await ViserClient(url(classroom)).connect()
-        await become_presenter(teacher, classroom)
-        student = await ViserClient(url(classroom), local_address="127.0.0.8").connect()
-        await teacher.set_gui("Challenge", "Elbow singularity")
-        await teacher.set_gui("Start the challenge", True)
-        await until(lambda: any(m.card is not None for m in room.members.values()), what="the card")
-        member = next(m for m in room.members.values() if m.card is not None)
+        teacher, student, member = await a_student_in(classroom, "Elbow singularity", "127.0.0.8")
         buttons = member.session.singularities.demo
         await until(lambda: student.gui.get("Put the arm on the", {}).get("visible") is False
                     and student.shown("are off while the class challenge asks you to find one"), what="the buttons off")
