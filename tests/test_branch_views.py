@@ -87,3 +87,19 @@ def test_the_floor_check_sees_the_bodies_not_just_the_joints(course, points):
     assert course.frames(q)[:, 2, 3].min() > -1e-9
     assert not ArmState(course, q).last.through_floor[0]  # the frame origins alone
     assert ArmState(course, q, body_points=points).last.through_floor[0]
+
+
+@pytest.mark.parametrize("legend", ["hull", "cloud", "map 1", "map 2", "map 4", "map 8"])
+def test_every_legend_drawn_in_3d_fits_a_projectors_canvas_in_lecture_mode(legend):
+    """The cloud's, the hull's and the branch-count map's legends were one line each, of 70 to 110 characters:
+    in lecture mode (an em of 24 px) 1,100 to 1,600 px wide, off the side of the smallest canvas a class looks
+    at. Each now comes in lines that fit it."""
+    from ur10teach.features import reach_map, workspace
+    from ur10teach.features.branch_labels import DEFAULT_VIEW, label_size
+    from ur10teach.style import label_scale
+
+    text = {"hull": workspace.HULL_LEGEND, "cloud": workspace.legend_text(0.123)}.get(legend)
+    if text is None:
+        text = reach_map.legend_text(int(legend.split()[1]))
+    width, _ = label_size(text, label_scale(1.3, lecture=True))  # both are drawn at 1.3
+    assert width <= 0.9 * DEFAULT_VIEW.width, (text, width)

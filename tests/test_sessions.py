@@ -492,6 +492,42 @@ def test_what_a_student_types_while_a_path_plays_is_not_written_over(app):
     asyncio.run(scenario())
 
 
+def test_a_legend_drawn_after_the_panels_last_redraw_is_sized_for_lecture_mode(app, monkeypatch):
+    """A 3D label is sized for lecture mode at a panel redraw. The cloud's legend, drawn after the last one (a
+    200 k cloud takes a while), stayed at its small size on the projector until the arm next changed."""
+    from ur10teach.features.workspace import WorkspaceView
+    from ur10teach.style import label_scale
+
+    begun, release = threading.Event(), threading.Event()
+    original = WorkspaceView._update
+
+    def held_update(self):
+        begun.set()
+        release.wait(HANG_TIMEOUT)
+        original(self)
+
+    monkeypatch.setattr(WorkspaceView, "_update", held_update)
+
+    async def scenario():
+        client = await ViserClient(url(app)).connect()
+        session = session_of(app, client)
+        await client.set_gui("Lecture mode", True)
+        await client.set_gui("Samples", "10 k")  # held too, and let go below
+        await client.set_gui("Show workspace cloud", True)
+        await until(begun.is_set, what="the cloud begun")
+        # every panel redraw asked for so far is done: none waits, and the one being drawn (on viser's loop) ends first
+        await until(lambda: id(session) not in app.refresher._waiting, what="no panel redraw waiting")
+        asyncio.run_coroutine_threadsafe(asyncio.sleep(0), app.server.get_event_loop()).result(HANG_TIMEOUT)
+        release.set()
+        await until(lambda: session.workspace.legend_label is not None and session.workspace.enabled.value
+                    and "manipulability" in session.workspace.legend_label.text, what="the cloud's legend")
+        await until(lambda: session.workspace.legend_label.font_screen_scale == label_scale(1.3, lecture=True),
+                    what="the legend at its lecture size")
+        await client.close()
+
+    asyncio.run(scenario())
+
+
 def test_a_browser_gone_before_its_turn_to_be_built_costs_nothing(app, monkeypatch):
     """A lecture hall joining at once is built one session at a time (``ur10teach.serving.workers.JOINS``):
     a browser that left while it waited for its turn is not built at all."""

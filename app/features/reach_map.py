@@ -72,9 +72,10 @@ COLOUR_NAMES = {REACH_COLORS[1][0]: "yellow", REACH_COLORS[2][0]: "green", REACH
 
 
 def legend_text(slots: int = 8) -> str:
-    """The map's label in 3D: "… yellow 2 · green 4 · teal 6 · purple 8" for the UR10."""
+    """The map's label in 3D: "… yellow 2 · green 4 · teal 6 · purple 8" for the UR10, in two lines that fit a
+    projector's canvas in lecture mode."""
     names = " · ".join(f"{COLOUR_NAMES[colour_of(count, slots)]} {count}" for count in legend_counts(slots))
-    return f"branches reaching each point, tool turned as now: {names}"
+    return f"branches reaching each point, tool turned as now:\n{names}"
 
 
 def legend_html(slots: int = 8) -> str:

@@ -272,6 +272,7 @@ class StaticsView(View):
                                  now=MAP_VIEW not in camera.extra)
             self.map_legend.content = (f"Colour: ‖Jᵀ F‖ for {np.linalg.norm(force):.0f} N, from 0 (purple) to "
                                        f"{top:.0f} {unit} (yellow), the largest of {len(norms):,} random joint vectors (red ball).")
+            session.refresher.request(session)  # its label sized for lecture mode, and kept clear of
 
     def _clear_map(self) -> None:
         if self._map is not None:

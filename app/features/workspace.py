@@ -167,8 +167,8 @@ def revolved_mesh(heights: np.ndarray, inner: np.ndarray, outer: np.ndarray,
     return vertices, np.vstack(faces).astype(np.uint32)
 
 
-HULL_LEGEND = ("the workspace's boundary: the flange reaches every point between the outer surface and the "
-               "hole about the base axis")
+HULL_LEGEND = ("the workspace's boundary:\nthe flange reaches every point between\n"
+               "the outer surface and the hole about the base axis")
 
 
 def manipulability_unit(arm: Arm) -> str:
@@ -177,8 +177,9 @@ def manipulability_unit(arm: Arm) -> str:
 
 
 def legend_text(top: float, unit: str = " m³") -> str:
-    """The legend beside the cloud in 3D, for everyone who sees the cloud (viewers included)."""
-    return f"colour = manipulability |det J|: dark violet 0 (singular) … yellow ≥ {top:.3f}{unit}"
+    """The legend beside the cloud in 3D, for everyone who sees the cloud (viewers included), in two lines that
+    fit a projector's canvas in lecture mode."""
+    return f"colour = manipulability |det J|:\ndark violet 0 (singular) … yellow ≥ {top:.3f}{unit}"
 
 
 def legend_html(top: float, unit: str = " m³") -> str:
@@ -189,6 +190,10 @@ def legend_html(top: float, unit: str = " m³") -> str:
         "<div style='display:flex;justify-content:space-between'><span>0 (singular)</span>"
         f"<span>≥ {top:.4f}{unit}</span></div></div>"
     )
+
+
+#: The room framed over the cloud's legend for its lines, as a share of the cloud's height.
+LEGEND_ROOM = 0.15
 
 
 def above(points: np.ndarray, up) -> np.ndarray:
@@ -311,6 +316,7 @@ class WorkspaceView(View):
             self.legend.content = HULL_LEGEND if section == HULL else legend_html(top, self._unit)
             self.legend.visible = True
             self._look_square_on(section, points)
+            self._session.refresher.request(self._session)  # the new legend sized for lecture mode, and kept clear of
         finally:
             if self._closed:  # it left while its cloud was made: it holds none
                 CLOUDS.release(self)
@@ -335,11 +341,14 @@ class WorkspaceView(View):
         return np.array([-math.sin(azimuth), math.cos(azimuth), 0.0])
 
     def _look_square_on(self, section: str, points: np.ndarray) -> None:
-        """The cloud is framed with the arm; a section is seen square-on (the camera turns to face its plane)."""
+        """The cloud is framed with the arm and its legend; a section is seen square-on (the camera turns to face its plane)."""
         camera = self._session.camera
         if camera is None:
             return
-        camera.show_also("cloud", points[:: max(1, len(points) // 2000)], self._session.drawing.world, now=False)
+        up = np.asarray(self._session.arm.up)
+        legend = above(points, up) + LEGEND_ROOM * float(np.ptp(points @ up)) * up  # its lines stand over its anchor
+        camera.show_also("cloud", np.vstack([points[:: max(1, len(points) // 2000)], legend]), self._session.drawing.world,
+                         now=False)
         if section == SECTIONS[0]:
             camera.frame()
             return

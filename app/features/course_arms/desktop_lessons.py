@@ -151,6 +151,7 @@ class StaticsExercise(View):
             label = self._scene.add_label(f"{self._root}/worst/label", f"largest ‖τ‖ = {top:.1f} N·m", font_screen_scale=1.4,
                                           anchor="bottom-center", position=(0.0, WORST_LABEL_RISE, 0.0))
             self._map = (cloud, marker, label)
+        session.refresher.request(session)  # its label sized for lecture mode, and kept clear of
         self.result.content = (
             f"Largest ‖τ‖ = **{norms[worst]:.2f} N·m** for {np.linalg.norm(force):.0f} N, at θ = ("
             + ", ".join(number(v, ".0f") for v in np.degrees(q[worst])) + f")° (red ball), of {len(q):,} poses "
