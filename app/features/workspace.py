@@ -295,6 +295,7 @@ class WorkspaceView(View):
                 vertices, faces = revolved_mesh(*revolved_boundary(points))
             else:
                 points, colors = self._section(section, points, colors, top)
+            legend_at = above(points, self._session.arm.up)
             with self._lock:
                 if self._closed:  # it left while its cloud was made
                     return
@@ -311,11 +312,11 @@ class WorkspaceView(View):
                 # above the cloud, in the same scene: it goes with the cloud and reaches every viewer
                 self.legend_label = self._scene.add_label(
                     f"{self._root}/workspace/legend", HULL_LEGEND if section == HULL else legend_text(top, self._unit),
-                    position=above(points, self._session.arm.up), font_screen_scale=1.3, anchor="bottom-center",
+                    position=legend_at, font_screen_scale=1.3, anchor="bottom-center",
                 )
             self.legend.content = HULL_LEGEND if section == HULL else legend_html(top, self._unit)
             self.legend.visible = True
-            self._look_square_on(section, points)
+            self._look_square_on(section, points, legend_at)
             self._session.refresher.request(self._session)  # the new legend sized for lecture mode, and kept clear of
         finally:
             if self._closed:  # it left while its cloud was made: it holds none
@@ -340,13 +341,13 @@ class WorkspaceView(View):
         azimuth = float(self._session.state.last.q[0])
         return np.array([-math.sin(azimuth), math.cos(azimuth), 0.0])
 
-    def _look_square_on(self, section: str, points: np.ndarray) -> None:
+    def _look_square_on(self, section: str, points: np.ndarray, legend_at: np.ndarray) -> None:
         """The cloud is framed with the arm and its legend; a section is seen square-on (the camera turns to face its plane)."""
         camera = self._session.camera
         if camera is None:
             return
         up = np.asarray(self._session.arm.up)
-        legend = above(points, up) + LEGEND_ROOM * float(np.ptp(points @ up)) * up  # its lines stand over its anchor
+        legend = legend_at + LEGEND_ROOM * float(np.ptp(points @ up)) * up  # its lines stand over its anchor
         camera.show_also("cloud", np.vstack([points[:: max(1, len(points) // 2000)], legend]), self._session.drawing.world,
                          now=False)
         if section == SECTIONS[0]:
