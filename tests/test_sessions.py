@@ -18,7 +18,7 @@ import pytest
 
 from ur10teach.features import joint_panel
 from ur10teach.serving import workers
-from ur10teach.state import joint_value_text
+from ur10teach.state import ArmState, joint_value_text
 from ur10teach.style import number, sentence
 
 from .server_support import become_presenter, drag_a_little, member_of, session_of, until, url
@@ -526,6 +526,41 @@ def test_a_legend_drawn_after_the_panels_last_redraw_is_sized_for_lecture_mode(a
         await client.close()
 
     asyncio.run(scenario())
+
+
+def test_a_flood_of_singularity_presses_costs_one_placing_under_way_and_one_waiting(app, monkeypatch):
+    """A press searched the arm's factors in viser's callback thread (up to 80 ms on the course's other arms), and
+    every press the gate let through (60 a second) was one more search. Presses now fold: while one is placed,
+    however many come make one more, of the newest button."""
+    placed: list[str] = []
+    held = threading.Event()
+    original = ArmState.place_in_singularity
+
+    def held_place(self, kind):
+        placed.append(kind)
+        if len(placed) == 1:  # the flood comes while the first is being placed
+            held.wait(HANG_TIMEOUT)
+        return original(self, kind)
+
+    monkeypatch.setattr(ArmState, "place_in_singularity", held_place)
+
+    async def scenario():
+        client = await ViserClient(url(app)).connect()
+        session = session_of(app, client)
+        await client.set_gui("Put the arm on the", "elbow")
+        await until(lambda: placed, what="the first press being placed")
+        for k in range(30):
+            await client.set_gui("Put the arm on the", ("shoulder", "wrist")[k % 2])
+        # one connection's messages are handled in order: once this one is, so are the presses (it moves no joint)
+        await client.set_gui("Show singularity overlay", True)
+        await until(lambda: session.singularities.enabled.value, what="every press to reach the server")
+        held.set()
+        await until(lambda: len(placed) == 2 and session.state.last.cause == "singularity"
+                    and abs(session.state.last.factors[2]) < 1e-12, what="the newest press placed")
+        await client.close()
+
+    asyncio.run(scenario())
+    assert placed == ["elbow", "wrist"]  # the held one, and one more for the 30 that came meanwhile: the newest
 
 
 def test_a_browser_gone_before_its_turn_to_be_built_costs_nothing(app, monkeypatch):

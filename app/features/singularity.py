@@ -20,6 +20,7 @@ from ur10core.orientation import in_frame
 from ur10core.serial import PRESETS
 
 from ..feedback import chosen
+from ..serving.workers import HEAVY, FoldedRuns
 from ..state import Snapshot
 from ..style import (
     DANGER_RED,
@@ -338,6 +339,8 @@ class Singularities(View):
             self.demo = (gui.add_button_group("Put the arm on the", names, hint="Moves as few joints as it can, as "
                                               "little as it can, onto where that factor is zero") if names else None)
             self.held_back = gui.add_markdown("", visible=False)  #: why the buttons are off (a class challenge)
+        self._pressed = ""  #: the newest button pressed
+        self._presses = FoldedRuns(self._place)
         if self.enabled is not None:
             self.enabled.on_update(session.guard(self._toggled))
         if self.demo is not None:
@@ -358,8 +361,15 @@ class Singularities(View):
     def _demo(self, _: viser.GuiEvent) -> None:
         if self.held_back.visible:  # a click a browser cannot send while they are off
             raise ValueError(self.held_back.content)
-        kind = chosen(self.demo, "singularity")
-        self._session.apply(lambda state: state.place_in_singularity(kind))
+        self._pressed = chosen(self.demo, "singularity")
+        self._presses.start("singularity", self._session.guard)
+
+    def _place(self) -> None:
+        """A press as a slow job: an arm without closed forms is searched (up to about 80 ms), so presses fold
+        into one under way and one waiting, each at most a share of the server's time (``HEAVY``)."""
+        session, kind = self._session, self._pressed
+        HEAVY.run(session.client, lambda: session.apply(lambda state: state.place_in_singularity(kind)),
+                  cancelled=lambda: session.closed)
 
     def render_panel(self, snapshot: Snapshot) -> None:
         self.gauges.content = factors_html(self._arm, snapshot.q)
