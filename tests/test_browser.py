@@ -12,6 +12,7 @@ from ur10dev.browser import (
     canvas_changed,
     canvas_pixels,
     choose,
+    click,
     dom_id,
     drawn_frames,
     foreign_requests,
@@ -105,8 +106,7 @@ def test_a_students_first_visit(open_page, light_app):
                                             atol=1e-5))(session.state.last), what="the ghosts drawn for the drag's last solution")
 
     # another branch from the list
-    page.get_by_role("button", name="3", exact=True).click()
-    wait_for(lambda: session.state.last.slot == 2, what="branch 3")
+    click(page, page.get_by_role("button", name="3", exact=True), lambda: session.state.last.slot == 2, "branch 3")
     np.testing.assert_allclose(session.arm.fk(session.state.last.q), session.state.last.target, atol=1e-9)
     wait_for(lambda: page.get_by_text("3: shoulder left, elbow up, wrist flipped").count() > 0, what="the status line")
 
@@ -127,9 +127,9 @@ def test_a_students_first_visit(open_page, light_app):
     wait_for(lambda: session.drawing.overlay.lines["shoulder"].visible, what="the overlay")
     wait_for(lambda: page.locator("math").count() > 0 and page.locator("math").first.is_visible(), what="det J as MathML")
     assert "234" in page.locator("math").first.text_content()
-    page.get_by_role("button", name="wrist", exact=True).click()
-    wait_for(lambda: "class='gauge-wrist' style='height:8px;width:0.0%" in session.singularities.gauges.content,
-             what="the wrist gauge to drop to zero")
+    click(page, page.get_by_role("button", name="wrist", exact=True),
+          lambda: "class='gauge-wrist' style='height:8px;width:0.0%" in session.singularities.gauges.content,
+          "the wrist gauge to drop to zero")
     assert abs(session.state.last.factors[2]) < 1e-12
     wait_for(lambda: page.get_by_text("s5 = +0.0000").count() > 0, what="the wrist factor readout")
     bar = page.locator(".gauge-wrist").first

@@ -8,7 +8,7 @@ import pytest
 
 from ur10teach.serving.classroom import EXPLORER, PRESENTER, VIEWER
 from ur10dev.browser import (
-    HANG_TIMEOUT_MS, ask_to_present, changed, choose, dom_id, settled_canvas, step_slider, teacher_and_student,
+    HANG_TIMEOUT_MS, ask_to_present, changed, choose, click, dom_id, settled_canvas, step_slider, teacher_and_student,
     where_changed,
 )
 from ur10dev.waiting import wait_for
@@ -41,16 +41,16 @@ def test_a_class_follows_the_presenter_and_a_student_explores(tmp_path):
             assert student.locator("[role=slider]").count() == 0  # watching: nothing to move
 
             # the student explores on their own copy, starting from the class's pose, and comes back
-            student.get_by_role("button", name="Explore on my own").click()
-            wait_for(lambda: student_member.role == EXPLORER and student_member.session is not None, what="exploring")
+            click(student, student.get_by_role("button", name="Explore on my own"),
+                  lambda: student_member.role == EXPLORER and student_member.session is not None, "exploring")
             own = student_member.session
             student.wait_for_selector(dom_id(own.joints.sliders[1]), timeout=HANG_TIMEOUT_MS)
             np.testing.assert_allclose(own.state.q, app.classroom.state.q)
             step_slider(student, own.joints.sliders[1], "ArrowLeft", 44.0)
             wait_for(lambda: abs(np.degrees(own.state.q[1]) - 44.0) < 1e-6, what="the student's own move")
             assert abs(np.degrees(app.classroom.state.q[1]) - 45.0) < 1e-6  # the class's arm did not move
-            student.get_by_role("button", name="Back to the presenter's arm").click()
-            wait_for(lambda: student_member.role == VIEWER and student_member.session is None, what="coming back")
+            click(student, student.get_by_role("button", name="Back to the presenter's arm"),
+                  lambda: student_member.role == VIEWER and student_member.session is None, "coming back")
             wait_for(lambda: student.locator("[role=slider]").count() == 0, what="the private panel to go")
 
             # the presenter shows the class the SCARA: the student's screen changes arm, with its live panel
@@ -63,9 +63,8 @@ def test_a_class_follows_the_presenter_and_a_student_explores(tmp_path):
             wait_for(lambda: changed(watching_ur10, settled_canvas(student)) > 0.02, what="the student's screen to change arm")
 
             # exploring the SCARA, the student keeps their own arm on screen when the class goes back to the UR10
-            student.get_by_role("button", name="Explore on my own").click()
-            wait_for(lambda: student_member.session is not None and student_member.session.built,
-                     what="the student's own SCARA")
+            click(student, student.get_by_role("button", name="Explore on my own"),
+                  lambda: student_member.session is not None and student_member.session.built, "the student's own SCARA")
             steady(student_member.session)  # its labels placed for the student's camera, which has come to rest
             exploring = settled_canvas(student)
             wait_for(app.classroom.can_switch, what="the class's arm to be ready for a change")

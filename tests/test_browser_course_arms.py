@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from ur10dev.browser import HANG_TIMEOUT_MS, canvas_changed, choose, dom_id, set_checkbox, settled_canvas, step_slider, unfold
+from ur10dev.browser import HANG_TIMEOUT_MS, canvas_changed, choose, click, dom_id, set_checkbox, settled_canvas, step_slider, unfold
 from ur10dev.waiting import wait_for
 
 pytestmark = pytest.mark.browser
@@ -66,31 +66,28 @@ def test_the_course_arms_in_the_picker(open_page, light_app):
     rows.fill(typed_rows)
     wait_for(lambda: editor.editor.rows.value == typed_rows, what="the server to hold the typed rows")
     wait_for(lambda: app.can_switch(client_id), what="the arm to be ready for a change")
-    page.locator(dom_id(editor.editor.build)).click()
-    wait_for(lambda: app.sessions.get(client_id) is not editor and getattr(app.sessions.get(client_id), "arm", None) is not None
-             and app.sessions[client_id].arm.joint_types == "RRP" and app.sessions[client_id].built, what="the typed arm")
+    click(page, editor.editor.build, lambda: app.sessions.get(client_id) is not editor
+          and getattr(app.sessions.get(client_id), "arm", None) is not None
+          and app.sessions[client_id].arm.joint_types == "RRP" and app.sessions[client_id].built, "the typed arm")
     typed = app.sessions[client_id]
     page.wait_for_selector(dom_id(typed.joints.sliders[2]), timeout=HANG_TIMEOUT_MS)
     assert page.get_by_text("joint 3 (mm)", exact=True).count() == 1  # the prismatic joint, in millimetres
     canvas_changed(page, before, 0.005, "the typed arm drawn")
-    page.locator(dom_id(typed.search.button)).click()
-    wait_for(lambda: typed.state.last.solution is not None, what="the numerical search")
+    click(page, typed.search.button, lambda: typed.state.last.solution is not None, "the numerical search")
     wait_for(lambda: page.get_by_text("found numerically 1", exact=True).count() > 0, what="the branches in the table")
 
     # the elbow arm's DH walkthrough: the z axes alone, the x axes back, then row 1's parameters drawn
     elbow = pick(page, app, client_id, "Elbow arm + spherical wrist")
-    page.get_by_text("DH walkthrough", exact=True).first.click()  # folded by default
     next_button = page.get_by_role("button", name="Next ▶")
-    next_button.wait_for(state="visible", timeout=HANG_TIMEOUT_MS)
+    unfold(page, "DH walkthrough", next_button)  # folded by default
     frames = settled_canvas(page)
-    next_button.click()
-    wait_for(lambda: elbow.walkthrough.step == 0 and not elbow.drawing.dh_frames.x_axes.visible, what="step 1")
+    click(page, next_button, lambda: elbow.walkthrough.step == 0, "step 1")
+    wait_for(lambda: not elbow.drawing.dh_frames.x_axes.visible, what="the x axes hidden")
     wait_for(lambda: page.get_by_text("Step 1 — the z axes", exact=False).count() > 0, what="step 1's text")
     z_only = canvas_changed(page, frames, 0.002, "the x axes to go")
-    next_button.click()
-    wait_for(lambda: elbow.walkthrough.step == 1 and elbow.drawing.dh_frames.x_axes.visible, what="step 2")
+    click(page, next_button, lambda: elbow.walkthrough.step == 1, "step 2")
+    wait_for(lambda: elbow.drawing.dh_frames.x_axes.visible, what="the x axes back")
     with_x = canvas_changed(page, z_only, 0.002, "the x axes to come back")
-    next_button.click()  # step 3: row 1's θ1 and α1 (its d1 too: a1 = 0 is listed, not drawn)
-    wait_for(lambda: elbow.walkthrough.step == 2, what="step 3")
+    click(page, next_button, lambda: elbow.walkthrough.step == 2, "step 3")  # row 1's θ1 and α1 (d1 too: a1 = 0 is listed, not drawn)
     wait_for(lambda: page.get_by_text("Row 1.", exact=False).count() > 0, what="row 1's text")
     canvas_changed(page, with_x, 0.002, "row 1's parameters drawn")

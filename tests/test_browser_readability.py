@@ -46,8 +46,7 @@ def key_points(session) -> list[np.ndarray]:
 def open_view_folder(page, session) -> None:
     """Unfold the "View" folder (folded by default) unless it is open already."""
     if not page.locator(dom_id(session.camera.frame_button)).is_visible():
-        page.get_by_text("View", exact=True).first.click()
-        page.locator(dom_id(session.camera.frame_button)).wait_for(state="visible", timeout=HANG_TIMEOUT_MS)
+        unfold(page, "View", session.camera.frame_button)
 
 
 def font_px(locator) -> float:
@@ -77,8 +76,8 @@ def test_the_arm_is_framed_beside_the_panel_in_any_window(open_page):
         wait_for(beside, what=f"the panel beside the 3D view, not over it, at {window}")
         wait_for(lambda: in_canvas(page, session, key_points(session)), what=f"the arm and target framed at {window}")
     # the stretched pose reaches highest: "Frame the arm" brings the target (the gizmo) back in view
-    page.get_by_role("button", name="Stretched", exact=True).click()
-    wait_for(lambda: np.allclose(np.degrees(session.state.q), [45, 90, 0, -90, 0, 60]), what="the stretched pose")
+    click(page, page.get_by_role("button", name="Stretched", exact=True),
+          lambda: np.allclose(np.degrees(session.state.q), [45, 90, 0, -90, 0, 60]), "the stretched pose")
     open_view_folder(page, session)
     page.locator(dom_id(session.camera.frame_button)).click()
     wait_for(lambda: in_canvas(page, session, key_points(session)), what="the stretched arm framed")
@@ -221,8 +220,7 @@ def test_the_ghosts_the_floor_and_the_gizmo_as_a_student_sees_them(open_page):
     wait_for(lambda: all(m.visible for m in robot.meshes[SCHEMATIC]), what="the schematic arm back")
 
     # at the zero pose three branches coincide with the arm; shown alone, the arm still looks like the arm
-    page.get_by_role("button", name="Zero", exact=True).click()
-    wait_for(lambda: np.allclose(session.state.q, 0.0), what="the zero pose")
+    click(page, page.get_by_role("button", name="Zero", exact=True), lambda: np.allclose(session.state.q, 0.0), "the zero pose")
     session.ik_target.show_ghosts.value = True
 
     def twins_of(snapshot) -> list[int]:
@@ -314,7 +312,7 @@ def test_the_workspace_seen_square_on_through_its_sections_and_the_branch_count_
     # the branch-count map covers the view, and changes when the tool turns upside down
     view = session.reach_map
     before = settled_canvas(page)
-    page.get_by_text("Reachable with this orientation", exact=True).first.click()
+    unfold(page, "Reachable with this orientation", view.enabled)
     set_checkbox(page, view.enabled, True)
     wait_for(lambda: view.image is not None, what="the map")
     first = canvas_changed(page, before, 0.3, "the map to cover the view")  # the camera turns square-on to the plane

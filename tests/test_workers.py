@@ -7,6 +7,7 @@ time, so the answers are the same on an idle machine and on a loaded one.
 from __future__ import annotations
 
 import asyncio
+import concurrent.futures
 import contextlib
 import os
 import signal
@@ -262,6 +263,27 @@ def test_the_worker_process_ends_once_no_job_comes_and_starts_again_for_the_next
         first = apart.run(os.getpid)
         wait_for(lambda: apart._pool is None, what="the idle worker process ended")
         assert apart.run(os.getpid) not in (first, os.getpid()) and apart.processes_started == 2
+    finally:
+        apart.stop()
+
+
+def test_a_job_handed_over_as_the_idle_process_is_ended_still_runs(monkeypatch):
+    """The idle timer runs out just as a job is handed to the process: the job runs (a pool shut down
+    with the job waiting in it cancelled it, and the student's path never came)."""
+    apart = workers.WorkerProcess()
+    submit = concurrent.futures.ProcessPoolExecutor.submit
+
+    def submit_as_the_timer_runs_out(pool, *args, **kwargs):
+        future = submit(pool, *args, **kwargs)
+        idle.function(*idle.args)  # the timer set after the job before
+        return future
+
+    try:
+        apart.run(os.getpid)
+        idle = apart._idle
+        monkeypatch.setattr(concurrent.futures.ProcessPoolExecutor, "submit", submit_as_the_timer_runs_out)
+        for _ in range(20):
+            assert apart.run(os.getpid) != os.getpid()
     finally:
         apart.stop()
 

@@ -207,15 +207,23 @@ def _press_until(press, done, what: str) -> None:
     wait_for(pressed, what=what)
 
 
+def _locator(page, element):
+    """``element`` (a viser handle, or a playwright locator) as a playwright locator."""
+    from playwright.sync_api import Locator
+
+    return element if isinstance(element, Locator) else page.locator(dom_id(element))
+
+
 def click(page, button, done, what: str) -> None:
-    """Click ``button`` until ``done()`` holds."""
-    _press_until(lambda: page.locator(dom_id(button)).click(), done, what)
+    """Click ``button`` (a viser handle, or a playwright locator) until ``done()`` holds: a single click
+    may land while the panel above it grows (a text filled in, a folder opening) and hit nothing."""
+    _press_until(_locator(page, button).click, done, what)
 
 
 def unfold(page, title: str, widget) -> None:
-    """Open a folded folder by its title, as a student does, until ``widget`` shows (a CI run once
-    waited two minutes on a single click that opened nothing)."""
-    _press_until(lambda: page.get_by_text(title, exact=True).first.click(), page.locator(dom_id(widget)).is_visible,
+    """Open a folded folder by its title, as a student does, until ``widget`` (a viser handle, or a
+    playwright locator) shows (a CI run once waited two minutes on a single click that opened nothing)."""
+    _press_until(lambda: page.get_by_text(title, exact=True).first.click(), _locator(page, widget).is_visible,
                  f"the {title} folder open")
 
 

@@ -396,29 +396,32 @@ class WorkerProcess:
         #: measures both): jobs run in the caller's thread
         self._unavailable = os.environ.get("UR10_TEACH_NO_WORKER_PROCESS") == "1"
         self.processes_started = 0  #: (for the tests)
+        self._jobs = 0  #: jobs handed over and not yet back
         self._idle: threading.Timer | None = None
 
     def run(self, function, *args, **kwargs):
         pool = self._started()
-        if pool is not None:
-            try:
-                return pool.submit(function, *args, **kwargs).result()
-            except concurrent.futures.BrokenExecutor as broken:  # raised by the pool, never by the job
-                log.warning("the worker process is gone (%s); this job runs in the server", broken)
-                self._discard(pool)
-            except RuntimeError as error:
-                if not str(error).startswith("cannot schedule new futures"):
-                    raise  # the job's own
-                self._discard(pool)  # shut down as its server stopped
-        return function(*args, **kwargs)
+        try:
+            if pool is not None:
+                try:
+                    return pool.submit(function, *args, **kwargs).result()
+                except concurrent.futures.BrokenExecutor as broken:  # raised by the pool, never by the job
+                    log.warning("the worker process is gone (%s); this job runs in the server", broken)
+                    self._discard(pool)
+                except RuntimeError as error:
+                    if not str(error).startswith("cannot schedule new futures"):
+                        raise  # the job's own
+                    self._discard(pool)  # shut down as its server stopped
+            return function(*args, **kwargs)
+        finally:
+            self._finished()
 
     def _started(self) -> concurrent.futures.ProcessPoolExecutor | None:
         with self._lock:
+            self._jobs += 1
             if self._idle is not None:
                 self._idle.cancel()
-            self._idle = threading.Timer(self.IDLE, self.stop)  # from the job's start: jobs last a second or so
-            self._idle.daemon = True
-            self._idle.start()
+                self._idle = None
             if self._pool is None and not self._unavailable:
                 try:
                     self._pool = concurrent.futures.ProcessPoolExecutor(
@@ -428,6 +431,25 @@ class WorkerProcess:
                     log.warning("no worker process (%s): slow jobs run in the server", error)
                     self._unavailable = True
             return self._pool
+
+    def _finished(self) -> None:
+        """A job is back: the idle time counts from the last one's end."""
+        with self._lock:
+            self._jobs -= 1
+            if self._jobs == 0 and self._pool is not None:
+                timer = self._idle = threading.Timer(self.IDLE, lambda: self._stop_if_idle(timer))
+                timer.daemon = True
+                timer.start()
+
+    def _stop_if_idle(self, timer: threading.Timer) -> None:
+        """``timer`` has run out: the process ends, unless a job came meanwhile (a pool shut down with a
+        job waiting in it cancels the job)."""
+        with self._lock:
+            pool = self._pool if self._idle is timer and self._jobs == 0 else None
+            if pool is not None:  # taken away under the lock: the next job starts a new process
+                self._idle = self._pool = None
+        if pool is not None:
+            pool.shutdown(wait=False)
 
     def _discard(self, pool: concurrent.futures.ProcessPoolExecutor) -> None:
         with self._lock:
