@@ -282,6 +282,39 @@ def test_updates_that_come_faster_than_they_pass_fold_into_the_newest(app):
     asyncio.run(scenario())
 
 
+def test_one_addresss_connections_pass_their_messages_at_one_rate_together():
+    """A run of bench_hostile's slider flood kept each of eight connections of one address under its closing
+    rate (the gate read them slower than they came): 480 slider moves a second, every one passed on. Now the
+    connections of an address share one rate: three sending 100 moves a second each pass at most two tabs' worth."""
+    app = TeachingServer(port=0, gate=Gate(trust_loopback=False))  # loopback stands in for a laptop on the LAN
+    steps = 200
+
+    async def scenario():
+        senders = [await ViserClient(url(app)).connect() for _ in range(3)]
+        sessions = [session_of(app, sender) for sender in senders]
+        sliders = [sender.gui["θ2 shoulder (°)"]["uuid"] for sender in senders]
+        passed_before = app.gate.passed["GuiUpdateMessage"]
+        started = time.monotonic()
+        for k in range(steps):
+            for sender, uuid in zip(senders, sliders):
+                await sender.send_raw(encode(messages.GuiUpdateMessage(uuid, {"value": float(k % 90)})))
+            await asyncio.sleep(0.01)  # the pace of a sender: within each connection's own limits
+        await until(lambda: all(abs(np.degrees(session.state.q[1]) - (steps - 1) % 90) < 1e-6 for session in sessions),
+                    what="each connection's newest value")
+        lasted = time.monotonic() - started
+        passed = app.gate.passed["GuiUpdateMessage"] - passed_before
+        assert all(sender._websocket.close_code is None for sender in senders)  # no flood: none closed
+        # a count, not a timing: a slow machine only makes the bound looser
+        assert passed <= gate_module.ADDRESS_MESSAGE_BURST + gate_module.ADDRESS_MESSAGES_PER_SECOND * lasted + 1, (passed, lasted)
+        for sender in senders:
+            await sender.close()
+
+    try:
+        asyncio.run(scenario())
+    finally:
+        app.stop()
+
+
 async def flood(client: ViserClient, frames) -> int:
     """Send ``frames`` back to back until the server hangs up; how many were sent."""
     sent = 0

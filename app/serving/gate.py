@@ -37,6 +37,10 @@ OVER_RATE_ALLOWANCE = 100
 #: Messages per second a connection's messages pass at, after a burst of :data:`MESSAGE_BURST`.
 MESSAGES_PER_SECOND = 60.0
 MESSAGE_BURST = 60
+#: Messages per second all the connections of one address pass at together (loopback excepted), after a
+#: burst of :data:`ADDRESS_MESSAGE_BURST`: two tabs' worth. Eight connections flooding had eight rates.
+ADDRESS_MESSAGES_PER_SECOND = 2 * MESSAGES_PER_SECOND
+ADDRESS_MESSAGE_BURST = 2 * MESSAGE_BURST
 #: Different widgets (or gizmos) one connection may have waiting at once; more are dropped.
 MAX_WAITING = 64
 #: Open websockets per address (loopback excepted).
@@ -93,6 +97,22 @@ class TokenBucket:
         """Seconds until a token is there."""
         self._fill()
         return max(0.0, (1.0 - self.tokens) / self.rate)
+
+
+class SharedRate:
+    """A rate the messages of several connections pass at together: one connection at a time waits for
+    the next token (the others queue behind it, first come first served, instead of each polling)."""
+
+    def __init__(self, rate: float, burst: float) -> None:
+        self.bucket = TokenBucket(rate, burst)
+        self._turn = asyncio.Lock()
+
+    async def take(self) -> None:
+        async with self._turn:
+            delay = self.bucket.wait_time()
+            if delay > 0.0:
+                await asyncio.sleep(delay)
+            self.bucket.take()
 
 
 def classify(raw: bytes | str, value_fits=lambda uuid, value: True) -> tuple[tuple | None, str]:
@@ -166,6 +186,7 @@ class Gate:
         self._open: collections.Counter = collections.Counter()  # address -> open websockets
         self._tcp: collections.Counter = collections.Counter()  # address -> open TCP connections
         self._arrivals: dict[str, TokenBucket] = {}
+        self._passing: dict[str, SharedRate] = {}  # address -> the rate its connections' messages pass at
         self._lock = threading.Lock()
         #: ``(uuid, value)`` -> whether a widget's value converts to the widget's type (the server sets it)
         self.value_fits: Callable[[Any, Any], bool] = lambda uuid, value: True
@@ -225,12 +246,20 @@ class Gate:
             return ipaddress.ip_address(address).is_loopback
         return False
 
-    def opened(self, address: str) -> None:
+    def opened(self, address: str) -> SharedRate | None:
+        """Count a new websocket from ``address``; the rate all of its websockets' messages pass at together
+        (None for this machine's own)."""
         with self._lock:
             self._open[address] += 1
+            if self.trusted(address):
+                return None
+            return self._passing.setdefault(address, SharedRate(ADDRESS_MESSAGES_PER_SECOND, ADDRESS_MESSAGE_BURST))
 
     def closed(self, address: str) -> None:
         self._forget_one(self._open, address)
+        with self._lock:
+            if address not in self._open:
+                self._passing.pop(address, None)
 
     def _forget_one(self, counts: collections.Counter, address: str) -> None:
         with self._lock:
@@ -316,10 +345,11 @@ class GatedConnection:
     first at the connection's rate. Everything else is the connection's own.
     """
 
-    def __init__(self, connection, gate: Gate) -> None:
+    def __init__(self, connection, gate: Gate, address_rate: SharedRate | None = None) -> None:
         self._connection = connection
         self._gate = gate
         self.trusted = gate.trusted(_address(connection))  #: this machine's: no per-address limits
+        self._address_rate = address_rate  #: shared by every connection of its address
         self._waiting: dict[tuple, bytes] = {}
         self._arrived = asyncio.Event()
         self._ended: BaseException | None = None
@@ -366,6 +396,8 @@ class GatedConnection:
                 if delay > 0.0:
                     await asyncio.sleep(delay)  # newer messages for the same keys replace those waiting meanwhile
                     continue
+                if self._address_rate is not None:
+                    await self._address_rate.take()
                 self._rate.take()
                 key = next(iter(self._waiting))
                 self._gate.note_passed(key[0])
@@ -416,8 +448,7 @@ def gated_serve(gate: Gate) -> Iterator[None]:
         def __init__(self, handler, *args, process_request=None, **kwargs) -> None:  # noqa: ANN001
             async def gated_handler(connection) -> None:  # noqa: ANN001
                 address = _address(connection)
-                gate.opened(address)
-                gated = GatedConnection(connection, gate)
+                gated = GatedConnection(connection, gate, gate.opened(address))
                 try:
                     await handler(gated)
                 finally:
