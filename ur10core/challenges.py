@@ -722,26 +722,17 @@ def solution(challenge: Challenge, arm: Arm, q_current=None) -> tuple[np.ndarray
 def singular_pose(arm: Arm, factor: str, min_tool_height: float | None = None, seed: int = 5) -> np.ndarray:
     """Joints within the limits where ``factor`` of det J is zero (to rounding) and the tool is high enough.
 
-    Newton's method on the one factor from many starts, the smallest step each time
-    (``Δq = −f ∇f / |∇f|²``, the gradient by central differences).
+    The pose :meth:`Arm.singular_configuration` puts the arm in from its home pose (docs/kinematics.md §5.2),
+    or from random poses (``seed``) where that one's tool is too low.
     """
-    k = arm.factor_names.index(factor)
-    low, high = arm.limits[:, 0], arm.limits[:, 1]
-    starts = np.concatenate([[arm.specs.home], arm.sample_joints(200, seed=seed)])
-    scale = float(factor_scales(arm)[k])
-    for q in starts:
-        for _ in range(30):
-            f = float(arm.singularity_factors(q)[k])
-            if abs(f) <= 1e-12 * scale:
-                break
-            step = 1e-6 * np.eye(arm.n_joints)
-            gradient = (arm.singularity_factors(q + step)[:, k] - arm.singularity_factors(q - step)[:, k]) / 2e-6
-            norm = float(gradient @ gradient)
-            if norm < 1e-20:
-                break
-            q = np.clip(q - f * gradient / norm, low, high)
-        if abs(float(arm.singularity_factors(q)[k])) <= 1e-9 * scale and (
-                min_tool_height is None or arm.fk(q)[2, 3] >= min_tool_height + 0.01):
+    if factor not in arm.factor_names:
+        raise ValueError(f"the {arm.name} arm has no {factor!r} factor: its det J's are {', '.join(arm.factor_names)}")
+    for start in np.concatenate([[arm.specs.home], arm.sample_joints(200, seed=seed)]):
+        try:
+            q = arm.singular_configuration(factor, start)
+        except ValueError:
+            continue  # no zero of the factor within reach of this start's single joints
+        if min_tool_height is None or arm.fk(q)[2, 3] >= min_tool_height + 0.01:
             return q
     where = "" if min_tool_height is None else f" and the tool {1000 * min_tool_height:.0f} mm above the floor"
     raise ValueError(f"no pose of the {arm.name} arm within its limits has its {factor} factor zero{where}")
