@@ -149,6 +149,19 @@ def test_a_singular_pose_exists_for_every_factor_of_every_arm(name):
         assert arm.manipulability(q) <= 1e-6  # det J itself vanishes there: an independent view of the same claim
 
 
+@pytest.mark.parametrize("name", [name for name in Arm.PRESETS if name != "cylindrical"])  # its reach: refused
+def test_a_singularity_challenges_answer_moves_the_arm_from_home_as_little_as_a_button_does(name):
+    """The answer shown at a singularity challenge's end, for every arm and factor, is where *Put the arm on
+    the …* takes the arm from its home pose (one joint turned, or two where one cannot), not wherever a search
+    of its own ended up."""
+    arm = Arm.preset(name)
+    for factor in arm.factor_names:
+        challenge = C.Challenge(f"{factor} singularity", "singularity", name, "Find one.", factor=factor)
+        q, _ = C.solution(challenge, arm)
+        np.testing.assert_allclose(q, arm.singular_configuration(factor, arm.specs.home), atol=1e-12)
+        assert np.count_nonzero(np.abs(q - arm.specs.home) > 1e-12) <= 2
+
+
 # ---------------------------------------------------------------------- branch count
 
 
