@@ -563,6 +563,36 @@ def test_a_flood_of_singularity_presses_costs_one_placing_under_way_and_one_wait
     assert placed == ["elbow", "wrist"]  # the held one, and one more for the 30 that came meanwhile: the newest
 
 
+def test_a_closed_form_singularity_press_does_not_wait_behind_another_browsers_slow_job(app):
+    """Presses became slow jobs (one at a time in the server): the UR10's, a closed form of a few microseconds,
+    waited behind any other browser's cloud. It no longer waits; the other arms' searches still take their turn."""
+    from ur10teach.serving.workers import HEAVY
+
+    running, release = threading.Event(), threading.Event()
+
+    def cloud() -> None:
+        running.set()
+        release.wait(HANG_TIMEOUT)
+
+    async def scenario():
+        client, neighbour = await ViserClient(url(app)).connect(), await ViserClient(url(app)).connect()
+        session = session_of(app, client)
+        other = threading.Thread(target=HEAVY.run, args=(session_of(app, neighbour).client, cloud))
+        other.start()
+        try:
+            await until(running.is_set, what="the other browser's slow job under way")
+            await client.set_gui("Put the arm on the", "wrist")
+            await until(lambda: abs(session.state.last.factors[2]) < 1e-12, what="the UR10 on its wrist singularity")
+            assert other.is_alive()  # placed while the other job held the server's slot
+        finally:
+            release.set()
+            other.join()
+        await client.close()
+        await neighbour.close()
+
+    asyncio.run(scenario())
+
+
 def test_a_browser_gone_before_its_turn_to_be_built_costs_nothing(app, monkeypatch):
     """A lecture hall joining at once is built one session at a time (``ur10teach.serving.workers.JOINS``):
     a browser that left while it waited for its turn is not built at all."""

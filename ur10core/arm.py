@@ -353,6 +353,16 @@ class Arm(JacobianUses, HasSpecs):
             raise ValueError(f"{self.name!r} has no derived factors (a custom table)")
         return tuple(name for name, _, _ in words)
 
+    @property
+    def singularities_in_closed_form(self) -> bool:
+        """Whether :meth:`singular_configuration` is a closed form (the UR family's: microseconds) rather than
+        a search (the other arms': milliseconds).
+
+        >>> Arm.preset("ur10").singularities_in_closed_form, Arm.preset("kr210").singularities_in_closed_form
+        (True, False)
+        """
+        return hasattr(self.solver, "singular_configuration")
+
     def singular_configuration(self, kind: str, q) -> np.ndarray:
         """Joints ``q`` (..., n) changed as little as needed to sit exactly on the singularity where the
         factor ``kind`` of det J is zero, (..., n) (docs/kinematics.md §5.2).

@@ -365,11 +365,18 @@ class Singularities(View):
         self._presses.start("singularity", self._session.guard)
 
     def _place(self) -> None:
-        """A press as a slow job: an arm without closed forms is searched (up to about 80 ms), so presses fold
-        into one under way and one waiting, each at most a share of the server's time (``HEAVY``)."""
+        """Presses fold into one under way and one waiting. An arm without closed forms is searched (up to about
+        80 ms): a slow job, at most a share of the server's time (``HEAVY``); a closed form does not wait its turn
+        behind other browsers' clouds."""
         session, kind = self._session, self._pressed
-        HEAVY.run(session.client, lambda: session.apply(lambda state: state.place_in_singularity(kind)),
-                  cancelled=lambda: session.closed)
+
+        def place() -> None:
+            session.apply(lambda state: state.place_in_singularity(kind))
+
+        if self._arm.singularities_in_closed_form:
+            place()
+        else:
+            HEAVY.run(session.client, place, cancelled=lambda: session.closed)
 
     def render_panel(self, snapshot: Snapshot) -> None:
         self.gauges.content = factors_html(self._arm, snapshot.q)
