@@ -461,6 +461,9 @@ class WorkerProcess:
         """End the process, if one was started (a job under way in it is not waited for)."""
         with self._lock:
             pool = self._pool
+            if self._idle is not None:
+                self._idle.cancel()
+                self._idle = None
         if pool is not None:
             self._discard(pool)
 
