@@ -113,13 +113,12 @@ def test_a_students_first_visit(open_page, light_app):
     # typed angles: a bad one is refused in the browser and changes nothing; good ones are applied
     before = session.state.q
     type_text(page, session.joints.typed, "30, 45, abc, 50, 60, 80")
-    page.locator(dom_id(session.joints.apply_typed)).click()
-    wait_for(lambda: page.get_by_text("'abc' is not a number").count() > 0, what="the refusal message")
+    click(page, session.joints.apply_typed, lambda: page.get_by_text("'abc' is not a number").count() > 0, "the refusal message")
     assert page.get_by_text("Not accepted").count() > 0
     np.testing.assert_array_equal(session.state.q, before)
     type_text(page, session.joints.typed, "10, 20, 30, 40, 50, 60")
-    page.locator(dom_id(session.joints.apply_typed)).click()
-    wait_for(lambda: np.allclose(np.degrees(session.state.q), [10, 20, 30, 40, 50, 60]), what="the typed angles")
+    click(page, session.joints.apply_typed, lambda: np.allclose(np.degrees(session.state.q), [10, 20, 30, 40, 50, 60]),
+          "the typed angles")
 
     # the singularity overlay: det J as MathML, and the wrist button puts the arm on s5 = 0
     unfold(page, "Singularities", session.singularities.enabled)  # folded: the first lesson needs the joints and the target

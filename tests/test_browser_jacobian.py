@@ -50,8 +50,8 @@ def test_what_the_jacobian_does_on_the_ur10_and_the_desktop_arm(open_page, light
     canvas_changed(page, shown, 0.003, "the ellipsoids to show")
     # velocities: a typed flange velocity gets its joint rates in the page
     unfold(page, "Velocities", session.velocity.solve)
-    page.locator(dom_id(session.velocity.solve)).click()
-    wait_for(lambda: page.get_by_text("within its speed limit", exact=False).count() > 0, what="the joint rates")
+    click(page, session.velocity.solve, lambda: page.get_by_text("within its speed limit", exact=False).count() > 0,
+          "the joint rates")
     assert np.isfinite(session.velocity.joint_rates()).all()
 
     # a path across s5 = 0: both charts show in the page, and the straight line's carries both marks

@@ -12,7 +12,7 @@ import pytest
 from ur10core import Arm
 from ur10core.orientation import rotation_from_quaternion
 from ur10dev.browser import (
-    dom_id, drawn_frames, project, set_checkbox, settled_canvas, unfold,
+    click, drawn_frames, project, set_checkbox, settled_canvas, unfold,
 )
 from ur10dev.waiting import wait_for
 from ur10teach.features.arm_picker import ARM_CHOICES, CUSTOM
@@ -212,9 +212,8 @@ def test_lecture_mode_labels_math_and_refusals(open_page, light_app):
     rows = page.locator(f"label[for='{editor.editor.rows._impl.uuid}']").locator("xpath=ancestor::div[2]").locator("textarea").first
     rows.fill("500 0 0 0 R\n400 0 0 R")
     wait_for(lambda: editor.editor.rows.value == "500 0 0 0 R\n400 0 0 R", what="the server to hold the typed rows")
-    page.locator(dom_id(editor.editor.build)).click()
     message = page.get_by_text("line 2: a row is five entries", exact=False).first
-    wait_for(lambda: message.count() > 0 and message.is_visible(), what="the refusal on the page")
+    click(page, editor.editor.build, lambda: message.count() > 0 and message.is_visible(), "the refusal on the page")
     def gap() -> float:  # measured once the panel has settled (lecture mode's type may still be re-laying it out)
         below, under = rows.bounding_box(), message.bounding_box()
         return under["y"] - (below["y"] + below["height"])

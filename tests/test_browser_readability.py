@@ -79,8 +79,7 @@ def test_the_arm_is_framed_beside_the_panel_in_any_window(open_page):
     click(page, page.get_by_role("button", name="Stretched", exact=True),
           lambda: np.allclose(np.degrees(session.state.q), [45, 90, 0, -90, 0, 60]), "the stretched pose")
     open_view_folder(page, session)
-    page.locator(dom_id(session.camera.frame_button)).click()
-    wait_for(lambda: in_canvas(page, session, key_points(session)), what="the stretched arm framed")
+    click(page, session.camera.frame_button, lambda: in_canvas(page, session, key_points(session)), "the stretched arm framed")
     # the standard views
     choose(page, session.camera.direction, "Top (x–y plane)")
     wait_for(lambda: forward(session)[2] < -0.95, what="the camera to look down on the arm")
@@ -104,8 +103,8 @@ def test_lecture_mode_for_the_presenter_and_the_class(open_page, playwright):
         assert session.ik_target.gizmo.line_width >= 6
         wide = page.locator("canvas").first.bounding_box()["width"]
         open_view_folder(page, session)
-        page.locator(dom_id(session.camera.lecture.hide_button)).click()
-        wait_for(lambda: page.locator("canvas").first.bounding_box()["width"] > wide + 300, what="the panel to fold away")
+        click(page, session.camera.lecture.hide_button, lambda: page.locator("canvas").first.bounding_box()["width"] > wide + 300,
+              "the panel to fold away")
         page.locator("[data-dock-collapsed]").first.click()  # the folded strip brings it back
         wait_for(lambda: page.locator("[data-dock-collapsed]").count() == 0, what="the panel back")
         open_view_folder(page, session)
@@ -251,8 +250,7 @@ def test_the_ghosts_the_floor_and_the_gizmo_as_a_student_sees_them(open_page):
 
     # an arm through the floor gets a red disc under its lowest point
     type_text(page, session.joints.typed, "0, -90, 0, -90, 0, 0")  # hanging down below its base
-    page.locator(dom_id(session.joints.apply_typed)).click()
-    wait_for(lambda: session.state.last.through_floor[0], what="the arm below the floor")
+    click(page, session.joints.apply_typed, lambda: session.state.last.through_floor[0], "the arm below the floor")
     wait_for(lambda: page.get_by_text("through the floor", exact=False).count() > 0, what="the table's warning")
 
     def red_pixels() -> int:

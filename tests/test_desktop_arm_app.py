@@ -8,8 +8,9 @@ import math
 import numpy as np
 import pytest
 
+from ur10core.orientation import from_frame
 from ur10teach.features.arm_picker import DESKTOP, UR10
-from ur10teach.features.course_arms.desktop_arm import COURSE_TO_WORLD, SHOULDER_HEIGHT, to_world, world_placement
+from ur10teach.features.course_arms.desktop_arm import COURSE_TO_WORLD, SHOULDER_HEIGHT, world_placement
 from ur10teach.features.readouts import pose_markdown
 from ur10teach.features.singularity import factors_html
 from ur10teach.state import ArmState
@@ -56,8 +57,8 @@ def test_the_desktop_arm_is_picked_driven_played_and_searched(app):
         await client.set_gui("θ3 forearm (°)", 0.0)
         await until(lambda: np.allclose(session.state.last.q, np.radians([0.0, -90.0, 0.0])), what="the sliders")
         np.testing.assert_allclose(session.state.last.flange[:3, 3], (FOREARM, UPPER_ARM, 0.0), atol=1e-12)
-        np.testing.assert_allclose(to_world(session.state.last.flange[:3, 3]), (FOREARM, 0.0, SHOULDER_HEIGHT + UPPER_ARM),
-                                   atol=1e-12)
+        np.testing.assert_allclose(from_frame(world_placement(), session.state.last.flange[:3, 3]),
+                                   (FOREARM, 0.0, SHOULDER_HEIGHT + UPPER_ARM), atol=1e-12)
         # its base frame stands in the world y up, and the IK target hangs in it (a position-only gizmo)
         np.testing.assert_allclose(world_placement()[:3, :3] @ (0.0, 1.0, 0.0), (0.0, 0.0, 1.0))
         await until(lambda: f"{frame}/ik_target" in client.received.nodes, what="the IK target in the course's frame")

@@ -5,6 +5,8 @@ import pytest
 
 from ur10core.orientation import (
     angle_axis,
+    from_frame,
+    in_frame,
     quaternion,
     rotation_from_angle_axis,
     rotation_from_quaternion,
@@ -106,3 +108,15 @@ def test_refuses_non_rotations():
         quaternion(np.diag([1.0, 1.0, -1.0]))
     with pytest.raises(ValueError, match=r"shape \(\.\.\., 3, 3\)"):
         angle_axis(np.eye(4))
+
+
+def test_points_from_a_frame_are_its_homogeneous_transform_and_in_frame_undoes_it():
+    rng = np.random.default_rng(3)
+    T = np.eye(4)
+    T[:3, :3], T[:3, 3] = _rz(0.7) @ _ry(-1.1) @ _rx(2.3), (0.4, -0.2, 1.5)
+    points = rng.normal(size=(5, 2, 3))  # segments, as the app draws them
+    homogeneous = np.concatenate([points, np.ones((5, 2, 1))], axis=-1) @ T.T
+    np.testing.assert_allclose(from_frame(T, points), homogeneous[..., :3], atol=1e-15)
+    np.testing.assert_allclose(in_frame(T, from_frame(T, points)), points, atol=1e-14)
+    with pytest.raises(ValueError, match="points"):
+        from_frame(T, [1.0, 2.0])

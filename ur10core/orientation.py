@@ -169,6 +169,18 @@ def in_frame(T, points) -> np.ndarray:
     return (points - T[:3, 3]) @ T[:3, :3]
 
 
+def from_frame(T, points) -> np.ndarray:
+    """``points`` (..., 3) given in the frame whose pose is ``T`` (4, 4), expressed in the base frame:
+    ``R p + o`` (the inverse of :func:`in_frame`).
+
+    >>> from_frame(transform_from_quaternion((1.0, 0.0, 0.0, 0.0), (1.0, 0.0, 0.0)), [1.0, 0.0, 0.0]).tolist()
+    [2.0, 0.0, 0.0]
+    """
+    T = as_float_array(T, "T")
+    points = vectors(points, "points", 3)
+    return points @ T[:3, :3].T + T[:3, 3]
+
+
 def angle_axis(R, check: bool = True) -> tuple[np.ndarray, np.ndarray]:
     """Equivalent angle–axis ``(θ, k̂)`` of R: θ (...) in [0, π], k̂ (..., 3) unit.
 

@@ -17,6 +17,8 @@ from typing import Callable
 import numpy as np
 import viser
 
+from ur10core.orientation import from_frame
+
 from ..style import NUMBER_SCALE
 from ..viser_internals.fast_updates import set_positions
 
@@ -285,7 +287,7 @@ def obstacle(label, under=(0.0, 0.0, 0.0)) -> tuple | None:
 
 def in_world(pools: tuple[BranchLabels, ...]) -> list[tuple]:
     """The :func:`obstacle` tuples of every label ``pools`` show, their positions in the world (for labels hung elsewhere)."""
-    return [(np.asarray(position) @ pool.world[:3, :3].T + pool.world[:3, 3], text, scale, anchor)
+    return [(from_frame(pool.world, position), text, scale, anchor)
             for pool in pools for position, text, scale, anchor in filter(None, map(obstacle, pool.labels))]
 
 

@@ -15,6 +15,8 @@ from typing import Callable
 import numpy as np
 import viser
 
+from ur10core.orientation import from_frame
+
 from ..feedback import chosen
 from ..state import Snapshot
 from ..view import View
@@ -169,7 +171,7 @@ class CameraControls(View):
             self.extra.pop(name, None)
         else:
             points = np.asarray(points, dtype=float).reshape(-1, 3)
-            self.extra[name] = points if world is None else points @ world[:3, :3].T + world[:3, 3]
+            self.extra[name] = points if world is None else from_frame(world, points)
         if now:
             self.frame()
 

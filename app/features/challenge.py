@@ -13,7 +13,7 @@ import viser
 
 from ur10core import Arm
 from ur10core.challenges import QUANTITIES, Challenge, Verdict, number_names
-from ur10core.orientation import in_frame, quaternion
+from ur10core.orientation import from_frame, in_frame, quaternion
 
 from ..feedback import Beside, chosen, within
 from ..serving.challenge_run import MAX_NICKNAME, ChallengeRun, Student, summary_markdown
@@ -215,7 +215,7 @@ class ClassTools:
 
     def show(self, run: ChallengeRun) -> None:
         names, poses, solved = run.flanges()
-        points = poses[:, :3, 3] @ self._world[:3, :3].T + self._world[:3, 3]
+        points = from_frame(self._world, poses[:, :3, 3])
         if len(names):
             self.dots.points = points.astype(np.float32)
             self.dots.colors = np.where(solved[:, None], SOLVED_COLOR, WORKING_COLOR).astype(np.uint8)

@@ -12,7 +12,7 @@ from typing import Any, Callable
 import numpy as np
 import viser
 
-from ur10core.orientation import quaternion
+from ur10core.orientation import from_frame, quaternion
 from ur10core.solvers.ur import URFamily
 from ur10core.workspace import BranchCountMap, branch_count_map
 
@@ -65,7 +65,7 @@ def map_pose(reach: BranchCountMap, world: np.ndarray = np.eye(4)) -> tuple[np.n
     """(wxyz, position) of the image node: its x along u, its y along v (an image's top row is +y);
     ``world`` (4, 4) puts the arm's base frame in the scene."""
     rotation = world[:3, :3] @ np.stack([reach.u, reach.v, np.cross(reach.u, reach.v)], axis=1)
-    return quaternion(rotation, check=False), world[:3, :3] @ reach.centre + world[:3, 3]
+    return quaternion(rotation, check=False), from_frame(world, reach.centre)
 
 
 COLOUR_NAMES = {REACH_COLORS[1][0]: "yellow", REACH_COLORS[2][0]: "green", REACH_COLORS[3][0]: "teal", REACH_COLORS[4][0]: "purple"}

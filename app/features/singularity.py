@@ -16,7 +16,7 @@ import viser.uplot
 
 from ur10core import Arm, symbolic, symbolic_arms
 from ur10core.arm import factor_scales
-from ur10core.orientation import in_frame
+from ur10core.orientation import from_frame, in_frame
 from ur10core.serial import PRESETS
 
 from ..feedback import chosen
@@ -148,8 +148,7 @@ def anchored_geometry(arm: Arm, frames: np.ndarray) -> dict[str, list[tuple[int 
 
 def _placed(frames: np.ndarray, parts: list[tuple[int | None, np.ndarray]]) -> np.ndarray:
     """Anchored parts in the base frame, one (m, 2, 3) array."""
-    return np.concatenate([segments if anchor is None else segments @ frames[anchor, :3, :3].T + frames[anchor, :3, 3]
-                           for anchor, segments in parts])
+    return np.concatenate([segments if anchor is None else from_frame(frames[anchor], segments) for anchor, segments in parts])
 
 
 def factor_names(arm: Arm) -> list[str]:
@@ -259,8 +258,7 @@ class SingularityOverlay(View):
             points = [segments.mean(axis=(0, 1)) for segments in factor_geometry(self._arm, snapshot.q, snapshot.frames,
                                                                                   self._size).values()]
         else:
-            points = [point if anchor is None else snapshot.frames[anchor, :3, :3] @ point + snapshot.frames[anchor, :3, 3]
-                      for anchor, point in self._name_points]
+            points = [point if anchor is None else from_frame(snapshot.frames[anchor], point) for anchor, point in self._name_points]
         self.names.show(np.array(points), list(self.parts))
 
     def render(self, snapshot: Snapshot) -> None:

@@ -15,7 +15,7 @@ import numpy as np
 import viser
 
 from ur10core import Arm
-from ur10core.orientation import quaternion
+from ur10core.orientation import from_frame, quaternion
 
 from ...state import Snapshot
 from ...style import JOINT_CAP_GREY, SHOULDER_COLOR
@@ -43,11 +43,6 @@ def world_placement() -> np.ndarray:
     world = np.eye(4)
     world[:3, :3], world[:3, 3] = COURSE_TO_WORLD, (0.0, 0.0, SHOULDER_HEIGHT)
     return world
-
-
-def to_world(points: np.ndarray) -> np.ndarray:
-    """(..., 3) points of the course's base frame → the app's world."""
-    return points @ COURSE_TO_WORLD.T + (0.0, 0.0, SHOULDER_HEIGHT)
 
 
 class Framed(NamedTuple):
@@ -113,7 +108,7 @@ class DesktopArmScene(LineDrawing):
         """What the camera frames: the arm as it is, and its reach about the shoulder and above, in the world."""
         points = self._points(snapshot.frames)
         ends = points[1] + self.size * np.array([[1.0, 0, 0], [-1.0, 0, 0], [0, 1.0, 0], [0, -1.0, 0], [0, 0, 1.0]])
-        world = to_world(np.vstack([points, ends]))
+        world = from_frame(self.world, np.vstack([points, ends]))
         frames = np.tile(np.eye(4), (len(world), 1, 1))
         frames[:, :3, 3] = world
         return Framed(frames, frames[3], (world[0],))
