@@ -164,7 +164,7 @@ def test_place_in_singularity(state, kind, factor):
     snap = state.place_in_singularity(kind)
     assert abs(snap.factors[factor]) < 1e-12
     assert snap.factors.prod() == pytest.approx(0, abs=1e-12)
-    with pytest.raises(ValueError, match="kind must be one of"):
+    with pytest.raises(ValueError, match="kind must be 'shoulder', 'elbow' or 'wrist', got 'knee'"):
         state.place_in_singularity("knee")
 
 
