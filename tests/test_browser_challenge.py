@@ -22,8 +22,8 @@ def test_a_presenter_and_two_students_run_a_reach_challenge(tmp_path):
         with class_browsers(app, 3) as (pages, members):
             teacher, ada, bo = pages
             teacher_member, ada_member, bo_member = members
-            ask_to_present(teacher, teacher_member, room.code)
-            wait_for(lambda: teacher_member.desk is not None, what="the presenter's Challenge folder")
+            ask_to_present(teacher, teacher_member, room.code, lambda: teacher_member.desk is not None,
+                           "the presenter's Challenge folder")
             desk = teacher_member.desk
             teacher.wait_for_selector(dom_id(desk.picker), timeout=HANG_TIMEOUT_MS)
             choose(teacher, desk.picker, "Reach the target")

@@ -26,10 +26,10 @@ def test_a_class_follows_the_presenter_and_a_student_explores(tmp_path):
     try:
         with teacher_and_student(app) as (teacher, student, teacher_member, student_member):
             # a wrong code is refused in the browser; the right one makes a presenter
-            ask_to_present(student, student_member, "AAA-AAA")
-            wait_for(lambda: student.get_by_text("that is not the join code").count() > 0, what="the refusal")
-            ask_to_present(teacher, teacher_member, app.classroom.code)
-            wait_for(lambda: teacher_member.role == PRESENTER and teacher_member.session is not None, what="the presenter")
+            ask_to_present(student, student_member, "AAA-AAA",
+                           lambda: student.get_by_text("that is not the join code").count() > 0, "the refusal")
+            ask_to_present(teacher, teacher_member, app.classroom.code, lambda: teacher_member.role == PRESENTER, "the presenter")
+            wait_for(lambda: teacher_member.session is not None, what="the presenter's arm")
             wait_for(lambda: teacher.get_by_text("You are presenting").count() > 0, what="the presenter's status")
 
             # the presenter moves a joint; the student's live panel follows

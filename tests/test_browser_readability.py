@@ -105,8 +105,8 @@ def test_lecture_mode_for_the_presenter_and_the_class(open_page, playwright):
         open_view_folder(page, session)
         click(page, session.camera.lecture.hide_button, lambda: page.locator("canvas").first.bounding_box()["width"] > wide + 300,
               "the panel to fold away")
-        page.locator("[data-dock-collapsed]").first.click()  # the folded strip brings it back
-        wait_for(lambda: page.locator("[data-dock-collapsed]").count() == 0, what="the panel back")
+        click(page, page.locator("[data-dock-collapsed]").first, lambda: page.locator("[data-dock-collapsed]").count() == 0,
+              "the panel back")  # the folded strip brings it back
         open_view_folder(page, session)
         set_checkbox(page, session.camera.lecture.enabled, False)
         wait_for(lambda: font_px(text) < 16, what="normal type again")

@@ -366,7 +366,7 @@ def teacher_and_student(app) -> Iterator[tuple]:
         yield (*pages, *members)
 
 
-def ask_to_present(page, member, code: str) -> None:
-    """Type the join code and press "Become presenter", as a teacher does."""
+def ask_to_present(page, member, code: str, done, what: str) -> None:
+    """Type the join code and press "Become presenter", as a teacher does, until ``done()`` holds."""
     type_text(page, member.join_code, code)
-    page.get_by_role("button", name="Become presenter").click()
+    click(page, page.get_by_role("button", name="Become presenter"), done, what)
