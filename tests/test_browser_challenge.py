@@ -7,7 +7,9 @@ import pytest
 
 from ur10teach.features.joint_panel import display_text
 from ur10teach.serving.classroom import EXPLORER
-from ur10dev.browser import HANG_TIMEOUT_MS, ask_to_present, choose, class_browsers, click, dom_id, type_text
+from ur10dev.browser import (
+    HANG_TIMEOUT_MS, ask_to_present, canvas_changed, choose, class_browsers, click, dom_id, settled_canvas, type_text,
+)
 from ur10dev.waiting import wait_for
 
 pytestmark = pytest.mark.browser
@@ -60,13 +62,18 @@ def test_a_presenter_and_two_students_run_a_reach_challenge(tmp_path):
                 names = {text for _, text, _ in tools.names.placed}
                 return tools.names.placed if names == {"Ada", "student 2"} else None
 
-            placed = wait_for(named_tools, what="the students' names by their tools")
-            hers = next(members for members, text, _ in placed if text == "Ada")
-            dots = teacher_member.tools.dots
-            assert dots.visible and len(dots.points) == 2
-            # her dot at her tool (viser keeps a point cloud's points as float16)
-            np.testing.assert_allclose(dots.points[hers[0]], ada_member.session.state.last.flange[:3, 3], atol=1e-3)
+            wait_for(named_tools, what="the students' names by their tools")
+            solved, working = teacher_member.tools.solved, teacher_member.tools.working
+            assert solved.visible and working.visible and len(solved.points) == len(working.points) == 1
+            # her dot at her tool, his at his (viser keeps a point cloud's points as float16)
+            np.testing.assert_allclose(solved.points[0], ada_member.session.state.last.flange[:3, 3], atol=1e-3)
+            np.testing.assert_allclose(working.points[0], bo_member.session.state.last.flange[:3, 3], atol=1e-3)
+            shown = settled_canvas(teacher)
             teacher.screenshot(path=str(tmp_path / "projector.png"))
+            # her green dot shows round the target's ball: hiding it changes the picture
+            solved.visible = False
+            canvas_changed(teacher, shown, 0.0002, "Ada's green dot to go")
+            solved.visible = True
 
             # the end: everyone is shown the solution, and every arm moves to it
             click(teacher, desk.end, lambda: room.challenges.run.ended, "End and show the solution")

@@ -14,7 +14,7 @@ from ur10core.dh import DHTable
 from ur10core.orientation import zyx_euler
 from ur10teach.features.branch_labels import JOIN
 from ur10teach.features.arm_picker import ARM_CHOICES
-from ur10teach.features.challenge import GOAL_ROOT
+from ur10teach.features.challenge import GOAL_RADIUS, GOAL_ROOT
 from ur10teach.features.course_arms.editor import CONVENTIONS
 from ur10teach.features.joint_panel import display_text, rate_label, typed_label
 from ur10teach.serving.gate import address_of
@@ -168,6 +168,15 @@ def test_thirty_students_every_kind_and_the_projector_counts_exactly(classroom):
                         name for label in tools.names.labels if label.visible for name in label.text.split(JOIN)}
 
                 await until(lambda: named() == here, what="the students' names in 3D")
+                # a dot at each tool: green for the solved, drawn larger than the orange ones (a crowd of working
+                # students round the target covered the green dots there), and larger than the target's ball
+                tools = room.presenter.tools
+                def dots(cloud) -> int:
+                    return len(cloud.points) if cloud.visible else 0
+
+                await until(lambda: (dots(tools.solved), dots(tools.working)) == (right, STUDENTS - len(leaving) - right),
+                            what="a dot per student, of their colour")
+                assert tools.solved.point_size > max(tools.working.point_size, 2 * GOAL_RADIUS)
             # back from the same computers: the attempt is theirs again
             for k in leaving:
                 students[k] = await ViserClient(url(classroom), local_address=addresses[k]).connect()

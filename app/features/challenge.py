@@ -29,6 +29,9 @@ CLASS_ROOT = "/challenge/class"
 MAX_TIME_LIMIT_MINUTES = 120
 #: Names the projector shows at most (a lecture hall's hundred read as dots beyond it).
 MAX_NAMES = 120
+#: The target's ball (radius, m), and the dots' sizes: a solved student's tool is on the target, and its dot is
+#: drawn larger than the ball and the working students' dots (twenty students round the target hid the green ones).
+GOAL_RADIUS, WORKING_DOT, SOLVED_DOT = 0.02, 0.03, 0.065
 
 
 def challenge_markdown(challenge: Challenge, time_limit: float | None = None) -> str:
@@ -180,7 +183,7 @@ class GoalMarker:
     def __init__(self, scene: viser.SceneApi, pose: np.ndarray, lecture: bool = False) -> None:
         self.pose = pose  #: (4, 4) in the world
         self.frame = scene.add_frame(GOAL_ROOT, wxyz=quaternion(pose[:3, :3], check=False), position=pose[:3, 3],
-                                     axes_length=0.15, axes_radius=0.01, origin_radius=0.02)
+                                     axes_length=0.15, axes_radius=0.01, origin_radius=GOAL_RADIUS)
         self.label = add_label(scene, f"{GOAL_ROOT}/name", "challenge target", 1.4, lecture, anchor="bottom-left")
 
     def name(self, frame: np.ndarray) -> tuple | None:
@@ -200,8 +203,10 @@ class ClassTools:
                  fixed: Callable[[], list[tuple]] = lambda: []) -> None:
         self._scene, self._world, self._view, self._scale = scene, world, view, label_scale(1.2, lecture)
         self._fixed = fixed  #: the labels already on the projector (branch numbers, the target's name), in the world: kept clear of
-        self.dots = scene.add_point_cloud(f"{CLASS_ROOT}/dots", np.zeros((1, 3), np.float32), np.zeros((1, 3), np.uint8),
-                                          point_size=0.03, point_shape="circle", visible=False)
+        self.working, self.solved = (
+            scene.add_point_cloud(f"{CLASS_ROOT}/{name}", np.zeros((1, 3), np.float32), colour, point_size=size,
+                                  point_shape="circle", visible=False)
+            for name, colour, size in (("working", WORKING_COLOR, WORKING_DOT), ("solved", SOLVED_COLOR, SOLVED_DOT)))
         self.names: BranchLabels | None = None
 
     def _pool(self, count: int) -> BranchLabels:
@@ -216,11 +221,12 @@ class ClassTools:
     def show(self, run: ChallengeRun) -> None:
         names, poses, solved = run.flanges()
         points = from_frame(self._world, poses[:, :3, 3])
-        if len(names):
-            self.dots.points = points.astype(np.float32)
-            self.dots.colors = np.where(solved[:, None], SOLVED_COLOR, WORKING_COLOR).astype(np.uint8)
-        if self.dots.visible != bool(len(names)):
-            self.dots.visible = bool(len(names))
+        for dots, which, colour in ((self.working, ~solved, WORKING_COLOR), (self.solved, solved, SOLVED_COLOR)):
+            if which.any():
+                dots.points = points[which].astype(np.float32)
+                dots.colors = np.tile(np.array(colour, np.uint8), (int(which.sum()), 1))
+            if dots.visible != bool(which.any()):
+                dots.visible = bool(which.any())
         shown = min(len(names), MAX_NAMES)  # beyond it, a dot without a name
         if shown or self.names is not None:
             self._pool(shown).show(points[:shown], names[:shown])
@@ -236,7 +242,8 @@ class ClassTools:
             self.names = None
 
     def remove(self) -> None:
-        self.dots.remove()
+        self.working.remove()
+        self.solved.remove()
         self._remove_names()
 
 
