@@ -60,7 +60,7 @@ def test_a_presenter_and_two_students_run_a_reach_challenge(tmp_path):
                 if tools is None or tools.names is None:
                     return None
                 names = {text for _, text, _ in tools.names.placed}
-                return tools.names.placed if names == {"Ada", "student 2"} else None
+                return tools.names.placed if names == {"✓ Ada", "student 2"} else None  # she has solved it
 
             wait_for(named_tools, what="the students' names by their tools")
             solved, working = teacher_member.tools.solved, teacher_member.tools.working

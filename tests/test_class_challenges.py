@@ -14,7 +14,7 @@ from ur10core.dh import DHTable
 from ur10core.orientation import zyx_euler
 from ur10teach.features.branch_labels import JOIN
 from ur10teach.features.arm_picker import ARM_CHOICES
-from ur10teach.features.challenge import GOAL_RADIUS, GOAL_ROOT
+from ur10teach.features.challenge import GOAL_RADIUS, GOAL_ROOT, SOLVED_MARK
 from ur10teach.features.course_arms.editor import CONVENTIONS
 from ur10teach.features.joint_panel import display_text, rate_label, typed_label
 from ur10teach.serving.gate import address_of
@@ -167,7 +167,9 @@ def test_thirty_students_every_kind_and_the_projector_counts_exactly(classroom):
                     return set() if tools is None or tools.names is None else {
                         name for label in tools.names.labels if label.visible for name in label.text.split(JOIN)}
 
-                await until(lambda: named() == here, what="the students' names in 3D")
+                solved_names = {SOLVED_MARK + member_of(k).student.name for k, plan in enumerate(PLAN) if plan == "right"}
+                await until(lambda: named() == (here - {name.removeprefix(SOLVED_MARK) for name in solved_names}) | solved_names,
+                            what="the students' names in 3D, a solved one marked")
                 # a dot at each tool: green for the solved, drawn larger than the orange ones (a crowd of working
                 # students round the target covered the green dots there), and larger than the target's ball
                 tools = room.presenter.tools

@@ -32,6 +32,8 @@ MAX_NAMES = 120
 #: The target's ball (radius, m), and the dots' sizes: a solved student's tool is on the target, and its dot is
 #: drawn larger than the ball and the working students' dots (twenty students round the target hid the green ones).
 GOAL_RADIUS, WORKING_DOT, SOLVED_DOT = 0.02, 0.03, 0.065
+#: Before a solved student's name in 3D (a label has no colour of its own, and names at one spot merge).
+SOLVED_MARK = "✓ "
 
 
 def challenge_markdown(challenge: Challenge, time_limit: float | None = None) -> str:
@@ -196,8 +198,8 @@ class GoalMarker:
 
 
 class ClassTools:
-    """Every student's tool on the projector: a dot each (orange working, green solved) and their names,
-    placed apart for the projector's camera as the branch numbers are (names at one spot read as one)."""
+    """Every student's tool on the projector: a dot each (orange working, green solved) and their names (a solved
+    one marked ✓), placed apart for the projector's camera as the branch numbers are (names at one spot read as one)."""
 
     def __init__(self, scene: viser.SceneApi, world: np.ndarray, view: Callable[[], ScreenView], lecture: bool = False,
                  fixed: Callable[[], list[tuple]] = lambda: []) -> None:
@@ -229,7 +231,8 @@ class ClassTools:
                 dots.visible = bool(which.any())
         shown = min(len(names), MAX_NAMES)  # beyond it, a dot without a name
         if shown or self.names is not None:
-            self._pool(shown).show(points[:shown], names[:shown])
+            self._pool(shown).show(points[:shown], [SOLVED_MARK + name if done else name
+                                                    for name, done in zip(names[:shown], solved)])
 
     def place(self) -> None:
         """The projector's camera moved: its names placed apart again."""
