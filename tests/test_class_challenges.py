@@ -480,3 +480,50 @@ def test_a_singularity_challenge_is_not_answered_by_the_singularity_buttons(clas
             await client.close()
 
     asyncio.run(scenario())
+
+
+def test_the_projector_frames_a_students_tool_that_has_left_its_view_unless_the_teacher_has_turned_it(classroom):
+    """A class spread over the workspace had most of its tools off the projector's canvas in lecture mode, their
+    names piled at its edge. The projector's camera now frames them all again when one leaves the view, unless the
+    teacher has moved the camera since it was framed."""
+    from ur10core.orientation import from_frame
+    from ur10teach.features.branch_labels import ScreenView
+
+    async def scenario():
+        teacher, student, member = await a_student_in(classroom, "Reach the target", "127.0.0.9")
+        presenter, world, arm = classroom.classroom.presenter, classroom.classroom.drawing.world, member.session.arm
+
+        def seen(point) -> bool:  # on the projector's canvas
+            view = ScreenView.of(presenter.client.camera)
+            pixels, depth = view.to_screen(np.asarray(point)[None])
+            return bool(depth[0] > 0 and (np.abs(pixels[0]) <= (view.width / 2, view.height / 2)).all())
+
+        def tool_out_of_view(seed: int) -> tuple[np.ndarray, np.ndarray]:
+            q = next(q for q in arm.sample_joints(5000, seed=seed) if not seen(from_frame(world, arm.fk(q)[:3, 3])))
+            return q, from_frame(world, arm.fk(q)[:3, 3])
+
+        def dot_at(tool) -> bool:
+            tools = presenter.tools
+            return tools is not None and tools.working.visible and np.allclose(tools.working.points, tool, atol=3e-3)
+
+        def camera(position, look_at, width: int = 1280, height: int = 800):  # what the projector's browser reports
+            return messages.ViewerCameraMessage(wxyz=(0.0, 0.0, 0.0, 1.0), position=position, fov=0.87, near=0.01, far=100.0,
+                                                image_height=height, image_width=width, look_at=look_at, up_direction=(0, 0, 1.0))
+
+        await teacher.send(camera((2.1, -1.9, 1.4), (0.2, 0.0, 0.5), 1920, 1080))  # its canvas, on the projector
+        await until(lambda: not np.allclose(presenter.client.camera.position, (2.1, -1.9, 1.4)), what="the projector framed")
+        q, tool = tool_out_of_view(1)
+        member.session.apply(lambda state: state.set_joints(q))
+        await until(lambda: dot_at(tool) and seen(tool), what="the projector framing the student's tool")
+        # the teacher turns the camera to a view of their own: it stays, wherever the student goes
+        turned = camera((0.9, -0.6, 0.8), (0.4, 0.0, 0.6), 1920, 1080)
+        await teacher.send(turned)
+        await until(lambda: np.allclose(presenter.client.camera.position, turned.position), what="the teacher's own view")
+        q, tool = tool_out_of_view(2)
+        member.session.apply(lambda state: state.set_joints(q))
+        await until(lambda: dot_at(tool), what="the student's dot moved on the projector")
+        assert np.allclose(presenter.client.camera.position, turned.position) and not seen(tool)
+        for client in (teacher, student):
+            await client.close()
+
+    asyncio.run(scenario())

@@ -124,6 +124,7 @@ class CameraControls(View):
         self._guard = guard
         self.closed = False
         self._framed_size: tuple[int, int] | None = None
+        self._framed_at: tuple[np.ndarray, np.ndarray] | None = None  #: (position, look_at) this framed the camera at
         #: called whenever the camera moves (the branch numbers are placed for it)
         self.on_moved: list[Callable[[], None]] = []
         #: what else is drawn and framed with the arm, by what draws it: a cloud, a path
@@ -175,6 +176,23 @@ class CameraControls(View):
         if now:
             self.frame()
 
+    def keep_in_view(self, name: str, points: np.ndarray | None) -> None:
+        """Keep world ``points`` in view with the arm (:meth:`show_also`), and frame them all at once when one has
+        left the canvas, unless the camera has been moved since this framed it (a view the user chose stays)."""
+        self.show_also(name, points, now=False)
+        if points is None or self.closed or not self._where_framed():
+            return
+        view = ScreenView.of(self._client.camera)
+        pixels, depth = view.to_screen(self.extra[name])
+        if (depth <= 0).any() or (np.abs(pixels) > (view.width / 2, view.height / 2)).any():
+            self.frame()
+
+    def _where_framed(self) -> bool:
+        """The camera is where this last framed it."""
+        camera, framed = self._client.camera, self._framed_at
+        return framed is not None and np.allclose(camera.position, framed[0], atol=1e-3) and np.allclose(
+            camera.look_at, framed[1], atol=1e-3)
+
     def look_from(self, direction) -> None:
         """Frame everything drawn (the arm, its ghosts, its target, :attr:`extra`) from ``direction``."""
         if self.closed:
@@ -186,5 +204,6 @@ class CameraControls(View):
             camera.up_direction = (0.0, 0.0, 1.0)
             camera.position = position
             camera.look_at = look_at  # after the position: viser moves both together otherwise
+        self._framed_at = (position, look_at)
         for moved in self.on_moved:  # placed for where the camera is going (the browser reports only a change)
             moved()

@@ -202,9 +202,11 @@ class ClassTools:
     one marked ✓), placed apart for the projector's camera as the branch numbers are (names at one spot read as one)."""
 
     def __init__(self, scene: viser.SceneApi, world: np.ndarray, view: Callable[[], ScreenView], lecture: bool = False,
-                 fixed: Callable[[], list[tuple]] = lambda: []) -> None:
+                 fixed: Callable[[], list[tuple]] = lambda: [],
+                 keep_in_view: Callable[[np.ndarray | None], None] = lambda points: None) -> None:
         self._scene, self._world, self._view, self._scale = scene, world, view, label_scale(1.2, lecture)
         self._fixed = fixed  #: the labels already on the projector (branch numbers, the target's name), in the world: kept clear of
+        self._keep_in_view = keep_in_view  #: the projector's camera keeps the tools (world points) in view; None: no more
         self.working, self.solved = (
             scene.add_point_cloud(f"{CLASS_ROOT}/{name}", np.zeros((1, 3), np.float32), colour, point_size=size,
                                   point_shape="circle", visible=False)
@@ -229,6 +231,7 @@ class ClassTools:
                 dots.colors = np.tile(np.array(colour, np.uint8), (int(which.sum()), 1))
             if dots.visible != bool(which.any()):
                 dots.visible = bool(which.any())
+        self._keep_in_view(points if len(names) else None)
         shown = min(len(names), MAX_NAMES)  # beyond it, a dot without a name
         if shown or self.names is not None:
             self._pool(shown).show(points[:shown], [SOLVED_MARK + name if done else name
@@ -245,6 +248,7 @@ class ClassTools:
             self.names = None
 
     def remove(self) -> None:
+        self._keep_in_view(None)
         self.working.remove()
         self.solved.remove()
         self._remove_names()

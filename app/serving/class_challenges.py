@@ -250,7 +250,8 @@ class ClassChallenges:
         if self.run is not None and member.tools is None and self.run.challenge.is_pose:
             drawing = self.room.drawing
             member.tools = ClassTools(member.client.scene, drawing.world, lambda: screen_view(member.client), self.room.app.lecture,
-                                      fixed=lambda: [*in_world(drawing.label_sets), *member.goal_name(np.eye(4))])
+                                      fixed=lambda: [*in_world(drawing.label_sets), *member.goal_name(np.eye(4))],
+                                      keep_in_view=lambda points: member.camera.keep_in_view("class", points))
             member.camera.on_moved.append(member.tools.place)
         if member.tools is not None and self.run is not None:
             member.tools.show(self.run)
