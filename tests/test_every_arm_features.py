@@ -200,14 +200,16 @@ def overlapping_labels(session, also=()) -> tuple[list[str], list[tuple[str, str
     pools = (session.names, *session.drawing.label_sets)
     placed, view = [], None
     with session.names.placing:  # not placed again by the panel's refresher while they are read
-        while view != pools[0].view():  # for one camera: a framing may still be arriving from the browser
-            view = pools[0].view()
+        # for one camera, the same before the placing and after the reading: a framing may still be arriving from the
+        # browser, and a camera move (a map turning the camera to face its plane) places them again for the new one
+        while view is None or view != pools[0].view():
+            view, placed = pools[0].view(), []
             place_in_order(pools)
-        for pool in pools:
-            scale = pool.labels[0].font_screen_scale if pool.labels else 1.0
-            for _, text, position in pool.placed:  # in the arm's base frame (the desktop arm's y is up)
-                seen = np.asarray(position, dtype=float) @ world[:3, :3].T + world[:3, 3]
-                placed.append((text, boxes(view.to_screen(seen[None])[0], [text], scale)[0]))
+            for pool in pools:
+                scale = pool.labels[0].font_screen_scale if pool.labels else 1.0
+                for _, text, position in pool.placed:  # in the arm's base frame (the desktop arm's y is up)
+                    seen = np.asarray(position, dtype=float) @ world[:3, :3].T + world[:3, 3]
+                    placed.append((text, boxes(view.to_screen(seen[None])[0], [text], scale)[0]))
     stay = [(text, boxes(view.to_screen(np.array([position], dtype=float))[0], [text], scale, anchor)[0])
             for position, text, scale, anchor in also]
     clashes = [(a, b) for k, (a, box_a) in enumerate(placed) for b, box_b in [*placed[k + 1:], *stay]
