@@ -515,6 +515,12 @@ def test_the_projector_frames_a_students_tool_that_has_left_its_view_unless_the_
         q, tool = tool_out_of_view(1)
         member.session.apply(lambda state: state.set_joints(q))
         await until(lambda: dot_at(tool) and seen(tool), what="the projector framing the student's tool")
+        # elsewhere out of view: framed again, with where the class has been (the camera settles, not hops)
+        earlier = tool
+        q, tool = tool_out_of_view(3)
+        member.session.apply(lambda state: state.set_joints(q))
+        await until(lambda: dot_at(tool) and seen(tool), what="the projector framing the student's new place")
+        assert seen(earlier), "the projector lost where the student was before"
         # the teacher turns the camera to a view of their own: it stays, wherever the student goes
         turned = camera((0.9, -0.6, 0.8), (0.4, 0.0, 0.6), 1920, 1080)
         await teacher.send(turned)

@@ -6,6 +6,7 @@ What is checked and how is ``ur10core.challenges``; who is in a run, ``ur10teach
 from __future__ import annotations
 
 import html
+import itertools
 from typing import Callable
 
 import numpy as np
@@ -207,6 +208,7 @@ class ClassTools:
         self._scene, self._world, self._view, self._scale = scene, world, view, label_scale(1.2, lecture)
         self._fixed = fixed  #: the labels already on the projector (branch numbers, the target's name), in the world: kept clear of
         self._keep_in_view = keep_in_view  #: the projector's camera keeps the tools (world points) in view; None: no more
+        self._reached: np.ndarray | None = None  #: (2, 3) the box round every tool seen in this challenge (world)
         self.working, self.solved = (
             scene.add_point_cloud(f"{CLASS_ROOT}/{name}", np.zeros((1, 3), np.float32), colour, point_size=size,
                                   point_shape="circle", visible=False)
@@ -231,7 +233,11 @@ class ClassTools:
                 dots.colors = np.tile(np.array(colour, np.uint8), (int(which.sum()), 1))
             if dots.visible != bool(which.any()):
                 dots.visible = bool(which.any())
-        self._keep_in_view(points if len(names) else None)
+        if len(names):  # the box round everywhere a tool has been only grows: the projector's camera settles
+            ends = np.array([points.min(axis=0), points.max(axis=0)])
+            self._reached = ends if self._reached is None else np.array([np.minimum(self._reached[0], ends[0]),
+                                                                           np.maximum(self._reached[1], ends[1])])
+            self._keep_in_view(np.array(list(itertools.product(*self._reached.T))))
         shown = min(len(names), MAX_NAMES)  # beyond it, a dot without a name
         if shown or self.names is not None:
             self._pool(shown).show(points[:shown], [SOLVED_MARK + name if done else name
