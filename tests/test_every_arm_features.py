@@ -13,6 +13,7 @@ import math
 import numpy as np
 import pytest
 
+from ur10core.orientation import from_frame
 from ur10teach.features.arm_picker import ARM_CHOICES
 from ur10teach.features.joint_panel import rate_label
 from ur10teach.features.statics import bars_html
@@ -208,7 +209,7 @@ def overlapping_labels(session, also=()) -> tuple[list[str], list[tuple[str, str
             for pool in pools:
                 scale = pool.labels[0].font_screen_scale if pool.labels else 1.0
                 for _, text, position in pool.placed:  # in the arm's base frame (the desktop arm's y is up)
-                    seen = np.asarray(position, dtype=float) @ world[:3, :3].T + world[:3, 3]
+                    seen = from_frame(world, position)
                     placed.append((text, boxes(view.to_screen(seen[None])[0], [text], scale)[0]))
     stay = [(text, boxes(view.to_screen(np.array([position], dtype=float))[0], [text], scale, anchor)[0])
             for position, text, scale, anchor in also]
@@ -268,7 +269,7 @@ def test_the_placed_labels_keep_clear_of_the_branch_count_maps_legend(app, label
         image = view.image
         legend = next(node for node in labels_of(session.client.scene) if node.name == f"{image.name}/legend")
         pose = transform_from_quaternion(np.asarray(image.wxyz), np.asarray(image.position))
-        where = pose[:3, :3] @ np.asarray(legend.position) + pose[:3, 3]  # in the scene, from the image's own pose
+        where = from_frame(pose, legend.position)  # in the scene, from the image's own pose
         placed, clashes = overlapping_labels(session, also=[(where, legend.text, legend.font_screen_scale, legend.anchor)])
         assert placed and not clashes, f"overlapping: {clashes}"
         await client.close()
@@ -291,7 +292,7 @@ def test_the_torque_map_and_the_cloud_are_framed_with_the_arm_and_the_legend_is_
         world, statics, workspace = session.drawing.world, session.statics, session.workspace
 
         def seen(points):  # (n, 3) from the arm's base frame into the scene
-            return np.asarray(points, dtype=float) @ world[:3, :3].T + world[:3, 3]
+            return from_frame(world, points)
 
         def in_view(points) -> bool:  # every one in front of this browser's camera and within its canvas
             view = ScreenView.of(session.client.camera)

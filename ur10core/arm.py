@@ -382,9 +382,8 @@ class Arm(JacobianUses, HasSpecs):
         >>> np.degrees(q).round(9).tolist()   # θ5 turned to 0: axes 4 and 6 in line
         [10.0, 20.0, -30.0, 40.0, 0.0, 60.0]
         """
-        own = getattr(self.solver, "singular_configuration", None)
-        if own is not None:
-            return own(kind, q)
+        if self.singularities_in_closed_form:
+            return self.solver.singular_configuration(kind, q)
         names = self.factor_names
         if kind not in names:
             raise ValueError(f"{self.name!r} has no {kind!r} singularity: its factors of det J are {', '.join(names)}")
