@@ -142,6 +142,26 @@ def test_every_arm_is_put_on_each_of_its_singularities_by_its_buttons(app, label
 
 
 @pytest.mark.parametrize("label", EVERY_ARM)
+def test_each_branch_of_every_arm_has_a_number_of_its_own_where_it_parts_from_the_others(app, label):
+    """At the arm's first pose, each pose of its branches carries its own number ("3 = 4" where two coincide), by
+    the joint where they part. Until 2026-12-03 the SCARA's went by its wrist, which both its branches share:
+    one label "arm: 1 · 2" there, and the other branch's elbow had none."""
+    from ur10teach.features.ik_target import same_pose_groups
+
+    async def scenario():
+        client = await ViserClient(url(app)).connect()
+        session = await pick(app, client, label)
+        numbers, snapshot = session.drawing.label_sets[-1], session.state.last
+        poses = same_pose_groups(snapshot.ghost_frames, snapshot.solution.valid)
+        await until(lambda: len(numbers.placed) == len(poses), what="a number for each pose")
+        for members, text, _ in numbers.placed:
+            assert len(members) == 1, f"{text!r}: branches of different poses in one label"
+        await client.close()
+
+    asyncio.run(scenario())
+
+
+@pytest.mark.parametrize("label", EVERY_ARM)
 def test_the_workspace_cloud_of_every_arm_is_its_own(app, label):
     """The cloud drawn is the arm's own sampled workspace, under the arm's own root."""
     async def scenario():

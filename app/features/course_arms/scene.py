@@ -3,7 +3,8 @@
 The arm is drawn as the DH method builds it: from each frame origin to the next along d
 and a (:func:`skeleton`), a short rod along each joint axis (a box for a prismatic joint),
 and, optionally, the x and z axes of every frame with their names (:mod:`..dh_frames`). Each IK slot is a ghost skeleton in
-its slot colour with discs at its joints and its number by its middle joint, as the UR10's ghosts are.
+its slot colour with discs at its joints and its number by the joint where the branches part, as the UR10's
+ghosts are by their elbows.
 """
 
 from __future__ import annotations
@@ -20,7 +21,7 @@ from ...style import JOINT_CAP_GREY, SLOT_COLORS
 from ...viser_internals.fast_updates import set_orientations, set_positions
 from ..branch_labels import BranchLabels, chain
 from ..dh_frames import DHFrames, show
-from ..ik_target import ALL_BRANCHES, add_unreachable_halo, focused, numbered
+from ..ik_target import ALL_BRANCHES, SAME_POSE, add_unreachable_halo, focused, numbered
 from ..singularity import SingularityOverlay, has_overlay
 
 ROOT = "/course_arm"
@@ -48,6 +49,18 @@ def skeleton(table: DHTable, frames: np.ndarray) -> np.ndarray:
     segments = np.stack([points[:-1], points[1:]], axis=-2)
     long = np.linalg.norm(segments[:, 1] - segments[:, 0], axis=-1) > 1e-9
     return segments[long] if long.any() else segments[:1]
+
+
+def label_frame(arm: Arm, first: Snapshot) -> int:
+    """The frame by whose origin each branch's number goes: the one at which most of ``first``'s branches are
+    apart (the SCARA's elbow, not its wrist, which both its branches share), the middle joint where that is
+    one of them or where there are no branches yet (a typed table before its search)."""
+    middle = arm.dh.joint_rows[min(2, arm.n_joints - 1)] + (0 if arm.convention == "standard" else 1)
+    if first.solution is None:
+        return middle
+    origins = first.ghost_frames[first.solution.valid, :, :3, 3]
+    pairs_apart = (np.linalg.norm(origins[:, None] - origins[None], axis=-1) > SAME_POSE).sum(axis=(0, 1))
+    return middle if pairs_apart[middle] == pairs_apart.max() else int(pairs_apart.argmax())
 
 
 def rod_rotations(axes: np.ndarray) -> np.ndarray:
@@ -162,7 +175,7 @@ class CourseArmScene(LineDrawing):
             self.joints.append(rod)
         #: the DH frames, x and z named, and a row's parameters (the DH folders switch them)
         self.dh_frames = DHFrames(scene, arm, first.frames, size, root)
-        self._label_frame = arm.dh.joint_rows[min(2, arm.n_joints - 1)] + (0 if arm.convention == "standard" else 1)
+        self._label_frame = label_frame(arm, first)
         self._add_ghosts(scene, arm, segments, 0.009 * size, 0.04 * size)
         #: det J's factors in 3D (a preset's; a typed table's det J is not derived)
         self.overlay = SingularityOverlay(scene, arm, first, size, root) if has_overlay(arm) else None
@@ -194,7 +207,7 @@ class CourseArmScene(LineDrawing):
         return skeleton(self._arm.dh, frames)
 
     def _ghost_label(self, frames: np.ndarray) -> np.ndarray:
-        return frames[self._label_frame, :3, 3]  # the middle joint
+        return frames[self._label_frame, :3, 3]
 
     def _ghost_joints(self, frames: np.ndarray) -> np.ndarray:
         return self._arm.dh.joint_axes(frames)[1]
