@@ -1,8 +1,8 @@
 """The branch numbers (and the DH frames' names) in 3D, placed so that no two overlap on the screen, for any arm.
 
-Numbers whose points fall together on the screen (the elbow arm's four branches that share an
-elbow) become one label, "1 · 2 · 5 · 6"; a label whose spot is taken moves to the nearest free
-one, with a leader line back to its point. Placed for the browser's own camera as it moves, and
+Numbers whose points fall together on the screen (two elbows in line with the camera) become one
+label, "1 · 2"; a label whose spot is taken moves to the nearest free one, with a leader line back
+to its point. Placed for the browser's own camera as it moves, and
 for the camera a browser frames the classroom's shared scene with (docs/architecture.md §8).
 """
 
@@ -34,8 +34,8 @@ GAP_PX = 6.0
 JOIN = " · "
 #: A leader line's colour where a label's point has none of its own.
 LEADER_GREY = (90, 94, 102)
-#: Labels whose points are this close on the screen (px) read as one: the elbow arm's four branches that
-#: share an elbow. Farther apart, a label that overlaps another moves to a free spot (OFFSETS) instead.
+#: Labels whose points are this close on the screen (px) read as one (two elbows in line with the camera).
+#: Farther apart, a label that overlaps another moves to a free spot (OFFSETS) instead.
 MERGE_PX = 14.0
 #: Where a label that would overlap another is tried instead, in label heights from its point, nearest first:
 #: up, then the other seven directions, out to eight heights (a leader line joins it to its point). A long
