@@ -140,8 +140,7 @@ def shoot_a_challenge(name: str) -> None:
             teacher = next(iter(room.members.values()))
             thread.start()
             wait_for(lambda: len(room.members) == 1 + len(CLASS), what="the class")
-            ask_to_present(page, teacher, room.code)
-            wait_for(lambda: teacher.desk is not None, what="the Challenge folder")
+            ask_to_present(page, teacher, room.code, lambda: teacher.desk is not None, "the Challenge folder")
             room.challenges.start(teacher, next(c for c in room.challenges.offered if c.title == "Reach the target"), 600.0)
             members = [m for m in room.members.values() if m is not teacher]
             wait_for(lambda: all(m.card is not None for m in members), what="every student's card")

@@ -83,3 +83,18 @@ def test_a_presenter_and_two_students_run_a_reach_challenge(tmp_path):
             wait_for(lambda: teacher.get_by_text("Ended").count() > 0, what="the end on the projector")
     finally:
         app.stop()
+
+
+def test_the_script_takes_the_readmes_projector_screenshot(tmp_path, monkeypatch):
+    """``scripts/screenshots.py`` is run by hand to retake the README's pictures, so nothing else noticed when it
+    broke: until 2026-12-03 its projector shot called ``ask_to_present`` as it was before the helper took what to
+    wait for, and failed. It takes the shot here, into a folder of the test's own."""
+    from PIL import Image
+
+    import scripts.screenshots as screenshots
+
+    monkeypatch.setattr(screenshots, "OUT", tmp_path)
+    screenshots.shoot_a_challenge("projector.png")
+    pixels = np.asarray(Image.open(tmp_path / "projector.png").convert("RGB"), dtype=float)
+    assert pixels.shape == (screenshots.WINDOW["height"], screenshots.WINDOW["width"], 3)
+    assert pixels.std() > 20, "a blank picture"
