@@ -188,6 +188,45 @@ def test_a_typed_dh_table_becomes_an_arm_with_numerical_ik(app):
     asyncio.run(scenario())
 
 
+def test_a_typed_tables_branches_are_numbered_where_they_part_once_searched(app):
+    """A typed SCARA (RRP) has two elbows over one wrist: its numbers go by the elbows, chosen from the branches its
+    search finds. (The SCARA preset's went by the wrist until 2026-12-03: one label, "arm: 1 · 2".)"""
+    async def scenario():
+        client = await ViserClient(url(app)).connect()
+        session = await pick(app, client, CUSTOM)
+        typed = await build_table(app, client, "400 0 0 0 R\n300 0 0 0 R\n0 0 0 0 P", "RRP", session)
+        goal = typed.arm.fk(np.array([0.5, 1.0, 0.1]))
+        await client.drag_target(goal[:3, 3], wxyz_of(goal), "start", name=TARGET)
+        await until(lambda: np.abs(typed.arm.fk(typed.state.last.q)[:3, 3] - goal[:3, 3]).max() < 1e-9,
+                    what="the typed arm at the target")
+        await client.set_gui("Find every branch", True)
+        await until(lambda: typed.state.last.solution is not None and len(typed.drawing.numbers.placed) == 2,
+                    what="both elbows numbered")
+        assert [members for members, _, _ in typed.drawing.numbers.placed] == [(0,), (1,)]
+        await client.close()
+
+    asyncio.run(scenario())
+
+
+def test_the_scaras_numbers_go_by_its_elbows_after_it_came_back_on_its_singularity(app):
+    """Where the arm is first drawn on a singularity (its branches together), the frame its numbers go by is
+    chosen once they are apart: a SCARA left stretched and picked again numbers its elbows once it bends."""
+    async def scenario():
+        client = await ViserClient(url(app)).connect()
+        scara = await pick(app, client, "SCARA (RRP + roll)")
+        await client.set_gui("θ2 (°)", 0.0)
+        await until(lambda: scara.state.last.q[1] == 0.0, what="the SCARA stretched")
+        await pick(app, client, "Planar elbow (2R)")
+        scara = await pick(app, client, "SCARA (RRP + roll)")
+        assert scara.state.last.q[1] == 0.0 and int(scara.state.last.solution.valid.sum()) == 2
+        await client.set_gui("θ2 (°)", 60.0)
+        await until(lambda: [members for members, _, _ in scara.drawing.numbers.placed] == [(0,), (1,)],
+                    what="both elbows numbered")
+        await client.close()
+
+    asyncio.run(scenario())
+
+
 def test_parse_table_refuses_what_is_not_a_table():
     from ur10teach.features.course_arms.editor import parse_table
 

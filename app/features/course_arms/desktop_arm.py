@@ -132,8 +132,8 @@ class DesktopArmScene(LineDrawing):
     def _ghost_lines(self, frames: np.ndarray) -> np.ndarray:
         return self._links(self._points(frames))[1:]
 
-    def _ghost_label(self, frames: np.ndarray) -> np.ndarray:
-        return self._points(frames)[2]  # the elbow
+    def _ghost_labels(self, snapshot: Snapshot) -> np.ndarray:
+        return np.array([self._points(frames)[2] for frames in snapshot.ghost_frames])  # the elbows
 
     def _ghost_joints(self, frames: np.ndarray) -> np.ndarray:
         return self._points(frames)[2:]  # the elbow and the tool (the shoulder is the solid arm's)

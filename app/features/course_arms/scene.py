@@ -51,15 +51,20 @@ def skeleton(table: DHTable, frames: np.ndarray) -> np.ndarray:
     return segments[long] if long.any() else segments[:1]
 
 
-def label_frame(arm: Arm, first: Snapshot) -> int:
-    """The frame by whose origin each branch's number goes: the one at which most of ``first``'s branches are
-    apart (the SCARA's elbow, not its wrist, which both its branches share), the middle joint where that is
-    one of them or where there are no branches yet (a typed table before its search)."""
-    middle = arm.dh.joint_rows[min(2, arm.n_joints - 1)] + (0 if arm.convention == "standard" else 1)
-    if first.solution is None:
-        return middle
-    origins = first.ghost_frames[first.solution.valid, :, :3, 3]
+def middle_frame(arm: Arm) -> int:
+    """The frame at the arm's middle joint (its third, or its last of fewer)."""
+    return arm.dh.joint_rows[min(2, arm.n_joints - 1)] + (0 if arm.convention == "standard" else 1)
+
+
+def label_frame(arm: Arm, snapshot: Snapshot) -> int | None:
+    """The frame by whose origin each branch's number goes: the one at which most of ``snapshot``'s branches
+    are apart (the SCARA's elbow, not its wrist, which both its branches share), the middle joint where that
+    is one of them; None where they are apart nowhere (one branch, or all together on a singularity)."""
+    origins = snapshot.ghost_frames[snapshot.solution.valid, :, :3, 3]
     pairs_apart = (np.linalg.norm(origins[:, None] - origins[None], axis=-1) > SAME_POSE).sum(axis=(0, 1))
+    if not pairs_apart.any():
+        return None
+    middle = middle_frame(arm)
     return middle if pairs_apart[middle] == pairs_apart.max() else int(pairs_apart.argmax())
 
 
@@ -120,8 +125,7 @@ class LineDrawing:
         if snapshot.solution is None:  # a typed table not searched yet: no branches to number
             self.numbers.show(np.zeros((0, 3)), [])
             return
-        anchors = np.array([self._ghost_label(frames) for frames in snapshot.ghost_frames])
-        self.numbers.show(anchors, numbered(snapshot, self.show_ghosts, self.focus))
+        self.numbers.show(self._ghost_labels(snapshot), numbered(snapshot, self.show_ghosts, self.focus))
 
     def _add_ghosts(self, scene: viser.SceneApi, arm: Arm, segments: np.ndarray, thickness: float, disc: float) -> None:
         """One skeleton per slot in its colour with a disc at each joint, and the numbers (hidden until a branch is there)."""
@@ -175,7 +179,7 @@ class CourseArmScene(LineDrawing):
             self.joints.append(rod)
         #: the DH frames, x and z named, and a row's parameters (the DH folders switch them)
         self.dh_frames = DHFrames(scene, arm, first.frames, size, root)
-        self._label_frame = label_frame(arm, first)
+        self._label_frame: int | None = None  #: chosen from the first branches apart (a typed table's come with its search)
         self._add_ghosts(scene, arm, segments, 0.009 * size, 0.04 * size)
         #: det J's factors in 3D (a preset's; a typed table's det J is not derived)
         self.overlay = SingularityOverlay(scene, arm, first, size, root) if has_overlay(arm) else None
@@ -206,8 +210,11 @@ class CourseArmScene(LineDrawing):
     def _ghost_lines(self, frames: np.ndarray) -> np.ndarray:
         return skeleton(self._arm.dh, frames)
 
-    def _ghost_label(self, frames: np.ndarray) -> np.ndarray:
-        return frames[self._label_frame, :3, 3]
+    def _ghost_labels(self, snapshot: Snapshot) -> np.ndarray:
+        if self._label_frame is None:  # chosen once the branches are apart somewhere, kept from then on
+            self._label_frame = label_frame(self._arm, snapshot)
+        frame = self._label_frame if self._label_frame is not None else middle_frame(self._arm)
+        return snapshot.ghost_frames[:, frame, :3, 3]
 
     def _ghost_joints(self, frames: np.ndarray) -> np.ndarray:
         return self._arm.dh.joint_axes(frames)[1]
