@@ -15,7 +15,7 @@ from ur10dev.browser import (
     click, drawn_frames, project, set_checkbox, settled_canvas, unfold,
 )
 from ur10dev.waiting import wait_for
-from ur10teach.features.arm_picker import ARM_CHOICES, CUSTOM
+from ur10teach.features.arm_picker import ARM_CHOICES, CUSTOM, panel_title
 from ur10teach.features.branch_labels import ScreenView
 from ur10teach.features.camera import arm_points
 from ur10teach.style import ALUMINIUM, JOINT_CAP_GREY
@@ -110,9 +110,18 @@ def steady_boxes(page, session) -> list[tuple[str, tuple[float, float, float, fl
     return wait_for(measured, what="the labels measured at rest")
 
 
+def title_cut(page, title: str) -> bool:
+    """Whether the panel's ``title`` is cut short on the screen (it ends in "…"), once the panel shows it."""
+    return wait_for(lambda: page.evaluate("""title => {
+        const shown = [...document.querySelectorAll('div')].filter(e => e.childElementCount === 0 && e.textContent === title);
+        return shown.length ? [shown.some(e => e.scrollWidth > e.clientWidth)] : null;
+    }""", title), what=f"the title {title!r}")[0]
+
+
 def test_no_two_3d_labels_overlap_for_any_arm_at_home_or_at_a_singularity(open_page, light_app):
     """Issue 30: the elbow arm's 1, 2, 5 and 6 stacked into one blot, the KR210's 3 and 4, the UR10's
-    "1" and "8" read as "18". No two labels a student sees overlap on the screen."""
+    "1" and "8" read as "18". No two labels a student sees overlap on the screen. And the panel's title, the
+    arm's name, is read whole (until 2026-12-03 four arms' ended "…: kin…" in lecture mode at 1280 px)."""
     page, session = open_page()
     client_id = next(k for k, v in light_app.sessions.items() if v is session)
     failures, seen = [], 0
@@ -121,6 +130,9 @@ def test_no_two_3d_labels_overlap_for_any_arm_at_home_or_at_a_singularity(open_p
             continue
         if session.choice != choice:
             session = pick(page, light_app, client_id, choice)
+        title = panel_title(choice, light_app.arm.name)
+        if title_cut(page, title):
+            failures.append(f"{choice}: the title {title!r} is cut short")
         kinds = session.singularities.demo.options if session.singularities.demo is not None else ()
         for kind in (None, *kinds):
             if kind is not None:

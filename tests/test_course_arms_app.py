@@ -566,7 +566,7 @@ def test_going_back_to_an_arm_finds_its_pose_target_typed_table_and_display_as_l
         typed = await pick(app, client, CUSTOM)
         await build_table(app, client, "500 0 0 0 R\n400 0 0 0 R", "RR", typed)
 
-        await until(lambda: client.received.panel_label == f"{CUSTOM}: kinematics", what="the title naming the arm")
+        await until(lambda: client.received.panel_label == CUSTOM, what="the title naming the arm")
         back = await pick(app, client, UR10)
         assert back.state.last is ur10_left  # the pose, target and branches as left
         await until(lambda: client.received.panel_label == "UR10 kinematics (course)", what="the UR10's title")

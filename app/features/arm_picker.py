@@ -40,8 +40,9 @@ assert set(ARM_CHOICES.values()) - {None, "custom", "three_dof"} == set(PRESETS)
 
 
 def panel_title(choice: str, preset: str) -> str:
-    """The panel's title: the arm it shows (``choice``, an :data:`ARM_CHOICES` label; ``preset``, the UR10's numbers)."""
-    return f"UR10 kinematics ({preset})" if choice == UR10 else f"{choice}: kinematics"
+    """The panel's title: the arm it shows (``choice``, an :data:`ARM_CHOICES` label; ``preset``, the UR10's numbers),
+    short enough to be read whole in lecture mode on a projector (no ": kinematics" after the arm's name)."""
+    return f"UR10 kinematics ({preset})" if choice == UR10 else choice
 
 
 #: What the classroom's presenter can show the class: a typed table is for one's own browser.
