@@ -743,6 +743,31 @@ def test_a_course_arms_ghosts_leave_out_what_lies_on_the_solid_arm_and_number_ev
     asyncio.run(scenario())
 
 
+@pytest.mark.parametrize("label", [label for label, name in ARM_CHOICES.items() if name not in (None, "custom")])
+def test_no_ghosts_disc_sits_on_a_joint_of_the_solid_arm(app, label):
+    """A ghost's joints are discs in its colour; where one fell on a joint of the solid arm, the arm's joint took
+    that colour (until 2026-12-03 the SCARA's other elbow put orange discs on the arm's base and wrist, every
+    course arm's ghosts on its base, the desktop arm's on its tool)."""
+    from ur10teach.features.ik_target import same_pose_groups
+
+    async def scenario():
+        client = await ViserClient(url(app)).connect()
+        session = await pick(app, client, label)
+        drawing = session.drawing
+        tool = getattr(drawing, "tool", None)  # the desktop arm's tool frame; a DH skeleton's tool is its last joint's
+        solid = [joint.position for joint in drawing.joints] + ([tool.position] if tool is not None else [])
+        with_discs = [k for k, discs in enumerate(drawing.ghost_joints) if discs.visible and drawing.ghosts[k].visible]
+        poses = same_pose_groups(session.state.last.ghost_frames, session.state.last.solution.valid)
+        assert with_discs or len(poses) == 1, "no ghost drawn with its joints"  # the cylindrical arm's two are one
+        for k in with_discs:
+            points = np.asarray(drawing.ghost_joints[k].points)
+            nearest = np.linalg.norm(points[:, None] - np.array(solid)[None], axis=-1).min(axis=1)
+            assert (nearest > 1e-4).all(), f"ghost {k + 1} has a disc on a joint of the solid arm"
+        await client.close()
+
+    asyncio.run(scenario())
+
+
 def test_the_planar_elbows_typed_target_is_a_point_of_its_plane(app):
     """The planar elbow moves in its plane z = 0, but its typed target asked for x y z and dropped the z
     it was given without a word (until 2026-12-03): it asks for x and y."""

@@ -141,20 +141,26 @@ class LineDrawing:
 
     def _render_ghosts(self, snapshot: Snapshot) -> None:
         """The target marker, and each branch shown as the drawing draws an arm (``_ghost_lines``), with
-        its joints (``_ghost_joints``); what lies on the solid arm is left to it (the two would flicker)."""
+        its joints (``_ghost_joints``); what lies on the solid arm is left to it (the two would flicker, and
+        a ghost's disc on the arm's joint would colour the arm as that branch's)."""
         self._render_target(snapshot)
         shown = self.shown_ghosts(snapshot, len(self.ghosts))
-        solid = self._ghost_lines(snapshot.frames)
+        with_joints = np.zeros_like(shown)
+        solid, solid_joints = self._ghost_lines(snapshot.frames), self._ghost_joints(snapshot.frames)
         for k in np.flatnonzero(shown):
             lines = self._ghost_lines(snapshot.ghost_frames[k])
             own = np.array([not np.isclose(line, solid, atol=1e-6).all(axis=(1, 2)).any() for line in lines])
             shown[k] = own.any()
+            joints = self._ghost_joints(snapshot.ghost_frames[k])
+            own_joints = ~np.isclose(joints[:, None], solid_joints[None], atol=1e-6).all(axis=-1).any(axis=-1)
+            with_joints[k] = shown[k] and own_joints.any()
             if shown[k]:
                 self.ghosts[k].points = lines[own]
-                self.ghost_joints[k].points = self._ghost_joints(snapshot.ghost_frames[k]).astype(np.float32)
-        for ghost, joints, show_it in zip(self.ghosts, self.ghost_joints, shown):
+            if with_joints[k]:
+                self.ghost_joints[k].points = joints[own_joints].astype(np.float32)
+        for ghost, joints, show_it, show_joints in zip(self.ghosts, self.ghost_joints, shown, with_joints):
             show(ghost, show_it)
-            show(joints, show_it)
+            show(joints, show_joints)
 
 
 class CourseArmScene(LineDrawing):
