@@ -22,7 +22,7 @@ from ur10core import Arm, IKSolution
 from ur10core.orientation import quaternion
 from ur10core.serial import project_target
 from ur10core.tolerances import FLOOR_TOLERANCE
-from ur10core.workspace import lowest_points
+from ur10core.workspace import heights_above_floor, lowest_points
 
 from .style import number
 
@@ -102,16 +102,16 @@ class Snapshot:
     def lowest(self) -> np.ndarray:
         """(1 + k, 3) lowest body point of the arm, then of each branch (NaN where invalid)."""
         points = np.zeros((len(self.frames), 1, 3)) if self.body_points is None else self.body_points
-        lowest = lowest_points(np.concatenate([self.frames[None], self.ghost_frames]), points)
+        lowest = lowest_points(np.concatenate([self.frames[None], self.ghost_frames]), points, self.arm.up)
         if self.solution is not None:
             lowest[1:][~self.solution.valid] = np.nan
         return lowest
 
     @functools.cached_property
     def through_floor(self) -> np.ndarray:
-        """(1 + k,) bool: the arm, then each branch, reaches below the floor z = 0 (a real arm would hit it)."""
+        """(1 + k,) bool: the arm, then each branch, reaches below its floor (a real arm would hit it)."""
         with np.errstate(invalid="ignore"):
-            return self.lowest[:, 2] < -FLOOR_TOLERANCE
+            return heights_above_floor(self.arm, self.lowest) < -FLOOR_TOLERANCE
 
 
 def joint_value_text(kind: str, value: float, digits: str = ".1f") -> str:

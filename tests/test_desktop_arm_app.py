@@ -10,7 +10,7 @@ import pytest
 
 from ur10core.orientation import from_frame
 from ur10teach.features.arm_picker import DESKTOP, UR10
-from ur10teach.features.course_arms.desktop_arm import COURSE_TO_WORLD, SHOULDER_HEIGHT, world_placement
+from ur10teach.features.course_arms.desktop_arm import COURSE_TO_WORLD, world_placement
 from ur10teach.features.readouts import pose_markdown
 from ur10teach.features.singularity import factors_html
 from ur10teach.state import ArmState
@@ -41,7 +41,7 @@ def test_the_world_stands_the_courses_y_up():
     # the lowest the tool gets in the joint ranges stays above the floor
     arm = Arm.preset("three_dof")
     grid = np.stack(np.meshgrid(*(np.linspace(lo, hi, 19) for lo, hi in arm.limits), indexing="ij"), -1).reshape(-1, 3)
-    assert SHOULDER_HEIGHT + arm.fk(grid)[:, 1, 3].min() > 0.1
+    assert arm.base_height + arm.fk(grid)[:, 1, 3].min() > 0.1
 
 
 @pytest.mark.server
@@ -57,10 +57,10 @@ def test_the_desktop_arm_is_picked_driven_played_and_searched(app):
         await client.set_gui("θ3 forearm (°)", 0.0)
         await until(lambda: np.allclose(session.state.last.q, np.radians([0.0, -90.0, 0.0])), what="the sliders")
         np.testing.assert_allclose(session.state.last.flange[:3, 3], (FOREARM, UPPER_ARM, 0.0), atol=1e-12)
-        np.testing.assert_allclose(from_frame(world_placement(), session.state.last.flange[:3, 3]),
-                                   (FOREARM, 0.0, SHOULDER_HEIGHT + UPPER_ARM), atol=1e-12)
+        np.testing.assert_allclose(from_frame(world_placement(session.arm), session.state.last.flange[:3, 3]),
+                                   (FOREARM, 0.0, session.arm.base_height + UPPER_ARM), atol=1e-12)
         # its base frame stands in the world y up, and the IK target hangs in it (a position-only gizmo)
-        np.testing.assert_allclose(world_placement()[:3, :3] @ (0.0, 1.0, 0.0), (0.0, 0.0, 1.0))
+        np.testing.assert_allclose(world_placement(session.arm)[:3, :3] @ (0.0, 1.0, 0.0), (0.0, 0.0, 1.0))
         await until(lambda: f"{frame}/ik_target" in client.received.nodes, what="the IK target in the course's frame")
         await client.set_gui("θ3 forearm (°)", 200.0)  # beyond its range: refused, with the range
         await until(lambda: any("from 0° to 180°" in body for _, body in client.received.notifications), what="the refusal")
@@ -136,7 +136,7 @@ def test_the_desktop_arm_has_its_branch_count_map_standing_the_right_way_up(app)
         np.testing.assert_array_equal(view.image.image, map_image(expected.counts, 4))
         # the vertical map stands upright in the scene: its image's y axis (v, the arm's y) is the world's z
         world = np.eye(4)
-        world[:3, :3], world[:3, 3] = COURSE_TO_WORLD, (0.0, 0.0, SHOULDER_HEIGHT)
+        world[:3, :3], world[:3, 3] = COURSE_TO_WORLD, (0.0, 0.0, session.arm.base_height)
         wxyz, position = map_pose(expected, world)
         np.testing.assert_allclose(view.image.position, position, atol=1e-6)
         np.testing.assert_allclose(np.abs(view.image.wxyz @ wxyz), 1.0, atol=1e-6)
@@ -177,6 +177,39 @@ def test_the_desktop_arm_follows_its_ik_target_with_its_other_branches_as_ghosts
         await client.drag_target(far[:3, 3], wxyz_of(far), "end", name=f"{frame}/ik_target")
         await until(lambda: "Target unreachable" in session.ik_target.branches.content, what="the reason")
         np.testing.assert_allclose(session.state.last.flange[:3, 3], goal[:3, 3], atol=1e-9)
+        await client.close()
+
+    asyncio.run(scenario())
+
+
+@pytest.mark.server
+def test_the_desktop_arms_floor_is_under_its_pedestal_not_the_plane_z_0(app):
+    """The desktop arm's base frame has y up and stands on a pedestal; until 2026-12-03 the floor check took
+    its z = 0 (a vertical plane through the shoulder) for the floor, and flagged "⚠ floor" on branches on the
+    far side of it, high in the air. Each branch is checked against the drawing's own floor here: the world's
+    z of every point it draws, from the drawing's placement in the world."""
+    from ur10teach.features.ik_target import branch_labels, same_pose_groups
+
+    async def scenario():
+        client = await ViserClient(url(app)).connect()
+        session = await pick(app, client, DESKTOP)
+        arm, frame = session.arm, session.drawing.root
+        for where in (arm.fk(np.radians([25.0, -35.0, 60.0]))[:3, 3], (1.0, -1.6, 0.0)):  # z < 0 up high; under the floor
+            goal = arm.fk(np.zeros(3))
+            goal[:3, 3] = where
+            await client.drag_target(goal[:3, 3], wxyz_of(goal), "end", name=f"{frame}/ik_target")
+            await until(lambda: np.allclose(session.state.last.target[:3, 3], where), what="the target moved")
+            snapshot = session.state.last
+            assert snapshot.solution.valid.any()
+            drawn = np.concatenate([snapshot.frames[None], snapshot.ghost_frames])[..., :3, 3]  # shoulder, elbow, tool
+            lowest_z = np.array([from_frame(session.drawing.world, points)[:, 2].min() for points in drawn])
+            expected = np.concatenate([[True], snapshot.solution.valid]) & (lowest_z < -1e-3)
+            np.testing.assert_array_equal(snapshot.through_floor, expected)
+            assert expected[1:].any() == (where[1] < -arm.base_height)
+            flagged = [k for k, text in enumerate(branch_labels(snapshot, same_pose_groups(snapshot.ghost_frames,
+                                                                                           snapshot.solution.valid)))
+                       if "floor" in text]
+            assert bool(flagged) == bool(expected[1:].any()), flagged
         await client.close()
 
     asyncio.run(scenario())

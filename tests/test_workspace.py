@@ -59,6 +59,10 @@ def test_lowest_points_is_the_lowest_of_every_body_point_moved_in_full(course):
     np.testing.assert_allclose(lowest_points(frames[7], points), expected[7], atol=1e-12)  # one arm
     with pytest.raises(ValueError, match="body_points"):
         lowest_points(frames, points[:6])
+    # along another vertical (the desktop arm's y up): the point least far along it
+    up = np.array([0.6, 0.8, 0.0])
+    expected = flat[np.arange(50), np.argmin(flat @ up, axis=1)]
+    np.testing.assert_allclose(lowest_points(frames, points, up), expected, atol=1e-12)
 
 
 def test_a_horizontal_section_is_sampled_in_its_plane(course):

@@ -237,6 +237,12 @@ class Arm(JacobianUses, HasSpecs):
         """Its vertical in the base frame: z, or y for the course's desktop arm."""
         return getattr(self.solver, "up", (0.0, 0.0, 1.0))
 
+    @property
+    def base_height(self) -> float:
+        """How high its base frame's origin stands above the floor, along :attr:`up` (m): 0 for an arm standing
+        on it, 1.5 for the course's desktop arm (its shoulder on a pedestal)."""
+        return float(getattr(self.solver, "base_height", 0.0))
+
     def joints(self, q, name: str = "q") -> np.ndarray:
         """``q`` checked: finite, shape (..., n); ``ValueError`` naming what is wrong."""
         return self._geometry.joints(q, name)

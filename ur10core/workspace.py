@@ -61,7 +61,8 @@ def horizontal_section(points, height: float, thickness: float = 0.02) -> tuple[
 
 
 def through_floor(arm, q, body_points=None, tolerance: float = FLOOR_TOLERANCE) -> np.ndarray:
-    """(...,) bool: at joints ``q`` (..., n) some body point of the arm is below the floor z = 0.
+    """(...,) bool: at joints ``q`` (..., n) some body point of the arm is below its floor
+    (:func:`heights_above_floor`: z = 0 for an arm standing on it).
 
     ``body_points`` (L, P, 3) as for :func:`lowest_points`; the frame origins alone by default.
 
@@ -69,14 +70,28 @@ def through_floor(arm, q, body_points=None, tolerance: float = FLOOR_TOLERANCE) 
     >>> arm = Arm.preset("ur10")
     >>> through_floor(arm, np.radians([[0, 60, 0, 0, 0, 0], [0, -90, 0, -90, 0, 0]])).tolist()   # up, then down
     [False, True]
+    >>> desk = Arm.preset("three_dof")                       # y up, its shoulder 1.5 m above the floor
+    >>> through_floor(desk, np.radians([[-60, 0, 135], [0, 90, -90]])).tolist()   # the tool at z < 0; 2.6 m down
+    [False, True]
     """
     frames = arm.frames(q)
     points = np.zeros((frames.shape[-3], 1, 3)) if body_points is None else body_points
-    return lowest_points(frames, points)[..., 2] < -tolerance
+    return heights_above_floor(arm, lowest_points(frames, points, arm.up)) < -tolerance
 
 
-def lowest_points(frames, body_points) -> np.ndarray:
-    """The lowest point of an arm's bodies, in the base frame: is the arm through the floor (z < 0)?
+def heights_above_floor(arm, points) -> np.ndarray:
+    """(...,) how high the base-frame ``points`` (..., 3) stand above the arm's floor: along :attr:`Arm.up`,
+    from :attr:`Arm.base_height` below its base frame's origin.
+
+    >>> from ur10core import Arm
+    >>> heights_above_floor(Arm.preset("three_dof"), [[0.0, -1.0, -2.0]]).tolist()   # y up, the shoulder 1.5 m up
+    [0.5]
+    """
+    return np.asarray(points, dtype=float) @ np.asarray(arm.up, dtype=float) + arm.base_height
+
+
+def lowest_points(frames, body_points, up=(0.0, 0.0, 1.0)) -> np.ndarray:
+    """The lowest point of an arm's bodies along ``up``, in the base frame: is the arm through the floor?
 
     docs/kinematics.md §3, "The floor".
 
@@ -87,11 +102,13 @@ def lowest_points(frames, body_points) -> np.ndarray:
     body_points : array_like, shape (L, P, 3)
         P points of each body in its own frame, e.g. the corners of its convex hull
         (repeat a point to give every body the same P).
+    up : array_like, shape (3,)
+        The vertical in the base frame (:attr:`Arm.up`: z, the desktop arm's y).
 
     Returns
     -------
     (..., 3) array
-        Per arm, the body point with the smallest base-frame z: ``min over l, p of T_l · p``.
+        Per arm, the body point lowest along ``up``: ``min over l, p of up · (T_l · p)``.
 
     >>> frames = np.tile(np.eye(4), (2, 1, 1))
     >>> frames[1, :3, 3] = [1.0, 0.0, -0.25]
@@ -106,10 +123,12 @@ def lowest_points(frames, body_points) -> np.ndarray:
         raise ValueError(f"body_points must have shape ({frames.shape[-3]}, P, 3), got {body_points.shape}")
     check_finite(frames, "frames")
     check_finite(body_points, "body_points")
-    # z of every point first (one row of each rotation): only the lowest point is turned in full
+    # the height of every point first (up · R, one row a body): only the lowest point is turned in full
     lead, bodies, count = frames.shape[:-3], frames.shape[-3], body_points.shape[1]
     frames = frames.reshape(-1, bodies, 4, 4)
-    heights = (frames[:, :, 2, None, :3] @ body_points.transpose(0, 2, 1))[:, :, 0] + frames[:, :, 2, 3, None]  # (N, L, P)
+    up = np.asarray(up, dtype=float)
+    rows = (up @ frames[:, :, :3, :3])[:, :, None, :]  # (N, L, 1, 3)
+    heights = (rows @ body_points.transpose(0, 2, 1))[:, :, 0] + (frames[:, :, :3, 3] @ up)[:, :, None]  # (N, L, P)
     body, point = np.divmod(heights.reshape(len(frames), -1).argmin(axis=1), count)
     T = frames[np.arange(len(frames)), body]
     lowest = (T[:, :3, :3] @ body_points[body, point][..., None])[..., 0] + T[:, :3, 3]

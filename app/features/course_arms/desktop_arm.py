@@ -25,8 +25,6 @@ from .scene import LineDrawing
 ROOT = "/desktop_arm"
 #: A classroom explorer's own desktop arm, apart from the class's (which it hides in that one browser).
 EXPLORER_ROOT = "/explored_desktop_arm"
-#: The course's y = 0 (the shoulder) stands this high above the floor, so that every reach stays above it.
-SHOULDER_HEIGHT = 1.5
 #: The course's base frame (y up) turned into the app's world (z up): Rx(90°), so x stays, y → z, z → −y.
 COURSE_TO_WORLD = np.array([[1.0, 0.0, 0.0], [0.0, 0.0, -1.0], [0.0, 1.0, 0.0]])
 #: Length of the parallelogram's crank at the shoulder (m): the drive is drawn to scale with it.
@@ -38,10 +36,11 @@ AXIS_TIPS = np.array([[0.5, 0.0, 0.0], [0.0, 0.5, 0.0], [0.0, 0.0, 0.5]])
 DRIVE_COLOR = SHOULDER_COLOR
 
 
-def world_placement() -> np.ndarray:
-    """(4, 4) the course's base frame in the app's world: turned y up → z up, the shoulder raised off the floor."""
+def world_placement(arm: Arm) -> np.ndarray:
+    """(4, 4) the course's base frame in the app's world: turned y up → z up, the shoulder raised off the floor
+    (``arm.base_height``)."""
     world = np.eye(4)
-    world[:3, :3], world[:3, 3] = COURSE_TO_WORLD, (0.0, 0.0, SHOULDER_HEIGHT)
+    world[:3, :3], world[:3, 3] = COURSE_TO_WORLD, (0.0, 0.0, arm.base_height)
     return world
 
 
@@ -67,7 +66,7 @@ class DesktopArmScene(LineDrawing):
         self.top = top  #: the node everything hangs from: a classroom explorer's own arm has one apart from the class's
         self.root = root = f"{top}/course_frame"  #: every node's parent: the course's base frame, placed in the world
         self.size = size  #: the arm's reach (m)
-        self.world = world_placement()
+        self.world = world_placement(arm)
         scene.add_frame(root, wxyz=quaternion(COURSE_TO_WORLD, check=False), position=self.world[:3, 3], show_axes=False)
         points = self._points(first.frames)
         self.links = scene.add_line_segments(f"{root}/links", self._links(points), LINK_GREY, thickness=0.06)
@@ -87,10 +86,9 @@ class DesktopArmScene(LineDrawing):
             self._add_target_marker(scene)
         self.render(first)
 
-    @staticmethod
-    def _points(frames: np.ndarray) -> np.ndarray:
+    def _points(self, frames: np.ndarray) -> np.ndarray:
         """(4, 3) the pedestal's foot, the shoulder, the elbow and the tool, in the course's frame."""
-        return np.vstack([[0.0, -SHOULDER_HEIGHT, 0.0], frames[..., :3, 3]])
+        return np.vstack([[0.0, -self._arm.base_height, 0.0], frames[..., :3, 3]])
 
     @staticmethod
     def _links(points: np.ndarray) -> np.ndarray:
