@@ -57,7 +57,8 @@ def show_the_desktop_arm(page, session) -> None:
 
     desktop = pick_arm(page, session, "The course's 3-DOF desktop arm")
     goal = desktop.arm.fk(np.radians([25.0, -35.0, 60.0]))  # where all four branches reach
-    desktop.apply(lambda state: state.move_target(transform_from_quaternion(np.array([1.0, 0, 0, 0]), goal[:3, 3])))
+    # "typed": as a typed target moves it, the gizmo goes with it (a drag's, "target", is where the hand left it)
+    desktop.apply(lambda state: state.move_target(transform_from_quaternion(np.array([1.0, 0, 0, 0]), goal[:3, 3]), cause="typed"))
     wait_for(lambda: int(desktop.state.last.solution.valid.sum()) == 4, what="its four branches")
 
 
