@@ -135,6 +135,22 @@ def test_singularity_checks_the_asked_factor_against_the_closed_form():
     assert verdict.group == "wrist factor not zero" and f"{math.sin(math.radians(5)):+.3g}" in verdict.message
 
 
+def test_the_desktop_arms_tool_height_is_measured_up_its_y_from_its_floor():
+    """The desktop arm's base frame has y up, on a pedestal 1.5 m high (``Arm.base_height``). Until 2026-12-03 a
+    singularity challenge's tool height on it was its z, a horizontal: a fold with the tool 1.47 m above the floor
+    was refused as "tool below 500 mm", and one with the tool under the floor could pass."""
+    desk = Arm.preset("three_dof")
+    task = C.Challenge("Fold, tool up", "singularity", "three_dof", "Fold it.", factor="fold", min_tool_height=0.5)
+    folded = np.radians([-60.0, 30.0, 30.0])  # θ3 = θ2: the forearm back along the upper arm
+    tool = desk.fk(folded)[:3, 3]
+    assert tool[2] < 0 and 1.4 < tool[1] + 1.5
+    assert C.check(task, desk, C.Answer(q=folded)).solved
+    high = C.Challenge("Fold, tool high", "singularity", "three_dof", "Fold it.", factor="fold", min_tool_height=3.0)
+    assert C.check(high, desk, C.Answer(q=folded)).group == "tool below 3000 mm"
+    q = C.singular_pose(desk, "fold", 3.0)  # the answer: high enough up its own vertical
+    assert desk.fk(q)[1, 3] + 1.5 >= 3.0 and C.check(high, desk, C.Answer(q=q)).solved
+
+
 @pytest.mark.parametrize("name", Arm.PRESETS)
 def test_a_singular_pose_exists_for_every_factor_of_every_arm(name):
     arm = Arm.preset(name)

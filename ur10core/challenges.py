@@ -21,6 +21,7 @@ import numpy as np
 
 from .arm import PRESETS, Arm, factor_scales
 from .dh import DHTable
+from .workspace import heights_above_floor
 
 if sys.version_info >= (3, 11):
     import tomllib
@@ -495,7 +496,7 @@ def _check_singularity(challenge: Challenge, arm: Arm, answer: Answer) -> Verdic
                            f"factor to be zero (it is {value:+.3g}).", f"{' and '.join(zero)} instead of {challenge.factor}", text)
         return Verdict(False, f"The {challenge.factor} factor is {value:+.3g}, {100 * levels[asked]:.0f} % of its usual size: "
                        f"not zero yet (within {100 * challenge.factor_tolerance:g} %).", f"{challenge.factor} factor not zero", text)
-    height = float(arm.fk(q)[2, 3])
+    height = float(heights_above_floor(arm, arm.fk(q)[:3, 3]))
     if challenge.min_tool_height is not None and height < challenge.min_tool_height:
         return Verdict(False, f"A {challenge.factor} singularity, but the tool is {1000 * height:.0f} mm above the floor: "
                        f"it must be at least {1000 * challenge.min_tool_height:.0f} mm.",
@@ -544,7 +545,7 @@ def _count_pose(challenge: Challenge, arm: Arm) -> tuple[float, ...]:
     T[:, :3, :3] = rotation
     solution = arm.ik(T)
     counts = (solution.valid & solution.within_limits).sum(axis=-1)
-    above = T[:, 2, 3] > 0.1  # a target above the floor, where one exists
+    above = heights_above_floor(arm, T[:, :3, 3]) > 0.1  # a target above the floor, where one exists
     found = np.flatnonzero((counts == challenge.count) & (counts > 0) & above)
     if not len(found):
         found = np.flatnonzero((counts == challenge.count) & (counts > 0))
@@ -732,7 +733,7 @@ def singular_pose(arm: Arm, factor: str, min_tool_height: float | None = None, s
             q = arm.singular_configuration(factor, start)
         except ValueError:
             continue  # no zero of the factor within reach of this start's single joints
-        if min_tool_height is None or arm.fk(q)[2, 3] >= min_tool_height + 0.01:
+        if min_tool_height is None or heights_above_floor(arm, arm.fk(q)[:3, 3]) >= min_tool_height + 0.01:
             return q
     where = "" if min_tool_height is None else f" and the tool {1000 * min_tool_height:.0f} mm above the floor"
     raise ValueError(f"no pose of the {arm.name} arm within its limits has its {factor} factor zero{where}")
