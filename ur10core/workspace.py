@@ -126,9 +126,8 @@ def lowest_points(frames, body_points, up=(0.0, 0.0, 1.0)) -> np.ndarray:
     # the height of every point first (up · R, one row a body): only the lowest point is turned in full
     lead, bodies, count = frames.shape[:-3], frames.shape[-3], body_points.shape[1]
     frames = frames.reshape(-1, bodies, 4, 4)
-    up = np.asarray(up, dtype=float)
-    rows = (up @ frames[:, :, :3, :3])[:, :, None, :]  # (N, L, 1, 3)
-    heights = (rows @ body_points.transpose(0, 2, 1))[:, :, 0] + (frames[:, :, :3, 3] @ up)[:, :, None]  # (N, L, P)
+    along = (np.asarray(up, dtype=float) @ frames[:, :, :3, :])[:, :, None, :]  # (N, L, 1, 4): up · [R | t]
+    heights = (along[..., :3] @ body_points.transpose(0, 2, 1))[:, :, 0] + along[..., 3]  # (N, L, P)
     body, point = np.divmod(heights.reshape(len(frames), -1).argmin(axis=1), count)
     T = frames[np.arange(len(frames)), body]
     lowest = (T[:, :3, :3] @ body_points[body, point][..., None])[..., 0] + T[:, :3, 3]
