@@ -68,6 +68,16 @@ def label_frame(arm: Arm, snapshot: Snapshot) -> int | None:
     return middle if pairs_apart[middle] == pairs_apart.max() else int(pairs_apart.argmax())
 
 
+def none_of(items: np.ndarray, others: np.ndarray) -> np.ndarray:
+    """(m,) bool: which of ``items`` (m, ...) is none of ``others`` (n, ...), to a micrometre.
+
+    >>> none_of(np.array([[0.0, 0.0], [1.0, 2.0]]), np.array([[1.0, 2.0 + 1e-9]])).tolist()
+    [True, False]
+    """
+    gaps = np.abs(items[:, None] - others[None]).reshape(len(items), len(others), -1).max(axis=-1)
+    return gaps.min(axis=1) > 1e-6
+
+
 def rod_rotations(axes: np.ndarray) -> np.ndarray:
     """(n, 3, 3) rotations whose z columns are the unit ``axes`` (n, 3): how each joint's rod is turned."""
     helper = np.where(np.abs(axes[:, :1]) < 0.9, [[1.0, 0.0, 0.0]], [[0.0, 1.0, 0.0]])
@@ -149,10 +159,10 @@ class LineDrawing:
         solid, solid_joints = self._ghost_lines(snapshot.frames), self._ghost_joints(snapshot.frames)
         for k in np.flatnonzero(shown):
             lines = self._ghost_lines(snapshot.ghost_frames[k])
-            own = np.array([not np.isclose(line, solid, atol=1e-6).all(axis=(1, 2)).any() for line in lines])
+            own = none_of(lines, solid)
             shown[k] = own.any()
             joints = self._ghost_joints(snapshot.ghost_frames[k])
-            own_joints = ~np.isclose(joints[:, None], solid_joints[None], atol=1e-6).all(axis=-1).any(axis=-1)
+            own_joints = none_of(joints, solid_joints)
             with_joints[k] = shown[k] and own_joints.any()
             if shown[k]:
                 self.ghosts[k].points = lines[own]
