@@ -121,7 +121,8 @@ def title_cut(page, title: str) -> bool:
 def test_no_two_3d_labels_overlap_for_any_arm_at_home_or_at_a_singularity(open_page, light_app):
     """Issue 30: the elbow arm's 1, 2, 5 and 6 stacked into one blot, the KR210's 3 and 4, the UR10's
     "1" and "8" read as "18". No two labels a student sees overlap on the screen. And the panel's title, the
-    arm's name, is read whole (until 2026-12-03 four arms' ended "…: kin…" in lecture mode at 1280 px)."""
+    arm's name, is read whole (until 2026-12-03 four arms' ended "…: kin…" in lecture mode at 1280 px, two at
+    this test's 900 px)."""
     page, session = open_page()
     client_id = next(k for k, v in light_app.sessions.items() if v is session)
     failures, seen = [], 0
