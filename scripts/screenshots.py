@@ -47,7 +47,7 @@ def pick_arm(page, session, label: str):
 
 
 def show_the_kr210(page, session) -> None:
-    pick_arm(page, session, "KUKA KR210 (spherical wrist)").dh_table.highlight.value = "row 3"
+    pick_arm(page, session, "KR210 (spherical wrist)").dh_table.highlight.value = "row 3"
 
 
 def show_the_desktop_arm(page, session) -> None:
@@ -55,7 +55,7 @@ def show_the_desktop_arm(page, session) -> None:
 
     from ur10core.orientation import transform_from_quaternion
 
-    desktop = pick_arm(page, session, "The course's 3-DOF desktop arm")
+    desktop = pick_arm(page, session, "3-DOF desktop arm")
     goal = desktop.arm.fk(np.radians([25.0, -35.0, 60.0]))  # where all four branches reach
     # "typed": as a typed target moves it, the gizmo goes with it (a drag's, "target", is where the hand left it)
     desktop.apply(lambda state: state.move_target(transform_from_quaternion(np.array([1.0, 0, 0, 0]), goal[:3, 3]), cause="typed"))

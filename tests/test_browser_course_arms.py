@@ -30,7 +30,7 @@ def test_the_course_arms_in_the_picker(open_page, light_app):
 
     # the KR210: the panel shows the branches, det J's factors with their meaning, and the DH table
     before = settled_canvas(page)
-    kr210 = pick(page, app, client_id, "KUKA KR210 (spherical wrist)")
+    kr210 = pick(page, app, client_id, "KR210 (spherical wrist)")
     wait_for(lambda: page.get_by_text("reach this target", exact=False).count() > 0, what="the branch table")
     assert page.get_by_text("shoulder front, elbow up, wrist not flipped").count() >= 1
     assert page.get_by_text("the wrist centre on axis 1", exact=False).count() >= 1

@@ -251,7 +251,7 @@ def test_a_claim_while_the_presenters_controls_are_drawn_leaves_them_one_folder(
     asyncio.run(scenario())
 
 
-@pytest.mark.parametrize("label", ["SCARA (RRP + roll)", "The course's 3-DOF desktop arm", "UR10 (as in the course)"])
+@pytest.mark.parametrize("label", ["SCARA (RRP + roll)", "3-DOF desktop arm", "UR10 (as in the course)"])
 def test_the_class_arms_labels_are_placed_for_the_camera_a_watching_browser_has(classroom, label):
     """The shared scene's 3D labels (DH axes, branch numbers) are placed apart for one camera. It was the UR10's
     default camera whatever the arm: every browser frames the class's arm, much closer for a small one, and the

@@ -22,7 +22,7 @@ from ur10dev.viser_client import ViserClient, wxyz_of
 
 pytestmark = pytest.mark.server
 
-KR210 = "KUKA KR210 (spherical wrist)"
+KR210 = "KR210 (spherical wrist)"
 TARGET = "/course_arm/ik_target"
 
 
@@ -625,7 +625,7 @@ def test_a_course_arm_moves_from_a_remembered_pose_along_both_paths(app, label, 
     asyncio.run(scenario())
 
 
-@pytest.mark.parametrize("label", ["KUKA KR210 (spherical wrist)", "SCARA (RRP + roll)"])
+@pytest.mark.parametrize("label", ["KR210 (spherical wrist)", "SCARA (RRP + roll)"])
 def test_a_course_arm_has_its_branch_count_map_and_a_typed_table_says_why_not(app, label):
     """Issue 29: the branch-count map was the UR10's alone."""
     from ur10teach.features.reach_map import COURSE_RESOLUTION, legend_text, map_image
@@ -722,7 +722,7 @@ def test_a_course_arms_ghosts_leave_out_what_lies_on_the_solid_arm_and_number_ev
 
     async def scenario():
         client = await ViserClient(url(app)).connect()
-        session = await pick(app, client, "KUKA KR210 (spherical wrist)")
+        session = await pick(app, client, "KR210 (spherical wrist)")
         drawing, snapshot = session.drawing, session.state.last
         solid = skeleton(session.arm.dh, snapshot.frames)
         shown = [k for k, ghost in enumerate(drawing.ghosts) if ghost.visible]

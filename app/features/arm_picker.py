@@ -1,10 +1,9 @@
-"""The "Arm" folder: which arm this browser drives — the UR10, or one of the course's other arms.
+"""The "Arm" folder: which arm this browser drives — the UR10, one of the course's other arms, or a typed table.
 
-Picking one takes the current arm out of this browser (its panel and scene) and builds the
-other's: the UR10 with every feature of the app (``ur10teach.session``), the others with theirs
-(``ur10teach.features.course_arms``). Each browser picks for itself; in shared mode the presenter picks the
-class's arm (``ur10teach.serving.classroom``).
-"""
+Picking one takes the current arm out of this browser (its panel and scene) and builds an
+``ur10teach.session.ArmSession`` on the other; the server keeps each arm's state for the browser's return.
+Each browser picks for itself; in shared mode the presenter picks the class's arm (``ur10teach.serving.classroom``).
+The labels are short enough to be read whole in the dropdown in lecture mode."""
 
 from __future__ import annotations
 
@@ -22,12 +21,12 @@ SWITCH_INTERVAL = 0.5
 
 UR10 = "UR10 (the app's arm)"
 CUSTOM = "Your own DH table"
-DESKTOP = "The course's 3-DOF desktop arm"
+DESKTOP = "3-DOF desktop arm"
 #: What the dropdown shows → the ``Arm.preset`` name (None: the server's own UR10; "custom": the DH editor;
 #: "three_dof": the course's desktop arm, ``ur10teach.features.course_arms.desktop_arm``).
 ARM_CHOICES: dict[str, str | None] = {
     UR10: None,
-    "KUKA KR210 (spherical wrist)": "kr210",
+    "KR210 (spherical wrist)": "kr210",
     "Stanford arm (RRP + wrist)": "stanford",
     "Elbow arm + spherical wrist": "elbow",
     "SCARA (RRP + roll)": "scara",
