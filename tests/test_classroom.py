@@ -436,27 +436,27 @@ def test_the_presenter_shows_the_class_another_arm(classroom):
         assert not room.drawing.overlay.enabled and room.drawing.show_ghosts  # a new arm: shown as any starts
         # every browser is sent the new arm in the shared scene, and the UR10's nodes go
         for client in (teacher, student):
-            await until(lambda: client.received.node_owners.get(f"{ROOT}/body") == "", what="the shared Stanford arm")
-            assert f"{ROOT}/ik_target" not in client.received.nodes or client is teacher  # the gizmo is the presenter's own
+            await until(lambda: client.received.node_owners.get(f"{ROOT}/base_frame/body") == "", what="the shared Stanford arm")
+            assert f"{room.drawing.root}/ik_target" not in client.received.nodes or client is teacher  # the gizmo is the presenter's own
             assert "/arm/link0" in client.received.removed_nodes
         await until(lambda: room.live.title.content == f"**{stanford}**", what="the Stanford arm's live panel")
         # the presenter drags; the class's arm and the live panel follow
         q = np.array([0.4, 1.2, 0.3, 0.2, 0.5, -0.3])
         T = room.state.arm.fk(q)
-        await teacher.drag_target(T[:3, 3], wxyz_of(T), "start", name=f"{ROOT}/ik_target")
+        await teacher.drag_target(T[:3, 3], wxyz_of(T), "start", name=f"{room.drawing.root}/ik_target")
         await until(lambda: np.abs(room.state.arm.fk(room.state.last.q) - T).max() < 1e-9, what="the class's arm moved")
         await until(lambda: "d3 300.00 mm" in room.live.joints.content, what="d3 in the live panel")
         # a student explores the same arm on their own, under a root of its own; the class's is hidden for them
         await student.set_gui("Explore on my own", True)
         explorer = member_of(classroom, 1)
         await until(lambda: isinstance(explorer.session, ArmSession), what="the explorer's arm")
-        assert explorer.session.drawing.root == EXPLORER_ROOT
+        assert explorer.session.drawing.top == EXPLORER_ROOT
         np.testing.assert_allclose(explorer.session.state.last.q, room.state.last.q)
         mine = str(explorer.client.client_id)
         await until(lambda: student.received.node_owners.get(ROOT) == mine and student.received.visible.get(ROOT) is False,
                     what="the class's arm hidden for the explorer")
         goal = room.state.arm.fk(np.array([0.1, 1.0, 0.2, 0.0, 0.4, 0.1]))
-        await student.drag_target(goal[:3, 3], wxyz_of(goal), "start", name=f"{EXPLORER_ROOT}/ik_target")
+        await student.drag_target(goal[:3, 3], wxyz_of(goal), "start", name=f"{explorer.session.drawing.root}/ik_target")
         await until(lambda: np.abs(explorer.session.arm.fk(explorer.session.state.last.q) - goal).max() < 1e-9,
                     what="the explorer's own arm moved")
         assert np.abs(room.state.arm.fk(room.state.last.q) - T).max() < 1e-9  # the class's did not
@@ -506,7 +506,7 @@ def test_the_class_is_shown_the_desktop_arm_played_and_explored(classroom):
                     what="the class's desktop arm")
         assert presenter.session.state is room.state and presenter.session.drawing is room.drawing
         for client in (teacher, student):
-            await until(lambda: client.received.node_owners.get(f"{ROOT}/course_frame/links") == "", what="the shared desktop arm")
+            await until(lambda: client.received.node_owners.get(f"{ROOT}/base_frame/links") == "", what="the shared desktop arm")
         await until(lambda: room.live.title.content == f"**{DESKTOP}**", what="the desktop arm's live panel")
         # the presenter plays the course's path: the class's arm moves and the live panel follows
         await teacher.set_gui("Play the course's path", True)

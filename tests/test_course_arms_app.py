@@ -121,6 +121,55 @@ def test_a_prismatic_joint_is_driven_in_millimetres(app):
     asyncio.run(scenario())
 
 
+def test_the_stanford_reports_example_is_one_click_and_its_t6_is_read_as_the_report_reads_it(app):
+    """The *Report's example* pose (every angle 100°, d3 = 10 in) and the Tool pose folder's Z-Y-Z angles, which
+    the report's GUI reads from T6: against spatialmath's ``tr2eul`` of the arm's T06 (test-only)."""
+    from spatialmath.base import tr2eul
+
+    async def scenario():
+        client = await ViserClient(url(app)).connect()
+        session = await pick(app, client, "Stanford arm (RRP + wrist)")
+        await client.set_gui("Pose", "Report's example")
+        q = session.arm.specs.poses["report's example"]
+        await until(lambda: np.allclose(session.state.last.q, q, atol=1e-12), what="the report's example")
+        phi, theta, psi = np.degrees(tr2eul(session.arm.fk(q)[:3, :3]))
+        line = f"**Z-Y-Z Euler** (φ, θ, ψ) = ({phi:.2f}°, {theta:.2f}°, {psi:.2f}°)"
+        await until(lambda: any(line in text for text in client.markdown.values()), what=line)
+        await client.close()
+
+    asyncio.run(scenario())
+
+
+def test_the_stanford_arm_stands_on_a_pedestal_up_to_its_shoulder_and_its_floor_is_under_it(app):
+    """The report's table starts at the shoulder (d1 = 0). Until 2026-12-04 the arm was drawn with its shoulder
+    on the floor, and every branch of the report's own example read "⚠ floor". It stands on a pedestal from the
+    floor to its base frame now; the floor check is against the drawing's own floor: the world's z of every
+    point it draws, from its base frame's place as the browser was sent it."""
+    from ur10core.orientation import from_frame
+
+    async def scenario():
+        client = await ViserClient(url(app)).connect()
+        session = await pick(app, client, "Stanford arm (RRP + wrist)")
+        arm, drawing = session.arm, session.drawing
+        await until(lambda: drawing.root in client.received.positions, what="the arm's base frame placed")
+        shoulder = np.array(client.received.positions[drawing.root])
+        np.testing.assert_allclose(shoulder, (0.0, 0.0, arm.base_height))
+        np.testing.assert_allclose(shoulder + drawing.pedestal.points[0], [(0.0, 0.0, 0.0), shoulder], atol=1e-6)
+        down = np.array([0.3, math.radians(170.0), 0.7, 0.2, 0.5, 0.1])  # the boom hanging down: the wrist 0.69 m below
+        for q, through in ((arm.specs.poses["report's example"], False), (down, True)):
+            session.apply(lambda state: state.set_joints(q))
+            snapshot = session.state.last
+            drawn = np.concatenate([snapshot.frames[None], snapshot.ghost_frames])[..., :3, 3]
+            lowest_z = np.array([(points + shoulder)[:, 2].min() for points in drawn])
+            np.testing.assert_allclose(from_frame(drawing.world, drawn[0]), drawn[0] + shoulder)
+            expected = np.concatenate([[True], snapshot.solution.valid]) & (lowest_z < -1e-3)
+            np.testing.assert_array_equal(snapshot.through_floor, expected)
+            assert expected[0] == through
+        await client.close()
+
+    asyncio.run(scenario())
+
+
 def test_every_arm_can_be_picked_and_an_unknown_one_is_refused(app):
     async def scenario():
         client = await ViserClient(url(app)).connect()
@@ -552,7 +601,7 @@ def test_going_back_to_an_arm_finds_its_pose_target_typed_table_and_display_as_l
         stanford = await pick(app, client, "Stanford arm (RRP + wrist)")
         goal = stanford.state.last.frames[-1].copy()
         goal[:3, 3] += (0.05, -0.03, 0.02)
-        await client.drag_target(goal[:3, 3], wxyz_of(goal), "start", name=TARGET)
+        await client.drag_target(goal[:3, 3], wxyz_of(goal), "start", name=f"{stanford.drawing.root}/ik_target")  # under its pedestal's top
         await until(lambda: np.allclose(stanford.state.last.target[:3, 3], goal[:3, 3], atol=1e-6), what="the Stanford arm moved")
         stanford_left = stanford.state.last
         await client.set_gui("Show ghost arms", False)  # and what it shows

@@ -10,7 +10,7 @@ import pytest
 
 from ur10core.orientation import from_frame
 from ur10teach.features.arm_picker import DESKTOP, UR10
-from ur10teach.features.course_arms.desktop_arm import COURSE_TO_WORLD, world_placement
+from ur10teach.features.course_arms.scene import COURSE_TO_WORLD, world_placement
 from ur10teach.features.readouts import pose_markdown
 from ur10teach.features.singularity import factors_html
 from ur10teach.state import ArmState

@@ -1,4 +1,4 @@
-"""The four orientation readouts against independent constructions."""
+"""The five orientation readouts against independent constructions."""
 
 import numpy as np
 import pytest
@@ -12,8 +12,10 @@ from ur10core.orientation import (
     rotation_from_quaternion,
     rotation_from_xyz_fixed,
     rotation_from_zyx_euler,
+    rotation_from_zyz_euler,
     xyz_fixed,
     zyx_euler,
+    zyz_euler,
 )
 
 pytestmark = pytest.mark.core
@@ -60,6 +62,32 @@ def test_gimbal_lock():
         alpha, b, gamma = zyx_euler(R)
         assert alpha == 0 and b == pytest.approx(beta)
         np.testing.assert_allclose(rotation_from_zyx_euler([alpha, b, gamma]), R, atol=1e-12)
+
+
+def test_zyz_euler_round_trip_construction_and_spatialmath(angles):
+    """Z-Y-Z Euler angles, as the Stanford report reads T6: against the product written out by hand and
+    spatialmath's ``tr2eul`` (roboticstoolbox's, test-only), θ in (0, π)."""
+    from spatialmath.base import tr2eul
+
+    zyz = angles.copy()
+    zyz[:, 1] = np.abs(zyz[:, 1]) * 2  # θ in (0, π)
+    by_hand = np.array([_rz(phi) @ _ry(theta) @ _rz(psi) for phi, theta, psi in zyz])
+    np.testing.assert_allclose(rotation_from_zyz_euler(zyz), by_hand, atol=1e-14)
+    np.testing.assert_allclose(zyz_euler(by_hand), zyz, atol=1e-9)
+    np.testing.assert_allclose(zyz_euler(by_hand), [tr2eul(R) for R in by_hand], atol=1e-9)
+    # the report's own formulas, read off n, o, a
+    n, o, a = by_hand[:, :, 0], by_hand[:, :, 1], by_hand[:, :, 2]
+    phi = np.arctan2(a[:, 1], a[:, 0])
+    c, s = np.cos(phi), np.sin(phi)
+    np.testing.assert_allclose(zyz_euler(by_hand)[:, 2], np.arctan2(-s * n[:, 0] + c * n[:, 1], -s * o[:, 0] + c * o[:, 1]))
+
+
+@pytest.mark.parametrize("theta", [0.0, np.pi])
+def test_zyz_euler_with_the_approach_along_z_keeps_phi_zero(theta):
+    R = rotation_from_zyz_euler([0.4, theta, 0.9])
+    phi, t, psi = zyz_euler(R)
+    assert phi == 0 and t == pytest.approx(theta)
+    np.testing.assert_allclose(rotation_from_zyz_euler([phi, t, psi]), R, atol=1e-12)
 
 
 def test_quaternion(angles):

@@ -91,6 +91,20 @@ def test_presets_fk_matches_roboticstoolbox_built_from_the_same_rows(name):
     np.testing.assert_allclose(arm.jacobian(q), np.array([robot.jacob0(x) for x in q]), atol=1e-12)
 
 
+def test_the_stanford_reports_own_example_is_a_pose_of_the_arm():
+    """The report's GUI starts from θ1 = θ2 = θ4 = θ5 = θ6 = 100°, d3 = 10 in. Until 2026-12-04 the assumed
+    θ5 limit of ±90° refused it. Its T6 against roboticstoolbox built from the report's table as the
+    course writes it (inches turned into metres here, not read from the preset)."""
+    arm = Arm.preset("stanford")
+    q = arm.specs.poses["report's example"]
+    np.testing.assert_allclose(q, [*np.radians([100, 100]), 10 * 0.0254, *np.radians([100, 100, 100])])
+    assert arm.within_limits(q)
+    half = np.pi / 2
+    report = rtb.DHRobot([rtb.RevoluteDH(alpha=-half), rtb.RevoluteDH(d=6.375 * 0.0254, alpha=half), rtb.PrismaticDH(),
+                          rtb.RevoluteDH(alpha=-half), rtb.RevoluteDH(alpha=half), rtb.RevoluteDH()])
+    np.testing.assert_allclose(arm.fk(q), report.fkine(q).A, atol=1e-12)
+
+
 @pytest.mark.parametrize("name", ANALYTIC)
 def test_jacobian_matches_finite_differences(name):
     arm = Arm.preset(name)

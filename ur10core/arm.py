@@ -240,8 +240,12 @@ class Arm(JacobianUses, HasSpecs):
     @property
     def base_height(self) -> float:
         """How high its base frame's origin stands above the floor, along :attr:`up` (m): 0 for an arm standing
-        on it, 1.5 for the course's desktop arm (its shoulder on a pedestal)."""
-        return float(getattr(self.solver, "base_height", 0.0))
+        on it, more for one whose table starts at its shoulder (``specs.base_height``).
+
+        >>> Arm.preset("kr210").base_height, Arm.preset("stanford").base_height, Arm.preset("three_dof").base_height
+        (0.0, 0.412, 1.5)
+        """
+        return float(self.specs.base_height)
 
     def joints(self, q, name: str = "q") -> np.ndarray:
         """``q`` checked: finite, shape (..., n); ``ValueError`` naming what is wrong."""

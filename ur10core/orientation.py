@@ -1,10 +1,12 @@
-"""The four ways the course reads an orientation (docs/kinematics.md §3, Craig ch. 2).
+"""The ways the course reads an orientation (docs/kinematics.md §3, Craig ch. 2, Paul ch. 2).
 
 * Z-Y-X Euler angles (α, β, γ): rotate about Z by α, then about the *new* Y by β,
   then about the new X by γ: ``R = Rz(α) Ry(β) Rx(γ)``.
 * X-Y-Z fixed angles (γ, β, α): rotate about the *fixed* X by γ, then fixed Y by β,
   then fixed Z by α: ``R = Rz(α) Ry(β) Rx(γ)`` as well — Craig's observation that the
   two conventions give the same matrix, with the angles read in opposite order.
+* Z-Y-Z Euler angles (φ, θ, ψ), as the course's Stanford-arm report reads T6 (Paul's Euler
+  angles): ``R = Rz(φ) Ry(θ) Rz(ψ)``, θ in [0, π].
 * Equivalent angle–axis (θ, k̂), θ in [0, π].
 * Euler parameters: the unit quaternion (w, x, y, z) with w ≥ 0.
 
@@ -89,6 +91,36 @@ def xyz_fixed(R, check: bool = True) -> np.ndarray:
     The same three numbers as :func:`zyx_euler`, read in the opposite order (Craig 2.71).
     """
     return zyx_euler(R, check)[..., ::-1]
+
+
+def rotation_from_zyz_euler(angles) -> np.ndarray:
+    """``R = Rz(φ) Ry(θ) Rz(ψ)`` from Z-Y-Z Euler angles ``(φ, θ, ψ)`` (..., 3)."""
+    phi, theta, psi = np.moveaxis(vectors(angles, "angles", 3), -1, 0)
+    return _rot(2, phi) @ _rot(1, theta) @ _rot(2, psi)
+
+
+def zyz_euler(R, check: bool = True) -> np.ndarray:
+    """Z-Y-Z Euler angles ``(φ, θ, ψ)`` of R, (..., 3), θ in [0, π]: docs/kinematics.md §3, as the
+    course's Stanford-arm report reads T6 = [n o a p] (Paul's Euler angles).
+
+    ``φ = atan2(a_y, a_x)``, ``θ = atan2(cφ a_x + sφ a_y, a_z)``,
+    ``ψ = atan2(−sφ n_x + cφ n_y, −sφ o_x + cφ o_y)``. When a is along ±z (sin θ ≈ 0)
+    only φ ± ψ is defined: φ = 0 and ψ carries the whole turn about z.
+
+    >>> R = rotation_from_zyz_euler([0.3, 1.2, -0.4])
+    >>> zyz_euler(R).round(6).tolist()
+    [0.3, 1.2, -0.4]
+    >>> np.degrees(zyz_euler(rotation_from_zyz_euler([0.3, 0.0, -0.4]))).round(3).tolist()  # only φ + ψ
+    [0.0, 0.0, -5.73]
+    """
+    R = _rotations(R, check)
+    n, o, a = R[..., :, 0], R[..., :, 1], R[..., :, 2]
+    locked = np.hypot(a[..., 0], a[..., 1]) < GIMBAL_TOLERANCE
+    phi = np.where(locked, 0.0, np.arctan2(a[..., 1], a[..., 0]))
+    c, s = np.cos(phi), np.sin(phi)
+    theta = np.arctan2(c * a[..., 0] + s * a[..., 1], a[..., 2])
+    psi = np.arctan2(-s * n[..., 0] + c * n[..., 1], -s * o[..., 0] + c * o[..., 1])
+    return np.stack([phi, theta, psi], axis=-1)
 
 
 def quaternion(R, check: bool = True) -> np.ndarray:

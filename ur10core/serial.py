@@ -49,7 +49,7 @@ PRESETS: dict[str, _Preset] = {
         "Stanford arm (the course's MATLAB GUI report): RRP + spherical wrist, d2 = 6.375 in",
         ((0, -_PI / 2, 0, 0, "R"), (0, _PI / 2, 0.161925, 0, "R"), (0, 0, 0, 0, "P"),
          (0, -_PI / 2, 0, 0, "R"), (0, _PI / 2, 0, 0, "R"), (0, 0, 0, 0, "R")),
-        STANDARD, _degrees((-170, 170), (-170, 170)) + ((0.0, 0.762),) + _degrees((-170, 170), (-90, 90), (-170, 170)),
+        STANDARD, _degrees((-170, 170), (-170, 170)) + ((0.0, 0.762),) + _degrees((-170, 170), (-170, 170), (-170, 170)),
         StanfordArm, ("θ1", "θ2", "d3", "θ4", "θ5", "θ6")),
     "elbow": _Preset(
         "Articulated (elbow) arm with a spherical wrist, as in the DH lecture notes",

@@ -1,5 +1,5 @@
 """What is known of each preset beyond its DH table: joint speed limits, torque ratings, rated
-payload and named poses (docs/kinematics.md §1, §7.5, §8.5).
+payload, named poses and how high it stands (docs/kinematics.md §1, §7.5, §8.5).
 
 Every arm of the core reads its own as ``arm.specs`` (:class:`ArmSpecs`). A preset the
 makers publish nothing for has ``None`` where a number would be; a typed table has only a
@@ -40,12 +40,16 @@ class ArmSpecs:
         Each joint's rated torque (N·m).
     payload_kg : float or None
         The rated payload at the flange.
+    base_height : float
+        How high its base frame's origin stands above the floor, along its vertical (m): 0 for
+        an arm whose table starts on the floor, more for one whose table starts at the shoulder.
     """
 
     poses: dict[str, np.ndarray]
     speed_limits: np.ndarray | None = None
     torque_ratings: np.ndarray | None = None
     payload_kg: float | None = None
+    base_height: float = 0.0
     #: the names of :attr:`poses` a student may pick (the home pose is always there)
     names: tuple[str, ...] = field(init=False)
 
@@ -77,14 +81,19 @@ _SPECS = {
     # the course's other arms (docs/kinematics.md §7.5): each starts away from its singularities
     "kr210": ArmSpecs({"home": np.array([0.0, math.radians(15), math.radians(-30), math.radians(20),
                                           math.radians(40), math.radians(10)])}),
+    # the report's table starts at the shoulder: it stands where Corke's model of Scheinman's arm has it (d1)
     "stanford": ArmSpecs({"home": np.array([math.radians(30), math.radians(60), 0.254, math.radians(20),
-                                             math.radians(40), math.radians(10)])}),
+                                             math.radians(40), math.radians(10)]),
+                          # the report's own FK example, its GUI's default input: every angle 100°, d3 = 10 in
+                          "report's example": np.array([*_degrees(100, 100), 0.254, *_degrees(100, 100, 100)])},
+                         base_height=0.412),
     "elbow": ArmSpecs({"home": _degrees(20, 40, 60, 20, 40, 10)}),
     "scara": ArmSpecs({"home": np.array([math.radians(30), math.radians(60), 0.1, math.radians(20)])}),
     "planar_elbow": ArmSpecs({"home": _degrees(30, 60)}),
     "cylindrical": ArmSpecs({"home": np.array([math.radians(30), 0.35, 0.35])}),
-    # the desktop arm starts where the course's drawing path starts (docs/kinematics.md §8.6)
-    "three_dof": ArmSpecs({"home": _degrees(0, 0, 135)}),
+    # the desktop arm starts where the course's drawing path starts (docs/kinematics.md §8.6); the course gives
+    # its shoulder no pedestal: this one keeps every pose within the joint ranges above the floor
+    "three_dof": ArmSpecs({"home": _degrees(0, 0, 135)}, base_height=1.5),
 }
 
 

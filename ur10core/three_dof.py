@@ -70,9 +70,6 @@ class DesktopArm:
     det_constant = "−l1 l5"
     #: Its vertical: the course's base frame has y up (every other arm of the core: z).
     up = (0.0, 1.0, 0.0)
-    #: How high its base frame (the shoulder) stands above the floor, along ``up`` (m). The course gives no
-    #: pedestal: this one keeps every pose within the joint ranges above the floor.
-    base_height = 1.5
 
     def joints(self, q, name: str = "q") -> np.ndarray:
         q = as_float_array(q, name)

@@ -62,8 +62,8 @@ ROTATION_TOLERANCE = 1e-6
 #: A pose's bottom row must equal [0, 0, 0, 1] to this tolerance.
 BOTTOM_ROW_TOLERANCE = 1e-9
 
-#: Below this cos β the Z-Y-X angles are at gimbal lock (β = ±90°): α is set to 0
-#: (:mod:`ur10core.orientation`).
+#: Below this cos β the Z-Y-X angles are at gimbal lock (β = ±90°): α is set to 0; below this
+#: sin θ the Z-Y-Z angles are (θ = 0 or π): φ is set to 0 (:mod:`ur10core.orientation`).
 GIMBAL_TOLERANCE = 1e-10
 
 #: Squared joint distances (rad²) closer than this count as a tie when the nearest branch

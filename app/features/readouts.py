@@ -1,4 +1,4 @@
-"""Live readouts: the tool pose T0n in millimetres and its orientation the four ways the course reads it."""
+"""Live readouts: the tool pose T0n in millimetres and its orientation the five ways the course reads it."""
 
 from __future__ import annotations
 
@@ -10,6 +10,7 @@ from ur10core.orientation import (
     quaternion,
     xyz_fixed,
     zyx_euler,
+    zyz_euler,
 )
 
 from ..state import Snapshot
@@ -27,18 +28,20 @@ def pose_markdown(T: np.ndarray) -> str:
 
 
 def orientation_markdown(R: np.ndarray, wxyz: np.ndarray | None = None) -> str:
-    """The four readouts of a rotation that came from the core (not re-validated).
+    """The five readouts of a rotation that came from the core (not re-validated).
 
     ``wxyz`` is its quaternion when the caller has it already.
     """
     alpha, beta, gamma = np.degrees(zyx_euler(R, check=False))
     fixed = np.degrees(xyz_fixed(R, check=False))
+    paul = np.degrees(zyz_euler(R, check=False))
     w, x, y, z = quaternion(R, check=False) if wxyz is None else wxyz
     theta, axis = angle_axis_from_quaternion((w, x, y, z))
     return "\n".join(
         [
             f"- **Z-Y-X Euler** (α, β, γ) = ({_degrees(alpha, beta, gamma)})",
             f"- **X-Y-Z fixed** (γ, β, α) = ({_degrees(*fixed)})",
+            f"- **Z-Y-Z Euler** (φ, θ, ψ) = ({_degrees(*paul)}), as the Stanford report reads T6",
             f"- **Angle–axis** θ = {number(np.degrees(theta), '.2f')}°, k̂ = ({', '.join(number(v, '+.4f') for v in axis)})",
             f"- **Quaternion** (w, x, y, z) = ({', '.join(number(v, '+.4f') for v in (w, x, y, z))})",
         ]

@@ -2,14 +2,12 @@
 
 The arm has no DH table (its forearm angle is absolute), so it is drawn from its frames,
 not its DH skeleton; everything else is a course arm's (``session.ArmSession``). Its
-base frame has y up: a node under the top one (``root``, "course frame") stands it in the
+base frame has y up: a node under the top one (``root``, ``scene.world_placement``) stands it in the
 world (z up), and every node under it, the IK target and the other features' drawings
 included, is in the course's frame.
 """
 
 from __future__ import annotations
-
-from typing import NamedTuple
 
 import numpy as np
 import viser
@@ -20,13 +18,11 @@ from ur10core.orientation import from_frame, quaternion
 from ...state import Snapshot
 from ...style import JOINT_CAP_GREY, SHOULDER_COLOR
 from ..branch_labels import BranchLabels, chain
-from .scene import LineDrawing
+from .scene import Framed, LineDrawing
 
 ROOT = "/desktop_arm"
 #: A classroom explorer's own desktop arm, apart from the class's (which it hides in that one browser).
 EXPLORER_ROOT = "/explored_desktop_arm"
-#: The course's base frame (y up) turned into the app's world (z up): Rx(90°), so x stays, y → z, z → −y.
-COURSE_TO_WORLD = np.array([[1.0, 0.0, 0.0], [0.0, 0.0, -1.0], [0.0, 1.0, 0.0]])
 #: Length of the parallelogram's crank at the shoulder (m): the drive is drawn to scale with it.
 CRANK = 0.3
 LINK_GREY = (90, 94, 102)
@@ -34,22 +30,6 @@ LINK_GREY = (90, 94, 102)
 NAMES = ("x₀", "y₀ (up)", "z₀", "θ2", "θ3 (absolute)", "tool")
 AXIS_TIPS = np.array([[0.5, 0.0, 0.0], [0.0, 0.5, 0.0], [0.0, 0.0, 0.5]])
 DRIVE_COLOR = SHOULDER_COLOR
-
-
-def world_placement(arm: Arm) -> np.ndarray:
-    """(4, 4) the course's base frame in the app's world: turned y up → z up, the shoulder raised off the floor
-    (``arm.base_height``)."""
-    world = np.eye(4)
-    world[:3, :3], world[:3, 3] = COURSE_TO_WORLD, (0.0, 0.0, arm.base_height)
-    return world
-
-
-class Framed(NamedTuple):
-    """What the camera frames, in the world: the arm's joints, its target and its lowest point."""
-
-    frames: np.ndarray
-    target: np.ndarray
-    lowest: tuple[np.ndarray]
 
 
 class DesktopArmScene(LineDrawing):
@@ -63,11 +43,9 @@ class DesktopArmScene(LineDrawing):
     def __init__(self, scene: viser.SceneApi, arm: Arm, first: Snapshot, size: float, top: str = ROOT,
                  target_marker: bool = False) -> None:
         self._arm = arm
-        self.top = top  #: the node everything hangs from: a classroom explorer's own arm has one apart from the class's
-        self.root = root = f"{top}/course_frame"  #: every node's parent: the course's base frame, placed in the world
+        self._place(scene, arm, top)  # the course's base frame (y up), placed in the world under ``top``
+        root = self.root
         self.size = size  #: the arm's reach (m)
-        self.world = world_placement(arm)
-        scene.add_frame(root, wxyz=quaternion(COURSE_TO_WORLD, check=False), position=self.world[:3, 3], show_axes=False)
         points = self._points(first.frames)
         self.links = scene.add_line_segments(f"{root}/links", self._links(points), LINK_GREY, thickness=0.06)
         self.drive = scene.add_line_segments(f"{root}/drive", self._drive(points), DRIVE_COLOR, thickness=0.025)
@@ -77,11 +55,11 @@ class DesktopArmScene(LineDrawing):
         self.tool = scene.add_frame(f"{root}/tool", axes_length=0.3, axes_radius=0.01)
         #: the base frame's axes and what the joints are, named apart on the screen like the branch numbers
         self.captions = BranchLabels(scene, f"{root}/names", len(NAMES), scale=1.3, merge_px=4.0)
-        self.captions.world = self.world
         self._name_points = np.zeros((len(NAMES), 3))
         self._add_ghosts(scene, arm, self._links(points)[1:], 0.03, 0.09)
-        self.numbers.world = self.world
         self.label_sets = chain((self.captions, self.numbers))  # the numbers keep clear of the captions
+        for labels in self.label_sets:
+            labels.world = self.world
         if target_marker:
             self._add_target_marker(scene)
         self.render(first)

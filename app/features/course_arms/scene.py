@@ -9,6 +9,8 @@ ghosts are by their elbows.
 
 from __future__ import annotations
 
+from typing import NamedTuple
+
 import numpy as np
 import viser
 
@@ -25,9 +27,29 @@ from ..ik_target import ALL_BRANCHES, SAME_POSE, add_unreachable_halo, focused, 
 from ..singularity import SingularityOverlay, has_overlay
 
 ROOT = "/course_arm"
+#: A base frame with y up (the course's desktop arm) turned into the app's world (z up): Rx(90°), so x stays, y → z, z → −y.
+COURSE_TO_WORLD = np.array([[1.0, 0.0, 0.0], [0.0, 0.0, -1.0], [0.0, 1.0, 0.0]])
 #: An explorer's own arm in a classroom, apart from the class's (which it hides in that one browser).
 EXPLORER_ROOT = "/explored_arm"
 SKELETON_GREY = (60, 62, 68)
+
+
+class Framed(NamedTuple):
+    """What the camera frames of an arm placed in the world (``LineDrawing.framed``), in the world."""
+
+    frames: np.ndarray  #: (m, 4, 4) the joints to keep in view: the arm's, its branches', its pedestal's foot
+    target: np.ndarray  #: (4, 4)
+    lowest: tuple[np.ndarray]  #: its lowest point (3,)
+
+
+def world_placement(arm: Arm) -> np.ndarray:
+    """(4, 4) the arm's base frame in the app's world (z up, the floor z = 0): turned so that its vertical
+    (``arm.up``) is z, and raised ``arm.base_height`` (a table that starts at the shoulder: a pedestal under it)."""
+    world = np.eye(4)
+    if tuple(arm.up) != (0.0, 0.0, 1.0):
+        world[:3, :3] = COURSE_TO_WORLD
+    world[2, 3] = arm.base_height
+    return world
 
 
 def skeleton(table: DHTable, frames: np.ndarray) -> np.ndarray:
@@ -98,10 +120,33 @@ class LineDrawing:
     top: str
     root: str
     size: float
+    world: np.ndarray
 
     @property
     def roots(self) -> tuple[str, ...]:
         return (self.top,)
+
+    def _place(self, scene: viser.SceneApi, arm: Arm, top: str) -> None:
+        """Hang the drawing from ``top`` (a classroom explorer's own arm has one apart from the class's): every
+        node under :attr:`root`, the IK target and the features' drawings included, is in the arm's base frame,
+        which a node of its own places in the world where it is not the world's (:func:`world_placement`)."""
+        self.top = self.root = top
+        self.world = world_placement(arm)
+        if not np.array_equal(self.world, np.eye(4)):
+            self.root = f"{top}/base_frame"
+            scene.add_frame(self.root, wxyz=quaternion(self.world[:3, :3], check=False), position=self.world[:3, 3],
+                            show_axes=False)
+
+    def framed(self, snapshot: Snapshot) -> Snapshot | Framed:
+        """What the camera frames: the arm's frames and its branches' (from its pedestal's foot), and its target,
+        in the world."""
+        if np.array_equal(self.world, np.eye(4)):
+            return snapshot
+        valid = snapshot.solution.valid if snapshot.solution is not None else np.zeros(len(snapshot.ghost_frames), bool)
+        frames = self.world @ np.concatenate([snapshot.frames[None], snapshot.ghost_frames[valid]]).reshape(-1, 4, 4)
+        foot = np.eye(4)
+        foot[:2, 3] = self.world[:2, 3]
+        return Framed(np.concatenate([foot[None], frames]), self.world @ snapshot.target, (foot[:3, 3],))
 
     @property
     def body_radius(self) -> float:
@@ -179,11 +224,16 @@ class CourseArmScene(LineDrawing):
     def __init__(self, scene: viser.SceneApi, arm: Arm, first: Snapshot, size: float,
                  root: str = ROOT, target_marker: bool = False) -> None:
         self._scene = scene
-        self.root = self.top = root  #: every node's parent: a classroom explorer's own arm has one apart from the class's
+        self._place(scene, arm, root)
+        root = self.root
         self._arm = arm
         self.size = size  #: the arm's reach (m): sizes of rods, axes and the gizmo follow it
         segments = skeleton(arm.dh, first.frames)
         self.body = scene.add_line_segments(f"{root}/body", segments, SKELETON_GREY, thickness=0.012 * size)
+        #: where its table starts at the shoulder (the Stanford arm's), the pedestal it stands on, up to its base frame
+        self.pedestal = scene.add_line_segments(
+            f"{root}/pedestal", np.array([[-arm.base_height * np.asarray(arm.up), np.zeros(3)]]), SKELETON_GREY,
+            thickness=0.03 * size) if arm.base_height else None
         self.joints = []
         for k, kind in enumerate(arm.joint_types):
             if kind == "R":
@@ -202,15 +252,10 @@ class CourseArmScene(LineDrawing):
         #: the 3D labels placed apart for a camera, in order, each pool clear of those before it
         self.label_sets = chain(((self.overlay.names,) if self.overlay is not None else ())
                                 + (self.dh_frames.values, self.dh_frames.names, self.numbers))
+        for labels in self.label_sets:
+            labels.world = self.world
         if target_marker:
             self._add_target_marker(scene)
-
-    #: Where the arm's base frame is in the scene: at the world's origin.
-    world = np.eye(4)
-
-    def framed(self, snapshot: Snapshot) -> Snapshot:
-        """What the camera frames: the arm's frames and target, in the world as they are."""
-        return snapshot
 
     def render(self, snapshot: Snapshot) -> None:
         frames = snapshot.frames
