@@ -19,8 +19,9 @@ from ..view import View
 
 
 def pose_markdown(T: np.ndarray) -> str:
-    """T06 as a table: rotation entries and the position in mm."""
-    rows = ["| | | | p (mm) |", "|---:|---:|---:|---:|"]
+    """T06 as a table: its columns n, o, a (the tool's x, y, z axes, as the course's reports name them) and the
+    position p in mm."""
+    rows = ["| n | o | a | p (mm) |", "|---:|---:|---:|---:|"]
     for i in range(3):
         rows.append("| " + " | ".join(number(T[i, j], "+.4f") for j in range(3)) + f" | **{number(T[i, 3] * 1000, '+.1f')}** |")
     rows.append("| 0 | 0 | 0 | 1 |")
