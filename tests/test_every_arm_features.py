@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import asyncio
 import math
+import time
 
 import numpy as np
 import pytest
@@ -22,6 +23,7 @@ from ur10teach.features.velocity import METRES_PER_SPEED
 from .server_support import until, url
 from .test_course_arms_app import pick
 from ur10dev.viser_client import ViserClient
+from ur10dev.waiting import HANG_TIMEOUT
 
 pytestmark = pytest.mark.server
 
@@ -220,10 +222,18 @@ def overlapping_labels(session, also=()) -> tuple[list[str], list[tuple[str, str
     world = session.drawing.world
     pools = (session.names, *session.drawing.label_sets)
     placed, view = [], None
+    camera = session.camera
+
+    def framing() -> bool:  # a framing is under way: its position set, its look-at not yet (a view no one sees)
+        return camera is not None and not camera._where_framed()
+
     with session.names.placing:  # not placed again by the panel's refresher while they are read
-        # for one camera, the same before the placing and after the reading: a framing may still be arriving from the
-        # browser, and a camera move (a map turning the camera to face its plane) places them again for the new one
-        while view is None or view != pools[0].view():
+        # for one camera, the same before the placing and after the reading, and not one half-way through a framing:
+        # a framing may still be arriving from the browser, and a camera move (a map turning the camera to face its
+        # plane) places them again for the new one
+        deadline = time.monotonic() + HANG_TIMEOUT
+        while view is None or view != pools[0].view() or framing():
+            assert time.monotonic() < deadline, "the camera never came to rest"
             view, placed = pools[0].view(), []
             place_in_order(pools)
             for pool in pools:
