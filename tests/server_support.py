@@ -10,11 +10,25 @@ from ur10teach.serving.server import TeachingServer
 from ur10dev.viser_client import BROWSER_SEND_INTERVAL, ViserClient, wxyz_of
 from ur10dev.waiting import until, wait_for
 
-__all__ = ["become_presenter", "drag_a_little", "member_of", "session_of", "until", "url", "wait_for"]
+__all__ = ["become_presenter", "drag_a_little", "member_of", "scene_pose", "session_of", "until", "url", "wait_for"]
 
 
 def url(server: TeachingServer) -> str:
     return f"http://127.0.0.1:{server.port}"
+
+
+def scene_pose(scene, handle) -> np.ndarray:
+    """(4, 4) where a scene node is in the world: its own pose through every node above it, as the browser
+    composes them (a node's pose is in its parent's frame)."""
+    from ur10core.orientation import transform_from_quaternion
+
+    nodes, parts = scene._handle_from_node_name, handle.name.split("/")
+    pose = transform_from_quaternion(np.asarray(handle.wxyz, dtype=float), np.asarray(handle.position, dtype=float))
+    for name in ("/".join(parts[:k]) for k in range(len(parts) - 1, 1, -1)):
+        if name in nodes:
+            parent = nodes[name]
+            pose = transform_from_quaternion(np.asarray(parent.wxyz, dtype=float), np.asarray(parent.position, dtype=float)) @ pose
+    return pose
 
 
 def member_of(server: TeachingServer, index: int):

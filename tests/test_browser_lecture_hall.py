@@ -10,7 +10,6 @@ import numpy as np
 import pytest
 
 from ur10core import Arm
-from ur10core.orientation import rotation_from_quaternion
 from ur10dev.browser import (
     click, drawn_frames, project, set_checkbox, settled_canvas, unfold,
 )
@@ -21,6 +20,7 @@ from ur10teach.features.camera import arm_points
 from ur10teach.style import ALUMINIUM, JOINT_CAP_GREY
 from ur10teach.viser_internals import labels_of
 
+from .server_support import scene_pose
 from .test_browser_course_arms import pick
 
 pytestmark = pytest.mark.browser
@@ -39,13 +39,7 @@ def shown_labels(*scenes) -> list:
 
 def world_position(scene, handle) -> np.ndarray:
     """Where a node is in the world: its position, through every node above it."""
-    nodes, parts = scene._handle_from_node_name, handle.name.split("/")
-    point = np.asarray(handle.position, dtype=float)
-    for name in ("/".join(parts[:k]) for k in range(len(parts) - 1, 1, -1)):
-        if name in nodes:
-            parent = nodes[name]
-            point = rotation_from_quaternion(parent.wxyz) @ point + np.asarray(parent.position, dtype=float)
-    return point
+    return scene_pose(scene, handle)[:3, 3]
 
 
 def screen_boxes(page, session) -> list[tuple[str, tuple[float, float, float, float]]]:

@@ -17,7 +17,7 @@ from ur10teach.state import ArmState
 from ur10core import Arm
 from ur10core.three_dof import FOREARM, UPPER_ARM
 
-from .server_support import until, url
+from .server_support import scene_pose, until, url
 from .test_course_arms_app import pick
 from ur10dev.viser_client import ViserClient, wxyz_of
 
@@ -123,7 +123,7 @@ def test_the_desktop_arm_is_picked_driven_played_and_searched(app):
 def test_the_desktop_arm_has_its_branch_count_map_standing_the_right_way_up(app):
     """Issue 29: the desktop arm's map, in its own frame (y up) and drawn in the scene's (z up)."""
     from ur10core.workspace import branch_count_map
-    from ur10teach.features.reach_map import COURSE_RESOLUTION, map_image, map_pose
+    from ur10teach.features.reach_map import COURSE_RESOLUTION, map_image
 
     async def scenario():
         client = await ViserClient(url(app)).connect()
@@ -134,12 +134,13 @@ def test_the_desktop_arm_has_its_branch_count_map_standing_the_right_way_up(app)
         await until(lambda: view.image is not None and view.shown_key is not None, what="the map")
         expected = branch_count_map(session.arm, session.state.last.target, "vertical", COURSE_RESOLUTION)
         np.testing.assert_array_equal(view.image.image, map_image(expected.counts, 4))
-        # the vertical map stands upright in the scene: its image's y axis (v, the arm's y) is the world's z
-        world = np.eye(4)
-        world[:3, :3], world[:3, 3] = COURSE_TO_WORLD, (0.0, 0.0, session.arm.base_height)
-        wxyz, position = map_pose(expected, world)
-        np.testing.assert_allclose(view.image.position, position, atol=1e-6)
-        np.testing.assert_allclose(np.abs(view.image.wxyz @ wxyz), 1.0, atol=1e-6)
+        # the vertical map stands upright in the scene, through the node that stands the arm on its pedestal: its
+        # image's y axis (v, the arm's y) is the world's z. Until 2026-12-04 it was placed in the world twice, on its
+        # back 1.5 m too high, out of sight (this test read the image's own pose, in its parent's frame)
+        drawn = scene_pose(session.client.scene, view.image)
+        np.testing.assert_allclose(drawn[:3, 1], [0.0, 0.0, 1.0], atol=1e-9)
+        np.testing.assert_allclose(drawn[:3, 3], COURSE_TO_WORLD @ expected.centre + (0.0, 0.0, session.arm.base_height),
+                                   atol=1e-6)
         np.testing.assert_allclose(COURSE_TO_WORLD @ expected.v, [0.0, 0.0, 1.0], atol=1e-12)
         await client.close()
 

@@ -20,7 +20,7 @@ from ur10teach.features.joint_panel import rate_label
 from ur10teach.features.statics import bars_html
 from ur10teach.features.velocity import METRES_PER_SPEED
 
-from .server_support import until, url
+from .server_support import scene_pose, until, url
 from .test_course_arms_app import pick
 from ur10dev.viser_client import ViserClient
 from ur10dev.waiting import HANG_TIMEOUT
@@ -184,9 +184,12 @@ def test_the_workspace_cloud_of_every_arm_is_its_own(app, label):
 
 @pytest.mark.parametrize("label", EVERY_ARM)
 def test_the_branch_count_map_of_every_arm_is_its_ik_s(app, label):
-    """The map shown counts, in each cell, the branches the arm's own IK finds within its limits. The
-    planar elbow's is its own plane: until 2026-12-03 its map started in a vertical plane, where no
-    cell is reached, and the camera turned to face it edge-on to the arm."""
+    """The map shown counts, in each cell, the branches the arm's own IK finds within its limits, and it is drawn
+    where those cells are: its plane in the scene, through every node above it. The planar elbow's is its own
+    plane: until 2026-12-03 its map started in a vertical plane, where no cell is reached, and the camera turned
+    to face it edge-on to the arm. Until 2026-12-04 an arm placed in the world by a node of its own had its map
+    placed twice: the desktop arm's lay on its back 1.5 m above where it belonged (out of sight), and the Stanford
+    arm's, once it stood on its pedestal, 0.41 m too high."""
     from ur10core.workspace import branch_count_map
     from ur10teach.features.reach_map import PLANES, map_image
 
@@ -202,6 +205,10 @@ def test_the_branch_count_map_of_every_arm_is_its_ik_s(app, label):
         expected = branch_count_map(session.arm, session.state.last.target, plane, view.resolution)
         assert expected.counts.max() > 0 and view.slots == len(session.arm.slot_labels)
         np.testing.assert_array_equal(view.image.image, map_image(expected.counts, view.slots))
+        drawn = scene_pose(session.client.scene, view.image)
+        world = session.drawing.world
+        np.testing.assert_allclose(drawn[:3, 3], from_frame(world, expected.centre), atol=1e-6)
+        np.testing.assert_allclose(drawn[:3, :2], world[:3, :3] @ np.stack([expected.u, expected.v], axis=1), atol=1e-6)
         # and one cell read back through the IK: its count is the number of branches that reach it within limits
         i, j = np.argwhere(expected.counts > 0)[0]
         T = session.state.last.target.copy()
@@ -286,7 +293,6 @@ def test_no_two_3d_labels_overlap_with_velocities_forces_and_ellipsoids_shown(ap
 def test_the_placed_labels_keep_clear_of_the_branch_count_maps_legend(app, label, plane):
     """The map's legend hangs in the map's own turned frame, beside the map; until 2026-12-03 the placed labels
     did not keep clear of it ("x4" under it on the SCARA's horizontal map)."""
-    from ur10core.orientation import transform_from_quaternion
     from ur10teach.viser_internals import labels_of
 
     async def scenario():
@@ -298,8 +304,7 @@ def test_the_placed_labels_keep_clear_of_the_branch_count_maps_legend(app, label
         await until(lambda: view.image is not None and view.shown_key is not None, what="the map")
         image = view.image
         legend = next(node for node in labels_of(session.client.scene) if node.name == f"{image.name}/legend")
-        pose = transform_from_quaternion(np.asarray(image.wxyz), np.asarray(image.position))
-        where = from_frame(pose, legend.position)  # in the scene, from the image's own pose
+        where = scene_pose(session.client.scene, legend)[:3, 3]  # in the scene, through the image and every node above it
         placed, clashes = overlapping_labels(session, also=[(where, legend.text, legend.font_screen_scale, legend.anchor)])
         assert placed and not clashes, f"overlapping: {clashes}"
         await client.close()

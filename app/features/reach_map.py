@@ -12,7 +12,7 @@ from typing import Any, Callable
 import numpy as np
 import viser
 
-from ur10core.orientation import from_frame, quaternion
+from ur10core.orientation import quaternion
 from ur10core.solvers.ur import URFamily
 from ur10core.workspace import BranchCountMap, branch_count_map
 
@@ -61,11 +61,11 @@ def colour_of(count: int, slots: int) -> tuple[int, int, int]:
     return REACH_COLORS[int(np.ceil(4 * count / slots))][0]
 
 
-def map_pose(reach: BranchCountMap, world: np.ndarray = np.eye(4)) -> tuple[np.ndarray, np.ndarray]:
-    """(wxyz, position) of the image node: its x along u, its y along v (an image's top row is +y);
-    ``world`` (4, 4) puts the arm's base frame in the scene."""
-    rotation = world[:3, :3] @ np.stack([reach.u, reach.v, np.cross(reach.u, reach.v)], axis=1)
-    return quaternion(rotation, check=False), from_frame(world, reach.centre)
+def map_pose(reach: BranchCountMap) -> tuple[np.ndarray, np.ndarray]:
+    """(wxyz, position) of the image node in the arm's base frame (the node it hangs from): its x along u, its y
+    along v (an image's top row is +y)."""
+    rotation = np.stack([reach.u, reach.v, np.cross(reach.u, reach.v)], axis=1)
+    return quaternion(rotation, check=False), np.asarray(reach.centre, dtype=float)
 
 
 COLOUR_NAMES = {REACH_COLORS[1][0]: "yellow", REACH_COLORS[2][0]: "green", REACH_COLORS[3][0]: "teal", REACH_COLORS[4][0]: "purple"}
@@ -93,7 +93,8 @@ class ReachMapView(View):
 
     For any arm with a closed-form IK; a typed table's folder says why it has no map.
     ``target_of(snapshot)`` is the pose whose orientation is kept (the IK target; the desktop
-    arm's tool), and ``world`` (4, 4) puts the arm's base frame in the scene.
+    arm's tool). ``root`` hangs from the arm's base frame, in which the map is drawn; ``world`` (4, 4)
+    puts that frame in the scene, for the camera.
     """
 
     def __init__(self, scene: viser.SceneApi, gui: viser.GuiApi, session: Session, root: str = "/reach_map",
@@ -177,7 +178,7 @@ class ReachMapView(View):
                          lambda: branch_count_map(self._session.arm, self._target_of(snapshot), key[1], self.resolution),
                          cancelled=lambda: self._closed or self._session.closed)
         self.computed += 1
-        image, (wxyz, position) = map_image(reach.counts, self.slots), map_pose(reach, self._world)
+        image, (wxyz, position) = map_image(reach.counts, self.slots), map_pose(reach)
         top = reach.size / 2 - 0.06  # the legend, along the map's v, just inside its edge
         with self._lock:
             if self._closed or not self.enabled.value:
