@@ -81,7 +81,7 @@ _SPECS = {
     # the course's other arms (docs/kinematics.md §7.5): each starts away from its singularities
     "kr210": ArmSpecs({"home": np.array([0.0, math.radians(15), math.radians(-30), math.radians(20),
                                           math.radians(40), math.radians(10)])}),
-    # the report's table starts at the shoulder: it stands where Corke's model of Scheinman's arm has it (d1)
+    # the report's table starts at the shoulder: 0.412 m up, as in Corke's model of Scheinman's arm (its d1)
     "stanford": ArmSpecs({"home": np.array([math.radians(30), math.radians(60), 0.254, math.radians(20),
                                              math.radians(40), math.radians(10)]),
                           # the report's own FK example, its GUI's default input: every angle 100°, d3 = 10 in
