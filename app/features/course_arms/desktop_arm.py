@@ -17,7 +17,7 @@ from ur10core.orientation import from_frame, quaternion
 
 from ...state import Snapshot
 from ...style import JOINT_CAP_GREY, SHOULDER_COLOR
-from ..branch_labels import BranchLabels, chain
+from ..branch_labels import BranchLabels
 from .scene import Framed, LineDrawing
 
 ROOT = "/desktop_arm"
@@ -57,16 +57,14 @@ class DesktopArmScene(LineDrawing):
         self.captions = BranchLabels(scene, f"{root}/names", len(NAMES), scale=1.3, merge_px=4.0)
         self._name_points = np.zeros((len(NAMES), 3))
         self._add_ghosts(scene, arm, self._links(points)[1:], 0.03, 0.09)
-        self.label_sets = chain((self.captions, self.numbers))  # the numbers keep clear of the captions
-        for labels in self.label_sets:
-            labels.world = self.world
+        self.label_sets = self._label_sets((self.captions, self.numbers))  # the numbers keep clear of the captions
         if target_marker:
             self._add_target_marker(scene)
         self.render(first)
 
     def _points(self, frames: np.ndarray) -> np.ndarray:
         """(4, 3) the pedestal's foot, the shoulder, the elbow and the tool, in the course's frame."""
-        return np.vstack([[0.0, -self._arm.base_height, 0.0], frames[..., :3, 3]])
+        return np.vstack([self.foot, frames[..., :3, 3]])
 
     @staticmethod
     def _links(points: np.ndarray) -> np.ndarray:

@@ -16,7 +16,7 @@ import viser
 
 from ur10core import Arm
 from ur10core.dh import DHTable
-from ur10core.orientation import quaternion
+from ur10core.orientation import from_frame, quaternion
 
 from ...state import Snapshot
 from ...style import JOINT_CAP_GREY, SLOT_COLORS
@@ -121,6 +121,7 @@ class LineDrawing:
     root: str
     size: float
     world: np.ndarray
+    foot: np.ndarray
 
     @property
     def roots(self) -> tuple[str, ...]:
@@ -132,6 +133,9 @@ class LineDrawing:
         which a node of its own places in the world where it is not the world's (:func:`world_placement`)."""
         self.top = self.root = top
         self.world = world_placement(arm)
+        #: (3,) the floor under its base frame's origin, in that frame: where a pedestal stands (the origin itself
+        #: for an arm standing on the floor)
+        self.foot = -arm.base_height * np.asarray(arm.up, dtype=float)
         if not np.array_equal(self.world, np.eye(4)):
             self.root = f"{top}/base_frame"
             scene.add_frame(self.root, wxyz=quaternion(self.world[:3, :3], check=False), position=self.world[:3, 3],
@@ -145,8 +149,14 @@ class LineDrawing:
         valid = snapshot.solution.valid if snapshot.solution is not None else np.zeros(len(snapshot.ghost_frames), bool)
         frames = self.world @ np.concatenate([snapshot.frames[None], snapshot.ghost_frames[valid]]).reshape(-1, 4, 4)
         foot = np.eye(4)
-        foot[:2, 3] = self.world[:2, 3]
+        foot[:3, 3] = from_frame(self.world, self.foot)
         return Framed(np.concatenate([foot[None], frames]), self.world @ snapshot.target, (foot[:3, 3],))
+
+    def _label_sets(self, pools: tuple[BranchLabels, ...]) -> tuple[BranchLabels, ...]:
+        """``pools`` placed in order, each clear of those before it (``chain``), in the arm's base frame placed in the world."""
+        for labels in pools:
+            labels.world = self.world
+        return chain(pools)
 
     @property
     def body_radius(self) -> float:
@@ -231,9 +241,8 @@ class CourseArmScene(LineDrawing):
         segments = skeleton(arm.dh, first.frames)
         self.body = scene.add_line_segments(f"{root}/body", segments, SKELETON_GREY, thickness=0.012 * size)
         #: where its table starts at the shoulder (the Stanford arm's), the pedestal it stands on, up to its base frame
-        self.pedestal = scene.add_line_segments(
-            f"{root}/pedestal", np.array([[-arm.base_height * np.asarray(arm.up), np.zeros(3)]]), SKELETON_GREY,
-            thickness=0.03 * size) if arm.base_height else None
+        self.pedestal = scene.add_line_segments(f"{root}/pedestal", np.array([[self.foot, np.zeros(3)]]), SKELETON_GREY,
+                                                thickness=0.03 * size) if arm.base_height else None
         self.joints = []
         for k, kind in enumerate(arm.joint_types):
             if kind == "R":
@@ -250,10 +259,8 @@ class CourseArmScene(LineDrawing):
         #: det J's factors in 3D (a preset's; a typed table's det J is not derived)
         self.overlay = SingularityOverlay(scene, arm, first, size, root) if has_overlay(arm) else None
         #: the 3D labels placed apart for a camera, in order, each pool clear of those before it
-        self.label_sets = chain(((self.overlay.names,) if self.overlay is not None else ())
-                                + (self.dh_frames.values, self.dh_frames.names, self.numbers))
-        for labels in self.label_sets:
-            labels.world = self.world
+        self.label_sets = self._label_sets(((self.overlay.names,) if self.overlay is not None else ())
+                                           + (self.dh_frames.values, self.dh_frames.names, self.numbers))
         if target_marker:
             self._add_target_marker(scene)
 
