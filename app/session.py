@@ -20,6 +20,7 @@ from .features.camera import CameraControls
 from .features.course_arms.desktop_lessons import desktop_lessons
 from .features.course_arms.editor import DHEditor
 from .features.course_arms.gripper import GripperPose
+from .features.course_arms.report_slip import kr210_lessons
 from .features.dh_table import DHTableView, DHWalkthrough
 from .features.drawings import arm_drawing
 from .features.ellipsoids import EllipsoidsView
@@ -44,7 +45,7 @@ from .style import NAME_SCALE
 #: Changes after which the camera frames the arm again: it may have gone far (a drag or a slider moves it gradually).
 REFRAMED = ("singularity", "typed")
 #: An arm's own lessons (the course's exercises with it), beside the features every arm has.
-LESSONS = {"three_dof": desktop_lessons}
+LESSONS = {"three_dof": desktop_lessons, "kr210": kr210_lessons}
 
 
 class ArmSession:

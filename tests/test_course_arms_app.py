@@ -405,6 +405,60 @@ def test_the_kr210_gripper_pose_in_the_urdf_convention(app):
     asyncio.run(scenario())
 
 
+def on_segments(points: np.ndarray, segments: np.ndarray) -> bool:
+    """Every one of ``points`` (n, 3) lies on one of ``segments`` (m, 2, 3), to a micrometre."""
+    start, along = segments[:, 0], segments[:, 1] - segments[:, 0]
+    t = np.clip(np.einsum("nmk,mk->nm", points[:, None] - start[None], along) / np.einsum("mk,mk->m", along, along), 0, 1)
+    gaps = np.linalg.norm(points[:, None] - (start[None] + t[..., None] * along[None]), axis=-1)
+    return bool((gaps.min(axis=1) < 1e-6).all())
+
+
+def test_the_kr210_reports_slip_is_drawn_where_its_formula_puts_the_arm(app):
+    """The course's KR210 report writes the wrist centre's distance beyond the shoulder √(WC_x² + WC_y² − a1); ticked,
+    the arm that formula gives is drawn dashed along its DH skeleton, to the gripper it reaches, with the gap to the
+    target dashed and named, and the folder says by how much. Near axis 1 the report's square root fails: said, not
+    drawn. Only the KR210 has the folder."""
+    async def scenario():
+        from ur10teach.features.course_arms.report_slip import ReportSlipView
+        from ur10teach.features.course_arms.scene import skeleton
+
+        from ur10core.serial import report_slip
+
+        client = await ViserClient(url(app)).connect()
+        session = await pick(app, client, KR210)
+        view = next(lesson for lesson in session.lessons if isinstance(lesson, ReportSlipView))
+        assert "The report's slip" in client.gui
+        await client.set_gui("Show the report's arm", True)
+        q = np.radians([20, 10, -30, 20, 40, 10])
+        session.apply(lambda state: state.set_joints(q))
+        slip = report_slip(session.arm, session.arm.fk(q), session.state.last.slot, q)
+        await until(lambda: view.arm_lines.visible and client.received.visible.get(view.arm_lines.name), what="the dashed arm")
+        dashes = np.asarray(view.arm_lines.points, float).reshape(-1, 3)
+        assert on_segments(dashes, skeleton(session.arm.dh, session.arm.frames(slip.q)))
+        assert not on_segments(dashes, skeleton(session.arm.dh, session.arm.frames(q)))  # not the arm's own
+        gap = np.asarray(view.miss.points, float).reshape(-1, 3)
+        np.testing.assert_allclose(gap[[0, -1]], [slip.reached[:3, 3], session.arm.fk(q)[:3, 3]], atol=1e-6)
+        assert 0.2 < np.linalg.norm(gap[0] - gap[-1]) < 0.3
+        (point, text, _), = view.names()
+        np.testing.assert_allclose(point, slip.reached[:3, 3])
+        assert text == f"the report's gripper, {1000 * abs(slip.slipped - slip.distance):.0f} mm off"
+        await until(lambda: f"**{1000 * abs(slip.slipped - slip.distance):.0f} mm** farther out" in view.readout.content,
+                    what="the gap in the folder")
+        # the wrist centre near axis 1: WC_x² + WC_y² < a1, and the report's code stops
+        near = np.diag([1.0, -1.0, -1.0, 1.0])
+        near[:3, 3] = (0.3, 0.2, 0.697)
+        session.apply(lambda state: state.move_target(near, cause="typed"))
+        await until(lambda: "square root of" in view.readout.content and not client.received.visible.get(view.arm_lines.name),
+                    what="the report's error, nothing drawn")
+        assert session.state.last.reachable
+        assert view.names()[0][0] is None
+        elbow = await pick(app, client, "Elbow arm + spherical wrist")
+        assert "The report's slip" not in client.gui and not any(isinstance(v, ReportSlipView) for v in elbow.panel_views)
+        await client.close()
+
+    asyncio.run(scenario())
+
+
 def test_changing_arms_too_fast_is_refused_and_the_picker_shows_the_arm_still_driven(app, monkeypatch):
     async def scenario():
         client = await ViserClient(url(app)).connect()

@@ -511,6 +511,76 @@ def test_the_kr210_urdf_gripper_convention():
     np.testing.assert_allclose(kr210_from_urdf(urdf), T, atol=1e-15)
 
 
+def kr210_report_ik(T: np.ndarray, slip: bool) -> np.ndarray:
+    """The KR210 report's IK written out step by step (the course's pick-and-place report, docs/kinematics.md
+    §7.3): the triangle shoulder, elbow, wrist centre by the law of cosines, then R3_6 = R0_3ᵀ R0_G read off.
+    ``slip``: its planar distance √(WC_x² + WC_y² − a1) in place of √(WC_x² + WC_y²) − a1."""
+    centre = T[:3, 3] - 0.303 * T[:3, 2]
+    theta1 = math.atan2(centre[1], centre[0])
+    u = math.sqrt(centre[0] ** 2 + centre[1] ** 2 - 0.35) if slip else math.hypot(centre[0], centre[1]) - 0.35
+    w = centre[2] - 0.75
+    side_a, side_b, side_c = math.hypot(1.5, 0.054), math.hypot(u, w), 1.25
+    angle_a = math.acos((side_b ** 2 + side_c ** 2 - side_a ** 2) / (2 * side_b * side_c))
+    angle_b = math.acos((side_a ** 2 + side_c ** 2 - side_b ** 2) / (2 * side_a * side_c))
+    theta2 = math.pi / 2 - angle_a - math.atan2(w, u)
+    theta3 = math.pi / 2 - (angle_b + math.atan2(0.054, 1.5))
+    first = SE3.Rz(theta1) * SE3.Rx(-math.pi / 2) * SE3.Rz(theta2 - math.pi / 2) * SE3.Rz(theta3)  # R0_3, by hand
+    r = first.R.T @ T[:3, :3]  # R3_6 (G turns no further than frame 6)
+    theta4 = math.atan2(r[2, 2], -r[0, 2])
+    theta5 = math.atan2(math.hypot(r[0, 2], r[2, 2]), r[1, 2])
+    theta6 = math.atan2(-r[1, 1], r[1, 0])
+    return np.array([theta1, theta2, theta3, theta4, theta5, theta6])
+
+
+def test_the_kr210_reports_slip_puts_the_gripper_where_its_own_steps_do():
+    """The report's steps, written out in the test, with its slip: the arm they give reaches :func:`report_slip`'s
+    pose, on its shoulder-front, elbow-up branch; without the slip they reach the target itself. And where
+    WC_x² + WC_y² < a1 the report's square root has no value; for an arm with no shoulder offset, no slip."""
+    from ur10core.serial import report_slip
+
+    arm = Arm.preset("kr210")
+    rng = np.random.default_rng(31)
+    q = random_joints(arm, 400, 30)
+    q[:, 0] = rng.uniform(-1.5, 1.5, len(q))  # the wrist centre in front of the shoulder: the report's θ1
+    checked = 0
+    for T, joints in zip(arm.fk(q), q):
+        solution = arm.ik(T, hint=joints)
+        if not solution.valid[:4].any():
+            continue
+        np.testing.assert_allclose(arm.fk(kr210_report_ik(T, slip=False)), T, atol=1e-9)
+        slot = int(np.flatnonzero(solution.valid[:4])[0])
+        slip = report_slip(arm, T, slot, joints)
+        centre = T[:3, 3] - 0.303 * T[:3, 2]
+        rho = math.hypot(centre[0], centre[1])
+        assert math.isclose(slip.distance, rho - 0.35) and math.isclose(slip.radicand, rho * rho - 0.35)
+        if rho * rho < 0.35:  # the report's square root has no value
+            assert math.isnan(slip.slipped) and slip.reached is None and slip.q is None
+            continue
+        assert math.isclose(slip.slipped, math.sqrt(rho * rho - 0.35))
+        if slip.q is None:  # moved out of reach
+            assert not arm.ik(slip.reached).valid[slot]
+            continue
+        checked += 1
+        np.testing.assert_allclose(arm.fk(slip.q), slip.reached, atol=1e-9)
+        report = kr210_report_ik(T, slip=True)
+        np.testing.assert_allclose(arm.fk(report), slip.reached, atol=1e-9)
+        assert math.isclose(np.linalg.norm(slip.reached[:3, 3] - T[:3, 3]), abs(slip.slipped + 0.35 - rho), abs_tol=1e-12)
+        np.testing.assert_allclose(slip.reached[:3, :3], T[:3, :3])
+        # the report's arm is the shoulder-front, elbow-up branch its wrist formula picks (θ5 ≥ 0)
+        ours = [report_slip(arm, T, up, report).q for up in (0, 1)]
+        assert any(mine is not None and np.abs(wrapped(mine - report, True)).max() < 1e-9 for mine in ours)
+    assert checked > 200
+    near = np.eye(4)
+    near[:3, :3] = np.diag([1.0, -1.0, -1.0])  # gripper down: the wrist centre 0.303 m above it
+    near[:3, 3] = (0.3, 0.2, 1.0 - 0.303)  # and 0.36 m from axis 1: WC_x² + WC_y² = 0.13 < 0.35
+    stuck = report_slip(arm, near, 0, np.zeros(6))
+    assert math.isnan(stuck.slipped) and stuck.reached is None and stuck.q is None
+    with pytest.raises(ValueError, match="no shoulder offset"):
+        report_slip(Arm.preset("elbow"), arm.fk(np.zeros(6)), 0, np.zeros(6))
+    with pytest.raises(ValueError, match="slot must be 0..7"):
+        report_slip(arm, T, 8, joints)
+
+
 @pytest.mark.parametrize("name", ["kr210", "elbow", "stanford"])
 def test_the_wrist_centre_is_on_the_last_three_axes_and_behind_the_tool(name):
     """Every spherical wrist's centre lies on its last three joint axes, also at s5 = 0 (axes 4 and 6

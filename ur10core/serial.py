@@ -2,14 +2,16 @@
 
 ``Arm.preset(name)`` builds an :class:`ur10core.Arm` from one of :data:`PRESETS`: the
 course's KR210 and Stanford arm, the lecture notes' SCARA, elbow arm, planar elbow and
-cylindrical arm. Also here: the KR210's URDF frame, and the part of a target an arm that
-controls less than a whole pose can follow (:func:`project_target`).
+cylindrical arm. Also here: the KR210's URDF frame, the KR210 report's slip in its IK
+(:func:`report_slip`), and the part of a target an arm that controls less than a whole pose can
+follow (:func:`project_target`).
 """
 
 from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import NamedTuple
 
 import numpy as np
 
@@ -100,7 +102,62 @@ def kr210_to_urdf(T) -> np.ndarray:
     return T
 
 
-__all__ = ["KR210_URDF_TURN", "PRESETS", "kr210_from_urdf", "kr210_to_urdf", "project_target"]
+__all__ = ["KR210_URDF_TURN", "PRESETS", "ReportSlip", "kr210_from_urdf", "kr210_to_urdf", "project_target", "report_slip"]
+
+
+class ReportSlip(NamedTuple):
+    """What :func:`report_slip` finds for one target."""
+
+    distance: float  #: √(WC_x² + WC_y²) − a1 (m): how far the wrist centre is beyond the shoulder, horizontally
+    radicand: float  #: WC_x² + WC_y² − a1, with a1's number in metres: what the report takes the square root of
+    slipped: float  #: √(radicand): NaN where it is negative
+    reached: np.ndarray | None  #: (4, 4) the tool pose the slipped joints reach; None where ``slipped`` is NaN
+    q: np.ndarray | None  #: (6,) those joints, on the asked branch's elbow and wrist; None where it cannot reach
+
+
+def report_slip(arm, T, slot: int, q_current) -> ReportSlip:
+    """Where the KR210 report's inverse kinematics puts the tool for the target ``T`` (4, 4) (docs/kinematics.md §7.3).
+
+    The report takes the wrist centre's horizontal distance beyond the shoulder as
+    √(WC_x² + WC_y² − a1) where it is √(WC_x² + WC_y²) − a1 (a length taken from an area:
+    the units give it away). Every later step is right for the distance it is given, so the
+    arm puts its wrist centre where that distance is the true one: on the same half-plane
+    through axis 1 and at the same height, ρ' = √(ρ² − a1) + a1 from the axis (ρ =
+    √(WC_x² + WC_y²)), and its wrist still turns the tool as asked. ``reached`` is ``T``
+    moved out by ρ' − ρ. The report solves the shoulder-front branches only: ``q`` is the
+    shoulder-front branch with the elbow and wrist of ``slot`` (0..7, ``4 shoulder + 2 elbow
+    + wrist``), turned next to ``q_current`` (6,); None where it does not reach ``reached``.
+
+    >>> from ur10core import Arm
+    >>> kr210 = Arm.preset("kr210")
+    >>> T = np.eye(4); T[:3, 3] = (2.0, 0.0, 1.5); T[:3, :3] = [[0, 0, 1], [0, 1, 0], [-1, 0, 0]]  # gripper along x
+    >>> slip = report_slip(kr210, T, 0, np.zeros(6))   # the wrist centre 1.697 m out: 1.347 m beyond the shoulder
+    >>> round(slip.distance, 3), round(slip.radicand, 3), round(slip.slipped, 3), round(float(slip.reached[0, 3] - T[0, 3]), 3)
+    (1.347, 2.53, 1.591, 0.244)
+    >>> np.allclose(kr210.fk(slip.q), slip.reached)
+    True
+    """
+    if not isinstance(arm.solver, ArticulatedArm) or arm.solver.plane["u0"] == 0.0:
+        raise ValueError(f"the {arm.name!r} arm has no shoulder offset a1 decoupled at its wrist centre: the slip "
+                         "changes nothing for it")
+    if isinstance(slot, bool) or not isinstance(slot, (int, np.integer)) or not 0 <= slot < 8:
+        raise ValueError(f"slot must be 0..7, got {slot!r}")
+    T = homogeneous_transform(T)
+    if T.shape != (4, 4):
+        raise ValueError(f"T must be one 4 × 4 pose, got shape {T.shape}")
+    a1 = arm.solver.plane["u0"]
+    centre = T[:3, 3] + T[:3, :3] @ arm.solver.centre_in_tool
+    rho = math.hypot(centre[0], centre[1])
+    if rho * rho < a1:  # the report's code stops here: the square root of a negative number
+        return ReportSlip(rho - a1, rho * rho - a1, math.nan, None, None)
+    slipped = math.sqrt(rho * rho - a1)
+    outward = centre[:2] / rho if rho > 0.0 else np.array([1.0, 0.0])
+    reached = T.copy()
+    reached[:2, 3] += (slipped + a1 - rho) * outward
+    solution = arm.ik(reached, hint=q_current)
+    front = slot % 4
+    q = solution.take(front, q_current) if solution.valid[front] else None
+    return ReportSlip(rho - a1, rho * rho - a1, slipped, reached, q)
 
 
 def project_target(arm, T, current) -> np.ndarray:
