@@ -235,8 +235,11 @@ def test_panel_texts(course):
     pose = pose_markdown(course.fk(np.zeros(6)))
     assert "**+1184.5**" in pose and "**-256.1**" in pose and "**+243.7**" in pose
     assert pose.startswith("| n | o | a | p (mm) |")  # the columns named as the course's reports name them
-    # R = Rx(90°), a = (0, −1, 0): φ = atan2(−1, 0), θ = atan2(1, 0), ψ = atan2(1, 0) by the report's formulas
-    assert "**Z-Y-Z Euler** (φ, θ, ψ) = (-90.00°, 90.00°, 90.00°)" in orientation_markdown(course.fk(np.zeros(6))[:3, :3])
+    # R = Rx(90°), a = (0, −1, 0): φ = atan2(−1, 0), θ = atan2(1, 0), ψ = atan2(1, 0) by the report's formulas, or
+    # with φ + 180° ("or + 180°", the report says) θ = atan2(−1, 0) and ψ = atan2(−1, 0)
+    assert ("**Z-Y-Z Euler** (φ, θ, ψ) = (-90.00°, 90.00°, 90.00°) or (90.00°, -90.00°, -90.00°)"
+            in orientation_markdown(course.fk(np.zeros(6))[:3, :3]))
+    assert "**Z-Y-Z Euler** (φ, θ, ψ) = (0.00°, 0.00°, 0.00°), as" in orientation_markdown(np.eye(3))  # only φ + ψ: one
     assert "Z-Y-X Euler" in orientation_markdown(np.eye(3)) and "(+1.0000, +0.0000, +0.0000, +0.0000)" in orientation_markdown(np.eye(3))
     controller = joints_markdown(course, np.zeros(6), with_controller=True)
     assert "| shoulder | 0.00° | 180.00° |" in controller

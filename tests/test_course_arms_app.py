@@ -122,8 +122,8 @@ def test_a_prismatic_joint_is_driven_in_millimetres(app):
 
 
 def test_the_stanford_reports_example_is_one_click_and_its_t6_is_read_as_the_report_reads_it(app):
-    """The *Report's example* pose (every angle 100°, d3 = 10 in) and the Tool pose folder's Z-Y-Z angles, which
-    the report's GUI reads from T6: against spatialmath's ``tr2eul`` of the arm's T06 (test-only)."""
+    """The *Report's example* pose (every angle 100°, d3 = 10 in) and the Tool pose folder's Z-Y-Z angles, both of
+    the report's solutions, which its GUI reads from T6: against spatialmath's ``tr2eul`` of the arm's T06 (test-only)."""
     from spatialmath.base import tr2eul
 
     async def scenario():
@@ -133,7 +133,9 @@ def test_the_stanford_reports_example_is_one_click_and_its_t6_is_read_as_the_rep
         q = session.arm.specs.poses["report's example"]
         await until(lambda: np.allclose(session.state.last.q, q, atol=1e-12), what="the report's example")
         phi, theta, psi = np.degrees(tr2eul(session.arm.fk(q)[:3, :3]))
-        line = f"**Z-Y-Z Euler** (φ, θ, ψ) = ({phi:.2f}°, {theta:.2f}°, {psi:.2f}°)"
+        other = np.degrees(tr2eul(session.arm.fk(q)[:3, :3], flip=True))  # the report's "or + 180°"
+        line = (f"**Z-Y-Z Euler** (φ, θ, ψ) = ({phi:.2f}°, {theta:.2f}°, {psi:.2f}°) or "
+                f"({other[0]:.2f}°, {other[1]:.2f}°, {other[2]:.2f}°)")
         await until(lambda: any(line in text for text in client.markdown.values()), what=line)
         await client.close()
 

@@ -80,6 +80,11 @@ def test_zyz_euler_round_trip_construction_and_spatialmath(angles):
     phi = np.arctan2(a[:, 1], a[:, 0])
     c, s = np.cos(phi), np.sin(phi)
     np.testing.assert_allclose(zyz_euler(by_hand)[:, 2], np.arctan2(-s * n[:, 0] + c * n[:, 1], -s * o[:, 0] + c * o[:, 1]))
+    # and the report's other solution, φ + 180°: the same rotation, as tr2eul's flip reads it
+    flipped = zyz_euler(by_hand, flip=True)
+    np.testing.assert_allclose(flipped, [tr2eul(R, flip=True) for R in by_hand], atol=1e-9)
+    np.testing.assert_allclose(rotation_from_zyz_euler(flipped), by_hand, atol=1e-12)
+    np.testing.assert_allclose(flipped[:, 1], -zyz[:, 1], atol=1e-9)
 
 
 @pytest.mark.parametrize("theta", [0.0, np.pi])
@@ -87,6 +92,7 @@ def test_zyz_euler_with_the_approach_along_z_keeps_phi_zero(theta):
     R = rotation_from_zyz_euler([0.4, theta, 0.9])
     phi, t, psi = zyz_euler(R)
     assert phi == 0 and t == pytest.approx(theta)
+    np.testing.assert_array_equal(zyz_euler(R, flip=True), (phi, t, psi))
     np.testing.assert_allclose(rotation_from_zyz_euler([phi, t, psi]), R, atol=1e-12)
 
 

@@ -99,24 +99,27 @@ def rotation_from_zyz_euler(angles) -> np.ndarray:
     return _rot(2, phi) @ _rot(1, theta) @ _rot(2, psi)
 
 
-def zyz_euler(R, check: bool = True) -> np.ndarray:
+def zyz_euler(R, check: bool = True, flip: bool = False) -> np.ndarray:
     """Z-Y-Z Euler angles ``(φ, θ, ψ)`` of R, (..., 3), θ in [0, π]: docs/kinematics.md §3, as the
     course's Stanford-arm report reads T6 = [n o a p] (Paul's Euler angles).
 
     ``φ = atan2(a_y, a_x)``, ``θ = atan2(cφ a_x + sφ a_y, a_z)``,
-    ``ψ = atan2(−sφ n_x + cφ n_y, −sφ o_x + cφ o_y)``. When a is along ±z (sin θ ≈ 0)
-    only φ ± ψ is defined: φ = 0 and ψ carries the whole turn about z.
+    ``ψ = atan2(−sφ n_x + cφ n_y, −sφ o_x + cφ o_y)``. ``flip``: the report's other solution,
+    φ + 180° (``atan2(−a_y, −a_x)``) through the same formulas, which give θ in [−π, 0] and
+    ψ + 180°. When a is along ±z (sin θ ≈ 0) only φ ± ψ is defined: φ = 0 and ψ carries the
+    whole turn about z, flipped or not.
 
     >>> R = rotation_from_zyz_euler([0.3, 1.2, -0.4])
-    >>> zyz_euler(R).round(6).tolist()
-    [0.3, 1.2, -0.4]
+    >>> zyz_euler(R).round(6).tolist(), np.degrees(zyz_euler(R, flip=True)).round(3).tolist()
+    ([0.3, 1.2, -0.4], [-162.811, -68.755, 157.082])
     >>> np.degrees(zyz_euler(rotation_from_zyz_euler([0.3, 0.0, -0.4]))).round(3).tolist()  # only φ + ψ
     [0.0, 0.0, -5.73]
     """
     R = _rotations(R, check)
     n, o, a = R[..., :, 0], R[..., :, 1], R[..., :, 2]
     locked = np.hypot(a[..., 0], a[..., 1]) < GIMBAL_TOLERANCE
-    phi = np.where(locked, 0.0, np.arctan2(a[..., 1], a[..., 0]))
+    sign = -1.0 if flip else 1.0
+    phi = np.where(locked, 0.0, np.arctan2(sign * a[..., 1], sign * a[..., 0]))
     c, s = np.cos(phi), np.sin(phi)
     theta = np.arctan2(c * a[..., 0] + s * a[..., 1], a[..., 2])
     psi = np.arctan2(-s * n[..., 0] + c * n[..., 1], -s * o[..., 0] + c * o[..., 1])

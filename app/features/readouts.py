@@ -36,13 +36,15 @@ def orientation_markdown(R: np.ndarray, wxyz: np.ndarray | None = None) -> str:
     alpha, beta, gamma = np.degrees(zyx_euler(R, check=False))
     fixed = np.degrees(xyz_fixed(R, check=False))
     paul = np.degrees(zyz_euler(R, check=False))
+    other = np.degrees(zyz_euler(R, check=False, flip=True))
+    paul_text = _degrees(*paul) + ("" if np.allclose(paul, other) else f") or ({_degrees(*other)}")
     w, x, y, z = quaternion(R, check=False) if wxyz is None else wxyz
     theta, axis = angle_axis_from_quaternion((w, x, y, z))
     return "\n".join(
         [
             f"- **Z-Y-X Euler** (α, β, γ) = ({_degrees(alpha, beta, gamma)})",
             f"- **X-Y-Z fixed** (γ, β, α) = ({_degrees(*fixed)})",
-            f"- **Z-Y-Z Euler** (φ, θ, ψ) = ({_degrees(*paul)}), as the Stanford report reads T6",
+            f"- **Z-Y-Z Euler** (φ, θ, ψ) = ({paul_text}), as the Stanford report reads T6",
             f"- **Angle–axis** θ = {number(np.degrees(theta), '.2f')}°, k̂ = ({', '.join(number(v, '+.4f') for v in axis)})",
             f"- **Quaternion** (w, x, y, z) = ({', '.join(number(v, '+.4f') for v in (w, x, y, z))})",
         ]
