@@ -19,8 +19,7 @@ from .features.branch_search import BranchSearch
 from .features.camera import CameraControls
 from .features.course_arms.desktop_lessons import desktop_lessons
 from .features.course_arms.editor import DHEditor
-from .features.course_arms.gripper import GripperPose
-from .features.course_arms.report_slip import kr210_lessons
+from .features.course_arms.kr210_lessons import kr210_lessons
 from .features.dh_table import DHTableView, DHWalkthrough
 from .features.drawings import arm_drawing
 from .features.ellipsoids import EllipsoidsView
@@ -130,7 +129,6 @@ class ArmSession:
         self.ellipsoids = EllipsoidsView(scene, gui, self, root=f"{nodes}/ellipsoids", reach=drawn.size)
         self.velocity = VelocityView(scene, gui, self, root=f"{nodes}/velocity")
         self.motion = MotionLessons(gui, self, before=self.stop_lessons)
-        self.gripper = GripperPose(gui, self) if arm.name == "kr210" else None
         self.lessons = LESSONS[arm.name](scene, gui, self) if arm.name in LESSONS else ()
         self.camera = (CameraControls(client, lambda: drawn.framed(self.state.last), self.guard, lecture,
                                       body_radius=drawn.body_radius) if own_camera else None)
@@ -143,7 +141,7 @@ class ArmSession:
         self.names_elsewhere: Callable[[Any], list] = lambda frame: []
         #: the views this session built in the browser's own panel (the drawing may be the classroom's)
         self.panel_views = tuple(view for view in (
-            self.editor, self.search, self.gripper, self.joints, self.arm_model, self.ik_target, self.readouts,
+            self.editor, self.search, self.joints, self.arm_model, self.ik_target, self.readouts,
             self.singularities, self.dh_table, self.walkthrough, self.workspace, self.reach_map, self.statics,
             self.ellipsoids, self.velocity, self.motion, *self.lessons, self.camera) if view is not None)
         self.views = (drawn, *self.panel_views)

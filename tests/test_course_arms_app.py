@@ -380,27 +380,28 @@ def test_a_course_arms_workspace_cloud(app):
 
 def test_the_kr210_gripper_pose_in_the_urdf_convention(app):
     async def scenario():
-        from ur10teach.features.course_arms.gripper import parse_pose, pose_text
+        from ur10teach.features.course_arms.gripper import GripperPose, parse_pose, pose_text
 
         from ur10core.serial import kr210_to_urdf
 
         client = await ViserClient(url(app)).connect()
         session = await pick(app, client, KR210)
+        gripper = next(lesson for lesson in session.lessons if isinstance(lesson, GripperPose))
         q = np.radians([20, 10, -15, 30, 40, 50])
         T = session.arm.fk(q)
         # typed in the simulation model's convention, the arm goes to the same gripper pose
         await client.set_gui("ROS/Gazebo gripper convention", True)
         # the box is rewritten in the new convention: a student types once it has been
-        await until(lambda: session.gripper.typed.value == pose_text(kr210_to_urdf(session.state.last.target)),
+        await until(lambda: gripper.typed.value == pose_text(kr210_to_urdf(session.state.last.target)),
                     what="the box in the URDF convention")
         await client.set_gui("x y z (mm) roll pitch yaw (°)", pose_text(kr210_to_urdf(T)))
         await client.set_gui("Go to this pose", True)
         await until(lambda: np.abs(session.arm.fk(session.state.last.q) - T).max() < 1e-3, what="the arm at the pose")
-        await until(lambda: "URDF" in session.gripper.readout.content, what="the readout in the URDF convention")
+        await until(lambda: "URDF" in gripper.readout.content, what="the readout in the URDF convention")
         # a pose that is not six numbers is refused
         await client.set_gui("x y z (mm) roll pitch yaw (°)", "1 2 3")
         await client.set_gui("Go to this pose", True)
-        await until(lambda: "six numbers" in session.gripper.refusal.line.content, what="the refusal beside the pose")
+        await until(lambda: "six numbers" in gripper.refusal.line.content, what="the refusal beside the pose")
         np.testing.assert_allclose(parse_pose(pose_text(T)), T, atol=1e-3)
         await client.close()
 
@@ -421,7 +422,7 @@ def test_the_kr210_reports_slip_is_drawn_where_its_formula_puts_the_arm(app):
     target dashed and named, and the folder says by how much. Near axis 1 the report's square root fails: said, not
     drawn. Only the KR210 has the folder."""
     async def scenario():
-        from ur10teach.features.course_arms.report_slip import ReportSlipView
+        from ur10teach.features.course_arms.kr210_lessons import ReportSlipView
         from ur10teach.features.course_arms.scene import skeleton
 
         from ur10core.serial import report_slip

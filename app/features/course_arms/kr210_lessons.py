@@ -1,4 +1,5 @@
-"""The KR210 report's slip in its IK (docs/kinematics.md §7.3): the arm its formula gives for the target, dashed, beside the right one."""
+"""The KR210's own folders: its gripper pose in either convention (``gripper``) and its report's slip in its IK
+(docs/kinematics.md §7.3), the arm that formula gives for the target drawn dashed beside the right one."""
 
 from __future__ import annotations
 
@@ -11,6 +12,7 @@ from ...state import Snapshot
 from ...style import number
 from ...view import Session, View
 from ..dh_frames import show
+from .gripper import GripperPose
 from .scene import skeleton
 
 #: A purple apart (CIE76 ΔE ≥ 16 for normal, protan and deutan vision) from the DH axes' red and blue, the ghosts'
@@ -104,5 +106,5 @@ class ReportSlipView(View):
 
 
 def kr210_lessons(scene: viser.SceneApi, gui: viser.GuiApi, session: Session) -> tuple[View, ...]:
-    """The KR210's own folder beside the features every arm has: its report's slip."""
-    return (ReportSlipView(scene, gui, session),)
+    """The KR210's own folders beside the features every arm has: its gripper pose, its report's slip."""
+    return GripperPose(gui, session), ReportSlipView(scene, gui, session)
