@@ -65,6 +65,19 @@ def test_coinciding_branches_share_one_label(course, points):
     assert len(arm_group) > 1
 
 
+@pytest.mark.parametrize("name, kind", [("elbow", "elbow"), ("stanford", "stroke"), ("stanford", "shoulder")])
+def test_every_branch_in_one_pose_is_named_all_of_them(name, kind):
+    """Stretched, the elbow arm's eight branches share every joint (the shoulder's two sides too, along one line);
+    so do the Stanford arm's with the wrist centre on its shoulder or on axis 1. "arm: 1 = 2 = 3 = 4 = 5 = 6 = 7 = 8"
+    was too wide for a free spot in lecture mode and sat over the DH frames' "z2" (CI, 2026-12-04): it is "arm: all 8"."""
+    snapshot = ArmState(Arm.preset(name)).place_in_singularity(kind)
+    groups = same_pose_groups(snapshot.ghost_frames, snapshot.solution.valid)
+    assert groups == (tuple(range(8)),)
+    frames = Arm.preset(name).frames(snapshot.solution.q)[:, :, :3, 3]  # independently: every branch's joints, by FK
+    assert np.abs(frames - frames[0]).max() < 1e-3
+    assert branch_labels(snapshot, groups) == ["arm: all 8"] + [""] * 7
+
+
 def test_an_arm_through_the_floor_is_marked(course, points):
     down = state(course, [0, -90, 0, -90, 0, 0], points).last  # the arm hangs below its base
     assert down.through_floor[0] and down.lowest[0, 2] < -0.5

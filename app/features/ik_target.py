@@ -141,14 +141,16 @@ def same_pose_groups(ghost_frames: np.ndarray, valid: np.ndarray, tolerance: flo
 
 
 def branch_labels(snapshot: Snapshot, groups: tuple[tuple[int, ...], ...]) -> list[str]:
-    """The 3D label of each slot ("" for none): its number, "3 = 4" for coinciding branches, the arm's marked.
+    """The 3D label of each slot ("" for none): its number, "3 = 4" for coinciding branches ("all 8" where every
+    slot does: "1 = 2 = … = 8" was too wide to find a free spot in lecture mode), the arm's marked.
 
     Only the first slot of a group carries the group's label.
     """
-    texts = [""] * len(snapshot.solution.labels)
+    slots = len(snapshot.solution.labels)
+    texts = [""] * slots
     floor = snapshot.through_floor[1:]
     for group in groups:
-        text = " = ".join(str(k + 1) for k in group)
+        text = f"all {slots}" if len(group) == slots > 2 else " = ".join(str(k + 1) for k in group)
         if snapshot.slot in group:
             text = f"arm: {text}"
         if floor[list(group)].any():
