@@ -447,6 +447,9 @@ def test_the_kr210_reports_slip_is_drawn_where_its_formula_puts_the_arm(app):
         assert text == f"the report's gripper, {1000 * abs(slip.slipped - slip.distance):.0f} mm off"
         await until(lambda: f"**{1000 * abs(slip.slipped - slip.distance):.0f} mm** farther out" in view.readout.content,
                     what="the gap in the folder")
+        np.testing.assert_allclose(slip.right, q, atol=1e-9)  # the arm is on a front branch: its own joints are right
+        for name, mine, right in zip(session.arm.joint_names, slip.q, q):  # side by side, for a student's own code
+            assert f"| {name} | {np.degrees(mine):.1f}° | {np.degrees(right):.1f}° |" in view.readout.content
         # the wrist centre near axis 1: WC_x² + WC_y² < a1, and the report's code stops
         near = np.diag([1.0, -1.0, -1.0, 1.0])
         near[:3, 3] = (0.3, 0.2, 0.697)

@@ -553,6 +553,8 @@ def test_the_kr210_reports_slip_puts_the_gripper_where_its_own_steps_do():
         centre = T[:3, 3] - 0.303 * T[:3, 2]
         rho = math.hypot(centre[0], centre[1])
         assert math.isclose(slip.distance, rho - 0.35) and math.isclose(slip.radicand, rho * rho - 0.35)
+        np.testing.assert_allclose(arm.fk(slip.right), T, atol=1e-9)  # the same branch, right
+        np.testing.assert_allclose(slip.right, solution.take(slot, joints))
         if rho * rho < 0.35:  # the report's square root has no value
             assert math.isnan(slip.slipped) and slip.reached is None and slip.q is None
             continue

@@ -113,6 +113,7 @@ class ReportSlip(NamedTuple):
     slipped: float  #: √(radicand): NaN where it is negative
     reached: np.ndarray | None  #: (4, 4) the tool pose the slipped joints reach; None where ``slipped`` is NaN
     q: np.ndarray | None  #: (6,) those joints, on the asked branch's elbow and wrist; None where it cannot reach
+    right: np.ndarray | None  #: (6,) the joints on that branch that reach ``T`` itself; None where it does not
 
 
 def report_slip(arm, T, slot: int, q_current) -> ReportSlip:
@@ -127,6 +128,7 @@ def report_slip(arm, T, slot: int, q_current) -> ReportSlip:
     moved out by ρ' − ρ. The report solves the shoulder-front branches only: ``q`` is the
     shoulder-front branch with the elbow and wrist of ``slot`` (0..7, ``4 shoulder + 2 elbow
     + wrist``), turned next to ``q_current`` (6,); None where it does not reach ``reached``.
+    ``right`` is the same branch's joints for ``T``, to set the two side by side.
 
     >>> from ur10core import Arm
     >>> kr210 = Arm.preset("kr210")
@@ -134,8 +136,8 @@ def report_slip(arm, T, slot: int, q_current) -> ReportSlip:
     >>> slip = report_slip(kr210, T, 0, np.zeros(6))   # the wrist centre 1.697 m out: 1.347 m beyond the shoulder
     >>> round(slip.distance, 3), round(slip.radicand, 3), round(slip.slipped, 3), round(float(slip.reached[0, 3] - T[0, 3]), 3)
     (1.347, 2.53, 1.591, 0.244)
-    >>> np.allclose(kr210.fk(slip.q), slip.reached)
-    True
+    >>> np.allclose(kr210.fk(slip.q), slip.reached), np.degrees(slip.q - slip.right).round(1).tolist()  # θ2, θ3 off
+    (True, [0.0, 11.0, -11.4, 0.0, -0.4, 0.0])
     """
     if not isinstance(arm.solver, ArticulatedArm) or arm.solver.plane["u0"] == 0.0:
         raise ValueError(f"the {arm.name!r} arm has no shoulder offset a1 decoupled at its wrist centre: the slip "
@@ -148,16 +150,18 @@ def report_slip(arm, T, slot: int, q_current) -> ReportSlip:
     a1 = arm.solver.plane["u0"]
     centre = T[:3, 3] + T[:3, :3] @ arm.solver.centre_in_tool
     rho = math.hypot(centre[0], centre[1])
+    front = slot % 4
+    target = arm.ik(T, hint=q_current)
+    right = target.take(front, q_current) if target.valid[front] else None
     if rho * rho < a1:  # the report's code stops here: the square root of a negative number
-        return ReportSlip(rho - a1, rho * rho - a1, math.nan, None, None)
+        return ReportSlip(rho - a1, rho * rho - a1, math.nan, None, None, right)
     slipped = math.sqrt(rho * rho - a1)
     outward = centre[:2] / rho if rho > 0.0 else np.array([1.0, 0.0])
     reached = T.copy()
     reached[:2, 3] += (slipped + a1 - rho) * outward
     solution = arm.ik(reached, hint=q_current)
-    front = slot % 4
     q = solution.take(front, q_current) if solution.valid[front] else None
-    return ReportSlip(rho - a1, rho * rho - a1, slipped, reached, q)
+    return ReportSlip(rho - a1, rho * rho - a1, slipped, reached, q, right)
 
 
 def project_target(arm, T, current) -> np.ndarray:

@@ -39,8 +39,8 @@ def dashed(segments: np.ndarray, dash: float) -> np.ndarray:
     return np.concatenate(pieces)
 
 
-def slip_markdown(slip: ReportSlip | None, slot: int) -> str:
-    """What the report's formula does to this target, in numbers."""
+def slip_markdown(slip: ReportSlip | None, slot: int, joint_names: tuple[str, ...]) -> str:
+    """What the report's formula does to this target, in numbers, and its joints beside the right ones."""
     if slip is None:
         return "The target is out of reach: there is no right answer for the report's formula to miss."
     if slip.reached is None:
@@ -54,6 +54,10 @@ def slip_markdown(slip: ReportSlip | None, slot: int) -> str:
         text += " That is beyond the arm's reach: the report's law of cosines has no angle there."
     if slot >= 4:
         text += " (The report solves the shoulder-front branches only: its arm is drawn on the front one.)"
+    if slip.q is not None and slip.right is not None:  # what a student checking their own code compares
+        rows = [f"| {name} | {number(np.degrees(mine), '.1f')}° | {number(np.degrees(right), '.1f')}° |"
+                for name, mine, right in zip(joint_names, slip.q, slip.right)]
+        text += "\n\n| joint | the report's | right |\n|---|---:|---:|\n" + "\n".join(rows)
     return text
 
 
@@ -97,7 +101,7 @@ class ReportSlipView(View):
         return [(point, text, SLIP_COLOR)]
 
     def render_panel(self, snapshot: Snapshot) -> None:
-        self.readout.content = slip_markdown(self._slip(snapshot), snapshot.slot)
+        self.readout.content = slip_markdown(self._slip(snapshot), snapshot.slot, self._arm.joint_names)
 
     def close(self) -> None:
         """The session has gone: so does the dashed arm, even from a scene everyone shares."""
