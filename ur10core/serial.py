@@ -110,10 +110,19 @@ class ReportSlip(NamedTuple):
 
     distance: float  #: √(WC_x² + WC_y²) − a1 (m): how far the wrist centre is beyond the shoulder, horizontally
     radicand: float  #: WC_x² + WC_y² − a1, with a1's number in metres: what the report takes the square root of
-    slipped: float  #: √(radicand): NaN where it is negative
     reached: np.ndarray | None  #: (4, 4) the tool pose the slipped joints reach; None where ``slipped`` is NaN
     q: np.ndarray | None  #: (6,) those joints, on the asked branch's elbow and wrist; None where it cannot reach
     right: np.ndarray | None  #: (6,) the joints on that branch that reach ``T`` itself; None where it does not
+
+    @property
+    def slipped(self) -> float:
+        """√(radicand): the distance as the report has it (m); NaN where the radicand is negative."""
+        return math.sqrt(self.radicand) if self.radicand >= 0.0 else math.nan
+
+    @property
+    def gap(self) -> float:
+        """How far the report's gripper ends from the target (m): |slipped − distance|, NaN where it has none."""
+        return abs(self.slipped - self.distance)
 
 
 def report_slip(arm, T, slot: int, q_current) -> ReportSlip:
@@ -134,8 +143,10 @@ def report_slip(arm, T, slot: int, q_current) -> ReportSlip:
     >>> kr210 = Arm.preset("kr210")
     >>> T = np.eye(4); T[:3, 3] = (2.0, 0.0, 1.5); T[:3, :3] = [[0, 0, 1], [0, 1, 0], [-1, 0, 0]]  # gripper along x
     >>> slip = report_slip(kr210, T, 0, np.zeros(6))   # the wrist centre 1.697 m out: 1.347 m beyond the shoulder
-    >>> round(slip.distance, 3), round(slip.radicand, 3), round(slip.slipped, 3), round(float(slip.reached[0, 3] - T[0, 3]), 3)
+    >>> round(slip.distance, 3), round(slip.radicand, 3), round(slip.slipped, 3), round(slip.gap, 3)
     (1.347, 2.53, 1.591, 0.244)
+    >>> round(float(slip.reached[0, 3] - T[0, 3]), 3)   # moved out along x, where the wrist centre is
+    0.244
     >>> np.allclose(kr210.fk(slip.q), slip.reached), np.degrees(slip.q - slip.right).round(1).tolist()  # θ2, θ3 off
     (True, [0.0, 11.0, -11.4, 0.0, -0.4, 0.0])
     """
@@ -154,14 +165,13 @@ def report_slip(arm, T, slot: int, q_current) -> ReportSlip:
     target = arm.ik(T, hint=q_current)
     right = target.take(front, q_current) if target.valid[front] else None
     if rho * rho < a1:  # the report's code stops here: the square root of a negative number
-        return ReportSlip(rho - a1, rho * rho - a1, math.nan, None, None, right)
-    slipped = math.sqrt(rho * rho - a1)
+        return ReportSlip(rho - a1, rho * rho - a1, None, None, right)
     outward = centre[:2] / rho if rho > 0.0 else np.array([1.0, 0.0])
     reached = T.copy()
-    reached[:2, 3] += (slipped + a1 - rho) * outward
+    reached[:2, 3] += (math.sqrt(rho * rho - a1) + a1 - rho) * outward
     solution = arm.ik(reached, hint=q_current)
     q = solution.take(front, q_current) if solution.valid[front] else None
-    return ReportSlip(rho - a1, rho * rho - a1, slipped, reached, q, right)
+    return ReportSlip(rho - a1, rho * rho - a1, reached, q, right)
 
 
 def project_target(arm, T, current) -> np.ndarray:

@@ -46,9 +46,8 @@ def slip_markdown(slip: ReportSlip | None, slot: int, joint_names: tuple[str, ..
     if slip.reached is None:
         return (f"Here the report's code stops with an error: the wrist centre is so near axis 1 that WC_x² + WC_y² "
                 f"is smaller than a1, and √(WC_x² + WC_y² − a1) is the square root of {number(slip.radicand, '.3f')}.")
-    gap = 1000 * abs(slip.slipped - slip.distance)
     text = (f"The wrist centre is **{number(1000 * slip.distance, '.0f')} mm** beyond the shoulder; the report's formula "
-            f"makes it **{number(1000 * slip.slipped, '.0f')} mm**, so its gripper ends **{number(gap, '.0f')} mm** "
+            f"makes it **{number(1000 * slip.slipped, '.0f')} mm**, so its gripper ends **{number(1000 * slip.gap, '.0f')} mm** "
             f"{'farther out' if slip.slipped > slip.distance else 'nearer in'} than the target.")
     if slip.q is None:
         text += " That is beyond the arm's reach: the report's law of cosines has no angle there."
@@ -80,10 +79,15 @@ class ReportSlipView(View):
         self.arm_lines = scene.add_line_segments(f"{root}/arm", empty, SLIP_COLOR, thickness=0.009 * size, visible=False)
         self.miss = scene.add_line_segments(f"{root}/miss", empty, SLIP_COLOR, thickness=0.005 * size, visible=False)
         self._gripper: tuple[np.ndarray, str] | None = None  #: where the report's gripper is and its name, while drawn
+        self._last: tuple = (None, None)  #: (snapshot, its slip): the drawing's, which the panel then reads again
         self.enabled.on_update(session.guard(lambda _: session.redraw()))
 
     def _slip(self, snapshot: Snapshot) -> ReportSlip | None:
-        return report_slip(self._arm, snapshot.target, snapshot.slot, snapshot.q) if snapshot.slot >= 0 else None
+        seen, slip = self._last
+        if seen is not snapshot:
+            slip = report_slip(self._arm, snapshot.target, snapshot.slot, snapshot.q) if snapshot.slot >= 0 else None
+            self._last = (snapshot, slip)
+        return slip
 
     def render(self, snapshot: Snapshot) -> None:
         slip = self._slip(snapshot) if self.enabled.value else None
@@ -91,8 +95,7 @@ class ReportSlipView(View):
         if drawn:
             self.arm_lines.points = dashed(skeleton(self._arm.dh, self._arm.frames(slip.q)), self._dash)
             self.miss.points = dashed(np.array([[slip.reached[:3, 3], snapshot.target[:3, 3]]]), self._dash / 2)
-        self._gripper = (slip.reached[:3, 3], f"the report's gripper, {number(1000 * abs(slip.slipped - slip.distance), '.0f')} mm off"
-                         ) if drawn else None
+        self._gripper = (slip.reached[:3, 3], f"the report's gripper, {number(1000 * slip.gap, '.0f')} mm off") if drawn else None
         show(self.arm_lines, drawn)
         show(self.miss, drawn)
 
