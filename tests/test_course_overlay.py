@@ -16,7 +16,8 @@ def _unit(v: np.ndarray) -> np.ndarray:
 
 #: Drawings that close a distance (the last segment's length goes to zero); the others show two
 #: lines that become parallel (wrist axes 4 and 6; the Stanford arm's boom and axis 1) or in line (the links).
-DISTANCES = {("kr210", "shoulder"), ("elbow", "shoulder"), ("stanford", "stroke"), ("cylindrical", "reach")}
+DISTANCES = {("kr210", "shoulder"), ("elbow", "shoulder"), ("stanford", "stroke"), ("cylindrical", "reach"),
+             ("cylindrical_wrist", "reach")}
 
 
 def degeneracy(arm: str, factor: str, segments: np.ndarray) -> float:

@@ -19,7 +19,7 @@ CODES = {REACHED, INSIDE_OFFSET, TOO_FAR, TOO_CLOSE, ORIENTATION, OUT_OF_PLANE, 
 
 def test_every_preset_is_named():
     assert Arm.PRESETS == ("course", "ur10", "ur10e", "kr210", "stanford", "elbow", "scara", "planar_elbow",
-                           "cylindrical", "three_dof")
+                           "cylindrical", "cylindrical_wrist", "three_dof")
 
 
 @pytest.mark.parametrize("name, make", EVERY_ARM, ids=[name for name, _ in EVERY_ARM])

@@ -19,7 +19,7 @@ from spatialmath import SE3  # (comes with roboticstoolbox)
 pytestmark = pytest.mark.core
 
 ANALYTIC = tuple(PRESETS)
-SPHERICAL_WRIST = ("kr210", "elbow", "stanford")
+SPHERICAL_WRIST = ("kr210", "elbow", "stanford", "cylindrical_wrist")
 
 
 def wrapped(difference: np.ndarray, revolute: np.ndarray) -> np.ndarray:
@@ -156,6 +156,21 @@ def test_course_numbers():
     np.testing.assert_allclose(p, expected, atol=1e-12)
 
 
+def test_the_cylindrical_arm_with_a_wrist_is_the_lecture_notes_t06():
+    """The DH notes multiply T03 of the cylindrical arm by T36 of the spherical wrist and write out T06's
+    twelve entries (Spong, Robot Modeling and Control, ch. 3): here, entry by entry, on 500 random joints."""
+    arm = Arm.preset("cylindrical_wrist")
+    d1, d6 = 0.3, 0.1
+    for t1, d2, d3, t4, t5, t6 in random_joints(arm, 500, 31):
+        c1, s1, c4, s4, c5, s5, c6, s6 = (f(t) for t in (t1, t4, t5, t6) for f in (math.cos, math.sin))
+        notes = [[c1 * c4 * c5 * c6 - c1 * s4 * s6 + s1 * s5 * c6, -c1 * c4 * c5 * s6 - c1 * s4 * c6 - s1 * s5 * s6,
+                  c1 * c4 * s5 - s1 * c5, c1 * c4 * s5 * d6 - s1 * c5 * d6 - s1 * d3],
+                 [s1 * c4 * c5 * c6 - s1 * s4 * s6 - c1 * s5 * c6, -s1 * c4 * c5 * s6 - s1 * s4 * c6 + c1 * s5 * s6,
+                  s1 * c4 * s5 + c1 * c5, s1 * c4 * s5 * d6 + c1 * c5 * d6 + c1 * d3],
+                 [-s4 * c5 * c6 - c4 * s6, s4 * c5 * s6 - c4 * c6, -s4 * s5, -s4 * s5 * d6 + d1 + d2]]
+        np.testing.assert_allclose(arm.fk([t1, d2, d3, t4, t5, t6])[:3], notes, atol=1e-12)
+
+
 # ---------------------------------------------------------------------------- analytic IK
 
 
@@ -175,6 +190,10 @@ def near_singular_joints(arm: Arm, n: int, seed: int) -> np.ndarray:
             q[stroke, 2] = np.abs(tiny[stroke])
             cylinder = kind == 2  # θ2 at 0 or π: the wrist centre on the d2 cylinder
             q[cylinder, 1] = rng.choice([0.0, math.pi], cylinder.sum()) + tiny[cylinder]
+        elif arm.name == "cylindrical_wrist":
+            column = kind > 0  # d3 at 0: the wrist centre on the column's axis (both, a third of the time)
+            q[column, 2] = np.abs(tiny[column])
+            q[kind == 2, 4] = tiny[kind == 2]
         else:
             plane = arm.solver.plane
             elbow = kind == 1  # stretched or folded: β = s3 θ3 + φ at 0 or π
@@ -209,11 +228,12 @@ def test_fk_of_ik_and_the_generating_joints(name, kind):
             distance = np.where(sol.valid, np.abs(wrapped(sol.q - q[:, None], arm.revolute)).max(axis=-1), np.inf)
             assert distance.min(axis=-1).max() < 1e-6
     assert len(sol.labels) == sol.q.shape[-2] == {"kr210": 8, "elbow": 8, "stanford": 8, "scara": 2,
-                                                   "planar_elbow": 2, "cylindrical": 2}[name]
+                                                   "planar_elbow": 2, "cylindrical": 2, "cylindrical_wrist": 4}[name]
 
 
-@pytest.mark.parametrize("name", ["kr210", "elbow", "stanford"])
-@pytest.mark.parametrize("kind", ["random", "near singular", "out of reach"])
+@pytest.mark.parametrize("name, kind", [  # the cylindrical arm's equations solve every point (d3 of either sign)
+    (name, kind) for name in ("kr210", "elbow", "stanford", "cylindrical_wrist")
+    for kind in ("random", "near singular", "out of reach") if (name, kind) != ("cylindrical_wrist", "out of reach")])
 def test_one_pose_in_floats_decides_as_the_batch_does(name, kind):
     """The one-pose path (``_solve_one``, plain floats) against the batch path on the same poses and
     hints: the same slots valid, singular and failing, with the same numbers to rounding (one pose at
@@ -471,6 +491,10 @@ def test_singular_flags_only_where_the_pose_leaves_a_value_free():
     cylindrical = Arm.preset("cylindrical")
     assert not cylindrical.ik(cylindrical.fk([0.0, 0.3, 0.3]), hint=[0.0, 0.3, 0.3]).singular.any()
     assert cylindrical.ik(cylindrical.fk([0.5, 0.3, 0.0]), hint=[0.5, 0.3, 0.0]).singular.all()
+    with_wrist = Arm.preset("cylindrical_wrist")
+    for q, singular in (([0.5, 0.3, 0.3, 0.2, 0.4, 0.1], [False] * 4), ([0.5, 0.3, 0.0, 0.2, 0.4, 0.1], [True] * 4),
+                        ([0.5, 0.3, 0.3, 0.2, 0.0, 0.1], [True] * 4)):  # on the column's axis; axes 4 and 6 in line
+        assert with_wrist.ik(with_wrist.fk(q), hint=q).singular.tolist() == singular
 
 
 @pytest.mark.parametrize("name", ["kr210", "stanford", "scara", "elbow"])
@@ -583,7 +607,7 @@ def test_the_kr210_reports_slip_puts_the_gripper_where_its_own_steps_do():
         report_slip(arm, T, 8, joints)
 
 
-@pytest.mark.parametrize("name", ["kr210", "elbow", "stanford"])
+@pytest.mark.parametrize("name", ["kr210", "elbow", "stanford", "cylindrical_wrist"])
 def test_the_wrist_centre_is_on_the_last_three_axes_and_behind_the_tool(name):
     """Every spherical wrist's centre lies on its last three joint axes, also at s5 = 0 (axes 4 and 6
     in line), and sits back from the tool along its z axis by the table's last d (KR210: d_G = 303 mm)."""
@@ -596,7 +620,7 @@ def test_the_wrist_centre_is_on_the_last_three_axes_and_behind_the_tool(name):
     for k in (3, 4, 5):
         assert np.linalg.norm(np.cross(centre - o[:, k], z[:, k]), axis=-1).max() < 1e-12
     T = arm.fk(q)
-    behind = {"kr210": 0.303, "elbow": 0.1, "stanford": 0.0}[name]
+    behind = {"kr210": 0.303, "elbow": 0.1, "stanford": 0.0, "cylindrical_wrist": 0.1}[name]
     np.testing.assert_allclose(centre, T[:, :3, 3] - behind * T[:, :3, 2], atol=1e-12)
     assert arm.wrist_centre(q[0]).shape == (3,)
     with pytest.raises(ValueError, match="no wrist"):
@@ -611,7 +635,7 @@ def test_a_typed_tables_slots_fit_its_chain(rows, slots):
     assert len(arm.ik(arm.fk(np.full(rows, 0.3))).labels) == len(arm.slot_labels) == slots
 
 
-@pytest.mark.parametrize("name", ["stanford", "cylindrical"])
+@pytest.mark.parametrize("name", ["stanford", "cylindrical", "cylindrical_wrist"])
 def test_the_reversed_stroke_is_a_branch_flagged_beyond_the_range(name):
     """(s2, c2) d3 = (u, z) also holds with θ2 + π and −d3 (the cylindrical arm: θ1 + π): the
     numerical solver finds those joints too, so the closed form keeps them, valid, exact, and
@@ -627,8 +651,8 @@ def test_the_reversed_stroke_is_a_branch_flagged_beyond_the_range(name):
     assert (sol.q[:, half:, stroke] < 0).all() and (sol.q[:, :half, stroke] > 0).all()
     assert not sol.within_limits[:, half:].any() and sol.within_limits[:, :half].any(axis=-1).all()
     np.testing.assert_allclose(sol.nearest(q).q, q, atol=1e-9)  # the arm's own branch stays the one chosen
-    if name == "stanford":  # every branch the numerical search finds is one of ours, reversed ones included
-        numerical = Arm(arm.dh, arm.limits, None, "stanford (numerical)")
+    if arm.n_joints == 6:  # every branch the numerical search finds is one of ours, reversed ones included
+        numerical = Arm(arm.dh, arm.limits, None, f"{name} (numerical)")
         found = numerical.ik(T[:10])
         reversed_found = 0
         for k in range(10):

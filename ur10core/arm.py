@@ -1,14 +1,15 @@
 """One model of a serial arm: its table, limits and physical data, and its family's IK solver.
 
 Every arm of the course is an :class:`Arm` (docs/kinematics.md §2, §7, §8.6): the UR10 and
-its kin (``"course"``, ``"ur10"``, ``"ur10e"``), the KUKA KR210, the Stanford arm, the
-elbow arm, the SCARA, the planar elbow, the cylindrical arm, the 3-DOF desktop arm, and any
-DH table a student types (:meth:`Arm.from_dh`). What differs between them is their
-*solver* (``arm.solver``, :mod:`ur10core.solvers`): the UR family's kernels, Pieper's
-decoupling, the planar closed forms, the desktop arm's closed form, or the numerical
-search. A solver may also supply faster closed forms of the arm's FK, frames, Jacobian,
-det J factors and workspace samples; the arm uses them where it has them and its DH table
-otherwise. Every arm's :meth:`Arm.ik` returns an :class:`ur10core.branches.IKSolution`.
+its kin (``"course"``, ``"ur10"``, ``"ur10e"``), the KUKA KR210, the Stanford arm, the elbow
+arm, the SCARA, the planar elbow, the cylindrical arm (alone and with a spherical wrist),
+the 3-DOF desktop arm, and any DH table a student types (:meth:`Arm.from_dh`). What differs
+between them is their *solver* (``arm.solver``, :mod:`ur10core.solvers`): the UR family's
+kernels, Pieper's decoupling, the planar closed forms, the desktop arm's closed form, or the
+numerical search. A solver may also supply faster closed forms of the arm's FK, frames,
+Jacobian, det J factors and workspace samples; the arm uses them where it has them and its
+DH table otherwise. Every arm's :meth:`Arm.ik` returns an
+:class:`ur10core.branches.IKSolution`.
 
 Units are metres and radians. Every method accepts any leading batch shape ``...``.
 """
@@ -136,7 +137,7 @@ class Arm(JacobianUses, HasSpecs):
     def preset(cls, name: str) -> "Arm":
         """``"course"`` (docs/kinematics.md §2), ``"ur10"``, ``"ur10e"``, the course's other arms
         (``"kr210"``, ``"stanford"``, ``"elbow"``, ``"scara"``, ``"planar_elbow"``, ``"cylindrical"``,
-        §7.5) or its 3-DOF desktop arm (``"three_dof"``, §8.6), each with its analytic IK."""
+        ``"cylindrical_wrist"``, §7.5) or its 3-DOF desktop arm (``"three_dof"``, §8.6), each with its analytic IK."""
         if name in LENGTHS:
             return cls.ur_family(name=name, **LENGTHS[name])
         if name in COURSE_ARMS:

@@ -2,7 +2,7 @@
 
 ``Arm.preset(name)`` builds an :class:`ur10core.Arm` from one of :data:`PRESETS`: the
 course's KR210 and Stanford arm, the lecture notes' SCARA, elbow arm, planar elbow and
-cylindrical arm. Also here: the KR210's URDF frame, the KR210 report's slip in its IK
+cylindrical arm (alone and with a spherical wrist). Also here: the KR210's URDF frame, the KR210 report's slip in its IK
 (:func:`report_slip`), and the part of a target an arm that controls less than a whole pose can
 follow (:func:`project_target`).
 """
@@ -18,7 +18,7 @@ import numpy as np
 from ._validate import homogeneous_transform
 from .dh import MODIFIED, STANDARD
 from .solvers.planar import Cylindrical, PlanarElbow, Scara
-from .solvers.spherical_wrist import ArticulatedArm, StanfordArm
+from .solvers.spherical_wrist import ArticulatedArm, CylindricalArm, StanfordArm
 
 _PI = math.pi
 _DEG = math.pi / 180
@@ -74,6 +74,12 @@ PRESETS: dict[str, _Preset] = {
         ((0, 0, 0.3, 0, "R"), (0, -_PI / 2, 0, 0, "P"), (0, 0, 0, 0, "P")),
         STANDARD, _degrees((-180, 180)) + ((0.0, 0.7), (0.1, 0.6)),
         Cylindrical, ("θ1", "d2", "d3")),
+    "cylindrical_wrist": _Preset(
+        "Cylindrical arm (RPP) with a spherical wrist, as in the DH lecture notes: d6 = 0.1 m",
+        ((0, 0, 0.3, 0, "R"), (0, -_PI / 2, 0, 0, "P"), (0, 0, 0, 0, "P"),
+         (0, -_PI / 2, 0, 0, "R"), (0, _PI / 2, 0, 0, "R"), (0, 0, 0.1, 0, "R")),
+        STANDARD, _degrees((-180, 180)) + ((0.0, 0.7), (0.1, 0.6)) + _degrees((-180, 180), (-120, 120), (-180, 180)),
+        CylindricalArm, ("θ1", "d2", "d3", "θ4", "θ5", "θ6")),
 }
 
 

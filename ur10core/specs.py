@@ -91,6 +91,7 @@ _SPECS = {
     "scara": ArmSpecs({"home": np.array([math.radians(30), math.radians(60), 0.1, math.radians(20)])}),
     "planar_elbow": ArmSpecs({"home": _degrees(30, 60)}),
     "cylindrical": ArmSpecs({"home": np.array([math.radians(30), 0.35, 0.35])}),
+    "cylindrical_wrist": ArmSpecs({"home": np.array([math.radians(30), 0.35, 0.35, *_degrees(20, 40, 10)])}),
     # the desktop arm starts where the course's drawing path starts (docs/kinematics.md §8.6); the course gives
     # its shoulder no pedestal: this one keeps every pose within the joint ranges above the floor
     "three_dof": ArmSpecs({"home": _degrees(0, 0, 135)}, base_height=1.5),

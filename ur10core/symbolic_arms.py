@@ -19,7 +19,8 @@ times a constant:
   zero stretched or folded) and s5 (axes 4 and 6 in line);
 * Stanford arm: d3² (the wrist centre on the shoulder), s2 (the boom parallel to axis 1,
   the wrist centre on the d2 cylinder: both shoulder branches meet) and s5;
-* SCARA and planar elbow: s2 (stretched or folded); cylindrical: d3 (on the column).
+* SCARA and planar elbow: s2 (stretched or folded); cylindrical: d3 (on the column), and s5 with
+  its wrist.
 
 Example
 -------
@@ -61,6 +62,8 @@ MEANINGS: dict[str, tuple[tuple[str, str], ...]] = {
     "scara": (("elbow", "θ2 = 0 or 180°: the two links in line (stretched or folded)"),),
     "planar_elbow": (("elbow", "θ2 = 0 or 180°: the two links in line (stretched or folded)"),),
     "cylindrical": (("reach", "d3 = 0: the tool on the column's axis, θ1 no longer moves it"),),
+    "cylindrical_wrist": (("reach", "d3 = 0: the wrist centre on the column's axis, θ1 no longer moves it"),
+                          ("wrist", "θ5 = 0: axes 4 and 6 in line, only θ4 + θ6 counts")),
 }
 
 
@@ -182,6 +185,8 @@ def _expected_factors(arm: Arm, frames: list[sp.Matrix]) -> list[sp.Expr]:
         return [sp.sin(q[1])]
     if arm.name == "cylindrical":
         return [q[2]]
+    if arm.name == "cylindrical_wrist":
+        return [q[2], sp.sin(q[4])]
     raise ValueError(f"no factored form is written for {arm.name!r}")
 
 

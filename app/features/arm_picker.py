@@ -32,6 +32,7 @@ ARM_CHOICES: dict[str, str | None] = {
     "SCARA (RRP + roll)": "scara",
     "Planar elbow (2R)": "planar_elbow",
     "Cylindrical arm (RPP)": "cylindrical",
+    "Cylindrical arm + wrist": "cylindrical_wrist",
     DESKTOP: "three_dof",
     CUSTOM: "custom",
 }

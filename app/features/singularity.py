@@ -182,8 +182,8 @@ def factor_geometry(arm: Arm, q: np.ndarray, frames: np.ndarray, size: float) ->
             out["shoulder"] = np.array([axis_line, [centre - 0.5 * size * z[2], centre + 0.2 * size * z[2]]])
         elif name == "shoulder":  # the wrist centre's distance from axis 1
             out["shoulder"] = np.array([axis_line, [_foot(centre, o[0], z[0]), centre]])
-        elif name == "reach":
-            out["reach"] = np.array([axis_line, [_foot(tool, o[0], z[0]), tool]])
+        elif name == "reach":  # the cylindrical arm's: the wrist centre's (the tool's) distance from the column
+            out["reach"] = np.array([axis_line, [_foot(centre, o[0], z[0]), centre]])
         elif name == "stroke":  # the wrist centre's distance from axis 2: d3
             out["stroke"] = np.array([[_foot(centre, o[1], z[1]), centre]])
         elif name == "wrist":

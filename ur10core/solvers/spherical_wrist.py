@@ -15,8 +15,11 @@ in the tool frame), joints 4–6 then turn the tool to ``R3_6 = R0_3ᵀ R``.
   and the stroke to WC (forward, or reversed: θ2 + π and the stroke negative), the wrist
   flipped or not: 8 slots, ``k = 4 reversed + 2 shoulder + wrist``. A reversed stroke is
   beyond a real arm's range (d3 ≥ 0), so those slots come flagged by ``within_limits``.
+* :class:`CylindricalArm` (RPP + wrist): WC is the cylindrical arm's tool point, placed by its
+  closed form (stroke forward, or θ1 + π and the stroke reversed), the wrist flipped or not:
+  4 slots, ``k = 2 reversed + wrist``.
 
-Where the compiled kernel is built, both solve in C (``wrist_ik``, ``_solve_one``'s steps,
+Where the compiled kernel is built, the first two solve in C (``wrist_ik``, ``_solve_one``'s steps,
 docs/kinematics.md §7.3); the numpy code here is the method and the fallback.
 """
 
@@ -46,6 +49,7 @@ from ..tolerances import (
     WRIST_TOLERANCE,
     WRIST_TURN_TOLERANCE,
 )
+from .planar import Cylindrical
 
 _TAU = 2.0 * math.pi
 
@@ -545,4 +549,63 @@ class StanfordArm(_CompiledWristArm):
                 valid[slot] = True
                 singular[slot] = abs(u) <= LENGTH_TOLERANCE or stroke <= LENGTH_TOLERANCE
         _wrist_slots_one(self.table, self.wrist, out, R, hint)
+        return out
+
+
+class CylindricalArm:
+    """RPP + spherical wrist (standard DH: the cylindrical arm's rows, then the wrist's): 4 slots,
+    ``k = 2 reversed + wrist``; the last two with θ1 turned by π and the stroke negative, beyond a real
+    arm's range (flagged by ``within_limits``).
+
+    The wrist centre WC = (x, y, z) is the cylindrical arm's tool point, so joints 1–3 are
+    its closed form (:class:`ur10core.solvers.planar.Cylindrical`): x = −s1 d3, y = c1 d3,
+    z = d1 + d2; joints 4–6 then turn the tool to ``R3_6 = R0_3ᵀ R``.
+
+    Example: the arm's home pose, and the three other branches that reach its tool pose.
+
+    >>> from ur10core import Arm
+    >>> arm = Arm.preset("cylindrical_wrist")
+    >>> q = np.array([math.radians(30), 0.35, 0.35, *np.radians([20, 40, 10])])
+    >>> sol = arm.ik(arm.fk(q))
+    >>> np.degrees(sol.q[:, [0, 3, 4, 5]]).round(6).tolist()   # θ1, θ4, θ5, θ6 per slot
+    [[30.0, 20.0, 40.0, 10.0], [30.0, -160.0, -40.0, -170.0], [-150.0, 160.0, 140.0, -170.0], [-150.0, -20.0, -140.0, 10.0]]
+    >>> (1000 * sol.q[:, 2]).round(6).tolist(), sol.within_limits.tolist()   # d3: reversed, beyond its range
+    ([350.0, 350.0, -350.0, -350.0], [True, True, False, False])
+    """
+
+    task = "pose"
+    labels = tuple(f"stroke {stroke}, wrist {wrist}" for stroke in ("forward", "reversed")
+                   for wrist in ("not flipped", "flipped"))
+
+    def __init__(self, table: DHTable) -> None:
+        if table.joint_types != "RPPRRR" or table.convention != STANDARD:
+            raise ValueError("the cylindrical solver with a wrist takes the standard table of an RPP arm with a "
+                             "spherical wrist")
+        self.table = table
+        self.column = Cylindrical(DHTable(table.rows[:3], STANDARD))  # checks the first three rows
+        self.wrist = Wrist(table)
+        self.centre_in_tool = _wrist_offset(table, self.wrist)
+
+    def explain(self, failure: int, detail: float) -> str:
+        return "no branch reaches this pose"
+
+    def _wrist_centre_poses(self, T: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """The tool's rotations and a pose (N, 4, 4) at each wrist centre, for the cylindrical arm's solver."""
+        R, centre = _pose_parts(self.centre_in_tool, T)
+        at_centre = np.broadcast_to(np.eye(4), T.shape).copy()
+        at_centre[:, :3, 3] = centre
+        return R, at_centre
+
+    def solve(self, T: np.ndarray, hint: np.ndarray | None) -> dict[str, np.ndarray]:
+        N = len(T)
+        R, at_centre = self._wrist_centre_poses(T)
+        column = self.column.solve(at_centre, None if hint is None else hint[:, :3])
+        out = empty_branches((N,), 4, 6)
+        for key in ("valid", "singular", "failure", "detail"):
+            out[key][:, 0::2] = column[key]
+        out["q"][:, 0::2, :3] = column["q"]
+        if N == 1:
+            _wrist_slots_one(self.table, self.wrist, out, R[0], None if hint is None else hint[0].tolist())
+        else:
+            _wrist_slots(self.table, self.wrist, out, R, hint)
         return out
