@@ -137,7 +137,8 @@ class Arm(JacobianUses, HasSpecs):
     def preset(cls, name: str) -> "Arm":
         """``"course"`` (docs/kinematics.md §2), ``"ur10"``, ``"ur10e"``, the course's other arms
         (``"kr210"``, ``"stanford"``, ``"elbow"``, ``"scara"``, ``"planar_elbow"``, ``"cylindrical"``,
-        ``"cylindrical_wrist"``, §7.5) or its 3-DOF desktop arm (``"three_dof"``, §8.6), each with its analytic IK."""
+        ``"cylindrical_wrist"``, §7.5) or its 3-DOF desktop arm (``"three_dof"``, §8.6), each with its
+        analytic IK."""
         if name in LENGTHS:
             return cls.ur_family(name=name, **LENGTHS[name])
         if name in COURSE_ARMS:

@@ -2,9 +2,9 @@
 
 ``Arm.preset(name)`` builds an :class:`ur10core.Arm` from one of :data:`PRESETS`: the
 course's KR210 and Stanford arm, the lecture notes' SCARA, elbow arm, planar elbow and
-cylindrical arm (alone and with a spherical wrist). Also here: the KR210's URDF frame, the KR210 report's slip in its IK
-(:func:`report_slip`), and the part of a target an arm that controls less than a whole pose can
-follow (:func:`project_target`).
+cylindrical arm (alone and with a spherical wrist). Also here: the KR210's URDF frame, the
+KR210 report's slip in its IK (:func:`report_slip`), and the part of a target an arm that
+controls less than a whole pose can follow (:func:`project_target`).
 """
 
 from __future__ import annotations

@@ -19,8 +19,8 @@ in the tool frame), joints 4–6 then turn the tool to ``R3_6 = R0_3ᵀ R``.
   closed form (stroke forward, or θ1 + π and the stroke reversed), the wrist flipped or not:
   4 slots, ``k = 2 reversed + wrist``.
 
-Where the compiled kernel is built, the first two solve in C (``wrist_ik``, ``_solve_one``'s steps,
-docs/kinematics.md §7.3); the numpy code here is the method and the fallback.
+Where the compiled kernel is built, the articulated and Stanford arms solve in C (``wrist_ik``,
+``_solve_one``'s steps, docs/kinematics.md §7.3); the numpy code here is the method and the fallback.
 """
 
 from __future__ import annotations
@@ -567,8 +567,10 @@ class CylindricalArm:
     >>> arm = Arm.preset("cylindrical_wrist")
     >>> q = np.array([math.radians(30), 0.35, 0.35, *np.radians([20, 40, 10])])
     >>> sol = arm.ik(arm.fk(q))
-    >>> np.degrees(sol.q[:, [0, 3, 4, 5]]).round(6).tolist()   # θ1, θ4, θ5, θ6 per slot
-    [[30.0, 20.0, 40.0, 10.0], [30.0, -160.0, -40.0, -170.0], [-150.0, 160.0, 140.0, -170.0], [-150.0, -20.0, -140.0, 10.0]]
+    >>> np.degrees(sol.q[:, 0]).round(6).tolist()   # θ1: turned by π where the stroke is reversed
+    [30.0, 30.0, -150.0, -150.0]
+    >>> np.degrees(sol.q[:2, 3:]).round(6).tolist()   # θ4, θ5, θ6: the wrist not flipped, and flipped
+    [[20.0, 40.0, 10.0], [-160.0, -40.0, -170.0]]
     >>> (1000 * sol.q[:, 2]).round(6).tolist(), sol.within_limits.tolist()   # d3: reversed, beyond its range
     ([350.0, 350.0, -350.0, -350.0], [True, True, False, False])
     """
