@@ -148,6 +148,9 @@ _BUILTIN = (
               "Type the Stanford arm's DH table (either convention): its forward kinematics must match the arm's."),
     Challenge("SCARA: one branch only", "branch_count", "scara",
               "Move the SCARA's target to where **only 1** of its 2 branches reaches.", count=1),
+    Challenge("Cylindrical arm + wrist: its DH table", "dh_table", "cylindrical_wrist",
+              "Type the DH table of the cylindrical arm with a spherical wrist (either convention): its forward "
+              "kinematics must match the arm's."),
 )
 
 
