@@ -206,7 +206,7 @@ def test_branch_count_agrees_with_the_reach_map():
 # ---------------------------------------------------------------------- DH table
 
 
-@pytest.mark.parametrize("name", ["ur10", "kr210", "stanford", "elbow"])
+@pytest.mark.parametrize("name", ["ur10", "kr210", "stanford", "elbow", "cylindrical_wrist"])
 def test_a_dh_table_in_either_convention_is_right_and_a_flipped_alpha_is_named(name):
     arm = COURSE if name == "ur10" else Arm.preset(name)
     task = C.Challenge("dh", "dh_table", name, "")
