@@ -126,6 +126,8 @@ def test_every_arm_is_put_on_each_of_its_singularities_by_its_buttons(app, label
             if arm.name.startswith("cylindrical") and kind == "reach":
                 await until(lambda: any("reach singularity" in body for _, body in client.received.notifications),
                             what="the refusal")
+                refusal = next(body for _, body in client.received.notifications if "reach singularity" in body)
+                assert "no pose near this one puts this arm on its reach singularity" in refusal  # not "the cylindrical_wrist arm"
                 assert np.array_equal(session.state.q, start_q)
                 continue
             await until(lambda: session.state.last.cause == "singularity"

@@ -409,7 +409,8 @@ class Arm(JacobianUses, HasSpecs):
                 meaning = symbolic_arms.load(self.name).factors[names.index(kind)].meaning
             else:
                 meaning = self.solver.factor_words[names.index(kind)][2]
-            raise ValueError(f"within its joint limits, no pose near this one puts the {self.name} arm on its {kind} "
+            # a student reads this in the browser: "this arm", not the preset's key ("cylindrical_wrist")
+            raise ValueError(f"within its joint limits, no pose near this one puts this arm on its {kind} "
                              f"singularity ({meaning}): det J's {kind} factor stays clear of zero")
         return found.reshape(q.shape)
 
