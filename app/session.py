@@ -17,6 +17,7 @@ from ur10core import Arm
 from .features.branch_labels import BranchLabels, ScreenView, chain, place_in_order, screen_view
 from .features.branch_search import BranchSearch
 from .features.camera import CameraControls
+from .features.course_arms.decoupling import decoupling_lessons
 from .features.course_arms.desktop_lessons import desktop_lessons
 from .features.course_arms.editor import DHEditor
 from .features.course_arms.kr210_lessons import kr210_lessons
@@ -44,7 +45,8 @@ from .style import NAME_SCALE
 #: Changes after which the camera frames the arm again: it may have gone far (a drag or a slider moves it gradually).
 REFRAMED = ("singularity", "typed")
 #: An arm's own lessons (the course's exercises with it), beside the features every arm has.
-LESSONS = {"three_dof": desktop_lessons, "kr210": kr210_lessons}
+LESSONS = {"three_dof": desktop_lessons, "kr210": kr210_lessons,
+           **{name: decoupling_lessons for name in ("stanford", "elbow", "cylindrical_wrist")}}
 
 
 class ArmSession:

@@ -465,6 +465,45 @@ def test_the_kr210_reports_slip_is_drawn_where_its_formula_puts_the_arm(app):
     asyncio.run(scenario())
 
 
+@pytest.mark.parametrize("label", [KR210, "Stanford arm (RRP + wrist)", "Elbow arm + spherical wrist",
+                                   "Cylindrical arm + wrist"])
+def test_every_arm_with_a_spherical_wrist_splits_its_pose_at_the_wrist_centre(app, label):
+    """Kinematic decoupling, the course's IK method for these arms: ticked, WC is named in 3D where the last three axes
+    meet; the folder gives WC, the joints that place it, R3_6 and its Z-Y-Z Euler angles, the arm's wrist joints,
+    with the other solution the other wrist. The UR10 and the SCARA have no spherical wrist, and no such folder."""
+    async def scenario():
+        from ur10teach.features.course_arms.decoupling import DecouplingView
+
+        from ur10core.solvers.spherical_wrist import wrist_split
+
+        client = await ViserClient(url(app)).connect()
+        session = await pick(app, client, label)
+        arm = session.arm
+        view = next(lesson for lesson in session.lessons if isinstance(lesson, DecouplingView))
+        assert "Wrist centre (decoupling)" in client.gui
+        (point, text, _), = view.names()
+        assert point is None and text == "WC"  # not named until asked
+        await client.set_gui("Name WC on the arm", True)
+        q = arm.specs.home.copy()
+        q[4] = -q[4]  # the wrist flipped
+        session.apply(lambda state: state.set_joints(q))
+        await until(lambda: view.names()[0][0] is not None and np.allclose(view.names()[0][0], arm.wrist_centre(q)),
+                    what="WC named where the wrist's axes meet")
+        split = wrist_split(arm, q)
+        own = split.euler if np.abs(split.wrist[0] - q[3:]).max() < 1e-9 else split.euler_flipped
+        words = f"(φ, θ, ψ) = **({', '.join(f'{np.degrees(a):.1f}°' for a in own)})**"
+        await until(lambda: words in view.readout.content, what="the arm's wrist as Z-Y-Z Euler angles")
+        content = view.readout.content
+        assert "is the wrist not flipped" in content and "Joints 1–3 place WC" in content
+        assert f"{split.centre[2] * 1000:.0f}) mm" in content
+        for ur_or_scara in (UR10, "SCARA (RRP + roll)"):
+            await pick(app, client, ur_or_scara)
+            assert "Wrist centre (decoupling)" not in client.gui
+        await client.close()
+
+    asyncio.run(scenario())
+
+
 def test_changing_arms_too_fast_is_refused_and_the_picker_shows_the_arm_still_driven(app, monkeypatch):
     async def scenario():
         client = await ViserClient(url(app)).connect()

@@ -662,3 +662,36 @@ def test_the_reversed_stroke_is_a_branch_flagged_beyond_the_range(name):
                 assert match.any()
                 reversed_found += bool(match[half:].any())
         assert reversed_found > 0
+
+
+@pytest.mark.parametrize("name", ["kr210", "stanford", "elbow", "cylindrical_wrist"])
+def test_the_wrist_split_reads_the_wrist_joints_as_zyz_euler_angles(name):
+    """Kinematic decoupling (docs/kinematics.md §7.3): WC is where the last three axes meet (``Arm.wrist_centre``'s
+    least squares); R3_6's Z-Y-Z Euler angles, by spatialmath's ``tr2eul`` (test-only), are the arm's wrist joints,
+    and the other solution (``flip=True``) is the wrist of the IK's other branch for the same target."""
+    from spatialmath.base import tr2eul
+
+    from ur10core.solvers.spherical_wrist import wrist_split
+
+    arm = Arm.preset(name)
+    for q in random_joints(arm, 200, 41):
+        split = wrist_split(arm, q)
+        np.testing.assert_allclose(split.centre, arm.wrist_centre(q), atol=1e-12)
+        frames = arm.frames(q)
+        np.testing.assert_allclose(split.R0_3 @ split.R3_6, frames[-1, :3, :3], atol=1e-12)
+        c, s = math.cos(split.twist), math.sin(split.twist)
+        W = np.array([[1, 0, 0], [0, c, s], [0, -s, c]]) @ split.R3_6  # Rx(−twist) R3_6
+        s5, s6 = split.signs
+        for flip, euler in ((False, split.euler), (True, split.euler_flipped)):
+            np.testing.assert_allclose(wrapped(euler - tr2eul(W, flip=flip), np.ones(3, bool)), 0.0, atol=1e-9)
+        readings = np.array([[e[0], s5 * e[1], s6 * e[2]] for e in (split.euler, split.euler_flipped)])
+        np.testing.assert_allclose(wrapped(readings - split.wrist, np.ones(3, bool)), 0.0, atol=1e-9)
+        own = np.abs(wrapped(split.wrist - q[3:], np.ones(3, bool))).max(axis=-1)
+        assert own.min() < 1e-9
+        sol = arm.ik(arm.fk(q), hint=q)
+        slot = int(sol.nearest(q).slot)
+        other = sol.q[slot ^ 1]  # the same arm slot, the other wrist
+        np.testing.assert_allclose(wrapped(other[3:] - split.wrist[int(np.argmax(own))], np.ones(3, bool)), 0.0, atol=1e-9)
+    for other_arm in ("ur10", "scara"):
+        with pytest.raises(ValueError, match="no spherical wrist"):
+            wrist_split(Arm.preset(other_arm), Arm.preset(other_arm).specs.home)

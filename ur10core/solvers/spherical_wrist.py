@@ -26,6 +26,7 @@ Where the compiled kernel is built, the articulated and Stanford arms solve in C
 from __future__ import annotations
 
 import math
+from typing import NamedTuple
 
 import numpy as np
 
@@ -41,6 +42,7 @@ from ..branches import (
     wrap,
 )
 from ..dh import MODIFIED, STANDARD, DHTable
+from ..orientation import zyz_euler
 from ..tolerances import (
     CHOICE_TOLERANCE,
     LENGTH_TOLERANCE,
@@ -611,3 +613,51 @@ class CylindricalArm:
         else:
             _wrist_slots(self.table, self.wrist, out, R, hint)
         return out
+
+
+class WristSplit(NamedTuple):
+    """A pose split at the wrist centre (:func:`wrist_split`)."""
+
+    centre: np.ndarray  #: (3,) WC in the base frame (m)
+    centre_in_tool: np.ndarray  #: (3,) c, WC in the tool frame: WC = p + R c
+    R0_3: np.ndarray  #: (3, 3) the frame before the wrist's first row, set by joints 1–3
+    R3_6: np.ndarray  #: (3, 3) R0_3ᵀ R: what the wrist turns
+    twist: float  #: α of the wrist's first row where the table puts it before the wrist (modified DH), else 0
+    signs: tuple[float, float]  #: (s5, s6): ``Rx(−twist) R3_6 = Rz(θ4) Ry(s5 θ5) Rz(s6 θ6)`` (offsets 0)
+    euler: np.ndarray  #: (3,) Z-Y-Z (φ, θ, ψ) of ``Rx(−twist) R3_6``
+    euler_flipped: np.ndarray  #: (3,) the other Z-Y-Z solution (φ + π, −θ, ψ + π): the wrist flipped
+    wrist: np.ndarray  #: (2, 3) θ4, θ5, θ6 read back from ``euler`` and from ``euler_flipped``: the arm's are one
+
+
+def wrist_split(arm, q) -> WristSplit:
+    """Kinematic decoupling at joints ``q`` (n,) (docs/kinematics.md §7.3): where the last three axes meet, WC,
+    the first three joints place; the wrist's three turn the rest, ``R3_6 = R0_3ᵀ R``, which is a Z-Y-Z
+    Euler product of θ4, θ5, θ6 (between the fixed turns of the table's wrist rows, for the KR210 one before).
+
+    ``ValueError`` for an arm without a spherical wrist (the UR family's wrist 1 and wrist 2 axes are d5 apart).
+
+    Example: the elbow arm's wrist joints are the Z-Y-Z Euler angles of R3_6, as the lecture notes show.
+
+    >>> from ur10core import Arm
+    >>> split = wrist_split(Arm.preset("elbow"), np.radians([20, 40, 60, 30, 50, -10]))
+    >>> np.degrees(split.euler).round(6).tolist(), np.degrees(split.euler_flipped).round(6).tolist()
+    ([30.0, 50.0, -10.0], [-150.0, -50.0, 170.0])
+    >>> (1000 * split.centre_in_tool).round(6).tolist()   # WC = p − 100 mm · z, d6 back along the tool's z
+    [0.0, 0.0, -100.0]
+    """
+    wrist = getattr(arm.solver, "wrist", None)
+    if wrist is None:
+        raise ValueError("this arm's last three joint axes do not meet in one point (no spherical wrist): its pose "
+                         "cannot be split at a wrist centre")
+    q = arm.joints(q)
+    if q.shape != (arm.n_joints,):
+        raise ValueError(f"q must be one pose of {arm.n_joints} joints, got shape {q.shape}")
+    frames = arm.frames(q)
+    R0_3, T = frames[wrist.first_row, :3, :3], frames[-1]
+    R3_6 = R0_3.T @ T[:3, :3]
+    W = wrist.P.T @ R3_6 @ wrist.post.T
+    euler, flipped = zyz_euler(W, check=False), zyz_euler(W, check=False, flip=True)
+    joints = wrap(np.stack([euler, flipped]) * [1.0, wrist.s5, wrist.s6] - wrist.offsets)
+    centre_in_tool = arm.solver.centre_in_tool
+    return WristSplit(T[:3, 3] + T[:3, :3] @ centre_in_tool, centre_in_tool.copy(), R0_3, R3_6,
+                      float(math.atan2(wrist.P[2, 1], wrist.P[1, 1])), (wrist.s5, wrist.s6), euler, flipped, joints)
