@@ -17,10 +17,10 @@ from ur10core import Arm
 from .features.branch_labels import BranchLabels, ScreenView, chain, place_in_order, screen_view
 from .features.branch_search import BranchSearch
 from .features.camera import CameraControls
-from .features.course_arms.decoupling import decoupling_lessons
 from .features.course_arms.desktop_lessons import desktop_lessons
 from .features.course_arms.editor import DHEditor
 from .features.course_arms.kr210_lessons import kr210_lessons
+from .features.decoupling import DecouplingView
 from .features.dh_table import DHTableView, DHWalkthrough
 from .features.drawings import arm_drawing
 from .features.ellipsoids import EllipsoidsView
@@ -45,8 +45,7 @@ from .style import NAME_SCALE
 #: Changes after which the camera frames the arm again: it may have gone far (a drag or a slider moves it gradually).
 REFRAMED = ("singularity", "typed")
 #: An arm's own lessons (the course's exercises with it), beside the features every arm has.
-LESSONS = {"three_dof": desktop_lessons, "kr210": kr210_lessons,
-           **{name: decoupling_lessons for name in ("stanford", "elbow", "cylindrical_wrist")}}
+LESSONS = {"three_dof": desktop_lessons, "kr210": kr210_lessons}
 
 
 class ArmSession:
@@ -122,6 +121,7 @@ class ArmSession:
         self.ik_target = IKTarget(client.scene, gui, drawn, self)
         self.readouts = Readouts(gui, first)
         self.singularities = Singularities(gui, drawn.overlay, self)
+        self.decoupling = DecouplingView(gui, self)
         self.dh_table = DHTableView(gui, self, drawn.dh_frames)
         self.walkthrough = DHWalkthrough(gui, self, drawn.dh_frames)
         nodes = drawn.root
@@ -144,7 +144,7 @@ class ArmSession:
         #: the views this session built in the browser's own panel (the drawing may be the classroom's)
         self.panel_views = tuple(view for view in (
             self.editor, self.search, self.joints, self.arm_model, self.ik_target, self.readouts,
-            self.singularities, self.dh_table, self.walkthrough, self.workspace, self.reach_map, self.statics,
+            self.singularities, self.decoupling, self.dh_table, self.walkthrough, self.workspace, self.reach_map, self.statics,
             self.ellipsoids, self.velocity, self.motion, *self.lessons, self.camera) if view is not None)
         self.views = (drawn, *self.panel_views)
         #: what the views name at moving points (``View.names``: the arrows' tips), placed apart before the

@@ -470,17 +470,14 @@ def test_the_kr210_reports_slip_is_drawn_where_its_formula_puts_the_arm(app):
 def test_every_arm_with_a_spherical_wrist_splits_its_pose_at_the_wrist_centre(app, label):
     """Kinematic decoupling, the course's IK method for these arms: ticked, WC is named in 3D where the last three axes
     meet; the folder gives WC, the joints that place it, R3_6 and its Z-Y-Z Euler angles, the arm's wrist joints,
-    with the other solution the other wrist. The UR10 and the SCARA have no spherical wrist, and no such folder."""
+    with the other solution the other wrist. The UR10 and the SCARA have no spherical wrist: their folder says so."""
     async def scenario():
-        from ur10teach.features.course_arms.decoupling import DecouplingView
-
         from ur10core.solvers.spherical_wrist import wrist_split
 
         client = await ViserClient(url(app)).connect()
         session = await pick(app, client, label)
-        arm = session.arm
-        view = next(lesson for lesson in session.lessons if isinstance(lesson, DecouplingView))
-        assert "Wrist centre (decoupling)" in client.gui
+        arm, view = session.arm, session.decoupling
+        assert "Wrist centre (decoupling)" in client.gui and "Name WC on the arm" in client.gui
         (point, text, _), = view.names()
         assert point is None and text == "WC"  # not named until asked
         await client.set_gui("Name WC on the arm", True)
@@ -496,9 +493,12 @@ def test_every_arm_with_a_spherical_wrist_splits_its_pose_at_the_wrist_centre(ap
         content = view.readout.content
         assert "is the wrist not flipped" in content and "Joints 1–3 place WC" in content
         assert f"{split.centre[2] * 1000:.0f}) mm" in content
-        for ur_or_scara in (UR10, "SCARA (RRP + roll)"):
-            await pick(app, client, ur_or_scara)
-            assert "Wrist centre (decoupling)" not in client.gui
+        for other, why in ((UR10, "the last three axes do not meet in one point"),
+                           ("SCARA (RRP + roll)", "this arm has 4 joints")):
+            session = await pick(app, client, other)
+            assert "Wrist centre (decoupling)" in client.gui and "Name WC on the arm" not in client.gui
+            assert session.decoupling.readout.content.startswith(f"No spherical wrist: {why}")
+            assert session.decoupling.names() == []
         await client.close()
 
     asyncio.run(scenario())

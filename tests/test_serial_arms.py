@@ -692,6 +692,11 @@ def test_the_wrist_split_reads_the_wrist_joints_as_zyz_euler_angles(name):
         slot = int(sol.nearest(q).slot)
         other = sol.q[slot ^ 1]  # the same arm slot, the other wrist
         np.testing.assert_allclose(wrapped(other[3:] - split.wrist[int(np.argmax(own))], np.ones(3, bool)), 0.0, atol=1e-9)
-    for other_arm in ("ur10", "scara"):
-        with pytest.raises(ValueError, match="no spherical wrist"):
+    rows = [(r.a, r.alpha, r.d, r.theta, r.joint) for r in arm.dh.rows]
+    typed = Arm.from_dh(rows, arm.dh.convention)  # a student's copy: numerical IK, the same wrist
+    q = arm.specs.home
+    np.testing.assert_allclose(wrist_split(typed, q).R3_6, wrist_split(arm, q).R3_6, atol=1e-15)
+    for other_arm, why in (("ur10", "the last three axes do not meet in one point"), ("scara", "this arm has 4 joints"),
+                           ("three_dof", "this arm has 3 joints")):
+        with pytest.raises(ValueError, match=f"no spherical wrist: {why}"):
             wrist_split(Arm.preset(other_arm), Arm.preset(other_arm).specs.home)

@@ -87,7 +87,7 @@ class Wrist:
     def __init__(self, table: DHTable) -> None:
         rows = table.rows
         if table.n_joints < 6 or table.joint_types[-3:] != "RRR":
-            raise ValueError("a spherical wrist needs three revolute joints last")
+            raise ValueError("a spherical wrist needs six joints, the last three revolute")
         j4, j5, j6 = table.joint_rows[-3:]
         if (j5, j6) != (j4 + 1, j4 + 2):
             raise ValueError("the wrist's three rows must follow each other")
@@ -629,12 +629,35 @@ class WristSplit(NamedTuple):
     wrist: np.ndarray  #: (2, 3) θ4, θ5, θ6 read back from ``euler`` and from ``euler_flipped``: the arm's are one
 
 
+def spherical_wrist(arm) -> tuple[Wrist, np.ndarray]:
+    """The arm's spherical wrist and c, WC in the tool frame: its solver's, or read from its DH table (a typed
+    table's); ``ValueError`` saying why where the last three axes are not a spherical wrist.
+
+    >>> from ur10core import Arm
+    >>> spherical_wrist(Arm.preset("ur10"))
+    Traceback (most recent call last):
+    ...
+    ValueError: no spherical wrist: the last three axes do not meet in one point
+    """
+    if hasattr(arm.solver, "wrist"):
+        return arm.solver.wrist, arm.solver.centre_in_tool
+    if arm.n_joints < 6 or arm.dh is None:
+        raise ValueError(f"no spherical wrist: this arm has {arm.n_joints} joints, and a spherical wrist is three more "
+                         "after the three that place it")
+    try:
+        wrist = Wrist(arm.dh)
+        return wrist, _wrist_offset(arm.dh, wrist)
+    except ValueError as why:
+        raise ValueError(f"no spherical wrist: {str(why).removesuffix(': not a spherical wrist')}") from None
+
+
 def wrist_split(arm, q) -> WristSplit:
     """Kinematic decoupling at joints ``q`` (n,) (docs/kinematics.md §7.3): where the last three axes meet, WC,
     the first three joints place; the wrist's three turn the rest, ``R3_6 = R0_3ᵀ R``, which is a Z-Y-Z
     Euler product of θ4, θ5, θ6 (between the fixed turns of the table's wrist rows, for the KR210 one before).
 
-    ``ValueError`` for an arm without a spherical wrist (the UR family's wrist 1 and wrist 2 axes are d5 apart).
+    ``ValueError`` for an arm without a spherical wrist (:func:`spherical_wrist`; the UR family's last three axes
+    do not meet). A typed table with one is split as a preset is.
 
     Example: the elbow arm's wrist joints are the Z-Y-Z Euler angles of R3_6, as the lecture notes show.
 
@@ -645,10 +668,7 @@ def wrist_split(arm, q) -> WristSplit:
     >>> (1000 * split.centre_in_tool).round(6).tolist()   # WC = p − 100 mm · z, d6 back along the tool's z
     [0.0, 0.0, -100.0]
     """
-    wrist = getattr(arm.solver, "wrist", None)
-    if wrist is None:
-        raise ValueError("this arm's last three joint axes do not meet in one point (no spherical wrist): its pose "
-                         "cannot be split at a wrist centre")
+    wrist, centre_in_tool = spherical_wrist(arm)
     q = arm.joints(q)
     if q.shape != (arm.n_joints,):
         raise ValueError(f"q must be one pose of {arm.n_joints} joints, got shape {q.shape}")
@@ -658,6 +678,5 @@ def wrist_split(arm, q) -> WristSplit:
     W = wrist.P.T @ R3_6 @ wrist.post.T
     euler, flipped = zyz_euler(W, check=False), zyz_euler(W, check=False, flip=True)
     joints = wrap(np.stack([euler, flipped]) * [1.0, wrist.s5, wrist.s6] - wrist.offsets)
-    centre_in_tool = arm.solver.centre_in_tool
     return WristSplit(T[:3, 3] + T[:3, :3] @ centre_in_tool, centre_in_tool.copy(), R0_3, R3_6,
                       float(math.atan2(wrist.P[2, 1], wrist.P[1, 1])), (wrist.s5, wrist.s6), euler, flipped, joints)

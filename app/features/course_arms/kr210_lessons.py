@@ -12,7 +12,6 @@ from ...state import Snapshot
 from ...style import number
 from ...view import Session, View
 from ..dh_frames import show
-from .decoupling import DecouplingView
 from .gripper import GripperPose
 from .scene import skeleton
 
@@ -114,6 +113,5 @@ class ReportSlipView(View):
 
 
 def kr210_lessons(scene: viser.SceneApi, gui: viser.GuiApi, session: Session) -> tuple[View, ...]:
-    """The KR210's own folders beside the features every arm has: its gripper pose, its wrist centre, its report's
-    slip."""
-    return GripperPose(gui, session), DecouplingView(gui, session), ReportSlipView(scene, gui, session)
+    """The KR210's own folders beside the features every arm has: its gripper pose, its report's slip."""
+    return GripperPose(gui, session), ReportSlipView(scene, gui, session)
