@@ -62,9 +62,9 @@ def test_explore_and_back_leaves_nothing_behind(classroom):
             session = member.session
             folders = [v.folders for v in session.panel_views]
             uuids = {folder._impl.uuid for group in folders for folder in group}
-            # joints, IK target, pose, DH table, singularities, workspace, reach map, forces and gravity,
-            # ellipsoids, velocities, motion, DH walkthrough
-            assert len(uuids) == 12
+            # joints, IK target, pose, DH table, singularities, wrist centre, workspace, reach map, forces and
+            # gravity, ellipsoids, velocities, motion, DH walkthrough
+            assert len(uuids) == 13
             checkbox = session.workspace.enabled._impl.uuid  # this private arm's, not the last one's
             await until(lambda: student.gui.get("Show workspace cloud", {}).get("uuid") == checkbox, what="the panel")
             await student.set_gui("Show workspace cloud", True)

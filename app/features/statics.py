@@ -229,9 +229,10 @@ class StaticsView(View):
 
     def obstacles(self) -> list[tuple]:
         """The torque map's largest ‖τ‖ at its red ball, for the placed labels to keep clear of."""
-        if self._worst is None:
+        worst = self._worst  # read once: the map's thread may clear it between two reads
+        if worst is None:
             return []
-        marker, name = self._worst
+        marker, name = worst
         return [obstacle(name, under=marker.position)]
 
     def render_panel(self, snapshot: Snapshot) -> None:
