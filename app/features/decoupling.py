@@ -66,8 +66,9 @@ class DecouplingView(View):
 
     def __init__(self, gui: viser.GuiApi, session: Session) -> None:
         self._arm = session.arm
+        self._centre_in_tool: np.ndarray | None = None  #: c: WC = p + R c
         try:
-            spherical_wrist(self._arm)
+            self._centre_in_tool = spherical_wrist(self._arm)[1]
             self.why_not = ""
         except ValueError as reason:
             self.why_not = sentence(str(reason)) + "." + ELSEWHERE  #: why the pose does not split, if it does not
@@ -83,12 +84,14 @@ class DecouplingView(View):
             self.shown.on_update(session.guard(lambda _: session.redraw()))
 
     def render(self, snapshot: Snapshot) -> None:
-        self._centre = wrist_split(self._arm, snapshot.q).centre if self.shown is not None and self.shown.value else None
+        tool = snapshot.flange
+        shown = self.shown is not None and self.shown.value
+        self._centre = tool[:3, 3] + tool[:3, :3] @ self._centre_in_tool if shown else None
 
     def names(self) -> list[tuple]:
         return [] if self.why_not else [(self._centre, "WC", WRIST_COLOR)]
 
     def render_panel(self, snapshot: Snapshot) -> None:
         if not self.why_not:
-            self.readout.content = split_markdown(wrist_split(self._arm, snapshot.q), snapshot.q, self._arm.joint_names,
-                                                  self._arm.revolute)
+            split = wrist_split(self._arm, snapshot.q, snapshot.frames)
+            self.readout.content = split_markdown(split, snapshot.q, self._arm.joint_names, self._arm.revolute)

@@ -651,10 +651,11 @@ def spherical_wrist(arm) -> tuple[Wrist, np.ndarray]:
         raise ValueError(f"no spherical wrist: {str(why).removesuffix(': not a spherical wrist')}") from None
 
 
-def wrist_split(arm, q) -> WristSplit:
+def wrist_split(arm, q, frames: np.ndarray | None = None) -> WristSplit:
     """Kinematic decoupling at joints ``q`` (n,) (docs/kinematics.md §7.3): where the last three axes meet, WC,
     the first three joints place; the wrist's three turn the rest, ``R3_6 = R0_3ᵀ R``, which is a Z-Y-Z
     Euler product of θ4, θ5, θ6 (between the fixed turns of the table's wrist rows, for the KR210 one before).
+    ``frames``: ``arm.frames(q)``, where the caller has them already.
 
     ``ValueError`` for an arm without a spherical wrist (:func:`spherical_wrist`; the UR family's last three axes
     do not meet). A typed table with one is split as a preset is.
@@ -672,7 +673,7 @@ def wrist_split(arm, q) -> WristSplit:
     q = arm.joints(q)
     if q.shape != (arm.n_joints,):
         raise ValueError(f"q must be one pose of {arm.n_joints} joints, got shape {q.shape}")
-    frames = arm.frames(q)
+    frames = arm.frames(q) if frames is None else frames
     R0_3, T = frames[wrist.first_row, :3, :3], frames[-1]
     R3_6 = R0_3.T @ T[:3, :3]
     W = wrist.P.T @ R3_6 @ wrist.post.T
