@@ -144,8 +144,8 @@ class ArmSession:
         #: the views this session built in the browser's own panel (the drawing may be the classroom's)
         self.panel_views = tuple(view for view in (
             self.editor, self.search, self.joints, self.arm_model, self.ik_target, self.readouts,
-            self.singularities, self.decoupling, self.dh_table, self.walkthrough, self.workspace, self.reach_map, self.statics,
-            self.ellipsoids, self.velocity, self.motion, *self.lessons, self.camera) if view is not None)
+            self.singularities, self.decoupling, self.dh_table, self.walkthrough, self.workspace, self.reach_map,
+            self.statics, self.ellipsoids, self.velocity, self.motion, *self.lessons, self.camera) if view is not None)
         self.views = (drawn, *self.panel_views)
         #: what the views name at moving points (``View.names``: the arrows' tips), placed apart before the
         #: drawing's own labels, which keep clear of them

@@ -36,7 +36,8 @@ def split_markdown(split: WristSplit, q: np.ndarray, joint_names: tuple[str, ...
     if not c.any():
         where = "The tool frame is at the wrist centre (d6 = 0): **WC = p**"
     elif abs(c[0]) < 1e-12 and abs(c[1]) < 1e-12:
-        where = f"WC is {number(-1000 * c[2], '.0f')} mm back along the tool's z axis: **WC = p − {number(-1000 * c[2], '.0f')} mm · z**"
+        back = number(-1000 * c[2], ".0f")
+        where = f"WC is {back} mm back along the tool's z axis: **WC = p − {back} mm · z**"
     else:
         where = f"**WC = p + R c**, c = ({', '.join(number(1000 * v, '.0f') for v in c)}) mm in the tool frame"
     placed = ", ".join(f"{name} = {number(np.degrees(v), '.1f') + '°' if turns else number(1000 * v, '.0f') + ' mm'}"
@@ -55,8 +56,8 @@ def split_markdown(split: WristSplit, q: np.ndarray, joint_names: tuple[str, ...
     arm_joints = np.asarray(q[-3:])
     second = bool(np.abs(wrap(split.wrist[1] - arm_joints)).max() < np.abs(wrap(split.wrist[0] - arm_joints)).max())
     own, other = (split.euler_flipped, split.euler) if second else (split.euler, split.euler_flipped)
-    return text + (f"its Z-Y-Z Euler angles (φ, θ, ψ) = **({_degrees(own)})** give the arm's {name4}, {name5}, {name6} = "
-                   f"({_degrees(arm_joints)}); the other solution, ({_degrees(other)}), is the wrist "
+    return text + (f"its Z-Y-Z Euler angles (φ, θ, ψ) = **({_degrees(own)})** give the arm's {name4}, {name5}, "
+                   f"{name6} = ({_degrees(arm_joints)}); the other solution, ({_degrees(other)}), is the wrist "
                    f"{'not flipped' if q[-2] < 0 else 'flipped'} ({name5} {'≥' if q[-2] < 0 else '≤'} 0).")
 
 
