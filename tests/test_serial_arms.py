@@ -696,7 +696,8 @@ def test_the_wrist_split_reads_the_wrist_joints_as_zyz_euler_angles(name):
     typed = Arm.from_dh(rows, arm.dh.convention)  # a student's copy: numerical IK, the same wrist
     q = arm.specs.home
     np.testing.assert_allclose(wrist_split(typed, q).R3_6, wrist_split(arm, q).R3_6, atol=1e-15)
-    for other_arm, why in (("ur10", "the last three axes do not meet in one point"), ("scara", "this arm has 4 joints"),
+    for other_arm, why in (("ur10", r"the last three axes do not meet in one point \(at the zero pose, axes 4 and 6 pass "
+                                    r"116 mm apart\)"), ("scara", "this arm has 4 joints"),
                            ("three_dof", "this arm has 3 joints")):
         with pytest.raises(ValueError, match=f"no spherical wrist: {why}"):
             wrist_split(Arm.preset(other_arm), Arm.preset(other_arm).specs.home)

@@ -634,10 +634,10 @@ def spherical_wrist(arm) -> tuple[Wrist, np.ndarray]:
     table's); ``ValueError`` saying why where the last three axes are not a spherical wrist.
 
     >>> from ur10core import Arm
-    >>> spherical_wrist(Arm.preset("ur10"))
+    >>> spherical_wrist(Arm.preset("ur10"))   # its d5 = 115.7 mm
     Traceback (most recent call last):
     ...
-    ValueError: no spherical wrist: the last three axes do not meet in one point
+    ValueError: no spherical wrist: the last three axes do not meet in one point (at the zero pose, axes 4 and 6 pass 116 mm apart)
     """
     if hasattr(arm.solver, "wrist"):
         return arm.solver.wrist, arm.solver.centre_in_tool
@@ -648,7 +648,14 @@ def spherical_wrist(arm) -> tuple[Wrist, np.ndarray]:
         wrist = Wrist(arm.dh)
         return wrist, _wrist_offset(arm.dh, wrist)
     except ValueError as why:
-        raise ValueError(f"no spherical wrist: {str(why).removesuffix(': not a spherical wrist')}") from None
+        reason = str(why).removesuffix(": not a spherical wrist")
+    if reason.startswith("the last three axes do not meet"):  # how far apart, at the table's zero
+        z, o = arm.dh.joint_axes(arm.dh.frames(np.zeros(arm.n_joints)))
+        normal, between = np.cross(z[-3], z[-1]), o[-1] - o[-3]
+        skew = np.linalg.norm(normal) > 1e-9
+        gap = abs(between @ normal) / np.linalg.norm(normal) if skew else np.linalg.norm(np.cross(between, z[-3]))
+        reason += f" (at the zero pose, axes {arm.n_joints - 2} and {arm.n_joints} pass {1000 * gap:.0f} mm apart)"
+    raise ValueError(f"no spherical wrist: {reason}")
 
 
 def wrist_split(arm, q, frames: np.ndarray | None = None) -> WristSplit:
