@@ -625,7 +625,7 @@ class WristSplit(NamedTuple):
     twist: float  #: α of the wrist's first row where the table puts it before the wrist (modified DH), else 0
     signs: tuple[float, float]  #: (s5, s6): ``Rx(−twist) R3_6 = Rz(θ4) Ry(s5 θ5) Rz(s6 θ6)`` (offsets 0)
     euler: np.ndarray  #: (3,) Z-Y-Z (φ, θ, ψ) of ``Rx(−twist) R3_6``
-    euler_flipped: np.ndarray  #: (3,) the other Z-Y-Z solution (φ + π, −θ, ψ + π): the wrist flipped
+    euler_flipped: np.ndarray  #: (3,) the other Z-Y-Z solution (φ + π, −θ, ψ + π): the other wrist choice
     wrist: np.ndarray  #: (2, 3) θ4, θ5, θ6 read back from ``euler`` and from ``euler_flipped``: the arm's are one
 
 
