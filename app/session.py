@@ -130,7 +130,7 @@ class ArmSession:
         self.statics = StaticsView(scene, gui, self, root=f"{nodes}/statics", size=drawn.size)
         self.ellipsoids = EllipsoidsView(scene, gui, self, root=f"{nodes}/ellipsoids", reach=drawn.size)
         self.velocity = VelocityView(scene, gui, self, root=f"{nodes}/velocity")
-        self.motion = MotionLessons(gui, self, before=self.stop_lessons)
+        self.motion = MotionLessons(gui, self, before=self.stop_lessons, payload_kg=self.statics.payload_kg)
         self.lessons = LESSONS[arm.name](scene, gui, self) if arm.name in LESSONS else ()
         self.camera = (CameraControls(client, lambda: drawn.framed(self.state.last), self.guard, lecture,
                                       body_radius=drawn.body_radius) if own_camera else None)

@@ -18,7 +18,7 @@ pytestmark = pytest.mark.browser
 
 def test_what_the_jacobian_does_on_the_ur10_and_the_desktop_arm(open_page, light_app, tmp_path):
     """Torque bars and the force arrow (its direction by a handle too), the ellipsoids, joint rates for
-    a typed velocity, a path charted both ways; then the desktop arm plays the course's path and finds
+    a typed velocity, a path charted both ways, a drop's energies; then the desktop arm plays the course's path and finds
     the pose that needs the most torque."""
     from ur10teach.features.arm_picker import DESKTOP
     from ur10teach.features.course_arms.desktop_lessons import CoursePathLesson, StaticsExercise
@@ -72,6 +72,13 @@ def test_what_the_jacobian_does_on_the_ur10_and_the_desktop_arm(open_page, light
     assert page.get_by_text("1/1/70", exact=False).count() == 0, "the time axis is read as dates"
     page.get_by_text("Joints interpolated: joint speeds", exact=True).scroll_into_view_if_needed()
     page.screenshot(path=str(tmp_path / "path_charts.png"))
+    # let go: the drop's energies take the paths' place in the page
+    click(page, motion.release, lambda: motion.player.playing or motion.energy.visible, "the drop started")
+    wait_for(lambda: motion.energy.visible, what="the drop's energy chart")
+    wait_for(lambda: page.get_by_text("Gravity drop: energy", exact=True).count() == 1, what="the energy chart in the page")
+    wait_for(lambda: page.get_by_text("Joints interpolated: joint speeds", exact=True).count() == 0, what="the path charts gone")
+    wait_for(lambda: not motion.player.playing, what="the drop played")
+    assert "T + V stays at" in motion.summary.content
 
     # the 3-DOF desktop arm from the picker: its parallelogram, its velocity plots, the path's arrows while it plays
     client_id = next(k for k, v in app.sessions.items() if v is session)

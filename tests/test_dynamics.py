@@ -91,6 +91,34 @@ def test_newton_euler_matches_roboticstoolbox(payload):
                                    robot.accel(controller[k], qd[k], tau[k]), atol=1e-8)
 
 
+@pytest.mark.parametrize("payload", [0.0, 3.0])
+def test_lagranges_energies_are_newton_eulers_mass_matrix_and_gravity(payload):
+    """T from each link's own motion is ½ q̇ᵀ M q̇ with roboticstoolbox's M; V's gradient is the gravity load;
+    V is the masses' height (docs §8.8). Batch shapes broadcast; an arm without masses is refused."""
+    robot = rtb.models.DH.UR10()
+    robot.payload(payload, [0.0, 0.0, 0.0])
+    arm = Arm.preset("ur10")
+    q, qd, _ = random_motion(100, 6)
+    kinetic, potential = dynamics.energies(arm, q, qd, payload)
+    inertia = np.array([robot.inertia(a) for a in q + CONTROLLER_OFFSET])
+    np.testing.assert_allclose(kinetic, 0.5 * np.einsum("ni,nij,nj->n", qd, inertia, qd), rtol=1e-9, atol=1e-9)
+    frames = ur_standard_table(arm).frames(q)
+    centres = np.einsum("njab,jb->nja", frames[:, 1:, :3, :3], UR10_MASSES.centres) + frames[:, 1:, :3, 3]
+    np.testing.assert_allclose(potential, GRAVITY * (centres[..., 2] @ UR10_MASSES.masses + payload * frames[:, 6, 2, 3]),
+                               atol=1e-9)
+    h = 1e-6
+    for k in range(10):
+        numeric = [(dynamics.energies(arm, q[k] + h * e, qd[k], payload)[1]
+                    - dynamics.energies(arm, q[k] - h * e, qd[k], payload)[1]) / (2 * h) for e in np.eye(6)]
+        np.testing.assert_allclose(arm.gravity_torques(q[k], payload), numeric, atol=1e-6)
+    assert dynamics.energies(arm, q[:4, None, :], qd[None, :5, :])[0].shape == (4, 5)
+    assert dynamics.energies(arm, q[0], np.zeros(6))[0] == 0.0
+    with pytest.raises(ValueError, match="no link masses for 'kr210'"):
+        dynamics.energies(Arm.preset("kr210"), np.zeros(6), np.zeros(6))
+    with pytest.raises(ValueError, match="qd"):
+        dynamics.energies(arm, np.zeros(6), np.zeros(5))
+
+
 def test_the_mass_matrix_is_symmetric_positive_definite_and_gravity_is_its_static_part():
     from ur10core import dynamics
 
@@ -125,6 +153,7 @@ def test_a_released_arm_keeps_its_energy(start):
 
     energies = [energy(q, qd) for q, qd in zip(motion.q, motion.qd)]
     assert np.ptp(energies) < 1e-3
+    np.testing.assert_allclose(sum(dynamics.energies(arm, motion.q, motion.qd)), energies, atol=1e-9)  # what the app plots
     assert np.abs(motion.q[-1] - motion.q[0]).max() > 0.3  # and it did fall
     with pytest.raises(ValueError, match="dt must be"):
         dynamics.release(arm, np.zeros(6), dt=1.0)

@@ -243,7 +243,8 @@ def test_the_rate_charts_mark_the_singularity_and_the_speed_limits():
     assert not joints[9].any() and not joints[10].any()
 
 
-def test_the_released_arm_falls_as_the_dynamics_say(app):
+@pytest.mark.parametrize("payload", [0.0, 10.0])
+def test_the_released_arm_falls_as_the_dynamics_say(app, payload):
     async def scenario():
         from ur10core import dynamics
         from ur10core.branches import wrap
@@ -251,13 +252,16 @@ def test_the_released_arm_falls_as_the_dynamics_say(app):
         client = await ViserClient(url(app)).connect()
         session = session_of(app, client)
         start = session.state.last.q.copy()
+        if payload:  # the payload set in Forces and gravity falls with the arm
+            await client.set_gui("Payload (kg)", payload)
+            await until(lambda: session.statics.payload.value == payload, what="the payload set")
         await client.set_gui("Release the arm", True)
         await until(lambda: session.motion.player.playing, what="the drop to start")
         await until(lambda: not np.allclose(session.state.last.q, start), what="the arm to move")
         await until(lambda: not session.motion.player.playing, what="the drop to end")
         # it stops on the floor (issue 30, bug 4: it ended through it, "arm: 4 ⚠ floor"): at the last
         # sample of the dynamics before the first that the floor check (the snapshot's own) finds below z = 0
-        motion = dynamics.release(session.arm, start, duration=3.0)
+        motion = dynamics.release(session.arm, start, duration=3.0, payload_kg=payload)
         frames = session.arm.frames(motion.q)
         from ur10core.workspace import lowest_points
         hit = int(np.argmax(lowest_points(frames, session.state.body_points)[:, 2] < -1e-3))
@@ -265,6 +269,16 @@ def test_the_released_arm_falls_as_the_dynamics_say(app):
         np.testing.assert_allclose(session.state.last.q, wrap(motion.q[hit - 1]), atol=1e-9)
         assert session.state.last.cause == "motion" and not session.state.last.through_floor[0]
         assert f"hits the floor at {motion.t[hit]:.2f} s" in session.motion.summary.content
+        # its energies, Lagrange's T and V, charted up to the touch: V turns into T, T + V stays put
+        assert ("holding 10 kg" in session.motion.summary.content) == bool(payload)
+        kinetic, potential = dynamics.energies(session.arm, motion.q[:hit], motion.qd[:hit], payload)
+        chart = session.motion.energy
+        assert chart.visible and not session.motion.caption.visible
+        assert not any(path_chart.visible for path_chart in session.motion.charts.values())
+        np.testing.assert_allclose(chart.data[0], motion.t[:hit], rtol=1e-6)
+        np.testing.assert_allclose(np.stack(chart.data[1:]), [kinetic, potential, kinetic + potential], rtol=1e-5, atol=1e-4)
+        assert kinetic[0] == 0.0 and kinetic[-1] > 10.0 and np.ptp(kinetic + potential) < 1e-3
+        assert f"T + V stays at {kinetic[0] + potential[0]:.1f} J" in session.motion.summary.content
         await client.close()
 
     asyncio.run(scenario())
@@ -290,6 +304,7 @@ def test_moving_from_a_remembered_pose_along_a_path(app, kind):
         await until(lambda: not session.motion.player.playing, what="the path to end")
         charts = session.motion.charts
         assert all(chart.visible for chart in charts.values()) and session.motion.summary.content.startswith(f"**{kind.capitalize()}**")
+        assert session.motion.caption.visible and not session.motion.energy.visible
         assert len(charts[kind].data[0]) == len(charts["straight tool line"].data[0])  # both ways, over the same time
         np.testing.assert_allclose(session.state.last.frames[6], goal, atol=1e-5)
         await client.close()

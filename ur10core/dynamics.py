@@ -91,7 +91,7 @@ def gravity_torques(arm, q: np.ndarray, payload_kg: float = 0.0) -> np.ndarray:
     payload_kg = _check_payload(payload_kg)
     masses = link_masses(arm)
     frames = ur_standard_table(arm).frames(q)  # (..., 7, 4, 4)
-    centres = np.einsum("...jab,jb->...ja", frames[..., 1:, :3, :3], masses.centres) + frames[..., 1:, :3, 3]
+    centres = _centres(frames, masses)
     weights = GRAVITY * masses.masses
     # the payload: one more mass at the flange origin
     centres = np.concatenate([centres, frames[..., 6:, :3, 3]], axis=-2)
@@ -103,6 +103,45 @@ def gravity_torques(arm, q: np.ndarray, payload_kg: float = 0.0) -> np.ndarray:
         lift = cross(axes[..., i:i + 1, :], lever)[..., 2]  # ∂z_c/∂q_i
         tau[..., i] = (lift * weights[i:]).sum(axis=-1)
     return tau
+
+
+def _centres(frames: np.ndarray, masses: LinkMasses) -> np.ndarray:
+    """Each link's centre of mass in the base frame, (..., 6, 3), from UR's standard-DH frames (..., 7, 4, 4)."""
+    return np.einsum("...jab,jb->...ja", frames[..., 1:, :3, :3], masses.centres) + frames[..., 1:, :3, 3]
+
+
+def energies(arm, q, qd, payload_kg: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
+    """Kinetic and potential energy (J) of a UR-family arm at joints ``q`` turning at ``qd``, each (...,).
+
+    The two terms of the Lagrangian L = T − V (docs/kinematics.md §8.8), from each link's own motion:
+
+        T = Σ_j ½ m_j |v_cj|² + ½ ω_jᵀ R_j I_j R_jᵀ ω_j,   V = g Σ_j m_j z_cj
+
+    with ω_j = Σ_{i≤j} z_{i−1} q̇_i and v_cj = Σ_{i≤j} z_{i−1} × (p_cj − o_{i−1}) q̇_i.
+    Lagrange's equations d/dt ∂L/∂q̇ − ∂L/∂q = τ are then Newton–Euler's: T = ½ q̇ᵀ M(q) q̇
+    (:func:`mass_matrix`) and ∂V/∂q = g(q) (:func:`gravity_torques`). Let go with no
+    friction, T + V stays constant (:func:`release`). ``payload_kg`` sits at the flange origin.
+    ``ValueError`` as :func:`inverse_dynamics`, or for an arm without link masses.
+
+    >>> from ur10core import Arm
+    >>> T, V = energies(Arm.preset("ur10"), np.zeros(6), [1.0, 0, 0, 0, 0, 0])  # the base turning at 1 rad/s
+    >>> round(float(T), 2), round(float(V), 1)
+    (6.11, 38.4)
+    """
+    q, qd = np.broadcast_arrays(*_joint_arrays(q=q, qd=qd))
+    links = with_payload(link_masses(arm), _check_payload(payload_kg))
+    frames = ur_standard_table(arm).frames(q)
+    centres = _centres(frames, links)
+    axes, origins = frames[..., :6, :3, 2], frames[..., :6, :3, 3]  # joint i turns about z_{i−1} through o_{i−1}
+    kinetic, spin = np.zeros(q.shape[:-1]), np.zeros(q.shape[:-1] + (3,))
+    for j in range(6):
+        spin = spin + axes[..., j, :] * qd[..., j:j + 1]  # ω_j, in the base frame
+        levers = centres[..., j:j + 1, :] - origins[..., :j + 1, :]
+        velocity = (cross(axes[..., :j + 1, :], levers) * qd[..., :j + 1, None]).sum(axis=-2)
+        own = np.einsum("...ba,...b->...a", frames[..., j + 1, :3, :3], spin)  # R_jᵀ ω_j: in the link's axes
+        kinetic = kinetic + 0.5 * links.masses[j] * (velocity * velocity).sum(axis=-1) \
+            + 0.5 * np.einsum("...a,ab,...b->...", own, links.inertias[j], own)
+    return kinetic, GRAVITY * (centres[..., 2] * links.masses).sum(axis=-1)
 
 
 def _check_payload(payload_kg) -> float:

@@ -86,6 +86,18 @@ def rate_chart(gui: viser.GuiApi, kind: str, labels: tuple[str, ...], kinds: str
         title=f"{kind.capitalize()}: joint speeds", aspect=2.0, visible=False)
 
 
+def energy_chart(gui: viser.GuiApi) -> viser.GuiUplotHandle:
+    """An empty chart for a gravity drop's kinetic, potential and total energy, hidden until a drop fills it."""
+    series = (viser.uplot.Series(label="time (s)"),
+              viser.uplot.Series(label="kinetic T", stroke=hex_color(SLOT_COLORS[1]), width=2),
+              viser.uplot.Series(label="potential V", stroke=hex_color(SLOT_COLORS[0]), width=2),
+              viser.uplot.Series(label="T + V", stroke="#333333", width=2, dash=LIMIT_DASHES[0]))
+    return gui.add_uplot(data=(np.zeros(2, np.float32),) * len(series), series=series,
+                         scales={"x": viser.uplot.Scale(time=False)},
+                         axes=(viser.uplot.Axis(label="seconds"), viser.uplot.Axis(label="energy (J)")),
+                         title="Gravity drop: energy", aspect=2.0, visible=False)
+
+
 def path_summary(path: paths.Path, kind: str, limits: np.ndarray | None, labels: tuple[str, ...],
                  kinds: str, out_of_reach: tuple[float, float, str] | None = None) -> str:
     """What a student should notice: each joint's fastest rate against its limit, where damping acted,
@@ -129,9 +141,11 @@ class MotionLessons(View):
     """The "Motion" folder: release the arm (where its link masses are known), or move it from a
     remembered pose two ways; a plot of the joint rates. For any arm, its joints named as the arm names them."""
 
-    def __init__(self, gui: viser.GuiApi, session: Session, before: Callable[[], None] = lambda: None) -> None:
+    def __init__(self, gui: viser.GuiApi, session: Session, before: Callable[[], None] = lambda: None,
+                 payload_kg: Callable[[], float] = lambda: 0.0) -> None:
         self._session = session
         self._before = before  #: called before a motion starts (another lesson's own motion stops)
+        self._payload_kg = payload_kg  #: what the flange holds as the arm is let go (set in Forces and gravity)
         self.player = Player(session)
         arm = session.arm
         self._labels, self._kinds = arm.joint_names, "".join(arm.joint_types)
@@ -143,7 +157,8 @@ class MotionLessons(View):
             unable = no_gravity_reason(arm)
             self.gravity_text = gui.add_markdown(f"**Gravity.** {unable}" if unable else
                                                  "**Gravity.** Let the arm go from where it is: every joint free, no friction, "
-                                                 "UR's link masses (M q̈ + C q̇ + g = 0).")
+                                                 "UR's link masses and the payload set in *Forces and gravity* "
+                                                 "(M q̈ + C q̇ + g = 0).")
             self.release = gui.add_button("Release the arm", icon=viser.Icon.ARROW_DOWN, disabled=bool(unable))
             gui.add_markdown("**Paths.** Remember a start pose, move the arm somewhere else (drag or sliders), then "
                              "watch it go from the start to here: the tool along a straight line (resolved rates), "
@@ -153,12 +168,13 @@ class MotionLessons(View):
             self.path = gui.add_button_group("Go from the start to here along", PATHS)
             self.stop = gui.add_button("Stop the motion", icon=viser.Icon.PLAYER_STOP)
             self.summary = gui.add_markdown("")
-            gui.add_markdown("Both ways between the same two poses, the one played first. Shaded: grey where the "
-                             "straight line passed near a singularity (the rates were damped)"
-                             + (", red where a joint went over its speed limit (the dashed lines)."
-                                if self._limits is not None else "."))
+            self.caption = gui.add_markdown("Both ways between the same two poses, the one played first. Shaded: grey "
+                                            "where the straight line passed near a singularity (the rates were damped)"
+                                            + (", red where a joint went over its speed limit (the dashed lines)."
+                                               if self._limits is not None else "."), visible=False)
             #: one chart per kind of path, side by side in time: the same endpoints both ways
             self.charts = {kind: rate_chart(gui, kind, self._labels, self._kinds, self._limits) for kind in PATHS}
+            self.energy = energy_chart(gui)
         self.start: np.ndarray | None = None  #: the remembered start pose (rad, m)
         self.remember.on_click(session.guard(lambda _: self._remember()))
         self.release.on_click(session.guard(lambda _: self._release()))
@@ -169,6 +185,7 @@ class MotionLessons(View):
         session = self._session
         arm, start, points = session.arm, session.state.last.q.copy(), session.state.body_points
         dynamics.link_masses(arm)  # an arm without published masses: refused here, with the reason
+        payload = self._payload_kg()
         self._before()
 
         # the equations of motion know no floor: the drop ends where the arm first touches it, as a real one would
@@ -176,13 +193,26 @@ class MotionLessons(View):
 
         def compute() -> tuple[np.ndarray, np.ndarray]:
             motion = HEAVY.run(session.client, lambda: APART.run(dynamics.release, arm, start, duration=DROP_SECONDS,
-                                                                  stop=floor), cancelled=self.player.cancelled)
+                                                                  payload_kg=payload, stop=floor),
+                               cancelled=self.player.cancelled)
             hit = floor is not None and bool(floor(motion.q[-1]))
-            self.summary.content = (f"**Gravity.** The arm hits the floor at {motion.t[-1]:.2f} s: the drop stops there "
-                                    "(the equations of motion know no floor)." if hit else
-                                    f"**Gravity.** {motion.t[-1]:.0f} s of free fall, clear of the floor.")
             end = len(motion.t) - hit  # shown up to the touch, not through the floor
-            return motion.t[:end], wrap(motion.q[:end])  # a joint that swung round is shown within one turn
+            t, q = motion.t[:end], motion.q[:end]
+            kinetic, potential = dynamics.energies(arm, q, motion.qd[:end], payload)
+            total = kinetic + potential
+            holding = f" holding {number(payload, 'g')} kg" if payload else ""
+            self.summary.content = (
+                (f"**Gravity.** The arm{holding} hits the floor at {motion.t[-1]:.2f} s: the drop stops there "
+                 "(the equations of motion know no floor)." if hit else
+                 f"**Gravity.** {motion.t[-1]:.0f} s of free fall{holding and ','}{holding}, clear of the floor.")
+                + f" Potential energy V turns into kinetic energy T (the chart); with no friction, T + V stays at "
+                f"{number(total[0], '.1f')} J (within {number(1000 * np.ptp(total), '.2g')} mJ).")
+            with session.client.atomic():
+                self.energy.data = tuple(np.asarray(c, dtype=np.float32) for c in (t, kinetic, potential, total))
+                self.energy.visible = True
+                for chart in (*self.charts.values(), self.caption):
+                    chart.visible = False
+            return t, wrap(q)  # a joint that swung round is shown within one turn
 
         self.player.play(compute, "motion")
 
@@ -212,6 +242,7 @@ class MotionLessons(View):
                 for name, path in both.items():
                     self.charts[name].data = rate_chart_data(path, self._limits, self._kinds)
                     self.charts[name].visible = True
+                self.caption.visible, self.energy.visible = True, False
             camera = session.camera
             if camera is not None:  # the whole way in view, both ways
                 camera.show_also("path", np.vstack([path.tool for path in both.values()]), session.drawing.world)

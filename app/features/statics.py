@@ -175,14 +175,17 @@ class StaticsView(View):
         if not self._holding:
             self._maps.start("torque-map", self._session.guard)
 
+    def payload_kg(self) -> float:
+        """The payload set here (kg) that the flange holds; 0 for an arm without link masses, which has no slider."""
+        return within(self.payload, "payload (kg)") if self._session.arm.name in MASSES else 0.0
+
     def loads(self, snapshot: Snapshot) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """(force (3,), τ of the force (n,), τ of gravity and payload (n,)) at this snapshot, from the widgets."""
         arm = self._session.arm
         force = self._force(chosen(self.direction, "force direction"), snapshot)
         gravity = np.zeros(arm.n_joints)
         if arm.name in MASSES:  # otherwise (the UR10e, the course's other arms): the force's torques alone
-            payload = within(self.payload, "payload (kg)")
-            gravity = arm.gravity_torques(snapshot.q, payload)
+            gravity = arm.gravity_torques(snapshot.q, self.payload_kg())
         return force, arm.static_torques(snapshot.q, force), gravity
 
     def _force(self, direction: str, snapshot, strict: bool = True) -> np.ndarray:
