@@ -26,7 +26,7 @@ from .features.drawings import arm_drawing
 from .features.ellipsoids import EllipsoidsView
 from .features.ik_target import IKTarget, pose_from_gizmo
 from .features.joint_panel import JointPanel
-from .features.lecture import LectureMode, size_labels
+from .features.lecture import LectureMode, size_chart, size_labels
 from .features.motion_lessons import MotionLessons
 from .features.reach_map import ReachMapView
 from .features.readouts import Readouts
@@ -134,8 +134,6 @@ class ArmSession:
         self.lessons = LESSONS[arm.name](scene, gui, self) if arm.name in LESSONS else ()
         self.camera = (CameraControls(client, lambda: drawn.framed(self.state.last), self.guard, lecture,
                                       body_radius=drawn.body_radius) if own_camera else None)
-        if self.camera is not None:
-            self.follow_lecture_mode(self.camera.lecture)
         #: the scene whose 3D labels this browser's lecture mode sizes: its own (a shared one follows the server's)
         self._label_scene = scene if server is None else None
         #: (frame (4, 4)) -> the names drawn in this browser by something else (a challenge's target), as
@@ -147,6 +145,8 @@ class ArmSession:
             self.singularities, self.decoupling, self.dh_table, self.walkthrough, self.workspace, self.reach_map,
             self.statics, self.ellipsoids, self.velocity, self.motion, *self.lessons, self.camera) if view is not None)
         self.views = (drawn, *self.panel_views)
+        if self.camera is not None:
+            self.follow_lecture_mode(self.camera.lecture)
         #: what the views name at moving points (``View.names``: the arrows' tips), placed apart before the
         #: drawing's own labels, which keep clear of them
         colours = [colour for _, _, colour in self._named()]
@@ -324,8 +324,10 @@ class ArmSession:
         self._lecture_changed(lecture.on)  # a panel built before it followed one has not sized its labels
 
     def _lecture_changed(self, on: bool) -> None:
-        """Lecture mode switched: thick gizmo lines, and the 3D labels sized at the next panel redraw."""
+        """Lecture mode switched: thick gizmo lines, big chart axes, and the 3D labels sized at the next panel redraw."""
         self.ik_target.thicken(on)
+        for chart in (chart for view in self.panel_views for chart in view.charts):
+            size_chart(chart, on)
         self.refresher.request(self)
 
     def close(self) -> None:

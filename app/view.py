@@ -43,10 +43,12 @@ class View:
 
     ``close`` lets go of what the view holds in a scene shared with others (the browser
     has gone, or handed the arm over); ``remove`` also takes the view's own widgets out of
-    a browser that stays. A view lists its panel folders in ``folders``.
+    a browser that stays. A view lists its panel folders in ``folders``, and its charts in
+    ``charts`` (lecture mode sizes their axes).
     """
 
     folders: tuple = ()
+    charts: tuple = ()
 
     def render(self, snapshot: Snapshot) -> None:
         pass

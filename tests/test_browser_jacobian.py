@@ -62,9 +62,9 @@ def test_what_the_jacobian_does_on_the_ur10_and_the_desktop_arm(open_page, light
     click(page, motion.remember, lambda: motion.start is not None, "the start remembered")
     session.apply(lambda state: state.set_joints(np.radians([10, -60, 80, -110, -20, 20])))
     click(page, page.get_by_role("button", name="straight tool line"),
-          lambda: motion.player.playing or any(chart.visible for chart in motion.charts.values()), "the path started")
-    wait_for(lambda: all(chart.visible for chart in motion.charts.values()), what="both charts")
-    line = motion.charts["straight tool line"].data
+          lambda: motion.player.playing or any(chart.visible for chart in motion.path_charts.values()), "the path started")
+    wait_for(lambda: all(chart.visible for chart in motion.path_charts.values()), what="both charts")
+    line = motion.path_charts["straight tool line"].data
     assert line[9].any() and line[10].any(), "the straight line's marks are missing"
     wait_for(lambda: page.get_by_text("near a singularity", exact=True).count() >= 2, what="the charts' legends")
     wait_for(lambda: page.get_by_text("Joints interpolated: joint speeds", exact=True).count() == 1, what="the second chart")

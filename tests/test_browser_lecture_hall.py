@@ -225,7 +225,8 @@ def test_the_camera_keeps_everything_drawn_in_view(open_page, light_app):
 
 def test_lecture_mode_labels_math_and_refusals(open_page, light_app):
     """Issue 30: in lecture mode the 3D numbers stay at 24 px or more; the course arms' det J factors are
-    rendered math, not sympy's text; a refused value is explained right below its box."""
+    rendered math, not sympy's text, and their chart's axes are at 20 px; a refused value is explained right
+    below its box."""
     page, session = open_page()
     client_id = next(k for k, v in light_app.sessions.items() if v is session)
     unfold(page, "View", session.camera.lecture.enabled)
@@ -246,6 +247,12 @@ def test_lecture_mode_labels_math_and_refusals(open_page, light_app):
     assert all(formulas.nth(k).bounding_box()["height"] > 8 for k in range(3))
     text = " ".join(formulas.nth(k).text_content() for k in range(3))
     assert "**" not in text and "q" not in text and "θ" in text, text
+    # and its factors' chart: uPlot draws the axes on its canvas in px, so they are sized apart from the page's type
+    # (the plot starts right of the y axis: 64 + 32 px in lecture mode, 50 + 30 at uPlot's own size)
+    wait_for(lambda: page.evaluate("""() => [...document.querySelectorAll('.uplot')].some(chart =>
+        chart.offsetParent !== null && parseFloat(chart.querySelector('.u-over').style.left) >= 96
+        && parseFloat(getComputedStyle(chart.querySelector('.u-legend')).fontSize) >= 20)"""),
+             what="the factors' chart with 20 px axes and legend")
 
     editor = pick(page, light_app, client_id, CUSTOM)
     rows = page.locator(f"label[for='{editor.editor.rows._impl.uuid}']").locator("xpath=ancestor::div[2]").locator("textarea").first

@@ -763,7 +763,7 @@ def test_a_course_arm_moves_from_a_remembered_pose_along_both_paths(app, label, 
         await until(lambda: not motion.player.playing, what="the path to end")
         await until(lambda: session.state.last.rates is None and not session.velocity.linear.visible, what="the arrows gone")
         np.testing.assert_allclose(session.arm.fk(session.state.last.q)[:3, 3], goal[:3, 3], atol=1e-4)
-        data = motion.charts["straight tool line"].data
+        data = motion.path_charts["straight tool line"].data
         n = session.arm.n_joints
         assert len(data) == 1 + n + 2  # time, each joint, the two marks: no limit lines for an arm without limits
         assert ("mm/s" in motion.summary.content) == ("P" in session.arm.joint_types)
@@ -932,6 +932,35 @@ def test_the_planar_elbows_typed_target_is_a_point_of_its_plane(app):
         await until(lambda: planar.state.last.cause == "typed", what="the typed target")
         np.testing.assert_allclose(planar.state.last.target[:3, 3], (0.6, 0.2, 0.0), atol=1e-12)
         np.testing.assert_allclose(planar.state.last.flange[:3, 3], (0.6, 0.2, 0.0), atol=1e-9)  # and the arm is there
+        await client.close()
+
+    asyncio.run(scenario())
+
+
+def test_lecture_mode_sizes_the_axes_of_every_chart_on_every_arm(app):
+    """uPlot draws a chart's tick numbers and axis names on its canvas in px, out of reach of the page's type:
+    in lecture mode they stayed at 12 px. They are 20 px on every chart of the arm shown, on a panel built in
+    lecture mode too, and back at uPlot's own size when it is switched off."""
+    from ur10teach.features.arm_picker import DESKTOP
+    from ur10teach.features.lecture import LECTURE_AXIS, LECTURE_AXIS_SIZE
+
+    def lecture_sized(session, on: bool) -> bool:
+        charts = [chart for view in session.panel_views for chart in view.charts]
+        assert len(charts) >= 4  # the factors' history and Motion's three, and the desktop arm's two more
+        return all(all((axis.get("font") == LECTURE_AXIS["font"] and axis.get("size") == size) == on and axis.get("label")
+                       for axis, size in zip(chart.axes, LECTURE_AXIS_SIZE, strict=True))
+                   and (chart.padding is not None) == on for chart in charts)
+
+    async def scenario():
+        client = await ViserClient(url(app)).connect()
+        session = session_of(app, client)
+        assert lecture_sized(session, False)
+        await client.set_gui("Lecture mode", True)
+        await until(lambda: lecture_sized(session, True), what="the UR10's charts at lecture size")
+        desktop = await pick(app, client, DESKTOP)
+        assert len(desktop.lessons) and lecture_sized(desktop, True)  # built in lecture mode: sized as it is built
+        await client.set_gui("Lecture mode", False)
+        await until(lambda: lecture_sized(desktop, False), what="the desktop arm's charts at their own size")
         await client.close()
 
     asyncio.run(scenario())

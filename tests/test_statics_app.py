@@ -274,7 +274,7 @@ def test_the_released_arm_falls_as_the_dynamics_say(app, payload):
         kinetic, potential = dynamics.energies(session.arm, motion.q[:hit], motion.qd[:hit], payload)
         chart = session.motion.energy
         assert chart.visible and not session.motion.caption.visible
-        assert not any(path_chart.visible for path_chart in session.motion.charts.values())
+        assert not any(path_chart.visible for path_chart in session.motion.path_charts.values())
         np.testing.assert_allclose(chart.data[0], motion.t[:hit], rtol=1e-6)
         np.testing.assert_allclose(np.stack(chart.data[1:]), [kinetic, potential, kinetic + potential], rtol=1e-5, atol=1e-4)
         assert kinetic[0] == 0.0 and kinetic[-1] > 10.0 and np.ptp(kinetic + potential) < 1e-3
@@ -302,7 +302,7 @@ def test_moving_from_a_remembered_pose_along_a_path(app, kind):
         await until(lambda: session.motion.player.playing, what="the path to start")
         await until(lambda: np.abs(session.state.last.q - start).max() < 0.05, what="the arm back near the start")
         await until(lambda: not session.motion.player.playing, what="the path to end")
-        charts = session.motion.charts
+        charts = session.motion.path_charts
         assert all(chart.visible for chart in charts.values()) and session.motion.summary.content.startswith(f"**{kind.capitalize()}**")
         assert session.motion.caption.visible and not session.motion.energy.visible
         assert len(charts[kind].data[0]) == len(charts["straight tool line"].data[0])  # both ways, over the same time

@@ -2,7 +2,7 @@
 
 One switch per browser, in its "View" folder; ``ur10-teach --lecture`` starts every browser
 with it on (in shared mode the viewers' too). It sets the page's type to at least 20 px
-(the panel's default is about 13 px) and every 3D label to at least 24 px, widens the docked
+(the panel's default is about 13 px), a chart's axes to 20 px and every 3D label to at least 24 px, widens the docked
 panel to hold it, and thickens the gizmo's lines; "Hide the panel" folds the panel to a strip at the edge, leaving the whole
 window to the arm (a click on the strip brings it back).
 """
@@ -25,8 +25,16 @@ STYLE = (
     # the sliders' tick labels and the inputs size themselves in px: bring them up too
     ".mantine-Slider-markLabel, .mantine-Input-input, .mantine-Button-label {"
     " font-size: 0.85rem !important; }"
+    # a chart's legend, under it, is the page's; its axes are drawn on its canvas (LECTURE_AXIS)
+    ".u-legend { font-size: 0.8rem !important; }"
     "</style>"
 )
+#: uPlot draws a chart's tick numbers and axis names on its canvas in px (12 by default), out of the page's
+#: type's reach: in lecture mode at the panel's 20 px, with the room they take under the plot (x, the first
+#: axis) and beside it (y), and padding (top, right, bottom, left) so that the end ticks' numbers are not cut.
+LECTURE_AXIS = {"font": "20px system-ui, sans-serif", "labelFont": "bold 20px system-ui, sans-serif", "labelSize": 32}
+LECTURE_AXIS_SIZE = (44, 64)
+LECTURE_PADDING = (16, 18, 0, 0)
 
 
 class LectureMode:
@@ -66,6 +74,16 @@ def add_label(scene: viser.SceneApi, name: str, text: str, base: float, lecture:
     label = scene.add_label(name, text, font_screen_scale=label_scale(base, lecture), **props)
     label._base_scale = base
     return label
+
+
+def size_chart(chart: viser.GuiUplotHandle, lecture: bool) -> None:
+    """A chart's axes at their size in lecture mode (:data:`LECTURE_AXIS`) or out of it (uPlot's own)."""
+    axes = tuple({**{key: value for key, value in axis.items() if key not in (*LECTURE_AXIS, "size")},
+                  **({**LECTURE_AXIS, "size": LECTURE_AXIS_SIZE[min(k, 1)]} if lecture else {})}
+                 for k, axis in enumerate(chart.axes))
+    if axes != tuple(chart.axes):
+        chart.axes = axes
+        chart.padding = LECTURE_PADDING if lecture else None
 
 
 def size_labels(scene: viser.SceneApi, lecture: bool) -> None:

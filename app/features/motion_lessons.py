@@ -173,8 +173,9 @@ class MotionLessons(View):
                                             + (", red where a joint went over its speed limit (the dashed lines)."
                                                if self._limits is not None else "."), visible=False)
             #: one chart per kind of path, side by side in time: the same endpoints both ways
-            self.charts = {kind: rate_chart(gui, kind, self._labels, self._kinds, self._limits) for kind in PATHS}
+            self.path_charts = {kind: rate_chart(gui, kind, self._labels, self._kinds, self._limits) for kind in PATHS}
             self.energy = energy_chart(gui)
+        self.charts = (*self.path_charts.values(), self.energy)
         self.start: np.ndarray | None = None  #: the remembered start pose (rad, m)
         self.remember.on_click(session.guard(lambda _: self._remember()))
         self.release.on_click(session.guard(lambda _: self._release()))
@@ -210,7 +211,7 @@ class MotionLessons(View):
             with session.client.atomic():
                 self.energy.data = tuple(np.asarray(c, dtype=np.float32) for c in (t, kinetic, potential, total))
                 self.energy.visible = True
-                for chart in (*self.charts.values(), self.caption):
+                for chart in (*self.path_charts.values(), self.caption):
                     chart.visible = False
             return t, wrap(q)  # a joint that swung round is shown within one turn
 
@@ -240,8 +241,8 @@ class MotionLessons(View):
                                                 for k in (kind, *(k for k in PATHS if k != kind)))
             with session.client.atomic():
                 for name, path in both.items():
-                    self.charts[name].data = rate_chart_data(path, self._limits, self._kinds)
-                    self.charts[name].visible = True
+                    self.path_charts[name].data = rate_chart_data(path, self._limits, self._kinds)
+                    self.path_charts[name].visible = True
                 self.caption.visible, self.energy.visible = True, False
             camera = session.camera
             if camera is not None:  # the whole way in view, both ways

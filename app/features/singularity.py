@@ -332,11 +332,12 @@ class Singularities(View):
                           for name in names)),
                 scales={"x": viser.uplot.Scale(time=False, range=(-PLOT_SECONDS, 0.0)),
                         "y": viser.uplot.Scale(range=(0.0, 1.0))},
-                axes=(viser.uplot.Axis(label="seconds (0 = now)"), viser.uplot.Axis(label="share of its scale")),
+                axes=(viser.uplot.Axis(label="seconds (0 = now)"), viser.uplot.Axis(label="|factor| / scale")),
                 title="Factors over the last 10 s", aspect=2.0) if names else None
             self.demo = (gui.add_button_group("Put the arm on the", names, hint="Moves as few joints as it can, as "
                                               "little as it can, onto where that factor is zero") if names else None)
             self.held_back = gui.add_markdown("", visible=False)  #: why the buttons are off (a class challenge)
+        self.charts = () if self.plot is None else (self.plot,)
         self._pressed = ""  #: the newest button pressed
         self._presses = FoldedRuns(self._place)
         if self.enabled is not None:

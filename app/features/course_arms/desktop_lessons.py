@@ -66,7 +66,7 @@ class CoursePathLesson(View):
             self.play = gui.add_button("Play the course's path", icon=viser.Icon.PLAYER_PLAY)
             self.stop = gui.add_button("Stop", icon=viser.Icon.PLAYER_STOP)
             self.readout = gui.add_markdown("")
-            gui.add_uplot(
+            velocity = gui.add_uplot(
                 data=(t.astype(np.float32), *(1000 * twist[:, :3].T).astype(np.float32)),
                 series=(viser.uplot.Series(label="t (s)"),
                         *(viser.uplot.Series(label=f"v{a} (mm/s)", stroke=hex_color(c), width=2)
@@ -74,7 +74,7 @@ class CoursePathLesson(View):
                 scales={"x": viser.uplot.Scale(time=False)},  # seconds, not dates
                 axes=(viser.uplot.Axis(label="t (s)"), viser.uplot.Axis(label="mm/s")),
                 title="Tool velocity v", aspect=2.0)
-            gui.add_uplot(
+            turning = gui.add_uplot(
                 data=(t.astype(np.float32), *np.degrees(twist[:, 3:].T).astype(np.float32)),
                 series=(viser.uplot.Series(label="t (s)"),
                         *(viser.uplot.Series(label=f"ω{a} (°/s)", stroke=hex_color(c), width=2)
@@ -82,6 +82,7 @@ class CoursePathLesson(View):
                 scales={"x": viser.uplot.Scale(time=False)},  # seconds, not dates
                 axes=(viser.uplot.Axis(label="t (s)"), viser.uplot.Axis(label="°/s")),
                 title="Tool turning rate ω", aspect=2.0)
+        self.charts = (velocity, turning)
         self.play.on_click(session.guard(lambda _: self.start()))
         self.stop.on_click(session.guard(lambda _: self.halt()))
 
