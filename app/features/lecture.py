@@ -80,8 +80,8 @@ def size_chart(chart: viser.GuiUplotHandle, lecture: bool) -> None:
     """A chart's axes at their size in lecture mode (:data:`LECTURE_AXIS`) or out of it (uPlot's own)."""
     axes = tuple({**{key: value for key, value in axis.items() if key not in (*LECTURE_AXIS, "size")},
                   **({**LECTURE_AXIS, "size": LECTURE_AXIS_SIZE[min(k, 1)]} if lecture else {})}
-                 for k, axis in enumerate(chart.axes))
-    if axes != tuple(chart.axes):
+                 for k, axis in enumerate(chart.axes or ()))
+    if axes != tuple(chart.axes or ()):
         chart.axes = axes
         chart.padding = LECTURE_PADDING if lecture else None
 
