@@ -498,7 +498,44 @@ def test_every_arm_with_a_spherical_wrist_splits_its_pose_at_the_wrist_centre(ap
             session = await pick(app, client, other)
             assert "Wrist centre (decoupling)" in client.gui and "Name WC on the arm" not in client.gui
             assert session.decoupling.readout.content.startswith(f"No spherical wrist: {why}")
-            assert session.decoupling.names() == []
+            assert all(text != "WC" for _, text, _ in session.decoupling.names())
+        assert session.decoupling.names() == [] and not session.decoupling.steps.visible  # the SCARA: nothing to name
+        await client.close()
+
+    asyncio.run(scenario())
+
+
+@pytest.mark.parametrize("wrist", [60.0, 0.0, -60.0])
+def test_the_ur10s_folder_shows_the_course_ik_step_by_step_from_p5(app, wrist):
+    """Its last three axes do not meet, so the pose does not split at a wrist centre: the folder says so and replays
+    the course's separation of variables (docs §4.1) on the pose with its numbers, from P5, which it names in 3D
+    when asked, to the arm's own joints and branch, the IK target's number for it. On θ5 = 0 it says that R fixes
+    only θ234 ± θ6 and keeps the arm's θ6."""
+    async def scenario():
+        client = await ViserClient(url(app)).connect()
+        session = session_of(app, client)
+        arm, view = session.arm, session.decoupling
+        assert "Name P5 on the arm" in client.gui and "Name WC on the arm" not in client.gui
+        assert view.readout.content.startswith("No spherical wrist: the last three axes do not meet in one point")
+        (point, text, _), = view.names()
+        assert point is None and text == "P5"
+        await client.set_gui("Name P5 on the arm", True)
+        q = np.radians([30, 45, 26, 50, wrist, 80])
+        session.apply(lambda state: state.set_joints(q))
+        T = arm.fk(q)
+        p5 = T[:3, 3] - arm.d6 * T[:3, 2]  # P5 = p − d6 z6, from the pose
+        await until(lambda: view.names()[0][0] is not None and np.allclose(view.names()[0][0], p5, atol=1e-12),
+                    what="P5 named where axes 5 and 6 meet")
+        own = [f"**θ{k} = {value:.1f}°**" for k, value in ((1, 30), (6, 80), (3, 26))] + ["= **45.0°**", "= **50.0°**",
+                                                                                       f"**θ5 = {wrist:.1f}°**"]
+        await until(lambda: all(words in view.steps.content for words in own), what="the steps ending at the arm's joints")
+        solution = arm.ik(T, hint=q)
+        slot = next(k for k in range(8) if solution.valid[k] and np.abs(solution.q[k] - q).max() < 1e-9)
+        content = view.steps.content
+        assert f"branch {slot + 1} ({arm.slot_labels[slot]})" in content
+        assert f"ρ = {1000 * np.hypot(*p5[:2]):.1f} mm" in content and f"d4 = {1000 * arm.d4:.1f} mm" in content
+        assert ("R fixes only θ234 ± θ6" in content) == (wrist == 0.0)
+        assert ("wrist flipped" in content) == (wrist < 0)
         await client.close()
 
     asyncio.run(scenario())

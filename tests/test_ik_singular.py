@@ -338,3 +338,46 @@ def test_the_hint_survives_rounding_at_the_triple_singularity():
     assert arm.pose_error(np.where(sol.valid[..., None], sol.q, 0.0), poses[:, None])[sol.valid].max() < 1e-9
     for pose in poses[:200]:
         assert wrapped_difference(solve_reference(arm, pose, hint=q).nearest(q).q, q).max() < 1e-6
+
+
+@pytest.mark.parametrize("near", [False, True])
+def test_the_separation_steps_end_at_the_arms_own_joints(any_arm, near):
+    """docs §4.1 replayed on T06(q), one step at a time (the app's step-by-step readout): on 1,500 random and 1,500
+    near-singular joint vectors each step's numbers are what the pose and the arm's joints say (P5 against frame 5's
+    origin, ρ, A against the shoulder factor, c5 and c3 against the joints), the two θ1 are the IK's two shoulders, the
+    steps end at q, and ``slot`` is the IK slot that holds q."""
+    from ur10core.solvers.ur import separation_steps
+
+    q = near_singular_joints(any_arm, 1500, seed=21)[0] if near else random_joints(1500, seed=20)
+    frames = any_arm.frames(q)
+    solution = any_arm.ik(frames[:, -1], hint=q)  # at a singularity q is one of many: the hint keeps it
+    factors = any_arm.singularity_factors(q)
+    d4 = any_arm.d4
+    for k in range(len(q)):
+        steps = separation_steps(any_arm, q[k], frames[k])
+        np.testing.assert_allclose(steps.p5, frames[k, 5, :3, 3], atol=1e-12)
+        # (√(ρ² − d4²) is ill-conditioned at ρ = d4: a rounding of ρ there makes a few nm of A)
+        assert steps.rho >= d4 - 1e-12 and abs(steps.reach) == pytest.approx(math.sqrt(max(steps.rho**2 - d4**2, 0)), abs=2e-8)
+        assert steps.reach == pytest.approx(factors[k, 0], abs=1e-12)  # A is det J's shoulder factor
+        # the course's formulas are ill-conditioned near a singularity (none of it shows in a readout to 0.1°): θ1 comes
+        # from a square root that is 0 at the shoulder's; θ6 and θ234 divide by s5, and c3 takes θ234's error; θ3 = ±acos(c3) turns by c3's error over |s3| (by its square
+        # root at s3 = 0), and θ2 by up to twenty times that, through atan2(a3 s3, a2 + a3 c3) with a2 + a3 c3 ≈ 41 mm
+        wrist = 0.0 if steps.wrist_singular else 1e-15 / abs(math.sin(q[k, 4]))
+        c3_error = 3e-15 + wrist
+        elbow = min(c3_error / max(abs(math.sin(q[k, 2])), 1e-300), math.sqrt(2 * c3_error))
+        shoulder = min(1e-15 / max(abs(steps.reach), 1e-300), 1e-7)  # θ1 from A = ±√(ρ² − d4²), A ≈ 0
+        tolerance = 1e-8 + wrist + 20 * elbow + shoulder
+        assert steps.c5 == pytest.approx(math.cos(q[k, 4]), abs=1e-12)
+        assert steps.c3 == pytest.approx(math.cos(q[k, 2]), abs=1e-9 + c3_error)
+        for side in (0, 1):  # the IK's left and right shoulders (where A ≈ 0 the IK may move each slot's within its band)
+            if solution.valid[k, 4 * side: 4 * side + 4].any() and abs(steps.reach) > 1e-4:
+                theta1 = solution.q[k, 4 * side: 4 * side + 4, 0]
+                assert wrapped_difference(steps.theta1[side], theta1[np.isfinite(theta1)]).max() < 1e-9
+        replayed = [steps.theta1[steps.reach >= 0], steps.theta2, steps.theta3, steps.theta4, steps.theta5, steps.theta6]
+        assert wrapped_difference(replayed, q[k]).max() < tolerance, (q[k], replayed)
+        assert solution.valid[k, steps.slot]
+        assert wrapped_difference(solution.q[k, steps.slot], q[k]).max() < 1e-6
+    with pytest.raises(ValueError, match="the UR family's IK"):
+        separation_steps(Arm.preset("kr210"), np.zeros(6))
+    with pytest.raises(ValueError, match="one pose of 6 joints"):
+        separation_steps(any_arm, np.zeros((2, 6)))

@@ -1,6 +1,7 @@
 """Kinematic decoupling (docs/kinematics.md §7.3), for any arm: where the arm has a spherical wrist, the wrist centre
 WC named in 3D and the pose split there in numbers (WC from the tool pose, then R3_6 = R0_3ᵀ R and its Z-Y-Z Euler
-angles, which are the wrist's three joints); elsewhere, why the pose does not split."""
+angles, which are the wrist's three joints); elsewhere, why the pose does not split, and for the UR family the
+course's separation of variables instead (§4.1), step by step from its wrist-2 point P5."""
 
 from __future__ import annotations
 
@@ -9,6 +10,7 @@ import viser
 
 from ur10core.branches import wrap
 from ur10core.solvers.spherical_wrist import WristSplit, spherical_wrist, wrist_split
+from ur10core.solvers.ur import SeparationSteps, separation_steps
 
 from ..state import Snapshot
 from ..style import WRIST_COLOR, number, sentence
@@ -19,6 +21,10 @@ INTRO = ("Where the last three axes meet in one point, the **wrist centre WC**, 
 #: What the folder says where the arm has no spherical wrist, after the core's reason
 ELSEWHERE = (" The pose does not split at a wrist centre here: its closed form (or the numerical search) solves the "
              "joints otherwise (docs/kinematics.md §4, §7.3).")
+#: ... and for the UR family, whose steps the folder then shows
+SEPARATED = (" The course separates the variables instead (docs/kinematics.md §4.1): the wrist-2 point **P5** = p − d6·z6, "
+             "on axes 5 and 6, does not move with θ5 or θ6 and fixes θ1; then R gives θ5, θ6 and θ234, and joints 2–3 "
+             "are a planar two-link arm. For this pose:")
 
 
 def _degrees(angles: np.ndarray) -> str:
@@ -61,38 +67,83 @@ def split_markdown(split: WristSplit, q: np.ndarray, joint_names: tuple[str, ...
                    f"{'not flipped' if q[-2] < 0 else 'flipped'} ({name5} {'≥' if q[-2] < 0 else '≤'} 0).")
 
 
+def _mm(*values: float) -> str:
+    return ", ".join(number(1000 * v, ".1f") for v in values)
+
+
+def steps_markdown(steps: SeparationSteps, arm) -> str:
+    """The folder's text for a UR-family arm: the course's five steps with this pose's numbers, ending at its joints."""
+    left, right = (_degrees([theta]) for theta in steps.theta1)
+    shoulder = "right" if steps.reach >= 0 else "left"
+    lines = [f"**1. θ1.** P5 = ({_mm(*steps.p5)}) mm is ρ = {_mm(steps.rho)} mm from the base axis (at least "
+             f"d4 = {_mm(arm.d4)} mm), so A = ±√(ρ² − d4²): θ1 = {left} (shoulder left) or {right} (right). "
+             f"This arm: A = {_mm(steps.reach)} mm, **θ1 = {_degrees([steps.theta1[steps.reach >= 0]])}** "
+             f"(shoulder {shoulder})."]
+    flipped = "flipped" if steps.theta5 < 0 else "not flipped"
+    lines.append(f"**2. θ5.** c5 = r13 s1 − r23 c1 = {number(steps.c5, '.4f')}, θ5 = ±acos(c5): this arm "
+                 f"**θ5 = {_degrees([steps.theta5])}** (wrist {flipped}).")
+    if steps.wrist_singular:
+        lines.append(f"**3–4. θ6, θ234.** s5 = 0: axes 4 and 6 in line, and R fixes only θ234 ± θ6. The arm keeps "
+                     f"**θ6 = {_degrees([steps.theta6])}**, so θ234 = {_degrees([steps.theta234])} (docs §4.3).")
+    else:
+        lines.append(f"**3. θ6** from s5 c6 = r21 c1 − r11 s1, −s5 s6 = r22 c1 − r12 s1: **θ6 = {_degrees([steps.theta6])}**.")
+        lines.append(f"**4. θ234** from c234 s5 = r13 c1 + r23 s1, s234 s5 = r33: θ234 = {_degrees([steps.theta234])}.")
+    lines.append(f"**5. θ3, θ2, θ4.** The frame-4 origin is at (h4, v4) = (A + d5 s234, P5z − d1 − d5 c234) = "
+                 f"({_mm(*steps.frame4)}) mm from the shoulder, r = {_mm(steps.r)} mm: c3 = (r² − a2² − a3²) / (2 a2 a3) "
+                 f"= {number(steps.c3, '.4f')}, θ3 = ±acos(c3): this arm **θ3 = {_degrees([steps.theta3])}**; "
+                 f"θ2 = atan2(v4, h4) − atan2(a3 s3, a2 + a3 c3) = **{_degrees([steps.theta2])}**; "
+                 f"θ4 = θ234 − θ2 − θ3 = **{_degrees([steps.theta4])}**.")
+    lines.append(f"The arm is on branch {steps.slot + 1} ({arm.slot_labels[steps.slot]}): the IK target's branch "
+                 f"{steps.slot + 1}.")
+    return "\n\n".join(lines)
+
+
 class DecouplingView(View):
     """The "Wrist centre (decoupling)" folder, and WC named in 3D when asked; for an arm without a spherical wrist
-    (the UR family, the small arms), the folder says why its pose does not split."""
+    (the UR family, the small arms), the folder says why its pose does not split, and the UR family's shows its
+    own steps instead, with P5 named in 3D when asked."""
 
     def __init__(self, gui: viser.GuiApi, session: Session) -> None:
-        self._arm = session.arm
+        arm = self._arm = session.arm
         self._centre_in_tool: np.ndarray | None = None  #: c: WC = p + R c
+        #: the UR family's: its steps from P5 (frame 5's origin) in place of a split
+        self._separated = arm.name in arm.UR_PRESETS
         try:
-            self._centre_in_tool = spherical_wrist(self._arm)[1]
+            self._centre_in_tool = spherical_wrist(arm)[1]
             self.why_not = ""
-        except ValueError as reason:
-            self.why_not = sentence(str(reason)) + "." + ELSEWHERE  #: why the pose does not split, if it does not
+        except ValueError as reason:  #: why the pose does not split, if it does not
+            self.why_not = sentence(str(reason)) + "." + (SEPARATED if self._separated else ELSEWHERE)
         folder = gui.add_folder("Wrist centre (decoupling)", expand_by_default=False)
         self.folders = (folder,)
+        self._point = "P5" if self._separated else "WC"  #: the point it names in 3D
         with folder:
             gui.add_markdown(INTRO)
-            self.shown = None if self.why_not else gui.add_checkbox("Name WC on the arm", False,
-                                                                     hint="The wrist centre, named in 3D")
-            self.readout = gui.add_markdown(self.why_not)
-        self._centre: np.ndarray | None = None  #: where WC is, while named
+            if self._separated:  # the reason, then the steps, which the checkbox names P5 of
+                self.readout = gui.add_markdown(self.why_not)
+            self.shown = (gui.add_checkbox(f"Name {self._point} on the arm", False, hint=f"{self._point}, named in 3D")
+                          if self._separated or not self.why_not else None)
+            if not self._separated:
+                self.readout = gui.add_markdown(self.why_not)
+            self.steps = gui.add_markdown("", visible=self._separated)
+        self._centre: np.ndarray | None = None  #: where WC (or P5) is, while named
         if self.shown is not None:
             self.shown.on_update(session.guard(lambda _: session.redraw()))
 
     def render(self, snapshot: Snapshot) -> None:
-        tool = snapshot.flange
-        shown = self.shown is not None and self.shown.value
-        self._centre = tool[:3, 3] + tool[:3, :3] @ self._centre_in_tool if shown else None
+        if self.shown is None or not self.shown.value:
+            self._centre = None
+        elif self._separated:
+            self._centre = snapshot.frames[5][:3, 3]
+        else:
+            tool = snapshot.flange
+            self._centre = tool[:3, 3] + tool[:3, :3] @ self._centre_in_tool
 
     def names(self) -> list[tuple]:
-        return [] if self.why_not else [(self._centre, "WC", WRIST_COLOR)]
+        return [] if self.shown is None else [(self._centre, self._point, WRIST_COLOR)]
 
     def render_panel(self, snapshot: Snapshot) -> None:
-        if not self.why_not:
+        if self._separated:
+            self.steps.content = steps_markdown(separation_steps(self._arm, snapshot.q, snapshot.frames), self._arm)
+        elif not self.why_not:
             split = wrist_split(self._arm, snapshot.q, snapshot.frames)
             self.readout.content = split_markdown(split, snapshot.q, self._arm.joint_names, self._arm.revolute)

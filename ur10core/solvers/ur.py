@@ -24,7 +24,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, ClassVar
+from typing import TYPE_CHECKING, ClassVar, NamedTuple
 
 import numpy as np
 
@@ -34,7 +34,8 @@ from .._backend import kernels
 from .._validate import (
     as_float_array, check_finite, homogeneous_transform, joint_vector, one_joint_vector, poses_and_hints, refuse_pose,
 )
-from ..branches import INSIDE_OFFSET, TOO_FAR, IKSolution
+from ..branches import INSIDE_OFFSET, TOO_FAR, IKSolution, wrap
+from ..tolerances import WRIST_TOLERANCE
 
 if TYPE_CHECKING:
     from ..arm import Arm
@@ -584,3 +585,83 @@ class URFamily:
         points[:, 1] = s1 * reach - self.d4 * c1 - self.d6 * (c1 * c5 - s1 * s5c234)
         points[:, 2] = self.a2 * s2 + self.a3 * s23 + self.d1 + self.d5 * c234 + self.d6 * s5 * s234
         np.abs(self.a2 * self.a3 * reach * s3 * s5, out=det_out)
+
+
+class SeparationSteps(NamedTuple):
+    """The UR family's IK replayed on one pose, step by step, on the arm's own branch (:func:`separation_steps`).
+
+    Lengths in metres, angles in radians; steps as docs/kinematics.md §4.1 numbers them.
+    """
+
+    p5: np.ndarray  #: (3,) step 1: the wrist-2 point P5 = p − d6 z6
+    rho: float  #: step 1: P5's distance from the base axis, at least d4 (else no θ1)
+    reach: float  #: step 1: A, P5's reach along x1 in the arm plane, ±√(ρ² − d4²): its sign is the shoulder
+    theta1: tuple[float, float]  #: step 1: θ1 for A ≤ 0 (shoulder left) and for A ≥ 0 (right)
+    c5: float  #: step 2: c5 = z4·z6 = r13 s1 − r23 c1, so θ5 = ±acos(c5)
+    theta5: float  #: step 2: the sign of the arm's wrist
+    theta6: float  #: step 3: from s5 c6 = r21 c1 − r11 s1, −s5 s6 = r22 c1 − r12 s1 (the arm's own where s5 = 0)
+    theta234: float  #: step 4: from c234 s5 = r13 c1 + r23 s1, s234 s5 = r33 (the arm's θ2 + θ3 + θ4 where s5 = 0)
+    wrist_singular: bool  #: s5 = 0 (to :data:`~ur10core.tolerances.WRIST_TOLERANCE`): steps 3 and 4 fix only θ234 ± θ6
+    frame4: tuple[float, float]  #: step 5: (h4, v4) = (A + d5 s234, P5z − d1 − d5 c234), the frame-4 origin from the shoulder
+    r: float  #: step 5: its distance from the shoulder, within |a2 − a3| … a2 + a3
+    c3: float  #: step 5: (r² − a2² − a3²) / (2 a2 a3), so θ3 = ±acos(c3)
+    theta2: float  #: step 5: atan2(v4, h4) − atan2(a3 s3, a2 + a3 c3)
+    theta3: float  #: step 5: the sign of the arm's elbow
+    theta4: float  #: step 5: θ234 − θ2 − θ3
+    slot: int  #: k = 4 i + 2 j + l, the IK slot of the arm's branch (``arm.slot_labels[k]``)
+
+
+def separation_steps(arm: "Arm", q, frames: np.ndarray | None = None) -> SeparationSteps:
+    """The course's IK of a UR-family arm (docs/kinematics.md §4.1) replayed on its own pose T06(q), one step at a time.
+
+    The UR wrist is not spherical, so the pose does not split at a wrist centre: the course separates the variables.
+    P5 = p − d6 z6 fixes θ1 (two tangents to the cylinder of radius d4), then θ5 = ±acos(r13 s1 − r23 c1), θ6 and
+    θ234 from R, and joints 2–3 as a planar two-link arm reaching the frame-4 origin. Each choice is made as the
+    arm's own joints make it, so the steps end at ``q`` (angles wrapped to (−π, π]); ``slot`` is that branch's
+    IK slot. ``frames``: ``arm.frames(q)``, where the caller has them. ``ValueError`` for an arm outside the UR
+    family or ``q`` that is not one pose.
+
+    >>> from ur10core import Arm
+    >>> steps = separation_steps(Arm.preset("course"), np.radians([30, 45, 26, 50, 60, 80]))   # §3's third example
+    >>> (1000 * steps.p5).round(1).tolist(), round(1000 * steps.rho, 1), round(1000 * steps.reach, 1)
+    ([532.5, 118.2, 1042.3], 545.5, 520.3)
+    >>> np.degrees([steps.theta1[1], steps.theta5, steps.theta6, steps.theta2, steps.theta3, steps.theta4]).round(6).tolist()
+    [30.0, 60.0, 80.0, 45.0, 26.0, 50.0]
+    >>> Arm.preset("course").slot_labels[steps.slot]
+    'shoulder right, elbow down, wrist not flipped'
+    """
+    solver = arm.solver
+    if not isinstance(solver, URFamily):
+        raise ValueError(f"the separation of variables is the UR family's IK (course, ur10, ur10e), not {arm.name!r}'s")
+    q = arm.joints(q)
+    if q.shape != (6,):
+        raise ValueError(f"q must be one pose of 6 joints, got shape {q.shape}")
+    d1, a2, a3, d4, d5, d6 = solver.dh_lengths
+    T = (arm.frames(q) if frames is None else frames)[-1]
+    (r11, r12, r13), (r21, r22, r23), (r31, r32, r33) = T[:3, :3].tolist()
+    p5 = T[:3, 3] - d6 * T[:3, 2]
+    x5, y5, z5 = p5.tolist()
+    rho = math.hypot(x5, y5)
+    tangent = math.sqrt(max(rho * rho - d4 * d4, 0.0))
+    theta1 = tuple(math.atan2(y5 * A + x5 * d4, x5 * A - y5 * d4) for A in (-tangent, tangent))
+    c1, s1 = math.cos(q[0]), math.sin(q[0])
+    reach = x5 * c1 + y5 * s1  # P5 = A x1 + d4 (s1, −c1): the arm's side of the two
+    c5, c6s5, s6s5 = r13 * s1 - r23 * c1, r21 * c1 - r11 * s1, r12 * s1 - r22 * c1
+    j = 0 if math.sin(q[4]) >= 0.0 else 1
+    s5 = (1 - 2 * j) * math.hypot(c6s5, s6s5)  # as √(1 − c5²), but not lost to rounding where c5 = ±1
+    theta5 = math.atan2(s5, c5)
+    wrist_singular = abs(s5) <= WRIST_TOLERANCE
+    if wrist_singular:  # only θ234 ± θ6 is fixed: the arm's own split
+        theta6, theta234 = float(wrap(q[5])), float(wrap(q[1] + q[2] + q[3]))
+    else:
+        theta6 = math.atan2(s6s5 / s5, c6s5 / s5)
+        theta234 = math.atan2(r33 / s5, (r13 * c1 + r23 * s1) / s5)
+    h4, v4 = reach + d5 * math.sin(theta234), z5 - d1 - d5 * math.cos(theta234)
+    r = math.hypot(h4, v4)
+    c3 = min(1.0, max(-1.0, (r * r - a2 * a2 - a3 * a3) / (2.0 * a2 * a3)))
+    elbow = 0 if math.sin(q[2]) >= 0.0 else 1  # l of k = 4 i + 2 j + l
+    theta3 = (1 - 2 * elbow) * math.acos(c3)
+    theta2 = math.atan2(v4, h4) - math.atan2(a3 * math.sin(theta3), a2 + a3 * c3)
+    return SeparationSteps(p5, rho, reach, theta1, c5, theta5, theta6, theta234, wrist_singular, (h4, v4), r, c3,
+                           float(wrap(theta2)), theta3, float(wrap(theta234 - theta2 - theta3)),
+                           4 * (1 if reach >= 0.0 else 0) + 2 * j + elbow)
