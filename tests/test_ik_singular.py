@@ -359,9 +359,10 @@ def test_the_separation_steps_end_at_the_arms_own_joints(any_arm, near):
         # (√(ρ² − d4²) is ill-conditioned at ρ = d4: a rounding of ρ there makes a few nm of A)
         assert steps.rho >= d4 - 1e-12 and abs(steps.reach) == pytest.approx(math.sqrt(max(steps.rho**2 - d4**2, 0)), abs=2e-8)
         assert steps.reach == pytest.approx(factors[k, 0], abs=1e-12)  # A is det J's shoulder factor
-        # the course's formulas are ill-conditioned near a singularity (none of it shows in a readout to 0.1°): θ1 comes
-        # from a square root that is 0 at the shoulder's; θ6 and θ234 divide by s5, and c3 takes θ234's error; θ3 = ±acos(c3) turns by c3's error over |s3| (by its square
-        # root at s3 = 0), and θ2 by up to twenty times that, through atan2(a3 s3, a2 + a3 c3) with a2 + a3 c3 ≈ 41 mm
+        # the course's formulas are ill-conditioned near a singularity (none of it shows in a readout to 0.1°): θ1
+        # comes from a square root that is 0 at the shoulder's; θ6 and θ234 divide by s5, and c3 takes θ234's error;
+        # θ3 = ±acos(c3) turns by c3's error over |s3| (by its square root at s3 = 0), and θ2 by up to twenty times
+        # that, through atan2(a3 s3, a2 + a3 c3) with a2 + a3 c3 ≈ 41 mm
         wrist = 0.0 if steps.wrist_singular else 1e-15 / abs(math.sin(q[k, 4]))
         c3_error = 3e-15 + wrist
         elbow = min(c3_error / max(abs(math.sin(q[k, 2])), 1e-300), math.sqrt(2 * c3_error))
