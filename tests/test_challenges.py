@@ -275,6 +275,37 @@ def test_numbers_name_the_kind_of_mistake():
         C.check(position, COURSE, C.Answer(numbers=p[:2]))
 
 
+def test_both_shoulders_theta1_are_the_iks_and_their_mistakes_are_named():
+    """IK step 1 as numbers (docs §4.1): both θ1 against the IK's own slots (left: 1–4, right: 5–8) on the UR family;
+    angles equal a turn apart; the shoulders swapped, a sign and radians are named; another arm is refused in a file."""
+    challenge = by_title("IK step 1: both shoulders")
+    for arm in (COURSE, Arm.preset("ur10"), Arm.preset("ur10e")):
+        solution = arm.ik(arm.fk(challenge.joints))
+        expected = C.expected_numbers(challenge, arm)
+        for side in (0, 1):
+            shoulder = solution.q[4 * side: 4 * side + 4, 0][solution.valid[4 * side: 4 * side + 4]]
+            assert len(shoulder) and np.allclose(np.radians(expected[side]), shoulder, atol=1e-9)
+    left, right = C.expected_numbers(challenge, COURSE)
+    assert right == pytest.approx(30.0) and C.number_names(challenge, COURSE) == ("θ1 left", "θ1 right")
+    assert C.check(challenge, COURSE, C.Answer(numbers=[left + 360.0 + 1.0, right - 360.0])).solved  # within 1.8°
+    cases = {
+        "θ1 left and θ1 right swapped": [right, left],
+        "θ1 left has the wrong sign": [-left, right],
+        "θ1 right is in radians, not degrees": [left, math.radians(right)],
+        "θ1 left is off": [left + 5.0, right],
+    }
+    for group, typed in cases.items():
+        verdict = C.check(challenge, COURSE, C.Answer(numbers=typed))
+        assert not verdict.solved and verdict.group == group, (group, verdict.group)
+    assert verdict.message == "θ1 left is off (each within 1.8°)."
+    text = GOOD.replace('kind = "reach"', 'kind = "numbers"\nquantity = "theta1"').replace('branch = "wrist flipped"\n', "")
+    text = text.replace("position_tolerance_mm = 3", "relative_tolerance = 0.01")
+    with pytest.raises(ValueError, match="line 5: theta1 is a step of the UR family's IK"):
+        C.parse(text, source="class.toml")
+    numbers, _ = C.parse(text.replace('arm = "kr210"', 'arm = "ur10"'))
+    assert numbers.quantity == "theta1"
+
+
 # ---------------------------------------------------------------------- velocity
 
 

@@ -21,6 +21,7 @@ import numpy as np
 
 from .arm import PRESETS, Arm, factor_scales
 from .dh import DHTable
+from .solvers.ur import separation_steps
 from .workspace import heights_above_floor
 
 if sys.version_info >= (3, 11):
@@ -33,7 +34,12 @@ __all__ = ["KINDS", "QUANTITIES", "Answer", "Challenge", "Verdict", "builtin", "
 KINDS = ("reach", "singularity", "branch_count", "dh_table", "numbers", "velocity")
 #: What a "numbers" challenge asks for at its joints.
 QUANTITIES = {"position": "p of the tool frame (x, y, z in mm)", "det_j": "det J (lengths in metres)",
-              "torque": "the joint torques τ = Jᵀ [F; M] (N·m, N for a sliding joint)"}
+              "torque": "the joint torques τ = Jᵀ [F; M] (N·m, N for a sliding joint)",
+              "theta1": "both θ1 of the course's IK for this pose, shoulder left then right (°; the UR family's step 1)"}
+#: The UR family's quantities: its IK's own steps (docs/kinematics.md §4.1)
+UR_QUANTITIES = ("theta1",)
+#: Quantities that are angles (°): equal a turn apart, within the relative tolerance of 180°
+ANGLES = ("theta1",)
 MAX_CHALLENGES = 100
 MAX_FILE_BYTES = 100_000
 MAX_TEXT = 1000
@@ -129,6 +135,10 @@ _BUILTIN = (
     Challenge("Where is the flange?", "numbers", "ur10",
               "Compute p of T06 at q = (30°, 60°, −80°, 110°, 90°, 0°). Type x y z in mm (1 % tolerance).",
               joints=_deg(30, 60, -80, 110, 90, 0), quantity="position"),
+    Challenge("IK step 1: both shoulders", "numbers", "ur10",
+              "The tool is where q = (30°, 45°, 26°, 50°, 60°, 80°) puts it. Do step 1 of the IK: from P5 = p − d6·z6, "
+              "type **both θ1**, shoulder left then right, in degrees (within 1.8°).",
+              joints=_deg(30, 45, 26, 50, 60, 80), quantity="theta1"),
     Challenge("det J by hand", "numbers", "ur10",
               "Compute det J at q = (0°, −60°, 90°, −30°, 45°, 0°) from its factors, lengths in metres (1 %).",
               joints=_deg(0, -60, 90, -30, 45, 0), quantity="det_j"),
@@ -297,6 +307,9 @@ def _from_table(table: dict) -> Challenge:
     challenge = Challenge(**values)
     if challenge.quantity == "torque" and not any(challenge.force) and not any(challenge.moment):
         raise _FieldError("quantity", "a torque question needs force_n or moment_nm")
+    if challenge.quantity in UR_QUANTITIES and arm_name not in Arm.UR_PRESETS:
+        raise _FieldError("quantity", f"{challenge.quantity} is a step of the UR family's IK: arm must be one of "
+                                      f"{', '.join(Arm.UR_PRESETS)}, got {arm_name!r:.40}")
     if challenge.velocity is not None and not any(challenge.velocity):
         raise _FieldError("velocity_mm_s", "the asked velocity must not be zero")
     if kind == "singularity":  # a factor that is zero nowhere within the limits is a task nobody can do
@@ -611,6 +624,8 @@ def expected_numbers(challenge: Challenge, arm: Arm) -> np.ndarray:
         return 1000 * arm.fk(q)[:3, 3]
     if challenge.quantity == "det_j":
         return np.array([np.linalg.det(arm.jacobian(q))])
+    if challenge.quantity == "theta1":
+        return np.degrees(separation_steps(arm, q).theta1)
     return arm.static_torques(q, challenge.force, challenge.moment)
 
 
@@ -619,6 +634,8 @@ def number_names(challenge: Challenge, arm: Arm) -> tuple[str, ...]:
         return ("x", "y", "z")
     if challenge.quantity == "det_j":
         return ("det J",)
+    if challenge.quantity == "theta1":
+        return ("θ1 left", "θ1 right")
     return tuple(f"τ{k + 1}" for k in range(arm.n_joints))
 
 
@@ -629,24 +646,33 @@ def _check_numbers(challenge: Challenge, arm: Arm, answer: Answer) -> Verdict:
     if typed.shape != expected.shape:
         raise ValueError(f"type {len(expected)} number{'s' * (len(expected) != 1)} ({', '.join(names)}), got {typed.size}")
     text = " ".join(f"{v:.6g}" for v in typed)
-    # relative to each number, with a floor of the tolerance times the largest (a zero torque is within reach)
-    allowed = challenge.relative_tolerance * np.maximum(np.abs(expected), np.abs(expected).max() * 0.01)
-    wrong = np.abs(typed - expected) > allowed
+    angles = challenge.quantity in ANGLES
+    if angles:  # a turn more or less is the same angle; the tolerance is a share of a half-turn
+        allowed = np.full(expected.shape, 180.0 * challenge.relative_tolerance)
+    else:  # relative to each number, with a floor of the tolerance times the largest (a zero torque is within reach)
+        allowed = challenge.relative_tolerance * np.maximum(np.abs(expected), np.abs(expected).max() * 0.01)
+
+    def gap(a, b):
+        return abs((a - b + 180.0) % 360.0 - 180.0) if angles else abs(a - b)
+
+    wrong = gap(typed, expected) > allowed
     if not wrong.any():
         return Verdict(True, "Solved: every number is right.", "", text)
     kinds = []
     for k in np.flatnonzero(wrong):
-        if abs(typed[k] + expected[k]) <= allowed[k]:
+        if gap(typed[k], -expected[k]) <= allowed[k]:
             kinds.append("has the wrong sign")
-        elif abs(typed[k] - expected[k] / 1000) <= allowed[k] / 1000:
+        elif angles and abs(typed[k] - math.radians(expected[k])) <= math.radians(allowed[k]):
+            kinds.append("is in radians, not degrees")
+        elif not angles and abs(typed[k] - expected[k] / 1000) <= allowed[k] / 1000:
             kinds.append("is in metres, not mm" if challenge.quantity == "position" else "is 1000 times too small")
-        elif abs(typed[k] - 1000 * expected[k]) <= 1000 * allowed[k]:
+        elif not angles and abs(typed[k] - 1000 * expected[k]) <= 1000 * allowed[k]:
             kinds.append("is 1000 times too big")
         else:
             kinds.append("is off")
     off = [names[k] for k in np.flatnonzero(wrong)]
     swapped = [(names[i], names[j]) for i in np.flatnonzero(wrong) for j in np.flatnonzero(wrong)
-               if i < j and abs(typed[i] - expected[j]) <= allowed[j] and abs(typed[j] - expected[i]) <= allowed[i]]
+               if i < j and gap(typed[i], expected[j]) <= allowed[j] and gap(typed[j], expected[i]) <= allowed[i]]
     if swapped:
         group = f"{swapped[0][0]} and {swapped[0][1]} swapped"
     elif len(set(kinds)) == 1:
@@ -655,7 +681,8 @@ def _check_numbers(challenge: Challenge, arm: Arm, answer: Answer) -> Verdict:
         group = f"{len(off)} numbers off"
     details = "; ".join(f"{name} {kind}" for name, kind in zip(off, kinds))
     # a quantity's name keeps its case at the start (X or Τ1 would be another quantity)
-    return Verdict(False, f"{details} (each within {100 * challenge.relative_tolerance:g} %).", group, text)
+    within = f"{180 * challenge.relative_tolerance:g}°" if angles else f"{100 * challenge.relative_tolerance:g} %"
+    return Verdict(False, f"{details} (each within {within}).", group, text)
 
 
 def _check_velocity(challenge: Challenge, arm: Arm, answer: Answer) -> Verdict:
