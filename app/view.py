@@ -43,12 +43,18 @@ class View:
 
     ``close`` lets go of what the view holds in a scene shared with others (the browser
     has gone, or handed the arm over); ``remove`` also takes the view's own widgets out of
-    a browser that stays. A view lists its panel folders in ``folders``, and its charts in
-    ``charts`` (lecture mode sizes their axes).
+    a browser that stays. A view lists its panel folders in ``folders``, its charts in
+    ``charts`` (lecture mode sizes their axes), and in ``answers`` the kinds of class challenge
+    one of its buttons would answer: while one runs, ``hold_back`` takes those buttons away.
     """
 
     folders: tuple = ()
     charts: tuple = ()
+    answers: tuple = ()
+
+    def hold_back(self, reason: str | None) -> None:
+        """Take away the buttons that would answer the running class challenge, saying ``reason`` in their
+        place (viser's buttons cannot be disabled), or give them back (None)."""
 
     def render(self, snapshot: Snapshot) -> None:
         pass

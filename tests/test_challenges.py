@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+import re
 import textwrap
 
 import numpy as np
@@ -11,6 +12,7 @@ import pytest
 from ur10core import Arm
 from ur10core import challenges as C
 from ur10core.dh import DHTable
+from ur10core.three_dof import FOREARM, UPPER_ARM
 from ur10core.workspace import branch_count_map
 
 pytestmark = pytest.mark.core
@@ -322,6 +324,64 @@ def test_velocity_groups():
     turning = COURSE.joint_rates(q, [0, 0, 0.1, 0, 0, 0.1]).qdot
     verdict = C.check(task, COURSE, C.Answer(q=q, rates=turning))
     assert verdict.group == "tool turns" and "5.7 °/s" in verdict.message
+
+
+# ---------------------------------------------------------------------- largest torque
+
+
+@pytest.mark.parametrize("name, force, largest", [
+    # the desktop arm (y up): pushed sideways, the base holds it all, both links stretched across the force
+    ("three_dof", (20.0, 0.0, 0.0), 20.0 * (UPPER_ARM + FOREARM)),
+    ("three_dof", (0.0, 0.0, -7.0), 7.0 * (UPPER_ARM + FOREARM)),
+    # pushed down, the parallelogram decouples the links: F l5 cos θ2 and F l1 cos θ3, each largest level
+    ("three_dof", (0.0, -10.0, 0.0), 10.0 * math.hypot(UPPER_ARM, FOREARM)),
+    # the planar elbow, in its plane: τ1 = F (a1 s1 + a2 s12) and τ2 = F a2 s12, both largest across the force
+    ("planar_elbow", (3.0, -4.0, 0.0), None),
+])
+def test_the_largest_torque_is_the_closed_forms_and_no_sampled_pose_beats_it(name, force, largest):
+    arm = Arm.preset(name)
+    if largest is None:
+        a1, a2 = (row.a for row in arm.dh.rows)
+        largest = np.linalg.norm(force) * math.hypot(a1 + a2, a2)
+    text = " ".join(f"{v:g}" for v in force)
+    task = C.parse(f'[[challenge]]\ntitle = "t"\nkind = "largest_torque"\narm = "{name}"\nforce_n = [{text.replace(" ", ", ")}]\n')[0]
+    worst = C.worst_pose(task, arm)
+    assert worst.norm == pytest.approx(largest, rel=1e-9) and arm.within_limits(worst.q)
+    np.testing.assert_allclose(worst.torques, arm.static_torques(worst.q, force), atol=1e-12)
+    low, high = arm.limits.T
+    sampled = np.linalg.norm(arm.static_torques(np.random.default_rng(4).uniform(low, high, (50_000, arm.n_joints)), force), axis=-1)
+    assert sampled.max() <= worst.norm * (1 + 1e-12)
+    q, words = C.solution(task, arm)
+    assert np.array_equal(q, worst.q) and f"{largest:.2f} N·m" in words
+    assert C.check(task, arm, C.Answer(q=worst.q)).solved
+
+
+def test_the_heaviest_pose_groups_say_how_close():
+    task = by_title("Desktop arm: the heaviest pose")
+    arm = Arm.preset("three_dof")
+    assert task.is_pose and "20 N along +x" in task.text
+    verdicts = {q: C.check(task, arm, C.Answer(q=np.radians(q))) for q in
+                ((0, 0, 90), (30, 0, 120), (80, 0, 170), (-89, 2, 178), (95, 0, 0))}
+    assert verdicts[(0, 0, 90)].group == "under half the largest"  # only the upper arm is across it: 1.35 / 2.63
+    assert "49 % of the most" in verdicts[(0, 0, 90)].message
+    assert verdicts[(30, 0, 120)].group == "half to 90 % of the largest"
+    assert verdicts[(80, 0, 170)].group == "over 90 % of the largest"
+    assert verdicts[(-89, 2, 178)].solved  # within 1 %
+    assert verdicts[(95, 0, 0)].group == "beyond the joint ranges"
+    assert "‖τ‖ 52.56 N·m" in verdicts[(-89, 2, 178)].answer
+
+
+@pytest.mark.parametrize("table, words", [
+    ('arm = "ur10"\nforce_n = [0, 0, -10]', "at most 3 joints, all revolute (planar_elbow, three_dof), got 'ur10'"),
+    ('arm = "cylindrical"\nforce_n = [0, 0, -10]', "all revolute"),  # ‖τ‖ would add N·m to N
+    ('arm = "three_dof"\nforce_n = [0, 0, 0]', "must not be zero"),
+    ('arm = "planar_elbow"\nforce_n = [0, 0, 5]', "needs no torque in any pose"),  # along its joints' axes
+    ('arm = "three_dof"', "needs 'force_n'"),
+    ('arm = "three_dof"\nforce_n = [1, 0, 0]\njoints = [0, 0, 90]', "'joints' is not used by a largest_torque"),
+])
+def test_a_largest_torque_challenge_must_be_searchable_and_need_torque(table, words):
+    with pytest.raises(ValueError, match=re.escape(words)):
+        C.parse(f'[[challenge]]\ntitle = "t"\nkind = "largest_torque"\n{table}\n')
 
 
 # ---------------------------------------------------------------------- files

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import asyncio
+import itertools
 import math
 import re
 
@@ -19,6 +20,7 @@ from ur10teach.features.course_arms.editor import CONVENTIONS
 from ur10teach.features.joint_panel import display_text, rate_label, typed_label
 from ur10teach.serving.gate import address_of
 from ur10teach.serving.challenge_run import ChallengeRun, clean_nickname, spreadsheet_safe
+from ur10teach.serving.class_challenges import HELD_BACK
 from ur10dev.viser_client import ViserClient, messages
 
 from .server_support import become_presenter, drag_a_little, until, url
@@ -466,16 +468,66 @@ def test_a_singularity_challenge_is_not_answered_by_the_singularity_buttons(clas
         teacher, student, member = await a_student_in(classroom, "Elbow singularity", "127.0.0.8")
         buttons = member.session.singularities.demo
         await until(lambda: student.gui.get("Put the arm on the", {}).get("visible") is False
-                    and student.shown("are off while the class challenge asks you to find one"), what="the buttons off")
+                    and student.shown(HELD_BACK), what="the buttons off")
         q = member.session.state.q
         await student.send(messages.GuiUpdateMessage(buttons._impl.uuid, {"value": "elbow"}))
-        await until(lambda: sum("are off while the class challenge" in body for _, body in student.received.notifications) == 1,
-                    what="the refusal")
+        await until(lambda: sum(HELD_BACK in body for _, body in student.received.notifications) == 1, what="the refusal")
         assert np.array_equal(member.session.state.q, q) and member.session.state.last.cause != "singularity"
         await teacher.set_gui("End and show the solution", True)
         await until(lambda: student.gui.get("Put the arm on the", {}).get("visible") is True, what="the buttons back")
         await student.set_gui("Put the arm on the", "wrist")
         await until(lambda: member.session.state.last.cause == "singularity", what="the wrist button working again")
+        for client in (teacher, student):
+            await client.close()
+
+    asyncio.run(scenario())
+
+
+def test_the_desktop_arms_heaviest_pose_is_found_by_the_student_not_by_its_search(classroom):
+    """The course's statics exercise as a class challenge, on its own arm: while it runs, the desktop arm's search
+    and the Forces folder's ‖τ‖ map (each marks the answer) are taken away and a forged click is refused; the
+    student's ‖τ‖ is checked against the refined search, the projector counts how close each student came,
+    and the end puts every arm on the largest ‖τ‖ and gives the buttons back."""
+
+    room = classroom.classroom
+    room.challenges.clock = itertools.count(0.0, 10.0).__next__  # each check a while after the last: none is paced
+
+    async def scenario():
+        teacher, student, member = await a_student_in(classroom, "Desktop arm: the heaviest pose", "127.0.0.8")
+        session = member.session
+        assert session.arm.name == "three_dof"
+        search, mapped = session.lessons[2].search, session.statics.mapped
+        await until(lambda: student.gui.get("Find the pose that needs the largest ‖τ‖", {}).get("visible") is False
+                    and student.gui.get(mapped.label, {}).get("visible") is False
+                    and len(student.shown(HELD_BACK)) == 2, what="the search and the map off, saying why")
+        await until(lambda: student.shown("The force at the tool: (20, 0, 0) N, in the base frame."), what="the task's force")
+        q = session.state.q
+        await student.send(messages.GuiUpdateMessage(search._impl.uuid, {"value": True}))
+        await student.send(messages.GuiUpdateMessage(mapped._impl.uuid, {"value": True}))
+        await until(lambda: sum(HELD_BACK in body for _, body in student.received.notifications) == 2, what="both refused")
+        assert np.array_equal(session.state.q, q) and session.statics._map is None and not session.lessons[2]._map
+        assert mapped.value is False
+
+        async def check(degrees) -> None:
+            await until(lambda: student.gui.get(typed_label(session.arm), {}).get("value") == display_text(session.arm, session.state.q),
+                        what="the panel's joints up to date")
+            await student.set_gui(typed_label(session.arm), " ".join(str(v) for v in degrees))
+            await student.set_gui("Set these values", True)
+            await until(lambda: np.allclose(session.state.q, np.radians(degrees)), what="the typed joints")
+            attempts = member.student.attempts
+            await student.set_gui("Check my answer", True)
+            await until(lambda: member.student.attempts == attempts + 1, what="the check")
+
+        await check([0, 0, 90])  # forearm up: only the upper arm's 1.35 m is across the force
+        assert "under half the largest" in member.student.verdict.group
+        await until(lambda: any("under half the largest" in t for t in teacher.shown("### Desktop arm")), what="the group on the board")
+        await check([-90, 0, 180])  # stretched, turned across the force: the base holds 20 N × (l5 + l1)
+        assert member.student.solved_after is not None
+        await teacher.set_gui("End and show the solution", True)
+        worst, _ = C.solution(room.challenges.run.challenge, session.arm)
+        await until(lambda: np.allclose(session.state.q, worst) and student.gui.get(mapped.label, {}).get("visible") is True
+                    and student.gui.get("Find the pose that needs the largest ‖τ‖", {}).get("visible") is True,
+                    what="the arm on the answer, the buttons back")
         for client in (teacher, student):
             await client.close()
 

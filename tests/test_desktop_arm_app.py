@@ -111,6 +111,9 @@ def test_the_desktop_arm_is_picked_driven_played_and_searched(app):
         await client.set_gui("Find the pose that needs the largest ‖τ‖", True)
         await until(lambda: "Largest ‖τ‖" in session.lessons[2].result.content and "√" not in session.lessons[2].result.content,
                     what="the sideways search")
+        # the base holds it all, stretched across the force (docs §8.6): the refined search's pose, not a grid point near it
+        await until(lambda: np.linalg.norm(session.arm.static_torques(session.state.last.q, (10.0, 0.0, 0.0)))
+                    == pytest.approx(10.0 * (UPPER_ARM + FOREARM), rel=1e-9), what="the arm at the sideways worst pose")
 
         back = await pick(app, client, UR10)
         assert session.closed and not back.closed

@@ -8,7 +8,8 @@ import numpy as np
 import pytest
 
 from ur10core import Arm
-from ur10core.three_dof import FOREARM, UPPER_ARM, course_path, largest_torque
+from ur10core.specs import largest_torque
+from ur10core.three_dof import FOREARM, UPPER_ARM, course_path
 
 pytestmark = pytest.mark.core
 

@@ -22,6 +22,7 @@ import numpy as np
 from .arm import PRESETS, Arm, factor_scales
 from .dh import DHTable
 from .solvers.ur import separation_steps
+from .specs import GRID_JOINTS, WorstPose, largest_torque
 from .workspace import heights_above_floor
 
 if sys.version_info >= (3, 11):
@@ -31,7 +32,7 @@ else:  # pragma: no cover - Python 3.10
 
 __all__ = ["KINDS", "QUANTITIES", "Answer", "Challenge", "Verdict", "builtin", "check", "load", "parse", "solution"]
 
-KINDS = ("reach", "singularity", "branch_count", "dh_table", "numbers", "velocity")
+KINDS = ("reach", "singularity", "branch_count", "dh_table", "numbers", "velocity", "largest_torque")
 #: What a "numbers" challenge asks for at its joints.
 QUANTITIES = {"position": "p of the tool frame (x, y, z in mm)", "det_j": "det J (lengths in metres)",
               "torque": "the joint torques τ = Jᵀ [F; M] (N·m, N for a sliding joint)",
@@ -64,14 +65,14 @@ class Challenge:
     min_tool_height: float | None = None  #: singularity: the tool at least this far above the floor (m)
     count: int | None = None  #: branch_count: how many branches reach
     quantity: str | None = None  #: numbers: a key of :data:`QUANTITIES`
-    force: tuple[float, ...] = (0.0, 0.0, 0.0)  #: numbers, torque: the force at the tool (N), base frame
+    force: tuple[float, ...] = (0.0, 0.0, 0.0)  #: numbers, torque; largest_torque: the force at the tool (N), base frame
     moment: tuple[float, ...] = (0.0, 0.0, 0.0)  #: and the moment (N·m)
     velocity: tuple[float, ...] | None = None  #: velocity: the tool's asked velocity (m/s)
     still: bool = False  #: velocity: the tool must not turn as it moves
     position_tolerance: float = 0.005  #: m
     orientation_tolerance: float = math.radians(2.0)
     factor_tolerance: float = 0.01  #: singularity: |factor| as a share of its typical size (``factor_scales``)
-    relative_tolerance: float = 0.01  #: numbers
+    relative_tolerance: float = 0.01  #: numbers; largest_torque: how far below the largest ‖τ‖ still solves
     velocity_tolerance: float = 0.005  #: m/s
     time_limit: float | None = None  #: s
 
@@ -82,7 +83,7 @@ class Challenge:
     @property
     def is_pose(self) -> bool:
         """Its answer is where the arm is: the projector draws every student's tool, and the end moves the arm."""
-        return self.kind in ("reach", "singularity", "branch_count")
+        return self.kind in ("reach", "singularity", "branch_count", "largest_torque")
 
 
 @dataclasses.dataclass(frozen=True)
@@ -161,6 +162,10 @@ _BUILTIN = (
     Challenge("Cylindrical arm + wrist: its DH table", "dh_table", "cylindrical_wrist",
               "Type the DH table of the cylindrical arm with a spherical wrist (either convention): its forward "
               "kinematics must match the arm's."),
+    Challenge("Desktop arm: the heaviest pose", "largest_torque", "three_dof",
+              "The course's statics exercise: the desktop arm's tool pushes with **20 N along +x**. Move the joints, "
+              "within their ranges, to the pose where holding it needs the **largest ‖τ‖ = ‖J_vᵀ F‖** (within 1 %). "
+              "*Forces and gravity* shows τ for 20 N, +x.", force=(20.0, 0.0, 0.0)),
 )
 
 
@@ -188,7 +193,7 @@ def parse(text: str, source: str = "challenges") -> tuple[Challenge, ...]:
     >>> parse('[[challenge]]\\ntitle = "Up"\\nkind = "velocty"')
     Traceback (most recent call last):
     ...
-    ValueError: challenges, line 3: kind must be one of reach, singularity, branch_count, dh_table, numbers, velocity, got 'velocty'
+    ValueError: challenges, line 3: kind must be one of reach, singularity, branch_count, dh_table, numbers, velocity, largest_torque, got 'velocty'
     """
     try:
         document = tomllib.loads(text)
@@ -245,7 +250,8 @@ _NEEDS = {"reach": ({"joints"}, {"branch", "position_tolerance_mm", "orientation
           "branch_count": ({"count"}, {"joints", "orientation_tolerance_deg"}),
           "dh_table": (set(), {"position_tolerance_mm"}),
           "numbers": ({"joints", "quantity"}, {"force_n", "moment_nm", "relative_tolerance"}),
-          "velocity": ({"velocity_mm_s"}, {"still", "velocity_tolerance_mm_s"})}
+          "velocity": ({"velocity_mm_s"}, {"still", "velocity_tolerance_mm_s"}),
+          "largest_torque": ({"force_n"}, {"relative_tolerance"})}
 _COMMON = {"title", "kind", "arm", "text", "time_limit_s"}
 
 
@@ -317,6 +323,16 @@ def _from_table(table: dict) -> Challenge:
             singular_pose(arm, challenge.factor, challenge.min_tool_height)
         except ValueError as error:
             raise _FieldError("factor", str(error)) from None
+    if kind == "largest_torque":
+        if not _searchable(arm):
+            raise _FieldError("arm", f"a largest_torque challenge searches every joint's range, so its arm has at most "
+                                     f"{GRID_JOINTS} joints, all revolute ({', '.join(n for n in PRESETS if _searchable(Arm.preset(n)))}), "
+                                     f"got {arm_name!r}")
+        if not any(challenge.force):
+            raise _FieldError("force_n", "the force must not be zero")
+        if worst_pose(challenge, arm).norm < 1e-6 * float(np.linalg.norm(challenge.force)):
+            raise _FieldError("force_n", f"this force needs no torque in any pose of the {arm_name} arm: it pushes along "
+                                         "what the joints cannot move")
     if kind == "branch_count":  # so is a count no target has
         try:
             _count_pose(challenge, arm)
@@ -711,8 +727,40 @@ def _check_velocity(challenge: Challenge, arm: Arm, answer: Answer) -> Verdict:
     return Verdict(True, f"Solved: your tool moves at ({shown}) mm/s.", "", text)
 
 
+def _searchable(arm: Arm) -> bool:
+    """Whether :func:`largest_torque` searches the arm exactly, in one unit: a few revolute joints."""
+    return arm.n_joints <= GRID_JOINTS and set(arm.joint_types) == {"R"}
+
+
+@functools.lru_cache(maxsize=16)
+def worst_pose(challenge: Challenge, arm: Arm) -> WorstPose:
+    """Where a largest_torque challenge's force needs the most torque (a grid search, refined: once per challenge)."""
+    return largest_torque(arm, challenge.force)
+
+
+#: A largest_torque answer's groups on the projector: (its share of the largest ‖τ‖ at least this, the group)
+TORQUE_SHARES = ((0.9, "over 90 % of the largest"), (0.5, "half to 90 % of the largest"), (0.0, "under half the largest"))
+
+
+def _check_largest_torque(challenge: Challenge, arm: Arm, answer: Answer) -> Verdict:
+    q = np.asarray(_needs(answer.q, "joints"), dtype=float)
+    text = _joints_text(arm, q)
+    if not arm.within_limits(q):
+        return Verdict(False, "Your joints are beyond the arm's ranges: the task keeps to them.", "beyond the joint ranges", text)
+    worst = worst_pose(challenge, arm)
+    norm = float(np.linalg.norm(arm.static_torques(q, challenge.force)))
+    share = norm / worst.norm
+    text += f": ‖τ‖ {norm:.4g} N·m"
+    if share >= 1.0 - challenge.relative_tolerance:
+        return Verdict(True, f"Solved: here ‖τ‖ = {norm:.2f} N·m, the most this force can need.", "", text)
+    group = next(words for least, words in TORQUE_SHARES if share >= least)
+    return Verdict(False, f"Here ‖τ‖ = {norm:.2f} N·m: {100 * share:.0f} % of the most this force can need. Not yet "
+                   f"(within {100 * challenge.relative_tolerance:g} %).", group, text)
+
+
 _CHECKS = {"reach": _check_reach, "singularity": _check_singularity, "branch_count": _check_branch_count,
-           "dh_table": _check_dh_table, "numbers": _check_numbers, "velocity": _check_velocity}
+           "dh_table": _check_dh_table, "numbers": _check_numbers, "velocity": _check_velocity,
+           "largest_torque": _check_largest_torque}
 
 
 # ---------------------------------------------------------------------- solutions
@@ -739,6 +787,9 @@ def solution(challenge: Challenge, arm: Arm, q_current=None) -> tuple[np.ndarray
     if challenge.kind == "branch_count":
         q = np.array(_count_pose(challenge, arm))
         return q, f"One answer: the target at {', '.join(f'{1000 * v:.0f}' for v in arm.fk(q)[:3, 3])} mm."
+    if challenge.kind == "largest_torque":
+        worst = worst_pose(challenge, arm)
+        return worst.q, f"The largest: ‖τ‖ = {worst.norm:.2f} N·m at joints {_joints_text(arm, worst.q)}."
     if challenge.kind == "dh_table":
         line_break = "  \n"  # markdown's
         return None, f"The arm's table ({arm.dh.convention} convention, a α d θ type):{line_break}{_rows_text(arm.dh, line_break)}"

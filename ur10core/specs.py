@@ -24,6 +24,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from ._validate import as_float_array, check_finite
+
 
 @dataclass(frozen=True)
 class ArmSpecs:
@@ -128,3 +130,70 @@ def torque_map(arm, force, n: int = 20_000, seed: int = 3) -> tuple[np.ndarray, 
     points, _, q = arm.sample_workspace(n, seed=seed, return_joints=True)
     norms = np.linalg.norm(arm.static_torques(q, force), axis=-1)
     return points, norms, int(np.argmax(norms))
+
+
+#: The most joints :func:`torque_grid` spans (``steps ** n`` poses).
+GRID_JOINTS = 3
+
+
+@dataclass(frozen=True)
+class WorstPose:
+    """Where in the joint ranges a tool force needs the largest joint torques (docs/kinematics.md §8.6)."""
+
+    q: np.ndarray  #: (n,) the joints there
+    torques: np.ndarray  #: (n,) τ = J_vᵀ F there (N·m)
+    norm: float  #: ‖τ‖ there
+    samples: int  #: joint vectors searched
+
+
+def torque_grid(arm, force, steps: int = 41) -> tuple[np.ndarray, np.ndarray]:
+    """(q (steps**n, n), ‖J_vᵀ F‖ at each (steps**n,)) on a grid of ``steps`` values per joint over ``arm.limits``.
+
+    For an arm of at most :data:`GRID_JOINTS` joints. ``force`` (3,) is in N, in the base
+    frame. The tool positions, for drawing the map the course draws over the workspace, are
+    ``arm.fk(q)[..., :3, 3]``.
+    """
+    force = as_float_array(force, "force")
+    if force.shape != (3,):
+        raise ValueError(f"force must be three numbers (N), got shape {force.shape}")
+    check_finite(force, "force")
+    if not 2 <= steps <= 201:
+        raise ValueError(f"steps must be from 2 to 201, got {steps}")
+    if arm.n_joints > GRID_JOINTS:
+        raise ValueError(f"a grid over every joint is for an arm of at most {GRID_JOINTS} joints; "
+                         f"the {arm.name} arm has {arm.n_joints}")
+    axes = [np.linspace(low, high, steps) for low, high in arm.limits]
+    q = np.stack(np.meshgrid(*axes, indexing="ij"), axis=-1).reshape(-1, arm.n_joints)
+    return q, np.linalg.norm(arm.static_torques(q, force), axis=-1)
+
+
+def largest_torque(arm, force, steps: int = 41, grid=None, refinements: int = 6) -> WorstPose:
+    """The largest ‖J_vᵀ F‖ over the joint ranges: the best of :func:`torque_grid`, then refined.
+
+    The course's statics exercise (docs/kinematics.md §8.6): which configuration needs the
+    most torque to hold ``force`` (N, base frame) at the tool. Each refinement searches 11
+    values per joint across one step of the last grid either side of its best (within the
+    limits), a fifth of that step apart: six leave the pose within 5⁻⁶ of a first step
+    (on the desktop arm's 41-value grid, 0.0003°), and ‖τ‖, flat at its largest, within
+    about 1e-12 of it. ``grid``: :func:`torque_grid`'s result, where the caller has it.
+
+    Example: pushing sideways, the desktop arm's base holds the most, stretched across the force.
+
+    >>> from ur10core import Arm
+    >>> from ur10core.three_dof import FOREARM, UPPER_ARM
+    >>> arm = Arm.preset("three_dof")
+    >>> worst = largest_torque(arm, [10.0, 0.0, 0.0])
+    >>> round(worst.norm, 6) == round(10 * (UPPER_ARM + FOREARM), 6), np.degrees(np.abs(worst.q)).round(2).tolist()
+    (True, [90.0, 0.0, 180.0])
+    """
+    q, norms = torque_grid(arm, force, steps) if grid is None else grid
+    best, samples = q[int(np.argmax(norms))], len(q)
+    low, high = arm.limits.T
+    step = (high - low) / (steps - 1)
+    for _ in range(refinements):
+        axes = [np.linspace(max(lo, c - h), min(hi, c + h), 11) for c, h, lo, hi in zip(best, step, low, high)]
+        near = np.concatenate([[best], np.stack(np.meshgrid(*axes, indexing="ij"), axis=-1).reshape(-1, arm.n_joints)])
+        best = near[int(np.argmax(np.linalg.norm(arm.static_torques(near, force), axis=-1)))]
+        samples, step = samples + len(near), step / 5
+    torques = arm.static_torques(best, force)
+    return WorstPose(best, torques, float(np.linalg.norm(torques)), samples)

@@ -1,5 +1,5 @@
-"""The course's 3-DOF desktop arm: its position map, its Jacobian, and the course's two exercises
-with it (docs/kinematics.md §8.6).
+"""The course's 3-DOF desktop arm: its position map, its Jacobian, and the course's joint path
+(docs/kinematics.md §8.6); its statics exercise is ``specs.largest_torque``.
 
 Joint 3 drives the forearm through a parallelogram, so θ3 is the forearm's *absolute* angle,
 not its angle to the upper arm. The base frame has **y vertical**. The tool position is
@@ -206,42 +206,3 @@ def course_path(t) -> tuple[np.ndarray, np.ndarray]:
     rates = np.array([math.pi / 6, math.pi / 6, math.pi / 8])
     q = np.array([0.0, 0.0, 3 * math.pi / 4]) + np.sin(t)[..., None] * rates
     return q, np.cos(t)[..., None] * rates
-
-
-@dataclass(frozen=True)
-class WorstPose:
-    """Where in the joint ranges a tool force needs the largest joint torques (docs/kinematics.md §8.6)."""
-
-    q: np.ndarray  #: (3,) the joints there
-    torques: np.ndarray  #: (3,) τ = J_vᵀ F there (N·m)
-    norm: float  #: ‖τ‖ there
-    samples: int  #: joint vectors searched
-
-
-def torque_grid(arm: "Arm", force, steps: int = 41) -> tuple[np.ndarray, np.ndarray]:
-    """(q (steps³, 3), ‖J_vᵀ F‖ at each (steps³,)) on a grid of ``steps`` values per joint over ``arm.limits``.
-
-    ``force`` (3,) is in N, in the base frame. The tool positions, for drawing the map the
-    course draws over the workspace, are ``arm.fk(q)[..., :3, 3]``.
-    """
-    force = as_float_array(force, "force")
-    if force.shape != (3,):
-        raise ValueError(f"force must be three numbers (N), got shape {force.shape}")
-    check_finite(force, "force")
-    if not 2 <= steps <= 201:
-        raise ValueError(f"steps must be from 2 to 201, got {steps}")
-    axes = [np.linspace(low, high, steps) for low, high in arm.limits]
-    q = np.stack(np.meshgrid(*axes, indexing="ij"), axis=-1).reshape(-1, 3)
-    return q, np.linalg.norm(arm.static_torques(q, force), axis=-1)
-
-
-def largest_torque(arm: "Arm", force, steps: int = 41) -> WorstPose:
-    """Search :func:`torque_grid` for the largest ‖J_vᵀ F‖.
-
-    The course's statics exercise: which configuration needs the most torque to hold
-    ``force`` (N, base frame) at the tool. A grid, not an optimiser: the answer is easy to
-    check and to draw over the workspace.
-    """
-    q, norms = torque_grid(arm, force, steps)
-    worst = int(np.argmax(norms))
-    return WorstPose(q[worst], arm.static_torques(q[worst], force), float(norms[worst]), len(q))

@@ -44,6 +44,8 @@ def challenge_markdown(challenge: Challenge, time_limit: float | None = None) ->
         lines.append(f"Time limit: {time_limit / 60:g} min.")
     if challenge.kind == "numbers":
         lines.append(f"Asked: {QUANTITIES[challenge.quantity]}.")
+    if challenge.kind == "largest_torque":
+        lines.append(f"The force at the tool: ({', '.join(f'{v:g}' for v in challenge.force)}) N, in the base frame.")
     return "\n\n".join(lines)
 
 

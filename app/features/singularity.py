@@ -305,6 +305,8 @@ class Singularities(View):
     ``overlay`` is the drawing's 3D part (``enabled``, ``set_enabled``), None where it draws none.
     """
 
+    answers = ("singularity",)
+
     def __init__(self, gui: viser.GuiApi, overlay, session: Session) -> None:
         self._session = session
         self._overlay = overlay
@@ -351,8 +353,6 @@ class Singularities(View):
         self._session.redraw()
 
     def hold_back(self, reason: str | None) -> None:
-        """Take the buttons away, saying ``reason`` in their place (a class challenge asks the student to find a
-        singularity; viser's button groups cannot be disabled), or give them back (None)."""
         self.held_back.content, self.held_back.visible = reason or "", reason is not None
         if self.demo is not None:
             self.demo.visible = reason is None

@@ -20,7 +20,7 @@ import viser
 from ur10core.dynamics import MASSES
 from ur10core.specs import torque_map
 
-from ..feedback import chosen, within
+from ..feedback import chosen, put_back, within
 from ..serving.workers import HEAVY, FoldedRuns
 from ..state import Snapshot
 from ..style import DANGER_RED, SAFE_GREEN, blend, hex_color, number
@@ -102,6 +102,8 @@ class StaticsView(View):
     arrow, the handle's distance and the map's marker (the UR10's drawing is for 1 m).
     """
 
+    answers = ("largest_torque",)  # the map marks the pose that needs the most
+
     def __init__(self, scene: viser.SceneApi, gui: viser.GuiApi, session: Session, root: str = "/statics",
                  size: float = 1.0) -> None:
         self._session = session
@@ -124,6 +126,7 @@ class StaticsView(View):
             self.mapped = gui.add_checkbox("Colour the workspace by ‖τ‖ for this force", False,
                                            hint=f"{TORQUE_MAP_POINTS:,} random joint vectors; the worst one is marked")
             self.map_legend = gui.add_markdown("", visible=False)
+            self.held_back = gui.add_markdown("", visible=False)  #: why the map is off (a class challenge)
         self._metres_per_n = ARROW_METRES_PER_N * size
         self.arrow = scene.add_arrows(f"{root}/force", np.zeros((1, 2, 3)), FORCE_COLOR, shaft_radius=0.012 * size,
                                       head_radius=0.03 * size, head_length=0.05 * size, visible=False)
@@ -245,9 +248,18 @@ class StaticsView(View):
             arm = self._session.arm
             self.bars.content = bars_html(force_torques, gravity, arm.specs.torque_ratings, arm.joint_names, arm.joint_types)
 
+    def hold_back(self, reason: str | None) -> None:
+        self.held_back.content, self.held_back.visible = reason or "", reason is not None
+        self.mapped.visible = reason is None
+        if reason is not None and self.mapped.value:
+            self.mapped.value = False  # its callback takes the map away
+
     def _draw_map(self) -> None:
         session = self._session
         shown = None
+        if self.mapped.value and self.held_back.visible:  # a click a browser cannot send while it is off
+            put_back(self.mapped, False)
+            raise ValueError(self.held_back.content)
         if self.mapped.value and not session.closed:
             force = self.fixed_force()
             shown = force, HEAVY.run(session.client, lambda: torque_map(session.arm, force, TORQUE_MAP_POINTS), cancelled=lambda: session.closed)
@@ -255,6 +267,8 @@ class StaticsView(View):
             if session.closed:
                 return
             self._clear_map()
+            if self.held_back.visible:  # a class challenge began while it was drawn
+                shown = None
             self.map_legend.visible = shown is not None
             camera = session.camera
             if shown is None:

@@ -30,9 +30,8 @@ if TYPE_CHECKING:
 
 log = logging.getLogger(__name__)
 
-#: What a student's Singularities folder says while a singularity challenge runs, in place of its buttons.
-HELD_BACK = ("The buttons that put the arm on a singularity are off while the class challenge asks you to find one: "
-             "they are back when the challenge ends.")
+#: What a folder says in place of the buttons that would answer the running challenge (``View.hold_back``).
+HELD_BACK = "Off while the class challenge asks you to find this yourself: back when it ends."
 
 
 class ClassChallenges:
@@ -123,8 +122,9 @@ class ClassChallenges:
         run, student, session = self.run, member.student, member.session
         if run is None or run.ended or student is None or session is None or session.arm != run.arm:
             return
-        if run.challenge.kind == "singularity":  # one click would answer it
-            session.singularities.hold_back(HELD_BACK)
+        for view in session.panel_views:  # one click would answer it
+            if run.challenge.kind in view.answers:
+                view.hold_back(HELD_BACK)
         kept = student.kept
         if "q" in kept:
             session.apply(lambda state: state.set_joints(kept["q"], cause="typed"))
@@ -202,7 +202,8 @@ class ClassChallenges:
             q, words = solution(challenge, arm, session.state.q) if own and challenge.kind == "velocity" else common
             try:
                 if own:
-                    session.singularities.hold_back(None)
+                    for view in session.panel_views:
+                        view.hold_back(None)
                 if own and q is not None:
                     session.apply(lambda state: state.set_joints(q, cause="typed"))
                 if other.card is not None:

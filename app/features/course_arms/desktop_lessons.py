@@ -10,7 +10,8 @@ import numpy as np
 import viser
 import viser.uplot
 
-from ur10core.three_dof import course_path, torque_grid
+from ur10core.specs import largest_torque, torque_grid
+from ur10core.three_dof import course_path
 
 from ...serving.workers import HEAVY, FoldedRuns
 from ...state import Snapshot
@@ -113,6 +114,8 @@ class StaticsExercise(View):
     """The course's statics exercise: for the force of the "Forces and gravity" folder, the pose in the joint
     ranges that needs the largest ‖τ‖ = ‖J_vᵀ F‖, over a grid of them, the arm put there."""
 
+    answers = ("largest_torque",)
+
     def __init__(self, scene: viser.SceneApi, gui: viser.GuiApi, session: Session) -> None:
         self._session = session
         self._scene = scene
@@ -130,22 +133,36 @@ class StaticsExercise(View):
         self._searches = FoldedRuns(self._search)
         self.search.on_click(session.guard(lambda _: self._searches.start("torque-search", session.guard)))
 
+    def hold_back(self, reason: str | None) -> None:
+        self.search.visible = reason is None
+        self.result.content = reason or ""
+        if reason is not None:
+            with self._map_lock:
+                self._clear()
+
     def _search(self) -> None:
         session = self._session
+        if not self.search.visible:  # a click a browser cannot send while it is off
+            raise ValueError(self.result.content)
         arm, force = session.arm, session.statics.fixed_force()
         if not force.any():
             raise ValueError("set a force first: with none, no pose needs any torque")
-        q, norms = HEAVY.run(session.client, lambda: torque_grid(arm, force, GRID_STEPS), cancelled=lambda: session.closed)
-        worst = int(np.argmax(norms))
+
+        def search():
+            grid = torque_grid(arm, force, GRID_STEPS)
+            return grid, largest_torque(arm, force, GRID_STEPS, grid=grid)
+
+        (q, norms), worst = HEAVY.run(session.client, search, cancelled=lambda: session.closed)
         points = arm.fk(q)[:, :3, 3]
         with self._map_lock:
-            if session.closed:
+            if session.closed or not self.search.visible:  # gone, or a class challenge began meanwhile
                 return
             self._clear()
-            top = float(norms[worst]) or 1.0
+            top = worst.norm or 1.0
             cloud = self._scene.add_point_cloud(f"{self._root}/torque_map", points.astype(np.float32), colormap(norms, top),
                                                 point_size=0.025, point_shape="circle")
-            marker = self._scene.add_icosphere(f"{self._root}/worst", radius=0.08, color=DANGER_RED, position=points[worst])
+            marker = self._scene.add_icosphere(f"{self._root}/worst", radius=0.08, color=DANGER_RED,
+                                               position=arm.fk(worst.q)[:3, 3])
             # raised on a red stalk: at the ball it sat on the base frame's and the joints' labels
             rise = np.array([[[0.0, 0.0, 0.0], [0.0, WORST_LABEL_RISE, 0.0]]], np.float32)
             self._scene.add_line_segments(f"{self._root}/worst/stalk", rise, DANGER_RED, thickness=0.015)
@@ -154,16 +171,16 @@ class StaticsExercise(View):
             self._map = (cloud, marker, label)
         session.refresher.request(session)  # its label sized for lecture mode, and kept clear of
         self.result.content = (
-            f"Largest ‖τ‖ = **{norms[worst]:.2f} N·m** for {np.linalg.norm(force):.0f} N, at θ = ("
-            + ", ".join(number(v, ".0f") for v in np.degrees(q[worst])) + f")° (red ball), of {len(q):,} poses "
-            "coloured from 0 (purple) to it (yellow).")
+            f"Largest ‖τ‖ = **{worst.norm:.2f} N·m** for {np.linalg.norm(force):.0f} N, at θ = ("
+            + ", ".join(number(v, ".1f") for v in np.degrees(worst.q)) + f")° (red ball), from {len(q):,} poses "
+            "coloured from 0 (purple) to it (yellow), and a finer search around the largest.")
         if not force[[0, 2]].any():  # vertical: the course's closed form to check the search against
             self.result.content += (
                 " For a vertical force the parallelogram decouples the links: joint 2 holds F l5 cos θ2 and "
                 "joint 3 F l1 cos θ3, so the worst pose has both links level, "
                 f"‖τ‖ = F √(l5² + l1²) = {np.linalg.norm(force) * math.hypot(arm.upper_arm, arm.forearm):.2f} N·m.")
         session.stop_lessons()
-        session.apply(lambda state: state.set_joints(q[worst]))
+        session.apply(lambda state: state.set_joints(worst.q))
 
     def obstacles(self) -> list[tuple]:
         """The largest ‖τ‖'s label, on its stalk over the red ball."""
