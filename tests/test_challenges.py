@@ -308,6 +308,52 @@ def test_both_shoulders_theta1_are_the_iks_and_their_mistakes_are_named():
     assert numbers.quantity == "theta1"
 
 
+def meeting_point(z: np.ndarray, o: np.ndarray) -> np.ndarray:
+    """The point nearest every line through o_k along z_k (k rows), by least squares: Σ (I − z zᵀ)(x − o) = 0."""
+    projections = np.eye(3) - z[:, :, None] * z[:, None, :]
+    return np.linalg.solve(projections.sum(axis=0), np.einsum("kij,kj->i", projections, o))
+
+
+@pytest.mark.parametrize("name", ["kr210", "elbow", "stanford", "cylindrical_wrist"])
+def test_the_wrist_centre_is_where_the_wrist_axes_meet_and_its_slips_are_named(name):
+    """Decoupling's step 1 as numbers (docs §7.3): WC against the point where the last three joint axes meet, found
+    from the DH frames alone; the tool's p and the offset taken the wrong way are named; an arm without a
+    spherical wrist is refused in a file, with why."""
+    arm = Arm.preset(name)
+    for q in arm.sample_joints(20, seed=8):
+        text = ", ".join(f"{v:.9f}" for v in np.where(arm.revolute, np.degrees(q), 1000 * q))
+        challenge = C.parse(f'[[challenge]]\ntitle = "t"\nkind = "numbers"\narm = "{name}"\njoints = [{text}]\n'
+                            'quantity = "wrist_centre"\n')[0]
+        z, o = arm.dh.joint_axes(arm.dh.frames(challenge.joints))
+        centre = meeting_point(z[-3:], o[-3:])
+        assert np.linalg.norm(np.cross(centre - o[-3:], z[-3:]), axis=-1).max() < 1e-9  # on all three axes
+        np.testing.assert_allclose(C.expected_numbers(challenge, arm), 1000 * centre, atol=1e-6)
+    assert C.number_names(challenge, arm) == ("x", "y", "z")
+    T, wc = arm.fk(challenge.joints), C.expected_numbers(challenge, arm)
+    if np.linalg.norm(1000 * T[:3, 3] - wc) > 50:  # a tool beyond the wrist centre
+        slips = {"p of the tool, not WC": 1000 * T[:3, 3], "the tool's offset taken the wrong way": 2000 * T[:3, 3] - wc}
+        for group, typed in slips.items():
+            verdict = C.check(challenge, arm, C.Answer(numbers=typed))
+            assert not verdict.solved and verdict.group == group, (group, verdict)
+
+
+def test_the_kr210s_wrist_centre_is_303_mm_back_along_the_gripper():
+    challenge = by_title("KR210: where is the wrist centre?")
+    arm = Arm.preset("kr210")
+    T = arm.fk(challenge.joints)
+    wc = C.expected_numbers(challenge, arm)
+    np.testing.assert_allclose(wc, 1000 * (T[:3, 3] - 0.303 * T[:3, 2]), atol=1e-9)  # the course's WC = p − 0.303 z
+    verdict = C.check(challenge, arm, C.Answer(numbers=1000 * T[:3, 3]))
+    assert verdict.message == "That is p, where the tool is: WC is 303 mm back along the tool's z."
+    assert C.check(challenge, arm, C.Answer(numbers=wc / 1000)).group == "x, y, z are in metres, not mm"
+    for other in ("ur10", "scara"):
+        text = f'[[challenge]]\ntitle = "t"\nkind = "numbers"\narm = "{other}"\njoints = [0, 0, 0, 0]\nquantity = "wrist_centre"\n'
+        if other == "ur10":
+            text = text.replace("[0, 0, 0, 0]", "[0, 0, 0, 0, 0, 0]")
+        with pytest.raises(ValueError, match="line 6: wrist_centre is a step of decoupling, and the .* arm has no spherical wrist"):
+            C.parse(text)
+
+
 # ---------------------------------------------------------------------- velocity
 
 

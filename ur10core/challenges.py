@@ -21,6 +21,7 @@ import numpy as np
 
 from .arm import PRESETS, Arm, factor_scales
 from .dh import DHTable
+from .solvers.spherical_wrist import spherical_wrist, wrist_split
 from .solvers.ur import separation_steps
 from .specs import GRID_JOINTS, WorstPose, largest_torque
 from .workspace import heights_above_floor
@@ -36,9 +37,15 @@ KINDS = ("reach", "singularity", "branch_count", "dh_table", "numbers", "velocit
 #: What a "numbers" challenge asks for at its joints.
 QUANTITIES = {"position": "p of the tool frame (x, y, z in mm)", "det_j": "det J (lengths in metres)",
               "torque": "the joint torques τ = Jᵀ [F; M] (N·m, N for a sliding joint)",
-              "theta1": "both θ1 of the course's IK for this pose, shoulder left then right (°; the UR family's step 1)"}
+              "theta1": "both θ1 of the course's IK for this pose, shoulder left then right (°; the UR family's step 1)",
+              "wrist_centre": "WC, where the wrist's three axes meet (x, y, z in mm; decoupling's step 1 on an arm "
+                              "with a spherical wrist)"}
 #: The UR family's quantities: its IK's own steps (docs/kinematics.md §4.1)
 UR_QUANTITIES = ("theta1",)
+#: Quantities of an arm with a spherical wrist (docs/kinematics.md §7.3)
+WRIST_QUANTITIES = ("wrist_centre",)
+#: Quantities that are a point in the base frame (mm): typed in metres is a named mistake
+POINTS = ("position", "wrist_centre")
 #: Quantities that are angles (°): equal a turn apart, within the relative tolerance of 180°
 ANGLES = ("theta1",)
 MAX_CHALLENGES = 100
@@ -155,6 +162,10 @@ _BUILTIN = (
     Challenge("KR210: reach with the wrist flipped", "reach", "kr210",
               "Put the KR210's tool on the target **with the wrist flipped**. Within 5 mm and 2°.",
               joints=_deg(10, 20, -30, 40, 50, 60), branch="wrist flipped"),
+    Challenge("KR210: where is the wrist centre?", "numbers", "kr210",
+              "Step 1 of the KR210's IK, kinematic decoupling: at q = (30°, 10°, −20°, 60°, 45°, 90°), where do its "
+              "wrist's three axes meet? WC = p − 303 mm · z of the gripper frame. Type x y z in mm (1 %).",
+              joints=_deg(30, 10, -20, 60, 45, 90), quantity="wrist_centre"),
     Challenge("Stanford arm's DH table", "dh_table", "stanford",
               "Type the Stanford arm's DH table (either convention): its forward kinematics must match the arm's."),
     Challenge("SCARA: one branch only", "branch_count", "scara",
@@ -316,6 +327,11 @@ def _from_table(table: dict) -> Challenge:
     if challenge.quantity in UR_QUANTITIES and arm_name not in Arm.UR_PRESETS:
         raise _FieldError("quantity", f"{challenge.quantity} is a step of the UR family's IK: arm must be one of "
                                       f"{', '.join(Arm.UR_PRESETS)}, got {arm_name!r:.40}")
+    if challenge.quantity in WRIST_QUANTITIES:
+        try:
+            spherical_wrist(arm)
+        except ValueError as why:
+            raise _FieldError("quantity", f"{challenge.quantity} is a step of decoupling, and the {arm_name} arm has {why}") from None
     if challenge.velocity is not None and not any(challenge.velocity):
         raise _FieldError("velocity_mm_s", "the asked velocity must not be zero")
     if kind == "singularity":  # a factor that is zero nowhere within the limits is a task nobody can do
@@ -638,6 +654,8 @@ def expected_numbers(challenge: Challenge, arm: Arm) -> np.ndarray:
     q = np.array(challenge.joints)
     if challenge.quantity == "position":
         return 1000 * arm.fk(q)[:3, 3]
+    if challenge.quantity == "wrist_centre":
+        return 1000 * wrist_split(arm, q).centre
     if challenge.quantity == "det_j":
         return np.array([np.linalg.det(arm.jacobian(q))])
     if challenge.quantity == "theta1":
@@ -646,13 +664,27 @@ def expected_numbers(challenge: Challenge, arm: Arm) -> np.ndarray:
 
 
 def number_names(challenge: Challenge, arm: Arm) -> tuple[str, ...]:
-    if challenge.quantity == "position":
+    if challenge.quantity in POINTS:
         return ("x", "y", "z")
     if challenge.quantity == "det_j":
         return ("det J",)
     if challenge.quantity == "theta1":
         return ("θ1 left", "θ1 right")
     return tuple(f"τ{k + 1}" for k in range(arm.n_joints))
+
+
+def _slips(challenge: Challenge, arm: Arm) -> list[tuple[np.ndarray, str, str]]:
+    """Whole answers a known slip gives, in the units typed: (the numbers, the group, what the student reads)."""
+    if challenge.quantity != "wrist_centre":
+        return []
+    T = arm.fk(np.array(challenge.joints))
+    c = wrist_split(arm, challenge.joints).centre_in_tool
+    offset = T[:3, :3] @ c
+    along = (f"{1000 * np.linalg.norm(c):.0f} mm {'back' if c[2] < 0 else 'on'} along the tool's z"
+             if np.allclose(c[:2], 0.0) else f"R c = ({', '.join(f'{1000 * v:.0f}' for v in offset)}) mm from it")
+    return [(1000 * T[:3, 3], "p of the tool, not WC", f"That is p, where the tool is: WC is {along}."),
+            (1000 * (T[:3, 3] - offset), "the tool's offset taken the wrong way",
+             f"The offset went the wrong way: WC is {along} from p, not the other way.")]
 
 
 def _check_numbers(challenge: Challenge, arm: Arm, answer: Answer) -> Verdict:
@@ -674,6 +706,9 @@ def _check_numbers(challenge: Challenge, arm: Arm, answer: Answer) -> Verdict:
     wrong = gap(typed, expected) > allowed
     if not wrong.any():
         return Verdict(True, "Solved: every number is right.", "", text)
+    for value, group, message in _slips(challenge, arm):
+        if not (gap(typed, value) > allowed).any():
+            return Verdict(False, message, group, text)
     kinds = []
     for k in np.flatnonzero(wrong):
         if gap(typed[k], -expected[k]) <= allowed[k]:
@@ -681,7 +716,7 @@ def _check_numbers(challenge: Challenge, arm: Arm, answer: Answer) -> Verdict:
         elif angles and abs(typed[k] - math.radians(expected[k])) <= math.radians(allowed[k]):
             kinds.append("is in radians, not degrees")
         elif not angles and abs(typed[k] - expected[k] / 1000) <= allowed[k] / 1000:
-            kinds.append("is in metres, not mm" if challenge.quantity == "position" else "is 1000 times too small")
+            kinds.append("is in metres, not mm" if challenge.quantity in POINTS else "is 1000 times too small")
         elif not angles and abs(typed[k] - 1000 * expected[k]) <= 1000 * allowed[k]:
             kinds.append("is 1000 times too big")
         else:
