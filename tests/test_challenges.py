@@ -300,6 +300,13 @@ def test_both_shoulders_theta1_are_the_iks_and_their_mistakes_are_named():
         verdict = C.check(challenge, COURSE, C.Answer(numbers=typed))
         assert not verdict.solved and verdict.group == group, (group, verdict.group)
     assert verdict.message == "θ1 left is off (each within 1.8°)."
+    # step 1 done on the flange's p instead of P5: the roots of p_y c1 − p_x s1 = −d4, ρ sin(φ − θ1) = −d4
+    p, d4 = COURSE.fk(challenge.joints)[:3, 3], COURSE.solver.dh_lengths[3]
+    phi, off = math.atan2(p[1], p[0]), math.asin(d4 / math.hypot(p[0], p[1]))
+    roots = np.degrees([phi + off, phi + math.pi - off])
+    groups = {C.check(challenge, COURSE, C.Answer(numbers=typed)).group for typed in (roots, roots[::-1])}
+    apart = np.abs((roots[:, None] - [left, right] + 180.0) % 360.0 - 180.0)
+    assert "θ1 from p, not from P5" in groups and apart.min() > 2.0  # a slip a student can make: not the answer itself
     text = GOOD.replace('kind = "reach"', 'kind = "numbers"\nquantity = "theta1"').replace('branch = "wrist flipped"\n', "")
     text = text.replace("position_tolerance_mm = 3", "relative_tolerance = 0.01")
     with pytest.raises(ValueError, match="line 5: theta1 is a step of the UR family's IK"):

@@ -611,6 +611,20 @@ class SeparationSteps(NamedTuple):
     slot: int  #: k = 4 i + 2 j + l, the IK slot of the arm's branch (``arm.slot_labels[k]``)
 
 
+def shoulder_angles(point: np.ndarray, d4: float) -> tuple[float, float]:
+    """Both θ1 (rad; shoulder left, then right) whose arm plane passes ``d4`` from the base axis through ``point``
+    (3,): the IK's step 1 for P5 (docs/kinematics.md §4.1), ``(py5 c1 − px5 s1) = −d4``, P5 = A x1 + d4 (s1, −c1).
+    Where ``point`` is nearer the base axis than d4 (only rounding for P5 itself), the two are one.
+
+    >>> np.degrees(shoulder_angles(np.array([0.0, -0.5, 0.0]), 0.5)).round(6).tolist()   # on the circle: one θ1
+    [0.0, 0.0]
+    """
+    x, y = float(point[0]), float(point[1])
+    tangent = math.sqrt(max(x * x + y * y - d4 * d4, 0.0))
+    left, right = (math.atan2(y * A + x * d4, x * A - y * d4) for A in (-tangent, tangent))
+    return left, right
+
+
 def separation_steps(arm: "Arm", q, frames: np.ndarray | None = None) -> SeparationSteps:
     """The course's IK of a UR-family arm (docs/kinematics.md §4.1) replayed on its own pose T06(q), one step at a time.
 
@@ -642,8 +656,7 @@ def separation_steps(arm: "Arm", q, frames: np.ndarray | None = None) -> Separat
     p5 = T[:3, 3] - d6 * T[:3, 2]
     x5, y5, z5 = p5.tolist()
     rho = math.hypot(x5, y5)
-    tangent = math.sqrt(max(rho * rho - d4 * d4, 0.0))
-    theta1 = tuple(math.atan2(y5 * A + x5 * d4, x5 * A - y5 * d4) for A in (-tangent, tangent))
+    theta1 = shoulder_angles(p5, d4)
     c1, s1 = math.cos(q[0]), math.sin(q[0])
     reach = x5 * c1 + y5 * s1  # P5 = A x1 + d4 (s1, −c1): the arm's side of the two
     c5, c6s5, s6s5 = r13 * s1 - r23 * c1, r21 * c1 - r11 * s1, r12 * s1 - r22 * c1
