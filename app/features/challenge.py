@@ -19,6 +19,7 @@ from ur10core.orientation import from_frame, in_frame, quaternion
 from ..feedback import Beside, chosen, within
 from ..serving.challenge_run import MAX_NICKNAME, ChallengeRun, Student, summary_markdown
 from ..style import SAFE_GREEN, hex_color, label_scale
+from .arm_picker import ARM_CHOICES, UR10
 from .branch_labels import BranchLabels, ScreenView, obstacle
 from .course_arms.editor import CONVENTIONS, STARTING_TABLE
 from .lecture import add_label
@@ -99,7 +100,9 @@ class ChallengeDesk:
 
     def _preview(self) -> None:
         challenge = self.chosen()
-        self.preview.content = f"{challenge_markdown(challenge)}\n\n*{challenge.kind.replace('_', ' ')}, {challenge.arm} arm*"
+        arm = UR10 if challenge.arm == "ur10" else next((label for label, name in ARM_CHOICES.items() if name == challenge.arm),
+                                                         f"the {challenge.arm} arm")
+        self.preview.content = f"{challenge_markdown(challenge)}\n\n*{challenge.kind.replace('_', ' ')}, on {arm}*"
         if challenge.time_limit and not self.minutes.value:
             self.minutes.value = round(challenge.time_limit / 60)
 
