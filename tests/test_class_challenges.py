@@ -15,7 +15,8 @@ from ur10core.dh import DHTable
 from ur10core.orientation import zyx_euler
 from ur10teach.features.branch_labels import JOIN
 from ur10teach.features.arm_picker import ARM_CHOICES
-from ur10teach.features.challenge import GOAL_RADIUS, GOAL_ROOT, SOLVED_MARK
+from ur10teach.features.challenge import GOAL_RADIUS, GOAL_ROOT, SOLVED_MARK, WORKING_DOT
+from ur10teach.features.drawings import UR10_SIZE
 from ur10teach.features.course_arms.editor import CONVENTIONS
 from ur10teach.features.joint_panel import display_text, rate_label, typed_label
 from ur10teach.serving.gate import address_of
@@ -426,6 +427,9 @@ def test_the_placed_labels_keep_clear_of_the_challenge_targets_name(classroom):
         member = next(m for m in list(room.members.values()) if m is not room.presenter)
         await until(lambda: member.goal is not None and member.session is not None and member.session.built, what="the target")
         session = member.session
+        # the target grows with the arm, as its drawing does: a UR10's 2 cm ball is a speck beside a 3.9 m KR210
+        scale = session.drawing.size / UR10_SIZE
+        assert scale > 2.5 and member.goal.frame.origin_radius == pytest.approx(GOAL_RADIUS * scale)
         target_q = np.array(room.challenges.run.challenge.joints)
         session.apply(lambda state: state.set_joints(target_q))  # the tool on the target, the DH frames around it
         goal = goal_name(member.goal)
@@ -521,6 +525,10 @@ def test_the_desktop_arms_heaviest_pose_is_found_by_the_student_not_by_its_searc
 
         await check([0, 0, 90])  # forearm up: only the upper arm's 1.35 m is across the force
         assert "under half the largest" in member.student.verdict.group
+        # the projector's dots grow with the arm shown, as its drawing does (2.6 m across)
+        tools = await until(lambda: room.presenter.tools, what="the class's tools on the projector")
+        assert tools.working.point_size == pytest.approx(WORKING_DOT * room.drawing.size / UR10_SIZE)
+        assert tools.working.point_size > 1.8 * WORKING_DOT
         await until(lambda: any("under half the largest" in t for t in teacher.shown("### Desktop arm")), what="the group on the board")
         await check([-90, 0, 180])  # stretched, turned across the force: the base holds 20 N × (l5 + l1)
         assert member.student.solved_after is not None

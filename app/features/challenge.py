@@ -21,6 +21,7 @@ from ..serving.challenge_run import MAX_NICKNAME, ChallengeRun, Student, summary
 from ..style import SAFE_GREEN, hex_color, label_scale
 from .arm_picker import ARM_CHOICES, UR10
 from .branch_labels import BranchLabels, ScreenView, obstacle
+from .drawings import UR10_SIZE
 from .course_arms.editor import CONVENTIONS, STARTING_TABLE
 from .lecture import add_label
 
@@ -33,6 +34,7 @@ MAX_TIME_LIMIT_MINUTES = 120
 MAX_NAMES = 120
 #: The target's ball (radius, m), and the dots' sizes: a solved student's tool is on the target, and its dot is
 #: drawn larger than the ball and the working students' dots (twenty students round the target hid the green ones).
+#: For the UR10 (``drawings.UR10_SIZE``): they grow with the arm shown, as its drawing does (a KR210 is 3.9 m across).
 GOAL_RADIUS, WORKING_DOT, SOLVED_DOT = 0.02, 0.03, 0.065
 #: Before a solved student's name in 3D (a label has no colour of its own, and names at one spot merge).
 SOLVED_MARK = "✓ "
@@ -188,10 +190,11 @@ class ChallengeCard:
 class GoalMarker:
     """The pose a reach challenge asks for, in one browser's scene: a frame and a label, in the arm's world."""
 
-    def __init__(self, scene: viser.SceneApi, pose: np.ndarray, lecture: bool = False) -> None:
+    def __init__(self, scene: viser.SceneApi, pose: np.ndarray, lecture: bool = False, size: float = UR10_SIZE) -> None:
         self.pose = pose  #: (4, 4) in the world
+        scale = size / UR10_SIZE  # ``size``: the drawing's, the arm's reach (m)
         self.frame = scene.add_frame(GOAL_ROOT, wxyz=quaternion(pose[:3, :3], check=False), position=pose[:3, 3],
-                                     axes_length=0.15, axes_radius=0.01, origin_radius=GOAL_RADIUS)
+                                     axes_length=0.15 * scale, axes_radius=0.01 * scale, origin_radius=GOAL_RADIUS * scale)
         self.label = add_label(scene, f"{GOAL_ROOT}/name", "challenge target", 1.4, lecture, anchor="bottom-left")
 
     def name(self, frame: np.ndarray) -> tuple | None:
@@ -209,15 +212,15 @@ class ClassTools:
 
     def __init__(self, scene: viser.SceneApi, world: np.ndarray, view: Callable[[], ScreenView], lecture: bool = False,
                  fixed: Callable[[], list[tuple]] = lambda: [],
-                 keep_in_view: Callable[[np.ndarray | None], None] = lambda points: None) -> None:
+                 keep_in_view: Callable[[np.ndarray | None], None] = lambda points: None, size: float = UR10_SIZE) -> None:
         self._scene, self._world, self._view, self._scale = scene, world, view, label_scale(1.2, lecture)
         self._fixed = fixed  #: the labels already on the projector (branch numbers, the target's name), in the world: kept clear of
         self._keep_in_view = keep_in_view  #: the projector's camera keeps the tools (world points) in view; None: no more
         self._reached: np.ndarray | None = None  #: (2, 3) the box round every tool seen in this challenge (world)
         self.working, self.solved = (
-            scene.add_point_cloud(f"{CLASS_ROOT}/{name}", np.zeros((1, 3), np.float32), colour, point_size=size,
+            scene.add_point_cloud(f"{CLASS_ROOT}/{name}", np.zeros((1, 3), np.float32), colour, point_size=dot * size / UR10_SIZE,
                                   point_shape="circle", visible=False)
-            for name, colour, size in (("working", WORKING_COLOR, WORKING_DOT), ("solved", SOLVED_COLOR, SOLVED_DOT)))
+            for name, colour, dot in (("working", WORKING_COLOR, WORKING_DOT), ("solved", SOLVED_COLOR, SOLVED_DOT)))
         self.names: BranchLabels | None = None
 
     def _pool(self, count: int) -> BranchLabels:

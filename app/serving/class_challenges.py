@@ -151,7 +151,7 @@ class ClassChallenges:
         drawing = session.drawing if session is not None and session.arm == self.run.arm else self.room.drawing
         pose = goal_pose(self.run.challenge, self.run.arm, drawing.world)
         if pose is not None and member.goal is None:
-            member.goal = GoalMarker(member.client.scene, pose, self.room.app.lecture)
+            member.goal = GoalMarker(member.client.scene, pose, self.room.app.lecture, drawing.size)
             if session is not None:  # its placed labels make way for the target's name (``ArmSession.names_elsewhere``)
                 session.refresher.request(session)
 
@@ -252,7 +252,7 @@ class ClassChallenges:
             drawing = self.room.drawing
             member.tools = ClassTools(member.client.scene, drawing.world, lambda: screen_view(member.client), self.room.app.lecture,
                                       fixed=lambda: [*in_world(drawing.label_sets), *member.goal_name(np.eye(4))],
-                                      keep_in_view=lambda points: member.camera.keep_in_view("class", points))
+                                      keep_in_view=lambda points: member.camera.keep_in_view("class", points), size=drawing.size)
             member.camera.on_moved.append(member.tools.place)
         if member.tools is not None and self.run is not None:
             member.tools.show(self.run)
