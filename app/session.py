@@ -129,7 +129,7 @@ class ArmSession:
         self.reach_map = ReachMapView(scene, gui, self, root=f"{nodes}/reach_map", world=drawn.world)
         self.statics = StaticsView(scene, gui, self, root=f"{nodes}/statics", size=drawn.size)
         self.ellipsoids = EllipsoidsView(scene, gui, self, root=f"{nodes}/ellipsoids", reach=drawn.size)
-        self.velocity = VelocityView(scene, gui, self, root=f"{nodes}/velocity")
+        self.velocity = VelocityView(scene, gui, self, root=f"{nodes}/velocity", size=drawn.size)
         self.motion = MotionLessons(gui, self, before=self.stop_lessons, payload_kg=self.statics.payload_kg)
         self.lessons = LESSONS[arm.name](scene, gui, self) if arm.name in LESSONS else ()
         self.camera = (CameraControls(client, lambda: drawn.framed(self.state.last), self.guard, lecture,

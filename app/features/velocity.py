@@ -83,11 +83,12 @@ class VelocityView(View):
     ``root``: where its nodes hang; ``tool(snapshot)``: the (4, 4) pose the arrows start at
     (the arm's tool by default). The arrows' names are the session's to place (:meth:`names`). The
     kinds of joints and their speed limits (``arm.specs``, where the maker publishes them) come
-    from ``session.arm``.
+    from ``session.arm``; ``size`` (the arm's reach, m) scales the arrows' thickness (for an arm 1 m across).
     """
 
     def __init__(self, scene: viser.SceneApi, gui: viser.GuiApi, session: Session, root: str = "/velocity",
-                 tool: Callable[[Any], np.ndarray] = lambda snapshot: snapshot.flange, place: str = "tool") -> None:
+                 tool: Callable[[Any], np.ndarray] = lambda snapshot: snapshot.flange, place: str = "tool",
+                 size: float = 1.0) -> None:
         self._session = session
         self._arm = session.arm
         self._tool = tool
@@ -111,10 +112,10 @@ class VelocityView(View):
             self.solve = gui.add_button("Find the joint rates")
             self.refusal = Beside(gui)
             self.rates = gui.add_markdown("")
-        self.linear = scene.add_arrows(f"{root}/linear", np.zeros((1, 2, 3)), LINEAR_COLOR, shaft_radius=0.008,
-                                       head_radius=0.02, head_length=0.04, visible=False)
-        self.angular = scene.add_arrows(f"{root}/angular", np.zeros((1, 2, 3)), ANGULAR_COLOR, shaft_radius=0.008,
-                                        head_radius=0.02, head_length=0.04, visible=False)
+        self.linear, self.angular = (  # as thick, for its size, beside a 3.9 m KR210 as beside the UR10
+            scene.add_arrows(f"{root}/{name}", np.zeros((1, 2, 3)), colour, shaft_radius=0.006 * size, head_radius=0.015 * size,
+                             head_length=0.03 * size, visible=False)
+            for name, colour in (("linear", LINEAR_COLOR), ("angular", ANGULAR_COLOR)))
         self._ends: tuple[np.ndarray, np.ndarray] | None = None  #: where the arrows end while they show
         for slider in self.sliders:
             slider.on_update(session.guard(lambda _: session.redraw()))
