@@ -26,6 +26,9 @@ SLOT_COLORS: tuple[tuple[int, int, int], ...] = (
     (221, 204, 119),  # sand
 )
 GHOST_OPACITY = 0.6
+#: The UR10's reach (m), which its drawing is sized for (its DH frames' axes and labels, its gizmo); another
+#: arm's drawing is sized by its own reach, and what is drawn beside it grows with that.
+UR10_SIZE = 1.3
 #: The page behind the ghosts (viser's light theme).
 PAGE_BACKGROUND = (235, 235, 235)
 UNREACHABLE_RED = (220, 30, 30)

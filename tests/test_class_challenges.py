@@ -16,7 +16,7 @@ from ur10core.orientation import zyx_euler
 from ur10teach.features.branch_labels import JOIN
 from ur10teach.features.arm_picker import ARM_CHOICES
 from ur10teach.features.challenge import GOAL_RADIUS, GOAL_ROOT, SOLVED_MARK, WORKING_DOT
-from ur10teach.features.drawings import UR10_SIZE
+from ur10teach.style import UR10_SIZE
 from ur10teach.features.course_arms.editor import CONVENTIONS
 from ur10teach.features.joint_panel import display_text, rate_label, typed_label
 from ur10teach.serving.gate import address_of

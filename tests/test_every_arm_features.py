@@ -16,6 +16,7 @@ import pytest
 
 from ur10core.orientation import from_frame
 from ur10teach.features.arm_picker import ARM_CHOICES
+from ur10teach.features.ik_target import GIZMO_SHARE, HALO_SHARE
 from ur10teach.features.joint_panel import rate_label
 from ur10teach.features.statics import bars_html
 from ur10teach.features.velocity import METRES_PER_SPEED
@@ -54,6 +55,8 @@ def test_velocity_and_forces_on_every_arm_match_finite_differences(app, label):
         for arrow in (session.velocity.linear, session.velocity.angular):
             assert arrow.shaft_radius / arrow.head_radius == pytest.approx(0.4)
             assert arrow.shaft_radius / session.statics.arrow.shaft_radius == pytest.approx(0.5)
+        # and the target's "unreachable" halo grows with its gizmo (on a 3.9 m KR210 it was a dot in the gizmo)
+        assert session.ik_target.unreachable.radius / session.ik_target.gizmo.scale == pytest.approx(HALO_SHARE / GIZMO_SHARE)
         # 50 N along +x at the tool: each joint holds ∂p/∂q_i · F (virtual work)
         await client.set_gui("Show the torques", True)
         await client.set_gui("Force direction", "+x")

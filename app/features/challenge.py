@@ -18,10 +18,9 @@ from ur10core.orientation import from_frame, in_frame, quaternion
 
 from ..feedback import Beside, chosen, within
 from ..serving.challenge_run import MAX_NICKNAME, ChallengeRun, Student, summary_markdown
-from ..style import SAFE_GREEN, hex_color, label_scale
+from ..style import SAFE_GREEN, UR10_SIZE, hex_color, label_scale
 from .arm_picker import ARM_CHOICES, UR10
 from .branch_labels import BranchLabels, ScreenView, obstacle
-from .drawings import UR10_SIZE
 from .course_arms.editor import CONVENTIONS, STARTING_TABLE
 from .lecture import add_label
 
@@ -34,7 +33,7 @@ MAX_TIME_LIMIT_MINUTES = 120
 MAX_NAMES = 120
 #: The target's ball (radius, m), and the dots' sizes: a solved student's tool is on the target, and its dot is
 #: drawn larger than the ball and the working students' dots (twenty students round the target hid the green ones).
-#: For the UR10 (``drawings.UR10_SIZE``): they grow with the arm shown, as its drawing does (a KR210 is 3.9 m across).
+#: For the UR10 (``style.UR10_SIZE``): they grow with the arm shown, as its drawing does (a KR210 is 3.9 m across).
 GOAL_RADIUS, WORKING_DOT, SOLVED_DOT = 0.02, 0.03, 0.065
 #: Before a solved student's name in 3D (a label has no colour of its own, and names at one spot merge).
 SOLVED_MARK = "✓ "

@@ -12,6 +12,7 @@ from ur10core import Arm
 
 from ..meshes import ArmModels
 from ..state import Snapshot
+from ..style import UR10_SIZE
 from .branch_labels import chain
 from .camera import BODY_RADIUS
 from .course_arms.desktop_arm import DesktopArmScene
@@ -22,8 +23,6 @@ from .ik_target import GHOST_STYLES, BranchesScene
 from .robot import RobotScene, node_name
 from .singularity import SingularityOverlay
 
-#: The UR10's reach (m), which sizes its DH frames' axes and labels and its gizmo.
-UR10_SIZE = 1.3
 
 
 def reach(arm: Arm) -> float:

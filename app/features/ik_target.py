@@ -29,6 +29,7 @@ from ..style import (
     GHOST_OPACITY,
     SLOT_COLORS,
     UNREACHABLE_RED,
+    UR10_SIZE,
     hex_color,
     sentence,
     swatch,
@@ -51,6 +52,8 @@ SAME_POSE = 1e-3
 #: The gizmo's size as a share of the arm's reach: small enough to leave the wrist's
 #: axes and the overlay's P5 in view (it is drawn over everything, to stay grabbable).
 GIZMO_SHARE = 0.12
+#: The "unreachable" halo's radius, as a share of the arm's reach too (0.06 m on the UR10).
+HALO_SHARE = 0.046
 GIZMO_LINE_WIDTH = {False: 3.0, True: 6.0}  #: pixels, normal and in lecture mode
 #: How far above a branch's elbow (frame {3}) its number floats. Not the wrist: every branch of a
 #: target shares the wrist centre P5 (and the flange); the elbows are where branches differ.
@@ -238,9 +241,10 @@ def branches_markdown(snapshot: Snapshot) -> str:
     return status_markdown(snapshot) + "\n\n" + branch_table(snapshot)
 
 
-def add_unreachable_halo(scene: viser.SceneApi, parent: str) -> viser.IcosphereHandle:
-    """Transform controls have no colour of their own: a red halo on the target says "unreachable"."""
-    return scene.add_icosphere(f"{parent}/unreachable", radius=0.06, color=UNREACHABLE_RED, opacity=0.45,
+def add_unreachable_halo(scene: viser.SceneApi, parent: str, size: float) -> viser.IcosphereHandle:
+    """Transform controls have no colour of their own: a red halo on the target says "unreachable"; ``size``, the
+    arm's reach (m), sizes it with the gizmo."""
+    return scene.add_icosphere(f"{parent}/unreachable", radius=HALO_SHARE * size, color=UNREACHABLE_RED, opacity=0.45,
                                visible=False, cast_shadow=False, receive_shadow=False)
 
 
@@ -265,7 +269,7 @@ class BranchesScene(View):
         if target_marker:
             self.target = scene.add_frame("/target", axes_length=0.1, axes_radius=0.004, origin_radius=0.008,
                                           wxyz=first.flange_wxyz, position=first.flange[:3, 3])
-            self.unreachable = add_unreachable_halo(scene, "/target")
+            self.unreachable = add_unreachable_halo(scene, "/target", UR10_SIZE)
         self._scene, self._models = scene, models
         self._geometries = {SKELETON: skeleton_links(first.arm.dh), **models.by_name}
         #: each geometry's batched ghost meshes, links 1..6, sent when first shown
@@ -405,7 +409,7 @@ class IKTarget(View):
             wxyz=quaternion(snapshot.target[:3, :3], check=False), position=snapshot.target[:3, 3])
         stop_echo(self.gizmo)
         # the halo rides on the gizmo unless the (shared) scene draws the target itself
-        self.unreachable = None if drawing.target is not None else add_unreachable_halo(controls, f"{drawing.root}/ik_target")
+        self.unreachable = None if drawing.target is not None else add_unreachable_halo(controls, f"{drawing.root}/ik_target", drawing.size)
         slots = len(arm.slot_labels)
         folder = gui.add_folder(f"IK target: all {slots} branches" if slots > 1 and not arm.numerical else "IK target")
         self.folders = (folder,)

@@ -167,7 +167,7 @@ class LineDrawing:
         """The target, drawn for the shared scene (only the presenter has a gizmo)."""
         name = f"{self.root}/target_marker"
         self.target = scene.add_frame(name, axes_length=0.08 * self.size, axes_radius=0.004 * self.size)
-        self.unreachable = add_unreachable_halo(scene, name)
+        self.unreachable = add_unreachable_halo(scene, name, self.size)
 
     def _render_target(self, snapshot: Snapshot) -> None:
         if self.target is not None:
