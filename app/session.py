@@ -125,7 +125,7 @@ class ArmSession:
         self.dh_table = DHTableView(gui, self, drawn.dh_frames)
         self.walkthrough = DHWalkthrough(gui, self, drawn.dh_frames)
         nodes = drawn.root
-        self.workspace = WorkspaceView(scene, gui, self, root=nodes)
+        self.workspace = WorkspaceView(scene, gui, self, root=nodes, size=drawn.size)
         self.reach_map = ReachMapView(scene, gui, self, root=f"{nodes}/reach_map", world=drawn.world)
         self.statics = StaticsView(scene, gui, self, root=f"{nodes}/statics", size=drawn.size)
         self.ellipsoids = EllipsoidsView(scene, gui, self, root=f"{nodes}/ellipsoids", reach=drawn.size)

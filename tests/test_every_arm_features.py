@@ -20,6 +20,8 @@ from ur10teach.features.ik_target import GIZMO_SHARE, HALO_SHARE
 from ur10teach.features.joint_panel import rate_label
 from ur10teach.features.statics import bars_html
 from ur10teach.features.velocity import METRES_PER_SPEED
+from ur10teach.features.workspace import POINT_SIZE
+from ur10teach.style import UR10_SIZE
 
 from .server_support import scene_pose, until, url
 from .test_course_arms_app import pick
@@ -184,6 +186,8 @@ def test_the_workspace_cloud_of_every_arm_is_its_own(app, label):
                     what="the cloud")
         points, _ = session.arm.sample_workspace(10_000, seed=0)
         np.testing.assert_allclose(session.workspace._cloud.points, points, atol=5e-3)  # float16 on the wire
+        # its dots the same share of the arm's size as on the UR10 (a 3.9 m KR210's were a third as big on screen)
+        assert session.workspace._cloud.point_size / session.drawing.size == pytest.approx(POINT_SIZE / UR10_SIZE)
         await until(lambda: f"{session.drawing.root}/workspace" in client.received.nodes, what="the cloud on screen")
         await client.close()
 
@@ -374,6 +378,7 @@ def test_the_torque_map_and_the_cloud_are_framed_with_the_arm_and_the_legend_is_
 
         await until(map_drawn, what="the torque map and its largest ‖τ‖")
         drawn, (marker, name) = seen_map[0]
+        assert drawn.point_size / session.drawing.size == pytest.approx(POINT_SIZE / UR10_SIZE)  # as the cloud's
         await until(lambda: in_view(drawn.points[::20]), what="the whole torque map in view")
         # and the placed labels keep clear of its largest ‖τ‖ (hung under the map's red ball)
         view = screen_view(session.client)

@@ -23,7 +23,7 @@ from ur10core.specs import torque_map
 from ..feedback import chosen, put_back, within
 from ..serving.workers import HEAVY, FoldedRuns
 from ..state import Snapshot
-from ..style import DANGER_RED, SAFE_GREEN, blend, hex_color, number
+from ..style import DANGER_RED, SAFE_GREEN, UR10_SIZE, blend, hex_color, number
 from ..view import Session, View
 from ..viser_internals.fast_updates import set_positions, stop_echo
 from .branch_labels import obstacle
@@ -278,7 +278,7 @@ class StaticsView(View):
             force, (points, norms, worst) = shown
             top = float(norms[worst]) or 1.0
             self._map = self._scene.add_point_cloud(f"{self._root}/torque_map", points.astype(np.float32), colormap(norms, top),
-                                                    point_size=POINT_SIZE, point_shape="circle")
+                                                    point_size=POINT_SIZE * self._size / UR10_SIZE, point_shape="circle")
             marker = self._scene.add_icosphere(f"{self._root}/worst", radius=0.04 * self._size, color=DANGER_RED,
                                                position=points[worst])
             unit = "N·m" if "P" not in session.arm.joint_types else "N·m or N"

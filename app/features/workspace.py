@@ -18,7 +18,7 @@ from ur10core.workspace import revolved_boundary, vertical_section
 
 from ..feedback import chosen, within
 from ..serving.workers import HEAVY, FoldedRuns
-from ..style import hex_color
+from ..style import UR10_SIZE, hex_color
 from ..view import Session, View
 from .camera import VIEWS
 
@@ -30,6 +30,7 @@ HULL = SECTIONS[4]
 HULL_COLOR = (86, 180, 233)  # Okabe-Ito sky blue: apart from the grey arm and the aluminium links
 HULL_OPACITY = 0.22
 HULL_SEGMENTS = 72
+#: The cloud's dots (m) on the UR10's drawing; they grow with another arm's.
 POINT_SIZE = 0.006
 #: Points in a section: sampled in its plane, they cover it densely at this many.
 SECTION_POINTS = 40_000
@@ -232,10 +233,12 @@ class WorkspaceView(View):
     the section slider costs at most one cloud in the making and one waiting.
     """
 
-    def __init__(self, scene: viser.SceneApi, gui: viser.GuiApi, session: Session, root: str = "") -> None:
+    def __init__(self, scene: viser.SceneApi, gui: viser.GuiApi, session: Session, root: str = "",
+                 size: float = UR10_SIZE) -> None:
         self._scene = scene
         self._session = session
         self._root = root  #: the cloud is ``{root}/workspace``: a classroom explorer's arm has a root of its own
+        self._point_size = POINT_SIZE * size / UR10_SIZE  # ``size``: the drawing's; a 3.9 m arm's cloud looks the UR10's
         self._unit = manipulability_unit(session.arm)
         self._cloud: viser.PointCloudHandle | None = None
         self.legend_label: viser.LabelHandle | None = None
@@ -307,7 +310,7 @@ class WorkspaceView(View):
                         cast_shadow=False, receive_shadow=False)
                 else:
                     self._cloud = self._scene.add_point_cloud(
-                        f"{self._root}/workspace", points, colors, point_size=POINT_SIZE, point_shape="circle"
+                        f"{self._root}/workspace", points, colors, point_size=self._point_size, point_shape="circle"
                     )
                 # above the cloud, in the same scene: it goes with the cloud and reaches every viewer
                 self.legend_label = self._scene.add_label(
