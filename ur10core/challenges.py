@@ -675,13 +675,13 @@ def number_names(challenge: Challenge, arm: Arm) -> tuple[str, ...]:
 
 def _slips(challenge: Challenge, arm: Arm) -> list[tuple[np.ndarray, str, str]]:
     """Whole answers a known slip gives, in the units typed: (the numbers, the group, what the student reads)."""
+    if challenge.quantity not in ("theta1", "wrist_centre"):
+        return []
     T = arm.fk(np.array(challenge.joints))
     if challenge.quantity == "theta1":
         d4, d6 = arm.solver.dh_lengths[3], arm.solver.dh_lengths[5]
         return [(np.degrees(shoulder_angles(T[:3, 3], d4)), "θ1 from p, not from P5",
                  f"Those are the θ1 of p, the flange: step 1 works on P5 = p − d6·z6, {1000 * d6:.1f} mm back along z6.")]
-    if challenge.quantity != "wrist_centre":
-        return []
     c = wrist_split(arm, challenge.joints).centre_in_tool
     offset = T[:3, :3] @ c
     along = (f"{1000 * np.linalg.norm(c):.0f} mm {'back' if c[2] < 0 else 'on'} along the tool's z"

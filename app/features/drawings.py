@@ -24,7 +24,6 @@ from .robot import RobotScene, node_name
 from .singularity import SingularityOverlay
 
 
-
 def reach(arm: Arm) -> float:
     """How far the arm's tool gets from the base (m), from a workspace sample: sizes follow it."""
     points, _ = arm.sample_workspace(4000, seed=0)
