@@ -69,6 +69,7 @@ def test_velocity_and_forces_on_every_arm_match_finite_differences(app, label):
         np.testing.assert_allclose(torques, reference, atol=1e-6)
         html = bars_html(torques, gravity, arm.specs.torque_ratings, arm.joint_names, arm.joint_types)
         await until(lambda: session.statics.bars.content == html, what="the torque bars")
+        assert f"‖Jᵀ F‖ = {np.linalg.norm(reference):.2f} N·m" in html  # the statics exercise's measure, beside the bars
         await client.close()
 
     asyncio.run(scenario())

@@ -68,7 +68,8 @@ def force_vector(direction: str, newtons: float, flange: np.ndarray, dragged, di
 def bars_html(force_torques: np.ndarray, gravity: np.ndarray, capacity: np.ndarray | None,
               labels: tuple[str, ...], kinds: str) -> str:
     """Per joint: a bar of |τ_force + τ_gravity| against its rated torque ``capacity`` (N·m), green to red,
-    with the three numbers; without published ratings (``None``), against the largest of them.
+    with the three numbers; without published ratings (``None``), against the largest of them. Then ‖Jᵀ F‖,
+    the force's alone: what the statics exercise and the ‖τ‖ map weigh a pose by.
     ``kinds``: ``"R"``/``"P"`` per joint (a prismatic joint holds a force, in N)."""
     totals = np.asarray(force_torques) + np.asarray(gravity)
     scale = capacity if capacity is not None else np.full(len(totals), max(float(np.abs(totals).max()), 1e-9))
@@ -85,6 +86,9 @@ def bars_html(force_torques: np.ndarray, gravity: np.ndarray, capacity: np.ndarr
             "<div style='height:10px;background:#e9ecef;border-radius:4px'>"
             f"<div class='torque-bar' style='height:10px;width:{100 * share:.1f}%;border-radius:4px;background:{colour}'>"
             "</div></div></div>")
+    units = "N·m" if "P" not in kinds else "N·m and N"
+    rows.append(f"<div style='margin-top:6px'><b>‖Jᵀ F‖ = {number(float(np.linalg.norm(force_torques)), '.2f')} {units}</b> "
+                "for the force alone, as the ‖τ‖ map weighs each pose</div>")
     return "<div style='font-size:0.9em'>" + "".join(rows) + "</div>"
 
 
