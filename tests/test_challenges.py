@@ -277,6 +277,22 @@ def test_numbers_name_the_kind_of_mistake():
         C.check(position, COURSE, C.Answer(numbers=p[:2]))
 
 
+@pytest.mark.parametrize("name", ["course", "ur10", "ur10e"])
+def test_det_j_by_hand_names_the_constant_left_out_and_lengths_in_mm(name):
+    """The course's det J = a2·a3·(a2 c2 + a3 c23 − d5 s234)·s3·s5 (docs §5), written out here: the three factors'
+    product alone is "a2·a3 left out", and the same lengths in mm (det J in m³) "lengths in mm, not metres"."""
+    challenge, arm = by_title("det J by hand"), Arm.preset(name)
+    t1, t2, t3, t4, t5, t6 = challenge.joints
+    factors = ((arm.a2 * math.cos(t2) + arm.a3 * math.cos(t2 + t3) - arm.d5 * math.sin(t2 + t3 + t4))
+               * math.sin(t3) * math.sin(t5))
+    det = C.expected_numbers(challenge, arm)[0]
+    assert det == pytest.approx(arm.a2 * arm.a3 * factors, rel=1e-12)
+    for typed, group in ((factors, "a2·a3 left out"), (1e9 * det, "lengths in mm, not metres"),
+                         (-det, "det J has the wrong sign"), (1.5 * det, "det J is off")):
+        verdict = C.check(challenge, arm, C.Answer(numbers=[typed]))
+        assert not verdict.solved and verdict.group == group, (typed, verdict)
+
+
 def test_both_shoulders_theta1_are_the_iks_and_their_mistakes_are_named():
     """IK step 1 as numbers (docs §4.1): both θ1 against the IK's own slots (left: 1–4, right: 5–8) on the UR family;
     angles equal a turn apart; the shoulders swapped, a sign and radians are named; another arm is refused in a file."""

@@ -675,6 +675,10 @@ def number_names(challenge: Challenge, arm: Arm) -> tuple[str, ...]:
 
 def _slips(challenge: Challenge, arm: Arm) -> list[tuple[np.ndarray, str, str]]:
     """Whole answers a known slip gives, in the units typed: (the numbers, the group, what the student reads)."""
+    if challenge.quantity == "det_j" and arm.name in Arm.UR_PRESETS:  # det J = a2 a3 (a2 c2 + a3 c23 − d5 s234) s3 s5
+        det = expected_numbers(challenge, arm)
+        return [(det / (arm.a2 * arm.a3), "a2·a3 left out", "That is the product of the three factors: det J is a2·a3 times it."),
+                (det * 1e9, "lengths in mm, not metres", "Those are lengths in mm: det J is in m³, so it is 10⁹ times smaller.")]
     if challenge.quantity not in ("theta1", "wrist_centre"):
         return []
     T = arm.fk(np.array(challenge.joints))
