@@ -272,6 +272,9 @@ def test_numbers_name_the_kind_of_mistake():
     torque = by_title("Holding a weight")
     message = C.check(torque, COURSE, C.Answer(numbers=1000 * C.expected_numbers(torque, COURSE))).message
     assert message.startswith("τ2 is 1000 times too big; τ3 "), message  # (τ1 and τ6 hold next to nothing here)
+    # J [F; M] typed for Jᵀ [F; M], J from the DH table's own product (not the UR family's closed form)
+    slip = COURSE.dh.jacobian(np.array(torque.joints)) @ np.r_[torque.force, torque.moment]
+    assert C.check(torque, COURSE, C.Answer(numbers=slip)).group == "J [F; M], not Jᵀ [F; M]"
     assert C.check(position, COURSE, C.Answer(numbers=p * 1.009)).solved  # within 1 %
     with pytest.raises(ValueError, match="type 3 numbers"):
         C.check(position, COURSE, C.Answer(numbers=p[:2]))

@@ -679,6 +679,10 @@ def _slips(challenge: Challenge, arm: Arm) -> list[tuple[np.ndarray, str, str]]:
         det = expected_numbers(challenge, arm)
         return [(det / (arm.a2 * arm.a3), "a2·a3 left out", "That is the product of the three factors: det J is a2·a3 times it."),
                 (det * 1e9, "lengths in mm, not metres", "Those are lengths in mm: det J is in m³, so it is 10⁹ times smaller.")]
+    if challenge.quantity == "torque" and arm.n_joints == 6:  # J is square: J [F; M] can be typed in its place
+        wrench = np.concatenate([challenge.force, challenge.moment])
+        return [(arm.jacobian(np.array(challenge.joints)) @ wrench, "J [F; M], not Jᵀ [F; M]",
+                 "That is J [F; M]: the joint torques are Jᵀ [F; M] (virtual work: τ · q̇ = [F; M] · J q̇).")]
     if challenge.quantity not in ("theta1", "wrist_centre"):
         return []
     T = arm.fk(np.array(challenge.joints))
