@@ -675,28 +675,28 @@ def number_names(challenge: Challenge, arm: Arm) -> tuple[str, ...]:
 
 def _slips(challenge: Challenge, arm: Arm) -> list[tuple[np.ndarray, str, str]]:
     """Whole answers a known slip gives, in the units typed: (the numbers, the group, what the student reads)."""
-    if challenge.quantity == "det_j" and arm.name in Arm.UR_PRESETS:  # det J = a2 a3 (a2 c2 + a3 c23 − d5 s234) s3 s5
+    q, quantity = np.array(challenge.joints), challenge.quantity
+    if quantity == "det_j" and arm.name in Arm.UR_PRESETS:  # det J = a2 a3 (a2 c2 + a3 c23 − d5 s234) s3 s5
         det = expected_numbers(challenge, arm)
         return [(det / (arm.a2 * arm.a3), "a2·a3 left out", "That is the product of the three factors: det J is a2·a3 times it."),
                 (det * 1e9, "lengths in mm, not metres", "Those are lengths in mm: det J is in m³, so it is 10⁹ times smaller.")]
-    if challenge.quantity == "torque" and arm.n_joints == 6:  # J is square: J [F; M] can be typed in its place
+    if quantity == "torque" and arm.n_joints == 6:  # J is square: J [F; M] can be typed in its place
         wrench = np.concatenate([challenge.force, challenge.moment])
-        return [(arm.jacobian(np.array(challenge.joints)) @ wrench, "J [F; M], not Jᵀ [F; M]",
+        return [(arm.jacobian(q) @ wrench, "J [F; M], not Jᵀ [F; M]",
                  "That is J [F; M]: the joint torques are Jᵀ [F; M] (virtual work: τ · q̇ = [F; M] · J q̇).")]
-    if challenge.quantity not in ("theta1", "wrist_centre"):
-        return []
-    T = arm.fk(np.array(challenge.joints))
-    if challenge.quantity == "theta1":
+    if quantity == "theta1":
         d4, d6 = arm.solver.dh_lengths[3], arm.solver.dh_lengths[5]
-        return [(np.degrees(shoulder_angles(T[:3, 3], d4)), "θ1 from p, not from P5",
+        return [(np.degrees(shoulder_angles(arm.fk(q)[:3, 3], d4)), "θ1 from p, not from P5",
                  f"Those are the θ1 of p, the flange: step 1 works on P5 = p − d6·z6, {1000 * d6:.1f} mm back along z6.")]
-    c = wrist_split(arm, challenge.joints).centre_in_tool
-    offset = T[:3, :3] @ c
-    along = (f"{1000 * np.linalg.norm(c):.0f} mm {'back' if c[2] < 0 else 'on'} along the tool's z"
-             if np.allclose(c[:2], 0.0) else f"R c = ({', '.join(f'{1000 * v:.0f}' for v in offset)}) mm from it")
-    return [(1000 * T[:3, 3], "p of the tool, not WC", f"That is p, where the tool is: WC is {along}."),
-            (1000 * (T[:3, 3] - offset), "the tool's offset taken the wrong way",
-             f"The offset went the wrong way: WC is {along} from p, not the other way.")]
+    if quantity == "wrist_centre":
+        T, c = arm.fk(q), wrist_split(arm, q).centre_in_tool
+        offset = T[:3, :3] @ c
+        along = (f"{1000 * np.linalg.norm(c):.0f} mm {'back' if c[2] < 0 else 'on'} along the tool's z"
+                 if np.allclose(c[:2], 0.0) else f"R c = ({', '.join(f'{1000 * v:.0f}' for v in offset)}) mm from it")
+        return [(1000 * T[:3, 3], "p of the tool, not WC", f"That is p, where the tool is: WC is {along}."),
+                (1000 * (T[:3, 3] - offset), "the tool's offset taken the wrong way",
+                 f"The offset went the wrong way: WC is {along} from p, not the other way.")]
+    return []
 
 
 def _check_numbers(challenge: Challenge, arm: Arm, answer: Answer) -> Verdict:
