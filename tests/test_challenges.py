@@ -263,6 +263,8 @@ def test_numbers_name_the_kind_of_mistake():
         "x, y, z are in metres, not mm": p / 1000,
         "z is off": p + [0, 0, 50],
         "2 numbers off": p * [-1, 1, 1.5],
+        # T05's origin, P5 = p − d6 z6 (docs §4.1): the product of the link transforms stopped one short
+        "the last transform left out": 1000 * (COURSE.fk(position.joints)[:3, 3] - COURSE.d6 * COURSE.fk(position.joints)[:3, 2]),
     }
     for group, typed in cases.items():
         verdict = C.check(position, COURSE, C.Answer(numbers=typed))

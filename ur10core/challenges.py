@@ -676,6 +676,11 @@ def number_names(challenge: Challenge, arm: Arm) -> tuple[str, ...]:
 def _slips(challenge: Challenge, arm: Arm) -> list[tuple[np.ndarray, str, str]]:
     """Whole answers a known slip gives, in the units typed: (the numbers, the group, what the student reads)."""
     q, quantity = np.array(challenge.joints), challenge.quantity
+    if quantity == "position":  # the product of the link transforms stopped one short
+        frames = arm.frames(q)
+        return [(1000 * frames[-2][:3, 3], "the last transform left out",
+                 f"That is where frame {len(frames) - 2}, the frame before the tool's, is: the last link "
+                 "transform, from it to the tool, is left out.")]
     if quantity == "det_j" and arm.name in Arm.UR_PRESETS:  # det J = a2 a3 (a2 c2 + a3 c23 − d5 s234) s3 s5
         det = expected_numbers(challenge, arm)
         return [(det / (arm.a2 * arm.a3), "a2·a3 left out", "That is the product of the three factors: det J is a2·a3 times it."),
