@@ -380,10 +380,13 @@ def test_the_torque_map_and_the_cloud_are_framed_with_the_arm_and_the_legend_is_
         await until(map_drawn, what="the torque map and its largest ‖τ‖")
         drawn, (marker, name) = seen_map[0]
         assert drawn.point_size / session.drawing.size == pytest.approx(POINT_SIZE / UR10_SIZE)  # as the cloud's
+        # its name stands on the red ball, up the arm's vertical: at its centre it hid the ball's upper half
+        assert np.dot(name.position, session.arm.up) > marker.radius and np.cross(name.position, session.arm.up) == pytest.approx(0.0)
         await until(lambda: in_view(drawn.points[::20]), what="the whole torque map in view")
         # and the placed labels keep clear of its largest ‖τ‖ (hung under the map's red ball)
         view = screen_view(session.client)
-        worst = boxes(view.to_screen(seen([marker.position]))[0], [name.text], name.font_screen_scale, name.anchor)[0]
+        worst = boxes(view.to_screen(seen([np.add(marker.position, name.position)]))[0], [name.text], name.font_screen_scale,
+                      name.anchor)[0]
         for pool in session.drawing.label_sets:
             pool.place()
         over = [text for pool in session.drawing.label_sets for _, text, position in pool.placed

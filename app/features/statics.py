@@ -52,8 +52,10 @@ ARROW_METRES_PER_N = 0.002
 FORCE_COLOR = (0, 114, 178)
 #: The torque map's name among what the camera frames with the arm (``CameraControls.extra``).
 MAP_VIEW = "torque map"
-#: Joint vectors sampled for the torque map (``ur10core.specs.torque_map``): the worst of them is marked.
+#: Joint vectors sampled for the torque map (``ur10core.specs.torque_map``): the worst of them is marked, by a red
+#: ball this big (m, for an arm 1 m across).
 TORQUE_MAP_POINTS = 20_000
+WORST_RADIUS = 0.04
 
 
 def force_vector(direction: str, newtons: float, flange: np.ndarray, dragged, directions: dict) -> np.ndarray:
@@ -283,11 +285,12 @@ class StaticsView(View):
             top = float(norms[worst]) or 1.0
             self._map = self._scene.add_point_cloud(f"{self._root}/torque_map", points.astype(np.float32), colormap(norms, top),
                                                     point_size=POINT_SIZE * self._size / UR10_SIZE, point_shape="circle")
-            marker = self._scene.add_icosphere(f"{self._root}/worst", radius=0.04 * self._size, color=DANGER_RED,
-                                               position=points[worst])
+            radius = WORST_RADIUS * self._size
+            marker = self._scene.add_icosphere(f"{self._root}/worst", radius=radius, color=DANGER_RED, position=points[worst])
             unit = "N·m" if "P" not in session.arm.joint_types else "N·m or N"
+            # standing on the ball: at its centre, the label hid its upper half
             label = self._scene.add_label(f"{self._root}/worst/label", f"largest ‖τ‖ = {top:.0f} {unit}", font_screen_scale=1.4,
-                                          anchor="bottom-center")
+                                          anchor="bottom-center", position=tuple(1.2 * radius * np.asarray(session.arm.up)))
             self._worst = (marker, label)
             if camera is not None:  # framed with the arm (a small arm's camera sat inside it), once: not on each new force
                 camera.show_also(MAP_VIEW, points[:: max(1, len(points) // 2000)], session.drawing.world,
