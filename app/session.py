@@ -6,6 +6,7 @@ Why it is built so: docs/architecture.md §1.
 from __future__ import annotations
 
 import contextlib
+import logging
 import time
 from typing import Any, Callable
 
@@ -41,6 +42,8 @@ from .serving.metrics import LATENCY
 from .serving.workers import DragQueue, PanelRefresher
 from .state import ArmState, Snapshot
 from .style import NAME_SCALE
+
+log = logging.getLogger(__name__)
 
 #: Changes after which the camera frames the arm again: it may have gone far (a drag or a slider moves it gradually).
 REFRAMED = ("singularity", "typed")
@@ -250,6 +253,8 @@ class ArmSession:
             draw(snapshot)
         except ValueError as refused:
             self.notify("Not accepted", str(refused))
+            # numpy's shape errors are ValueErrors too: the teacher's console keeps what tells a bug from a refusal
+            log.info("browser %s: a redraw refused a value: %s", self.client.client_id, refused, exc_info=True)
 
     # ------------------------------------------------------------------ display choices
 

@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import asyncio
 import time
+import traceback
 
 import msgspec
 import numpy as np
@@ -267,6 +268,32 @@ def test_a_refused_rate_force_or_payload_is_put_back_and_the_arm_goes_on(app, ca
         await client.close()
 
     without_failures(scenario, caplog)
+
+
+def test_a_redraw_that_refuses_is_logged_with_its_traceback(app, caplog):
+    """A view's redraw that raises ``ValueError`` is shown as "Not accepted" (a value a browser set that it will
+    not draw) and the other views are drawn. numpy's shape errors are ValueErrors too: the console now keeps the
+    traceback, where such a bug was seen only as a notice in one browser."""
+
+    async def scenario():
+        client = await ViserClient(url(app)).connect()
+        session = session_of(app, client)
+
+        def broken(snapshot):
+            np.ones(3) + np.ones(4)  # a bug of the type a refusal has
+
+        session.velocity.render_panel = broken
+        before = session.readouts.pose.content
+        with caplog.at_level("INFO", logger="ur10teach.session"):
+            await drag_a_little(client, session, steps=3)
+            await until(lambda: session.readouts.pose.content != before, what="the other views drawn all the same")
+            await until(lambda: any("could not be broadcast" in body for _, body in client.received.notifications),
+                        what="the notice")
+        record = next(r for r in caplog.records if r.name == "ur10teach.session" and "a redraw refused" in r.getMessage())
+        assert record.exc_info is not None and "broken" in "".join(traceback.format_exception(*record.exc_info))
+        await client.close()
+
+    asyncio.run(scenario())
 
 
 async def goes_on(client: ViserClient, session) -> None:
