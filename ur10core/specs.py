@@ -174,8 +174,8 @@ def largest_torque(arm, force, steps: int = 41, grid=None, refinements: int = 6)
     most torque to hold ``force`` (N, base frame) at the tool. Each refinement searches 11
     values per joint across one step of the last grid either side of its best (within the
     limits), a fifth of that step apart: six leave the pose within 5⁻⁶ of a first step
-    (on the desktop arm's 41-value grid, 0.0003°), and ‖τ‖, flat at its largest, within
-    about 1e-12 of it. ``grid``: :func:`torque_grid`'s result, where the caller has it.
+    (on the desktop arm's 41-value grid, 0.0003°). The tests find ‖τ‖ within 1e-9 of the
+    closed forms. ``grid``: :func:`torque_grid`'s result, where the caller has it.
 
     Example: pushing sideways, the desktop arm's base holds the most, stretched across the force.
 

@@ -612,9 +612,10 @@ class SeparationSteps(NamedTuple):
 
 
 def shoulder_angles(point: np.ndarray, d4: float) -> tuple[float, float]:
-    """Both θ1 (rad; shoulder left, then right) whose arm plane passes ``d4`` from the base axis through ``point``
-    (3,): the IK's step 1 for P5 (docs/kinematics.md §4.1), ``(py5 c1 − px5 s1) = −d4``, P5 = A x1 + d4 (s1, −c1).
-    Where ``point`` is nearer the base axis than d4 (only rounding for P5 itself), the two are one.
+    """Both θ1 (rad; shoulder left, then right) that put ``point`` (3,) in the arm's plane, which passes ``d4``
+    from the base axis: the IK's step 1 for P5 (docs/kinematics.md §4.1), ``py5 c1 − px5 s1 = −d4``, so that
+    P5 = A x1 + d4 (s1, −c1). Where ``point`` is nearer the base axis than d4 (for P5, only by rounding), the two
+    are one.
 
     >>> np.degrees(shoulder_angles(np.array([0.0, -0.5, 0.0]), 0.5)).round(6).tolist()   # on the circle: one θ1
     [0.0, 0.0]
