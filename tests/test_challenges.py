@@ -282,6 +282,34 @@ def test_numbers_name_the_kind_of_mistake():
         C.check(position, COURSE, C.Answer(numbers=p[:2]))
 
 
+def test_the_tool_velocity_on_the_courses_path_is_the_time_derivative_of_where_the_tool_is():
+    """The course's velocity exercise as numbers (docs §8.6): v at t = 4 s against the central difference in t
+    of the course's own position map along its path, p(θ(t)), written out in the test; rates in °/s read as
+    rad/s are named; a sign flipped everywhere is not taken for a swap; the file keys go together."""
+    challenge, arm = by_title("Desktop arm: the tool's velocity on the course's path"), Arm.preset("three_dof")
+    l5, l1, h = UPPER_ARM, FOREARM, 1e-6
+
+    def course_position(t: float) -> np.ndarray:  # θ(t) as the course drives it, then p(θ) as the course writes it
+        t1 = t2 = math.pi / 6 * math.sin(t)
+        t3 = 3 * math.pi / 4 + math.pi / 8 * math.sin(t)
+        reach = l1 * math.cos(t3) - l5 * math.cos(t2)
+        return np.array([math.cos(t1) * reach, l1 * math.sin(t3) - l5 * math.sin(t2), -math.sin(t1) * reach])
+
+    v = 1000 * (course_position(4.0 + h) - course_position(4.0 - h)) / (2 * h)
+    np.testing.assert_allclose(C.expected_numbers(challenge, arm), v, atol=1e-4)
+    assert C.number_names(challenge, arm) == ("vx", "vy", "vz") and C.check(challenge, arm, C.Answer(numbers=v)).solved
+    degrees = 1000 * arm.tool_twist(np.array(challenge.joints), np.degrees(challenge.rates))[:3]
+    for typed, group in ((degrees, "joint rates in °/s taken as rad/s"), (-v, "vx, vy, vz have the wrong sign"),
+                         (v[[1, 0, 2]], "vx and vy swapped"), (v / 1000, "vx, vy, vz are 1000 times too small")):
+        verdict = C.check(challenge, arm, C.Answer(numbers=typed))
+        assert not verdict.solved and verdict.group == group, (group, verdict)
+    head = '[[challenge]]\ntitle = "v"\nkind = "numbers"\narm = "three_dof"\njoints = [0, 0, 90]\n'
+    assert C.parse(head + 'quantity = "tool_velocity"\nrates_deg_s = [10, 0, 0]\n')[0].rates == pytest.approx((math.radians(10), 0, 0))
+    for tail, line in (('quantity = "tool_velocity"\n', 6), ('quantity = "position"\nrates_deg_s = [10, 0, 0]\n', 7)):
+        with pytest.raises(ValueError, match=f"line {line}: tool_velocity needs the joint rates"):
+            C.parse(head + tail)
+
+
 @pytest.mark.parametrize("name", ["course", "ur10", "ur10e"])
 def test_det_j_by_hand_names_the_constant_left_out_and_lengths_in_mm(name):
     """The course's det J = a2·a3·(a2 c2 + a3 c23 − d5 s234)·s3·s5 (docs §5), written out here: the three factors'

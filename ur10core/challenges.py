@@ -24,6 +24,7 @@ from .dh import DHTable
 from .solvers.spherical_wrist import spherical_wrist, wrist_split
 from .solvers.ur import separation_steps, shoulder_angles
 from .specs import GRID_JOINTS, WorstPose, largest_torque
+from .three_dof import course_path
 from .workspace import heights_above_floor
 
 if sys.version_info >= (3, 11):
@@ -39,7 +40,8 @@ QUANTITIES = {"position": "p of the tool frame (x, y, z in mm)", "det_j": "det J
               "torque": "the joint torques τ = Jᵀ [F; M] (N·m, N for a sliding joint)",
               "theta1": "both θ1 of the course's IK for this pose, shoulder left then right (°; the UR family's step 1)",
               "wrist_centre": "WC, where the wrist's three axes meet (x, y, z in mm; decoupling's step 1 on an arm "
-                              "with a spherical wrist)"}
+                              "with a spherical wrist)",
+              "tool_velocity": "v of the tool, J_v q̇, for the given joint rates (vx, vy, vz in mm/s)"}
 #: The UR family's quantities: its IK's own steps (docs/kinematics.md §4.1)
 UR_QUANTITIES = ("theta1",)
 #: Quantities of an arm with a spherical wrist (docs/kinematics.md §7.3)
@@ -67,6 +69,7 @@ class Challenge:
     arm: str  #: an ``Arm.preset`` name ("ur10": the app's own UR10, whichever preset the server runs)
     text: str  #: the task as the students read it
     joints: tuple[float, ...] | None = None  #: reach: the target's joints; numbers: where to compute; branch_count: the orientation's
+    rates: tuple[float, ...] | None = None  #: numbers, tool_velocity: the joint rates (rad/s, m/s for a sliding joint)
     branch: str | int | None = None  #: reach: a slot number (1-based) or words of its label ("elbow down")
     factor: str | None = None  #: singularity: which factor of det J is zero
     min_tool_height: float | None = None  #: singularity: the tool at least this far above the floor (m)
@@ -125,6 +128,7 @@ def _deg(*values: float) -> tuple[float, ...]:
 
 
 _REACH = _deg(20, 70, -100, 120, 90, 30)
+_PATH_AT_4S = course_path(4.0)  #: the desktop arm's joints and rates at t = 4 s of the course's path (docs §8.6)
 _BUILTIN = (
     Challenge("Reach the target", "reach", "ur10",
               "Put the tool on the orange target, position and orientation, on any branch (drag the target "
@@ -173,6 +177,11 @@ _BUILTIN = (
     Challenge("Cylindrical arm + wrist: its DH table", "dh_table", "cylindrical_wrist",
               "Type the DH table of the cylindrical arm with a spherical wrist (either convention): its forward "
               "kinematics must match the arm's."),
+    Challenge("Desktop arm: the tool's velocity on the course's path", "numbers", "three_dof",
+              "The course drives the desktop arm along θ̇ = (π/6 cos t, π/6 cos t, π/8 cos t) from θ = (0°, 0°, 135°), so "
+              "θ = (π/6 sin t, π/6 sin t, 3π/4 + π/8 sin t). At **t = 4 s**, what is the tool's velocity v = J_v θ̇? "
+              "Type vx vy vz in mm/s (1 %).", joints=tuple(_PATH_AT_4S[0].tolist()), rates=tuple(_PATH_AT_4S[1].tolist()),
+              quantity="tool_velocity"),
     Challenge("Desktop arm: the heaviest pose", "largest_torque", "three_dof",
               "The course's statics exercise: the desktop arm's tool pushes with **20 N along +x**. Move the joints, "
               "within their ranges, to the pose where holding it needs the **largest ‖τ‖ = ‖J_vᵀ F‖** (within 1 %). "
@@ -252,7 +261,7 @@ def _line(text: str, index: int, field: str | None) -> int:
 
 
 #: Every key a challenge table may have, and what it becomes.
-_FIELDS = {"title", "kind", "arm", "text", "joints", "branch", "factor", "min_tool_height_mm", "count", "quantity",
+_FIELDS = {"title", "kind", "arm", "text", "joints", "rates_deg_s", "branch", "factor", "min_tool_height_mm", "count", "quantity",
            "force_n", "moment_nm", "velocity_mm_s", "still", "position_tolerance_mm", "orientation_tolerance_deg",
            "factor_tolerance", "relative_tolerance", "velocity_tolerance_mm_s", "time_limit_s"}
 #: The keys each kind needs, and those it may have beyond the common ones.
@@ -260,7 +269,7 @@ _NEEDS = {"reach": ({"joints"}, {"branch", "position_tolerance_mm", "orientation
           "singularity": ({"factor"}, {"min_tool_height_mm", "factor_tolerance"}),
           "branch_count": ({"count"}, {"joints", "orientation_tolerance_deg"}),
           "dh_table": (set(), {"position_tolerance_mm"}),
-          "numbers": ({"joints", "quantity"}, {"force_n", "moment_nm", "relative_tolerance"}),
+          "numbers": ({"joints", "quantity"}, {"force_n", "moment_nm", "rates_deg_s", "relative_tolerance"}),
           "velocity": ({"velocity_mm_s"}, {"still", "velocity_tolerance_mm_s"}),
           "largest_torque": ({"force_n"}, {"relative_tolerance"})}
 _COMMON = {"title", "kind", "arm", "text", "time_limit_s"}
@@ -290,6 +299,9 @@ def _from_table(table: dict) -> Challenge:
     values: dict = {"title": title, "kind": kind, "arm": arm_name, "text": _text(table, "text", MAX_TEXT) or title}
     if "joints" in table:
         values["joints"] = _joints(table, arm)
+    if "rates_deg_s" in table:
+        shown = _numbers(table, "rates_deg_s", arm.n_joints, 1e5)
+        values["rates"] = tuple(np.where(arm.revolute, np.radians(shown), np.array(shown) / 1000.0).tolist())
     if "branch" in table:
         values["branch"] = _branch(table["branch"], arm)
     if "factor" in table:
@@ -324,6 +336,9 @@ def _from_table(table: dict) -> Challenge:
     challenge = Challenge(**values)
     if challenge.quantity == "torque" and not any(challenge.force) and not any(challenge.moment):
         raise _FieldError("quantity", "a torque question needs force_n or moment_nm")
+    if (challenge.quantity == "tool_velocity") != (challenge.rates is not None):
+        raise _FieldError("quantity" if challenge.rates is None else "rates_deg_s",
+                          "tool_velocity needs the joint rates, rates_deg_s, and only it uses them")
     if challenge.quantity in UR_QUANTITIES and arm_name not in Arm.UR_PRESETS:
         raise _FieldError("quantity", f"{challenge.quantity} is a step of the UR family's IK: arm must be one of "
                                       f"{', '.join(Arm.UR_PRESETS)}, got {arm_name!r:.40}")
@@ -656,6 +671,8 @@ def expected_numbers(challenge: Challenge, arm: Arm) -> np.ndarray:
         return 1000 * arm.fk(q)[:3, 3]
     if challenge.quantity == "wrist_centre":
         return 1000 * wrist_split(arm, q).centre
+    if challenge.quantity == "tool_velocity":
+        return 1000 * arm.tool_twist(q, np.array(challenge.rates))[:3]
     if challenge.quantity == "det_j":
         return np.array([np.linalg.det(arm.jacobian(q))])
     if challenge.quantity == "theta1":
@@ -666,6 +683,8 @@ def expected_numbers(challenge: Challenge, arm: Arm) -> np.ndarray:
 def number_names(challenge: Challenge, arm: Arm) -> tuple[str, ...]:
     if challenge.quantity in POINTS:
         return ("x", "y", "z")
+    if challenge.quantity == "tool_velocity":
+        return ("vx", "vy", "vz")
     if challenge.quantity == "det_j":
         return ("det J",)
     if challenge.quantity == "theta1":
@@ -689,6 +708,10 @@ def _slips(challenge: Challenge, arm: Arm) -> list[tuple[np.ndarray, str, str]]:
         wrench = np.concatenate([challenge.force, challenge.moment])
         return [(arm.jacobian(q) @ wrench, "J [F; M], not Jᵀ [F; M]",
                  "That is J [F; M]: the joint torques are Jᵀ [F; M] (virtual work: τ · q̇ = [F; M] · J q̇).")]
+    if quantity == "tool_velocity":  # the revolute joints' rates in °/s, read as rad/s
+        typed_rates = np.where(arm.revolute, np.degrees(challenge.rates), challenge.rates)
+        return [(1000 * arm.tool_twist(q, typed_rates)[:3], "joint rates in °/s taken as rad/s",
+                 "That is J_v q̇ with the rates in °/s read as rad/s: turn them into rad/s first.")]
     if quantity == "theta1":
         d4, d6 = arm.solver.dh_lengths[3], arm.solver.dh_lengths[5]
         return [(np.degrees(shoulder_angles(arm.fk(q)[:3, 3], d4)), "θ1 from p, not from P5",
@@ -739,7 +762,9 @@ def _check_numbers(challenge: Challenge, arm: Arm, answer: Answer) -> Verdict:
         else:
             kinds.append("is off")
     off = [names[k] for k in np.flatnonzero(wrong)]
-    swapped = [(names[i], names[j]) for i in np.flatnonzero(wrong) for j in np.flatnonzero(wrong)
+    # a swap only between numbers nothing simpler explains (a flipped sign can look like a swap: vy ≈ −vz)
+    unexplained = [k for k, kind in zip(np.flatnonzero(wrong), kinds) if kind == "is off"]
+    swapped = [(names[i], names[j]) for i in unexplained for j in unexplained
                if i < j and gap(typed[i], expected[j]) <= allowed[j] and gap(typed[j], expected[i]) <= allowed[i]]
     if swapped:
         group = f"{swapped[0][0]} and {swapped[0][1]} swapped"
