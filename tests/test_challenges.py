@@ -286,7 +286,7 @@ def test_the_tool_velocity_on_the_courses_path_is_the_time_derivative_of_where_t
     """The course's velocity exercise as numbers (docs §8.6): v at t = 4 s against the central difference in t
     of the course's own position map along its path, p(θ(t)), written out in the test; rates in °/s read as
     rad/s are named; a sign flipped everywhere is not taken for a swap; the file keys go together."""
-    challenge, arm = by_title("Desktop arm: the tool's velocity on the course's path"), Arm.preset("three_dof")
+    challenge, arm = by_title("Desktop arm: velocity on the path"), Arm.preset("three_dof")
     l5, l1, h = UPPER_ARM, FOREARM, 1e-6
 
     def course_position(t: float) -> np.ndarray:  # θ(t) as the course drives it, then p(θ) as the course writes it

@@ -177,7 +177,7 @@ _BUILTIN = (
     Challenge("Cylindrical arm + wrist: its DH table", "dh_table", "cylindrical_wrist",
               "Type the DH table of the cylindrical arm with a spherical wrist (either convention): its forward "
               "kinematics must match the arm's."),
-    Challenge("Desktop arm: the tool's velocity on the course's path", "numbers", "three_dof",
+    Challenge("Desktop arm: velocity on the path", "numbers", "three_dof",
               "The course drives the desktop arm along θ̇ = (π/6 cos t, π/6 cos t, π/8 cos t) from θ = (0°, 0°, 135°), so "
               "θ = (π/6 sin t, π/6 sin t, 3π/4 + π/8 sin t). At **t = 4 s**, what is the tool's velocity v = J_v θ̇? "
               "Type vx vy vz in mm/s (1 %).", joints=tuple(_PATH_AT_4S[0].tolist()), rates=tuple(_PATH_AT_4S[1].tolist()),
