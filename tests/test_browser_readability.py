@@ -92,7 +92,9 @@ def test_the_arm_is_framed_beside_the_panel_in_any_window(open_page):
 def test_lecture_mode_for_the_presenter_and_the_class(open_page, playwright):
     """``--lecture``: 20 px type and thick gizmo lines in the teacher's browser, the panel folds away
     and comes back, each browser can switch it off; the class's browsers get it too."""
-    from ur10dev.browser import SMALL_VIEWPORT, launch, open_app
+    from ur10dev.browser import SMALL_VIEWPORT, ask_to_present, launch, open_app
+
+    from .test_browser_lecture_hall import cut_choices
 
     server = TeachingServer(port=0, lecture=True, light=True)
     try:
@@ -120,6 +122,12 @@ def test_lecture_mode_for_the_presenter_and_the_class(open_page, playwright):
         watching = page.get_by_text("You are watching", exact=False).first
         watching.wait_for(timeout=HANG_TIMEOUT_MS)
         assert font_px(watching) >= 20, "a viewer's type is under 20 px in lecture mode"
+        # the teacher picks a class challenge by its title on the projector: until 2026-12-04 five ran under the
+        # dropdown's chevron ("KR210: reach with the wrist flipped", "Cylindrical arm + wrist: its DH table", ...)
+        room = server.classroom
+        member = next(iter(room.members.values()))
+        ask_to_present(page, member, room.code, lambda: member.desk is not None, "the Challenge folder")
+        assert not cut_choices(page, member.desk.picker), "challenges whose titles are cut in the teacher's picker"
     finally:
         browser.close()
         server.stop()

@@ -99,7 +99,7 @@ def test_reach_elbow_down_names_the_branch_each_slot_is(slot):
 
 
 def test_reach_by_branch_number_and_on_other_arms():
-    reach = C.Challenge("five", "reach", "kr210", "", joints=by_title("KR210: reach with the wrist flipped").joints, branch=3)
+    reach = C.Challenge("five", "reach", "kr210", "", joints=by_title("KR210: reach, wrist flipped").joints, branch=3)
     arm = Arm.preset("kr210")
     solution = arm.ik(arm.fk(reach.joints))
     valid = np.flatnonzero(solution.valid)
@@ -286,7 +286,7 @@ def test_the_tool_velocity_on_the_courses_path_is_the_time_derivative_of_where_t
     """The course's velocity exercise as numbers (docs §8.6): v at t = 4 s against the central difference in t
     of the course's own position map along its path, p(θ(t)), written out in the test; rates in °/s read as
     rad/s are named; a sign flipped everywhere is not taken for a swap; the file keys go together."""
-    challenge, arm = by_title("Desktop arm: velocity on the path"), Arm.preset("three_dof")
+    challenge, arm = by_title("Desktop arm: tool velocity"), Arm.preset("three_dof")
     l5, l1, h = UPPER_ARM, FOREARM, 1e-6
 
     def course_position(t: float) -> np.ndarray:  # θ(t) as the course drives it, then p(θ) as the course writes it
@@ -394,7 +394,7 @@ def test_the_wrist_centre_is_where_the_wrist_axes_meet_and_its_slips_are_named(n
 
 
 def test_the_kr210s_wrist_centre_is_303_mm_back_along_the_gripper():
-    challenge = by_title("KR210: where is the wrist centre?")
+    challenge = by_title("KR210: its wrist centre")
     arm = Arm.preset("kr210")
     T = arm.fk(challenge.joints)
     wc = C.expected_numbers(challenge, arm)
@@ -459,7 +459,7 @@ def test_the_largest_torque_is_the_closed_forms_and_no_sampled_pose_beats_it(nam
 
 
 def test_the_heaviest_pose_groups_say_how_close():
-    task = by_title("Desktop arm: the heaviest pose")
+    task = by_title("Desktop arm: heaviest pose")
     arm = Arm.preset("three_dof")
     assert task.is_pose and "20 N along +x" in task.text
     verdicts = {q: C.check(task, arm, C.Answer(q=np.radians(q))) for q in

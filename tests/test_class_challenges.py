@@ -420,7 +420,7 @@ def test_the_placed_labels_keep_clear_of_the_challenge_targets_name(classroom):
         room = classroom.classroom
         teacher = await ViserClient(url(classroom)).connect()
         await become_presenter(teacher, classroom)
-        await teacher.set_gui("Challenge", "KR210: reach with the wrist flipped")
+        await teacher.set_gui("Challenge", "KR210: reach, wrist flipped")
         await teacher.set_gui("Start the challenge", True)
         await until(lambda: room.challenges.running, what="the KR210 challenge")
         student = await ViserClient(url(classroom)).connect()
@@ -497,7 +497,7 @@ def test_the_desktop_arms_heaviest_pose_is_found_by_the_student_not_by_its_searc
     room.challenges.clock = itertools.count(0.0, 10.0).__next__  # each check a while after the last: none is paced
 
     async def scenario():
-        teacher, student, member = await a_student_in(classroom, "Desktop arm: the heaviest pose", "127.0.0.8")
+        teacher, student, member = await a_student_in(classroom, "Desktop arm: heaviest pose", "127.0.0.8")
         session = member.session
         assert session.arm.name == "three_dof"
         await until(lambda: teacher.shown("*largest torque, on 3-DOF desktop arm*"), what="the arm named as the picker names it")

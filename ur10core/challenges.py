@@ -163,10 +163,10 @@ _BUILTIN = (
               "turning. Within 5 mm/s and 1 °/s.", velocity=(0.0, 0.0, 0.1), still=True),
     Challenge("Type the UR10's DH table", "dh_table", "ur10",
               "Type the DH table of the UR10 (either convention): its forward kinematics must match the arm's."),
-    Challenge("KR210: reach with the wrist flipped", "reach", "kr210",
+    Challenge("KR210: reach, wrist flipped", "reach", "kr210",
               "Put the KR210's tool on the target **with the wrist flipped**. Within 5 mm and 2°.",
               joints=_deg(10, 20, -30, 40, 50, 60), branch="wrist flipped"),
-    Challenge("KR210: where is the wrist centre?", "numbers", "kr210",
+    Challenge("KR210: its wrist centre", "numbers", "kr210",
               "Step 1 of the KR210's IK, kinematic decoupling: at q = (30°, 10°, −20°, 60°, 45°, 90°), where do its "
               "wrist's three axes meet? WC = p − 303 mm · z of the gripper frame. Type x y z in mm (1 %).",
               joints=_deg(30, 10, -20, 60, 45, 90), quantity="wrist_centre"),
@@ -174,15 +174,15 @@ _BUILTIN = (
               "Type the Stanford arm's DH table (either convention): its forward kinematics must match the arm's."),
     Challenge("SCARA: one branch only", "branch_count", "scara",
               "Move the SCARA's target to where **only 1** of its 2 branches reaches.", count=1),
-    Challenge("Cylindrical arm + wrist: its DH table", "dh_table", "cylindrical_wrist",
+    Challenge("Cylindrical + wrist: DH table", "dh_table", "cylindrical_wrist",
               "Type the DH table of the cylindrical arm with a spherical wrist (either convention): its forward "
               "kinematics must match the arm's."),
-    Challenge("Desktop arm: velocity on the path", "numbers", "three_dof",
+    Challenge("Desktop arm: tool velocity", "numbers", "three_dof",
               "The course drives the desktop arm along θ̇ = (π/6 cos t, π/6 cos t, π/8 cos t) from θ = (0°, 0°, 135°), so "
               "θ = (π/6 sin t, π/6 sin t, 3π/4 + π/8 sin t). At **t = 4 s**, what is the tool's velocity v = J_v θ̇? "
               "Type vx vy vz in mm/s (1 %).", joints=tuple(_PATH_AT_4S[0].tolist()), rates=tuple(_PATH_AT_4S[1].tolist()),
               quantity="tool_velocity"),
-    Challenge("Desktop arm: the heaviest pose", "largest_torque", "three_dof",
+    Challenge("Desktop arm: heaviest pose", "largest_torque", "three_dof",
               "The course's statics exercise: the desktop arm's tool pushes with **20 N along +x**. Move the joints, "
               "within their ranges, to the pose where holding it needs the **largest ‖τ‖ = ‖J_vᵀ F‖** (within 1 %). "
               "*Forces and gravity* shows τ for 20 N, +x.", force=(20.0, 0.0, 0.0)),
