@@ -11,6 +11,7 @@ from typing import Callable
 
 import viser
 
+from ur10core import Arm
 from ur10core.serial import PRESETS
 
 from ..feedback import put_back
@@ -43,6 +44,11 @@ def panel_title(choice: str, preset: str) -> str:
     """The panel's title: the arm it shows (``choice``, an :data:`ARM_CHOICES` label; ``preset``, the UR10's numbers),
     short enough to be read whole in lecture mode on a projector (no ": kinematics" after the arm's name)."""
     return f"UR10 kinematics ({preset})" if choice == UR10 else choice
+
+
+def choice_of(preset: str) -> str:
+    """The picker's label for an ``Arm.preset`` name: the UR family's is the app's own UR10."""
+    return UR10 if preset in Arm.UR_PRESETS else next(label for label, name in ARM_CHOICES.items() if name == preset)
 
 
 #: What the classroom's presenter can show the class: a typed table is for one's own browser.

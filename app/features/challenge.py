@@ -19,7 +19,7 @@ from ur10core.orientation import from_frame, in_frame, quaternion
 from ..feedback import Beside, chosen, within
 from ..serving.challenge_run import MAX_NICKNAME, ChallengeRun, Student, summary_markdown
 from ..style import SAFE_GREEN, UR10_SIZE, hex_color, label_scale
-from .arm_picker import ARM_CHOICES, UR10
+from .arm_picker import choice_of
 from .branch_labels import BranchLabels, ScreenView, obstacle
 from .course_arms.editor import CONVENTIONS, STARTING_TABLE
 from .lecture import add_label
@@ -101,9 +101,8 @@ class ChallengeDesk:
 
     def _preview(self) -> None:
         challenge = self.chosen()
-        arm = UR10 if challenge.arm == "ur10" else next((label for label, name in ARM_CHOICES.items() if name == challenge.arm),
-                                                         f"the {challenge.arm} arm")
-        self.preview.content = f"{challenge_markdown(challenge)}\n\n*{challenge.kind.replace('_', ' ')}, on {arm}*"
+        self.preview.content = (f"{challenge_markdown(challenge)}\n\n"
+                                f"*{challenge.kind.replace('_', ' ')}, on {choice_of(challenge.arm)}*")
         if challenge.time_limit and not self.minutes.value:
             self.minutes.value = round(challenge.time_limit / 60)
 

@@ -15,7 +15,7 @@ import numpy as np
 from ur10core import Arm
 from ur10core.challenges import Answer, Challenge, number_names, solution
 
-from ..features.arm_picker import ARM_CHOICES, UR10
+from ..features.arm_picker import choice_of
 from ..features.branch_labels import in_world, screen_view
 from ..features.challenge import ChallengeCard, ChallengeDesk, ClassTools, GoalMarker, goal_pose
 from ..features.course_arms.editor import parse_table
@@ -72,8 +72,7 @@ class ClassChallenges:
                 raise ValueError("only the presenter starts a challenge")
             if self.run is not None and not self.run.ended:
                 raise ValueError("a challenge is running: end it first")
-            label = UR10 if challenge.arm in Arm.UR_PRESETS else next(k for k, v in ARM_CHOICES.items() if v == challenge.arm)
-            self.room.show_arm(member, label, paced=False)
+            self.room.show_arm(member, choice_of(challenge.arm), paced=False)
             for other in self.room.members.values():  # the last run's cards and targets go
                 self.step_out(other, keep=False)
             self.run = ChallengeRun(challenge, self.room.state.arm, time_limit, clock=lambda: self.clock())
