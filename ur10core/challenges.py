@@ -300,8 +300,7 @@ def _from_table(table: dict) -> Challenge:
     if "joints" in table:
         values["joints"] = _joints(table, arm)
     if "rates_deg_s" in table:
-        shown = _numbers(table, "rates_deg_s", arm.n_joints, 1e5)
-        values["rates"] = tuple(np.where(arm.revolute, np.radians(shown), np.array(shown) / 1000.0).tolist())
+        values["rates"] = tuple(_in_si(arm, _numbers(table, "rates_deg_s", arm.n_joints, 1e5)).tolist())
     if "branch" in table:
         values["branch"] = _branch(table["branch"], arm)
     if "factor" in table:
@@ -403,10 +402,15 @@ def _numbers(table: dict, field: str, size: int, bound: float) -> list[float]:
     return [float(v) for v in values]
 
 
+def _in_si(arm: Arm, shown: list[float]) -> np.ndarray:
+    """Joint values (or rates) as a file gives them, degrees (mm for a sliding joint), in radians and metres."""
+    return np.where(arm.revolute, np.radians(shown), np.array(shown) / 1000.0)
+
+
 def _joints(table: dict, arm: Arm) -> tuple[float, ...]:
     """The file's joints (degrees, mm for a sliding joint), within the arm's limits."""
     shown = _numbers(table, "joints", arm.n_joints, 1e5)
-    q = np.where(arm.revolute, np.radians(shown), np.array(shown) / 1000.0)
+    q = _in_si(arm, shown)
     if not arm.within_limits(q):
         raise _FieldError("joints", f"joints {shown} are outside the {arm.name} arm's limits")
     return tuple(q.tolist())
@@ -692,8 +696,9 @@ def number_names(challenge: Challenge, arm: Arm) -> tuple[str, ...]:
     return tuple(f"τ{k + 1}" for k in range(arm.n_joints))
 
 
-def _slips(challenge: Challenge, arm: Arm) -> list[tuple[np.ndarray, str, str]]:
-    """Whole answers a known slip gives, in the units typed: (the numbers, the group, what the student reads)."""
+def _slips(challenge: Challenge, arm: Arm, expected: np.ndarray) -> list[tuple[np.ndarray, str, str]]:
+    """Whole answers a known slip gives, in the units typed: (the numbers, the group, what the student reads).
+    ``expected``: the right answer (:func:`expected_numbers`)."""
     q, quantity = np.array(challenge.joints), challenge.quantity
     if quantity == "position":  # the product of the link transforms stopped one short
         frames = arm.frames(q)
@@ -701,7 +706,7 @@ def _slips(challenge: Challenge, arm: Arm) -> list[tuple[np.ndarray, str, str]]:
                  f"That is where frame {len(frames) - 2}, the frame before the tool's, is: the last link "
                  "transform, from it to the tool, is left out.")]
     if quantity == "det_j" and arm.name in Arm.UR_PRESETS:  # det J = a2 a3 (a2 c2 + a3 c23 − d5 s234) s3 s5
-        det = expected_numbers(challenge, arm)
+        det = expected
         return [(det / (arm.a2 * arm.a3), "a2·a3 left out", "That is the product of the three factors: det J is a2·a3 times it."),
                 (det * 1e9, "lengths in mm, not metres", "Those are lengths in mm: det J is in m³, so it is 10⁹ times smaller.")]
     if quantity == "torque" and arm.n_joints == 6:  # J is square: J [F; M] can be typed in its place
@@ -746,7 +751,7 @@ def _check_numbers(challenge: Challenge, arm: Arm, answer: Answer) -> Verdict:
     wrong = gap(typed, expected) > allowed
     if not wrong.any():
         return Verdict(True, "Solved: every number is right.", "", text)
-    for value, group, message in _slips(challenge, arm):
+    for value, group, message in _slips(challenge, arm, expected):
         if not (gap(typed, value) > allowed).any():
             return Verdict(False, message, group, text)
     kinds = []
