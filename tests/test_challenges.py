@@ -310,6 +310,37 @@ def test_the_tool_velocity_on_the_courses_path_is_the_time_derivative_of_where_t
             C.parse(head + tail)
 
 
+def test_holding_itself_up_is_roboticstoolboxs_gravload_and_its_slips_are_named():
+    """The joint torques that hold the UR10 against its weight and a payload (docs §8.5) against
+    roboticstoolbox-python's gravload for its DH UR10 (UR's masses, the controller's angles); the sign
+    flipped, the masses without g and the payload left out are named; the file's keys are checked."""
+    import roboticstoolbox as rtb  # test-only reference
+
+    from ur10core.controller import CONTROLLER_OFFSET
+
+    challenge, arm = by_title("Holding itself up"), Arm.preset("ur10")
+    robot = rtb.models.DH.UR10()
+    q = np.array(challenge.joints) + CONTROLLER_OFFSET
+    robot.payload(challenge.payload, [0.0, 0.0, 0.0])
+    loaded = robot.gravload(q)
+    robot.payload(0.0, [0.0, 0.0, 0.0])
+    alone = robot.gravload(q)
+    assert challenge.payload == 5.0 and loaded[1] > 150  # stretched out level: the shoulder holds the most
+    np.testing.assert_allclose(C.expected_numbers(challenge, arm), loaded, atol=1e-9)
+    assert C.check(challenge, arm, C.Answer(numbers=loaded)).solved
+    for typed, group in ((-loaded, "gravity's torques, not the holding ones"), (loaded / 9.81, "masses, not weights"),
+                         (alone, "the payload left out"), (loaded * [1, 1, 1.1, 1, 1, 1], "τ3 is off")):
+        verdict = C.check(challenge, arm, C.Answer(numbers=typed))
+        assert not verdict.solved and verdict.group == group, (group, verdict)
+    head = '[[challenge]]\ntitle = "g"\nkind = "numbers"\njoints = [0, 0, 0, 0, 0, 0]\n'
+    assert C.parse(head + 'quantity = "gravity_torque"\n')[0].payload == 0.0
+    for tail, line, words in (('quantity = "gravity_torque"\npayload_kg = 11\n', 6, "payload_kg must be a number from 0 to 10"),
+                              ('quantity = "position"\npayload_kg = 1\n', 6, "payload_kg is used by gravity_torque only"),
+                              ('quantity = "gravity_torque"\narm = "kr210"\n', 5, "known for course, ur10, not for 'kr210'")):
+        with pytest.raises(ValueError, match=f"line {line}: .*{words}"):
+            C.parse(head + tail)
+
+
 @pytest.mark.parametrize("name", ["course", "ur10", "ur10e"])
 def test_det_j_by_hand_names_the_constant_left_out_and_lengths_in_mm(name):
     """The course's det J = a2·a3·(a2 c2 + a3 c23 − d5 s234)·s3·s5 (docs §5), written out here: the three factors'
@@ -506,6 +537,102 @@ GOOD = textwrap.dedent("""\
     factor = "wrist"
     time_limit_s = 120
     """)
+
+
+TERSE = textwrap.dedent("""\
+    [[challenge]]
+    title = "a"
+    kind = "reach"
+    arm = "kr210"
+    joints = [10, 20, -30, 40, 50, 60]
+    branch = 2
+    position_tolerance_mm = 12
+    orientation_tolerance_deg = 7
+    [[challenge]]
+    title = "b"
+    kind = "singularity"
+    factor = "wrist"
+    factor_tolerance = 0.02
+    min_tool_height_mm = 300
+    [[challenge]]
+    title = "c"
+    kind = "velocity"
+    velocity_mm_s = [10, 0, -2.5]
+    velocity_tolerance_mm_s = 2
+    still = true
+    [[challenge]]
+    title = "d"
+    kind = "numbers"
+    joints = [0, 0, 0, 90, 0, 0]
+    quantity = "torque"
+    force_n = [0, 0, -100]
+    moment_nm = [1, 0, 0]
+    relative_tolerance = 0.05
+    [[challenge]]
+    title = "e"
+    kind = "numbers"
+    arm = "stanford"
+    joints = [10, 20, 250, 30, 40, 50]
+    quantity = "position"
+    [[challenge]]
+    title = "f"
+    kind = "largest_torque"
+    arm = "planar_elbow"
+    force_n = [0, -30, 0]
+    relative_tolerance = 0.02
+    [[challenge]]
+    title = "g"
+    kind = "dh_table"
+    arm = "scara"
+    position_tolerance_mm = 20
+    [[challenge]]
+    title = "h"
+    kind = "branch_count"
+    arm = "scara"
+    count = 2
+    joints = [30, 60, 100, 20]
+    orientation_tolerance_deg = 4
+    """)
+
+
+def test_the_terms_give_what_the_check_takes_whatever_the_task_says():
+    """A teacher's text may be a title alone: the words under it still give the joints, the force, the branch
+    and each tolerance, as the file sets them."""
+    terms = [C.terms(c) for c in C.parse(TERSE)]
+    assert terms[0] == ("Checked: your tool on the target, on branch 2 (shoulder front, elbow up, wrist flipped), "
+                        "within 12 mm and 7°.")
+    assert terms[1] == ("Checked: the wrist factor of det J zero, within 2 % of its usual size, with the tool at least "
+                        "300 mm above the floor.")
+    assert terms[2] == ("Checked: your joint rates, at your pose, move the tool at v = (10, 0, -2.5) mm/s, in the base "
+                        "frame, within 2 mm/s, without turning (under 1 °/s).")
+    assert terms[3] == ("Given: q = (0°, 0°, 0°, 90°, 0°, 0°); F = (0, 0, -100) N and M = (1, 0, 0) N·m at the tool, in "
+                        f"the base frame. Asked: {C.QUANTITIES['torque']}, each within 5 %.")
+    assert terms[4].startswith("Given: q = (10°, 20°, 250 mm, 30°, 40°, 50°). Asked: p of the tool frame")
+    assert terms[5] == ("Given: F = (0, -30, 0) N at the tool, in the base frame. Checked: your joints, within their "
+                        "ranges, need ‖τ‖ = ‖J_vᵀ F‖ within 2 % of the largest any pose needs.")
+    assert terms[6].endswith("the tool frame within 2 mm.")  # the table's tool within a tenth of the tolerance
+    assert terms[7] == ("Checked: your IK target where exactly 2 branches reach within the joint limits, with the tool's "
+                        "orientation at q = (30°, 60°, 100 mm, 20°), within 4° of its yaw.")
+    # the planar elbow controls no orientation: none is written
+    assert "Checked: your tool on the target, within 12 mm." == C.terms(C.parse(TERSE.replace('arm = "kr210"\njoints = [10, 20, -30, 40, 50, 60]\nbranch = 2',
+                                                             'arm = "planar_elbow"\njoints = [10, 20]'))[0])
+
+
+@pytest.mark.parametrize("challenge", [c for c in C.builtin() if c.kind == "numbers"], ids=lambda c: c.key)
+def test_a_numbers_tasks_givens_as_written_are_enough_to_solve_it(challenge):
+    """Joints and rates are written to two decimals: worked from them, the answer is still within the tolerance."""
+    arm = arm_of(challenge)
+
+    def given(symbol: str) -> tuple[float, ...] | None:
+        found = re.search(rf"{symbol} = \(([^)]*)\)", C.terms(challenge))
+        if found is None:
+            return None
+        shown = [float(re.sub(r"[^0-9.\-]", "", v)) for v in found.group(1).split(",")]
+        return tuple(np.where(arm.revolute, np.radians(shown), np.array(shown) / 1000).tolist())
+
+    worked = C.Challenge(**{**challenge.__dict__, "joints": given("q"), "rates": given("q̇")})
+    assert worked.joints is not None and (challenge.rates is None) == (worked.rates is None)
+    assert C.check(challenge, arm, C.Answer(numbers=C.expected_numbers(worked, arm))).solved
 
 
 def test_a_teachers_file_is_read_in_its_units():

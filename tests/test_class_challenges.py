@@ -505,7 +505,7 @@ def test_the_desktop_arms_heaviest_pose_is_found_by_the_student_not_by_its_searc
         await until(lambda: student.gui.get("Find the pose that needs the largest ‖τ‖", {}).get("visible") is False
                     and student.gui.get(mapped.label, {}).get("visible") is False
                     and len(student.shown(HELD_BACK)) == 2, what="the search and the map off, saying why")
-        await until(lambda: student.shown("The force at the tool: (20, 0, 0) N, in the base frame."), what="the task's force")
+        await until(lambda: student.shown("**Given:** F = (20, 0, 0) N at the tool, in the base frame."), what="the task's force")
         q = session.state.q
         await student.send(messages.GuiUpdateMessage(search._impl.uuid, {"value": True}))
         await student.send(messages.GuiUpdateMessage(mapped._impl.uuid, {"value": True}))

@@ -21,6 +21,7 @@ import numpy as np
 
 from .arm import PRESETS, Arm, factor_scales
 from .dh import DHTable
+from .dynamics import GRAVITY, MASSES
 from .solvers.spherical_wrist import spherical_wrist, wrist_split
 from .solvers.ur import separation_steps, shoulder_angles
 from .specs import GRID_JOINTS, WorstPose, largest_torque
@@ -41,11 +42,15 @@ QUANTITIES = {"position": "p of the tool frame (x, y, z in mm)", "det_j": "det J
               "theta1": "both θ1 of the course's IK for this pose, shoulder left then right (°; the UR family's step 1)",
               "wrist_centre": "WC, where the wrist's three axes meet (x, y, z in mm; decoupling's step 1 on an arm "
                               "with a spherical wrist)",
-              "tool_velocity": "v of the tool, J_v q̇, for the given joint rates (vx, vy, vz in mm/s)"}
+              "tool_velocity": "v of the tool, J_v q̇, for the given joint rates (vx, vy, vz in mm/s)",
+              "gravity_torque": "the joint torques that hold the arm still against its weight and the payload's (N·m; "
+                                "UR's link masses and centres of mass)"}
 #: The UR family's quantities: its IK's own steps (docs/kinematics.md §4.1)
 UR_QUANTITIES = ("theta1",)
 #: Quantities of an arm with a spherical wrist (docs/kinematics.md §7.3)
 WRIST_QUANTITIES = ("wrist_centre",)
+#: Quantities of an arm whose link masses are known (docs/kinematics.md §8.5)
+MASS_QUANTITIES = ("gravity_torque",)
 #: Quantities that are a point in the base frame (mm): typed in metres is a named mistake
 POINTS = ("position", "wrist_centre")
 #: Quantities that are angles (°): equal a turn apart, within the relative tolerance of 180°
@@ -77,6 +82,7 @@ class Challenge:
     quantity: str | None = None  #: numbers: a key of :data:`QUANTITIES`
     force: tuple[float, ...] = (0.0, 0.0, 0.0)  #: numbers, torque; largest_torque: the force at the tool (N), base frame
     moment: tuple[float, ...] = (0.0, 0.0, 0.0)  #: and the moment (N·m)
+    payload: float = 0.0  #: numbers, gravity_torque: the mass at the flange (kg)
     velocity: tuple[float, ...] | None = None  #: velocity: the tool's asked velocity (m/s)
     still: bool = False  #: velocity: the tool must not turn as it moves
     position_tolerance: float = 0.005  #: m
@@ -132,9 +138,9 @@ _PATH_AT_4S = course_path(4.0)  #: the desktop arm's joints and rates at t = 4 s
 _BUILTIN = (
     Challenge("Reach the target", "reach", "ur10",
               "Put the tool on the orange target, position and orientation, on any branch (drag the target "
-              "or move the joints). Within 5 mm and 2°.", joints=_REACH),
+              "or move the joints).", joints=_REACH),
     Challenge("Reach it elbow down", "reach", "ur10",
-              "Put the tool on the target **with the elbow down**. Within 5 mm and 2°.", joints=_REACH, branch="elbow down"),
+              "Put the tool on the target **with the elbow down**.", joints=_REACH, branch="elbow down"),
     Challenge("Wrist singularity, tool up high", "singularity", "ur10",
               "Find a pose where the **wrist** factor of det J is zero, with the tool at least 500 mm above the floor.",
               factor="wrist", min_tool_height=0.5),
@@ -145,30 +151,35 @@ _BUILTIN = (
               "branches reach it (Branches table).", joints=_deg(0, 60, -90, 120, -90, 0), count=4,
               orientation_tolerance=math.radians(5)),
     Challenge("Where is the flange?", "numbers", "ur10",
-              "Compute p of T06 at q = (30°, 60°, −80°, 110°, 90°, 0°). Type x y z in mm (1 % tolerance).",
+              "Compute p of T06 at the given joints. Type x y z in mm.",
               joints=_deg(30, 60, -80, 110, 90, 0), quantity="position"),
     Challenge("IK step 1: both shoulders", "numbers", "ur10",
-              "The tool is where q = (30°, 45°, 26°, 50°, 60°, 80°) puts it. Do step 1 of the IK: from P5 = p − d6·z6, "
-              "type **both θ1**, shoulder left then right, in degrees (within 1.8°).",
+              "The tool is where the given joints put it. Do step 1 of the IK: from P5 = p − d6·z6, "
+              "type **both θ1**, shoulder left then right, in degrees.",
               joints=_deg(30, 45, 26, 50, 60, 80), quantity="theta1"),
     Challenge("det J by hand", "numbers", "ur10",
-              "Compute det J at q = (0°, −60°, 90°, −30°, 45°, 0°) from its factors, lengths in metres (1 %).",
+              "Compute det J at the given joints from its factors, lengths in metres.",
               joints=_deg(0, -60, 90, -30, 45, 0), quantity="det_j"),
     Challenge("Holding a weight", "numbers", "ur10",
-              "At q = (0°, 0°, 0°, 90°, 0°, 0°), the arm stretched out, the flange pushes down with 100 N. Type the "
-              "six joint torques τ = Jᵀ F in N·m (1 %).", joints=_deg(0, 0, 0, 90, 0, 0), quantity="torque",
+              "The arm stretched out, the flange pushes down with 100 N. Type the "
+              "six joint torques τ = Jᵀ F in N·m.", joints=_deg(0, 0, 0, 90, 0, 0), quantity="torque",
               force=(0.0, 0.0, -100.0)),
+    Challenge("Holding itself up", "numbers", "ur10",
+              "Stretched out level, the arm holds 5 kg at its flange. Type the six "
+              "joint torques that hold it still against gravity, in N·m: for each joint, the weights m g beyond it "
+              "times their lever arms (link masses 7.1, 12.7, 4.27, 2.0, 2.0, 0.365 kg).",
+              joints=_deg(0, 0, 0, -90, 0, 0), quantity="gravity_torque", payload=5.0),
     Challenge("Straight up", "velocity", "ur10",
               "Set the joint rates (Velocities folder) so that the flange moves **straight up at 100 mm/s** without "
-              "turning. Within 5 mm/s and 1 °/s.", velocity=(0.0, 0.0, 0.1), still=True),
+              "turning.", velocity=(0.0, 0.0, 0.1), still=True),
     Challenge("Type the UR10's DH table", "dh_table", "ur10",
               "Type the DH table of the UR10 (either convention): its forward kinematics must match the arm's."),
     Challenge("KR210: reach, wrist flipped", "reach", "kr210",
-              "Put the KR210's tool on the target **with the wrist flipped**. Within 5 mm and 2°.",
+              "Put the KR210's tool on the target **with the wrist flipped**.",
               joints=_deg(10, 20, -30, 40, 50, 60), branch="wrist flipped"),
     Challenge("KR210: its wrist centre", "numbers", "kr210",
-              "Step 1 of the KR210's IK, kinematic decoupling: at q = (30°, 10°, −20°, 60°, 45°, 90°), where do its "
-              "wrist's three axes meet? WC = p − 303 mm · z of the gripper frame. Type x y z in mm (1 %).",
+              "Step 1 of the KR210's IK, kinematic decoupling: at the given joints, where do its "
+              "wrist's three axes meet? WC = p − 303 mm · z of the gripper frame. Type x y z in mm.",
               joints=_deg(30, 10, -20, 60, 45, 90), quantity="wrist_centre"),
     Challenge("Stanford arm's DH table", "dh_table", "stanford",
               "Type the Stanford arm's DH table (either convention): its forward kinematics must match the arm's."),
@@ -180,11 +191,11 @@ _BUILTIN = (
     Challenge("Desktop arm: tool velocity", "numbers", "three_dof",
               "The course drives the desktop arm along θ̇ = (π/6 cos t, π/6 cos t, π/8 cos t) from θ = (0°, 0°, 135°), so "
               "θ = (π/6 sin t, π/6 sin t, 3π/4 + π/8 sin t). At **t = 4 s**, what is the tool's velocity v = J_v θ̇? "
-              "Type vx vy vz in mm/s (1 %).", joints=tuple(_PATH_AT_4S[0].tolist()), rates=tuple(_PATH_AT_4S[1].tolist()),
+              "Type vx vy vz in mm/s.", joints=tuple(_PATH_AT_4S[0].tolist()), rates=tuple(_PATH_AT_4S[1].tolist()),
               quantity="tool_velocity"),
     Challenge("Desktop arm: heaviest pose", "largest_torque", "three_dof",
               "The course's statics exercise: the desktop arm's tool pushes with **20 N along +x**. Move the joints, "
-              "within their ranges, to the pose where holding it needs the **largest ‖τ‖ = ‖J_vᵀ F‖** (within 1 %). "
+              "within their ranges, to the pose where holding it needs the **largest ‖τ‖ = ‖J_vᵀ F‖**. "
               "*Forces and gravity* shows τ for 20 N, +x.", force=(20.0, 0.0, 0.0)),
 )
 
@@ -262,14 +273,14 @@ def _line(text: str, index: int, field: str | None) -> int:
 
 #: Every key a challenge table may have, and what it becomes.
 _FIELDS = {"title", "kind", "arm", "text", "joints", "rates_deg_s", "branch", "factor", "min_tool_height_mm", "count", "quantity",
-           "force_n", "moment_nm", "velocity_mm_s", "still", "position_tolerance_mm", "orientation_tolerance_deg",
+           "force_n", "moment_nm", "payload_kg", "velocity_mm_s", "still", "position_tolerance_mm", "orientation_tolerance_deg",
            "factor_tolerance", "relative_tolerance", "velocity_tolerance_mm_s", "time_limit_s"}
 #: The keys each kind needs, and those it may have beyond the common ones.
 _NEEDS = {"reach": ({"joints"}, {"branch", "position_tolerance_mm", "orientation_tolerance_deg"}),
           "singularity": ({"factor"}, {"min_tool_height_mm", "factor_tolerance"}),
           "branch_count": ({"count"}, {"joints", "orientation_tolerance_deg"}),
           "dh_table": (set(), {"position_tolerance_mm"}),
-          "numbers": ({"joints", "quantity"}, {"force_n", "moment_nm", "rates_deg_s", "relative_tolerance"}),
+          "numbers": ({"joints", "quantity"}, {"force_n", "moment_nm", "rates_deg_s", "payload_kg", "relative_tolerance"}),
           "velocity": ({"velocity_mm_s"}, {"still", "velocity_tolerance_mm_s"}),
           "largest_torque": ({"force_n"}, {"relative_tolerance"})}
 _COMMON = {"title", "kind", "arm", "text", "time_limit_s"}
@@ -332,6 +343,10 @@ def _from_table(table: dict) -> Challenge:
             ("time_limit_s", "time_limit", 1.0, 10.0, 86_400.0)):
         if field in table:
             values[name] = scale * _number(table, field, low, high)
+    if "payload_kg" in table:
+        if table.get("quantity") not in MASS_QUANTITIES:
+            raise _FieldError("payload_kg", f"payload_kg is used by {', '.join(MASS_QUANTITIES)} only")
+        values["payload"] = _number(table, "payload_kg", 0.0, arm.specs.payload_kg or 0.0)
     challenge = Challenge(**values)
     if challenge.quantity == "torque" and not any(challenge.force) and not any(challenge.moment):
         raise _FieldError("quantity", "a torque question needs force_n or moment_nm")
@@ -346,6 +361,9 @@ def _from_table(table: dict) -> Challenge:
             spherical_wrist(arm)
         except ValueError as why:
             raise _FieldError("quantity", f"{challenge.quantity} is a step of decoupling, and the {arm_name} arm has {why}") from None
+    if challenge.quantity in MASS_QUANTITIES and arm_name not in MASSES:
+        raise _FieldError("quantity", f"{challenge.quantity} needs the arm's link masses, known for "
+                                      f"{', '.join(sorted(MASSES))}, not for {arm_name!r:.40}")
     if challenge.velocity is not None and not any(challenge.velocity):
         raise _FieldError("velocity_mm_s", "the asked velocity must not be zero")
     if kind == "singularity":  # a factor that is zero nowhere within the limits is a task nobody can do
@@ -437,6 +455,76 @@ def _slots_named(words: str, labels: tuple[str, ...]) -> list[int]:
     parts = [p.strip().lower() for p in words.split(",") if p.strip()]
     named = [k for k, label in enumerate(labels) if all(p in _label_parts(label) for p in parts)]
     return named if parts else []
+
+
+# ---------------------------------------------------------------------- terms
+
+
+def terms(challenge: Challenge) -> str:
+    """What the check takes and asks, from the challenge's own fields: what a student reads under the task.
+
+    A teacher's text may leave out the joints, the force or a tolerance; these words cannot,
+    since they are written from what :func:`check` compares.
+
+    >>> print(terms(builtin()[0]))
+    Checked: your tool on the target, within 5 mm and 2°.
+    >>> print(terms(next(c for c in builtin() if c.quantity == "torque")))
+    Given: q = (0°, 0°, 0°, 90°, 0°, 0°); F = (0, 0, -100) N at the tool, in the base frame. Asked: the joint torques τ = Jᵀ [F; M] (N·m, N for a sliding joint), each within 1 %.
+    """
+    arm = Arm.preset(challenge.arm)  # what is written here is the same for each of the UR family's presets
+    turned = "" if arm.task == "position" else f" and {math.degrees(challenge.orientation_tolerance):.3g}°" + (
+        " of its yaw" if arm.task == "position and yaw" else "")
+    relative = f"within {100 * challenge.relative_tolerance:.3g} %"
+    if challenge.kind == "reach":
+        branch = ("" if challenge.branch is None else f", on branch {challenge.branch} ({arm.slot_labels[challenge.branch - 1]})"
+                  if isinstance(challenge.branch, int) else f", on the {challenge.branch} branch")
+        return f"Checked: your tool on the target{branch}, within {1000 * challenge.position_tolerance:.3g} mm{turned}."
+    if challenge.kind == "singularity":
+        height = "" if challenge.min_tool_height is None else \
+            f", with the tool at least {1000 * challenge.min_tool_height:.0f} mm above the floor"
+        return (f"Checked: the {challenge.factor} factor of det J zero, within {100 * challenge.factor_tolerance:.3g} % "
+                f"of its usual size{height}.")
+    if challenge.kind == "branch_count":
+        held = "" if arm.task == "position" else (
+            f", with the tool's orientation at q = {_given(arm, _goal_joints(challenge, arm))}{turned.replace(' and ', ', within ')}")
+        return f"Checked: your IK target where exactly {_branches(challenge.count)} within the joint limits{held}."
+    if challenge.kind == "dh_table":
+        return (f"Checked: your table's forward kinematics against the arm's at zero joints, its home and {DH_SAMPLES} "
+                f"random joint values: the tool frame within {100 * challenge.position_tolerance:.3g} mm.")
+    if challenge.kind == "velocity":
+        still = ", without turning (under 1 °/s)" if challenge.still and arm.task == "pose" else ""
+        return (f"Checked: your joint rates, at your pose, move the tool at v = {_vector(1000 * np.array(challenge.velocity))} mm/s, "
+                f"in the base frame, within {1000 * challenge.velocity_tolerance:.3g} mm/s{still}.")
+    force = f"F = {_vector(challenge.force)} N" + (f" and M = {_vector(challenge.moment)} N·m" if any(challenge.moment) else "")
+    if challenge.kind == "largest_torque":
+        return (f"Given: {force} at the tool, in the base frame. Checked: your joints, within their ranges, need "
+                f"‖τ‖ = ‖J_vᵀ F‖ {relative} of the largest any pose needs.")
+    given = [f"q = {_given(arm, challenge.joints)}"]
+    if challenge.quantity == "torque":
+        given.append(f"{force} at the tool, in the base frame")
+    if challenge.rates is not None:
+        given.append(f"q̇ = {_given(arm, challenge.rates, '/s')}")
+    if challenge.quantity == "gravity_torque":
+        given.append(f"a payload of {challenge.payload:g} kg at the flange")
+    within = f"within {180 * challenge.relative_tolerance:.3g}°" if challenge.quantity in ANGLES else relative
+    each = "each " if len(number_names(challenge, arm)) > 1 else ""
+    return f"Given: {'; '.join(given)}. Asked: {QUANTITIES[challenge.quantity]}, {each}{within}."
+
+
+def _given(arm: Arm, values, per: str = "") -> str:
+    """"(30°, 60°, 12.5 mm/s)": joint values (or rates, ``per`` "/s") as a task gives them, each with its unit."""
+    return "(" + ", ".join(f"{_short(math.degrees(v))}°{per}" if kind == "R" else f"{_short(1000 * v)} mm{per}"
+                           for v, kind in zip(values, arm.joint_types)) + ")"
+
+
+def _vector(values) -> str:
+    return "(" + ", ".join(_short(v) for v in values) + ")"
+
+
+def _short(value: float) -> str:
+    """To two decimals, without trailing zeros: "30", "117.97", "-0.5"."""
+    text = f"{value:.2f}".rstrip("0").rstrip(".")
+    return "0" if text == "-0" else text
 
 
 # ---------------------------------------------------------------------- checks
@@ -571,8 +659,13 @@ def _check_singularity(challenge: Challenge, arm: Arm, answer: Answer) -> Verdic
     return Verdict(True, f"Solved: the {challenge.factor} factor is zero here.", "", text)
 
 
+def _goal_joints(challenge: Challenge, arm: Arm) -> np.ndarray:
+    """Where a branch_count task's orientation is the tool's: its joints, else the arm's home."""
+    return np.array(challenge.joints if challenge.joints is not None else arm.specs.home)
+
+
 def _goal_orientation(challenge: Challenge, arm: Arm) -> np.ndarray:
-    return arm.fk(np.array(challenge.joints if challenge.joints is not None else arm.specs.home))[:3, :3]
+    return arm.fk(_goal_joints(challenge, arm))[:3, :3]
 
 
 def _check_branch_count(challenge: Challenge, arm: Arm, answer: Answer) -> Verdict:
@@ -681,6 +774,8 @@ def expected_numbers(challenge: Challenge, arm: Arm) -> np.ndarray:
         return np.array([np.linalg.det(arm.jacobian(q))])
     if challenge.quantity == "theta1":
         return np.degrees(separation_steps(arm, q).theta1)
+    if challenge.quantity == "gravity_torque":
+        return arm.gravity_torques(q, challenge.payload)
     return arm.static_torques(q, challenge.force, challenge.moment)
 
 
@@ -717,6 +812,15 @@ def _slips(challenge: Challenge, arm: Arm, expected: np.ndarray) -> list[tuple[n
         typed_rates = np.where(arm.revolute, np.degrees(challenge.rates), challenge.rates)
         return [(1000 * arm.tool_twist(q, typed_rates)[:3], "joint rates in °/s taken as rad/s",
                  "That is J_v q̇ with the rates in °/s read as rad/s: turn them into rad/s first.")]
+    if quantity == "gravity_torque":
+        slips = [(-expected, "gravity's torques, not the holding ones",
+                  "Those are the torques gravity puts on the joints: holding the arm still takes their opposite."),
+                 (expected / GRAVITY, "masses, not weights",
+                  f"Those are masses times lever arms: each weight is m g, {GRAVITY} times more (N·m, not kg·m).")]
+        if challenge.payload:
+            slips.append((arm.gravity_torques(q), "the payload left out",
+                          f"Those hold the arm alone: the {challenge.payload:g} kg at the flange is left out."))
+        return slips
     if quantity == "theta1":
         d4, d6 = arm.solver.dh_lengths[3], arm.solver.dh_lengths[5]
         return [(np.degrees(shoulder_angles(arm.fk(q)[:3, 3], d4)), "θ1 from p, not from P5",

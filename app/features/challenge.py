@@ -7,13 +7,14 @@ from __future__ import annotations
 
 import html
 import itertools
+import re
 from typing import Callable
 
 import numpy as np
 import viser
 
 from ur10core import Arm
-from ur10core.challenges import QUANTITIES, Challenge, Verdict, number_names
+from ur10core.challenges import Challenge, Verdict, number_names, terms
 from ur10core.orientation import from_frame, in_frame, quaternion
 
 from ..feedback import Beside, chosen, within
@@ -41,13 +42,10 @@ SOLVED_MARK = "✓ "
 
 def challenge_markdown(challenge: Challenge, time_limit: float | None = None) -> str:
     """The task as a student reads it."""
-    lines = [f"### {html.escape(challenge.title, quote=False)}", challenge.text]
+    checked = re.sub(r"\b(Given|Asked|Checked):", r"**\1:**", html.escape(terms(challenge), quote=False))
+    lines = [f"### {html.escape(challenge.title, quote=False)}", challenge.text, checked]
     if time_limit:
         lines.append(f"Time limit: {time_limit / 60:g} min.")
-    if challenge.kind == "numbers":
-        lines.append(f"Asked: {QUANTITIES[challenge.quantity]}.")
-    if challenge.kind == "largest_torque":
-        lines.append(f"The force at the tool: ({', '.join(f'{v:g}' for v in challenge.force)}) N, in the base frame.")
     return "\n\n".join(lines)
 
 
