@@ -24,7 +24,7 @@ from ur10core.serial import project_target
 from ur10core.tolerances import FLOOR_TOLERANCE
 from ur10core.workspace import heights_above_floor, lowest_points
 
-from .style import number
+from .style import number, typed_numbers
 
 
 @dataclass(frozen=True)
@@ -174,7 +174,7 @@ class ArmState:
     @staticmethod
     def parse_numbers(text: str, count: int, what: str = "joint values") -> np.ndarray:
         """``"30, 45, 26, 50, 60, 80"`` (commas or spaces, a ° allowed) → floats, with a message a student understands."""
-        parts = [p for p in text.replace(",", " ").replace(";", " ").split() if p]
+        parts = [p for p in typed_numbers(text).replace(",", " ").replace(";", " ").split() if p]
         if len(parts) != count:
             raise ValueError(f"{what}: expected {count} numbers, got {len(parts)} in {text!r:.60}")
         values = []

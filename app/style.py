@@ -82,6 +82,15 @@ def number(value: float, spec: str) -> str:
     return text
 
 
+#: Dashes a student may type for a minus, or copy from a task's text (the course writes −, U+2212).
+_MINUS = str.maketrans({"\u2212": "-", "\u2013": "-"})
+
+
+def typed_numbers(text: str) -> str:
+    """What a student typed, its minus signs the ones ``float`` reads: "−60" → "-60"."""
+    return text.translate(_MINUS)
+
+
 def sentence(text: str) -> str:
     """``text`` with a capital first letter (messages are written to follow a colon); a variable that
     starts it (θ2, d3, ḋ3) keeps its case: Θ2 or D3 would be another quantity."""

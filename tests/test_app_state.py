@@ -60,6 +60,8 @@ def test_bad_joints_are_refused_and_nothing_changes(state, q, message):
 def test_parse_typed_degrees():
     np.testing.assert_array_equal(ArmState.parse_numbers("30, 45, 26, 50, 60, 80", 6), [30, 45, 26, 50, 60, 80])
     np.testing.assert_array_equal(ArmState.parse_numbers("30 45;26,  50 60° 80", 6), [30, 45, 26, 50, 60, 80])
+    # the minus the course's texts write (−, U+2212), as a student copies it, or an en dash
+    np.testing.assert_array_equal(ArmState.parse_numbers("\u221230, 0, 0, \u201390, 5.1, -0.5", 6), [-30, 0, 0, -90, 5.1, -0.5])
     with pytest.raises(ValueError, match="'abc' is not a number"):
         ArmState.parse_numbers("30, 45, abc, 50, 60, 80", 6)
     with pytest.raises(ValueError, match="expected 6 numbers, got 3"):

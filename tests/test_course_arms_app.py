@@ -293,6 +293,8 @@ def test_parse_table_refuses_what_is_not_a_table():
     assert arm.joint_types == "RRP" and arm.convention == "modified" and arm.task == "position"
     np.testing.assert_allclose(arm.limits, [[-math.pi, math.pi]] * 2 + [[0.0, 1.0]])  # none typed: the defaults
     limited = parse_table("0 90 400 0 R -170 170\n400 0 0 0 R, -45, 135\n0 0 100 0 P 50 300", "standard")
+    assert parse_table("0 90 400 0 R \u2212170 170\n400 \u221290 0 0 R", "standard") == parse_table(
+        "0 90 400 0 R -170 170\n400 -90 0 0 R", "standard")  # the minus the course writes, copied
     np.testing.assert_allclose(limited.limits, [np.radians([-170, 170]), np.radians([-45, 135]), [0.05, 0.3]])
 
 

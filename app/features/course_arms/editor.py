@@ -17,6 +17,7 @@ import viser
 from ur10core import Arm
 
 from ...feedback import Beside, chosen
+from ...style import typed_numbers
 from ...view import Session, View
 
 #: What the editor starts with: the lecture notes' articulated arm without its wrist.
@@ -44,7 +45,7 @@ def parse_table(text: str, convention: str, name: str = "custom") -> Arm:
         raise ValueError(f"the table is too long (at most {MAX_TEXT} characters)")
     rows, limits = [], []
     for number, line in enumerate(text.splitlines(), start=1):
-        line = line.split("#", 1)[0].strip()
+        line = typed_numbers(line.split("#", 1)[0]).strip()
         if not line:
             continue
         fields = [f for f in re.split(r"[,\s]+", line) if f]
