@@ -357,6 +357,32 @@ def test_det_j_by_hand_names_the_constant_left_out_and_lengths_in_mm(name):
         assert not verdict.solved and verdict.group == group, (typed, verdict)
 
 
+#: The rows of J each arm's det J is over (docs §7.6), written out: all six for a wrist; v and ω_z for the SCARA;
+#: v for the cylindrical arm; the plane's v_x, v_y for the planar elbow.
+SQUARE_ROWS = {"kr210": [0, 1, 2, 3, 4, 5], "elbow": [0, 1, 2, 3, 4, 5], "stanford": [0, 1, 2, 3, 4, 5],
+               "cylindrical_wrist": [0, 1, 2, 3, 4, 5], "scara": [0, 1, 2, 5], "cylindrical": [0, 1, 2],
+               "planar_elbow": [0, 1]}
+
+
+@pytest.mark.parametrize("name", [*SQUARE_ROWS, "three_dof"])
+def test_det_j_as_numbers_on_every_arm_is_its_square_jacobians(name):
+    """det J was asked of J's six rows whatever the arm: on a 2-, 3- or 4-joint arm the check raised numpy's
+    "Last 2 dimensions of the array must be square". Against the DH table's own Jacobian over the rows
+    written out above, and the desktop arm's against the course's det J_v (docs §8.6)."""
+    arm = Arm.preset(name)
+    q = arm.sample_joints(5, seed=4)[2]
+    if name == "three_dof":
+        _, t2, t3 = q
+        det = -FOREARM * UPPER_ARM * (FOREARM * math.cos(t3) - UPPER_ARM * math.cos(t2)) * math.sin(t2 - t3)
+    else:
+        det = float(np.linalg.det(arm.dh.jacobian(q)[SQUARE_ROWS[name]]))
+    challenge = C.Challenge("d", "numbers", name, "", joints=tuple(q.tolist()), quantity="det_j")
+    assert C.expected_numbers(challenge, arm)[0] == pytest.approx(det, rel=1e-9) and abs(det) > 1e-6
+    assert C.check(challenge, arm, C.Answer(numbers=[det])).solved
+    assert C.check(challenge, arm, C.Answer(numbers=[-det])).group == "det J has the wrong sign"
+    assert C.terms(challenge).startswith("Given: q = (") and C.solution(challenge, arm)[1].startswith("The answer: det J = ")
+
+
 def test_both_shoulders_theta1_are_the_iks_and_their_mistakes_are_named():
     """IK step 1 as numbers (docs §4.1): both θ1 against the IK's own slots (left: 1–4, right: 5–8) on the UR family;
     angles equal a turn apart; the shoulders swapped, a sign and radians are named; another arm is refused in a file."""

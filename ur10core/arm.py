@@ -459,6 +459,29 @@ class Arm(JacobianUses, HasSpecs):
         dynamics.link_masses(self)  # raises, naming the arms that have them
         return dynamics.gravity_torques(self, self.joints(q), payload_kg)
 
+    @property
+    def det_rows(self) -> list[int]:
+        """The rows of J that det J is taken over: those the arm controls (``TASK_ROWS``); a planar arm's,
+        its plane's v_x and v_y (docs/kinematics.md §7.6)."""
+        return [0, 1] if self.planar else TASK_ROWS[self.task]
+
+    def det_jacobian(self, q) -> np.ndarray:
+        """det J over :attr:`det_rows`, shape (...): a constant times the product of :meth:`singularity_factors`
+        (docs/kinematics.md §5, §7.6, §8.6). ``ValueError`` where those rows are not as many as the joints.
+
+        >>> arm = Arm.preset("planar_elbow")                     # det J = a1 a2 s2
+        >>> q = np.radians([10.0, 30.0])
+        >>> bool(np.isclose(arm.det_jacobian(q), arm.dh.rows[0].a * arm.dh.rows[1].a * np.sin(q[1])))
+        True
+        """
+        if hasattr(self.solver, "det_jacobian"):  # the UR family's closed form
+            return self.solver.det_jacobian(q)
+        rows = self.det_rows
+        if len(rows) != self.n_joints:
+            raise ValueError(f"the {self.name} arm has {self.n_joints} joints and controls {len(rows)} rows of J: "
+                             "its J is not square, so it has no det J")
+        return np.linalg.det(self.jacobian(q)[..., rows, :])
+
     def smallest_singular_value(self, q) -> np.ndarray:
         """σ_min of the rows of J the arm controls, shape (...): how close to losing a direction."""
         J = self.jacobian(q)[..., TASK_ROWS[self.task], :]

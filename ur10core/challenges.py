@@ -37,7 +37,8 @@ __all__ = ["KINDS", "QUANTITIES", "Answer", "Challenge", "Verdict", "builtin", "
 
 KINDS = ("reach", "singularity", "branch_count", "dh_table", "numbers", "velocity", "largest_torque")
 #: What a "numbers" challenge asks for at its joints.
-QUANTITIES = {"position": "p of the tool frame (x, y, z in mm)", "det_j": "det J (lengths in metres)",
+QUANTITIES = {"position": "p of the tool frame (x, y, z in mm)",
+              "det_j": "det J (lengths in metres; over the rows of J the arm controls, if fewer than six)",
               "torque": "the joint torques τ = Jᵀ [F; M] (N·m, N for a sliding joint)",
               "theta1": "both θ1 of the course's IK for this pose, shoulder left then right (°; the UR family's step 1)",
               "wrist_centre": "WC, where the wrist's three axes meet (x, y, z in mm; decoupling's step 1 on an arm "
@@ -771,7 +772,7 @@ def expected_numbers(challenge: Challenge, arm: Arm) -> np.ndarray:
     if challenge.quantity == "tool_velocity":
         return 1000 * arm.tool_twist(q, np.array(challenge.rates))[:3]
     if challenge.quantity == "det_j":
-        return np.array([np.linalg.det(arm.jacobian(q))])
+        return np.array([arm.det_jacobian(q)])
     if challenge.quantity == "theta1":
         return np.degrees(separation_steps(arm, q).theta1)
     if challenge.quantity == "gravity_torque":
