@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import re
 import textwrap
@@ -336,7 +337,9 @@ def test_holding_itself_up_is_roboticstoolboxs_gravload_and_its_slips_are_named(
     assert C.parse(head + 'quantity = "gravity_torque"\n')[0].payload == 0.0
     for tail, line, words in (('quantity = "gravity_torque"\npayload_kg = 11\n', 6, "payload_kg must be a number from 0 to 10"),
                               ('quantity = "position"\npayload_kg = 1\n', 6, "payload_kg is used by gravity_torque only"),
-                              ('quantity = "gravity_torque"\narm = "kr210"\n', 5, "known for course, ur10, not for 'kr210'")):
+                              ('quantity = "gravity_torque"\narm = "kr210"\n', 5, "known for course, ur10, not for 'kr210'"),
+                              # not "payload_kg must be a number from 0 to 0": the arm has no masses to hold it with
+                              ('quantity = "gravity_torque"\npayload_kg = 2\narm = "kr210"\n', 5, "known for course, ur10")):
         with pytest.raises(ValueError, match=f"line {line}: .*{words}"):
             C.parse(head + tail)
 
@@ -661,6 +664,45 @@ def test_a_numbers_tasks_givens_as_written_are_enough_to_solve_it(challenge):
     assert C.check(challenge, arm, C.Answer(numbers=C.expected_numbers(worked, arm))).solved
 
 
+def _file_joints(arm: Arm, q: np.ndarray) -> list[float]:
+    return [round(v, 6) for v in np.where(arm.revolute, np.degrees(q), 1000 * q).tolist()]
+
+
+@pytest.mark.parametrize("name", C.PRESETS)
+def test_every_kind_and_quantity_on_every_arm_is_refused_by_line_or_checks(name):
+    """A teacher may write any kind and quantity for any arm. Each is either refused when the server starts,
+    naming its line, or its terms, its solution and the check of any answer work (a numbers task's det J on a
+    3-joint arm raised numpy's error at every check; a DH table task on the desktop arm, an AttributeError)."""
+    arm = Arm.preset(name)
+    q = arm.sample_joints(3, seed=1)[1]
+    extras = {"torque": "force_n = [1, 2, 3]\n", "gravity_torque": "payload_kg = 2\n",
+              "tool_velocity": f"rates_deg_s = {[10.0] * arm.n_joints}\n"}
+    tables = [f'kind = "numbers"\njoints = {_file_joints(arm, q)}\nquantity = "{quantity}"\n{extras.get(quantity, "")}'
+              for quantity in C.QUANTITIES]
+    tables += ['kind = "largest_torque"\nforce_n = [0, 0, -10]\n', 'kind = "velocity"\nvelocity_mm_s = [10, 0, 0]\nstill = true\n',
+               'kind = "dh_table"\n', 'kind = "branch_count"\ncount = 2\n', f'kind = "reach"\njoints = {_file_joints(arm, q)}\nbranch = 1\n',
+               *(f'kind = "singularity"\nfactor = "{factor}"\n' for factor in arm.factor_names)]
+    answers = [C.Answer(q=p, target=arm.fk(p), table=arm.dh, rates=np.ones(arm.n_joints)) for p in arm.sample_joints(3, seed=2)]
+    checked = 0
+    for table in tables:
+        try:
+            challenge, = C.parse(f'[[challenge]]\ntitle = "t"\narm = "{name}"\n{table}')
+        except ValueError as refusal:
+            assert re.match(r"challenges, line \d+: ", str(refusal)), str(refusal)
+            continue
+        assert C.terms(challenge)
+        C.solution(challenge, arm)
+        for answer in answers:
+            if challenge.kind == "numbers":
+                expected = C.expected_numbers(challenge, arm)
+                for typed in (expected, np.zeros_like(expected), 2 * expected, expected[::-1]):
+                    assert isinstance(C.check(challenge, arm, dataclasses.replace(answer, numbers=typed)), C.Verdict)
+            else:
+                assert isinstance(C.check(challenge, arm, answer), C.Verdict)
+        checked += 1
+    assert checked >= 6  # position, det J, torque, tool velocity, velocity, reach: every arm has them
+
+
 def test_a_teachers_file_is_read_in_its_units():
     reach, singular = C.parse(GOOD)
     assert reach.arm == "kr210" and np.allclose(np.degrees(reach.joints), [10, 20, -30, 40, 50, 60])
@@ -673,6 +715,8 @@ def test_a_teachers_file_is_read_in_its_units():
     (("joints = [10, 20, -30, 40, 50, 60]", "joints = [10, 20, -30, 40, 50]"), 6, "list of 6 numbers"),
     (("joints = [10, 20, -30, 40, 50, 60]", "joints = [10, 100, -30, 40, 50, 60]"), 6, "outside the kr210 arm's limits"),
     (("branch = \"wrist flipped\"", "branch = \"wrist upside down\""), 7, "words of a branch's name"),
+    # elbow down needs θ2 = 88° there, past the KR210's 85°: nobody could do it (the README's example asked it)
+    (("branch = \"wrist flipped\"", "branch = \"elbow down\""), 7, "'elbow down' does not reach this target within the joint limits; branches 1, 2 do"),
     (("position_tolerance_mm = 3", "position_tolerance_mm = -3"), 8, "position_tolerance_mm must be a number"),
     (("factor = \"wrist\"", "factor = \"elbow\""), 14, "factors are stroke, shoulder, wrist"),
     (("time_limit_s = 120", "time_limt_s = 120"), 15, "unknown key 'time_limt_s'"),
@@ -697,6 +741,8 @@ def test_files_are_bounded_and_branch_counts_must_exist(tmp_path):
         C.parse(many)
     with pytest.raises(ValueError, match="line 4: no target .* exactly 3 branches"):
         C.parse('[[challenge]]\ntitle = "x"\nkind = "branch_count"\ncount = 3\n')
+    with pytest.raises(ValueError, match="line 4: the three_dof arm has no DH table to type"):  # its check raised AttributeError
+        C.parse('[[challenge]]\ntitle = "x"\nkind = "dh_table"\narm = "three_dof"\n')
     big = tmp_path / "big.toml"
     big.write_text("#" * 200_000)
     with pytest.raises(ValueError, match="at most 100 kB"):

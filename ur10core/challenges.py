@@ -347,7 +347,8 @@ def _from_table(table: dict) -> Challenge:
     if "payload_kg" in table:
         if table.get("quantity") not in MASS_QUANTITIES:
             raise _FieldError("payload_kg", f"payload_kg is used by {', '.join(MASS_QUANTITIES)} only")
-        values["payload"] = _number(table, "payload_kg", 0.0, arm.specs.payload_kg or 0.0)
+        if arm_name in MASSES:  # (an arm without them is refused for its quantity below)
+            values["payload"] = _number(table, "payload_kg", 0.0, arm.specs.payload_kg or 0.0)
     challenge = Challenge(**values)
     if challenge.quantity == "torque" and not any(challenge.force) and not any(challenge.moment):
         raise _FieldError("quantity", "a torque question needs force_n or moment_nm")
@@ -367,6 +368,15 @@ def _from_table(table: dict) -> Challenge:
                                       f"{', '.join(sorted(MASSES))}, not for {arm_name!r:.40}")
     if challenge.velocity is not None and not any(challenge.velocity):
         raise _FieldError("velocity_mm_s", "the asked velocity must not be zero")
+    if kind == "reach" and challenge.branch is not None:  # a branch that does not get there is a task nobody can do
+        solution_ = arm.ik(arm.fk(np.array(challenge.joints)), hint=np.array(challenge.joints))
+        reaching = np.flatnonzero(solution_.valid & solution_.within_limits)
+        if not any(solution_.within_limits[s] for s in _wanted_slots(challenge, arm)):
+            raise _FieldError("branch", f"branch {challenge.branch!r} does not reach this target within the joint limits; "
+                                        f"branches {', '.join(str(k + 1) for k in reaching)} do")
+    if kind == "dh_table" and arm.dh is None:
+        raise _FieldError("arm", f"the {arm_name} arm has no DH table to type: the course writes its kinematics in "
+                                 "closed form, in frames of its own")
     if kind == "singularity":  # a factor that is zero nowhere within the limits is a task nobody can do
         try:
             singular_pose(arm, challenge.factor, challenge.min_tool_height)
@@ -964,8 +974,7 @@ def solution(challenge: Challenge, arm: Arm, q_current=None) -> tuple[np.ndarray
             q = np.array(challenge.joints)
         else:
             solution_ = arm.ik(goal, hint=np.array(challenge.joints))
-            slot = next((s for s in _wanted_slots(challenge, arm) if solution_.within_limits[s]),
-                        next(s for s in _wanted_slots(challenge, arm) if solution_.valid[s]))
+            slot = next(s for s in _wanted_slots(challenge, arm) if solution_.within_limits[s])  # (parse made sure)
             q = solution_.take(slot, np.array(challenge.joints))
         return q, f"One answer: joints {_joints_text(arm, q)}."
     if challenge.kind == "singularity":
