@@ -34,7 +34,7 @@ hand_back_large_buffers()  # before numpy and the rest allocate
 
 import ur10core  # noqa: E402
 from ur10core import Arm  # noqa: E402
-from ur10core.challenges import builtin, load  # noqa: E402
+from ur10core.challenges import builtin, load, unfit  # noqa: E402
 
 from .serving import logs  # noqa: E402
 
@@ -70,6 +70,9 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
             args.challenge_list = (*load(args.challenges), *builtin())
         except (OSError, ValueError) as error:
             parser.error(f"--challenges: {error}")
+        for challenge in args.challenge_list[:-len(builtin())]:
+            if unfit(challenge, args.preset):
+                parser.error(f"--challenges: {challenge.title!r} on the {args.preset} preset: {unfit(challenge, args.preset)}")
         titles = [c.title for c in args.challenge_list]
         if len(set(titles)) != len(titles):
             parser.error("--challenges: a challenge in the file has the title of a built-in one; give it another")

@@ -703,6 +703,37 @@ def test_every_kind_and_quantity_on_every_arm_is_refused_by_line_or_checks(name)
     assert checked >= 6  # position, det J, torque, tool velocity, velocity, reach: every arm has them
 
 
+@pytest.mark.parametrize("name", C.PRESETS)
+def test_every_question_about_the_pose_shown_is_asked_at_its_joints_or_refused_saying_why(name):
+    """What the presenter asks of the arm the class sees: the task is at the joints shown (the arm there, on its
+    branch, solves a reach; the numbers are those of its own pose), and a question the arm cannot be asked is
+    refused with the reason a file would get."""
+    arm = Arm.preset(name)
+    q = arm.sample_joints(5, seed=6)[3]
+    slot = int(arm.ik(arm.fk(q), hint=q).nearest(q).slot)
+    asked = 0
+    for question in C.POSE_QUESTIONS:
+        try:
+            challenge = C.about_the_pose(question, arm, q, slot)
+        except ValueError as why:
+            assert re.search(r"has no spherical wrist|needs the arm's link masses", str(why)), (question, str(why))
+            continue
+        asked += 1
+        assert challenge.title == question and np.allclose(challenge.joints, q) and C.terms(challenge)
+        on_the_pose = C.Answer(q=q, numbers=C.expected_numbers(challenge, arm) if challenge.kind == "numbers" else None)
+        assert C.check(challenge, arm, on_the_pose).solved
+        if challenge.quantity == "position":
+            np.testing.assert_allclose(C.expected_numbers(challenge, arm), 1000 * arm.fk(q)[:3, 3])
+        if challenge.branch is not None:
+            others = [k for k in range(len(arm.slot_labels)) if k != slot]
+            other = next((k for k in others if arm.ik(arm.fk(q)).within_limits[k]), None)
+            if other is not None:  # the same tool pose on another branch is not it
+                assert not C.check(challenge, arm, C.Answer(q=arm.ik(arm.fk(q)).q[other])).solved
+    assert asked >= 4  # reach, its branch, where the tool is, det J
+    with pytest.raises(ValueError, match="question must be one of"):
+        C.about_the_pose("Pose shown: dance", arm, q)
+
+
 def test_a_teachers_file_is_read_in_its_units():
     reach, singular = C.parse(GOOD)
     assert reach.arm == "kr210" and np.allclose(np.degrees(reach.joints), [10, 20, -30, 40, 50, 60])

@@ -543,6 +543,72 @@ def test_the_desktop_arms_heaviest_pose_is_found_by_the_student_not_by_its_searc
     asyncio.run(scenario())
 
 
+def test_the_presenter_asks_the_class_about_the_pose_it_is_shown(classroom):
+    """A question thought of in the lecture, with no file: the teacher puts the class's arm somewhere and asks where
+    its tool is, then asks the class to reach that pose. The numbers are asked at the joints shown (p checked
+    against the DH table's own product); the reach sends the class's arm home first, since every student's arm
+    starts where it is; asked again from home, it is refused, saying why."""
+    room = classroom.classroom
+    room.challenges.clock = itertools.count(0.0, 10.0).__next__
+    shown = [20, -70, 100, -30, 60, 10]
+
+    async def scenario():
+        teacher = await ViserClient(url(classroom)).connect()
+        await become_presenter(teacher, classroom)
+        student = await ViserClient(url(classroom), local_address="127.0.0.7").connect()
+        arm = room.state.arm
+        await teacher.set_gui(typed_label(arm), " ".join(str(v) for v in shown))
+        await teacher.set_gui("Set these values", True)
+        await until(lambda: np.allclose(room.state.q, np.radians(shown)), what="the class's arm at the pose")
+        await teacher.set_gui("Challenge", "Pose shown: wrist centre")  # the UR10 has no spherical wrist
+        await until(lambda: teacher.shown("Not about the arm shown: wrist_centre is a step of decoupling"), what="why not")
+        await teacher.set_gui("Challenge", "Pose shown: tool position")
+        given = "**Given:** q = (20°, -70°, 100°, -30°, 60°, 10°)"
+        await until(lambda: any("asked of the class's arm as it stands when you start" in t for t in teacher.shown(given)),
+                    what="the preview, at the joints shown")
+        await teacher.set_gui("Start the challenge", True)
+        member = await until(lambda: next((m for m in room.members.values() if m.card is not None), None), what="the card")
+        await until(lambda: student.shown(given), what="the joints given to the student")
+        assert np.allclose(room.state.q, np.radians(shown))  # a numbers task leaves the class's arm where it is
+        p = 1000 * arm.dh.fk(np.radians(shown))[:3, 3]
+        await student.set_gui("Your numbers (x, y, z)", " ".join(f"{v:.3f}" for v in p))
+        await student.set_gui("Check my answer", True)
+        await until(lambda: member.student.solved_after is not None, what="solved")
+        await teacher.set_gui("End and show the solution", True)
+
+        await teacher.set_gui("Challenge", "Pose shown: reach it")
+        await teacher.set_gui("Start the challenge", True)
+        home = arm.specs.home
+        await until(lambda: member.card is not None and member.card.challenge.title == "Pose shown: reach it"
+                    and np.allclose(room.state.q, home) and np.allclose(member.session.state.q, home),
+                    what="the class's arm, and so the student's, gone home")
+        assert np.allclose(np.degrees(member.card.challenge.joints), shown)
+        await until(lambda: student.gui.get(typed_label(arm), {}).get("value") == display_text(arm, member.session.state.q),
+                    what="the panel's joints up to date")
+        await student.set_gui(typed_label(arm), " ".join(str(v) for v in shown))
+        await student.set_gui("Set these values", True)
+        await until(lambda: np.allclose(member.session.state.q, np.radians(shown)), what="the student's joints")
+        attempts = member.student.attempts
+        await student.set_gui("Check my answer", True)
+        await until(lambda: member.student.attempts == attempts + 1, what="the check")
+        assert member.student.verdict.solved
+        await teacher.set_gui("End and show the solution", True)
+        await until(lambda: not room.challenges.running, what="the end")
+
+        await until(lambda: np.allclose(room.state.q, np.radians(shown)), what="the class's arm on the solution")
+        await teacher.set_gui(typed_label(arm), " ".join(f"{v:.9f}" for v in np.degrees(home)))
+        await teacher.set_gui("Set these values", True)
+        await until(lambda: np.allclose(room.state.q, home), what="the class's arm at home: the pose shown is home")
+        await teacher.set_gui("Challenge", "Pose shown: reach it")
+        await teacher.set_gui("Start the challenge", True)
+        await until(lambda: teacher.shown("so it is at its home pose: move it away first"), what="the refusal")
+        assert not room.challenges.running
+        for client in (teacher, student):
+            await client.close()
+
+    asyncio.run(scenario())
+
+
 def test_the_projector_frames_a_students_tool_that_has_left_its_view_unless_the_teacher_has_turned_it(classroom):
     """A class spread over the workspace had most of its tools off the projector's canvas in lecture mode, their
     names piled at its edge. The projector's camera now frames them all again when one leaves the view, unless the

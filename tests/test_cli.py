@@ -29,6 +29,26 @@ def test_defaults_are_loopback_8080_course():
     assert (args.host, args.port, args.preset, args.shared) == ("0.0.0.0", 9000, "ur10e", True)
 
 
+def test_a_challenge_on_the_app_s_ur10_must_fit_the_preset_it_runs(tmp_path, capsys):
+    """A file's gravity challenge on "ur10" is refused at start on the ur10e, which has no link masses (its
+    students' checks raised "no link masses for 'ur10e'"); the built-in one is not offered there."""
+    from ur10core.challenges import builtin
+    from ur10teach.serving.server import TeachingServer
+
+    file = tmp_path / "class.toml"
+    file.write_text('[[challenge]]\ntitle = "Hold it"\nkind = "numbers"\njoints = [0, 0, 0, 0, 0, 0]\n'
+                    'quantity = "gravity_torque"\n')
+    assert parse_args(["--shared", "--challenges", str(file)]).challenge_list[0].title == "Hold it"
+    with pytest.raises(SystemExit):
+        parse_args(["--shared", "--preset", "ur10e", "--challenges", str(file)])
+    assert "'Hold it' on the ur10e preset: gravity_torque needs the arm's link masses" in capsys.readouterr().err
+    server = TeachingServer(preset="ur10e", port=0, challenges=builtin())
+    try:
+        assert [c.title for c in builtin() if c not in server.challenges] == ["Holding itself up"]
+    finally:
+        server.stop()
+
+
 def test_lan_addresses_are_real_ipv4_addresses():
     for address in lan_addresses():
         assert not ipaddress.IPv4Address(address).is_loopback

@@ -33,7 +33,8 @@ if sys.version_info >= (3, 11):
 else:  # pragma: no cover - Python 3.10
     import tomli as tomllib
 
-__all__ = ["KINDS", "QUANTITIES", "Answer", "Challenge", "Verdict", "builtin", "check", "load", "parse", "solution"]
+__all__ = ["KINDS", "POSE_QUESTIONS", "QUANTITIES", "Answer", "Challenge", "Verdict", "about_the_pose", "builtin", "check",
+           "load", "parse", "solution", "terms", "unfit"]
 
 KINDS = ("reach", "singularity", "branch_count", "dh_table", "numbers", "velocity", "largest_torque")
 #: What a "numbers" challenge asks for at its joints.
@@ -201,6 +202,75 @@ _BUILTIN = (
 )
 
 
+#: What a presenter can ask about the pose the class is shown (:func:`about_the_pose`): the picker's words → (kind,
+#: quantity or "branch").
+POSE_QUESTIONS = {"Pose shown: reach it": ("reach", None), "Pose shown: reach + branch": ("reach", "branch"),
+                  "Pose shown: tool position": ("numbers", "position"), "Pose shown: det J": ("numbers", "det_j"),
+                  "Pose shown: wrist centre": ("numbers", "wrist_centre"),
+                  "Pose shown: holding torques": ("numbers", "gravity_torque")}
+_SHOWN = "the joints the class's arm was shown at"
+_POSE_TEXTS = {None: "Put your tool on the target, the pose the class's arm was shown in: position and orientation, on "
+                     "any branch.",
+               "branch": "Put your tool on the target, the pose the class's arm was shown in, **on the branch it was on: "
+                         "{label}**.",
+               "position": f"Where is the tool at {_SHOWN}? Type x y z in mm.",
+               "det_j": f"What is det J at {_SHOWN}?",
+               "wrist_centre": f"Where do the wrist's three axes meet at {_SHOWN}? Type x y z in mm.",
+               "gravity_torque": f"Which joint torques hold the arm still at {_SHOWN}, against its own weight? In N·m."}
+
+
+def about_the_pose(question: str, arm: Arm, q, slot: int | None = None) -> Challenge:
+    """A presenter's question (a key of :data:`POSE_QUESTIONS`) about the pose the class is shown: ``arm`` (a preset)
+    at joints ``q`` (n,), on IK slot ``slot`` (0-based). ``ValueError`` saying why where it does not apply.
+
+    >>> arm = Arm.preset("kr210")
+    >>> about_the_pose("Pose shown: wrist centre", arm, arm.specs.home).quantity
+    'wrist_centre'
+    >>> about_the_pose("Pose shown: holding torques", arm, arm.specs.home)
+    Traceback (most recent call last):
+    ...
+    ValueError: gravity_torque needs the arm's link masses, known for course, ur10, not for 'kr210'
+    """
+    if question not in POSE_QUESTIONS:
+        raise ValueError(f"question must be one of {', '.join(POSE_QUESTIONS)}, got {question!r:.40}")
+    if arm.name not in PRESETS:
+        raise ValueError("a typed table has no challenges: show the class one of the course's arms")
+    kind, asked = POSE_QUESTIONS[question]
+    q = arm.joints(q)
+    values = {"title": question, "kind": kind, "arm": "ur10" if arm.name in Arm.UR_PRESETS else arm.name,
+              "joints": tuple(q.tolist())}
+    if asked == "branch":
+        if slot is None or not 0 <= slot < len(arm.slot_labels) or arm.numerical:
+            raise ValueError("the arm shown is on no numbered branch (its IK is numerical)")
+        values["branch"] = slot + 1
+        values["text"] = _POSE_TEXTS["branch"].format(label=arm.slot_labels[slot])
+    else:
+        values["text"] = _POSE_TEXTS[asked]
+        if kind == "numbers":
+            values["quantity"] = asked
+    try:
+        return _validated(Challenge(**values), arm)
+    except _FieldError as why:  # (no file line to name)
+        raise ValueError(str(why)) from None
+
+
+def unfit(challenge: Challenge, preset: str) -> str:
+    """Why ``challenge`` cannot be set where the app's own UR10 is the ``preset`` (one of ``Arm.UR_PRESETS``), or "".
+
+    A challenge on "ur10" is done on that preset, and :func:`parse` checked it on the ``ur10``'s numbers.
+
+    >>> unfit(next(c for c in builtin() if c.quantity == "gravity_torque"), "ur10e")
+    "gravity_torque needs the arm's link masses, known for course, ur10, not for 'ur10e'"
+    """
+    if challenge.arm != "ur10" or preset == "ur10":
+        return ""
+    try:
+        _validated(challenge, Arm.preset(preset))
+    except _FieldError as why:
+        return str(why)
+    return ""
+
+
 # ---------------------------------------------------------------------- files
 
 
@@ -349,7 +419,13 @@ def _from_table(table: dict) -> Challenge:
             raise _FieldError("payload_kg", f"payload_kg is used by {', '.join(MASS_QUANTITIES)} only")
         if arm_name in MASSES:  # (an arm without them is refused for its quantity below)
             values["payload"] = _number(table, "payload_kg", 0.0, arm.specs.payload_kg or 0.0)
-    challenge = Challenge(**values)
+    return _validated(Challenge(**values), arm)
+
+
+def _validated(challenge: Challenge, arm: Arm) -> Challenge:
+    """``challenge``, if it is a task a class can do on ``arm`` (a preset: for "ur10", the server's own UR10's);
+    ``_FieldError`` naming the field otherwise."""
+    kind, arm_name = challenge.kind, arm.name
     if challenge.quantity == "torque" and not any(challenge.force) and not any(challenge.moment):
         raise _FieldError("quantity", "a torque question needs force_n or moment_nm")
     if (challenge.quantity == "tool_velocity") != (challenge.rates is not None):

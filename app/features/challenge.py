@@ -14,7 +14,7 @@ import numpy as np
 import viser
 
 from ur10core import Arm
-from ur10core.challenges import Challenge, Verdict, number_names, terms
+from ur10core.challenges import POSE_QUESTIONS, Challenge, Verdict, number_names, terms
 from ur10core.orientation import from_frame, in_frame, quaternion
 
 from ..feedback import Beside, chosen, within
@@ -66,16 +66,20 @@ class ChallengeDesk:
 
     def __init__(self, gui: viser.GuiApi, challenges: tuple[Challenge, ...], guard: Callable[[Callable], Callable],
                  start: Callable[[Challenge, float | None], None], end: Callable[[], None], download: Callable[[], None],
-                 run: Callable[[], ChallengeRun | None], on_render: Callable[[], None] = lambda: None) -> None:
+                 run: Callable[[], ChallengeRun | None], on_render: Callable[[], None] = lambda: None,
+                 about_pose: Callable[[str], Challenge] | None = None) -> None:
         self.closed = False
         self._on_render = on_render  #: the scene's part of the board (every student's tool)
         self._challenges = {c.title: c for c in challenges}
+        #: a question of ``POSE_QUESTIONS`` → the challenge on the class's arm as it is now (None: none offered)
+        self._about_pose = about_pose
+        titles = (*self._challenges, *(q for q in POSE_QUESTIONS if q not in self._challenges and about_pose))
         self._run = run
         # each callback right after its widget: a widget reaches the browser as it is made, and a click on
         # a button without its callback yet is lost
         self.folder = gui.add_folder("Challenge", order=0.05)
         with self.folder:
-            self.picker = gui.add_dropdown("Challenge", tuple(self._challenges), hint="Built in, or from --challenges FILE")
+            self.picker = gui.add_dropdown("Challenge", titles, hint="Built in, from --challenges FILE, or about the pose shown")
             self.preview = gui.add_markdown("")
             self.picker.on_update(guard(lambda _: self._preview()))
             self.minutes = gui.add_number("Time limit (min, 0: none)", 0, min=0, max=MAX_TIME_LIMIT_MINUTES, step=1)
@@ -91,16 +95,23 @@ class ChallengeDesk:
         self.render_panel()
 
     def chosen(self) -> Challenge:
-        return self._challenges[chosen(self.picker, "challenge")]
+        """The challenge picked; a question about the pose shown is asked of the class's arm as it is now."""
+        title = chosen(self.picker, "challenge")
+        return self._challenges[title] if title in self._challenges else self._about_pose(title)
 
     def time_limit(self) -> float | None:
         minutes = within(self.minutes, "time limit (min)")
         return 60 * minutes if minutes else None
 
     def _preview(self) -> None:
-        challenge = self.chosen()
+        try:
+            challenge = self.chosen()
+        except ValueError as why:  # a question about the pose shown that the arm shown cannot be asked
+            self.preview.content = f"Not about the arm shown: {html.escape(str(why), quote=False)}."
+            return
+        shown = "; asked of the class's arm as it stands when you start" if challenge.title in POSE_QUESTIONS else ""
         self.preview.content = (f"{challenge_markdown(challenge)}\n\n"
-                                f"*{challenge.kind.replace('_', ' ')}, on {choice_of(challenge.arm)}*")
+                                f"*{challenge.kind.replace('_', ' ')}, on {choice_of(challenge.arm)}{shown}*")
         if challenge.time_limit and not self.minutes.value:
             self.minutes.value = round(challenge.time_limit / 60)
 

@@ -13,7 +13,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from ur10core import Arm
-from ur10core.challenges import Answer, Challenge, number_names, solution
+from ur10core.challenges import Answer, Challenge, about_the_pose, check, number_names, solution
 
 from ..features.arm_picker import choice_of
 from ..features.branch_labels import in_world, screen_view
@@ -63,7 +63,12 @@ class ClassChallenges:
         return ChallengeDesk(member.client.gui, self.offered, lambda handler, beside=None: self._guard(member, handler, beside),
                              start=lambda challenge, limit: self.start(member, challenge, limit),
                              end=lambda: self.end(member), download=lambda: self.download(member),
-                             run=lambda: self.run, on_render=lambda: self._render_board(member))
+                             run=lambda: self.run, on_render=lambda: self._render_board(member), about_pose=self.about_the_pose)
+
+    def about_the_pose(self, question: str) -> Challenge:
+        """A question of ``POSE_QUESTIONS`` about the class's arm as it is now."""
+        state = self.room.state
+        return about_the_pose(question, state.arm, state.q, state.last.slot)
 
     def start(self, member: Member, challenge: Challenge, time_limit: float | None) -> None:
         """The presenter starts ``challenge``: the class is shown its arm, and every other browser gets its own copy and the task."""
@@ -75,8 +80,16 @@ class ClassChallenges:
             self.room.show_arm(member, choice_of(challenge.arm), paced=False)
             for other in self.room.members.values():  # the last run's cards and targets go
                 self.step_out(other, keep=False)
-            self.run = ChallengeRun(challenge, self.room.state.arm, time_limit, clock=lambda: self.clock())
+            state = self.room.state
+            home = state.arm.specs.home
+            # nobody starts on the answer: the students' arms start where the class's is
+            on_answer = challenge.is_pose and check(challenge, state.arm, Answer(q=state.q, target=state.last.target)).solved
+            if on_answer and check(challenge, state.arm, Answer(q=home, target=state.arm.fk(home))).solved:
+                raise ValueError("the class's arm is on the answer, and so it is at its home pose: move it away first")
+            self.run = ChallengeRun(challenge, state.arm, time_limit, clock=lambda: self.clock())
             members = [m for m in self.room.members.values() if m is not member]
+        if on_answer:  # so the class's arm goes home
+            member.session.apply(lambda arm_state: arm_state.set_joints(home, cause="typed"))
         self.show_goal(member)
         for other in members:
             try:
@@ -131,6 +144,9 @@ class ClassChallenges:
                 session.apply(lambda state: state.move_target(kept["target"], cause="typed"))
         elif run.challenge.kind == "branch_count" and run.challenge.joints is not None:
             session.apply(lambda state: state.set_joints(run.challenge.joints, cause="typed"))
+        elif run.challenge.is_pose and session.arm == self.room.state.arm:  # from where the class's arm is, as everyone
+            start = self.room.state.q  # (an arm kept from the last challenge may be on this one's answer)
+            session.apply(lambda state: state.set_joints(start, cause="typed"))
 
     def set_aside(self, member: Member) -> None:
         """A student's own arm is going (they watch the class, or leave): where it is, kept for :meth:`resume`."""

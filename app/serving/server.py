@@ -16,7 +16,7 @@ import viser
 
 from ur10core import Arm, symbolic, symbolic_arms
 from ur10core.arm import factor_scales
-from ur10core.challenges import Challenge, builtin
+from ur10core.challenges import Challenge, builtin, unfit
 
 from ..features.arm_picker import (
     ARM_CHOICES,
@@ -190,7 +190,8 @@ class TeachingServer:
                  allowed_origins=(), gate: Gate | None = None, lecture: bool = False, light: bool = False,
                  challenges: tuple[Challenge, ...] | None = None) -> None:
         self.arm = Arm.preset(preset)
-        self.challenges = builtin() if challenges is None else tuple(challenges)
+        # what the app's own UR10 cannot be asked is not offered (the ur10e has no link masses to hold up)
+        self.challenges = tuple(c for c in (builtin() if challenges is None else challenges) if not unfit(c, preset))
         self.lecture = lecture
         self.models = load_models(preset, light)
         symbolic.load()  # read the cached derivations now rather than in the first student's callback
