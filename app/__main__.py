@@ -67,12 +67,14 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
         if not args.shared:
             parser.error("--challenges needs --shared (challenges are set by the presenter)")
         try:
-            args.challenge_list = (*load(args.challenges), *builtin())
+            own = load(args.challenges)
         except (OSError, ValueError) as error:
             parser.error(f"--challenges: {error}")
-        for challenge in args.challenge_list[:-len(builtin())]:
-            if unfit(challenge, args.preset):
-                parser.error(f"--challenges: {challenge.title!r} on the {args.preset} preset: {unfit(challenge, args.preset)}")
+        for challenge in own:
+            why = unfit(challenge, args.preset)
+            if why:
+                parser.error(f"--challenges: {challenge.title!r} on the {args.preset} preset: {why}")
+        args.challenge_list = (*own, *builtin())
         titles = [c.title for c in args.challenge_list]
         if len(set(titles)) != len(titles):
             parser.error("--challenges: a challenge in the file has the title of a built-in one; give it another")

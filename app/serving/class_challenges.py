@@ -78,14 +78,14 @@ class ClassChallenges:
             if self.run is not None and not self.run.ended:
                 raise ValueError("a challenge is running: end it first")
             self.room.show_arm(member, choice_of(challenge.arm), paced=False)
-            for other in self.room.members.values():  # the last run's cards and targets go
-                self.step_out(other, keep=False)
             state = self.room.state
             home = state.arm.specs.home
             # nobody starts on the answer: the students' arms start where the class's is
             on_answer = challenge.is_pose and check(challenge, state.arm, Answer(q=state.q, target=state.last.target)).solved
             if on_answer and check(challenge, state.arm, Answer(q=home, target=state.arm.fk(home))).solved:
                 raise ValueError("the class's arm is on the answer, and so it is at its home pose: move it away first")
+            for other in self.room.members.values():  # the last run's cards and targets go
+                self.step_out(other, keep=False)
             self.run = ChallengeRun(challenge, state.arm, time_limit, clock=lambda: self.clock())
             members = [m for m in self.room.members.values() if m is not member]
         if on_answer:  # so the class's arm goes home
