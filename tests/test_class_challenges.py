@@ -569,6 +569,9 @@ def test_the_presenter_asks_the_class_about_the_pose_it_is_shown(classroom):
         await teacher.set_gui("Start the challenge", True)
         member = await until(lambda: next((m for m in room.members.values() if m.card is not None), None), what="the card")
         await until(lambda: student.shown(given), what="the joints given to the student")
+        # and on the projector, under the board's title: what the class was asked, at the joints it was shown
+        await until(lambda: any(given in t and "joined" in t for t in teacher.shown("### Pose shown: tool position")),
+                    what="the task's terms on the board")
         assert np.allclose(room.state.q, np.radians(shown))  # a numbers task leaves the class's arm where it is
         p = 1000 * arm.dh.fk(np.radians(shown))[:3, 3]
         await student.set_gui("Your numbers (x, y, z)", " ".join(f"{v:.3f}" for v in p))

@@ -7,18 +7,17 @@ from __future__ import annotations
 
 import html
 import itertools
-import re
 from typing import Callable
 
 import numpy as np
 import viser
 
 from ur10core import Arm
-from ur10core.challenges import POSE_QUESTIONS, Challenge, Verdict, number_names, terms
+from ur10core.challenges import POSE_QUESTIONS, Challenge, Verdict, number_names
 from ur10core.orientation import from_frame, in_frame, quaternion
 
 from ..feedback import Beside, chosen, within
-from ..serving.challenge_run import MAX_NICKNAME, ChallengeRun, Student, summary_markdown
+from ..serving.challenge_run import MAX_NICKNAME, ChallengeRun, Student, summary_markdown, terms_markdown
 from ..style import SAFE_GREEN, UR10_SIZE, hex_color, label_scale
 from .arm_picker import choice_of
 from .branch_labels import BranchLabels, ScreenView, obstacle
@@ -42,8 +41,7 @@ SOLVED_MARK = "✓ "
 
 def challenge_markdown(challenge: Challenge, time_limit: float | None = None) -> str:
     """The task as a student reads it."""
-    checked = re.sub(r"\b(Given|Asked|Checked):", r"**\1:**", html.escape(terms(challenge), quote=False))
-    lines = [f"### {html.escape(challenge.title, quote=False)}", challenge.text, checked]
+    lines = [f"### {html.escape(challenge.title, quote=False)}", challenge.text, terms_markdown(challenge)]
     if time_limit:
         lines.append(f"Time limit: {time_limit / 60:g} min.")
     return "\n\n".join(lines)

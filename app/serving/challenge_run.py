@@ -11,6 +11,7 @@ import dataclasses
 import html
 import io
 import math
+import re
 import threading
 import time
 import unicodedata
@@ -19,7 +20,7 @@ from collections import Counter
 import numpy as np
 
 from ur10core import Arm
-from ur10core.challenges import Answer, Challenge, Verdict, check
+from ur10core.challenges import Answer, Challenge, Verdict, check, terms
 
 from .gate import TokenBucket
 
@@ -203,10 +204,15 @@ class ChallengeRun:
         return out.getvalue().encode("utf-8")
 
 
+def terms_markdown(challenge: Challenge) -> str:
+    """What the check takes and asks (``ur10core.challenges.terms``), its "Given:", "Asked:", "Checked:" in bold."""
+    return re.sub(r"\b(Given|Asked|Checked):", r"**\1:**", html.escape(terms(challenge), quote=False))
+
+
 def summary_markdown(run: ChallengeRun) -> str:
-    """The projector's view of the class: counts, times, and the mistakes most made."""
+    """The projector's view of the class: the task's terms, counts, times, and the mistakes most made."""
     s = run.summary()
-    lines = [f"### {html.escape(run.challenge.title, quote=False)}",
+    lines = [f"### {html.escape(run.challenge.title, quote=False)}", terms_markdown(run.challenge),
              f"#### **{s.solved}** solved · **{s.working}** working · **{s.joined}** joined"
              + (f" ({s.joined - s.here} away)" if s.here < s.joined else "")]
     if s.fastest is not None:
