@@ -146,7 +146,8 @@ class ClassChallenges:
             session.apply(lambda state: state.set_joints(run.challenge.joints, cause="typed"))
         elif run.challenge.is_pose and session.arm == self.room.state.arm:  # from where the class's arm is, as everyone
             start = self.room.state.q  # (an arm kept from the last challenge may be on this one's answer)
-            session.apply(lambda state: state.set_joints(start, cause="typed"))
+            if not np.array_equal(session.state.q, start):
+                session.apply(lambda state: state.set_joints(start, cause="typed"))
 
     def set_aside(self, member: Member) -> None:
         """A student's own arm is going (they watch the class, or leave): where it is, kept for :meth:`resume`."""
