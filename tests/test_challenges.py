@@ -473,6 +473,27 @@ def test_the_kr210s_wrist_centre_is_303_mm_back_along_the_gripper():
 # ---------------------------------------------------------------------- velocity
 
 
+@pytest.mark.parametrize("name", C.PRESETS)
+def test_a_velocity_task_is_one_the_sliders_can_do_and_the_answer_shown_does_it(name):
+    """The answer shown at the end was the least-squares rates of (v, 0): on the desktop arm and the planar elbow,
+    which cannot hold ω at 0, it moved the tool 16 and 77 mm/s off the asked v. It is now solved from J_v where
+    the tool may turn. A velocity no pose gives with the sliders' rates is refused at start: along the planar
+    elbow's axis, or 20 m/s."""
+    arm = Arm.preset(name)
+    asked = [100, 0, 0] if name == "planar_elbow" else [0, 0, 100]
+    head = f'[[challenge]]\ntitle = "v"\nkind = "velocity"\narm = "{name}"\n'
+    challenge, = C.parse(head + f"velocity_mm_s = {asked}\n")
+    for q in (arm.specs.home, *arm.sample_joints(3, seed=5)):
+        words = C.solution(challenge, arm, q)[1]
+        shown = np.array([float(v) for v in re.search(r"q̇ = \(([^)]*)\)", words).group(1).split()])
+        rates = np.where(arm.revolute, np.radians(shown), shown / 1000)  # as typed into the sliders, to 0.1
+        if np.linalg.svd(arm.jacobian(q)[arm.det_rows], compute_uv=False)[-1] > 0.05:  # (damped near a singularity)
+            assert C.check(challenge, arm, C.Answer(q=q, rates=rates)).solved, (q, words)
+    for velocity in ([0, 0, 100] if name == "planar_elbow" else [20_000, 0, 0],):
+        with pytest.raises(ValueError, match="line 5: no pose of the .* arm within its limits moves the tool so with joint rates"):
+            C.parse(head + f"velocity_mm_s = {velocity}\n")
+
+
 def test_velocity_groups():
     task = by_title("Straight up")
     q = COURSE.specs.home

@@ -21,6 +21,7 @@ import numpy as np
 
 from .arm import PRESETS, Arm, factor_scales
 from .dh import DHTable
+from .differential import damped_inverse
 from .dynamics import GRAVITY, MASSES
 from .solvers.spherical_wrist import spherical_wrist, wrist_split
 from .solvers.ur import separation_steps, shoulder_angles
@@ -57,6 +58,8 @@ MASS_QUANTITIES = ("gravity_torque",)
 POINTS = ("position", "wrist_centre")
 #: Quantities that are angles (°): equal a turn apart, within the relative tolerance of 180°
 ANGLES = ("theta1",)
+#: The joint rates a student can set (the app's Velocities sliders): °/s for a revolute joint, mm/s for a sliding one.
+RATE_LIMITS = {"R": 180.0, "P": 500.0}
 MAX_CHALLENGES = 100
 MAX_FILE_BYTES = 100_000
 MAX_TEXT = 1000
@@ -444,6 +447,10 @@ def _validated(challenge: Challenge, arm: Arm) -> Challenge:
                                       f"{', '.join(sorted(MASSES))}, not for {arm_name!r:.40}")
     if challenge.velocity is not None and not any(challenge.velocity):
         raise _FieldError("velocity_mm_s", "the asked velocity must not be zero")
+    if kind == "velocity" and not _velocity_pose(challenge, arm):  # nor is a velocity no joint rates give
+        limits = ", ".join(f"±{RATE_LIMITS[k]:g} {'°/s' if k == 'R' else 'mm/s'}" for k in sorted(set(arm.joint_types)))
+        raise _FieldError("velocity_mm_s", f"no pose of the {arm_name} arm within its limits moves the tool so with joint "
+                                           f"rates a student can set ({limits})")
     if kind == "reach" and challenge.branch is not None:  # a branch that does not get there is a task nobody can do
         solution_ = arm.ik(arm.fk(np.array(challenge.joints)), hint=np.array(challenge.joints))
         reaching = np.flatnonzero(solution_.valid & solution_.within_limits)
@@ -1000,6 +1007,26 @@ def _check_velocity(challenge: Challenge, arm: Arm, answer: Answer) -> Verdict:
     return Verdict(True, f"Solved: your tool moves at ({shown}) mm/s.", "", text)
 
 
+def _velocity_pose(challenge: Challenge, arm: Arm, samples: int = 2000) -> bool:
+    """Whether some pose (the home pose, or one of ``samples`` random ones) has joint rates a student can set that
+    solve a velocity challenge."""
+    q = np.concatenate([[arm.specs.home], arm.sample_joints(samples, seed=8)])
+    qdot = _velocity_rates(challenge, arm, q)
+    limits = np.array([RATE_LIMITS[k] for k in arm.joint_types]) * np.where(arm.revolute, math.pi / 180, 1e-3)
+    moves = np.linalg.norm(arm.tool_twist(q, qdot)[:, :3] - challenge.velocity, axis=-1) <= challenge.velocity_tolerance / 2
+    settable = (np.abs(qdot) <= limits).all(axis=-1)
+    return bool((moves & settable).any())
+
+
+def _velocity_rates(challenge: Challenge, arm: Arm, q: np.ndarray) -> np.ndarray:
+    """Joint rates (..., n) that move the tool at the asked velocity from joints ``q`` (..., n), as the check
+    weighs them: without turning (all six rows of J) where it must not turn, else from J_v's rows alone
+    (the least-squares rates of all six would trade the asked v for an ω nobody asked about)."""
+    if challenge.still and arm.task == "pose":
+        return arm.joint_rates(q, np.concatenate([challenge.velocity, np.zeros(3)])).qdot
+    return damped_inverse(arm.jacobian(q)[..., :3, :], np.broadcast_to(challenge.velocity, np.shape(q)[:-1] + (3,)))[0]
+
+
 def _searchable(arm: Arm) -> bool:
     """Whether :func:`largest_torque` searches the arm exactly, in one unit: a few revolute joints."""
     return arm.n_joints <= GRID_JOINTS and set(arm.joint_types) == {"R"}
@@ -1069,7 +1096,7 @@ def solution(challenge: Challenge, arm: Arm, q_current=None) -> tuple[np.ndarray
         values = expected_numbers(challenge, arm)
         return None, "The answer: " + ", ".join(f"{name} = {value:.6g}" for name, value in zip(number_names(challenge, arm), values))
     q = np.asarray(arm.specs.home if q_current is None else q_current, dtype=float)
-    rates = arm.joint_rates(q, np.concatenate([challenge.velocity, np.zeros(3)])).qdot
+    rates = _velocity_rates(challenge, arm, q)
     return None, f"At your pose, one answer: q̇ = ({_joints_text(arm, rates, '+.1f')}) °/s (mm/s)."
 
 

@@ -16,6 +16,8 @@ from typing import Any, Callable
 import numpy as np
 import viser
 
+from ur10core.challenges import RATE_LIMITS  # the rates a student can set: a velocity challenge is refused beyond them
+
 from ..feedback import Beside, within
 from ..state import Snapshot
 from ..style import number, swatch
@@ -73,10 +75,6 @@ def rates_markdown(qdot: np.ndarray, damping: float, asked: np.ndarray, achieved
     return "\n".join(lines)
 
 
-#: The slider ranges: °/s for a revolute joint, mm/s for a prismatic one.
-MAX_RATE = {"R": 180.0, "P": 500.0}
-
-
 class VelocityView(View):
     """The "Velocities" folder and the two arrows at the tool: for the sliders' joint rates, or a playing path's.
 
@@ -103,7 +101,7 @@ class VelocityView(View):
                              f"{number(1000 * METRES_PER_SPEED, '.0f')} mm drawn per m/s  \n{swatch(ANGULAR_COLOR)} **ω**: "
                              f"turning rate (about the arrow, right hand), {number(1000 * METRES_PER_TURN_RATE, '.0f')} "
                              "mm drawn per rad/s")
-            self.sliders = [gui.add_slider(rate_label(self._arm, i), min=-MAX_RATE[kind], max=MAX_RATE[kind], step=0.1,
+            self.sliders = [gui.add_slider(rate_label(self._arm, i), min=-RATE_LIMITS[kind], max=RATE_LIMITS[kind], step=0.1,
                                            initial_value=0.0)
                             for i, kind in enumerate(self._kinds)]
             self.readout = gui.add_markdown("")
