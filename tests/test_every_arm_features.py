@@ -19,7 +19,7 @@ from ur10teach.features.arm_picker import ARM_CHOICES
 from ur10teach.features.ik_target import GIZMO_SHARE, HALO_SHARE
 from ur10teach.features.joint_panel import rate_label
 from ur10teach.features.statics import bars_html
-from ur10teach.features.velocity import METRES_PER_SPEED
+from ur10teach.features.velocity import METRES_PER_SPEED, parse_twist
 from ur10teach.features.workspace import POINT_SIZE
 from ur10teach.style import UR10_SIZE
 
@@ -59,6 +59,15 @@ def test_velocity_and_forces_on_every_arm_match_finite_differences(app, label):
             assert arrow.shaft_radius / session.statics.arrow.shaft_radius == pytest.approx(0.5)
         # and the target's "unreachable" halo grows with its gizmo (on a 3.9 m KR210 it was a dot in the gizmo)
         assert session.ik_target.unreachable.radius / session.ik_target.gizmo.scale == pytest.approx(HALO_SHARE / GIZMO_SHARE)
+        # that velocity typed (ω asked zero, as a student types it): the rates for what the arm controls give it back
+        v = 1000 * math.radians(10.0) * position_rate(arm, q, 0)
+        typed = " ".join(f"{c:.6f}" for c in v) + " 0 0 0"
+        await client.set_gui("vx vy vz (mm/s) ωx ωy ωz (°/s)", typed)
+        await client.set_gui("Find the joint rates", True)
+        await until(lambda: "| joint | rate |" in session.velocity.rates.content, what="the joint rates")
+        rates = arm.joint_rates(q, parse_twist(typed))
+        np.testing.assert_allclose(sum(rates.qdot[i] * position_rate(arm, q, i) for i in range(arm.n_joints)), v / 1000, atol=1e-6)
+        assert ("This arm controls its tool's position" in session.velocity.rates.content) == (arm.task != "pose")
         # 50 N along +x at the tool: each joint holds ∂p/∂q_i · F (virtual work)
         await client.set_gui("Show the torques", True)
         await client.set_gui("Force direction", "+x")

@@ -149,8 +149,10 @@ class JacobianUses:
 
         ``q̇ = Σ σ_k / (σ_k² + λ²) · v_k u_kᵀ · twist`` over J's singular triplets: the least-squares
         rates away from a singularity (λ = 0), bounded near one, where λ grows as
-        :func:`damping` says from the smallest singular value. An arm with fewer than six
-        joints gets the least-squares rates of what it can do; ``achieved`` says what that is.
+        :func:`damping` says from the smallest singular value. An arm that controls less than
+        a pose solves only the rows it controls (:data:`TASK_ROWS`: its tool's position, and a
+        SCARA's yaw): asking a position-only arm for ω = 0 as well traded the asked v for it.
+        ``achieved`` is the whole twist the rates give.
 
         Parameters
         ----------
@@ -171,7 +173,8 @@ class JacobianUses:
         J = self.jacobian(self._joints(q))
         twist = vectors(twist, "twist", 6)
         J = np.broadcast_to(J, np.broadcast_shapes(J.shape[:-2], twist.shape[:-1]) + J.shape[-2:])
-        qdot, lam = damped_inverse(J, twist)
+        rows = TASK_ROWS[getattr(self, "task", "pose")]
+        qdot, lam = damped_inverse(J[..., rows, :], twist[..., rows])
         return JointRates(qdot, lam, np.einsum("...ij,...j->...i", J, qdot))
 
     def static_torques(self, q, force, moment=(0.0, 0.0, 0.0)) -> np.ndarray:

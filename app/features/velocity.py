@@ -52,9 +52,15 @@ def shown_rates(qdot: np.ndarray, kinds: str) -> np.ndarray:
     return np.where(np.array(list(kinds)) == "R", np.degrees(qdot), 1000.0 * np.asarray(qdot))
 
 
+#: What an arm that controls less than a pose is asked of a typed velocity (``Arm.joint_rates`` solves those rows only).
+UNASKED = {"position": "its tool's position only: the ω typed is not asked of it",
+           "position and yaw": "its tool's position and yaw only: the ωx and ωy typed are not asked of it"}
+
+
 def rates_markdown(qdot: np.ndarray, damping: float, asked: np.ndarray, achieved: np.ndarray,
-                   labels: tuple[str, ...], kinds: str, limits: np.ndarray | None = None) -> str:
-    """The joint rates (°/s, mm/s), red where over the joint's speed limit (if it has ``limits``), and what the damping cost."""
+                   labels: tuple[str, ...], kinds: str, limits: np.ndarray | None = None, task: str = "pose") -> str:
+    """The joint rates (°/s, mm/s), red where over the joint's speed limit (if it has ``limits``), what the damping cost,
+    and, on an arm that controls less than a pose (``task``), what of the velocity was not asked of it."""
     shown = shown_rates(qdot, kinds)
     over_limit = np.abs(shown) > limits if limits is not None else np.zeros(len(shown), bool)
     cells = []
@@ -72,6 +78,9 @@ def rates_markdown(qdot: np.ndarray, damping: float, asked: np.ndarray, achieved
         miss_w = math.degrees(np.linalg.norm(achieved[3:] - asked[3:]))
         lines.append(f"Near a singularity: damped (λ = {damping:.3f}), so the arm gives this velocity to within "
                      f"{miss_v:.1f} mm/s and {miss_w:.1f} °/s rather than turn its joints without bound.")
+    if task in UNASKED:
+        lines.append(f"This arm controls {UNASKED[task]}; these rates turn the tool at ω = "
+                     f"({', '.join(number(math.degrees(w), '+.1f') for w in achieved[3:])}) °/s.")
     return "\n".join(lines)
 
 
@@ -129,7 +138,7 @@ class VelocityView(View):
         snapshot = self._session.state.last
         rates = self._arm.joint_rates(snapshot.q, twist)
         self.rates.content = rates_markdown(rates.qdot, float(rates.damping), twist, rates.achieved,
-                                            self._labels, self._kinds, self._limits)
+                                            self._labels, self._kinds, self._limits, self._arm.task)
 
     def render(self, snapshot: Snapshot) -> None:
         playing = snapshot.rates is not None and bool(np.any(snapshot.rates))  # a path playing: its own rates
