@@ -174,7 +174,7 @@ class JacobianUses:
         twist = vectors(twist, "twist", 6)
         J = np.broadcast_to(J, np.broadcast_shapes(J.shape[:-2], twist.shape[:-1]) + J.shape[-2:])
         rows = TASK_ROWS[getattr(self, "task", "pose")]
-        qdot, lam = damped_inverse(J[..., rows, :], twist[..., rows])
+        qdot, lam = damped_inverse(J, twist) if len(rows) == 6 else damped_inverse(J[..., rows, :], twist[..., rows])
         return JointRates(qdot, lam, np.einsum("...ij,...j->...i", J, qdot))
 
     def static_torques(self, q, force, moment=(0.0, 0.0, 0.0)) -> np.ndarray:
