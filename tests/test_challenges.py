@@ -735,7 +735,7 @@ def test_every_question_about_the_pose_shown_is_asked_at_its_joints_or_refused_s
     asked = 0
     for question in C.POSE_QUESTIONS:
         try:
-            challenge = C.about_the_pose(question, arm, q, slot)
+            challenge = C.about_the_pose(question, arm, q)
         except ValueError as why:
             assert re.search(r"has no spherical wrist|needs the arm's link masses", str(why)), (question, str(why))
             continue

@@ -222,9 +222,9 @@ _POSE_TEXTS = {None: "Put your tool on the target, the pose the class's arm was 
                "gravity_torque": f"Which joint torques hold the arm still at {_SHOWN}, against its own weight? In N·m."}
 
 
-def about_the_pose(question: str, arm: Arm, q, slot: int | None = None) -> Challenge:
+def about_the_pose(question: str, arm: Arm, q) -> Challenge:
     """A presenter's question (a key of :data:`POSE_QUESTIONS`) about the pose the class is shown: ``arm`` (a preset)
-    at joints ``q`` (n,), on IK slot ``slot`` (0-based). ``ValueError`` saying why where it does not apply.
+    at joints ``q`` (n,), on the branch those joints are on. ``ValueError`` saying why where it does not apply.
 
     >>> arm = Arm.preset("kr210")
     >>> about_the_pose("Pose shown: wrist centre", arm, arm.specs.home).quantity
@@ -242,9 +242,8 @@ def about_the_pose(question: str, arm: Arm, q, slot: int | None = None) -> Chall
     q = arm.joints(q)
     values = {"title": question, "kind": kind, "arm": "ur10" if arm.name in Arm.UR_PRESETS else arm.name,
               "joints": tuple(q.tolist())}
-    if asked == "branch":
-        if slot is None or not 0 <= slot < len(arm.slot_labels) or arm.numerical:
-            raise ValueError("the arm shown is on no numbered branch (its IK is numerical)")
+    if asked == "branch":  # the slot whose joints are q (not the target's, which may be out of reach)
+        slot = _slot_of(arm, arm.ik(arm.fk(q), hint=q), q)
         values["branch"] = slot + 1
         values["text"] = _POSE_TEXTS["branch"].format(label=arm.slot_labels[slot])
     else:

@@ -68,7 +68,7 @@ class ClassChallenges:
     def about_the_pose(self, question: str) -> Challenge:
         """A question of ``POSE_QUESTIONS`` about the class's arm as it is now."""
         state = self.room.state
-        return about_the_pose(question, state.arm, state.q, state.last.slot)
+        return about_the_pose(question, state.arm, state.q)
 
     def start(self, member: Member, challenge: Challenge, time_limit: float | None) -> None:
         """The presenter starts ``challenge``: the class is shown its arm, and every other browser gets its own copy and the task."""
