@@ -172,7 +172,8 @@ _BUILTIN = (
     Challenge("Holding itself up", "numbers", "ur10",
               "Stretched out level, the arm holds 5 kg at its flange. Type the six "
               "joint torques that hold it still against gravity, in N·m: for each joint, the weights m g beyond it "
-              "times their lever arms (link masses 7.1, 12.7, 4.27, 2.0, 2.0, 0.365 kg).",
+              "times their lever arms (link masses 7.1, 12.7, 4.27, 2.0, 2.0, 0.365 kg). *Forces and gravity* shows "
+              "them for a pose and a payload you set.",
               joints=_deg(0, 0, 0, -90, 0, 0), quantity="gravity_torque", payload=5.0),
     Challenge("Straight up", "velocity", "ur10",
               "Set the joint rates (Velocities folder) so that the flange moves **straight up at 100 mm/s** without "
