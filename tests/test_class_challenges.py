@@ -566,6 +566,12 @@ def test_the_presenter_asks_the_class_about_the_pose_it_is_shown(classroom):
         given = "**Given:** q = (20°, -70°, 100°, -30°, 60°, 10°)"
         await until(lambda: any("asked of the class's arm as it stands when you start" in t for t in teacher.shown(given)),
                     what="the preview, at the joints shown")
+        await teacher.set_gui(typed_label(arm), " ".join(str(v) for v in [25, *shown[1:]]))  # moved after it was picked
+        await teacher.set_gui("Set these values", True)
+        await until(lambda: teacher.shown("**Given:** q = (25°, -70°"), what="the preview following the class's arm")
+        await teacher.set_gui(typed_label(arm), " ".join(str(v) for v in shown))
+        await teacher.set_gui("Set these values", True)
+        await until(lambda: teacher.shown(given), what="the preview back at the joints shown")
         await teacher.set_gui("Start the challenge", True)
         member = await until(lambda: next((m for m in room.members.values() if m.card is not None), None), what="the card")
         await until(lambda: student.shown(given), what="the joints given to the student")

@@ -117,6 +117,8 @@ class ChallengeDesk:
         self._on_render()  # first: a change from here on asks for the next redraw
         run = self._run()
         running = run is not None and not run.ended
+        if not running and self.picker.value in POSE_QUESTIONS:
+            self._preview()  # at the joints the class's arm has now
         for handle, show in ((self.picker, not running), (self.minutes, not running), (self.start, not running),
                              (self.preview, not running), (self.end, running), (self.download, run is not None)):
             if handle.visible != show:

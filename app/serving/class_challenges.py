@@ -13,7 +13,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from ur10core import Arm
-from ur10core.challenges import Answer, Challenge, about_the_pose, check, number_names, solution
+from ur10core.challenges import POSE_QUESTIONS, Answer, Challenge, about_the_pose, check, number_names, solution
 
 from ..features.arm_picker import choice_of
 from ..features.branch_labels import in_world, screen_view
@@ -253,6 +253,13 @@ class ClassChallenges:
                 shown.remove()
             setattr(member, part, None)
         member.student = member.observer = None
+
+    def class_arm_moved(self) -> None:
+        """The class's arm moved: a question about the pose shown, previewed, is previewed at its new joints."""
+        presenter = self.room.presenter
+        if not self.running and presenter is not None and presenter.desk is not None \
+                and presenter.desk.picker.value in POSE_QUESTIONS:
+            self._board_changed()
 
     def _board_changed(self) -> None:
         """The presenter's board redraws soon (at its own pace: a hundred students moving ask for it once)."""

@@ -299,6 +299,7 @@ class Classroom:
         session.follow_lecture_mode(member.camera.lecture)
         session.names_elsewhere = member.goal_name
         session.observers.append(lambda _: app.refresher.request(self.live))
+        session.observers.append(lambda _: self.challenges.class_arm_moved())
         session.watch_camera(member.camera)  # the browser's own camera, for the workspace sections
         app.janitor.settle()
         return session
