@@ -185,9 +185,9 @@ def test_joint_rates_draw_the_flange_velocity_and_a_typed_velocity_gets_its_rate
         await until(lambda: view.rates.content == rates_markdown(rates.qdot, float(rates.damping), asked, rates.achieved,
                                                                  snapshot.arm.joint_names, "RRRRRR", limits), what="the joint rates")
         assert float(rates.damping) == 0.0 and np.allclose(rates.achieved, asked)
-        await client.set_gui("vx vy vz (mm/s) ωx ωy ωz (°/s)", "1 2 3")
+        await client.set_gui("vx vy vz (mm/s) ωx ωy ωz (°/s)", "1 2 3 4")
         await client.set_gui("Find the joint rates", True)
-        await until(lambda: "six numbers" in view.refusal.line.content.lower() and view.refusal.line.visible,
+        await until(lambda: "three numbers" in view.refusal.line.content.lower() and view.refusal.line.visible,
                     what="the refusal beside the velocity")
         await client.set_gui("vx vy vz (mm/s) ωx ωy ωz (°/s)", "0 0 200 0 0 0")
         await client.set_gui("Find the joint rates", True)
@@ -218,6 +218,10 @@ def test_near_a_singularity_the_needed_rates_are_red_and_on_it_damped():
         assert ("damped (λ =" in text) == damped
     with pytest.raises(ValueError, match="up to 2000 mm/s"):
         parse_twist("5000 0 0 0 0 0")
+    # v alone, ω = 0 (all a position-only arm is asked), and the minus the course writes
+    np.testing.assert_array_equal(parse_twist("\u2212100, 0 50"), [-0.1, 0, 0.05, 0, 0, 0])
+    with pytest.raises(ValueError, match="three numbers, vx vy vz .* or six"):
+        parse_twist("1 2 3 4 5")
 
 
 def test_the_rate_charts_mark_the_singularity_and_the_speed_limits():

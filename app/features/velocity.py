@@ -20,7 +20,7 @@ from ur10core.challenges import RATE_LIMITS  # the rates a student can set: a ve
 
 from ..feedback import Beside, within
 from ..state import Snapshot
-from ..style import number, swatch
+from ..style import number, swatch, typed_numbers
 from ..view import Session, View
 from .joint_panel import rate_label
 
@@ -32,10 +32,13 @@ MAX_TYPED = (2000.0, 360.0)  #: the largest typed speed (mm/s) and turning rate 
 
 
 def parse_twist(text: str) -> np.ndarray:
-    """``vx vy vz ωx ωy ωz`` in mm/s and °/s → (6,) in m/s and rad/s; ``ValueError`` saying what is wrong."""
-    fields = [f for f in re.split(r"[,\s]+", text.strip()) if f]
+    """``vx vy vz [ωx ωy ωz]`` in mm/s and °/s (ω = 0 if left out) → (6,) in m/s and rad/s; ``ValueError`` saying
+    what is wrong."""
+    fields = [f for f in re.split(r"[,\s]+", typed_numbers(text).strip()) if f]
+    if len(fields) == 3:  # a velocity alone: all a position-only arm is asked
+        fields += ["0", "0", "0"]
     if len(fields) != 6:
-        raise ValueError(f"type six numbers, vx vy vz (mm/s) then ωx ωy ωz (°/s); got {len(fields)}")
+        raise ValueError(f"type three numbers, vx vy vz (mm/s), or six, with ωx ωy ωz (°/s) after them; got {len(fields)}")
     try:
         values = np.array([float(f) for f in fields])
     except ValueError:
@@ -115,7 +118,8 @@ class VelocityView(View):
                             for i, kind in enumerate(self._kinds)]
             self.readout = gui.add_markdown("")
             gui.add_markdown(f"Or ask for a {place} velocity and see the joint rates it needs, q̇ = J⁻¹ v:")
-            self.typed = gui.add_text("vx vy vz (mm/s) ωx ωy ωz (°/s)", "100 0 0 0 0 0")
+            self.typed = gui.add_text("vx vy vz (mm/s) ωx ωy ωz (°/s)", "100 0 0 0 0 0",
+                                      hint="Three numbers, v alone (ω = 0), or six")
             self.solve = gui.add_button("Find the joint rates")
             self.refusal = Beside(gui)
             self.rates = gui.add_markdown("")
