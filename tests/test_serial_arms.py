@@ -394,6 +394,23 @@ def test_numerical_ik_finds_the_kr210s_branches():
     assert complete / len(T) >= 0.7
 
 
+def test_a_typed_table_finds_poses_near_a_singularity():
+    """Found by a fuzz of typed copies of the presets: the Stanford arm with its stroke d3 a few mm
+    long (the wrist centre close to the shoulder's axis, where J is singular) had no start within
+    1e-10 after the usual steps, so a pose 0.1 µm away was reported as not found. Its closed form
+    is the independent check: every one of these poses has eight branches."""
+    stanford = Arm.preset("stanford")
+    typed = Arm.from_dh([(r.a, r.alpha, r.d, r.theta, r.joint) for r in stanford.dh.rows], stanford.dh.convention)
+    q = np.array([[0.319, 2.528, 0.002, -2.004, 1.307, -0.626],
+                  [1.164, -1.230, 0.001, 2.810, -1.196, -1.104],
+                  [-2.188, -0.115, 0.003, 1.717, -2.521, -2.732]])
+    T = typed.fk(q)
+    assert stanford.ik(T).valid.sum(axis=-1).tolist() == [8, 8, 8]
+    sol = typed.ik(T)
+    assert sol.valid.any(axis=-1).all(), sol.unreachable_reason()
+    assert typed.pose_error(np.where(sol.valid[..., None], sol.q, 0), T[:, None])[sol.valid].max() < 1e-9
+
+
 def test_a_custom_arm_typed_by_a_student():
     arm = Arm.from_dh([(0.5, 0, 0, 0), (0.4, 0, 0, 0), (0, 0, 0, 0)], convention="standard", joint_types="RRP")
     assert arm.joint_types == "RRP" and arm.task == "position"

@@ -9,9 +9,11 @@ joints):
 
 λ shrinks after a step that lowers the error and grows after one that does not (the step
 is then not taken), so a start near a singularity slows down instead of jumping. Starts
-that converge to within 1e-12 of the pose, checked once more by FK to 1e-9, are the
-solutions; solutions closer than 1e-6 in every joint are one, and they are sorted so that
-the same pose always lists them in the same order, labelled "found numerically".
+that converge to within 1e-10 of the pose, checked once more by FK to 1e-9, are the
+solutions. Near a singularity the steps close in slowly, not quadratically: when no start of a
+pose got there but one came within 1e-5, its four nearest take eight times as many steps more. Solutions closer than
+1e-6 in every joint are one, and they are sorted so that the same pose always lists them in
+the same order, labelled "found numerically".
 """
 
 from __future__ import annotations
@@ -26,10 +28,15 @@ from ..tolerances import LENGTH_TOLERANCE
 
 #: A start has converged when its error (m and rad) is below this.
 CONVERGED = 1e-12
+#: A start whose error is below this (and whose FK is within 1e-9 of the pose) is a solution.
+REACHED = 1e-10
 #: Solutions closer than this in every joint (rad or m) are the same solution.
 SAME = 1e-6
 #: λ never shrinks below this: λ² = 1e-12 keeps J Jᵀ + λ² I invertible in floating point.
 MIN_DAMPING = 1e-6
+#: A pose no start reached, with a start this close (m and rad), gets its nearest starts this
+#: many times more steps (see :meth:`NumericalIK.solve`).
+NEARLY_REACHED, POLISHED_STARTS, MORE_STEPS = 1e-5, 4, 8
 
 
 def sampling_range(limits: np.ndarray, revolute: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -178,10 +185,17 @@ class NumericalIK:
         starts = self._starts(hint, N)
         target = np.broadcast_to(T[:, None], starts.shape[:-1] + (4, 4))
         q, size = self._descend(starts, target, self.iterations)
+        best = size.min(axis=-1)
+        stuck = np.flatnonzero((best > REACHED) & (best < NEARLY_REACHED))
+        if len(stuck):  # near a singularity the steps converge slowly, not quadratically: carry on the nearest
+            nearest = np.argsort(size[stuck], axis=-1)[:, :POLISHED_STARTS]
+            rows = stuck[:, None]
+            q[rows, nearest], size[rows, nearest] = self._descend(
+                q[rows, nearest], target[rows, nearest], MORE_STEPS * self.iterations)
         reached = np.abs(self.table.fk(q) - target)
         if self.task == "position":
             reached = reached[..., :3, 3]
-        ok = (size <= 1e-10) & (reached.reshape(reached.shape[:2] + (-1,)).max(axis=-1) <= 1e-9)
+        ok = (size <= REACHED) & (reached.reshape(reached.shape[:2] + (-1,)).max(axis=-1) <= 1e-9)
         for k in range(N):
             found = _distinct(q[k][ok[k]], self.revolute)[:slots]
             out["q"][k, : len(found)] = found
