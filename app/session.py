@@ -212,6 +212,13 @@ class ArmSession:
             if player is not None:
                 player.stop()
 
+    def hold_back(self, asked: str | None) -> None:
+        """A class challenge asking ``asked`` (``Challenge.asks``) runs on this arm, or none does (None): each view
+        takes away what would answer it, or gives it back (``View.hold_back``), and the scene and panel follow."""
+        for view in self.panel_views:
+            view.hold_back(asked)
+        self.redraw()
+
     def redraw(self) -> None:
         """The 3D view again, unchanged state (a toggle changed what is shown), and the panel after it."""
         with self.state.lock:

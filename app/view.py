@@ -10,6 +10,14 @@ from ur10core import Arm
 
 from .state import ArmState, Snapshot
 
+#: What a view says in place of what it holds back while a class challenge runs (``View.hold_back``).
+HELD_BACK = "Off while the class challenge asks you to find this yourself: back when it ends."
+
+
+def say_held_back(markdown: viser.GuiMarkdownHandle, held: bool) -> None:
+    """``markdown`` says :data:`HELD_BACK` while ``held``; otherwise it is hidden, and empty."""
+    markdown.content, markdown.visible = (HELD_BACK, True) if held else ("", False)
+
 
 class Session(Protocol):
     """What a feature is handed (``ur10teach.session.ArmSession``): the browser, its arm, and the means to change
@@ -44,17 +52,21 @@ class View:
     ``close`` lets go of what the view holds in a scene shared with others (the browser
     has gone, or handed the arm over); ``remove`` also takes the view's own widgets out of
     a browser that stays. A view lists its panel folders in ``folders``, its charts in
-    ``charts`` (lecture mode sizes their axes), and in ``answers`` the kinds of class challenge
-    one of its buttons would answer: while one runs, ``hold_back`` takes those buttons away.
+    ``charts`` (lecture mode sizes their axes), and in ``answers`` what a class challenge may ask
+    (``Challenge.asks``: its kind, or a numbers challenge's quantity) that its panel would give away: while
+    one asking it runs, ``held`` is what it asks, and the view shows :data:`HELD_BACK` in its place.
     """
 
     folders: tuple = ()
     charts: tuple = ()
     answers: tuple = ()
+    held: str | None = None
 
-    def hold_back(self, reason: str | None) -> None:
-        """Take away the buttons that would answer the running class challenge, saying ``reason`` in their
-        place (viser's buttons cannot be disabled), or give them back (None)."""
+    def hold_back(self, asked: str | None) -> None:
+        """A class challenge asking ``asked`` runs (None: none does). A view whose ``answers`` hold it takes away
+        the readouts and buttons that would answer it (viser's buttons cannot be disabled: they are hidden), until
+        it is given back; ``render_panel``, called next, writes its readouts."""
+        self.held = asked if asked in self.answers else None
 
     def render(self, snapshot: Snapshot) -> None:
         pass

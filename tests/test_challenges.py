@@ -333,6 +333,22 @@ def test_holding_itself_up_is_roboticstoolboxs_gravload_and_its_slips_are_named(
                          (alone, "the payload left out"), (loaded * [1, 1, 1.1, 1, 1, 1], "τ3 is off")):
         verdict = C.check(challenge, arm, C.Answer(numbers=typed))
         assert not verdict.solved and verdict.group == group, (group, verdict)
+    # worked by hand from what the student reads (the readouts that gave it are off while it runs): the terms'
+    # masses and centres of mass, the text's axes, the payload at the flange (the UR10's FK)
+    words = C.terms(challenge)
+    masses = [float(m) for m in re.search(r"links of \(([^)]*)\) kg", words).group(1).split(", ")]
+    where = [np.array([float(v) for v in point.split(", ")]) / 1000
+             for point in re.findall(r"\((-?[\d.]+, -?[\d.]+, -?[\d.]+)\)", words.split("centres of mass at")[1])]
+    assert len(masses) == len(where) == 6 and "g = 9.81 m/s²" in words
+    where.append(arm.fk(challenge.joints)[:3, 3])
+    axes = {1: ((0, 0, 1), (0, 0)), 2: ((0, -1, 0), (0, 0)), 3: ((0, -1, 0), (0.612, 0)), 4: ((0, -1, 0), (1.184, 0)),
+            5: ((1, 0, 0), (0, -0.1639)), 6: ((0, -1, 0), (1.3, 0))}
+    weights = 9.81 * np.array([*masses, challenge.payload])
+    by_hand = [sum(w * np.cross(axis, [*(p[:2] - through), 0.0])[2] for w, p in zip(weights[i - 1:], where[i - 1:]))
+               for i, (axis, through) in axes.items()]
+    assert C.check(challenge, arm, C.Answer(numbers=by_hand)).solved, by_hand
+    for through in ("x = 0, 612 and 1184 mm", "y = −163.9 mm", "x = 1300 mm"):
+        assert through in challenge.text
     head = '[[challenge]]\ntitle = "g"\nkind = "numbers"\njoints = [0, 0, 0, 0, 0, 0]\n'
     assert C.parse(head + 'quantity = "gravity_torque"\n')[0].payload == 0.0
     for tail, line, words in (('quantity = "gravity_torque"\npayload_kg = 11\n', 6, "payload_kg must be a number from 0 to 10"),

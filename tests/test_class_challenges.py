@@ -21,7 +21,7 @@ from ur10teach.features.course_arms.editor import CONVENTIONS
 from ur10teach.features.joint_panel import display_text, rate_label, typed_label
 from ur10teach.serving.gate import address_of
 from ur10teach.serving.challenge_run import ChallengeRun, clean_nickname, spreadsheet_safe
-from ur10teach.serving.class_challenges import HELD_BACK
+from ur10teach.view import HELD_BACK
 from ur10dev.viser_client import ViserClient, messages
 
 from .server_support import become_presenter, drag_a_little, until, url
@@ -465,22 +465,136 @@ def test_the_placed_labels_keep_clear_of_the_challenge_targets_name(classroom):
 
 def test_a_singularity_challenge_is_not_answered_by_the_singularity_buttons(classroom):
     """*Put the arm on the: elbow* answered *Elbow singularity* in one click. While a singularity challenge runs,
-    a student's buttons are taken away and the folder says why (a forged click is refused, the arm stays); they are
-    back at its end."""
+    a student's buttons are taken away and the folder says why (a forged click is refused, the arm stays), and the
+    presenter's too (the projector would show the class the answer); they are back at its end."""
 
     async def scenario():
         teacher, student, member = await a_student_in(classroom, "Elbow singularity", "127.0.0.8")
         buttons = member.session.singularities.demo
         await until(lambda: student.gui.get("Put the arm on the", {}).get("visible") is False
                     and student.shown(HELD_BACK), what="the buttons off")
+        await until(lambda: teacher.gui.get("Put the arm on the", {}).get("visible") is False
+                    and teacher.shown(HELD_BACK), what="the presenter's buttons off")
         q = member.session.state.q
         await student.send(messages.GuiUpdateMessage(buttons._impl.uuid, {"value": "elbow"}))
         await until(lambda: sum(HELD_BACK in body for _, body in student.received.notifications) == 1, what="the refusal")
         assert np.array_equal(member.session.state.q, q) and member.session.state.last.cause != "singularity"
         await teacher.set_gui("End and show the solution", True)
-        await until(lambda: student.gui.get("Put the arm on the", {}).get("visible") is True, what="the buttons back")
+        await until(lambda: student.gui.get("Put the arm on the", {}).get("visible") is True
+                    and teacher.gui.get("Put the arm on the", {}).get("visible") is True, what="the buttons back")
         await student.set_gui("Put the arm on the", "wrist")
         await until(lambda: member.session.state.last.cause == "singularity", what="the wrist button working again")
+        for client in (teacher, student):
+            await client.close()
+
+    asyncio.run(scenario())
+
+
+#: A built-in numbers challenge → the readouts of a panel on its arm that would give its answer.
+HELD_READOUTS = {
+    "Where is the flange?": lambda s: [s.readouts.pose],
+    "IK step 1: both shoulders": lambda s: [s.decoupling.steps, s.ik_target.branches],
+    "det J by hand": lambda s: [s.singularities.gauges],
+    "Holding a weight": lambda s: [s.statics.bars],
+    "Holding itself up": lambda s: [s.statics.bars],
+    "KR210: its wrist centre": lambda s: [s.decoupling.readout],
+    "Desktop arm: tool velocity": lambda s: [s.velocity.readout, s.lessons[1].readout],
+}
+
+
+@pytest.mark.parametrize("title", HELD_READOUTS)
+def test_a_numbers_challenges_answer_cannot_be_read_off_a_panel(classroom, title):
+    """*Where is the flange?* was answered by typing its joints and copying the Tool pose folder; each numbers
+    quantity had such a readout (det J's gauges, the torque bars, the branch table's θ1, WC, v). While one runs,
+    those readouts say why they are off, in the student's panel and in the presenter's, which the projector
+    shows, even with the student's arm at the task's joints (and for θ1, the other shoulder's branch cannot be
+    chosen: the joint panel would show it); they are back at its end."""
+    room = classroom.classroom
+
+    async def scenario():
+        teacher, student, member = await a_student_in(classroom, title, "127.0.0.9")
+        challenge, session, presenter = room.challenges.run.challenge, member.session, room.presenter.session
+        if challenge.quantity in ("torque", "gravity_torque"):  # the bars show once asked for
+            for client in (teacher, student):
+                await client.set_gui("Show the torques", True)
+        readouts = [*HELD_READOUTS[title](session), *HELD_READOUTS[title](presenter)]
+        await until(lambda: all(HELD_BACK in readout.content for readout in readouts), what="the readouts held back")
+        arm, given = session.arm, " ".join(f"{v:.6f}" for v in np.degrees(challenge.joints))
+        await student.set_gui(typed_label(arm), given)
+        await student.set_gui("Set these values", True)
+        await until(lambda: np.allclose(session.state.q, challenge.joints)
+                    and student.gui.get(typed_label(arm), {}).get("value") == display_text(arm, session.state.q),
+                    what="the task's joints, and the panel drawn at them")
+        assert all(HELD_BACK in readout.content for readout in readouts)
+        if title == "Desktop arm: tool velocity":  # the course path's plot gives v at t = 4 s too
+            assert session.lessons[1].velocity.visible is False
+        if title == "IK step 1: both shoulders":  # another branch chosen would show its θ1 in the joint panel
+            await until(lambda: student.gui.get("Use branch", {}).get("visible") is False, what="Use branch off")
+            await student.send(messages.GuiUpdateMessage(session.ik_target.branch_buttons._impl.uuid, {"value": "5"}))
+            await until(lambda: any(HELD_BACK in body for _, body in student.received.notifications), what="the refusal")
+            assert np.allclose(session.state.q, challenge.joints)
+        await teacher.set_gui("End and show the solution", True)
+        await until(lambda: not any(HELD_BACK in readout.content for readout in readouts), what="the readouts back")
+        for client in (teacher, student):
+            await client.close()
+
+    asyncio.run(scenario())
+
+
+def test_the_buttons_that_would_answer_a_velocity_a_branch_count_or_a_dh_table_are_off_while_it_runs(classroom):
+    """*Find the joint rates* gave *Straight up*'s rates for "0 0 100"; the branch-count map drew where *Four branches
+    only* holds; the DH table folder, its row on the arm and the walkthrough's rows gave *Type the UR10's DH table*.
+    While each runs they are taken away from the student (a forged click is refused and changes nothing) and from
+    the presenter; the walkthrough still walks through the procedure, without the rows' values; all is back at
+    the end."""
+    room = classroom.classroom
+
+    async def refused(student, handle, value, count: int) -> None:
+        await student.send(messages.GuiUpdateMessage(handle._impl.uuid, {"value": value}))
+        await until(lambda: sum(HELD_BACK in body for _, body in student.received.notifications) == count, what="the refusal")
+
+    async def scenario():
+        teacher, student, member = await a_student_in(classroom, "Straight up", "127.0.0.10")
+        velocity = member.session.velocity
+        for session, client in ((member.session, student), (room.presenter.session, teacher)):
+            await until(lambda: client.gui.get("Find the joint rates", {}).get("visible") is False
+                        and session.velocity.held_back.content == HELD_BACK, what="Find the joint rates off")
+        await student.send(messages.GuiUpdateMessage(velocity.solve._impl.uuid, {"value": True}))
+        await until(lambda: "Off while the class challenge" in velocity.refusal.line.content, what="the refusal, beside it")
+        assert velocity.rates.content == ""
+        await teacher.set_gui("End and show the solution", True)
+        await until(lambda: student.gui.get("Find the joint rates", {}).get("visible") is True, what="it back")
+        await student.set_gui("Find the joint rates", True)
+        await until(lambda: "°/s" in velocity.rates.content, what="the rates found again")
+
+        await teacher.set_gui("Challenge", "Four branches only")
+        await teacher.set_gui("Start the challenge", True)
+        reach_map = member.session.reach_map
+        await until(lambda: student.gui.get("Show branch-count map", {}).get("visible") is False
+                    and teacher.gui.get("Show branch-count map", {}).get("visible") is False, what="the map's switch off")
+        await refused(student, reach_map.enabled, True, 1)
+        assert reach_map.enabled.value is False and reach_map.computed == 0 and reach_map.image is None
+        await teacher.set_gui("End and show the solution", True)
+        await until(lambda: student.gui.get("Show branch-count map", {}).get("visible") is True, what="the switch back")
+
+        await teacher.set_gui("Challenge", "Type the UR10's DH table")
+        await teacher.set_gui("Start the challenge", True)
+        table, walkthrough = member.session.dh_table, member.session.walkthrough
+        await until(lambda: table.table.visible is False and table.highlight.visible is False
+                    and room.presenter.session.dh_table.table.visible is False
+                    and student.gui.get("Show a row on the arm", {}).get("visible") is False, what="the table off")
+        await refused(student, table.highlight, "row 2", 2)
+        assert table.highlight.value == "none" and table._frames.highlight_row is None
+        for _ in range(3):  # z axes, x axes, row 1: its words, without its values
+            await student.set_gui("Step", "Next ▶")
+        await until(lambda: "Row 1" in walkthrough.text.content, what="the walkthrough at row 1")
+        assert "Row 1:" not in walkthrough.text.content and walkthrough._frames.highlight_row is None
+        await teacher.set_gui("End and show the solution", True)
+        await until(lambda: table.table.visible is True and student.gui.get("Show a row on the arm", {}).get("visible") is True,
+                    what="the table back")
+        await student.set_gui("Step", "Next ▶")  # row 2, with its values
+        await until(lambda: "Row 2: θ" in walkthrough.text.content and walkthrough._frames.highlight_row == 2,
+                    what="the rows' values back")
         for client in (teacher, student):
             await client.close()
 

@@ -22,7 +22,7 @@ import numpy as np
 from .arm import PRESETS, Arm, factor_scales
 from .dh import DHTable
 from .differential import damped_inverse
-from .dynamics import GRAVITY, MASSES
+from .dynamics import GRAVITY, MASSES, centres_of_mass
 from .solvers.spherical_wrist import spherical_wrist, wrist_split
 from .solvers.ur import separation_steps, shoulder_angles
 from .specs import GRID_JOINTS, WorstPose, largest_torque
@@ -106,6 +106,16 @@ class Challenge:
         """Its answer is where the arm is: the projector draws every student's tool, and the end moves the arm."""
         return self.kind in ("reach", "singularity", "branch_count", "largest_torque")
 
+    @property
+    def asks(self) -> str:
+        """What it asks for: its kind, or a numbers challenge's quantity (what the app's panels must not show while
+        it runs).
+
+        >>> builtin()[0].asks, next(c for c in builtin() if c.kind == "numbers").asks
+        ('reach', 'position')
+        """
+        return self.quantity if self.kind == "numbers" else self.kind
+
 
 @dataclasses.dataclass(frozen=True)
 class Answer:
@@ -170,10 +180,10 @@ _BUILTIN = (
               "six joint torques τ = Jᵀ F in N·m.", joints=_deg(0, 0, 0, 90, 0, 0), quantity="torque",
               force=(0.0, 0.0, -100.0)),
     Challenge("Holding itself up", "numbers", "ur10",
-              "Stretched out level, the arm holds 5 kg at its flange. Type the six "
-              "joint torques that hold it still against gravity, in N·m: for each joint, the weights m g beyond it "
-              "times their lever arms (link masses 7.1, 12.7, 4.27, 2.0, 2.0, 0.365 kg). *Forces and gravity* shows "
-              "them for a pose and a payload you set.",
+              "Stretched out level, the arm holds 5 kg at its flange. Type the six joint torques that hold it still "
+              "against gravity, in N·m: for each joint, the weights m g beyond it times their lever arms, by the right "
+              "hand about its axis. Joint 1 turns about z; joints 2, 3 and 4 about −y, through x = 0, 612 and 1184 mm; "
+              "joint 5 about x, through y = −163.9 mm; joint 6 about −y, through x = 1300 mm (the flange).",
               joints=_deg(0, 0, 0, -90, 0, 0), quantity="gravity_torque", payload=5.0),
     Challenge("Straight up", "velocity", "ur10",
               "Set the joint rates (Velocities folder) so that the flange moves **straight up at 100 mm/s** without "
@@ -598,8 +608,11 @@ def terms(challenge: Challenge) -> str:
         given.append(f"{force} at the tool, in the base frame")
     if challenge.rates is not None:
         given.append(f"q̇ = {_given(arm, challenge.rates, '/s')}")
-    if challenge.quantity == "gravity_torque":
-        given.append(f"a payload of {challenge.payload:g} kg at the flange")
+    if challenge.quantity == "gravity_torque":  # the app's bars that give the answer are off: what a hand needs
+        centres = 1000 * centres_of_mass(arm, np.array(challenge.joints))
+        given.append(f"a payload of {challenge.payload:g} kg at the flange; links of ({', '.join(f'{m:g}' for m in MASSES[arm.name].masses)}) kg, "
+                     f"their centres of mass at {', '.join(_vector(c) for c in centres)} mm in the base frame; "
+                     f"g = {GRAVITY:g} m/s²")
     within = f"within {180 * challenge.relative_tolerance:.3g}°" if challenge.quantity in ANGLES else relative
     each = "each " if len(number_names(challenge, arm)) > 1 else ""
     return f"Given: {'; '.join(given)}. Asked: {QUANTITIES[challenge.quantity]}, {each}{within}."

@@ -105,6 +105,17 @@ def gravity_torques(arm, q: np.ndarray, payload_kg: float = 0.0) -> np.ndarray:
     return tau
 
 
+def centres_of_mass(arm, q: np.ndarray) -> np.ndarray:
+    """Each link's centre of mass in the base frame (m), (..., 6, 3), at the course's joints ``q`` (..., 6): UR's
+    published centres, each in its link's frame of UR's standard DH table (docs/kinematics.md §8.5).
+
+    >>> from ur10core import Arm
+    >>> (1000 * centres_of_mass(Arm.preset("ur10"), np.zeros(6))[2]).round(1)  # the forearm's, stretched out
+    array([944.3, -68. , 127.3])
+    """
+    return _centres(ur_standard_table(arm).frames(np.asarray(q, dtype=float)), link_masses(arm))
+
+
 def _centres(frames: np.ndarray, masses: LinkMasses) -> np.ndarray:
     """Each link's centre of mass in the base frame, (..., 6, 3), from UR's standard-DH frames (..., 7, 4, 4)."""
     return np.einsum("...jab,jb->...ja", frames[..., 1:, :3, :3], masses.centres) + frames[..., 1:, :3, 3]

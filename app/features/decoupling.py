@@ -14,7 +14,7 @@ from ur10core.solvers.ur import SeparationSteps, separation_steps
 
 from ..state import Snapshot
 from ..style import WRIST_COLOR, number, sentence
-from ..view import Session, View
+from ..view import HELD_BACK, Session, View
 
 INTRO = ("Where the last three axes meet in one point, the **wrist centre WC**, the wrist's joints cannot move it: "
          "the first three joints place WC, and the wrist then turns the tool. The pose splits in two (Pieper).")
@@ -103,6 +103,8 @@ class DecouplingView(View):
     (the UR family, the small arms), the folder says why its pose does not split, and the UR family's shows its
     own steps instead, with P5 named in 3D when asked."""
 
+    answers = ("theta1", "wrist_centre")  # the UR family's steps give both θ1; a split gives WC
+
     def __init__(self, gui: viser.GuiApi, session: Session) -> None:
         arm = self._arm = session.arm
         self._centre_in_tool: np.ndarray | None = None  #: c: WC = p + R c
@@ -142,7 +144,9 @@ class DecouplingView(View):
         return [] if self.shown is None else [(self._centre, self._point, WRIST_COLOR)]
 
     def render_panel(self, snapshot: Snapshot) -> None:
-        if self._separated:
+        if self.held:
+            (self.steps if self._separated else self.readout).content = HELD_BACK
+        elif self._separated:
             self.steps.content = steps_markdown(separation_steps(self._arm, snapshot.q, snapshot.frames), self._arm)
         elif not self.why_not:
             split = wrist_split(self._arm, snapshot.q, snapshot.frames)

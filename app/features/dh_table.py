@@ -10,10 +10,10 @@ import viser
 from ur10core import Arm
 from ur10core.dh import DHTable
 
-from ..feedback import chosen
+from ..feedback import chosen, put_back
 from ..state import Snapshot
 from ..style import number
-from ..view import Session, View
+from ..view import HELD_BACK, Session, View, say_held_back
 from .dh_frames import FRAMES_NONE, FRAMES_XZ, FRAMES_Z, DHFrames
 
 #: What the DH folders say of an arm without a DH table (the desktop arm).
@@ -54,6 +54,8 @@ class DHTableView(View):
     ``frames`` draws them on the arm (None for an arm without a DH table).
     """
 
+    answers = ("dh_table",)  # the table, and a row's values drawn on the arm
+
     def __init__(self, gui: viser.GuiApi, session: Session, frames: DHFrames | None) -> None:
         self._session = session
         self._frames = frames
@@ -71,14 +73,28 @@ class DHTableView(View):
             self.highlight = gui.add_dropdown("Show a row on the arm", self.row_choices, initial_value="none",
                                               hint="Its d and a as segments, its θ and α as arcs, with their values")
             self.row_values = gui.add_markdown("")
-            gui.add_markdown(f"**{arm.description}.** As defined ({arm.convention} DH):\n\n" + dh_table_markdown(arm.dh)
-                             + f"\n\nThe same chain in {other.convention} DH (the tool pose is the same; the "
-                             "frames slide to the neighbouring joint axes):\n\n" + dh_table_markdown(other))
+            self.table = gui.add_markdown(f"**{arm.description}.** As defined ({arm.convention} DH):\n\n" + dh_table_markdown(arm.dh)
+                                          + f"\n\nThe same chain in {other.convention} DH (the tool pose is the same; "
+                                          "the frames slide to the neighbouring joint axes):\n\n" + dh_table_markdown(other))
+            self.held_back = gui.add_markdown("", visible=False)
         self.show_frames.on_update(session.guard(lambda _: self._apply()))
         self.highlight.on_update(session.guard(lambda _: self._apply()))
 
+    def hold_back(self, asked: str | None) -> None:
+        super().hold_back(asked)
+        if self._session.arm.dh is None:
+            return
+        for widget in (self.highlight, self.row_values, self.table):
+            widget.visible = self.held is None
+        say_held_back(self.held_back, self.held is not None)
+        if self.held and self.highlight.value != "none":
+            self.highlight.value = "none"  # its callback takes the row's values off the arm
+
     def _apply(self) -> None:
         choice = chosen(self.highlight, "row")
+        if self.held and choice != "none":  # a choice a browser cannot send while it is off
+            put_back(self.highlight, "none")
+            raise ValueError(HELD_BACK)
         frames = self._frames
         frames.shown = FRAMES_XZ if self.show_frames.value else FRAMES_NONE
         frames.highlight_row = None if choice == "none" else int(choice.split()[1])
@@ -131,7 +147,10 @@ class DHWalkthrough(View):
     """Step through the DH procedure on the arm: z axes, x axes, then each row's four parameters.
 
     ``frames`` draws them (:class:`ur10teach.features.dh_frames.DHFrames`; None for an arm without a DH table).
+    While a class challenge asks for the table, the steps are there without the rows' values.
     """
+
+    answers = ("dh_table",)
 
     def __init__(self, gui: viser.GuiApi, session: Session, frames: DHFrames | None) -> None:
         self._session = session
@@ -158,12 +177,22 @@ class DHWalkthrough(View):
             self.step = min(self.step + 1, len(self.steps) - 1)
         else:
             self.step = max(self.step - 1, -1)
+        self._show()
+
+    def hold_back(self, asked: str | None) -> None:
+        super().hold_back(asked)
+        if self.step >= 0:
+            self._show()  # the step shown, with its row's values or without them
+
+    def _show(self) -> None:
         frames = self._frames
         if self.step < 0:
             frames.shown, frames.highlight_row = frames.at_rest, None
             self.text.content = "Press **Next** to build this arm's frames the DH way, one step at a time."
         else:
             text, frames_shown, row = self.steps[self.step]
+            if self.held:
+                row = None
             frames.shown, frames.highlight_row = frames_shown, row
             values = "" if row is None else "\n\n" + row_values_markdown(self._session.arm, self._session.state.last.q, row)
             self.text.content = f"{text}{values}\n\n*Step {self.step + 1} of {len(self.steps)}*"

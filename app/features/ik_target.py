@@ -34,7 +34,7 @@ from ..style import (
     sentence,
     swatch,
 )
-from ..view import Session, View
+from ..view import HELD_BACK, Session, View
 from ..viser_internals.fast_updates import set_instances, stop_echo
 from .branch_labels import BranchLabels
 from .robot import model_slug
@@ -396,6 +396,8 @@ class IKTarget(View):
     applies the changes. A drag is filed on viser's event loop and solved by the drag queue.
     """
 
+    answers = ("theta1",)  # the branch table lists every branch's joints; a branch chosen shows its own
+
     def __init__(self, controls: viser.SceneApi, gui: viser.GuiApi, drawing, session: Session) -> None:
         self._session = session
         self._drawing = drawing
@@ -468,13 +470,21 @@ class IKTarget(View):
         except Exception:  # nothing may escape onto the event loop
             log.exception("could not queue a drag")
 
+    def hold_back(self, asked: str | None) -> None:
+        super().hold_back(asked)
+        self.branch_buttons.visible = self.held is None
+
     def _ghost_clicked(self, client: viser.ClientHandle | None, slot: int) -> None:
         if client is None or client.client_id != self._session.client.client_id:
             return  # in the shared scene only the presenter's clicks count
-        self._session.guard(lambda _: self._session.apply(lambda state: state.select_branch(slot)))(None)
+        self._session.guard(lambda _: self._select(slot))(None)
 
     def _branch_button(self, _: viser.GuiEvent) -> None:
-        slot = int(chosen(self.branch_buttons, "branch")) - 1
+        self._select(int(chosen(self.branch_buttons, "branch")) - 1)
+
+    def _select(self, slot: int) -> None:
+        if self.held:  # the joint panel would show the other branch's joints
+            raise ValueError(HELD_BACK)
         self._session.apply(lambda state: state.select_branch(slot))
 
     def _toggle_ghosts(self, _: viser.GuiEvent) -> None:
@@ -516,7 +526,7 @@ class IKTarget(View):
             self.unreachable.visible = not snapshot.reachable
 
     def render_panel(self, snapshot: Snapshot) -> None:
-        self.branches.content = branches_markdown(snapshot)
+        self.branches.content = status_markdown(snapshot) + "\n\n" + HELD_BACK if self.held else branches_markdown(snapshot)
 
 
 def pose_from_gizmo(pose) -> tuple[np.ndarray, bool]:

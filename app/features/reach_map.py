@@ -20,7 +20,7 @@ from ..feedback import chosen, put_back
 from ..serving.workers import MAPS, FoldedRuns
 from ..state import Snapshot
 from ..style import REACH_COLORS, hex_color
-from ..view import Session, View
+from ..view import HELD_BACK, Session, View, say_held_back
 from .workspace import FROM_ABOVE
 
 PLANES = {"vertical, through the base axis and the target": "vertical", "horizontal, at the target's height": "horizontal"}
@@ -97,6 +97,8 @@ class ReachMapView(View):
     puts that frame in the scene, for the camera.
     """
 
+    answers = ("branch_count",)  # the map shows where each count of branches reaches
+
     def __init__(self, scene: viser.SceneApi, gui: viser.GuiApi, session: Session, root: str = "/reach_map",
                  target_of: Callable[[Any], np.ndarray] = lambda snapshot: snapshot.target,
                  world: np.ndarray = np.eye(4)) -> None:
@@ -130,6 +132,7 @@ class ReachMapView(View):
             planes, missing = planes_of(arm)
             self.plane = gui.add_dropdown("Plane", planes, initial_value=planes[0], hint=missing or None)
             self.legend = gui.add_html(legend_html(max(self.slots, 1)), visible=False)
+            self.held_back = gui.add_markdown("", visible=False)
         self.enabled.on_update(session.guard(self._toggled))
         self.plane.on_update(session.guard(self._toggled))
 
@@ -139,11 +142,19 @@ class ReachMapView(View):
         label, where = self._legend  # hung in the map's turned frame, beside the map
         return [(where, label.text, label.font_screen_scale, label.anchor)]
 
+    def hold_back(self, asked: str | None) -> None:
+        super().hold_back(asked)
+        self.enabled.visible = self.held is None
+        say_held_back(self.held_back, self.held is not None)
+        if self.held and self.enabled.value:
+            self.enabled.value = False  # its callback takes the map away
+
     def _toggled(self, _: viser.GuiEvent) -> None:
         chosen(self.plane, "plane")
-        if self.enabled.value and not self.slots:  # its checkbox is disabled: only a made-up message gets here
+        why = NO_MAP if not self.slots else HELD_BACK if self.held else None
+        if self.enabled.value and why:  # its checkbox is disabled or hidden: only a made-up message gets here
             put_back(self.enabled, False)  # refused once, not again at every redraw of the panel
-            raise ValueError(NO_MAP)
+            raise ValueError(why)
         self.legend.visible = self.enabled.value
         if self.enabled.value:
             self._face_next = True
@@ -170,7 +181,7 @@ class ReachMapView(View):
     def _draw(self) -> None:
         snapshot = self._session.state.last
         key = self._key(snapshot)
-        if not self.enabled.value or key == self.shown_key:
+        if not self.enabled.value or self.held or key == self.shown_key:
             return
         if not self.slots:
             raise ValueError(NO_MAP)
@@ -181,7 +192,7 @@ class ReachMapView(View):
         image, (wxyz, position) = map_image(reach.counts, self.slots), map_pose(reach)
         top = reach.size / 2 - 0.06  # the legend, along the map's v, just inside its edge
         with self._lock:
-            if self._closed or not self.enabled.value:
+            if self._closed or not self.enabled.value or self.held:  # gone, off, or a class challenge began meanwhile
                 return
             if self.image is None:
                 self.image = self._scene.add_image(

@@ -15,7 +15,7 @@ from ur10core.orientation import (
 
 from ..state import Snapshot
 from ..style import number
-from ..view import View
+from ..view import HELD_BACK, View
 
 
 def pose_markdown(T: np.ndarray) -> str:
@@ -67,6 +67,8 @@ def pose_title(snapshot: Snapshot) -> str:
 class Readouts(View):
     """The "Tool pose" folder."""
 
+    answers = ("position",)
+
     def __init__(self, gui: viser.GuiApi, first: Snapshot) -> None:
         folder = gui.add_folder(pose_title(first), expand_by_default=False)
         with folder:
@@ -74,4 +76,4 @@ class Readouts(View):
         self.folders = (folder,)
 
     def render_panel(self, snapshot: Snapshot) -> None:
-        self.pose.content = flange_markdown(snapshot)
+        self.pose.content = HELD_BACK if self.held else flange_markdown(snapshot)

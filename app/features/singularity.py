@@ -32,7 +32,7 @@ from ..style import (
     hex_color,
     number,
 )
-from ..view import Session, View
+from ..view import HELD_BACK, Session, View, say_held_back
 from .branch_labels import BranchLabels
 
 #: Below this share of its largest value a factor is drawn fully red.
@@ -305,7 +305,7 @@ class Singularities(View):
     ``overlay`` is the drawing's 3D part (``enabled``, ``set_enabled``), None where it draws none.
     """
 
-    answers = ("singularity",)
+    answers = ("singularity", "det_j")  # its buttons put the arm on one; its gauges give det J
 
     def __init__(self, gui: viser.GuiApi, overlay, session: Session) -> None:
         self._session = session
@@ -352,14 +352,15 @@ class Singularities(View):
             self._overlay.set_enabled(bool(self.enabled.value))
         self._session.redraw()
 
-    def hold_back(self, reason: str | None) -> None:
-        self.held_back.content, self.held_back.visible = reason or "", reason is not None
+    def hold_back(self, asked: str | None) -> None:
+        super().hold_back(asked)
+        say_held_back(self.held_back, self.held == "singularity")
         if self.demo is not None:
-            self.demo.visible = reason is None
+            self.demo.visible = self.held != "singularity"
 
     def _demo(self, _: viser.GuiEvent) -> None:
-        if self.held_back.visible:  # a click a browser cannot send while they are off
-            raise ValueError(self.held_back.content)
+        if self.held == "singularity":  # a click a browser cannot send while they are off
+            raise ValueError(HELD_BACK)
         self._pressed = chosen(self.demo, "singularity")
         self._presses.start("singularity", self._session.guard)
 
@@ -378,7 +379,7 @@ class Singularities(View):
             HEAVY.run(session.client, place, cancelled=lambda: session.closed)
 
     def render_panel(self, snapshot: Snapshot) -> None:
-        self.gauges.content = factors_html(self._arm, snapshot.q)
+        self.gauges.content = HELD_BACK if self.held == "det_j" else factors_html(self._arm, snapshot.q)
         if self.plot is None:
             return
         now = time.monotonic() - self._started

@@ -24,7 +24,7 @@ from ..feedback import chosen, put_back, within
 from ..serving.workers import HEAVY, FoldedRuns
 from ..state import Snapshot
 from ..style import DANGER_RED, SAFE_GREEN, UR10_SIZE, blend, hex_color, number
-from ..view import Session, View
+from ..view import HELD_BACK, Session, View, say_held_back
 from ..viser_internals.fast_updates import set_positions, stop_echo
 from .branch_labels import obstacle
 from .workspace import POINT_SIZE, colormap
@@ -108,7 +108,7 @@ class StaticsView(View):
     arrow, the handle's distance and the map's marker (the UR10's drawing is for 1 m).
     """
 
-    answers = ("largest_torque",)  # the map marks the pose that needs the most
+    answers = ("largest_torque", "torque", "gravity_torque")  # the map marks the pose that needs the most; the bars give τ
 
     def __init__(self, scene: viser.SceneApi, gui: viser.GuiApi, session: Session, root: str = "/statics",
                  size: float = 1.0) -> None:
@@ -252,20 +252,23 @@ class StaticsView(View):
         if self.bars.visible:
             _, force_torques, gravity = self.loads(snapshot)
             arm = self._session.arm
-            self.bars.content = bars_html(force_torques, gravity, arm.specs.torque_ratings, arm.joint_names, arm.joint_types)
+            self.bars.content = (HELD_BACK if self.held in ("torque", "gravity_torque") else
+                                 bars_html(force_torques, gravity, arm.specs.torque_ratings, arm.joint_names, arm.joint_types))
 
-    def hold_back(self, reason: str | None) -> None:
-        self.held_back.content, self.held_back.visible = reason or "", reason is not None
-        self.mapped.visible = reason is None
-        if reason is not None and self.mapped.value:
+    def hold_back(self, asked: str | None) -> None:
+        super().hold_back(asked)
+        mapping = self.held != "largest_torque"
+        self.mapped.visible = mapping
+        say_held_back(self.held_back, not mapping)
+        if not mapping and self.mapped.value:
             self.mapped.value = False  # its callback takes the map away
 
     def _draw_map(self) -> None:
         session = self._session
         shown = None
-        if self.mapped.value and self.held_back.visible:  # a click a browser cannot send while it is off
+        if self.mapped.value and self.held == "largest_torque":  # a click a browser cannot send while it is off
             put_back(self.mapped, False)
-            raise ValueError(self.held_back.content)
+            raise ValueError(HELD_BACK)
         if self.mapped.value and not session.closed:
             force = self.fixed_force()
             shown = force, HEAVY.run(session.client, lambda: torque_map(session.arm, force, TORQUE_MAP_POINTS), cancelled=lambda: session.closed)
@@ -273,7 +276,7 @@ class StaticsView(View):
             if session.closed:
                 return
             self._clear_map()
-            if self.held_back.visible:  # a class challenge began while it was drawn
+            if self.held == "largest_torque":  # a class challenge began while it was drawn
                 shown = None
             self.map_legend.visible = shown is not None
             camera = session.camera

@@ -21,7 +21,7 @@ from ur10core.challenges import RATE_LIMITS  # the rates a student can set: a ve
 from ..feedback import Beside, within
 from ..state import Snapshot
 from ..style import number, swatch, typed_numbers
-from ..view import Session, View
+from ..view import HELD_BACK, Session, View, say_held_back
 from .joint_panel import rate_label
 
 LINEAR_COLOR, ANGULAR_COLOR = (0, 114, 178), (204, 121, 167)
@@ -96,6 +96,8 @@ class VelocityView(View):
     from ``session.arm``; ``size`` (the arm's reach, m) scales the arrows' thickness (for an arm 1 m across).
     """
 
+    answers = ("velocity", "tool_velocity")  # "Find the joint rates" gives q̇ for a v; the readout gives v
+
     def __init__(self, scene: viser.SceneApi, gui: viser.GuiApi, session: Session, root: str = "/velocity",
                  tool: Callable[[Any], np.ndarray] = lambda snapshot: snapshot.flange, place: str = "tool",
                  size: float = 1.0) -> None:
@@ -123,6 +125,7 @@ class VelocityView(View):
             self.solve = gui.add_button("Find the joint rates")
             self.refusal = Beside(gui)
             self.rates = gui.add_markdown("")
+            self.held_back = gui.add_markdown("", visible=False)
         self.linear, self.angular = (  # as thick, for its size, beside a 3.9 m KR210 as beside the UR10
             scene.add_arrows(f"{root}/{name}", np.zeros((1, 2, 3)), colour, shaft_radius=0.006 * size, head_radius=0.015 * size,
                              head_length=0.03 * size, visible=False)
@@ -137,7 +140,15 @@ class VelocityView(View):
         shown = np.array([within(slider, slider.label) for slider in self.sliders])
         return np.where(np.array(list(self._kinds)) == "R", np.radians(shown), shown / 1000.0)
 
+    def hold_back(self, asked: str | None) -> None:
+        super().hold_back(asked)
+        for widget in (self.typed, self.solve, self.rates):
+            widget.visible = self.held != "velocity"
+        say_held_back(self.held_back, self.held == "velocity")
+
     def _solve(self) -> None:
+        if self.held == "velocity":  # a click a browser cannot send while it is off
+            raise ValueError(HELD_BACK)
         twist = parse_twist(str(self.typed.value))
         snapshot = self._session.state.last
         rates = self._arm.joint_rates(snapshot.q, twist)
@@ -165,6 +176,9 @@ class VelocityView(View):
         return list(zip(ends, NAMES, (LINEAR_COLOR, ANGULAR_COLOR)))
 
     def render_panel(self, snapshot: Snapshot) -> None:
+        if self.held == "tool_velocity":
+            self.readout.content = HELD_BACK
+            return
         qdot = self.joint_rates()
         twist = self._arm.tool_twist(snapshot.q, qdot)
         self.readout.content = (f"v = ({', '.join(number(1000 * v, '+.1f') for v in twist[:3])}) mm/s, "

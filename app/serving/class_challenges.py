@@ -30,9 +30,6 @@ if TYPE_CHECKING:
 
 log = logging.getLogger(__name__)
 
-#: What a folder says in place of the buttons that would answer the running challenge (``View.hold_back``).
-HELD_BACK = "Off while the class challenge asks you to find this yourself: back when it ends."
-
 
 class ClassChallenges:
     """The challenges the presenter can set (``offered``), the one started last (``run``), and the board.
@@ -90,6 +87,7 @@ class ClassChallenges:
             members = [m for m in self.room.members.values() if m is not member]
         if on_answer:  # so the class's arm goes home
             member.session.apply(lambda arm_state: arm_state.set_joints(home, cause="typed"))
+        self.hold_back(member.session)
         self.show_goal(member)
         for other in members:
             try:
@@ -134,9 +132,7 @@ class ClassChallenges:
         run, student, session = self.run, member.student, member.session
         if run is None or run.ended or student is None or session is None or session.arm != run.arm:
             return
-        for view in session.panel_views:  # one click would answer it
-            if run.challenge.kind in view.answers:
-                view.hold_back(HELD_BACK)
+        self.hold_back(session)
         kept = student.kept
         if "q" in kept:
             session.apply(lambda state: state.set_joints(kept["q"], cause="typed"))
@@ -148,6 +144,13 @@ class ClassChallenges:
             start = self.room.state.q  # (an arm kept from the last challenge may be on this one's answer)
             if not np.array_equal(session.state.q, start):
                 session.apply(lambda state: state.set_joints(start, cause="typed"))
+
+    def hold_back(self, session) -> None:
+        """Nothing in ``session``'s panel gives away the running challenge (on its arm): a student's, and the
+        presenter's, which the class sees on the projector."""
+        run = self.run
+        if run is not None and not run.ended and session is not None and session.arm == run.arm:
+            session.hold_back(run.challenge.asks)
 
     def set_aside(self, member: Member) -> None:
         """A student's own arm is going (they watch the class, or leave): where it is, kept for :meth:`resume`."""
@@ -218,8 +221,7 @@ class ClassChallenges:
             q, words = solution(challenge, arm, session.state.q) if own and challenge.kind == "velocity" else common
             try:
                 if own:
-                    for view in session.panel_views:
-                        view.hold_back(None)
+                    session.hold_back(None)
                 if own and q is not None:
                     session.apply(lambda state: state.set_joints(q, cause="typed"))
                 if other.card is not None:

@@ -301,6 +301,7 @@ class Classroom:
         session.observers.append(lambda _: app.refresher.request(self.live))
         session.observers.append(lambda _: self.challenges.class_arm_moved())
         session.watch_camera(member.camera)  # the browser's own camera, for the workspace sections
+        self.challenges.hold_back(session)  # the projector shows this panel
         app.janitor.settle()
         return session
 

@@ -16,7 +16,7 @@ from ur10core.three_dof import course_path
 from ...serving.workers import HEAVY, FoldedRuns
 from ...state import Snapshot
 from ...style import DANGER_RED, SLOT_COLORS, hex_color, number
-from ...view import Session, View
+from ...view import HELD_BACK, Session, View
 from ..animation import Player
 from ..branch_labels import obstacle
 from ..workspace import colormap
@@ -50,6 +50,8 @@ class DesktopAbout(View):
 class CoursePathLesson(View):
     """The course's velocity exercise: play its joint path, with v and ω drawn at the tool and plotted."""
 
+    answers = ("tool_velocity",)  # its readout and plot give v
+
     def __init__(self, gui: viser.GuiApi, session: Session) -> None:
         self._session = session
         self.player = Player(session)
@@ -67,7 +69,7 @@ class CoursePathLesson(View):
             self.play = gui.add_button("Play the course's path", icon=viser.Icon.PLAYER_PLAY)
             self.stop = gui.add_button("Stop", icon=viser.Icon.PLAYER_STOP)
             self.readout = gui.add_markdown("")
-            velocity = gui.add_uplot(
+            self.velocity = velocity = gui.add_uplot(
                 data=(t.astype(np.float32), *(1000 * twist[:, :3].T).astype(np.float32)),
                 series=(viser.uplot.Series(label="t (s)"),
                         *(viser.uplot.Series(label=f"v{a} (mm/s)", stroke=hex_color(c), width=2)
@@ -99,7 +101,10 @@ class CoursePathLesson(View):
                          done=lambda: session.apply(lambda state: state.set_joints(state.last.q)))
 
     def render_panel(self, snapshot: Snapshot) -> None:
-        if snapshot.rates is None or not np.any(snapshot.rates):
+        self.velocity.visible = self.held is None
+        if self.held:
+            self.readout.content = HELD_BACK
+        elif snapshot.rates is None or not np.any(snapshot.rates):
             self.readout.content = "Not playing: the arrows show while the path plays."
             return
         twist = self._session.arm.tool_twist(snapshot.q, snapshot.rates)
@@ -133,17 +138,18 @@ class StaticsExercise(View):
         self._searches = FoldedRuns(self._search)
         self.search.on_click(session.guard(lambda _: self._searches.start("torque-search", session.guard)))
 
-    def hold_back(self, reason: str | None) -> None:
-        self.search.visible = reason is None
-        self.result.content = reason or ""
-        if reason is not None:
+    def hold_back(self, asked: str | None) -> None:
+        super().hold_back(asked)
+        self.search.visible = self.held is None
+        self.result.content = HELD_BACK if self.held else ""
+        if self.held:
             with self._map_lock:
                 self._clear()
 
     def _search(self) -> None:
         session = self._session
-        if not self.search.visible:  # a click a browser cannot send while it is off
-            raise ValueError(self.result.content)
+        if self.held:  # a click a browser cannot send while it is off
+            raise ValueError(HELD_BACK)
         arm, force = session.arm, session.statics.fixed_force()
         if not force.any():
             raise ValueError("set a force first: with none, no pose needs any torque")
@@ -155,7 +161,7 @@ class StaticsExercise(View):
         (q, norms), worst = HEAVY.run(session.client, search, cancelled=lambda: session.closed)
         points = arm.fk(q)[:, :3, 3]
         with self._map_lock:
-            if session.closed or not self.search.visible:  # gone, or a class challenge began meanwhile
+            if session.closed or self.held:  # gone, or a class challenge began meanwhile
                 return
             self._clear()
             top = worst.norm or 1.0

@@ -14,7 +14,7 @@ from ur10core.serial import kr210_from_urdf, kr210_to_urdf
 from ...feedback import Beside
 from ...state import Snapshot
 from ...style import number
-from ...view import Session, View
+from ...view import HELD_BACK, Session, View
 
 
 def pose_text(T: np.ndarray) -> str:
@@ -44,6 +44,8 @@ def parse_pose(text: str) -> np.ndarray:
 class GripperPose(View):
     """The "Gripper pose" folder of the KR210: the target in either convention, and a pose to go to."""
 
+    answers = ("position",)  # the target is on the tool once the joints are set
+
     def __init__(self, gui: viser.GuiApi, session: Session) -> None:
         self._session = session
         folder = gui.add_folder("Gripper pose", expand_by_default=False)
@@ -72,5 +74,8 @@ class GripperPose(View):
         self._session.apply(lambda state: state.move_target(T, cause="typed"))
 
     def render_panel(self, snapshot: Snapshot) -> None:
+        if self.held:
+            self.readout.content = HELD_BACK
+            return
         name = "URDF (ROS/Gazebo)" if self.urdf.value else "DH (frame G)"
         self.readout.content = f"Target in the {name} convention: **{pose_text(self._shown(snapshot.target))}**"
