@@ -30,8 +30,6 @@ GRID_STEPS = 31
 WORST_LABEL_RISE = 0.8
 
 
-
-
 class DesktopAbout(View):
     """The arm's own folder: what it is (its tool pose and det J_v are in the folders every arm has)."""
 
