@@ -100,10 +100,8 @@ class CoursePathLesson(View):
 
     def render_panel(self, snapshot: Snapshot) -> None:
         self.velocity.visible = self.held is None
-        if self.held:
-            self.readout.content = HELD_BACK
-        elif snapshot.rates is None or not np.any(snapshot.rates):
-            self.readout.content = "Not playing: the arrows show while the path plays."
+        if self.held or snapshot.rates is None or not np.any(snapshot.rates):
+            self.readout.content = HELD_BACK if self.held else "Not playing: the arrows show while the path plays."
             return
         twist = self._session.arm.tool_twist(snapshot.q, snapshot.rates)
         self.readout.content = (f"v = ({', '.join(number(1000 * v, '+.0f') for v in twist[:3])}) mm/s  \n"
