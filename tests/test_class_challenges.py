@@ -495,7 +495,7 @@ def test_a_singularity_challenge_is_not_answered_by_the_singularity_buttons(clas
 HELD_READOUTS = {
     "Where is the flange?": lambda s: [s.readouts.pose],
     "IK step 1: both shoulders": lambda s: [s.decoupling.steps, s.ik_target.branches],
-    "det J by hand": lambda s: [s.singularities.gauges],
+    "det J by hand": lambda s: [s.singularities.gauges, s.ellipsoids.lengths],
     "Holding a weight": lambda s: [s.statics.bars],
     "Holding itself up": lambda s: [s.statics.bars],
     "KR210: its wrist centre": lambda s: [s.decoupling.readout],
@@ -515,9 +515,10 @@ def test_a_numbers_challenges_answer_cannot_be_read_off_a_panel(classroom, title
     async def scenario():
         teacher, student, member = await a_student_in(classroom, title, "127.0.0.9")
         challenge, session, presenter = room.challenges.run.challenge, member.session, room.presenter.session
-        if challenge.quantity in ("torque", "gravity_torque"):  # the bars show once asked for
+        shown = {"torque": "Show the torques", "gravity_torque": "Show the torques", "det_j": "Show at the tool"}
+        if challenge.quantity in shown:  # the bars and the ellipsoids' lengths show once asked for
             for client in (teacher, student):
-                await client.set_gui("Show the torques", True)
+                await client.set_gui(shown[challenge.quantity], True)
         readouts = [*HELD_READOUTS[title](session), *HELD_READOUTS[title](presenter)]
         await until(lambda: all(HELD_BACK in readout.content for readout in readouts), what="the readouts held back")
         arm, given = session.arm, " ".join(f"{v:.6f}" for v in np.degrees(challenge.joints))

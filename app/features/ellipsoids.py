@@ -20,7 +20,7 @@ from ur10core.orientation import quaternion
 from ..feedback import chosen
 from ..state import Snapshot
 from ..style import number, swatch
-from ..view import Session, View
+from ..view import HELD_BACK, Session, View
 from ..viser_internals.fast_updates import set_orientations, set_positions, set_scales
 
 VELOCITY_COLOR, FORCE_COLOR = (86, 180, 233), (213, 94, 0)
@@ -80,6 +80,8 @@ class EllipsoidsView(View):
     ``root``, ``tool`` and ``place`` as for ``ur10teach.features.velocity.VelocityView``: the arm's tool by default.
     """
 
+    answers = ("det_j",)  # on an arm that places its tool only, the velocity semi-axes multiply to |det J|
+
     def __init__(self, scene: viser.SceneApi, gui: viser.GuiApi, session: Session, root: str = "/ellipsoids",
                  tool: Callable[[Any], np.ndarray] = lambda snapshot: snapshot.flange, place: str = "tool",
                  reach: float = 1.3) -> None:
@@ -138,7 +140,9 @@ class EllipsoidsView(View):
 
     def render_panel(self, snapshot: Snapshot) -> None:
         self.lengths.visible = bool(self.enabled.value)
-        if self.lengths.visible:
+        if self.lengths.visible and self.held:
+            self.lengths.content = HELD_BACK
+        elif self.lengths.visible:
             translation = self._arm.translation_ellipsoid(snapshot.q)
             self.lengths.content = lengths_markdown(translation.velocity, translation.force, self._place,
                                                     HELD.get(getattr(self._arm, "task", "pose"), ""),
