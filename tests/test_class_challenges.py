@@ -530,6 +530,13 @@ def test_a_numbers_challenges_answer_cannot_be_read_off_a_panel(classroom, title
         assert all(HELD_BACK in readout.content for readout in readouts)
         if title == "Desktop arm: tool velocity":  # the course path's plot gives v at t = 4 s too
             assert session.lessons[1].velocity.visible is False
+        if title == "Where is the flange?":  # an arm made again (back from watching, or a new presenter's) holds it back too
+            await student.set_gui("Back to the presenter's arm", True)
+            await until(lambda: member.session is None and "Explore on my own" in student.gui, what="watching")
+            await student.set_gui("Explore on my own", True)
+            await until(lambda: member.session is not None and member.session is not session, what="a new arm")
+            await until(lambda: member.session.readouts.pose.content == HELD_BACK, what="its Tool pose held back")
+            readouts = [*HELD_READOUTS[title](member.session), *HELD_READOUTS[title](presenter)]  # the old arm's are gone
         if title == "IK step 1: both shoulders":  # another branch chosen would show its θ1 in the joint panel
             await until(lambda: student.gui.get("Use branch", {}).get("visible") is False, what="Use branch off")
             await student.send(messages.GuiUpdateMessage(session.ik_target.branch_buttons._impl.uuid, {"value": "5"}))
