@@ -609,10 +609,10 @@ def terms(challenge: Challenge) -> str:
     if challenge.rates is not None:
         given.append(f"q̇ = {_given(arm, challenge.rates, '/s')}")
     if challenge.quantity == "gravity_torque":  # the app's bars that give the answer are off: what a hand needs
-        centres = 1000 * centres_of_mass(arm, np.array(challenge.joints))
-        given.append(f"a payload of {challenge.payload:g} kg at the flange; links of ({', '.join(f'{m:g}' for m in MASSES[arm.name].masses)}) kg, "
-                     f"their centres of mass at {', '.join(_vector(c) for c in centres)} mm in the base frame; "
-                     f"g = {GRAVITY:g} m/s²")
+        masses = ", ".join(f"{m:g}" for m in MASSES[arm.name].masses)
+        centres = ", ".join(_vector(c) for c in 1000 * centres_of_mass(arm, np.array(challenge.joints)))
+        given.append(f"a payload of {challenge.payload:g} kg at the flange; links of ({masses}) kg, their centres of "
+                     f"mass at {centres} mm in the base frame; g = {GRAVITY:g} m/s²")
     within = f"within {180 * challenge.relative_tolerance:.3g}°" if challenge.quantity in ANGLES else relative
     each = "each " if len(number_names(challenge, arm)) > 1 else ""
     return f"Given: {'; '.join(given)}. Asked: {QUANTITIES[challenge.quantity]}, {each}{within}."

@@ -11,9 +11,9 @@ joints):
 is then not taken), so a start near a singularity slows down instead of jumping. Starts
 that converge to within 1e-10 of the pose, checked once more by FK to 1e-9, are the
 solutions. Near a singularity the steps close in slowly, not quadratically: when no start of a
-pose got there but one came within 1e-5, its four nearest take eight times as many steps more. Solutions closer than
-1e-6 in every joint are one, and they are sorted so that the same pose always lists them in
-the same order, labelled "found numerically".
+pose got there but one came within 1e-5, its four nearest take eight times as many steps
+more. Solutions closer than 1e-6 in every joint are one, and they are sorted so that the
+same pose always lists them in the same order, labelled "found numerically".
 """
 
 from __future__ import annotations
