@@ -215,9 +215,11 @@ class ArmSession:
     def hold_back(self, asked: str | None) -> None:
         """A class challenge asking ``asked`` (``Challenge.asks``) runs on this arm, or none does (None): each view
         takes away what would answer it, or gives it back (``View.hold_back``), and the scene and panel follow."""
+        before = [view.held for view in self.panel_views]
         for view in self.panel_views:
             view.hold_back(asked)
-        self.redraw()
+        if [view.held for view in self.panel_views] != before:  # a reach holds nothing: a hundred arms not redrawn
+            self.redraw()
 
     def redraw(self) -> None:
         """The 3D view again, unchanged state (a toggle changed what is shown), and the panel after it."""
