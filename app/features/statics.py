@@ -249,11 +249,12 @@ class StaticsView(View):
 
     def render_panel(self, snapshot: Snapshot) -> None:
         self.bars.visible = bool(self.enabled.value)
-        if self.bars.visible:
+        if self.bars.visible and self.held in ("torque", "gravity_torque"):
+            self.bars.content = HELD_BACK
+        elif self.bars.visible:
             _, force_torques, gravity = self.loads(snapshot)
             arm = self._session.arm
-            self.bars.content = (HELD_BACK if self.held in ("torque", "gravity_torque") else
-                                 bars_html(force_torques, gravity, arm.specs.torque_ratings, arm.joint_names, arm.joint_types))
+            self.bars.content = bars_html(force_torques, gravity, arm.specs.torque_ratings, arm.joint_names, arm.joint_types)
 
     def hold_back(self, asked: str | None) -> None:
         super().hold_back(asked)
