@@ -5,7 +5,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from ur10teach.features.ik_target import ALL_BRANCHES, branch_labels, branch_table, flipped, focus_options, focused, same_pose_groups
+from ur10teach.features.ik_target import (ALL_BRANCHES, branch_labels, branch_table, flipped, focus_options, focused,
+                                          same_pose_groups, status_markdown)
 from ur10teach.meshes import body_points, load_links
 from ur10teach.state import ArmState
 from ur10core import SLOTS, Arm
@@ -76,6 +77,27 @@ def test_every_branch_in_one_pose_is_named_all_of_them(name, kind):
     frames = Arm.preset(name).frames(snapshot.solution.q)[:, :, :3, 3]  # independently: every branch's joints, by FK
     assert np.abs(frames - frames[0]).max() < 1e-3
     assert branch_labels(snapshot, groups) == ["arm: all 8"] + [""] * 7
+
+
+@pytest.mark.parametrize("name", ["stanford", "kr210", "elbow", "cylindrical", "cylindrical_wrist", "three_dof",
+                                  "scara", "planar_elbow", "course"])
+def test_the_status_says_which_ghosts_lie_on_each_other_though_their_joints_differ(name):
+    """On an arm with a spherical wrist, a flipped wrist moves no joint: its ghost lies on the other's at every
+    pose, labelled "1 = 2". Until 2026-12-04 nothing said so, while the table beside it gave the two different
+    joints (and docs said ghosts are merged at a singularity): the status line now names such ghosts."""
+    arm = Arm.preset(name)
+    rng = np.random.default_rng(4)
+    low, high = np.clip(arm.limits.T, -np.pi, np.pi)
+    snapshot = ArmState(arm, rng.uniform(0.8 * low + 0.2 * high, 0.2 * low + 0.8 * high)).last  # off any singularity
+    groups = [g for g in same_pose_groups(snapshot.ghost_frames, snapshot.solution.valid) if len(g) > 1]
+    status = status_markdown(snapshot)
+    for group in groups:  # independently: each branch's joints by FK, and its joint values
+        q = snapshot.solution.q[list(group)]
+        frames = arm.frames(q)[:, :, :3, 3]
+        assert np.abs(frames - frames[0]).max() < 1e-6
+        assert np.abs(np.angle(np.exp(1j * (q - q[0])))).max() > 0.1  # (a prismatic joint's m read as radians)
+        assert " = ".join(str(k + 1) for k in group) in status.split("lie on each other")[0]
+    assert ("lie on each other" in status) == bool(groups) == (name not in ("scara", "planar_elbow", "course"))
 
 
 def test_an_arm_through_the_floor_is_marked(course, points):

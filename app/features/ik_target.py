@@ -229,9 +229,24 @@ def status_markdown(snapshot: Snapshot) -> str:
             notes.append("Elbow singular (stretched or folded): the elbow-up and elbow-down branches coincide.")
         if solution.wrist_singular[snapshot.slot]:
             notes.append("Wrist singular: axes 4 and 6 are parallel; θ6 was kept and θ2…θ4 follow it.")
-    elif solution.singular[snapshot.slot]:
-        notes.append("Singular: the pose does not fix every joint; the arm's own value was kept.")
+    else:
+        if solution.singular[snapshot.slot]:
+            notes.append("Singular: the pose does not fix every joint; the arm's own value was kept.")
+        together = " and ".join(" = ".join(str(k + 1) for k in group) for group in drawn_as_one(snapshot))
+        if together:
+            notes.append(f"Ghosts {together} lie on each other: their joints sit in the same places, turned or slid "
+                         "differently (the table gives each one's values).")
     return " ".join(notes)
+
+
+def drawn_as_one(snapshot: Snapshot) -> list[tuple[int, ...]]:
+    """The groups of :func:`same_pose_groups` whose branches differ in their joints, not only in name: drawn as one
+    ghost all the same, since every joint of theirs sits in the same place (a spherical wrist flipped, θ4 + 180°,
+    −θ5, θ6 + 180°, moves none)."""
+    solution = snapshot.solution
+    groups = [group for group in same_pose_groups(snapshot.ghost_frames, solution.valid) if len(group) > 1]
+    return [group for group in groups
+            if np.ptp([solution.take(k, snapshot.q) for k in group], axis=0).max() > SAME_POSE]
 
 
 def branches_markdown(snapshot: Snapshot) -> str:
