@@ -10,9 +10,9 @@ joints):
 λ shrinks after a step that lowers the error and grows after one that does not (the step
 is then not taken), so a start near a singularity slows down instead of jumping. Starts
 that converge to within 1e-10 of the pose, checked once more by FK to 1e-9, are the
-solutions. Near a singularity the steps close in slowly, not quadratically: when no start of a
-pose got there but one came within 1e-5, its four nearest take eight times as many steps
-more. Solutions closer than 1e-6 in every joint are one, and they are sorted so that the
+solutions. Near a singularity the damped steps close in slowly, not quadratically (J's smallest
+singular value is below the least λ, which holds back the very step that remains): a start that
+stopped within 1e-3 of the pose takes eight undamped Gauss–Newton steps, Δq = J⁺ e. Solutions closer than 1e-6 in every joint are one, and they are sorted so that the
 same pose always lists them in the same order, labelled "found numerically".
 """
 
@@ -34,9 +34,9 @@ REACHED = 1e-10
 SAME = 1e-6
 #: λ never shrinks below this: λ² = 1e-12 keeps J Jᵀ + λ² I invertible in floating point.
 MIN_DAMPING = 1e-6
-#: A pose no start reached, with a start this close (m and rad), gets its nearest starts this
-#: many times more steps (see :meth:`NumericalIK.solve`).
-NEARLY_REACHED, POLISHED_STARTS, MORE_STEPS = 1e-5, 4, 8
+#: A start that stopped short of the pose but this close (m and rad) takes this many undamped
+#: steps (see :meth:`NumericalIK._newton`).
+NEARLY_REACHED, NEWTON_STEPS = 1e-3, 8
 
 
 def sampling_range(limits: np.ndarray, revolute: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -155,6 +155,31 @@ class NumericalIK:
             damping[active] = np.where(better, np.maximum(damping[active] / 3, MIN_DAMPING), np.minimum(damping[active] * 4, 1e3))
         return np.where(self.revolute, wrap(q), q), size
 
+    def _newton(self, q: np.ndarray, target: np.ndarray, steps: int) -> tuple[np.ndarray, np.ndarray]:
+        """``steps`` undamped Gauss–Newton steps q ← q + J⁺ e from starts ``q`` (..., n) already near ``target``:
+        the best joints each start passed through, and their error size.
+
+        Near a singularity J's smallest singular value falls below :data:`MIN_DAMPING`, and damped
+        least squares then holds back the very step that remains. The pseudo-inverse takes it whole;
+        its first step may raise the error before the next ones close it, so every step is taken.
+        """
+        error, J = self._error(q, target)
+        best_q, best = q, np.linalg.norm(error, axis=-1)
+        for _ in range(steps):
+            q = q + np.einsum("...ij,...j->...i", np.linalg.pinv(J), error)
+            error, J = self._error(q, target)
+            size = np.linalg.norm(error, axis=-1)
+            best_q, best = np.where((size < best)[..., None], q, best_q), np.minimum(size, best)
+        return np.where(self.revolute, wrap(best_q), best_q), best
+
+    def _finish(self, q: np.ndarray, target: np.ndarray, size: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """The starts that stopped short of ``target`` but within :data:`NEARLY_REACHED`, taken the rest of the way
+        by :meth:`_newton`: near a singularity the damped steps converge slowly, not quadratically."""
+        stuck = (size > REACHED) & (size < NEARLY_REACHED)
+        if stuck.any():
+            q[stuck], size[stuck] = self._newton(q[stuck], target[stuck], NEWTON_STEPS)
+        return q, size
+
     def follow(self, T: np.ndarray, hint: np.ndarray, iterations: int = 30) -> tuple[np.ndarray, float]:
         """One pose (4, 4) from the current joints ``hint`` (n,) only: (joints, their pose error).
 
@@ -167,6 +192,7 @@ class NumericalIK:
         if distance > self.reach + LENGTH_TOLERANCE:  # nowhere to go (and a huge error's square would overflow)
             return np.array(hint, dtype=float), distance - self.reach
         q, size = self._descend(np.array(hint, dtype=float)[None], T[None], iterations)
+        q, size = self._finish(q, T[None], size)
         return q[0], float(size[0])
 
     def solve(self, T: np.ndarray, hint: np.ndarray | None) -> dict[str, np.ndarray]:
@@ -185,13 +211,7 @@ class NumericalIK:
         starts = self._starts(hint, N)
         target = np.broadcast_to(T[:, None], starts.shape[:-1] + (4, 4))
         q, size = self._descend(starts, target, self.iterations)
-        best = size.min(axis=-1)
-        stuck = np.flatnonzero((best > REACHED) & (best < NEARLY_REACHED))
-        if len(stuck):  # near a singularity the steps converge slowly, not quadratically: carry on the nearest
-            nearest = np.argsort(size[stuck], axis=-1)[:, :POLISHED_STARTS]
-            rows = stuck[:, None]
-            q[rows, nearest], size[rows, nearest] = self._descend(
-                q[rows, nearest], target[rows, nearest], MORE_STEPS * self.iterations)
+        q, size = self._finish(q, target, size)
         reached = np.abs(self.table.fk(q) - target)
         if self.task == "position":
             reached = reached[..., :3, 3]
