@@ -305,7 +305,7 @@ class Singularities(View):
     ``overlay`` is the drawing's 3D part (``enabled``, ``set_enabled``), None where it draws none.
     """
 
-    answers = ("singularity", "det_j")  # its buttons put the arm on one; its gauges give det J
+    answers = ("singularity", "det_j")  # its buttons put the arm on one; its gauges and plot give det J
 
     def __init__(self, gui: viser.GuiApi, overlay, session: Session) -> None:
         self._session = session
@@ -357,6 +357,8 @@ class Singularities(View):
         say_held_back(self.held_back, self.held == "singularity")
         if self.demo is not None:
             self.demo.visible = self.held != "singularity"
+        if self.plot is not None:  # each factor's size against its scale: the UR10's s3 and s5 as they are
+            self.plot.visible = self.held != "det_j"
 
     def _demo(self, _: viser.GuiEvent) -> None:
         if self.held == "singularity":  # a click a browser cannot send while they are off
