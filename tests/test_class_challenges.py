@@ -498,7 +498,7 @@ HELD_READOUTS = {
     "det J by hand": lambda s: [s.singularities.gauges, s.ellipsoids.lengths],
     "Holding a weight": lambda s: [s.statics.bars],
     "Holding itself up": lambda s: [s.statics.bars],
-    "KR210: its wrist centre": lambda s: [s.decoupling.readout],
+    "KR210: its wrist centre": lambda s: [s.decoupling.readout, s.lessons[1].readout],
     "Desktop arm: tool velocity": lambda s: [s.velocity.readout, s.lessons[1].readout],
 }
 

@@ -10,7 +10,7 @@ from ur10core.serial import ReportSlip, report_slip
 
 from ...state import Snapshot
 from ...style import number
-from ...view import Session, View
+from ...view import HELD_BACK, Session, View
 from ..dh_frames import show
 from .gripper import GripperPose
 from .scene import skeleton
@@ -63,6 +63,8 @@ def slip_markdown(slip: ReportSlip | None, slot: int, joint_names: tuple[str, ..
 class ReportSlipView(View):
     """The KR210's "The report's slip" folder, and the arm the report's formula gives, dashed, with its gripper named."""
 
+    answers = ("wrist_centre",)  # how far the wrist centre is beyond the shoulder: with θ1, WC_x and WC_y
+
     def __init__(self, scene: viser.SceneApi, gui: viser.GuiApi, session: Session) -> None:
         self._arm = session.arm
         size = session.drawing.size
@@ -104,7 +106,8 @@ class ReportSlipView(View):
         return [(point, text, SLIP_COLOR)]
 
     def render_panel(self, snapshot: Snapshot) -> None:
-        self.readout.content = slip_markdown(self._slip(snapshot), snapshot.slot, self._arm.joint_names)
+        self.readout.content = HELD_BACK if self.held else slip_markdown(self._slip(snapshot), snapshot.slot,
+                                                                          self._arm.joint_names)
 
     def close(self) -> None:
         """The session has gone: so does the dashed arm, even from a scene everyone shares."""
