@@ -12,8 +12,9 @@ is then not taken), so a start near a singularity slows down instead of jumping.
 that converge to within 1e-10 of the pose, checked once more by FK to 1e-9, are the
 solutions. Near a singularity the damped steps close in slowly, not quadratically (J's smallest
 singular value is below the least λ, which holds back the very step that remains): a start that
-stopped within 1e-3 of the pose takes eight undamped Gauss–Newton steps, Δq = J⁺ e. Solutions closer than 1e-6 in every joint are one, and they are sorted so that the
-same pose always lists them in the same order, labelled "found numerically".
+stopped within 1e-3 of the pose takes twenty undamped Gauss–Newton steps, Δq = J⁺ e.
+Solutions closer than 1e-6 in every joint are one, and they are sorted so that the same
+pose always lists them in the same order, labelled "found numerically".
 """
 
 from __future__ import annotations
@@ -36,7 +37,7 @@ SAME = 1e-6
 MIN_DAMPING = 1e-6
 #: A start that stopped short of the pose but this close (m and rad) takes this many undamped
 #: steps (see :meth:`NumericalIK._newton`).
-NEARLY_REACHED, NEWTON_STEPS = 1e-3, 8
+NEARLY_REACHED, NEWTON_STEPS = 1e-3, 20
 
 
 def sampling_range(limits: np.ndarray, revolute: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
