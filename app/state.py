@@ -245,16 +245,37 @@ class ArmState:
             if self.numerical:
                 q, _ = self.arm.solver.follow(target, previous.q)
                 error = float(self.arm.pose_error(q, target))
-                if error <= 1e-9:
-                    return self._remember(q, target, None, -1, "", cause)
-                return self._remember(previous.q, target, None, -1,
-                                      f"the search from the arm's joints came within {1000 * error:.3g} mm of it: it may "
-                                      "be out of reach, or reachable only from another branch (Find every branch)", cause)
-            solution = self.arm.ik(target, hint=previous.q)  # ValueError for a malformed pose
-            branch = solution.nearest(previous.q, prefer=previous.slot)  # turned next to the joints, within the limits
+                if error > 1e-9:
+                    return self._remember(previous.q, target, None, -1,
+                                          f"the search from the arm's joints came within {1000 * error:.3g} mm of it: it "
+                                          "may be out of reach, or reachable only from another branch (Find every branch)",
+                                          cause)
+                found = np.full((len(self.arm.slot_labels), len(q)), np.nan)  # the one branch followed, as a solution
+                found[0] = q
+                solution = IKSolution(found, np.arange(len(found)) == 0, np.zeros(len(found), np.int8), self.arm)
+            else:
+                solution = self.arm.ik(target, hint=previous.q)  # ValueError for a malformed pose
+            # turned next to the joints; a real arm cannot take a branch beyond a joint limit, and every slider
+            # would then be refused until a pose button
+            branch = solution.nearest(previous.q, prefer=previous.slot, within_limits=True)
             if branch.slot < 0:
-                return self._remember(previous.q, target, solution, -1, solution.unreachable_reason(), cause)
+                reason = solution.unreachable_reason() or self._beyond_limits(solution, previous.q)
+                if self.numerical:  # the search followed one branch only
+                    return self._remember(previous.q, target, None, -1, f"{reason}: another branch may reach it "
+                                          "within them (Find every branch)", cause)
+                return self._remember(previous.q, target, solution, -1, reason, cause)
+            if self.numerical:
+                return self._remember(branch.q, target, None, -1, "", cause)
             return self._remember(branch.q, target, solution, int(branch.slot), "", cause)
+
+    def _beyond_limits(self, solution: IKSolution, q: np.ndarray) -> str:
+        """Why a target that some branch reaches is out of the arm's reach: the nearest such branch's joint beyond
+        its limit, e.g. "reachable only beyond a joint limit (d3: from 0 mm to 762 mm, got -50.0 mm)"."""
+        try:
+            self.check_joints(solution.nearest(q).q)
+        except ValueError as beyond:
+            return f"reachable only beyond a joint limit ({beyond})"
+        return "reachable only beyond a joint limit"  # another branch, farther away, is the one beyond them
 
     def select_branch(self, slot: int) -> Snapshot:
         """Put the arm on branch ``slot`` of the current target (turned next to the current joints)."""

@@ -161,6 +161,64 @@ def test_a_branch_beyond_a_joint_limit_is_refused_and_says_which():
     state.set_joints(state.q)  # and from there the arm moves on
 
 
+def test_a_drag_never_puts_the_arm_beyond_a_joint_limit():
+    """A drag took the branch nearest the arm's joints, beyond a limit or not: the Stanford arm's wrist centre
+    dragged 50 mm behind its shoulder put d3 at -50 mm, and from there every slider and "Put target back on the
+    tool" were refused ("d3: from 0 mm to 762 mm", until 2026-12-04). The arm takes the nearest branch a real arm
+    can take; a typed table, which follows one branch, stays where it is and says which joint would leave its range."""
+    stanford = Arm.preset("stanford")
+    typed = Arm.from_dh([(r.a, r.alpha, r.d, r.theta, r.joint) for r in stanford.dh.rows], stanford.dh.convention,
+                        limits=stanford.limits)
+    q = np.array([0.3, 0.8, 0.002, 0.2, 0.5, 0.1])
+    behind = q.copy()
+    behind[2] = -0.05
+    for arm in (stanford, typed):
+        state = ArmState(arm, q)
+        snap = state.move_target(arm.fk(behind))
+        assert arm.within_limits(snap.q), np.round(snap.q, 3)
+        if arm is stanford:  # the branch with the stroke forward, θ2 turned over: the same pose
+            assert snap.reachable and snap.q[2] == pytest.approx(0.05)
+            np.testing.assert_allclose(arm.fk(snap.q), arm.fk(behind), atol=1e-9)
+        else:
+            assert not snap.reachable and np.array_equal(snap.q, q)
+            assert "beyond a joint limit (joint 3: from 0 mm to 762 mm, got -50.0 mm)" in snap.reason
+            assert "Find every branch" in snap.reason
+        state.set_joint(0, 0.31)  # and the sliders move it on
+        state.set_joints(state.q)  # and "Put target back on the tool"
+
+
+def test_a_target_reachable_only_beyond_a_limit_is_unreachable_with_its_branches_listed():
+    """The cylindrical arm's tool below its base needs d2 < 0: its two branches reach it, beyond d2's range."""
+    from ur10teach.features.ik_target import branches_markdown
+
+    arm = Arm.preset("cylindrical")
+    state = ArmState(arm)
+    before = state.q
+    T = state.last.target.copy()
+    T[2, 3] = -0.2
+    snap = state.move_target(T)
+    assert not snap.reachable and np.array_equal(snap.q, before)
+    assert snap.reason == "reachable only beyond a joint limit (d2: from 0 mm to 700 mm, got -500.0 mm)"
+    assert snap.solution.valid.all() and not snap.solution.within_limits.any()
+    assert branches_markdown(snap).count("beyond a joint limit") == 3  # the reason, and each branch's flag
+
+
+@pytest.mark.parametrize("name", ["elbow", "kr210", "scara", "stanford", "cylindrical_wrist", "three_dof"])
+def test_a_random_drag_keeps_every_arm_within_its_limits(name):
+    """A random walk of the target (2 cm steps), back to the arm where it is refused. Until 2026-12-04 it put the
+    elbow arm, the KR210, the SCARA, the Stanford arm and the cylindrical arm with a wrist beyond a limit."""
+    arm = Arm.preset(name)
+    state = ArmState(arm)
+    rng = np.random.default_rng(0)
+    for _ in range(1500):
+        T = state.last.target.copy()
+        T[:3, 3] += rng.normal(0.0, 0.02, 3)
+        snap = state.move_target(T)
+        assert arm.within_limits(snap.q), (np.round(snap.q, 3), snap.slot)
+        if not snap.reachable:  # back to where the arm is, as a student would drag back
+            state.set_joints(state.q)
+
+
 @pytest.mark.parametrize("kind, factor", [("shoulder", 0), ("elbow", 1), ("wrist", 2)])
 def test_place_in_singularity(state, kind, factor):
     snap = state.place_in_singularity(kind)

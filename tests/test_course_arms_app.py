@@ -452,9 +452,11 @@ def test_the_kr210_reports_slip_is_drawn_where_its_formula_puts_the_arm(app):
         np.testing.assert_allclose(slip.right, q, atol=1e-9)  # the arm is on a front branch: its own joints are right
         for name, mine, right in zip(session.arm.joint_names, slip.q, q):  # side by side, for a student's own code
             assert f"| {name} | {np.degrees(mine):.1f}° | {np.degrees(right):.1f}° |" in view.readout.content
-        # the wrist centre near axis 1: WC_x² + WC_y² < a1, and the report's code stops
-        near = np.diag([1.0, -1.0, -1.0, 1.0])
-        near[:3, 3] = (0.3, 0.2, 0.697)
+        # the wrist centre near axis 1: WC_x² + WC_y² < a1, and the report's code stops (a pose within the joint
+        # limits: the one this test had, (300, 200, 697) mm pointing down, is reached only with A3 at 118°)
+        near = session.arm.fk(np.radians([-106, -11, -66, 115, -96, 168]))
+        wrist_centre = session.arm.wrist_centre(np.radians([-106, -11, -66, 115, -96, 168]))
+        assert wrist_centre[0] ** 2 + wrist_centre[1] ** 2 < session.arm.dh.rows[1].a
         session.apply(lambda state: state.move_target(near, cause="typed"))
         await until(lambda: "square root of" in view.readout.content and not client.received.visible.get(view.arm_lines.name),
                     what="the report's error, nothing drawn")

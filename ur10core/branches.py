@@ -146,7 +146,7 @@ class IKSolution:
         reasons = dict.fromkeys(self.arm.solver.explain(int(failure[k]), float(detail[k])) for k in order if failure[k])
         return "; ".join(reasons) or "no branch reaches this pose"
 
-    def nearest(self, q_current, joint_limit: float | None = None, prefer=None) -> Branch:
+    def nearest(self, q_current, joint_limit: float | None = None, prefer=None, within_limits: bool = False) -> Branch:
         """The valid branch nearest the current joints ``q_current`` (..., n), turned next to them.
 
         Each revolute joint of each valid slot is replaced by the whole-turn equivalent nearest
@@ -154,6 +154,7 @@ class IKSolution:
         may set another ±limit than its ±360°); the slot with the smallest Euclidean joint-space distance
         wins. ``prefer`` (int or (...) ints, −1 for none) is a slot kept when it ties with the
         nearest, so that an app showing "the arm is on branch k" does not flip at a singularity.
+        ``within_limits``: only the slots inside every joint limit, the ones a real arm can take.
         Where no slot is valid, ``q`` is NaN and ``slot`` −1.
 
         >>> from ur10core import Arm
@@ -162,14 +163,24 @@ class IKSolution:
         >>> branch = arm.ik(arm.fk(q)).nearest(q)
         >>> int(branch.slot), np.allclose(branch.q, q)
         (1, True)
+        >>> stanford = Arm.preset("stanford")   # the wrist centre 1 mm behind the shoulder: d3 = -1 mm is nearest
+        >>> near = np.array([0.3, 0.8, -0.001, 0.2, 0.5, 0.1])
+        >>> solution = stanford.ik(stanford.fk(near))
+        >>> [round(1000 * float(solution.nearest(near, within_limits=only).q[2])) for only in (False, True)]
+        [-1, 1]
         """
         limit = getattr(self.arm.solver, "turn_limit", None)
-        if limit is not None:  # symmetric ±limit on every joint: the UR family's kernels
+        if limit is not None:  # symmetric ±limit on every joint: the UR family's kernels (every slot is inside it)
             return _ik().nearest_branch(self, q_current, limit if joint_limit is None else joint_limit, prefer)
         if joint_limit is not None:
             raise ValueError(f"joint_limit is the UR family's (±360° on every joint); the {self.arm.name!r} arm's "
                              "joints turn within its own limits")
-        return _nearest_within_limits(self, q_current, prefer)
+        branch = _nearest_within_limits(self, q_current, prefer)
+        if not within_limits or self.q.ndim == 2 and (branch.slot < 0 or _inside(branch.q, self.arm.limits)):
+            return branch  # one pose on a branch inside the limits (a drag, mostly): no limits checked on every slot
+        inside = self.valid & self.within_limits
+        return IKSolution(self.q, inside, self.failure, self.arm, within_limits=inside, extra=self.extra).nearest(
+            q_current, prefer=prefer)
 
 
     def take(self, slot: int, q_current) -> np.ndarray:
@@ -232,6 +243,11 @@ def _nearest_within_limits(solution: IKSolution, q_current, prefer) -> Branch:
     any_valid = solution.valid.any(axis=-1)
     q = np.take_along_axis(shifted, slot[..., None, None], -2)[..., 0, :]
     return Branch(np.where(any_valid[..., None], q, np.nan), np.where(any_valid, slot, -1))
+
+
+def _inside(q: np.ndarray, limits: np.ndarray) -> bool:
+    """One pose's joints (n,) within ``limits`` (n, 2), as a slider accepts them (to 1e-9)."""
+    return all(low - 1e-9 <= value <= high + 1e-9 for value, (low, high) in zip(q.tolist(), limits.tolist()))
 
 
 def _nearest_one(solution: IKSolution, current: list, prefer: int, low: list, high: list, tie: float) -> Branch:
