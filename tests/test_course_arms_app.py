@@ -903,6 +903,30 @@ def test_the_ur10_walks_through_its_dh_frames(app):
     asyncio.run(scenario())
 
 
+def test_a_target_only_branches_beyond_a_limit_reach_keeps_the_arm_and_draws_them(app):
+    """Dragged below the cylindrical arm's base, the target needs d2 < 0: the arm stays, the panel names d2, the two
+    branches that reach it are drawn as ghosts beside the arm, and the sliders still move it (until 2026-12-04 the
+    arm went there, d2 at -500 mm, and every slider was refused)."""
+    async def scenario():
+        client = await ViserClient(url(app)).connect()
+        session = await pick(app, client, "Cylindrical arm (RPP)")
+        before = session.state.q
+        below = session.state.last.target.copy()
+        below[2, 3] = -0.2
+        await client.drag_target(below[:3, 3], wxyz_of(below), "start", name=TARGET)
+        await client.drag_target(below[:3, 3], wxyz_of(below), "end", name=TARGET)
+        await until(lambda: "beyond a joint limit (d2:" in session.state.last.reason, what="the reason")
+        np.testing.assert_allclose(session.state.q, before)
+        await until(lambda: "beyond a joint limit (d2:" in session.ik_target.branches.content, what="the panel")
+        assert all(ghost.visible for ghost in session.drawing.ghosts[:2])
+        await client.set_gui("θ1 (°)", 40.0)
+        await until(lambda: math.isclose(session.state.q[0], math.radians(40.0), abs_tol=1e-9), what="θ1 = 40°")
+        assert not client.received.notifications, client.received.notifications
+        await client.close()
+
+    asyncio.run(scenario())
+
+
 def test_a_course_arms_ghosts_leave_out_what_lies_on_the_solid_arm_and_number_every_branch(app):
     """Issue 30: ghosts and the solid arm flickered where they overlap (the same segment drawn twice). A
     ghost's skeleton leaves out every segment the solid arm draws; every shown branch is numbered."""
