@@ -100,6 +100,22 @@ def test_the_status_says_which_ghosts_lie_on_each_other_though_their_joints_diff
     assert ("lie on each other" in status) == bool(groups) == (name not in ("scara", "planar_elbow", "course"))
 
 
+@pytest.mark.parametrize("name", ["stanford", "elbow", "scara", "cylindrical", "three_dof", "course"])
+def test_the_status_counts_the_branches_a_class_challenge_counts(name):
+    """*SCARA: one branch only* and every branch-count task count the branches within the joint limits, as the reach
+    map does; the status line counted every branch that reaches, beyond a limit or not (the Stanford arm's "8 of 8"
+    where 4 need d3 < 0), so a student could read "2 of 2" on a target the server counted as one (until 2026-12-04)."""
+    import re
+
+    from ur10core.challenges import _count
+
+    arm = Arm.preset(name)
+    for q in arm.sample_joints(25, seed=5):
+        snapshot = ArmState(arm, q).last
+        counted = int(re.match(r"\*\*(\d+) of \d+ branches\*\*", status_markdown(snapshot)).group(1))
+        assert counted == _count(arm, snapshot.target), status_markdown(snapshot)
+
+
 def test_an_arm_through_the_floor_is_marked(course, points):
     down = state(course, [0, -90, 0, -90, 0, 0], points).last  # the arm hangs below its base
     assert down.through_floor[0] and down.lowest[0, 2] < -0.5

@@ -196,19 +196,25 @@ def branch_table(snapshot: Snapshot) -> str:
 
 
 def reach_count(solution) -> str:
-    """How many branches reach, in words that fit the arm: "**6 of 8 branches** reach this target".
+    """How many branches reach, in words that fit the arm: "**6 of 8 branches** reach this target". Counted within
+    the joint limits, as the reach map and the class challenges count them, with those only beyond one after.
 
     >>> from ur10core import Arm
     >>> cylindrical = Arm.preset("cylindrical")
     >>> reach_count(cylindrical.ik(cylindrical.fk(cylindrical.specs.home)))  # the second with its stroke reversed
-    '**2 of 2 branches** reach this target'
+    '**1 of 2 branches** reach this target within the joint limits, and 1 more only beyond a limit'
     """
     slots, found = len(solution.labels), int(solution.valid.sum())
-    if slots == 1:
-        return "**Its one branch** reaches this target"
+    within = int((solution.valid & solution.within_limits).sum())
+    beyond = f", and {found - within} more only beyond a limit" if within < found else ""
     if solution.method == "found numerically":
-        return f"**{found} solution{'s' * (found != 1)}** found (this chain has at most {slots})"
-    return f"**{found} of {slots} branches** reach this target"
+        return f"**{found} solution{'s' * (found != 1)}** found (this chain has at most {slots})" + (
+            f", {found - within} of them beyond a joint limit" if within < found else "")
+    if within == found:
+        return "**Its one branch** reaches this target" if slots == 1 else f"**{found} of {slots} branches** reach this target"
+    if slots == 1:
+        return "**Its one branch** reaches this target only beyond a joint limit"
+    return f"**{within} of {slots} branches** reach this target within the joint limits{beyond}"
 
 
 def status_markdown(snapshot: Snapshot) -> str:
