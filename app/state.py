@@ -308,11 +308,20 @@ class ArmState:
             return self.set_joints(self.arm.singular_configuration(kind, self._before_singularity), cause="singularity")
 
     def with_branches(self, snapshot: Snapshot, solution: IKSolution) -> Snapshot:
-        """A typed table's found branches shown, if the arm has not moved since they were searched for."""
+        """A typed table's found branches shown, if the arm has not moved since they were searched for. An arm whose
+        own search had stopped short of the target takes the nearest branch found within its limits."""
         with self.lock:
             if self.last is not snapshot:
                 return self.last
-            reached = solution.valid.any()
-            slot = int(solution.nearest(snapshot.q).slot) if reached else -1
-            reason = snapshot.reason if reached else solution.unreachable_reason()
-            return self._remember(snapshot.q, snapshot.target, solution, slot, reason, "branch")
+            if not solution.valid.any():
+                return self._remember(snapshot.q, snapshot.target, solution, -1, solution.unreachable_reason(), "branch")
+            if snapshot.reachable:  # the arm is at the target: on the branch nearest its joints
+                return self._remember(snapshot.q, snapshot.target, solution, int(solution.nearest(snapshot.q).slot), "",
+                                      "branch")
+            # the arm's own search stopped short of the target (or beyond a limit): it takes the nearest branch
+            # found within the limits, as a preset's arm takes its nearest
+            branch = solution.nearest(snapshot.q, within_limits=True)
+            if branch.slot < 0:
+                return self._remember(snapshot.q, snapshot.target, solution, -1,
+                                      self._beyond_limits(solution, snapshot.q), "branch")
+            return self._remember(branch.q, snapshot.target, solution, int(branch.slot), "", "branch")

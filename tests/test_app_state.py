@@ -187,6 +187,27 @@ def test_a_drag_never_puts_the_arm_beyond_a_joint_limit():
         state.set_joints(state.q)  # and "Put target back on the tool"
 
 
+def test_find_every_branch_puts_a_typed_arm_that_stopped_short_on_the_nearest_branch_within_its_limits():
+    """After a typed arm's drag stopped short ("another branch may reach it within them (Find every branch)"), the
+    search's branches were listed with "← arm" on one beyond d3's limit, the arm not at the target at all, and the
+    reason kept saying the target was unreachable (until 2026-12-04). The arm now takes the nearest branch found
+    within its limits, as a preset's arm takes its nearest on a drag."""
+    stanford = Arm.preset("stanford")
+    typed = Arm.from_dh([(r.a, r.alpha, r.d, r.theta, r.joint) for r in stanford.dh.rows], stanford.dh.convention,
+                        limits=stanford.limits)
+    q = np.array([0.3, 0.8, 0.002, 0.2, 0.5, 0.1])
+    behind = q.copy()
+    behind[2] = -0.05
+    state = ArmState(typed, q)
+    stopped = state.move_target(typed.fk(behind))
+    assert not stopped.reachable
+    found = state.with_branches(stopped, typed.ik(stopped.target, hint=stopped.q))
+    assert found.reachable and found.solution.within_limits[found.slot]
+    assert typed.within_limits(found.q) and found.q[2] == pytest.approx(0.05)
+    np.testing.assert_allclose(typed.fk(found.q), typed.fk(behind), atol=1e-9)
+    state.set_joint(0, found.q[0] + 0.01)  # and the sliders move it on
+
+
 def test_a_target_reachable_only_beyond_a_limit_is_unreachable_with_its_branches_listed():
     """The cylindrical arm's tool below its base needs d2 < 0: its two branches reach it, beyond d2's range."""
     from ur10teach.features.ik_target import branches_markdown
