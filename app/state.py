@@ -255,11 +255,8 @@ class ArmState:
                 solution = IKSolution(found, np.arange(len(found)) == 0, np.zeros(len(found), np.int8), self.arm)
             else:
                 solution = self.arm.ik(target, hint=previous.q)  # ValueError for a malformed pose
-            # turned next to the joints; a real arm cannot take a branch beyond a joint limit, and every slider
-            # would then be refused until a pose button
-            branch = solution.nearest(previous.q, prefer=previous.slot, within_limits=True)
-            if branch.slot < 0:
-                reason = solution.unreachable_reason() or self._beyond_limits(solution, previous.q)
+            branch, reason = self._branch_within_limits(solution, previous.q, prefer=previous.slot)
+            if reason:
                 if self.numerical:  # the search followed one branch only
                     return self._remember(previous.q, target, None, -1, f"{reason}: another branch may reach it "
                                           "within them (Find every branch)", cause)
@@ -268,14 +265,24 @@ class ArmState:
                 return self._remember(branch.q, target, None, -1, "", cause)
             return self._remember(branch.q, target, solution, int(branch.slot), "", cause)
 
-    def _beyond_limits(self, solution: IKSolution, q: np.ndarray) -> str:
-        """Why a target that some branch reaches is out of the arm's reach: the nearest such branch's joint beyond
-        its limit, e.g. "reachable only beyond a joint limit (d3: from 0 mm to 762 mm, got -50.0 mm)"."""
+    def _branch_within_limits(self, solution: IKSolution, q: np.ndarray, prefer: int | None = None) -> tuple:
+        """(the branch of ``solution`` the arm takes from its joints ``q``, "") or (no branch, why not).
+
+        Turned next to the joints. A real arm cannot take a branch beyond a joint limit (and every slider would
+        then be refused until a pose button): a target only such branches reach is out of reach, and the reason
+        names the nearest one's joint, e.g. "reachable only beyond a joint limit (d3: from 0 mm to 762 mm, got
+        -50.0 mm)".
+        """
+        branch = solution.nearest(q, prefer=prefer, within_limits=True)
+        if branch.slot >= 0:
+            return branch, ""
+        if not solution.valid.any():
+            return branch, solution.unreachable_reason()
         try:
             self.check_joints(solution.nearest(q).q)
         except ValueError as beyond:
-            return f"reachable only beyond a joint limit ({beyond})"
-        return "reachable only beyond a joint limit"  # another branch, farther away, is the one beyond them
+            return branch, f"reachable only beyond a joint limit ({beyond})"
+        return branch, "reachable only beyond a joint limit"  # another branch, farther away, is the one beyond them
 
     def select_branch(self, slot: int) -> Snapshot:
         """Put the arm on branch ``slot`` of the current target (turned next to the current joints)."""
@@ -313,15 +320,12 @@ class ArmState:
         with self.lock:
             if self.last is not snapshot:
                 return self.last
-            if not solution.valid.any():
-                return self._remember(snapshot.q, snapshot.target, solution, -1, solution.unreachable_reason(), "branch")
-            if snapshot.reachable:  # the arm is at the target: on the branch nearest its joints
+            if snapshot.reachable and solution.valid.any():  # the arm is at the target: on the branch nearest its joints
                 return self._remember(snapshot.q, snapshot.target, solution, int(solution.nearest(snapshot.q).slot), "",
                                       "branch")
             # the arm's own search stopped short of the target (or beyond a limit): it takes the nearest branch
             # found within the limits, as a preset's arm takes its nearest
-            branch = solution.nearest(snapshot.q, within_limits=True)
-            if branch.slot < 0:
-                return self._remember(snapshot.q, snapshot.target, solution, -1,
-                                      self._beyond_limits(solution, snapshot.q), "branch")
+            branch, reason = self._branch_within_limits(solution, snapshot.q)
+            if reason:
+                return self._remember(snapshot.q, snapshot.target, solution, -1, reason, "branch")
             return self._remember(branch.q, snapshot.target, solution, int(branch.slot), "", "branch")

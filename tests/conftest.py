@@ -30,6 +30,13 @@ def random_joints(n: int, seed: int = 0) -> np.ndarray:
     return -np.random.default_rng(seed).uniform(-np.pi, np.pi, (n, 6))
 
 
+def typed_copy(arm: Arm, with_limits: bool = False) -> Arm:
+    """A student's copy of a preset: its DH table typed in (``Arm.from_dh``, numerical IK), with the preset's joint
+    limits or the editor's defaults."""
+    rows = [(r.a, r.alpha, r.d, r.theta, r.joint) for r in arm.dh.rows]
+    return Arm.from_dh(rows, arm.dh.convention, limits=arm.limits if with_limits else None)
+
+
 def wrapped_difference(a, b) -> np.ndarray:
     """|a − b| modulo 2π, in [0, π]."""
     return np.abs(np.remainder(np.asarray(a) - np.asarray(b) + np.pi, 2 * np.pi) - np.pi)

@@ -13,7 +13,7 @@ from ur10teach.state import ArmState
 from ur10teach.features.workspace import VIRIDIS, KeptClouds, colormap
 from ur10core import Arm
 
-from .conftest import wrapped_difference
+from .conftest import typed_copy, wrapped_difference
 
 
 @pytest.fixture
@@ -161,17 +161,22 @@ def test_a_branch_beyond_a_joint_limit_is_refused_and_says_which():
     state.set_joints(state.q)  # and from there the arm moves on
 
 
+def wrist_centre_behind_the_shoulder() -> tuple:
+    """The Stanford arm, its typed copy (with its limits), joints with d3 = 2 mm, and the same joints with d3 = -50 mm:
+    the wrist centre behind the shoulder, a pose only a reversed stroke or θ2 turned over reaches."""
+    stanford = Arm.preset("stanford")
+    q = np.array([0.3, 0.8, 0.002, 0.2, 0.5, 0.1])
+    behind = q.copy()
+    behind[2] = -0.05
+    return stanford, typed_copy(stanford, with_limits=True), q, behind
+
+
 def test_a_drag_never_puts_the_arm_beyond_a_joint_limit():
     """A drag took the branch nearest the arm's joints, beyond a limit or not: the Stanford arm's wrist centre
     dragged 50 mm behind its shoulder put d3 at -50 mm, and from there every slider and "Put target back on the
     tool" were refused ("d3: from 0 mm to 762 mm", until 2026-12-04). The arm takes the nearest branch a real arm
     can take; a typed table, which follows one branch, stays where it is and says which joint would leave its range."""
-    stanford = Arm.preset("stanford")
-    typed = Arm.from_dh([(r.a, r.alpha, r.d, r.theta, r.joint) for r in stanford.dh.rows], stanford.dh.convention,
-                        limits=stanford.limits)
-    q = np.array([0.3, 0.8, 0.002, 0.2, 0.5, 0.1])
-    behind = q.copy()
-    behind[2] = -0.05
+    stanford, typed, q, behind = wrist_centre_behind_the_shoulder()
     for arm in (stanford, typed):
         state = ArmState(arm, q)
         snap = state.move_target(arm.fk(behind))
@@ -192,12 +197,7 @@ def test_find_every_branch_puts_a_typed_arm_that_stopped_short_on_the_nearest_br
     search's branches were listed with "← arm" on one beyond d3's limit, the arm not at the target at all, and the
     reason kept saying the target was unreachable (until 2026-12-04). The arm now takes the nearest branch found
     within its limits, as a preset's arm takes its nearest on a drag."""
-    stanford = Arm.preset("stanford")
-    typed = Arm.from_dh([(r.a, r.alpha, r.d, r.theta, r.joint) for r in stanford.dh.rows], stanford.dh.convention,
-                        limits=stanford.limits)
-    q = np.array([0.3, 0.8, 0.002, 0.2, 0.5, 0.1])
-    behind = q.copy()
-    behind[2] = -0.05
+    stanford, typed, q, behind = wrist_centre_behind_the_shoulder()
     state = ArmState(typed, q)
     stopped = state.move_target(typed.fk(behind))
     assert not stopped.reachable

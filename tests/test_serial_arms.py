@@ -16,6 +16,8 @@ from ur10core.serial import PRESETS
 import roboticstoolbox as rtb  # test-only reference: a missing test extra fails here, loudly
 from spatialmath import SE3  # (comes with roboticstoolbox)
 
+from .conftest import typed_copy
+
 pytestmark = pytest.mark.core
 
 ANALYTIC = tuple(PRESETS)
@@ -400,7 +402,7 @@ def test_a_typed_table_finds_poses_near_a_singularity():
     1e-10 after the usual steps, so a pose 0.1 µm away was reported as not found. Its closed form
     is the independent check: every one of these poses has eight branches."""
     stanford = Arm.preset("stanford")
-    typed = Arm.from_dh([(r.a, r.alpha, r.d, r.theta, r.joint) for r in stanford.dh.rows], stanford.dh.convention)
+    typed = typed_copy(stanford)
     q = np.array([[0.319, 2.528, 0.002, -2.004, 1.307, -0.626],
                   [1.164, -1.230, 0.001, 2.810, -1.196, -1.104],
                   [-2.188, -0.115, 0.003, 1.717, -2.521, -2.732]])
@@ -419,8 +421,7 @@ def test_a_typed_table_finds_every_branch_next_to_a_singularity(name, joint, wit
     branches of such UR10 poses were missing; undamped Gauss–Newton steps from the starts that came near now
     finish them. The preset's closed form is the independent check: each branch it gives is found."""
     arm = Arm.preset(name)
-    typed = Arm.from_dh([(r.a, r.alpha, r.d, r.theta, r.joint) for r in arm.dh.rows], arm.dh.convention,
-                        limits=arm.limits)
+    typed = typed_copy(arm, with_limits=True)
     rng = np.random.default_rng(12)
     q = rng.uniform(np.maximum(arm.limits[:, 0], -np.pi), np.minimum(arm.limits[:, 1], np.pi), (40, 6))
     q[:, joint] = rng.uniform(0.0 if name == "stanford" else -within, within, 40)
@@ -440,7 +441,7 @@ def test_a_typed_tables_drag_follows_the_target_next_to_a_singularity():
     Stanford arm dragged with its stroke d3 under 3 mm was told "the search came within 1.06e-06 mm of it: it
     may be out of reach" on 27 of these 400 steps (until 2026-12-04). Each one is reachable by construction."""
     stanford = Arm.preset("stanford")
-    typed = Arm.from_dh([(r.a, r.alpha, r.d, r.theta, r.joint) for r in stanford.dh.rows], stanford.dh.convention)
+    typed = typed_copy(stanford)
     rng = np.random.default_rng(5)
     errors = []
     for _ in range(40):
@@ -756,8 +757,7 @@ def test_the_wrist_split_reads_the_wrist_joints_as_zyz_euler_angles(name):
         slot = int(sol.nearest(q).slot)
         other = sol.q[slot ^ 1]  # the same arm slot, the other wrist
         np.testing.assert_allclose(wrapped(other[3:] - split.wrist[int(np.argmax(own))], np.ones(3, bool)), 0.0, atol=1e-9)
-    rows = [(r.a, r.alpha, r.d, r.theta, r.joint) for r in arm.dh.rows]
-    typed = Arm.from_dh(rows, arm.dh.convention)  # a student's copy: numerical IK, the same wrist
+    typed = typed_copy(arm)  # numerical IK, the same wrist
     q = arm.specs.home
     np.testing.assert_allclose(wrist_split(typed, q).R3_6, wrist_split(arm, q).R3_6, atol=1e-15)
     for other_arm, why in (("ur10", r"the last three axes do not meet in one point \(at the zero pose, axes 4 and 6 pass "
