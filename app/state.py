@@ -21,7 +21,7 @@ import numpy as np
 from ur10core import Arm, IKSolution
 from ur10core.orientation import quaternion
 from ur10core.serial import project_target
-from ur10core.tolerances import FLOOR_TOLERANCE
+from ur10core.tolerances import FLOOR_TOLERANCE, LIMIT_TOLERANCE
 from ur10core.workspace import heights_above_floor, lowest_points
 
 from .style import number, typed_numbers
@@ -166,7 +166,7 @@ class ArmState:
         for name, kind, value, lo, hi in zip(arm.joint_names, arm.joint_types, q.tolist(), low, high):
             if not math.isfinite(value):
                 raise ValueError(f"{name}: {value} is not a number")
-            if not lo - 1e-9 <= value <= hi + 1e-9:
+            if not lo - LIMIT_TOLERANCE <= value <= hi + LIMIT_TOLERANCE:
                 lowest, highest = (joint_value_text(kind, v, ".0f") for v in (lo, hi))
                 raise ValueError(f"{name}: from {lowest} to {highest}, got {joint_value_text(kind, value)}")
         return np.clip(q, low, high)

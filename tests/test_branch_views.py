@@ -110,10 +110,13 @@ def test_the_status_counts_the_branches_a_class_challenge_counts(name):
     from ur10core.challenges import _count
 
     arm = Arm.preset(name)
-    for q in arm.sample_joints(25, seed=5):
+    on_a_limit = arm.sample_joints(2 * arm.n_joints, seed=6)  # each joint on each end (the desktop arm's θ3 = 0, 180°)
+    on_a_limit[np.arange(2 * arm.n_joints), np.tile(np.arange(arm.n_joints), 2)] = arm.limits.T.reshape(-1)
+    for q in [*arm.sample_joints(25, seed=5), *on_a_limit]:
         snapshot = ArmState(arm, q).last
         counted = int(re.match(r"\*\*(\d+) of \d+ branches\*\*", status_markdown(snapshot)).group(1))
         assert counted == _count(arm, snapshot.target), status_markdown(snapshot)
+        assert counted >= 1, status_markdown(snapshot)  # the arm is there: a branch within the limits reaches it
 
 
 def test_an_arm_through_the_floor_is_marked(course, points):

@@ -782,7 +782,9 @@ def test_a_teachers_file_is_read_in_its_units():
 @pytest.mark.parametrize("change, line, words", [
     (("arm = \"kr210\"", "arm = \"kr2100\""), 5, "arm must be one of"),
     (("joints = [10, 20, -30, 40, 50, 60]", "joints = [10, 20, -30, 40, 50]"), 6, "list of 6 numbers"),
-    (("joints = [10, 20, -30, 40, 50, 60]", "joints = [10, 100, -30, 40, 50, 60]"), 6, "outside the kr210 arm's limits"),
+    (("joints = [10, 20, -30, 40, 50, 60]", "joints = [10, 100, -30, 40, 50, 60]"), 6,
+     "A2 is 100°, outside the kr210 arm's limits for it: -45° to 85°"),
+    (("arm = \"kr210\"", "arm = \"stanford\""), 6, "d3 is -30 mm, outside the stanford arm's limits for it: 0 mm to 762 mm"),
     (("branch = \"wrist flipped\"", "branch = \"wrist upside down\""), 7, "words of a branch's name"),
     # elbow down needs θ2 = 88° there, past the KR210's 85°: nobody could do it (the README's example asked it)
     (("branch = \"wrist flipped\"", "branch = \"elbow down\""), 7, "'elbow down' does not reach this target within the joint limits; branches 1, 2 do"),

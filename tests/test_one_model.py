@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import itertools
 import pickle
 
 import numpy as np
@@ -47,6 +48,24 @@ def test_every_arm_is_one_class_and_its_ik_one_result_type(name, make):
     # one pose: the same answer as the batch's
     one = arm.ik(T[3], hint=q[3])
     assert type(one) is IKSolution and int(one.nearest(q[3]).slot) == int(branch.slot[3])
+
+
+@pytest.mark.parametrize("name, make", EVERY_ARM, ids=[name for name, _ in EVERY_ARM])
+def test_a_pose_with_a_joint_on_its_limit_is_reached_within_the_limits(name, make):
+    """The desktop arm with its elbow straight (θ3 = 0, its lower limit) was reached "only beyond a limit": IK gave
+    θ3 = −0.0 or −1e-16, a rounding below it. So did θ3 = 180° and the cylindrical arm's d2 = 0."""
+    arm = make()
+    poses = arm.sample_joints(6, seed=3)
+    for pose, joint, end in itertools.product(poses, range(arm.n_joints), (0, 1)):
+        q = pose.copy()
+        q[joint] = arm.limits[joint, end]
+        for hint in (None, q):
+            solution = arm.ik(arm.fk(q), hint=hint)
+            assert solution.within_limits.any(), (joint, end, hint)
+            branch = solution.nearest(q, within_limits=True)
+            assert int(branch.slot) >= 0 and arm.pose_error(branch.q, arm.fk(q)) < 1e-9
+            inside = (arm.limits[:, 0] <= branch.q) & (branch.q <= arm.limits[:, 1])
+            assert inside.all(), (joint, end, branch.q)  # a slider takes it: on the limit, not a rounding beyond
 
 
 @pytest.mark.parametrize("name, make", EVERY_ARM, ids=[name for name, _ in EVERY_ARM])

@@ -31,6 +31,7 @@ from .solvers.numerical import NumericalIK, sampling_range
 from .serial import PRESETS as COURSE_ARMS
 from .solvers.ur import DESCRIPTIONS, DH_ALPHA, JOINT_LIMIT, JOINT_NAMES, LENGTHS, SingularityGeometry, URFamily
 from ._validate import homogeneous_transform, poses_and_hints
+from .tolerances import LIMIT_TOLERANCE
 
 __all__ = ["Arm", "DH_ALPHA", "JOINT_LIMIT", "JOINT_NAMES", "SingularityGeometry", "factor_scales"]
 
@@ -273,9 +274,10 @@ class Arm(JacobianUses, HasSpecs):
         return self._geometry.jacobian(q)
 
     def within_limits(self, q) -> np.ndarray:
-        """(...) bool: every joint inside its limits (revolute joints also one turn either way)."""
+        """(...) bool: every joint inside its limits (revolute joints also one turn either way), to
+        :data:`~ur10core.tolerances.LIMIT_TOLERANCE`."""
         q = self.joints(q)
-        low, high = self.limits[:, 0], self.limits[:, 1]
+        low, high = self.limits[:, 0] - LIMIT_TOLERANCE, self.limits[:, 1] + LIMIT_TOLERANCE
         inside = (q >= low) & (q <= high)
         turned = np.where(self.revolute, (q + 2 * _PI >= low) & (q + 2 * _PI <= high)
                           | (q - 2 * _PI >= low) & (q - 2 * _PI <= high), False)

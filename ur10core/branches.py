@@ -15,6 +15,7 @@ from typing import TYPE_CHECKING, NamedTuple
 import numpy as np
 
 from ._validate import within_reason
+from .tolerances import LIMIT_TOLERANCE
 
 if TYPE_CHECKING:
     from .arm import Arm
@@ -176,11 +177,15 @@ class IKSolution:
             raise ValueError(f"joint_limit is the UR family's (±360° on every joint); the {self.arm.name!r} arm's "
                              "joints turn within its own limits")
         branch = _nearest_within_limits(self, q_current, prefer)
-        if not within_limits or self.q.ndim == 2 and (branch.slot < 0 or _inside(branch.q, self.arm.limits)):
-            return branch  # one pose on a branch inside the limits (a drag, mostly): no limits checked on every slot
-        inside = self.valid & self.within_limits
-        return IKSolution(self.q, inside, self.failure, self.arm, within_limits=inside, extra=self.extra).nearest(
-            q_current, prefer=prefer)
+        if not within_limits:
+            return branch
+        # one pose whose nearest branch is inside them (a drag, mostly) needs no check of every slot
+        if not (self.q.ndim == 2 and (branch.slot < 0 or _inside(branch.q, self.arm.limits))):
+            inside = self.valid & self.within_limits
+            branch = IKSolution(self.q, inside, self.failure, self.arm, within_limits=inside, extra=self.extra).nearest(
+                q_current, prefer=prefer)
+        # a value a rounding beyond a limit (a pose on it) is the limit, so that a slider takes it
+        return Branch(np.minimum(np.maximum(branch.q, self.arm.limits[:, 0]), self.arm.limits[:, 1]), branch.slot)
 
 
     def take(self, slot: int, q_current) -> np.ndarray:
@@ -221,11 +226,13 @@ def _nearest_within_limits(solution: IKSolution, q_current, prefer) -> Branch:
     prefer = _preferred_slot(prefer, len(solution.labels))
     low, high = arm.limits[:, 0], arm.limits[:, 1]
     if solution.q.ndim == 2 and type(prefer) is int:  # one pose (the drag path): a dozen floats, not numpy calls
-        return _nearest_one(solution, q_current.tolist(), prefer, low.tolist(), high.tolist(), TIE_TOLERANCE)
+        return _nearest_one(solution, q_current.tolist(), prefer, (low - LIMIT_TOLERANCE).tolist(),
+                            (high + LIMIT_TOLERANCE).tolist(), TIE_TOLERANCE)
     current = q_current[..., None, :]
     turns = np.round((current - solution.q) / _TAU)
     shifted = solution.q + turns * _TAU
     # back inside the limits by a whole turn where the nearest turn leaves them (and a turn fits)
+    low, high = low - LIMIT_TOLERANCE, high + LIMIT_TOLERANCE
     shifted = np.where((shifted < low) & (shifted + _TAU <= high), shifted + _TAU, shifted)
     shifted = np.where((shifted > high) & (shifted - _TAU >= low), shifted - _TAU, shifted)
     shifted = np.where(arm.revolute, shifted, solution.q)
@@ -246,8 +253,9 @@ def _nearest_within_limits(solution: IKSolution, q_current, prefer) -> Branch:
 
 
 def _inside(q: np.ndarray, limits: np.ndarray) -> bool:
-    """One pose's joints (n,) within ``limits`` (n, 2), as a slider accepts them (to 1e-9)."""
-    return all(low - 1e-9 <= value <= high + 1e-9 for value, (low, high) in zip(q.tolist(), limits.tolist()))
+    """One pose's joints (n,) within ``limits`` (n, 2), to LIMIT_TOLERANCE, as a slider accepts them."""
+    return all(low - LIMIT_TOLERANCE <= value <= high + LIMIT_TOLERANCE
+               for value, (low, high) in zip(q.tolist(), limits.tolist()))
 
 
 def _nearest_one(solution: IKSolution, current: list, prefer: int, low: list, high: list, tie: float) -> Branch:

@@ -27,6 +27,7 @@ from .solvers.spherical_wrist import spherical_wrist, wrist_split
 from .solvers.ur import separation_steps, shoulder_angles
 from .specs import GRID_JOINTS, WorstPose, largest_torque
 from .three_dof import course_path
+from .tolerances import LIMIT_TOLERANCE
 from .workspace import heights_above_floor
 
 if sys.version_info >= (3, 11):
@@ -533,9 +534,13 @@ def _joints(table: dict, arm: Arm) -> tuple[float, ...]:
     """The file's joints (degrees, mm for a sliding joint), within the arm's limits."""
     shown = _numbers(table, "joints", arm.n_joints, 1e5)
     q = _in_si(arm, shown)
-    if not arm.within_limits(q):
-        raise _FieldError("joints", f"joints {shown} are outside the {arm.name} arm's limits")
-    return tuple(q.tolist())
+    for name, value, si, (low, high), revolute in zip(arm.joint_names, shown, q, arm.limits, arm.revolute):
+        if not low - LIMIT_TOLERANCE <= si <= high + LIMIT_TOLERANCE:
+            unit = "°" if revolute else " mm"
+            low, high = (f"{math.degrees(v) if revolute else 1000 * v:g}{unit}" for v in (low, high))
+            raise _FieldError("joints", f"{name} is {value:g}{unit}, outside the {arm.name} arm's limits for it: "
+                                        f"{low} to {high}")
+    return tuple(np.clip(q, arm.limits[:, 0], arm.limits[:, 1]).tolist())
 
 
 def _branch(value, arm: Arm) -> str | int:

@@ -14,6 +14,7 @@ from ._validate import as_float_array, check_finite
 from .differential import TASK_ROWS, damped_inverse
 from .orientation import rotation_from_angle_axis
 from .solvers.numerical import rotation_log
+from .tolerances import LIMIT_TOLERANCE
 
 #: Closed-loop gain of the resolved-rate motion (1/s): a drift from the line is corrected within
 #: a few tenths of a second rather than accumulated step after step.
@@ -186,7 +187,7 @@ def out_of_range(arm, path: Path) -> str:
     >>> out_of_range(arm, path)
     ''
     """
-    low, high = arm.limits[:, 0] - 1e-9, arm.limits[:, 1] + 1e-9
+    low, high = arm.limits[:, 0] - LIMIT_TOLERANCE, arm.limits[:, 1] + LIMIT_TOLERANCE
     outside = (path.q < low) | (path.q > high)
     if not outside.any():
         return ""

@@ -56,6 +56,11 @@ SIDE_TOLERANCE = 1e-6
 #: √rounding, and the slot is flagged singular.
 STRETCHED_TOLERANCE = 1e-9
 
+#: Metres or radians. A joint value this far beyond a limit is at the limit: IK at a pose on a
+#: limit (the desktop arm's straight elbow, θ3 = 0) gives it to rounding, either side of it,
+#: and a slider's value is compared to it as closely.
+LIMIT_TOLERANCE = 1e-9
+
 #: A pose's rotation part may deviate from orthonormal by this much (max |Rᵀ R − I|).
 ROTATION_TOLERANCE = 1e-6
 
