@@ -5,7 +5,6 @@ from __future__ import annotations
 import numpy as np
 
 from ur10teach.serving.metrics import LatencyLog
-from ur10dev.metered_app import resident_bytes
 from ur10dev.waiting import HANG_TIMEOUT
 
 
