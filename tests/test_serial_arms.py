@@ -436,6 +436,26 @@ def test_a_typed_table_finds_every_branch_next_to_a_singularity(name, joint, wit
     assert matched.sum() >= 0.95 * closed.valid.sum(), f"{matched.sum()} of {closed.valid.sum()} branches found"
 
 
+def test_a_typed_tables_joint_that_does_not_move_the_tool_point_does_not_fill_its_slots():
+    """A typed SCARA controls its tool's position: its roll θ4 turns about the tool point, so every θ4 reaches and
+    each of the search's starts brought back another. Its 16 slots were 16 rolls of the elbow branch first in
+    order, without the other elbow nor, often, the arm's own joints (until 2026-12-04). Now the roll is kept at
+    the arm's, and the search lists the closed form's two elbows."""
+    scara = Arm.preset("scara")
+    typed = typed_copy(scara, with_limits=True)
+    q = scara.sample_joints(30, seed=4)
+    T = typed.fk(q)
+    closed, found = scara.ik(T, hint=q), typed.ik(T, hint=q)
+    assert (found.valid.sum(axis=-1) == closed.valid.sum(axis=-1)).all()
+    for k in range(len(q)):
+        branches = closed.q[k][closed.valid[k]]
+        ours = found.q[k][found.valid[k]]
+        apart = np.abs(wrapped(ours[:, None, :3] - branches[None, :, :3], scara.revolute[:3])).max(axis=-1)
+        assert (apart.min(axis=0) < 1e-6).all() and (apart.min(axis=1) < 1e-6).all()
+        np.testing.assert_allclose(ours[:, 3], q[k, 3])  # the roll the arm has, on both elbows
+    np.testing.assert_allclose(found.nearest(q).q, q, atol=1e-7)  # the arm's own joints among them
+
+
 def test_a_typed_tables_drag_follows_the_target_next_to_a_singularity():
     """The drag's one search, from the arm's own joints, stalled the same way a hair from the target: a typed
     Stanford arm dragged with its stroke d3 under 3 mm was told "the search came within 1.06e-06 mm of it: it

@@ -13,8 +13,10 @@ that converge to within 1e-10 of the pose, checked once more by FK to 1e-9, are 
 solutions. Near a singularity the damped steps close in slowly, not quadratically (J's smallest
 singular value is below the least λ, which holds back the very step that remains): a start that
 stopped within 1e-3 of the pose takes twenty undamped Gauss–Newton steps, Δq = J⁺ e.
-Solutions closer than 1e-6 in every joint are one, and they are sorted so that the same
-pose always lists them in the same order, labelled "found numerically".
+A joint that does not move the tool point of a position task (its axis passes through it) is
+set to the hint's value. Solutions closer than 1e-6 in every joint are one, the hint's kept
+first, and they are sorted so that the same pose always lists them in the same order,
+labelled "found numerically".
 """
 
 from __future__ import annotations
@@ -181,6 +183,23 @@ class NumericalIK:
             q[stuck], size[stuck] = self._newton(q[stuck], target[stuck], NEWTON_STEPS)
         return q, size
 
+    def _idle_joints_set(self, q: np.ndarray, target: np.ndarray, ok: np.ndarray, hint: np.ndarray | None) -> np.ndarray:
+        """Solutions ``q`` (N, starts, n) with each joint that does not move the tool point there set to the
+        hint's value (else 0, or its nearest limit), where the tool still reaches ``target`` then.
+
+        A revolute joint whose axis passes through the tool point (a typed SCARA's roll, always; a wrist point
+        on axis 1) turns the rest of the chain about that point: every value of it reaches, a continuum,
+        and each start would bring back another value of it, filling the slots with one branch."""
+        _, J = self._error(q, target)
+        idle = ok[..., None] & (np.linalg.norm(J, axis=-2) < 1e-9)
+        if not idle.any():
+            return q
+        low, high = self.limits[:, 0], self.limits[:, 1]
+        kept = np.clip(0.0, low, high) if hint is None else np.asarray(hint, dtype=float)[:, None]
+        moved = np.where(idle, kept, q)
+        still = np.abs(self.table.fk(moved)[..., :3, 3] - target[..., :3, 3]).max(axis=-1) <= 1e-9
+        return np.where((still & idle.any(axis=-1))[..., None], moved, q)
+
     def follow(self, T: np.ndarray, hint: np.ndarray, iterations: int = 30) -> tuple[np.ndarray, float]:
         """One pose (4, 4) from the current joints ``hint`` (n,) only: (joints, their pose error).
 
@@ -217,8 +236,11 @@ class NumericalIK:
         if self.task == "position":
             reached = reached[..., :3, 3]
         ok = (size <= REACHED) & (reached.reshape(reached.shape[:2] + (-1,)).max(axis=-1) <= 1e-9)
-        for k in range(N):
+        if self.task == "position":
+            q = self._idle_joints_set(q, target, ok, hint)
+        for k in range(N):  # the hint's own solution first, so that it is kept however many others there are
             found = _distinct(q[k][ok[k]], self.revolute)[:slots]
+            found = found[np.lexsort(found.T[::-1])] if len(found) else found
             out["q"][k, : len(found)] = found
             out["valid"][k, : len(found)] = True
             if not len(found):
@@ -228,10 +250,9 @@ class NumericalIK:
 
 
 def _distinct(q: np.ndarray, revolute: np.ndarray) -> np.ndarray:
-    """Rows of ``q`` (m, n) with near-duplicates dropped, in lexicographic order."""
+    """Rows of ``q`` (m, n) with near-duplicates dropped, the first of each kept, in their order."""
     if not len(q):
         return q
-    q = q[np.lexsort(q.T[::-1])]
     kept: list[np.ndarray] = []
     for row in q:
         if not any(np.abs(np.where(revolute, wrap(row - other), row - other)).max() <= SAME for other in kept):
