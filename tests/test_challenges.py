@@ -823,6 +823,19 @@ def test_files_are_bounded_and_branch_counts_must_exist(tmp_path):
     assert len(C.load(good)) == 2
 
 
+def test_a_file_saved_on_windows_is_read(tmp_path):
+    """Older Notepads and PowerShell 5's "utf8" start a file with a byte-order mark, which TOML does not allow: the
+    whole file was refused with "Invalid statement (at line 1, column 1)". A file saved as ANSI (Windows-1252) is
+    named by its line."""
+    windows = tmp_path / "notepad.toml"
+    windows.write_bytes(b"\xef\xbb\xbf" + GOOD.replace("\n", "\r\n").encode())
+    assert [c.title for c in C.load(windows)] == [c.title for c in C.parse(GOOD)]
+    ansi = tmp_path / "ansi.toml"
+    ansi.write_bytes(GOOD.replace('title = "Stroke"', 'title = "Stroke at 45\xb0"').encode("cp1252"))
+    with pytest.raises(ValueError, match="line 11: not UTF-8 text .*save the file as UTF-8"):
+        C.load(ansi)
+
+
 def test_the_readmes_example_file_is_a_valid_challenge_file():
     from pathlib import Path
 

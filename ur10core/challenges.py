@@ -294,10 +294,12 @@ def load(path) -> tuple[Challenge, ...]:
         raw = file.read(MAX_FILE_BYTES + 1)
     if len(raw) > MAX_FILE_BYTES:
         raise ValueError(f"{path}: a challenge file is at most {MAX_FILE_BYTES // 1000} kB")
-    try:
-        text = raw.decode("utf-8")
+    try:  # (a byte-order mark, as older Notepads and PowerShell 5's utf8 write, is not TOML: dropped)
+        text = raw.decode("utf-8-sig")
     except UnicodeDecodeError as error:
-        raise ValueError(f"{path}: not UTF-8 text (byte {error.start})") from None
+        line = raw[:error.start].count(b"\n") + 1
+        raise ValueError(f"{path}, line {line}: not UTF-8 text (byte {error.start}, {raw[error.start]:#04x}): "
+                         "save the file as UTF-8") from None
     return parse(text, source=str(path))
 
 
