@@ -52,7 +52,7 @@ def test_every_arm_is_one_class_and_its_ik_one_result_type(name, make):
 
 @pytest.mark.parametrize("name, make", EVERY_ARM, ids=[name for name, _ in EVERY_ARM])
 def test_a_pose_with_a_joint_on_its_limit_is_reached_within_the_limits(name, make):
-    """The desktop arm with its elbow straight (θ3 = 0, its lower limit) was reached "only beyond a limit": IK gave
+    """The desktop arm with its forearm level (θ3 = 0, its lower limit) was reached "only beyond a limit": IK gave
     θ3 = −0.0 or −1e-16, a rounding below it. So did θ3 = 180° and the cylindrical arm's d2 = 0."""
     arm = make()
     poses = arm.sample_joints(6, seed=3)

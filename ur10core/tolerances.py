@@ -57,7 +57,7 @@ SIDE_TOLERANCE = 1e-6
 STRETCHED_TOLERANCE = 1e-9
 
 #: Metres or radians. A joint value this far beyond a limit is at the limit: IK at a pose on a
-#: limit (the desktop arm's straight elbow, θ3 = 0) gives it to rounding, either side of it,
+#: limit (the desktop arm's forearm level, θ3 = 0) gives it to rounding, either side of it,
 #: and a slider's value is compared to it as closely.
 LIMIT_TOLERANCE = 1e-9
 
