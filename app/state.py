@@ -180,7 +180,7 @@ class ArmState:
         values = []
         for part in parts:
             try:
-                value = float(part.replace("°", ""))
+                value = float(part)
             except ValueError:
                 raise ValueError(f"{what}: {part!r} is not a number") from None
             if not math.isfinite(value):

@@ -82,12 +82,13 @@ def number(value: float, spec: str) -> str:
     return text
 
 
-#: Dashes a student may type for a minus, or copy from a task's text (the course writes −, U+2212).
-_MINUS = str.maketrans({"\u2212": "-", "\u2013": "-"})
+#: Dashes a student may type for a minus, or copy from a task's text (the course writes −, U+2212), and the
+#: degree sign a student may type after an angle.
+_MINUS = str.maketrans({"\u2212": "-", "\u2013": "-", "°": ""})
 
 
 def typed_numbers(text: str) -> str:
-    """What a student typed, its minus signs the ones ``float`` reads: "−60" → "-60"."""
+    """What a student typed, its minus signs the ones ``float`` reads and no degree signs: "−60°" → "-60"."""
     return text.translate(_MINUS)
 
 

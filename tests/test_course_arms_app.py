@@ -295,6 +295,8 @@ def test_parse_table_refuses_what_is_not_a_table():
     limited = parse_table("0 90 400 0 R -170 170\n400 0 0 0 R, -45, 135\n0 0 100 0 P 50 300", "standard")
     assert parse_table("0 90 400 0 R \u2212170 170\n400 \u221290 0 0 R", "standard") == parse_table(
         "0 90 400 0 R -170 170\n400 -90 0 0 R", "standard")  # the minus the course writes, copied
+    assert parse_table("0 90° 400 0° R -170° 170°\n400 0 0 0 R", "standard") == parse_table(
+        "0 90 400 0 R -170 170\n400 0 0 0 R", "standard")  # degrees as the course writes them (refused until 2026-12-04)
     np.testing.assert_allclose(limited.limits, [np.radians([-170, 170]), np.radians([-45, 135]), [0.05, 0.3]])
 
 
