@@ -13,10 +13,11 @@ that converge to within 1e-10 of the pose, checked once more by FK to 1e-9, are 
 solutions. Near a singularity the damped steps close in slowly, not quadratically (J's smallest
 singular value is below the least λ, which holds back the very step that remains): a start that
 stopped within 1e-3 of the pose takes twenty undamped Gauss–Newton steps, Δq = J⁺ e.
-A joint that does not move the tool point of a position task (its axis passes through it) is
-set to the hint's value. Solutions closer than 1e-6 in every joint are one, the hint's kept
-first, and they are sorted so that the same pose always lists them in the same order,
-labelled "found numerically".
+Where the pose leaves the joints free along a curve (a wrist with axes 4 and 6 in line, a
+typed SCARA's roll), a solution is moved along it to the hint's value of its last joint.
+Solutions closer than 1e-6 in every joint are one, and so are solutions up to 1e-2 apart
+whose midpoint is a solution too; the hint's is kept first, and they are sorted so that the
+same pose always lists them in the same order, labelled "found numerically".
 """
 
 from __future__ import annotations
@@ -33,8 +34,14 @@ from ..tolerances import LENGTH_TOLERANCE
 CONVERGED = 1e-12
 #: A start whose error is below this (and whose FK is within 1e-9 of the pose) is a solution.
 REACHED = 1e-10
-#: Solutions closer than this in every joint (rad or m) are the same solution.
-SAME = 1e-6
+#: Solutions closer than this in every joint (rad or m) are the same solution; so are solutions up to
+#: NEAR apart whose midpoint is a solution too (:meth:`NumericalIK._distinct`).
+SAME, NEAR = 1e-6, 1e-2
+#: A singular value of J below this is a direction the joints can move in without moving the tool
+#: (:meth:`NumericalIK._pinned`).
+NULL_SINGULAR_VALUE = 1e-9
+#: Damped steps that bring a solution moved along a curve of solutions back onto it, one joint held.
+PIN_STEPS = 40
 #: λ never shrinks below this: λ² = 1e-12 keeps J Jᵀ + λ² I invertible in floating point.
 MIN_DAMPING = 1e-6
 #: A start that stopped short of the pose but this close (m and rad) takes this many undamped
@@ -122,21 +129,25 @@ class NumericalIK:
             q[:, 0] = hint
         return q
 
-    def _error(self, q: np.ndarray, target: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Pose error (…, 6 or 3) and the Jacobian rows that go with it (…, 6 or 3, n)."""
+    def _error(self, q: np.ndarray, target: np.ndarray, moving=None) -> tuple[np.ndarray, np.ndarray]:
+        """Pose error (…, 6 or 3) and the Jacobian rows that go with it (…, 6 or 3, n). ``moving`` (…, n), 1 or 0:
+        the columns of the joints it does not mark are zero, so that no step moves them."""
         frames = self.table.frames(q)
         tool = frames[..., -1, :, :]
         J = self.table.jacobian_from_frames(frames)
+        if moving is not None:
+            J = J * moving[..., None, :]
         position = target[..., :3, 3] - tool[..., :3, 3]
         if self.task == "position":
             return position, J[..., :3, :]
         turn = rotation_log(target[..., :3, :3] @ np.swapaxes(tool[..., :3, :3], -1, -2))
         return np.concatenate([position, turn], axis=-1), J
 
-    def _descend(self, q: np.ndarray, target: np.ndarray, iterations: int) -> tuple[np.ndarray, np.ndarray]:
-        """Levenberg–Marquardt from the starts ``q`` (..., n) towards ``target`` (..., 4, 4): (joints, error size)."""
+    def _descend(self, q: np.ndarray, target: np.ndarray, iterations: int, moving=None) -> tuple[np.ndarray, np.ndarray]:
+        """Levenberg–Marquardt from the starts ``q`` (..., n) towards ``target`` (..., 4, 4): (joints, error size).
+        ``moving``: as for :meth:`_error`."""
         damping = np.full(q.shape[:-1], 1e-2)
-        error, J = self._error(q, target)
+        error, J = self._error(q, target, moving)
         size = np.linalg.norm(error, axis=-1)
         rows = error.shape[-1]
         for _ in range(iterations):
@@ -150,7 +161,7 @@ class NumericalIK:
                 weights = np.einsum("kij,kj->ki", np.linalg.pinv(A), error[active])
             step = np.einsum("kji,kj->ki", J[active], weights)
             trial = q[active] + step
-            trial_error, trial_J = self._error(trial, target[active])
+            trial_error, trial_J = self._error(trial, target[active], None if moving is None else moving[active])
             trial_size = np.linalg.norm(trial_error, axis=-1)
             better = trial_size < size[active]
             index = tuple(np.argwhere(active)[better].T)
@@ -158,19 +169,20 @@ class NumericalIK:
             damping[active] = np.where(better, np.maximum(damping[active] / 3, MIN_DAMPING), np.minimum(damping[active] * 4, 1e3))
         return np.where(self.revolute, wrap(q), q), size
 
-    def _newton(self, q: np.ndarray, target: np.ndarray, steps: int) -> tuple[np.ndarray, np.ndarray]:
+    def _newton(self, q: np.ndarray, target: np.ndarray, steps: int, moving=None) -> tuple[np.ndarray, np.ndarray]:
         """``steps`` undamped Gauss–Newton steps q ← q + J⁺ e from starts ``q`` (..., n) already near ``target``:
-        the best joints each start passed through, and their error size.
+        the best joints each start passed through, and their error size. ``moving`` (..., n), 1 or 0: only the
+        joints it marks move.
 
         Near a singularity J's smallest singular value falls below :data:`MIN_DAMPING`, and damped
         least squares then holds back the very step that remains. The pseudo-inverse takes it whole;
         its first step may raise the error before the next ones close it, so every step is taken.
         """
-        error, J = self._error(q, target)
+        error, J = self._error(q, target, moving)
         best_q, best = q, np.linalg.norm(error, axis=-1)
         for _ in range(steps):
             q = q + np.einsum("...ij,...j->...i", np.linalg.pinv(J), error)
-            error, J = self._error(q, target)
+            error, J = self._error(q, target, moving)
             size = np.linalg.norm(error, axis=-1)
             best_q, best = np.where((size < best)[..., None], q, best_q), np.minimum(size, best)
         return np.where(self.revolute, wrap(best_q), best_q), best
@@ -183,22 +195,66 @@ class NumericalIK:
             q[stuck], size[stuck] = self._newton(q[stuck], target[stuck], NEWTON_STEPS)
         return q, size
 
-    def _idle_joints_set(self, q: np.ndarray, target: np.ndarray, ok: np.ndarray, hint: np.ndarray | None) -> np.ndarray:
-        """Solutions ``q`` (N, starts, n) with each joint that does not move the tool point there set to the
-        hint's value (else 0, or its nearest limit), where the tool still reaches ``target`` then.
+    def _pinned(self, q: np.ndarray, target: np.ndarray, ok: np.ndarray, hint: np.ndarray | None) -> np.ndarray:
+        """Solutions ``q`` (N, starts, n) on a curve of solutions, moved along it to where the last joint that moves
+        along it has the hint's value (else 0), where the tool still reaches ``target`` there.
 
-        A revolute joint whose axis passes through the tool point (a typed SCARA's roll, always; a wrist point
-        on axis 1) turns the rest of the chain about that point: every value of it reaches, a continuum,
-        and each start would bring back another value of it, filling the slots with one branch."""
+        Where the pose leaves one direction of the joints free (J has one null direction: a spherical wrist with
+        axes 4 and 6 in line, whose θ4 + θ6 alone is fixed; the UR10's at θ5 = 0, its four parallel axes; a typed
+        SCARA's roll about its own tool point; a seventh joint), every point of that curve reaches, and each start
+        would bring back another point of it, filling the slots with one branch. The closed forms keep the
+        hint's value there; so does this: a step along the null direction, then damped steps with that joint
+        held. Where they do not reach the pose, the solution stays as it was."""
         _, J = self._error(q, target)
-        idle = ok[..., None] & (np.linalg.norm(J, axis=-2) < 1e-9)
-        if not idle.any():
+        _, sigma, Vt = np.linalg.svd(J)  # Vt: (N, starts, n, n), the last rows the least moving directions
+        rank = (sigma > NULL_SINGULAR_VALUE).sum(axis=-1)
+        line = ok & (rank == self.table.n_joints - 1)  # one free direction, no more
+        if not line.any():
             return q
-        low, high = self.limits[:, 0], self.limits[:, 1]
-        kept = np.clip(0.0, low, high) if hint is None else np.asarray(hint, dtype=float)[:, None]
-        moved = np.where(idle, kept, q)
-        still = np.abs(self.table.fk(moved)[..., :3, 3] - target[..., :3, 3]).max(axis=-1) <= 1e-9
-        return np.where((still & idle.any(axis=-1))[..., None], moved, q)
+        free = Vt[..., -1, :]
+        # the last joint it moves by a fiftieth of the most or more, the same joint all along one curve (a wrist's θ6)
+        moves = np.abs(free) >= 0.02 * np.abs(free).max(axis=-1, keepdims=True)
+        joint = (self.table.n_joints - 1 - np.argmax(moves[..., ::-1], axis=-1))[..., None]
+        wanted = (np.clip(0.0, self.limits[:, 0], self.limits[:, 1]) if hint is None
+                  else np.asarray(hint, dtype=float)[:, None, :])
+        offset = np.take_along_axis(np.broadcast_to(wanted, q.shape) - q, joint, -1)
+        offset = np.where(self.revolute[joint], wrap(offset), offset)
+        moved = q + offset / np.take_along_axis(free, joint, -1) * free
+        held = (np.arange(self.table.n_joints) != joint).astype(float)[line]
+        moved[line], size = self._descend(moved[line], target[line], PIN_STEPS, moving=held)
+        stuck = (size > REACHED) & (size < NEARLY_REACHED)
+        if stuck.any():
+            pinned = moved[line]
+            pinned[stuck], _ = self._newton(pinned[stuck], target[line][stuck], NEWTON_STEPS, moving=held[stuck])
+            moved[line] = pinned
+        still = self._reached(moved, target) & line
+        return np.where(still[..., None], moved, q)
+
+    def _reached(self, q: np.ndarray, target: np.ndarray) -> np.ndarray:
+        """(...) bool: joints ``q`` (..., n) put the tool on ``target`` (..., 4, 4) in what the arm controls, to 1e-10
+        (the error the search stops at) and to 1e-9 in every entry of FK."""
+        error, _ = self._error(q, target)
+        gap = np.abs(self.table.fk(q) - target)
+        gap = gap[..., :3, 3].max(axis=-1) if self.task == "position" else gap.max(axis=(-2, -1))
+        return (np.linalg.norm(error, axis=-1) <= REACHED) & (gap <= 1e-9)
+
+    def _distinct(self, q: np.ndarray, target: np.ndarray) -> np.ndarray:
+        """Rows of ``q`` (m, n), solutions of ``target`` (4, 4), with near-duplicates dropped, the first of each kept.
+
+        Two are one where they are :data:`SAME` apart, or up to :data:`NEAR` apart with their midpoint a
+        solution too: next to a singularity the pose fixes the joints only to about √rounding (a stretched
+        elbow's θ2 to 1e-5 rad) or along a line, and two starts stop at two points of one branch. Two
+        branches that close are apart by a curve, and their midpoint misses the pose."""
+        kept: list[np.ndarray] = []
+        for row in q:
+            for other in kept:
+                step = np.where(self.revolute, wrap(row - other), row - other)
+                apart = np.abs(step).max()
+                if apart <= SAME or apart <= NEAR and self._reached(other + step / 2, target):
+                    break
+            else:
+                kept.append(row)
+        return np.array(kept).reshape(-1, q.shape[-1])
 
     def follow(self, T: np.ndarray, hint: np.ndarray, iterations: int = 30) -> tuple[np.ndarray, float]:
         """One pose (4, 4) from the current joints ``hint`` (n,) only: (joints, their pose error).
@@ -232,14 +288,10 @@ class NumericalIK:
         target = np.broadcast_to(T[:, None], starts.shape[:-1] + (4, 4))
         q, size = self._descend(starts, target, self.iterations)
         q, size = self._finish(q, target, size)
-        reached = np.abs(self.table.fk(q) - target)
-        if self.task == "position":
-            reached = reached[..., :3, 3]
-        ok = (size <= REACHED) & (reached.reshape(reached.shape[:2] + (-1,)).max(axis=-1) <= 1e-9)
-        if self.task == "position":
-            q = self._idle_joints_set(q, target, ok, hint)
+        ok = self._reached(q, target)
+        q = self._pinned(q, target, ok, hint)
         for k in range(N):  # the hint's own solution first, so that it is kept however many others there are
-            found = _distinct(q[k][ok[k]], self.revolute)[:slots]
+            found = self._distinct(q[k][ok[k]], T[k])[:slots]
             found = found[np.lexsort(found.T[::-1])] if len(found) else found
             out["q"][k, : len(found)] = found
             out["valid"][k, : len(found)] = True
@@ -247,14 +299,3 @@ class NumericalIK:
                 out["failure"][k] = NOT_FOUND
                 out["detail"][k] = size[k].min()
         return out
-
-
-def _distinct(q: np.ndarray, revolute: np.ndarray) -> np.ndarray:
-    """Rows of ``q`` (m, n) with near-duplicates dropped, the first of each kept, in their order."""
-    if not len(q):
-        return q
-    kept: list[np.ndarray] = []
-    for row in q:
-        if not any(np.abs(np.where(revolute, wrap(row - other), row - other)).max() <= SAME for other in kept):
-            kept.append(row)
-    return np.array(kept)
