@@ -38,8 +38,11 @@ REACHED = 1e-10
 #: NEAR apart whose midpoint is a solution too (:meth:`NumericalIK._distinct`).
 SAME, NEAR = 1e-6, 1e-2
 #: A singular value of J below this is a direction the joints can move in without moving the tool
-#: (:meth:`NumericalIK._pinned`).
-NULL_SINGULAR_VALUE = 1e-9
+#: (:meth:`NumericalIK._pinned`): a turn of π along it moves the pose by 3e-10 at most, about what
+#: the search stops at (the closed forms' wrist is free below |s5| = 3e-11). Solutions of the
+#: Stanford arm with its stroke a few µm long (1e-11 to 1e-10) may then be listed as fewer than its
+#: closed form's eight: to within 1e-11 of the pose, a few µm of stroke and 1e-5 rad of θ1 join them.
+NULL_SINGULAR_VALUE = 1e-10
 #: Damped steps that bring a solution moved along a curve of solutions back onto it, one joint held.
 PIN_STEPS = 40
 #: λ never shrinks below this: λ² = 1e-12 keeps J Jᵀ + λ² I invertible in floating point.
@@ -204,8 +207,8 @@ class NumericalIK:
         SCARA's roll about its own tool point; a seventh joint), every point of that curve reaches, and each start
         would bring back another point of it, filling the slots with one branch. The closed forms keep the
         hint's value there; so does this: a step along the null direction, then damped steps with that joint
-        held. Where they do not reach the pose, the solution stays as it was."""
-        _, J = self._error(q, target)
+        held. Where they do not reach the pose as closely as before, the solution stays as it was."""
+        error, J = self._error(q, target)
         _, sigma, Vt = np.linalg.svd(J)  # Vt: (N, starts, n, n), the last rows the least moving directions
         rank = (sigma > NULL_SINGULAR_VALUE).sum(axis=-1)
         line = ok & (rank == self.table.n_joints - 1)  # one free direction, no more
@@ -227,34 +230,39 @@ class NumericalIK:
             pinned = moved[line]
             pinned[stuck], _ = self._newton(pinned[stuck], target[line][stuck], NEWTON_STEPS, moving=held[stuck])
             moved[line] = pinned
-        still = self._reached(moved, target) & line
+        # as close to the pose as before (next to a singularity, a step along a direction that barely moves the tool
+        # still moves it: the Stanford arm's stroke 1 µm long would merge its eight branches into two)
+        before = np.linalg.norm(error, axis=-1)
+        still = self._reached(moved, target, np.maximum(2 * before, 10 * CONVERGED)) & line
         return np.where(still[..., None], moved, q)
 
-    def _reached(self, q: np.ndarray, target: np.ndarray) -> np.ndarray:
-        """(...) bool: joints ``q`` (..., n) put the tool on ``target`` (..., 4, 4) in what the arm controls, to 1e-10
-        (the error the search stops at) and to 1e-9 in every entry of FK."""
+    def _reached(self, q: np.ndarray, target: np.ndarray, within: float = REACHED) -> np.ndarray:
+        """(...) bool: joints ``q`` (..., n) put the tool on ``target`` (..., 4, 4) in what the arm controls, to
+        ``within`` (by default the error the search stops at) and to 1e-9 in every entry of FK."""
         error, _ = self._error(q, target)
         gap = np.abs(self.table.fk(q) - target)
         gap = gap[..., :3, 3].max(axis=-1) if self.task == "position" else gap.max(axis=(-2, -1))
-        return (np.linalg.norm(error, axis=-1) <= REACHED) & (gap <= 1e-9)
+        return (np.linalg.norm(error, axis=-1) <= within) & (gap <= 1e-9)
 
     def _distinct(self, q: np.ndarray, target: np.ndarray) -> np.ndarray:
         """Rows of ``q`` (m, n), solutions of ``target`` (4, 4), with near-duplicates dropped, the first of each kept.
 
-        Two are one where they are :data:`SAME` apart, or up to :data:`NEAR` apart with their midpoint a
-        solution too: next to a singularity the pose fixes the joints only to about √rounding (a stretched
-        elbow's θ2 to 1e-5 rad) or along a line, and two starts stop at two points of one branch. Two
-        branches that close are apart by a curve, and their midpoint misses the pose."""
-        kept: list[np.ndarray] = []
-        for row in q:
-            for other in kept:
+        Two are one where they are :data:`SAME` apart, or up to :data:`NEAR` apart with their midpoint as
+        close to the pose as they are: next to a singularity the pose fixes the joints only to about
+        √rounding (a stretched elbow's θ2 to 1e-5 rad) or along a line, and two starts stop at two points
+        of one branch. Two branches that close are apart by a curve: their midpoint misses the pose by
+        more, however little the pose fixes them."""
+        sizes = np.linalg.norm(self._error(q, np.broadcast_to(target, q.shape[:-1] + (4, 4)))[0], axis=-1).tolist()
+        kept: list[tuple[np.ndarray, float]] = []
+        for row, size in zip(q, sizes):
+            for other, other_size in kept:
                 step = np.where(self.revolute, wrap(row - other), row - other)
                 apart = np.abs(step).max()
-                if apart <= SAME or apart <= NEAR and self._reached(other + step / 2, target):
+                if apart <= SAME or apart <= NEAR and self._reached(other + step / 2, target, 2 * max(size, other_size)):
                     break
             else:
-                kept.append(row)
-        return np.array(kept).reshape(-1, q.shape[-1])
+                kept.append((row, size))
+        return np.array([row for row, _ in kept]).reshape(-1, q.shape[-1])
 
     def follow(self, T: np.ndarray, hint: np.ndarray, iterations: int = 30) -> tuple[np.ndarray, float]:
         """One pose (4, 4) from the current joints ``hint`` (n,) only: (joints, their pose error).
