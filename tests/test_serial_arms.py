@@ -11,6 +11,7 @@ import pytest
 from ur10core import Arm
 from ur10core.branches import INSIDE_OFFSET, ORIENTATION, OUT_OF_PLANE, TOO_CLOSE, TOO_FAR
 from ur10core.dh import DHTable
+from ur10core.orientation import rotation_from_zyx_euler
 from ur10core.serial import PRESETS
 
 import roboticstoolbox as rtb  # test-only reference: a missing test extra fails here, loudly
@@ -464,23 +465,54 @@ def test_a_typed_table_on_a_singularity_lists_each_branch_once(name, joint):
     np.testing.assert_allclose(found.nearest(q).q, q, atol=1e-6)
 
 
-def test_a_typed_tables_joint_that_does_not_move_the_tool_point_does_not_fill_its_slots():
-    """A typed SCARA controls its tool's position: its roll θ4 turns about the tool point, so every θ4 reaches and
-    each of the search's starts brought back another. Its 16 slots were 16 rolls of the elbow branch first in
-    order, without the other elbow nor, often, the arm's own joints (until 2026-12-04). Now the roll is kept at
-    the arm's, and the search lists the closed form's two elbows."""
+def test_a_typed_scara_places_its_position_and_yaw_as_the_preset_does():
+    """A typed SCARA was a position-only chain: its roll θ4 turned about the tool point, every θ4 reached, and its
+    16 slots were 16 rolls of one elbow (until 2026-12-04); a drag's yaw did nothing. Its axes all stay parallel
+    to z0, with three revolute joints and a slide: it now places its position and yaw, as the preset's closed form
+    does, with the same two branches."""
     scara = Arm.preset("scara")
     typed = typed_copy(scara, with_limits=True)
+    assert typed.task == scara.task == "position and yaw" and len(typed.slot_labels) == 2
     q = scara.sample_joints(30, seed=4)
     T = typed.fk(q)
-    closed, found = scara.ik(T, hint=q), typed.ik(T, hint=q)
+    closed, found = scara.ik(T), typed.ik(T)
     assert (found.valid.sum(axis=-1) == closed.valid.sum(axis=-1)).all()
+    for k in range(len(q)):
+        apart = np.abs(wrapped(found.q[k][found.valid[k]][:, None] - closed.q[k][closed.valid[k]][None], scara.revolute))
+        assert (apart.max(axis=-1).min(axis=0) < 1e-6).all()
+    # a yaw asked of it turns its roll, as the preset's
+    from ur10teach.state import ArmState
+
+    followed = []
+    for arm in (scara, typed):
+        state = ArmState(arm, scara.specs.home)
+        goal = state.last.target.copy()
+        goal[:3, :3] = rotation_from_zyx_euler(np.array([0.5, 0.0, 0.0])) @ goal[:3, :3]
+        snapshot = state.move_target(goal)
+        assert snapshot.reachable and arm.pose_error(snapshot.q, goal) < 1e-9
+        followed.append(snapshot.q)
+    np.testing.assert_allclose(followed[1], followed[0], atol=1e-7)
+    assert abs(followed[1][3] - scara.specs.home[3]) == pytest.approx(0.5)  # (its tool points down: the roll turns back)
+
+
+def test_a_typed_tables_joint_that_does_not_move_the_tool_point_does_not_fill_its_slots():
+    """The cylindrical arm with a roll at its tool point (RPPR) places a position: the roll turns about the tool
+    point, every value of it reaches, and each of the search's starts brought back another, filling the 16 slots
+    with one branch. The roll is now kept at the arm's, and the search lists the closed form's branches of the
+    other three joints."""
+    cylindrical = Arm.preset("cylindrical")
+    rows = [(r.a, r.alpha, r.d, r.theta, r.joint) for r in cylindrical.dh.rows] + [(0.0, 0.0, 0.0, 0.0, "R")]
+    typed = Arm.from_dh(rows, "standard", limits=[*cylindrical.limits, (-np.pi, np.pi)])
+    assert typed.task == "position"
+    q = np.column_stack([cylindrical.sample_joints(30, seed=4), np.linspace(-3, 3, 30)])
+    T = typed.fk(q)
+    closed, found = cylindrical.ik(T, hint=q[:, :3]), typed.ik(T, hint=q)
     for k in range(len(q)):
         branches = closed.q[k][closed.valid[k]]
         ours = found.q[k][found.valid[k]]
-        apart = np.abs(wrapped(ours[:, None, :3] - branches[None, :, :3], scara.revolute[:3])).max(axis=-1)
-        assert (apart.min(axis=0) < 1e-6).all() and (apart.min(axis=1) < 1e-6).all()
-        np.testing.assert_allclose(ours[:, 3], q[k, 3])  # the roll the arm has, on both elbows
+        apart = np.abs(wrapped(ours[:, None, :3] - branches[None], cylindrical.revolute)).max(axis=-1)
+        assert len(ours) == len(branches) and (apart.min(axis=0) < 1e-6).all()
+        np.testing.assert_allclose(ours[:, 3], q[k, 3])  # the roll the arm has, on each branch
     np.testing.assert_allclose(found.nearest(q).q, q, atol=1e-7)  # the arm's own joints among them
 
 

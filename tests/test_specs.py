@@ -78,7 +78,7 @@ def _pose(yaw: float, tilt: float, position) -> np.ndarray:
 def test_a_scara_takes_only_the_targets_yaw_with_its_tool_pointing_down():
     arm = Arm.preset("scara")
     target = _pose(0.7, 0.4, (0.3, 0.2, 0.1))
-    followed = project_target(arm, target, np.eye(4))
+    followed = project_target(arm, target, arm.fk(arm.specs.home))
     np.testing.assert_allclose(followed[:3, 3], target[:3, 3])
     np.testing.assert_allclose(followed[:3, 2], [0, 0, -1], atol=1e-12)  # the tool's z points down
     assert math.isclose(math.atan2(followed[1, 0], followed[0, 0]), math.atan2(target[1, 0], target[0, 0]))

@@ -184,17 +184,18 @@ def project_target(arm, T, current) -> np.ndarray:
     """The part of a target pose ``T`` (4, 4) the arm can follow (``arm.task``), the rest from its
     own tool pose ``current`` (4, 4).
 
-    A SCARA keeps its tool pointing down and takes only the target's yaw; an arm that places
-    only a position keeps its own orientation; an arm that moves in a plane (the planar elbow, in
-    z = 0: ``Arm.planar``) stays in it (docs/kinematics.md §7.5).
+    A SCARA keeps its tool axis (down, the preset's) and takes only the target's yaw, the turn of
+    its x axis about z; an arm that places only a position keeps its own orientation; an arm that
+    moves in a plane (the planar elbow, in z = 0: ``Arm.planar``) stays in it (docs/kinematics.md §7.5).
     """
     out = np.array(T, dtype=float)
     if out.shape != (4, 4) or not np.isfinite(out).all():
         raise ValueError(f"T must be one finite 4 × 4 pose, got shape {out.shape}")
-    if arm.task == "position and yaw":
-        yaw = math.atan2(out[1, 0], out[0, 0])
-        c, s = math.cos(yaw), math.sin(yaw)
-        out[:3, :3] = np.array([[c, s, 0.0], [s, -c, 0.0], [0.0, 0.0, -1.0]])  # Rz(yaw) Rx(π)
+    if arm.task == "position and yaw":  # its own orientation turned about z by the yaw between them
+        now = np.asarray(current, dtype=float)
+        turn = math.atan2(out[1, 0], out[0, 0]) - math.atan2(now[1, 0], now[0, 0])
+        c, s = math.cos(turn), math.sin(turn)
+        out[:3, :3] = np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]]) @ now[:3, :3]
     elif arm.task == "position":
         out[:3, :3] = np.asarray(current, dtype=float)[:3, :3]
         if arm.planar:

@@ -2,8 +2,7 @@
 
 Each pose is solved from ``starts`` joint vectors at once (the hint first, then random
 ones spread over the joint ranges), by Levenberg–Marquardt steps on the pose error
-``e = [p_target − p; log(R_target Rᵀ)]`` (position only for arms of fewer than six
-joints):
+``e = [p_target − p; log(R_target Rᵀ)]``, or what of it the chain controls (:func:`task_of`):
 
     Δq = Jᵀ (J Jᵀ + λ² I)⁻¹ e
 
@@ -14,8 +13,8 @@ solutions. Near a singularity the damped steps close in slowly, not quadraticall
 singular value is below the least λ, which holds back the very step that remains): a start that
 stopped within 1e-3 of the pose takes twenty undamped Gauss–Newton steps, Δq = J⁺ e.
 Where the pose leaves the joints free along a curve (a wrist with axes 4 and 6 in line, a
-typed SCARA's roll), a solution is moved along it to the hint's value of its last joint.
-Solutions closer than 1e-6 in every joint are one, and so are solutions up to 1e-2 apart
+roll at the tool point of a position-only chain), a solution is moved along it to the hint's
+value of its last joint. Solutions closer than 1e-6 in every joint are one, and so are solutions up to 1e-2 apart
 whose midpoint is a solution too; the hint's is kept first, and they are sorted so that the
 same pose always lists them in the same order, labelled "found numerically".
 """
@@ -96,6 +95,23 @@ def most_solutions(n_joints: int) -> int:
     return {1: 1, 2: 2, 3: 4}.get(n_joints, 16)
 
 
+def task_of(table: DHTable) -> str:
+    """What of a pose a typed chain controls (docs/kinematics.md §7.4): the pose with six joints or more; its
+    position and its yaw about z0 where every joint axis stays parallel to z0 (every α a multiple of 180°),
+    with three revolute joints or more and a prismatic one, as a SCARA; else its position.
+
+    >>> scara = [(0.325, 0, 0.387, 0, "R"), (0.275, math.pi, 0, 0, "R"), (0, 0, 0, 0, "P"), (0, 0, 0, 0, "R")]
+    >>> task_of(DHTable(scara, "standard"))
+    'position and yaw'
+    """
+    kinds = table.joint_types
+    if table.n_joints >= 6:
+        return "pose"
+    if all(abs(math.sin(row.alpha)) < 1e-12 for row in table.rows) and kinds.count("R") >= 3 and "P" in kinds:
+        return "position and yaw"
+    return "position"
+
+
 class NumericalIK:
     """Damped least squares from ``starts`` starts; up to ``slots`` distinct solutions per pose
     (by default as many as the chain can have, :func:`most_solutions`)."""
@@ -107,8 +123,9 @@ class NumericalIK:
         self.table = table
         self.limits = np.asarray(limits, dtype=float)
         self.starts, self.iterations, self.seed = starts, iterations, seed
-        self.task = "pose" if table.n_joints >= 6 else "position"
-        slots = most_solutions(table.n_joints) if slots is None else slots
+        self.task = task_of(table)
+        if slots is None:  # three parallel revolute axes place x, y and the yaw as a planar 3R: two ways at most
+            slots = 2 if self.task == "position and yaw" and table.n_joints == 4 else most_solutions(table.n_joints)
         self.labels = tuple(f"found numerically {k + 1}" for k in range(slots))
         self.revolute = np.array([t == "R" for t in table.joint_types])
         # no joint values put the tool farther from the base origin than every length and stroke laid end to end
@@ -119,8 +136,7 @@ class NumericalIK:
         if failure == TOO_FAR:
             return (f"the target is {1000 * detail:.1f} mm from the base; this chain, every length and stroke laid "
                     f"end to end, reaches {1000 * self.reach:.1f} mm at most")
-        what = "pose" if self.task == "pose" else "position"
-        return (f"the numerical search found no joints that reach this {what} from {self.starts} starts "
+        return (f"the numerical search found no joints that reach this {self.task} from {self.starts} starts "
                 f"(the nearest came within {1000 * detail:.3g} mm / mrad)")
 
     def _starts(self, hint: np.ndarray | None, count: int) -> np.ndarray:
@@ -144,6 +160,8 @@ class NumericalIK:
         if self.task == "position":
             return position, J[..., :3, :]
         turn = rotation_log(target[..., :3, :3] @ np.swapaxes(tool[..., :3, :3], -1, -2))
+        if self.task == "position and yaw":
+            return np.concatenate([position, turn[..., 2:]], axis=-1), J[..., [0, 1, 2, 5], :]
         return np.concatenate([position, turn], axis=-1), J
 
     def _descend(self, q: np.ndarray, target: np.ndarray, iterations: int, moving=None) -> tuple[np.ndarray, np.ndarray]:
@@ -203,8 +221,8 @@ class NumericalIK:
         along it has the hint's value (else 0), where the tool still reaches ``target`` there.
 
         Where the pose leaves one direction of the joints free (J has one null direction: a spherical wrist with
-        axes 4 and 6 in line, whose θ4 + θ6 alone is fixed; the UR10's at θ5 = 0, its four parallel axes; a typed
-        SCARA's roll about its own tool point; a seventh joint), every point of that curve reaches, and each start
+        axes 4 and 6 in line, whose θ4 + θ6 alone is fixed; the UR10's at θ5 = 0, its four parallel axes; a roll
+        about the tool point of a chain that places a position; a seventh joint), every point of that curve reaches, and each start
         would bring back another point of it, filling the slots with one branch. The closed forms keep the
         hint's value there; so does this: a step along the null direction, then damped steps with that joint
         held. Where they do not reach the pose as closely as before, the solution stays as it was."""
@@ -230,8 +248,8 @@ class NumericalIK:
             pinned = moved[line]
             pinned[stuck], _ = self._newton(pinned[stuck], target[line][stuck], NEWTON_STEPS, moving=held[stuck])
             moved[line] = pinned
-        # as close to the pose as before (next to a singularity, a step along a direction that barely moves the tool
-        # still moves it: the Stanford arm's stroke 1 µm long would merge its eight branches into two)
+        # as close to the pose as before: next to a singularity, a step along a direction that barely moves the
+        # tool still moves it
         before = np.linalg.norm(error, axis=-1)
         still = self._reached(moved, target, np.maximum(2 * before, 10 * CONVERGED)) & line
         return np.where(still[..., None], moved, q)
@@ -241,7 +259,12 @@ class NumericalIK:
         ``within`` (by default the error the search stops at) and to 1e-9 in every entry of FK."""
         error, _ = self._error(q, target)
         gap = np.abs(self.table.fk(q) - target)
-        gap = gap[..., :3, 3].max(axis=-1) if self.task == "position" else gap.max(axis=(-2, -1))
+        if self.task == "pose":
+            gap = gap[..., :3, :].max(axis=(-2, -1))
+        elif self.task == "position and yaw":  # (its tool axis is its own: the yaw is its x axis's)
+            gap = np.maximum(gap[..., :3, 3].max(axis=-1), gap[..., :2, :2].max(axis=(-2, -1)))
+        else:
+            gap = gap[..., :3, 3].max(axis=-1)
         return (np.linalg.norm(error, axis=-1) <= within) & (gap <= 1e-9)
 
     def _distinct(self, q: np.ndarray, target: np.ndarray) -> np.ndarray:
