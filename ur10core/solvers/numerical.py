@@ -14,9 +14,10 @@ singular value is below the least λ, which holds back the very step that remain
 stopped within 1e-3 of the pose takes twenty undamped Gauss–Newton steps, Δq = J⁺ e.
 Where the pose leaves the joints free along a curve (a wrist with axes 4 and 6 in line, a
 roll at the tool point of a position-only chain), a solution is moved along it to the hint's
-value of its last joint. Solutions closer than 1e-6 in every joint are one, and so are solutions up to 1e-2 apart
-whose midpoint is a solution too; the hint's is kept first, and they are sorted so that the
-same pose always lists them in the same order, labelled "found numerically".
+value of its last joint. Solutions closer than 1e-6 in every joint are one, and so are
+solutions up to 1e-2 apart whose midpoint is as close to the pose as they are; the hint's is
+kept first, and they are sorted so that the same pose always lists them in the same order,
+labelled "found numerically".
 """
 
 from __future__ import annotations
@@ -34,7 +35,7 @@ CONVERGED = 1e-12
 #: A start whose error is below this (and whose FK is within 1e-9 of the pose) is a solution.
 REACHED = 1e-10
 #: Solutions closer than this in every joint (rad or m) are the same solution; so are solutions up to
-#: NEAR apart whose midpoint is a solution too (:meth:`NumericalIK._distinct`).
+#: NEAR apart whose midpoint is as close to the pose as they are (:meth:`NumericalIK._distinct`).
 SAME, NEAR = 1e-6, 1e-2
 #: A singular value of J below this is a direction the joints can move in without moving the tool
 #: (:meth:`NumericalIK._pinned`): a turn of π along it moves the pose by 3e-10 at most, about what
@@ -149,7 +150,8 @@ class NumericalIK:
         return q
 
     def _error(self, q: np.ndarray, target: np.ndarray, moving=None) -> tuple[np.ndarray, np.ndarray]:
-        """Pose error (…, 6 or 3) and the Jacobian rows that go with it (…, 6 or 3, n). ``moving`` (…, n), 1 or 0:
+        """Pose error (…, m) and the Jacobian rows that go with it (…, m, n), m = 6, 4 (position and yaw) or 3
+        (position), as :attr:`task` has it. ``moving`` (…, n), 1 or 0:
         the columns of the joints it does not mark are zero, so that no step moves them."""
         frames = self.table.frames(q)
         tool = frames[..., -1, :, :]
@@ -164,7 +166,8 @@ class NumericalIK:
             return np.concatenate([position, turn[..., 2:]], axis=-1), J[..., [0, 1, 2, 5], :]
         return np.concatenate([position, turn], axis=-1), J
 
-    def _descend(self, q: np.ndarray, target: np.ndarray, iterations: int, moving=None) -> tuple[np.ndarray, np.ndarray]:
+    def _descend(self, q: np.ndarray, target: np.ndarray, iterations: int,
+                 moving=None) -> tuple[np.ndarray, np.ndarray]:
         """Levenberg–Marquardt from the starts ``q`` (..., n) towards ``target`` (..., 4, 4): (joints, error size).
         ``moving``: as for :meth:`_error`."""
         damping = np.full(q.shape[:-1], 1e-2)
@@ -217,42 +220,44 @@ class NumericalIK:
         return q, size
 
     def _pinned(self, q: np.ndarray, target: np.ndarray, ok: np.ndarray, hint: np.ndarray | None) -> np.ndarray:
-        """Solutions ``q`` (N, starts, n) on a curve of solutions, moved along it to where the last joint that moves
-        along it has the hint's value (else 0), where the tool still reaches ``target`` there.
+        """Solutions ``q`` (N, starts, n) (where ``ok``) on a curve of solutions, moved along it to where the last
+        joint that moves along it has the hint's value (else 0), where the tool still reaches ``target`` there.
 
-        Where the pose leaves one direction of the joints free (J has one null direction: a spherical wrist with
-        axes 4 and 6 in line, whose θ4 + θ6 alone is fixed; the UR10's at θ5 = 0, its four parallel axes; a roll
-        about the tool point of a chain that places a position; a seventh joint), every point of that curve reaches, and each start
-        would bring back another point of it, filling the slots with one branch. The closed forms keep the
-        hint's value there; so does this: a step along the null direction, then damped steps with that joint
-        held. Where they do not reach the pose as closely as before, the solution stays as it was."""
-        error, J = self._error(q, target)
-        _, sigma, Vt = np.linalg.svd(J)  # Vt: (N, starts, n, n), the last rows the least moving directions
-        rank = (sigma > NULL_SINGULAR_VALUE).sum(axis=-1)
-        line = ok & (rank == self.table.n_joints - 1)  # one free direction, no more
+        Where the pose leaves one direction of the joints free (J has one null direction: a spherical wrist
+        with axes 4 and 6 in line, whose θ4 + θ6 alone is fixed; the UR10's at θ5 = 0, its four parallel axes;
+        a roll about the tool point of a chain that places a position; a seventh joint), every point of that
+        curve reaches, and each start would bring back another point of it, filling the slots with one
+        branch. The closed forms keep the hint's value there; so does this: a step along the null direction,
+        then damped steps with that joint held. A solution they do not bring as close to the pose as it was
+        stays as it was (next to a singularity, a step along a direction that barely moves the tool still
+        moves it)."""
+        n = self.table.n_joints
+        if not ok.any():
+            return q
+        error, J = self._error(q[ok], target[ok])
+        _, sigma, Vt = np.linalg.svd(J)  # the last row of Vt: the direction that moves the tool least
+        line = (sigma > NULL_SINGULAR_VALUE).sum(axis=-1) == n - 1  # one free direction, no more
         if not line.any():
             return q
-        free = Vt[..., -1, :]
+        at = tuple(np.argwhere(ok)[line].T)
+        free = Vt[line, -1, :]
         # the last joint it moves by a fiftieth of the most or more, the same joint all along one curve (a wrist's θ6)
         moves = np.abs(free) >= 0.02 * np.abs(free).max(axis=-1, keepdims=True)
-        joint = (self.table.n_joints - 1 - np.argmax(moves[..., ::-1], axis=-1))[..., None]
+        joint = (n - 1 - np.argmax(moves[:, ::-1], axis=-1))[:, None]
         wanted = (np.clip(0.0, self.limits[:, 0], self.limits[:, 1]) if hint is None
                   else np.asarray(hint, dtype=float)[:, None, :])
-        offset = np.take_along_axis(np.broadcast_to(wanted, q.shape) - q, joint, -1)
+        offset = np.take_along_axis(np.broadcast_to(wanted, q.shape)[at] - q[at], joint, -1)
         offset = np.where(self.revolute[joint], wrap(offset), offset)
-        moved = q + offset / np.take_along_axis(free, joint, -1) * free
-        held = (np.arange(self.table.n_joints) != joint).astype(float)[line]
-        moved[line], size = self._descend(moved[line], target[line], PIN_STEPS, moving=held)
+        moved = q[at] + offset / np.take_along_axis(free, joint, -1) * free
+        held = (np.arange(n) != joint).astype(float)
+        moved, size = self._descend(moved, target[at], PIN_STEPS, moving=held)
         stuck = (size > REACHED) & (size < NEARLY_REACHED)
         if stuck.any():
-            pinned = moved[line]
-            pinned[stuck], _ = self._newton(pinned[stuck], target[line][stuck], NEWTON_STEPS, moving=held[stuck])
-            moved[line] = pinned
-        # as close to the pose as before: next to a singularity, a step along a direction that barely moves the
-        # tool still moves it
-        before = np.linalg.norm(error, axis=-1)
-        still = self._reached(moved, target, np.maximum(2 * before, 10 * CONVERGED)) & line
-        return np.where(still[..., None], moved, q)
+            moved[stuck], _ = self._newton(moved[stuck], target[at][stuck], NEWTON_STEPS, moving=held[stuck])
+        still = self._reached(moved, target[at], np.maximum(2 * np.linalg.norm(error[line], axis=-1), 10 * CONVERGED))
+        q = q.copy()
+        q[tuple(index[still] for index in at)] = moved[still]
+        return q
 
     def _reached(self, q: np.ndarray, target: np.ndarray, within: float = REACHED) -> np.ndarray:
         """(...) bool: joints ``q`` (..., n) put the tool on ``target`` (..., 4, 4) in what the arm controls, to
@@ -281,7 +286,8 @@ class NumericalIK:
             for other, other_size in kept:
                 step = np.where(self.revolute, wrap(row - other), row - other)
                 apart = np.abs(step).max()
-                if apart <= SAME or apart <= NEAR and self._reached(other + step / 2, target, 2 * max(size, other_size)):
+                if apart <= SAME or apart <= NEAR and self._reached(other + step / 2, target,
+                                                                     2 * max(size, other_size)):
                     break
             else:
                 kept.append((row, size))
