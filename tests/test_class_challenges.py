@@ -763,8 +763,15 @@ def test_the_projector_frames_a_students_tool_that_has_left_its_view_unless_the_
             return bool(depth[0] > 0 and (np.abs(pixels[0]) <= (view.width / 2, view.height / 2)).all())
 
         def tool_out_of_view(seed: int) -> tuple[np.ndarray, np.ndarray]:
-            q = next(q for q in arm.sample_joints(5000, seed=seed) if not seen(from_frame(world, arm.fk(q)[:3, 3])))
-            return q, from_frame(world, arm.fk(q)[:3, 3])
+            """Joints whose tool is off the canvas, the one nearest the middle of the view: a farther one (the first
+            found, on a busy host) widened the view to the whole workspace, leaving nothing out of it to try next."""
+            q = arm.sample_joints(5000, seed=seed)
+            tools = from_frame(world, arm.fk(q)[:, :3, 3])
+            view = ScreenView.of(presenter.client.camera)
+            pixels, depth = view.to_screen(tools)
+            out = np.flatnonzero((depth <= 0) | (np.abs(pixels) > (view.width / 2, view.height / 2)).any(axis=-1))
+            k = out[np.argmin(np.linalg.norm(tools[out] - np.asarray(view.look_at), axis=-1))]
+            return q[k], tools[k]
 
         def dot_at(tool) -> bool:
             tools = presenter.tools
