@@ -84,12 +84,12 @@ def number(value: float, spec: str) -> str:
 
 #: Dashes a student may type for a minus, or copy from a task's text (the course writes −, U+2212), and the
 #: degree sign a student may type after an angle.
-_MINUS = str.maketrans({"\u2212": "-", "\u2013": "-", "°": ""})
+_TYPED_SIGNS = str.maketrans({"\u2212": "-", "\u2013": "-", "°": ""})
 
 
 def typed_numbers(text: str) -> str:
     """What a student typed, its minus signs the ones ``float`` reads and no degree signs: "−60°" → "-60"."""
-    return text.translate(_MINUS)
+    return text.translate(_TYPED_SIGNS)
 
 
 def sentence(text: str) -> str:
