@@ -25,7 +25,7 @@ import numpy as np
 
 from .branches import IKSolution
 from .dh import PRISMATIC, REVOLUTE, STANDARD, DHTable
-from .differential import TASK_ROWS, JacobianUses
+from .differential import TASK_ROWS, JacobianUses, task_gap
 from .specs import HasSpecs
 from .solvers.numerical import NumericalIK, sampling_range
 from .serial import PRESETS as COURSE_ARMS
@@ -323,12 +323,7 @@ class Arm(JacobianUses, HasSpecs):
 
     def pose_error(self, q, T) -> np.ndarray:
         """How far FK(q) is from ``T`` in what the arm controls (max abs entry), shape (...)."""
-        difference = np.abs(self.fk(q) - np.asarray(T, dtype=float))
-        if self.task == "position":
-            return difference[..., :3, 3].max(axis=-1)
-        if self.task == "position and yaw":  # the tool axis is the arm's own: compare p and x, y axes' yaw
-            return np.maximum(difference[..., :3, 3].max(axis=-1), difference[..., :2, :2].max(axis=(-2, -1)))
-        return difference[..., :3, :].max(axis=(-2, -1))
+        return task_gap(self.fk(q), T, self.task)
 
     # ------------------------------------------------------------------ singularities
 

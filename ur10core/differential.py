@@ -71,6 +71,17 @@ def damping(smallest_singular_value: np.ndarray) -> np.ndarray:
 TASK_ROWS = {"pose": [0, 1, 2, 3, 4, 5], "position and yaw": [0, 1, 2, 5], "position": [0, 1, 2]}
 
 
+def task_gap(T, T_goal, task: str) -> np.ndarray:
+    """How far poses ``T`` are from ``T_goal`` (..., 4, 4) in what a ``task`` controls: the largest difference of an
+    entry, shape (...). A SCARA's tool axis is its own: its position and the x, y axes' yaw are compared."""
+    difference = np.abs(np.asarray(T, dtype=float) - np.asarray(T_goal, dtype=float))
+    if task == "position":
+        return difference[..., :3, 3].max(axis=-1)
+    if task == "position and yaw":
+        return np.maximum(difference[..., :3, 3].max(axis=-1), difference[..., :2, :2].max(axis=(-2, -1)))
+    return difference[..., :3, :].max(axis=(-2, -1))
+
+
 def damped_inverse(J: np.ndarray, twist: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """(q̇, λ): ``Σ σ_k / (σ_k² + λ²) · v_k u_kᵀ twist`` for J (..., m, n) and twist (..., m), λ from :func:`damping`."""
     U, sigma, Vt = np.linalg.svd(J, full_matrices=False)

@@ -28,6 +28,7 @@ import numpy as np
 
 from ..branches import NOT_FOUND, TOO_FAR, empty_branches, wrap
 from ..dh import DHTable
+from ..differential import task_gap
 from ..tolerances import LENGTH_TOLERANCE
 
 #: A start has converged when its error (m and rad) is below this.
@@ -259,18 +260,13 @@ class NumericalIK:
         q[tuple(index[still] for index in at)] = moved[still]
         return q
 
-    def _reached(self, q: np.ndarray, target: np.ndarray, within: float = REACHED) -> np.ndarray:
+    def _reached(self, q: np.ndarray, target: np.ndarray, within: float = REACHED, size=None) -> np.ndarray:
         """(...) bool: joints ``q`` (..., n) put the tool on ``target`` (..., 4, 4) in what the arm controls, to
-        ``within`` (by default the error the search stops at) and to 1e-9 in every entry of FK."""
-        error, _ = self._error(q, target)
-        gap = np.abs(self.table.fk(q) - target)
-        if self.task == "pose":
-            gap = gap[..., :3, :].max(axis=(-2, -1))
-        elif self.task == "position and yaw":  # (its tool axis is its own: the yaw is its x axis's)
-            gap = np.maximum(gap[..., :3, 3].max(axis=-1), gap[..., :2, :2].max(axis=(-2, -1)))
-        else:
-            gap = gap[..., :3, 3].max(axis=-1)
-        return (np.linalg.norm(error, axis=-1) <= within) & (gap <= 1e-9)
+        ``within`` (by default the error the search stops at) and to 1e-9 in every entry of FK. ``size``: their
+        error's size, where the search has it already."""
+        if size is None:
+            size = np.linalg.norm(self._error(q, target)[0], axis=-1)
+        return (size <= within) & (task_gap(self.table.fk(q), target, self.task) <= 1e-9)
 
     def _distinct(self, q: np.ndarray, target: np.ndarray) -> np.ndarray:
         """Rows of ``q`` (m, n), solutions of ``target`` (4, 4), with near-duplicates dropped, the first of each kept.
@@ -325,7 +321,7 @@ class NumericalIK:
         target = np.broadcast_to(T[:, None], starts.shape[:-1] + (4, 4))
         q, size = self._descend(starts, target, self.iterations)
         q, size = self._finish(q, target, size)
-        ok = self._reached(q, target)
+        ok = self._reached(q, target, size=size)
         q = self._pinned(q, target, ok, hint)
         for k in range(N):  # the hint's own solution first, so that it is kept however many others there are
             found = self._distinct(q[k][ok[k]], T[k])[:slots]
