@@ -164,8 +164,11 @@ def test_values_that_are_not_plainly_real_numbers(course, pose, q, message):
 
 
 def test_poses_that_are_not_plainly_real_numbers(course, pose):
-    with pytest.raises(ValueError, match=r"T must be real numbers, got complex numbers"):
-        course.ik(pose + 0j)
+    for call in (course.ik, lambda T: course.pose_error(np.zeros(6), T)):  # pose_error: was TypeError
+        with pytest.raises(ValueError, match=r"T must be real numbers, got complex numbers"):
+            call(pose + 0j)
+        with pytest.raises(ValueError, match=r"T must be real numbers"):
+            call({"a": 1})
     with pytest.raises(ValueError, match=r"T must be a plain array of numbers, not a masked array"):
         course.ik(np.ma.masked_array(pose))
     with pytest.raises(ValueError, match=r"T must be real numbers"):

@@ -323,7 +323,7 @@ class Arm(JacobianUses, HasSpecs):
 
     def pose_error(self, q, T) -> np.ndarray:
         """How far FK(q) is from ``T`` in what the arm controls (max abs entry), shape (...)."""
-        return task_gap(self.fk(q), T, self.task)
+        return task_gap(self.fk(q), homogeneous_transform(T), self.task)
 
     # ------------------------------------------------------------------ singularities
 
