@@ -35,8 +35,13 @@ hand_back_large_buffers()  # before numpy and the rest allocate
 import ur10core  # noqa: E402
 from ur10core import Arm  # noqa: E402
 from ur10core.challenges import builtin, load, unfit  # noqa: E402
+from ur10core.serial import PRESETS as COURSE_ARMS  # noqa: E402
 
 from .serving import logs  # noqa: E402
+
+
+#: What ``--arm`` takes: the app's own UR10 (its numbers are ``--preset``'s) or an ``Arm.preset`` name of the course's others.
+FIRST_ARMS = ("ur10", *COURSE_ARMS, "three_dof")
 
 
 def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
@@ -46,6 +51,9 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
     parser.add_argument("--port", type=int, default=8080, help="port (default 8080; the next free one if busy)")
     parser.add_argument("--preset", choices=Arm.UR_PRESETS, default="course",
                         help="link lengths: the course's table, UR's CB3 UR10 or the UR10e (default course)")
+    parser.add_argument("--arm", choices=FIRST_ARMS, default="ur10",
+                        help="the arm every browser opens on: the app's UR10 (default) or one of the course's other "
+                             "arms; every arm stays in the picker (in shared mode, the arm the class sees first)")
     parser.add_argument("--shared", action="store_true",
                         help="shared demo mode: everyone watches the presenter's arm; the browser that enters "
                              "the printed join code presents")
@@ -90,7 +98,7 @@ def main(argv: list[str] | None = None, started=None) -> None:
     logs.install()
     from .serving.server import TeachingServer
 
-    app = TeachingServer(preset=args.preset, host=args.host, port=args.port, shared=args.shared,
+    app = TeachingServer(preset=args.preset, first_arm=args.arm, host=args.host, port=args.port, shared=args.shared,
                          allowed_origins=args.allow_origin, lecture=args.lecture, light=args.light,
                          challenges=args.challenge_list)
     moved = "" if args.port in (0, app.port) else f" (port {args.port} was busy)"
@@ -99,6 +107,8 @@ def main(argv: list[str] | None = None, started=None) -> None:
     print(f"\nUR10 teaching app ({args.preset}, {mode}; kinematics: {kernel}) is running{moved}. Open:", flush=True)
     for url in app.urls:
         print(f"    {url}", flush=True)
+    if args.arm != "ur10":
+        print(f"Browsers open on the {app.first_choice}; every arm stays in the picker.", flush=True)
     if args.host in ("0.0.0.0", ""):
         print("Students on the same network use one of the addresses above.", flush=True)
     if app.classroom is not None:

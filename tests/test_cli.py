@@ -27,6 +27,13 @@ def test_defaults_are_loopback_8080_course():
     assert (args.host, args.port, args.preset, args.shared) == ("127.0.0.1", 8080, "course", False)
     args = parse_args(["--host", "0.0.0.0", "--port", "9000", "--preset", "ur10e", "--shared"])
     assert (args.host, args.port, args.preset, args.shared) == ("0.0.0.0", 9000, "ur10e", True)
+    assert parse_args([]).arm == "ur10" and parse_args(["--arm", "three_dof"]).arm == "three_dof"
+
+
+def test_the_arm_to_open_on_is_one_of_the_picker(capsys):
+    with pytest.raises(SystemExit):
+        parse_args(["--arm", "ur10e"])  # the UR10's numbers are --preset's
+    assert "argument --arm: invalid choice: 'ur10e'" in capsys.readouterr().err
 
 
 def test_a_challenge_on_the_app_s_ur10_must_fit_the_preset_it_runs(tmp_path, capsys):
@@ -67,9 +74,10 @@ def test_prints_the_real_port_when_the_asked_one_is_busy():
 
 
 def test_lan_address_and_join_code_in_shared_mode():
-    with running_app("--host", "0.0.0.0", "--shared") as app:
+    with running_app("--host", "0.0.0.0", "--shared", "--arm", "scara") as app:
         text = "".join(app.output)
     assert "shared demo mode" in text
+    assert "Browsers open on the SCARA (RRP + roll); every arm stays in the picker." in text
     assert re.search(r"Join code for the presenter: [A-Z0-9]{3}-[A-Z0-9]{3}", text)
     for address in lan_addresses():
         assert f"http://{address}:" in text

@@ -777,6 +777,46 @@ def test_going_back_to_an_arm_finds_its_pose_target_typed_table_and_display_as_l
     asyncio.run(scenario())
 
 
+@pytest.mark.parametrize("first_arm, shared", [("scara", False), ("three_dof", False), ("kr210", True), ("three_dof", True)])
+def test_a_teacher_can_open_every_browser_on_another_arm(first_arm, shared):
+    """``--arm``: a lecture on the SCARA opens every browser on it (in shared mode, the class sees it first and a
+    student explores it), where each student had to find it in the picker; the UR10 stays a pick away."""
+    from ur10teach.serving.server import TeachingServer
+
+    label = next(choice for choice, name in ARM_CHOICES.items() if name == first_arm)
+    app = TeachingServer(port=0, shared=shared, first_arm=first_arm)
+
+    async def scenario():
+        client = await ViserClient(url(app)).connect()
+        await until(lambda: client.received.panel_label == label, what="the title naming the arm")
+        if shared:
+            assert app.classroom.choice == label and app.classroom.state.arm.name == first_arm
+            await client.set_gui("Explore on my own", True)
+            member = next(iter(app.classroom.members.values()))
+            await until(lambda: member.session is not None and member.session.built, what="the student's own arm")
+            assert member.session.arm.name == first_arm
+        else:
+            session = session_of(app, client)
+            assert session.choice == label and session.arm.name == first_arm
+            assert session.arm_picker.dropdown.value == label
+            await pick(app, client, UR10)
+            await until(lambda: client.received.panel_label == "UR10 kinematics (course)", what="the UR10's title")
+        await client.close()
+
+    try:
+        asyncio.run(scenario())
+    finally:
+        app.stop()
+
+
+def test_an_arm_to_open_on_must_be_in_the_picker():
+    from ur10teach.serving.server import TeachingServer
+
+    for name in ("ur10e", "custom", "puma"):  # the UR10's numbers are --preset's; a typed table is each student's own
+        with pytest.raises(ValueError, match=f"first_arm: '{name}' is not an arm of the picker"):
+            TeachingServer(port=0, first_arm=name)
+
+
 @pytest.mark.parametrize("label", [label for label in ARM_CHOICES if label not in (UR10, CUSTOM)])
 def test_a_course_arm_moves_from_a_remembered_pose_along_both_paths(app, label, monkeypatch):
     """Issue 29: the Motion folder was the UR10's alone. On the course's arms and its desktop arm: a

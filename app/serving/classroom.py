@@ -22,7 +22,6 @@ from ..features.arm_picker import (
     ARM_CHOICES,
     CLASS_CHOICES,
     SWITCH_INTERVAL,
-    UR10,
     ArmPicker,
     panel_title,
 )
@@ -165,13 +164,13 @@ class Classroom:
     def __init__(self, app: "TeachingServer") -> None:
         self.app = app
         self.code = make_join_code()
-        self.choice = UR10  #: the arm the class is shown (an ``ARM_CHOICES`` label)
+        self.choice = app.first_choice  #: the arm the class is shown (an ``ARM_CHOICES`` label)
         #: each arm the class has been shown, by label: it comes back where the presenter left it
         self.states: dict[str, ArmState] = {}
         self.displays: dict[str, dict] = {}  #: and what the presenter had shown on it (overlay, cloud, ...)
-        self.state = self._state_of(UR10)
+        self.state = self._state_of(self.choice)
         self.drawing = self._draw()
-        self.live = self._live_panel(UR10)
+        self.live = self._live_panel(self.choice)
         self._last_switch = -math.inf
         self.members: dict[int, Member] = {}
         self.presenter: Member | None = None

@@ -24,6 +24,7 @@ from ..features.arm_picker import (
     SWITCH_INTERVAL,
     UR10,
     ArmPicker,
+    choice_of,
     panel_title,
 )
 from ..features.branch_labels import CAMERA_FOV_DEGREES, CAMERA_LOOK_AT, CAMERA_POSITION
@@ -161,12 +162,15 @@ class Janitor:
 
 
 class TeachingServer:
-    """The app: a viser server giving every browser its own arm (the UR10 first, then any arm it picks).
+    """The app: a viser server giving every browser its own arm (the UR10 first, or ``first_arm``; then any arm it picks).
 
     Parameters
     ----------
     preset : str
         ``"course"``, ``"ur10"`` or ``"ur10e"`` (see :meth:`ur10core.Arm.preset`).
+    first_arm : str
+        The arm every browser opens on (``--arm``; in shared mode, the class's first): ``"ur10"``, the app's own
+        UR10 with ``preset``'s numbers, or the ``Arm.preset`` name of one of the course's other arms.
     host, port : str, int
         Where to listen. viser moves to the next free port when ``port`` is busy:
         :attr:`port` is the real one. ``port=0`` lets the OS choose (tests).
@@ -186,10 +190,14 @@ class TeachingServer:
         What the classroom's presenter can set (``--challenges``; the built-in ones by default).
     """
 
-    def __init__(self, preset: str = "course", host: str = "127.0.0.1", port: int = 8080, shared: bool = False,
+    def __init__(self, preset: str = "course", first_arm: str = "ur10", host: str = "127.0.0.1", port: int = 8080, shared: bool = False,
                  allowed_origins=(), gate: Gate | None = None, lecture: bool = False, light: bool = False,
                  challenges: tuple[Challenge, ...] | None = None) -> None:
         self.arm = Arm.preset(preset)
+        if first_arm != "ur10" and first_arm not in set(ARM_CHOICES.values()) - {None, "custom"}:
+            raise ValueError(f"first_arm: {first_arm!r} is not an arm of the picker")
+        #: the picker's label of the arm every browser opens on
+        self.first_choice = UR10 if first_arm == "ur10" else choice_of(first_arm)
         # what the app's own UR10 cannot be asked is not offered (the ur10e has no link masses to hold up)
         self.challenges = tuple(c for c in (builtin() if challenges is None else challenges) if not unfit(c, preset))
         self.lecture = lecture
@@ -202,7 +210,7 @@ class TeachingServer:
                 factor_scales(Arm.preset(name))  # the gauges' scales: a few hundred ms in all, never in a callback
         factor_scales(self.arm)
         self.host = host
-        label = panel_title(UR10, preset)
+        label = panel_title(self.first_choice, preset)
         self.gate = gate or Gate(allowed_origins)
         raise_open_file_limit()
         shared_frames.install()
@@ -280,7 +288,7 @@ class TeachingServer:
         if self.classroom is not None:
             self.classroom.connect(client)
         else:
-            self._start_session(client, UR10, self.lecture)
+            self._start_session(client, self.first_choice, self.lecture)
 
     def _start_session(self, client: viser.ClientHandle, choice: str, lecture: bool, typed=None) -> None:
         """Build the arm ``choice`` (an ``ARM_CHOICES`` label) in this browser, with the picker above it.
