@@ -333,28 +333,30 @@ def test_holding_itself_up_is_roboticstoolboxs_gravload_and_its_slips_are_named(
                          (alone, "the payload left out"), (loaded * [1, 1, 1.1, 1, 1, 1], "τ3 is off")):
         verdict = C.check(challenge, arm, C.Answer(numbers=typed))
         assert not verdict.solved and verdict.group == group, (group, verdict)
-    # worked by hand from what the student reads (the readouts that gave it are off while it runs): the terms'
-    # masses and centres of mass, the text's axes, the payload at the flange (the UR10's FK)
-    words = C.terms(challenge)
-    masses = [float(m) for m in re.search(r"links of \(([^)]*)\) kg", words).group(1).split(", ")]
-    where = [np.array([float(v) for v in point.split(", ")]) / 1000
-             for point in re.findall(r"\((-?[\d.]+, -?[\d.]+, -?[\d.]+)\)", words.split("centres of mass at")[1])]
-    assert len(masses) == len(where) == 6 and "g = 9.81 m/s²" in words
-    where.append(arm.fk(challenge.joints)[:3, 3])
-    axes = {1: ((0, 0, 1), (0, 0)), 2: ((0, -1, 0), (0, 0)), 3: ((0, -1, 0), (0.612, 0)), 4: ((0, -1, 0), (1.184, 0)),
-            5: ((1, 0, 0), (0, -0.1639)), 6: ((0, -1, 0), (1.3, 0))}
-    weights = 9.81 * np.array([*masses, challenge.payload])
-    by_hand = [sum(w * np.cross(axis, [*(p[:2] - through), 0.0])[2] for w, p in zip(weights[i - 1:], where[i - 1:]))
-               for i, (axis, through) in axes.items()]
-    for preset in ("ur10", "course"):  # the server's default preset is the course's UR10, a millimetre apart
-        assert C.check(challenge, Arm.preset(preset), C.Answer(numbers=by_hand)).solved, (preset, by_hand)
-    for through in ("x = 0, 612 and 1184 mm", "y = −163.9 mm", "x = 1300 mm"):
-        assert through in challenge.text
+    # worked by hand from what the student reads on each preset (the readouts that gave it are off while it runs):
+    # the terms' masses, centres of mass and axis points, the text's axis directions, the payload at the flange
+    # (the arm's FK). Until 2026-12-04 the text gave the UR10's axes in numbers, and the terms its masses on any preset
+    directions = {1: (0, 0, 1), 2: (0, -1, 0), 3: (0, -1, 0), 4: (0, -1, 0), 5: (1, 0, 0), 6: (0, -1, 0)}
+    assert "Joint 1 turns about z; joints 2, 3 and 4 about −y; joint 5 about x; joint 6 about −y" in challenge.text
+    for preset in ("ur10", "course", "ur10e"):
+        arm = Arm.preset(preset)
+        words = C.terms(challenge, arm)
+        masses = [float(m) for m in re.search(r"links of \(([^)]*)\) kg", words).group(1).split(", ")]
+        points = [np.array([float(v) for v in point.split(", ")]) / 1000
+                  for point in re.findall(r"\((-?[\d.]+, -?[\d.]+, -?[\d.]+)\)", words.split("centres of mass at")[1])]
+        where, through = points[:6] + [arm.fk(challenge.joints)[:3, 3]], points[6:]
+        assert len(masses) == len(where) - 1 == len(through) == 6 and "g = 9.81 m/s²" in words
+        weights = 9.81 * np.array([*masses, challenge.payload])
+        by_hand = [sum(w * np.dot(directions[i], np.cross(p - through[i - 1], [0.0, 0.0, 1.0]))  # (gravity's opposite)
+                       for w, p in zip(weights[i - 1:], where[i - 1:])) for i in directions]
+        verdict = C.check(challenge, arm, C.Answer(numbers=by_hand))
+        assert verdict.solved, (preset, by_hand, verdict)
+        np.testing.assert_allclose(by_hand, C.expected_numbers(challenge, arm), rtol=2e-3, atol=0.05)
     head = '[[challenge]]\ntitle = "g"\nkind = "numbers"\njoints = [0, 0, 0, 0, 0, 0]\n'
     assert C.parse(head + 'quantity = "gravity_torque"\n')[0].payload == 0.0
     for tail, line, words in (('quantity = "gravity_torque"\npayload_kg = 11\n', 6, "payload_kg must be a number from 0 to 10"),
                               ('quantity = "position"\npayload_kg = 1\n', 6, "payload_kg is used by gravity_torque only"),
-                              ('quantity = "gravity_torque"\narm = "kr210"\n', 5, "known for course, ur10, not for 'kr210'"),
+                              ('quantity = "gravity_torque"\narm = "kr210"\n', 5, "known for course, ur10, ur10e, not for 'kr210'"),
                               # not "payload_kg must be a number from 0 to 0": the arm has no masses to hold it with
                               ('quantity = "gravity_torque"\npayload_kg = 2\narm = "kr210"\n', 5, "known for course, ur10")):
         with pytest.raises(ValueError, match=f"line {line}: .*{words}"):

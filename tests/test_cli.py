@@ -36,16 +36,22 @@ def test_the_arm_to_open_on_is_one_of_the_picker(capsys):
     assert "argument --arm: invalid choice: 'ur10e'" in capsys.readouterr().err
 
 
-def test_a_challenge_on_the_app_s_ur10_must_fit_the_preset_it_runs(tmp_path, capsys):
-    """A file's gravity challenge on "ur10" is refused at start on the ur10e, which has no link masses (its
-    students' checks raised "no link masses for 'ur10e'"); the built-in one is not offered there."""
-    from ur10core.challenges import builtin
+def test_a_challenge_on_the_app_s_ur10_must_fit_the_preset_it_runs(tmp_path, capsys, monkeypatch):
+    """A file's challenge on "ur10" is checked again on the preset the server runs, and refused at start where
+    that preset cannot be asked it; a built-in one is not offered there. The ur10e had no link masses until
+    2026-12-04 (its students' gravity checks raised "no link masses for 'ur10e'"): it has UR's now, and this
+    takes them away to see a challenge refused."""
+    from ur10core.challenges import builtin, unfit
+    from ur10core.dynamics import MASSES
     from ur10teach.serving.server import TeachingServer
 
     file = tmp_path / "class.toml"
     file.write_text('[[challenge]]\ntitle = "Hold it"\nkind = "numbers"\njoints = [0, 0, 0, 0, 0, 0]\n'
                     'quantity = "gravity_torque"\n')
-    assert parse_args(["--shared", "--challenges", str(file)]).challenge_list[0].title == "Hold it"
+    for preset in ("course", "ur10e"):
+        assert parse_args(["--shared", "--preset", preset, "--challenges", str(file)]).challenge_list[0].title == "Hold it"
+        assert not [c.title for c in builtin() if unfit(c, preset)]
+    monkeypatch.delitem(MASSES, "ur10e")
     with pytest.raises(SystemExit):
         parse_args(["--shared", "--preset", "ur10e", "--challenges", str(file)])
     assert "'Hold it' on the ur10e preset: gravity_torque needs the arm's link masses" in capsys.readouterr().err

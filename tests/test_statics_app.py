@@ -247,8 +247,13 @@ def test_the_rate_charts_mark_the_singularity_and_the_speed_limits():
     assert not joints[9].any() and not joints[10].any()
 
 
-@pytest.mark.parametrize("payload", [0.0, 10.0])
-def test_the_released_arm_falls_as_the_dynamics_say(app, payload):
+@pytest.mark.parametrize("preset, payload", [("course", 0.0), ("course", 10.0), ("ur10e", 10.0)])
+def test_the_released_arm_falls_as_the_dynamics_say(preset, payload):
+    """The UR10e falls too: it had no link masses until 2026-12-04 (no gravity, *Release the arm* off)."""
+    from ur10teach.serving.server import TeachingServer
+
+    app = TeachingServer(preset=preset, port=0)
+
     async def scenario():
         from ur10core import dynamics
         from ur10core.branches import wrap
@@ -285,7 +290,10 @@ def test_the_released_arm_falls_as_the_dynamics_say(app, payload):
         assert f"T + V stays at {kinetic[0] + potential[0]:.1f} J" in session.motion.summary.content
         await client.close()
 
-    asyncio.run(scenario())
+    try:
+        asyncio.run(scenario())
+    finally:
+        app.stop()
 
 
 @pytest.mark.parametrize("kind", ["straight tool line", "joints interpolated"])

@@ -183,8 +183,8 @@ _BUILTIN = (
     Challenge("Holding itself up", "numbers", "ur10",
               "Stretched out level, the arm holds 5 kg at its flange. Type the six joint torques that hold it still "
               "against gravity, in N·m: for each joint, the weights m g beyond it times their lever arms, by the right "
-              "hand about its axis. Joint 1 turns about z; joints 2, 3 and 4 about −y, through x = 0, 612 and 1184 mm; "
-              "joint 5 about x, through y = −163.9 mm; joint 6 about −y, through x = 1300 mm (the flange).",
+              "hand about its axis. Joint 1 turns about z; joints 2, 3 and 4 about −y; joint 5 about x; joint 6 about "
+              "−y, through the flange (each axis's point is given below).",
               joints=_deg(0, 0, 0, -90, 0, 0), quantity="gravity_torque", payload=5.0),
     Challenge("Straight up", "velocity", "ur10",
               "Set the joint rates (Velocities folder) so that the flange moves **straight up at 100 mm/s** without "
@@ -244,7 +244,7 @@ def about_the_pose(question: str, arm: Arm, q) -> Challenge:
     >>> about_the_pose("Pose shown: holding torques", arm, arm.specs.home)
     Traceback (most recent call last):
     ...
-    ValueError: gravity_torque needs the arm's link masses, known for course, ur10, not for 'kr210'
+    ValueError: gravity_torque needs the arm's link masses, known for course, ur10, ur10e, not for 'kr210'
     """
     if question not in POSE_QUESTIONS:
         raise ValueError(f"question must be one of {', '.join(POSE_QUESTIONS)}, got {question!r:.40}")
@@ -273,8 +273,8 @@ def unfit(challenge: Challenge, preset: str) -> str:
 
     A challenge on "ur10" is done on that preset, and :func:`parse` checked it on the ``ur10``'s numbers.
 
-    >>> unfit(next(c for c in builtin() if c.quantity == "gravity_torque"), "ur10e")
-    "gravity_torque needs the arm's link masses, known for course, ur10, not for 'ur10e'"
+    >>> unfit(next(c for c in builtin() if c.quantity == "gravity_torque"), "ur10e")  # the UR10e's masses are UR's
+    ''
     """
     if challenge.arm != "ur10" or preset == "ur10":
         return ""
@@ -571,8 +571,11 @@ def _slots_named(words: str, labels: tuple[str, ...]) -> list[int]:
 # ---------------------------------------------------------------------- terms
 
 
-def terms(challenge: Challenge) -> str:
+def terms(challenge: Challenge, arm: Arm | None = None) -> str:
     """What the check takes and asks, from the challenge's own fields: what a student reads under the task.
+
+    ``arm``: the arm it is checked on (a challenge on "ur10" is checked on the preset the server runs); its
+    ``Arm.preset`` by default.
 
     A teacher's text may leave out the joints, the force or a tolerance; these words cannot,
     since they are written from what :func:`check` compares.
@@ -582,7 +585,7 @@ def terms(challenge: Challenge) -> str:
     >>> print(terms(next(c for c in builtin() if c.quantity == "torque")))
     Given: q = (0°, 0°, 0°, 90°, 0°, 0°); F = (0, 0, -100) N at the tool, in the base frame. Asked: the joint torques τ = Jᵀ [F; M] (N·m, N for a sliding joint), each within 1 %.
     """
-    arm = Arm.preset(challenge.arm)  # what is written here is the same for each of the UR family's presets
+    arm = arm or Arm.preset(challenge.arm)
     turned = "" if arm.task == "position" else f" and {math.degrees(challenge.orientation_tolerance):.3g}°" + (
         " of its yaw" if arm.task == "position and yaw" else "")
     relative = f"within {100 * challenge.relative_tolerance:.3g} %"
@@ -618,11 +621,20 @@ def terms(challenge: Challenge) -> str:
     if challenge.quantity == "gravity_torque":  # the app's bars that give the answer are off: what a hand needs
         masses = ", ".join(f"{m:g}" for m in MASSES[arm.name].masses)
         centres = ", ".join(_vector(c) for c in 1000 * centres_of_mass(arm, np.array(challenge.joints)))
+        axes = ", ".join(_vector(point) for point in 1000 * _axis_points(arm, np.array(challenge.joints)))
         given.append(f"a payload of {challenge.payload:g} kg at the flange; links of ({masses}) kg, their centres of "
-                     f"mass at {centres} mm in the base frame; g = {GRAVITY:g} m/s²")
+                     f"mass at {centres} mm in the base frame; joints 1 to {arm.n_joints}'s axes through {axes} mm; "
+                     f"g = {GRAVITY:g} m/s²")
     within = f"within {180 * challenge.relative_tolerance:.3g}°" if challenge.quantity in ANGLES else relative
     each = "each " if len(number_names(challenge, arm)) > 1 else ""
     return f"Given: {'; '.join(given)}. Asked: {QUANTITIES[challenge.quantity]}, {each}{within}."
+
+
+def _axis_points(arm: Arm, q: np.ndarray) -> np.ndarray:
+    """(n, 3) a point of each revolute joint's axis at joints ``q`` (m, base frame): the foot of the perpendicular
+    from the tool point, p + z × v, where J's column is [v; z] and v = z × (p − o) (docs/kinematics.md §8.1)."""
+    J, p = arm.jacobian(q), arm.fk(q)[:3, 3]
+    return p + np.cross(J[3:].T, J[:3].T)
 
 
 def _given(arm: Arm, values, per: str = "") -> str:

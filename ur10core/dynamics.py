@@ -1,4 +1,4 @@
-"""The UR10's dynamics: gravity loads (docs/kinematics.md §8.5), and the recursive Newton–Euler
+"""The UR family's dynamics: gravity loads (docs/kinematics.md §8.5), and the recursive Newton–Euler
 equations with the mass matrix, Coriolis terms and forward dynamics (§8.8).
 
 UR gives each link's mass and centre of mass in its *standard-DH* link frame, the
@@ -52,9 +52,15 @@ UR10_MASSES = LinkMasses(
     source="UR's published masses and centres of mass for the UR10; inertias of roboticstoolbox-python's UR10",
 )
 
+#: UR's published masses for the UR10e; its centres of mass are published as the UR10's, in the
+#: UR10e's own link frames. UR publishes no inertias: the UR10's are kept.
+UR10E_MASSES = LinkMasses(masses=np.array([7.369, 13.051, 3.989, 2.1, 1.98, 0.615]), centres=UR10_MASSES.centres,
+                          inertias=UR10_MASSES.inertias,
+                          source="UR's published masses and centres of mass for the UR10e; inertias as the UR10's")
+
 #: Per preset. The course's arm has UR10 link lengths to within a millimetre: it carries the
 #: UR10's masses (the course's own CAD masses come without centres of mass).
-MASSES = {"ur10": UR10_MASSES, "course": UR10_MASSES}
+MASSES = {"ur10": UR10_MASSES, "course": UR10_MASSES, "ur10e": UR10E_MASSES}
 
 
 def ur_standard_table(arm) -> DHTable:

@@ -39,9 +39,9 @@ GOAL_RADIUS, WORKING_DOT, SOLVED_DOT = 0.02, 0.03, 0.065
 SOLVED_MARK = "✓ "
 
 
-def challenge_markdown(challenge: Challenge, time_limit: float | None = None) -> str:
-    """The task as a student reads it."""
-    lines = [f"### {html.escape(challenge.title, quote=False)}", challenge.text, terms_markdown(challenge)]
+def challenge_markdown(challenge: Challenge, time_limit: float | None = None, arm: Arm | None = None) -> str:
+    """The task as a student reads it, on ``arm`` (the run's; ``Arm.preset(challenge.arm)`` by default)."""
+    lines = [f"### {html.escape(challenge.title, quote=False)}", challenge.text, terms_markdown(challenge, arm)]
     if time_limit:
         lines.append(f"Time limit: {time_limit / 60:g} min.")
     return "\n\n".join(lines)
@@ -141,7 +141,7 @@ class ChallengeCard:
         self.numbers = self.rows = self.convention = None
         kept = student.kept
         with self.folder:
-            self.task = gui.add_markdown(challenge_markdown(challenge, run.time_limit))
+            self.task = gui.add_markdown(challenge_markdown(challenge, run.time_limit, run.arm))
             self.nickname = gui.add_text(f"Your nickname (up to {MAX_NICKNAME} characters)", student.nickname,
                                          hint="What the projector shows by your tool; your student number if empty")
             self.named = Beside(gui)

@@ -193,7 +193,7 @@ class StaticsView(View):
         arm = self._session.arm
         force = self._force(chosen(self.direction, "force direction"), snapshot)
         gravity = np.zeros(arm.n_joints)
-        if arm.name in MASSES:  # otherwise (the UR10e, the course's other arms): the force's torques alone
+        if arm.name in MASSES:  # otherwise (the course's other arms): the force's torques alone
             gravity = arm.gravity_torques(snapshot.q, self.payload_kg())
         return force, arm.static_torques(snapshot.q, force), gravity
 

@@ -204,15 +204,15 @@ class ChallengeRun:
         return out.getvalue().encode("utf-8")
 
 
-def terms_markdown(challenge: Challenge) -> str:
+def terms_markdown(challenge: Challenge, arm: Arm | None = None) -> str:
     """What the check takes and asks (``ur10core.challenges.terms``), its "Given:", "Asked:", "Checked:" in bold."""
-    return re.sub(r"\b(Given|Asked|Checked):", r"**\1:**", html.escape(terms(challenge), quote=False))
+    return re.sub(r"\b(Given|Asked|Checked):", r"**\1:**", html.escape(terms(challenge, arm), quote=False))
 
 
 def summary_markdown(run: ChallengeRun) -> str:
     """The projector's view of the class: the task's terms, counts, times, and the mistakes most made."""
     s = run.summary()
-    lines = [f"### {html.escape(run.challenge.title, quote=False)}", terms_markdown(run.challenge),
+    lines = [f"### {html.escape(run.challenge.title, quote=False)}", terms_markdown(run.challenge, run.arm),
              f"#### **{s.solved}** solved · **{s.working}** working · **{s.joined}** joined"
              + (f" ({s.joined - s.here} away)" if s.here < s.joined else "")]
     if s.fastest is not None:

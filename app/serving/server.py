@@ -198,7 +198,7 @@ class TeachingServer:
             raise ValueError(f"first_arm: {first_arm!r} is not an arm of the picker")
         #: the picker's label of the arm every browser opens on
         self.first_choice = UR10 if first_arm == "ur10" else choice_of(first_arm)
-        # what the app's own UR10 cannot be asked is not offered (the ur10e has no link masses to hold up)
+        # what the app's own UR10 cannot be asked on this preset is not offered
         self.challenges = tuple(c for c in (builtin() if challenges is None else challenges) if not unfit(c, preset))
         self.lecture = lecture
         self.models = load_models(preset, light)
