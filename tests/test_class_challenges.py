@@ -20,7 +20,7 @@ from ur10teach.style import UR10_SIZE
 from ur10teach.features.course_arms.editor import CONVENTIONS
 from ur10teach.features.joint_panel import display_text, rate_label, typed_label
 from ur10teach.serving.gate import address_of
-from ur10teach.serving.challenge_run import ChallengeRun, clean_nickname, spreadsheet_safe
+from ur10teach.serving.challenge_run import ChallengeRun, clean_nickname, spreadsheet_safe, summary_markdown
 from ur10teach.view import HELD_BACK
 from ur10dev.viser_client import ViserClient, messages
 
@@ -251,6 +251,38 @@ def test_a_client_cannot_claim_solved_and_checks_are_paced(classroom):
             await client.close()
 
     asyncio.run(scenario())
+
+
+def test_on_the_ur10e_the_holding_challenge_gives_and_checks_the_ur10es_masses():
+    """The ur10e had no link masses until 2026-12-04 (no holding challenge there); the task's terms gave the
+    CB3 UR10's masses on any preset, where the check took the preset's. The preview, the student's task and the
+    projector now give the masses the check takes (test_challenges works the answer from them by hand)."""
+    from ur10teach.serving.server import TeachingServer
+
+    app = TeachingServer(preset="ur10e", port=0, shared=True)
+    room, arm = app.classroom, app.arm
+    challenge = next(c for c in app.challenges if c.title == "Holding itself up")
+
+    async def scenario():
+        first = await ViserClient(url(app)).connect()  # the teacher's preview before starting
+        await become_presenter(first, app)
+        await first.set_gui("Challenge", challenge.title)
+        await until(lambda: first.shown("links of (7.369, 13.051, 3.989, 2.1, 1.98, 0.615) kg"), what="the preview")
+        teacher, student, _ = await a_student_in(app, challenge.title, "127.0.0.8")
+        await until(lambda: student.shown("links of (7.369, 13.051"), what="the student's task, on the UR10e")
+        assert room.challenges.run.arm is arm and "7.369" in summary_markdown(room.challenges.run)
+        answer = " ".join(f"{t:.3f}" for t in C.expected_numbers(challenge, arm))
+        await until(lambda: any(label.startswith("Your numbers") for label in student.gui), what="the answer box")
+        await student.set_gui(next(label for label in student.gui if label.startswith("Your numbers")), answer)
+        await student.set_gui("Check my answer", True)
+        await until(lambda: student.shown("Solved: every number is right"), what="the answer worked from the terms, right")
+        for client in (first, teacher, student):
+            await client.close()
+
+    try:
+        asyncio.run(scenario())
+    finally:
+        app.stop()
 
 
 def test_run_bookkeeping_bounds_and_time_limit():

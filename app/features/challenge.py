@@ -65,8 +65,10 @@ class ChallengeDesk:
     def __init__(self, gui: viser.GuiApi, challenges: tuple[Challenge, ...], guard: Callable[[Callable], Callable],
                  start: Callable[[Challenge, float | None], None], end: Callable[[], None], download: Callable[[], None],
                  run: Callable[[], ChallengeRun | None], on_render: Callable[[], None] = lambda: None,
-                 about_pose: Callable[[str], Challenge] | None = None) -> None:
+                 about_pose: Callable[[str], Challenge] | None = None,
+                 arm_of: Callable[[Challenge], Arm | None] = lambda challenge: None) -> None:
         self.closed = False
+        self._arm_of = arm_of  #: the arm a challenge would be checked on (None: its ``Arm.preset``)
         self._on_render = on_render  #: the scene's part of the board (every student's tool)
         self._challenges = {c.title: c for c in challenges}
         #: a question of ``POSE_QUESTIONS`` → the challenge on the class's arm as it is now (None: none offered)
@@ -108,7 +110,7 @@ class ChallengeDesk:
             self.preview.content = f"Not about the arm shown: {html.escape(str(why), quote=False)}."
             return
         shown = "; asked of the class's arm as it stands when you start" if challenge.title in POSE_QUESTIONS else ""
-        self.preview.content = (f"{challenge_markdown(challenge)}\n\n"
+        self.preview.content = (f"{challenge_markdown(challenge, arm=self._arm_of(challenge))}\n\n"
                                 f"*{challenge.kind.replace('_', ' ')}, on {choice_of(challenge.arm)}{shown}*")
         if challenge.time_limit and not self.minutes.value:
             self.minutes.value = round(challenge.time_limit / 60)

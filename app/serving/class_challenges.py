@@ -60,7 +60,8 @@ class ClassChallenges:
         return ChallengeDesk(member.client.gui, self.offered, lambda handler, beside=None: self._guard(member, handler, beside),
                              start=lambda challenge, limit: self.start(member, challenge, limit),
                              end=lambda: self.end(member), download=lambda: self.download(member),
-                             run=lambda: self.run, on_render=lambda: self._render_board(member), about_pose=self.about_the_pose)
+                             run=lambda: self.run, on_render=lambda: self._render_board(member), about_pose=self.about_the_pose,
+                             arm_of=lambda challenge: self.room.app.arm if challenge.arm == "ur10" else None)
 
     def about_the_pose(self, question: str) -> Challenge:
         """A question of ``POSE_QUESTIONS`` about the class's arm as it is now."""
