@@ -191,15 +191,22 @@ def test_the_ghosts_the_floor_and_the_gizmo_as_a_student_sees_them(open_page):
     everything = settled_canvas(page)
     session.ik_target.gizmo.visible = False
     no_gizmo = canvas_changed(page, everything, 0.0005, "the gizmo to go")
+    session.ik_target.gizmo.visible = True
+    again = canvas_changed(page, no_gizmo, 0.0005, "the gizmo back")
+    # the gizmo's pixels change as it goes and as it comes back; anything else that changed meanwhile changes
+    # once (a clean-clone CI run on a busy host once counted a quarter of the arm's pixels as the gizmo's)
+    gizmo = (changed_mask(no_gizmo, everything) & changed_mask(no_gizmo, again)).sum()
+    u, v = project(session.client.camera, session.arm.singularity_geometry(session.state.last.q).p5, box)
+    covered = np.minimum(*(np.abs(neighbourhood(shown, u, v, box, 3) - neighbourhood(no_gizmo, u, v, box, 3)).sum(axis=1)
+                           for shown in (everything, again)))
+    assert covered.mean() < 40, "the gizmo covers P5"
+    session.ik_target.gizmo.visible = False
+    no_gizmo = canvas_changed(page, again, 0.0005, "the gizmo to go again")
     for node in session.drawing.robot.links:
         node.visible = False
     no_arm = canvas_changed(page, no_gizmo, 0.01, "the arm to go")
-    gizmo = changed_mask(no_gizmo, everything).sum()
     arm_pixels = changed_mask(no_arm, no_gizmo).sum()
     assert gizmo < GIZMO_MAX_SHARE * arm_pixels, f"the gizmo covers {gizmo / arm_pixels:.0%} as much of the view as the arm"
-    u, v = project(session.client.camera, session.arm.singularity_geometry(session.state.last.q).p5, box)
-    assert np.abs(neighbourhood(everything, u, v, box, 3) - neighbourhood(no_gizmo, u, v, box, 3)).sum(axis=1).mean() < 40, \
-        "the gizmo covers P5"
     for node in session.drawing.robot.links:
         node.visible = True
     session.ik_target.gizmo.visible = True
