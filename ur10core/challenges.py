@@ -621,20 +621,14 @@ def terms(challenge: Challenge, arm: Arm | None = None) -> str:
     if challenge.quantity == "gravity_torque":  # the app's bars that give the answer are off: what a hand needs
         masses = ", ".join(f"{m:g}" for m in MASSES[arm.name].masses)
         centres = ", ".join(_vector(c) for c in 1000 * centres_of_mass(arm, np.array(challenge.joints)))
-        axes = ", ".join(_vector(point) for point in 1000 * _axis_points(arm, np.array(challenge.joints)))
+        _, on_axes = arm.dh.joint_axes(arm.dh.frames(np.array(challenge.joints)))
+        axes = ", ".join(_vector(point) for point in 1000 * on_axes)
         given.append(f"a payload of {challenge.payload:g} kg at the flange; links of ({masses}) kg, their centres of "
                      f"mass at {centres} mm in the base frame; joints 1 to {arm.n_joints}'s axes through {axes} mm; "
                      f"g = {GRAVITY:g} m/s²")
     within = f"within {180 * challenge.relative_tolerance:.3g}°" if challenge.quantity in ANGLES else relative
     each = "each " if len(number_names(challenge, arm)) > 1 else ""
     return f"Given: {'; '.join(given)}. Asked: {QUANTITIES[challenge.quantity]}, {each}{within}."
-
-
-def _axis_points(arm: Arm, q: np.ndarray) -> np.ndarray:
-    """(n, 3) a point of each revolute joint's axis at joints ``q`` (m, base frame): the foot of the perpendicular
-    from the tool point, p + z × v, where J's column is [v; z] and v = z × (p − o) (docs/kinematics.md §8.1)."""
-    J, p = arm.jacobian(q), arm.fk(q)[:3, 3]
-    return p + np.cross(J[3:].T, J[:3].T)
 
 
 def _given(arm: Arm, values, per: str = "") -> str:
