@@ -35,13 +35,9 @@ hand_back_large_buffers()  # before numpy and the rest allocate
 import ur10core  # noqa: E402
 from ur10core import Arm  # noqa: E402
 from ur10core.challenges import builtin, load, unfit  # noqa: E402
-from ur10core.serial import PRESETS as COURSE_ARMS  # noqa: E402
 
+from .features.arm_picker import FIRST_ARMS  # noqa: E402
 from .serving import logs  # noqa: E402
-
-
-#: What ``--arm`` takes: the app's own UR10 (its numbers are ``--preset``'s) or an ``Arm.preset`` name of the course's others.
-FIRST_ARMS = ("ur10", *COURSE_ARMS, "three_dof")
 
 
 def parse_args(argv: list[str] | None = None) -> argparse.Namespace:

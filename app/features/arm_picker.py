@@ -51,6 +51,10 @@ def choice_of(preset: str) -> str:
     return UR10 if preset in Arm.UR_PRESETS else next(label for label, name in ARM_CHOICES.items() if name == preset)
 
 
+#: What a server may open every browser on (``--arm``): the app's own UR10 (its numbers are ``--preset``'s) or the
+#: ``Arm.preset`` name of one of the course's other arms; a typed table is each browser's own.
+FIRST_ARMS = ("ur10", *(name for name in ARM_CHOICES.values() if name not in (None, "custom")))
+
 #: What the classroom's presenter can show the class: a typed table is for one's own browser.
 CLASS_CHOICES = tuple(label for label in ARM_CHOICES if label != CUSTOM)
 

@@ -21,6 +21,7 @@ from ur10core.challenges import Challenge, builtin, unfit
 from ..features.arm_picker import (
     ARM_CHOICES,
     CUSTOM,
+    FIRST_ARMS,
     SWITCH_INTERVAL,
     UR10,
     ArmPicker,
@@ -194,7 +195,7 @@ class TeachingServer:
                  allowed_origins=(), gate: Gate | None = None, lecture: bool = False, light: bool = False,
                  challenges: tuple[Challenge, ...] | None = None) -> None:
         self.arm = Arm.preset(preset)
-        if first_arm != "ur10" and first_arm not in set(ARM_CHOICES.values()) - {None, "custom"}:
+        if first_arm not in FIRST_ARMS:
             raise ValueError(f"first_arm: {first_arm!r} is not an arm of the picker")
         #: the picker's label of the arm every browser opens on
         self.first_choice = UR10 if first_arm == "ur10" else choice_of(first_arm)
