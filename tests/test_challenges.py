@@ -798,12 +798,24 @@ def test_a_teachers_file_is_read_in_its_units():
     (("title = \"Stroke\"", "title = \"Reach it\""), 11, "two challenges titled"),
     (("title = \"Stroke\"", "title = \"Stroke"), 11, "Illegal character"),
     (("factor = \"wrist\"", "factor = \"stroke\"\nmin_tool_height_mm = 5000"), 14, "5000 mm above the floor"),  # TOML's own syntax error names its line
+    # a table or a list where a name goes (for quantity it raised TypeError, "unhashable type")
+    (("arm = \"kr210\"", "arm = {name = \"kr210\"}"), 5, "arm must be one of"),
+    (("kind = \"singularity\"", "kind = [\"singularity\"]"), 12, "kind must be one of"),
+    (("factor = \"wrist\"", "factor = [\"wrist\"]"), 14, "factors are stroke, shoulder, wrist"),
+    # a key written twice on the file's last line: TOML's "(at end of document)" is that line
+    (("time_limit_s = 120\n", "time_limit_s = 120\ntime_limit_s = 60"), 16, "Cannot overwrite a value"),
 ])
 def test_a_bad_file_is_refused_naming_the_line(change, line, words):
     text = GOOD.replace(*change)
     with pytest.raises(ValueError) as error:
         C.parse(text, source="class.toml")
     assert f"line {line}" in str(error.value) and words in str(error.value), str(error.value)
+
+
+def test_a_numbers_quantity_that_is_not_a_name_is_refused_naming_its_line():
+    for value in ("[\"position\"]", "{ p = 1 }"):  # raised TypeError ("unhashable type")
+        with pytest.raises(ValueError, match="line 5: quantity must be one of"):
+            C.parse(f'[[challenge]]\ntitle = "t"\nkind = "numbers"\njoints = [0, 0, 0, 0, 0, 0]\nquantity = {value}\n')
 
 
 def test_files_are_bounded_and_branch_counts_must_exist(tmp_path):

@@ -315,8 +315,9 @@ def parse(text: str, source: str = "challenges") -> tuple[Challenge, ...]:
     """
     try:
         document = tomllib.loads(text)
-    except tomllib.TOMLDecodeError as error:
-        raise ValueError(f"{source}: {error}") from None
+    except tomllib.TOMLDecodeError as error:  # (its "end of document" is the last line, which a teacher looks for)
+        where = f"at line {len(text.splitlines())}"
+        raise ValueError(f"{source}: {str(error).replace('at end of document', where)}") from None
     unknown = set(document) - {"challenge"}
     if unknown:
         raise ValueError(f"{source}, line {_line(text, -1, sorted(unknown)[0])}: only [[challenge]] tables, "
@@ -409,7 +410,7 @@ def _from_table(table: dict) -> Challenge:
     if "count" in table:
         values["count"] = _integer(table, "count", 0, len(arm.slot_labels))
     if "quantity" in table:
-        if table["quantity"] not in QUANTITIES:
+        if not isinstance(table["quantity"], str) or table["quantity"] not in QUANTITIES:
             raise _FieldError("quantity", f"quantity must be one of {', '.join(QUANTITIES)}, got {table['quantity']!r:.40}")
         values["quantity"] = table["quantity"]
     for field, name, scale, size in (("force_n", "force", 1.0, 3), ("moment_nm", "moment", 1.0, 3),
