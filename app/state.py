@@ -13,6 +13,7 @@ from __future__ import annotations
 import functools
 import itertools
 import math
+import re
 import threading
 from dataclasses import dataclass, field
 
@@ -24,7 +25,7 @@ from ur10core.serial import project_target
 from ur10core.tolerances import FLOOR_TOLERANCE, LIMIT_TOLERANCE
 from ur10core.workspace import heights_above_floor, lowest_points
 
-from .style import number, typed_numbers
+from .style import number, typed_fields
 
 
 @dataclass(frozen=True)
@@ -174,9 +175,10 @@ class ArmState:
     @staticmethod
     def parse_numbers(text: str, count: int, what: str = "joint values") -> np.ndarray:
         """``"30, 45, 26, 50, 60, 80"`` (commas or spaces, a ° allowed) → floats, with a message a student understands."""
-        parts = [p for p in typed_numbers(text).replace(",", " ").replace(";", " ").split() if p]
+        parts = typed_fields(text, what)
         if len(parts) != count:
-            raise ValueError(f"{what}: expected {count} numbers, got {len(parts)} in {text!r:.60}")
+            point = " (decimals take a point: 0.5)" if re.search(r"\d,\d", text) else ""
+            raise ValueError(f"{what}: expected {count} number{'s' * (count != 1)}, got {len(parts)} in {text!r:.60}{point}")
         values = []
         for part in parts:
             try:

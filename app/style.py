@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import re
+
 import numpy as np
 
 #: Light-grey aluminium of the link bodies and the charcoal of the joint caps (RGB 0-255): the
@@ -87,9 +89,24 @@ def number(value: float, spec: str) -> str:
 _TYPED_SIGNS = str.maketrans({"\u2212": "-", "\u2013": "-", "°": ""})
 
 
-def typed_numbers(text: str) -> str:
-    """What a student typed, its minus signs the ones ``float`` reads and no degree signs: "−60°" → "-60"."""
-    return text.translate(_TYPED_SIGNS)
+def typed_fields(text: str, what: str) -> list[str]:
+    """The entries a student typed, split at commas, semicolons and spaces, each minus sign one ``float``
+    reads and no degree signs. A comma between digits, where numbers are also parted without one, is
+    read as a decimal comma (as much of Europe writes 1,5) and refused: read as a list it gave wrong numbers.
+
+    >>> typed_fields("−30°, 45;26  0.5", "joint values")
+    ['-30', '45', '26', '0.5']
+    >>> typed_fields("1,5 2,5 3,5", "target")
+    Traceback (most recent call last):
+    ...
+    ValueError: target: is '1,5' one number or two? Write decimals with a point (1.5) and a space after each comma
+    """
+    text = text.translate(_TYPED_SIGNS).strip()
+    if re.search(r"\d,\d", text) and any("," not in gap for gap in re.findall(r"[\s;,]+", text)):
+        group = next(g for g in re.split(r"[\s;]+", text) if re.search(r"\d,\d", g))
+        raise ValueError(f"{what}: is {group!r:.20} one number or two? Write decimals with a point "
+                         f"({group.replace(',', '.'):.20}) and a space after each comma")
+    return [field for field in re.split(r"[\s;,]+", text) if field]
 
 
 def sentence(text: str) -> str:

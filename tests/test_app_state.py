@@ -70,6 +70,21 @@ def test_parse_typed_degrees():
         ArmState.parse_numbers("1 2 3 4 5 inf", 6)
 
 
+@pytest.mark.parametrize("text, count, refusal", [
+    # numbers with a decimal comma, parted by spaces or semicolons, were read as twice as many: three values
+    # typed as 1,5 2,5 3,5 for six joints were taken as (1, 5, 2, 5, 3, 5)
+    ("1,5 2,5 3,5", 6, "is '1,5' one number or two\\? Write decimals with a point \\(1.5\\)"),
+    ("0,5; −1,25; 90", 3, "is '0,5' one number or two"),
+    ("10 20,5 30", 3, "is '20,5' one number or two"),
+    ("0,0123", 1, "expected 1 number, got 2 .* \\(decimals take a point: 0.5\\)"),  # alone it may be a list: counted, with the hint
+])
+def test_a_decimal_comma_is_refused_not_read_as_two_numbers(text, count, refusal):
+    with pytest.raises(ValueError, match=f"your numbers: {refusal}"):
+        ArmState.parse_numbers(text, count, "your numbers")
+    for listed in ("1,5,2,5,3,5", "1, 5, 2, 5, 3, 5", "1,5, 2,5, 3,5"):  # a comma after each number: a list
+        np.testing.assert_array_equal(ArmState.parse_numbers(listed, 6), [1, 5, 2, 5, 3, 5])
+
+
 def test_dragging_the_target_never_jumps(state, course):
     """A smooth target path gives a smooth joint path: the nearest branch every step."""
     q0 = state.q

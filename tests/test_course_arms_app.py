@@ -286,7 +286,8 @@ def test_parse_table_refuses_what_is_not_a_table():
                         ("\n".join(["100 0 0 0 R"] * 11), "at most 10 rows"), ("nan 0 0 0 R", "finite"),
                         ("1 0 0 0 R 90 -90", "min < max"), ("1 0 0 0 R -400 0", "±360°"), ("1 0 0 0 P 0 9000", "±5000 mm"),
                         ("1 0 0 0 R 10", "five entries"), ("1 0 0 0 R\n1 0 0 0 F 0 1", "fixed row has no limits"),
-                        ("1 0 0 0 R x 1", "must be numbers"), ("# " + "x" * 1000 + "\n1 0 0 0 R", "too long")):
+                        ("1 0 0 0 R x 1", "must be numbers"), ("# " + "x" * 1000 + "\n1 0 0 0 R", "too long"),
+                        ("1 0 0 0 R\n400 0 0,5 0 R", "line 2: is '0,5' one number or two")):
         with pytest.raises(ValueError, match=words):
             parse_table(text, "standard")
     arm = parse_table("# a comment\n0, 90, 400, 0, R  # base\n400 0 0 0 r\n0 0 100 0 P", "modified")
@@ -407,6 +408,10 @@ def test_the_kr210_gripper_pose_in_the_urdf_convention(app):
         await client.set_gui("Go to this pose", True)
         await until(lambda: "six numbers" in gripper.refusal.line.content, what="the refusal beside the pose")
         np.testing.assert_allclose(parse_pose(pose_text(T)), T, atol=1e-3)
+        # the minus the course writes, copied, is a minus here too (it was "must be numbers"); a decimal comma is asked about
+        np.testing.assert_allclose(parse_pose(pose_text(T).replace("-", "\u2212")), T, atol=1e-3)
+        with pytest.raises(ValueError, match="the pose: is '2,5' one number or two"):
+            parse_pose("1000 2,5 1500 0 0 0")
         await client.close()
 
     asyncio.run(scenario())

@@ -222,6 +222,8 @@ def test_near_a_singularity_the_needed_rates_are_red_and_on_it_damped():
     np.testing.assert_array_equal(parse_twist("\u2212100, 0 50"), [-0.1, 0, 0.05, 0, 0, 0])
     with pytest.raises(ValueError, match="three numbers, vx vy vz .* or six"):
         parse_twist("1 2 3 4 5")
+    with pytest.raises(ValueError, match="the tool velocity: is '0,5' one number or two"):  # it was (0, 5, 0) mm/s
+        parse_twist("0,5 0 0")
 
 
 def test_the_rate_charts_mark_the_singularity_and_the_speed_limits():

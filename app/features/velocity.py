@@ -10,7 +10,6 @@ inverse, each in red where it exceeds the joint's speed limit (the UR10's, docs/
 from __future__ import annotations
 
 import math
-import re
 from typing import Any, Callable
 
 import numpy as np
@@ -20,7 +19,7 @@ from ur10core.challenges import RATE_LIMITS  # the rates a student can set: a ve
 
 from ..feedback import Beside, within
 from ..state import Snapshot
-from ..style import number, swatch, typed_numbers
+from ..style import number, swatch, typed_fields
 from ..view import HELD_BACK, Session, View, say_held_back
 from .joint_panel import rate_label
 
@@ -34,7 +33,7 @@ MAX_TYPED = (2000.0, 360.0)  #: the largest typed speed (mm/s) and turning rate 
 def parse_twist(text: str) -> np.ndarray:
     """``vx vy vz [ωx ωy ωz]`` in mm/s and °/s (ω = 0 if left out) → (6,) in m/s and rad/s; ``ValueError`` saying
     what is wrong."""
-    fields = [f for f in re.split(r"[,\s]+", typed_numbers(text).strip()) if f]
+    fields = typed_fields(text, "the tool velocity")
     if len(fields) == 3:  # a velocity alone: all a position-only arm is asked
         fields += ["0", "0", "0"]
     if len(fields) != 6:

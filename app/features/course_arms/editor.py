@@ -9,7 +9,6 @@ limits ``min max`` (degrees or mm; ±180° and 0…1000 mm otherwise); commas or
 from __future__ import annotations
 
 import math
-import re
 from typing import Callable
 
 import viser
@@ -17,7 +16,7 @@ import viser
 from ur10core import Arm
 
 from ...feedback import Beside, chosen
-from ...style import typed_numbers
+from ...style import typed_fields
 from ...view import Session, View
 
 #: What the editor starts with: the lecture notes' articulated arm without its wrist.
@@ -45,10 +44,9 @@ def parse_table(text: str, convention: str, name: str = "custom") -> Arm:
         raise ValueError(f"the table is too long (at most {MAX_TEXT} characters)")
     rows, limits = [], []
     for number, line in enumerate(text.splitlines(), start=1):
-        line = typed_numbers(line.split("#", 1)[0]).strip()
-        if not line:
+        fields = typed_fields(line.split("#", 1)[0], f"line {number}")
+        if not fields:
             continue
-        fields = [f for f in re.split(r"[,\s]+", line) if f]
         if len(fields) not in (5, 7):
             raise ValueError(f"line {number}: a row is five entries, a α d θ type (mm, degrees, R/P/F), "
                              f"and a joint's limits min max if you like; got {len(fields)}")

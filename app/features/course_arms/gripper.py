@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import math
-import re
 
 import numpy as np
 import viser
@@ -13,7 +12,7 @@ from ur10core.serial import kr210_from_urdf, kr210_to_urdf
 
 from ...feedback import Beside
 from ...state import Snapshot
-from ...style import number
+from ...style import number, typed_fields
 from ...view import HELD_BACK, Session, View
 
 
@@ -26,7 +25,7 @@ def pose_text(T: np.ndarray) -> str:
 
 def parse_pose(text: str) -> np.ndarray:
     """The pose typed as ``x y z roll pitch yaw`` (mm, degrees), (4, 4); ``ValueError`` saying what is wrong."""
-    fields = [f for f in re.split(r"[,\s]+", text.strip()) if f]
+    fields = typed_fields(text, "the pose")
     if len(fields) != 6:
         raise ValueError(f"type six numbers, x y z (mm) roll pitch yaw (°); got {len(fields)}")
     try:
