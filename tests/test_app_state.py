@@ -76,7 +76,8 @@ def test_parse_typed_degrees():
     ("1,5 2,5 3,5", 6, "is '1,5' one number or two\\? Write decimals with a point \\(1.5\\)"),
     ("0,5; −1,25; 90", 3, "is '0,5' one number or two"),
     ("10 20,5 30", 3, "is '20,5' one number or two"),
-    ("0,0123", 1, "expected 1 number, got 2 .* \\(decimals take a point: 0.5\\)"),  # alone it may be a list: counted, with the hint
+    ("0,0123", 1, "1 number here\\? Write decimals with a point: 0.0123"),  # alone it may be a list: asked when a point fits
+    ("1184,3,-163,9", 2, "2 numbers here\\? Write decimals with a point: 1184.3,-163.9"),
 ])
 def test_a_decimal_comma_is_refused_not_read_as_two_numbers(text, count, refusal):
     with pytest.raises(ValueError, match=f"your numbers: {refusal}"):
