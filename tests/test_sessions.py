@@ -466,6 +466,33 @@ def test_what_a_student_types_in_the_all_six_box_outlives_a_late_redraw(app):
     asyncio.run(scenario())
 
 
+def test_the_all_six_box_shows_the_arm_when_the_clicks_callback_runs_before_the_texts(app):
+    """viser runs each message's callback in its own thread: the text's and *Set these values*' can run in either
+    order. With the click's first, the arm went to the typed pose but the box kept the student's text
+    ("-22.704075 -22.704075 117.971944"), not the pose as the panel writes it; on Python 3.13 it happened every time."""
+    from viser import GuiEvent
+
+    async def scenario():
+        client = await ViserClient(url(app)).connect()
+        session = session_of(app, client)
+        panel, handle = session.joints, app.server.get_clients()[int(client.gizmo_owner)]
+        typed = "10.004 20 30 40 50 60"
+        panel.typed._impl.value = typed  # what viser does with the student's text, before it runs the callbacks
+        for callback in panel.apply_typed._impl.update_cb:  # the click's callback first
+            callback(GuiEvent(handle, handle.client_id, panel.apply_typed))
+        await until(lambda: np.allclose(np.degrees(session.state.q), [10.004, 20, 30, 40, 50, 60]), what="the typed pose")
+        await until(lambda: client.gui["All 6 (°)"]["value"] == "10, 20, 30, 40, 50, 60", what="the box at the arm")
+        for callback in panel.typed._impl.update_cb:  # then the text's
+            callback(GuiEvent(handle, handle.client_id, panel.typed))
+        panel.render_panel(session.state.last)  # a redraw after it: the box stays the arm's
+        assert panel.typed.value == "10, 20, 30, 40, 50, 60"
+        await client.set_gui("Pose", "Stretched")  # and follows the arm
+        await until(lambda: client.gui["All 6 (°)"]["value"] == "45, 90, 0, -90, 0, 60", what="the box to follow the arm")
+        await client.close()
+
+    asyncio.run(scenario())
+
+
 def test_what_a_student_types_while_a_path_plays_is_not_written_over(app):
     """Each frame of a playing path wrote the arm's joints into the *All 6* box: a student typing the
     next pose while the last one played saw their text replaced between two keystrokes."""

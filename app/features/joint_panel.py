@@ -169,13 +169,20 @@ class JointPanel(View):
         self._session.apply(lambda state: state.set_joints(q))
 
     def _text_typed(self, event: viser.GuiEvent) -> None:
-        if event.client is not None:  # the student's text stands until the arm changes after it
-            with self._typing_lock:
+        if event.client is not None:
+            self._keep_student_text()
+
+    def _keep_student_text(self) -> None:
+        """The student's text stands until the arm changes after it. (A box already redrawn since is not theirs: viser
+        runs the text's callback and *Set these values*' in threads of their own, in either order.)"""
+        with self._typing_lock:
+            if self.typed.value != self._typed_text:
                 self._typed_text, self._typed_over = self.typed.value, self._session.state.last.order
                 self._shown_q = None
                 self._student_text = True
 
     def _typed_values(self, _: viser.GuiEvent) -> None:
+        self._keep_student_text()
         arm = self._arm
         values = ArmState.parse_numbers(self.typed.value, arm.n_joints, "joint values")
         q = [float(from_display(kind, v)) for kind, v in zip(arm.joint_types, values)]
