@@ -2,10 +2,21 @@
 
 from __future__ import annotations
 
+import sys
+
 import numpy as np
 import pytest
 
 from ur10core import Arm
+
+
+def urs_own_solver():
+    """The ``ur_analytic_ik`` module (UR's official numbers, test-only). It has wheels up to Python 3.11 only
+    (pyproject.toml): from 3.12 its tests are skipped, before that they need it."""
+    if sys.version_info >= (3, 12):
+        return pytest.importorskip("ur_analytic_ik")
+    import ur_analytic_ik
+    return ur_analytic_ik
 
 
 def pytest_collection_modifyitems(config, items):

@@ -2,13 +2,13 @@
 
 import numpy as np
 import pytest
-import ur_analytic_ik
 
 from ur10core import FLANGE_TURN, Arm, flange_from_controller, flange_to_controller, from_controller, to_controller
 
-from .conftest import random_joints, wrapped_difference
+from .conftest import random_joints, urs_own_solver, wrapped_difference
 
 pytestmark = pytest.mark.core
+ur_analytic_ik = urs_own_solver()
 
 REFERENCES = {"ur10": ur_analytic_ik.ur10, "ur10e": ur_analytic_ik.ur10e}
 

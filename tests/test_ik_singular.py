@@ -9,7 +9,7 @@ from ur10core import ELBOW_TOO_FAR, Arm, from_controller
 from ur10core.ik import solve_reference
 from ur10core.tolerances import WRIST_TOLERANCE
 
-from .conftest import random_joints, wrapped_difference
+from .conftest import random_joints, urs_own_solver, wrapped_difference
 
 pytestmark = pytest.mark.core
 
@@ -229,7 +229,7 @@ def test_regular_wrist_beyond_reach_keeps_the_plain_reason(course):
 @pytest.mark.parametrize("name", ["ur10", "ur10e"])
 def test_ur_analytic_ik_finds_nothing_we_miss_on_wrist_singular_poses(name):
     """Where UR's own solver (ur-analytic-ik, test-only) finds a solution, so do we; and ours are exact."""
-    import ur_analytic_ik
+    ur_analytic_ik = urs_own_solver()
     arm = Arm.preset(name)
     solver = getattr(ur_analytic_ik, name)
     q = _exactly_wrist_singular(arm, 2000, seed=32)

@@ -2,8 +2,9 @@
 
 from __future__ import annotations
 
-import tomllib
 from pathlib import Path
+
+from ur10core.challenges import tomllib  # (tomli before Python 3.11)
 
 ROOT = Path(__file__).resolve().parent.parent
 

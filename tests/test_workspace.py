@@ -6,6 +6,8 @@ import pytest
 from ur10core import Arm, flange_to_controller
 from ur10core.workspace import MAP_PLANES, branch_count_map, revolved_boundary
 
+from .conftest import urs_own_solver
+
 pytestmark = pytest.mark.core
 
 
@@ -108,7 +110,7 @@ def test_branch_count_map_counts_what_urs_own_solver_finds(plane):
     The map runs our IK on the ur10 preset; the reference is asked cell by cell, through
     the controller's convention (docs/kinematics.md §6), on a coarse grid.
     """
-    import ur_analytic_ik
+    ur_analytic_ik = urs_own_solver()
     arm = Arm.preset("ur10")
     rng = np.random.default_rng(7)
     for _ in range(3):
