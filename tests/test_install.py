@@ -24,8 +24,9 @@ pytestmark = pytest.mark.install
 
 
 @pytest.fixture(scope="module")
-def installed(tmp_path_factory) -> tuple[Path, dict]:
-    """A venv holding a normal (non-editable) install of this checkout, built with no compiler in reach."""
+def installed(tmp_path_factory) -> tuple[Path, dict, str]:
+    """A venv holding a normal (non-editable) install of this checkout, built with no compiler in reach, and
+    what pip said."""
     folder = tmp_path_factory.mktemp("laptop")
     venv = folder / "venv"
     subprocess.run([sys.executable, "-m", "venv", str(venv)], check=True)
@@ -41,16 +42,26 @@ def installed(tmp_path_factory) -> tuple[Path, dict]:
     shutil.copytree(ROOT, source, ignore=shutil.ignore_patterns(
         ".git", ".venv*", "build", "*.egg-info", "__pycache__", ".pytest_cache", ".ruff_cache", "*.so", "*.pyd"))
     done = subprocess.run(
-        # --no-compile: what the tests below import is compiled as they import it (scripts/test.sh says why)
-        [str(bin_dir / "python"), "-m", "pip", "install", "--quiet", "--no-compile", str(source)],
+        # --no-compile: what the tests below import is compiled as they import it (scripts/test.sh says why);
+        # --verbose: the build's own warnings, which pip shows from release 24 on, are shown by this one too
+        [str(bin_dir / "python"), "-m", "pip", "install", "--verbose", "--no-compile", str(source)],
         cwd=folder, env=env, capture_output=True, text=True, timeout=900,
     )
     assert done.returncode == 0, done.stdout + done.stderr
-    return bin_dir, env
+    return bin_dir, env, done.stdout + done.stderr
+
+
+def test_the_build_warns_of_nothing_a_newer_setuptools_would_refuse(installed):
+    """Every install printed two warnings from setuptools, whose newest release the build fetches: the licence
+    written as a table, which it stops building on 2027-02-18, and each mesh folder packed as data of a package
+    it had not been told of ("Package would be ignored")."""
+    *_, said = installed
+    warnings = re.findall(r"\w*Warning: .*", said)
+    assert not warnings, warnings
 
 
 def test_the_core_installs_without_a_compiler_and_runs_on_numpy(installed, tmp_path):
-    bin_dir, env = installed
+    bin_dir, env, _ = installed
     code = (
         "import numpy as np, ur10core, pathlib; from ur10core import Arm;"
         "a = Arm.preset('course'); q = np.radians([45, 90, 0, -90, 0, 60]); s = a.ik(a.fk(q));"
@@ -67,7 +78,7 @@ def test_the_core_installs_without_a_compiler_and_runs_on_numpy(installed, tmp_p
 
 
 def test_the_app_starts_from_another_directory(installed, tmp_path):
-    bin_dir, env = installed
+    bin_dir, env, _ = installed
     with serving([str(bin_dir / "ur10-teach"), "--port", "0"], tmp_path, env, timeout=HANG_TIMEOUT) as (app, output):
         url = re.search(r"http://127\.0\.0\.1:\d+", "".join(output)).group(0)
         with urllib.request.urlopen(url, timeout=HANG_TIMEOUT) as page:
@@ -84,7 +95,7 @@ def test_the_app_starts_from_another_directory(installed, tmp_path):
 
 
 def test_the_real_ur10_meshes_and_their_licence_ship(installed, tmp_path):
-    bin_dir, env = installed
+    bin_dir, env, _ = installed
     code = (
         "import ur10teach.meshes as m, pathlib; models = m.load_models('course');"
         "print(','.join(models.names), (m.MESH_DIR / 'real' / 'ur10' / 'LICENSE.md').is_file(), m.MESH_DIR, sep='|')"
