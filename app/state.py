@@ -176,11 +176,13 @@ class ArmState:
     def parse_numbers(text: str, count: int, what: str = "joint values") -> np.ndarray:
         """``"30, 45, 26, 50, 60, 80"`` (commas or spaces, a ° allowed) → floats, with a message a student understands."""
         parts = typed_fields(text, what)
-        dotted = re.sub(r"(\d),(\d)", r"\1.\2", text.strip())
-        if len(parts) != count and dotted != text.strip() and len(typed_fields(dotted, what)) == count:
-            raise ValueError(f"{what}: {count} number{'s' * (count != 1)} here? Write decimals with a point: {dotted:.60}")
         if len(parts) != count:
-            raise ValueError(f"{what}: expected {count} number{'s' * (count != 1)}, got {len(parts)} in {text!r:.60}")
+            numbers = f"{count} number{'s' * (count != 1)}"
+            dotted = re.sub(r"(\d),(\d)", r"\1.\2", text.strip())  # decimal commas as points
+            decimals = typed_fields(dotted, what)  # (not "1.184.3", from 1.184,3: no question then)
+            if "," in text and len(decimals) == count and all(f.lstrip("+-").replace(".", "", 1).isdigit() for f in decimals):
+                raise ValueError(f"{what}: {numbers} here? Write decimals with a point: {dotted:.60}")
+            raise ValueError(f"{what}: expected {numbers}, got {len(parts)} in {text!r:.60}")
         values = []
         for part in parts:
             try:

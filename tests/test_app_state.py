@@ -78,6 +78,7 @@ def test_parse_typed_degrees():
     ("10 20,5 30", 3, "is '20,5' one number or two"),
     ("0,0123", 1, "1 number here\\? Write decimals with a point: 0.0123"),  # alone it may be a list: asked when a point fits
     ("1184,3,-163,9", 2, "2 numbers here\\? Write decimals with a point: 1184.3,-163.9"),
+    ("1.184,3", 1, "expected 1 number, got 2 in '1.184,3'$"),  # a thousands point too: no "1.184.3" to suggest
 ])
 def test_a_decimal_comma_is_refused_not_read_as_two_numbers(text, count, refusal):
     with pytest.raises(ValueError, match=f"your numbers: {refusal}"):
