@@ -436,6 +436,25 @@ def test_a_students_slider_value_is_not_put_back_by_a_redraw_before_its_callback
     asyncio.run(scenario())
 
 
+def test_a_slider_shows_the_students_value_when_it_crossed_the_servers_on_the_way(app):
+    """A student's slider value on its way to the server while the panel sent that slider the arm's angle (a
+    branch clicked, say): the browser showed the panel's angle, the arm took the student's, and since viser
+    already held the student's value the slider was never put right."""
+
+    async def scenario():
+        client = await ViserClient(url(app)).connect()
+        session = session_of(app, client)
+        label = "θ3 elbow (°)"
+        session.apply(lambda state: state.set_joint(2, np.radians(-120.0)))  # the panel sends -120
+        await until(lambda: client.gui[label]["value"] == -120.0, what="the panel's angle in the browser")
+        await client.set_gui(label, 65.0)  # sent before the browser had -120: it shows -120 now
+        await until(lambda: abs(np.degrees(session.state.q[2]) - 65.0) < 1e-9, what="the student's angle applied")
+        await until(lambda: client.gui[label]["value"] == 65.0, what="the slider at the arm's angle")
+        await client.close()
+
+    asyncio.run(scenario())
+
+
 def test_what_a_student_types_in_the_all_six_box_outlives_a_late_redraw(app):
     """On a loaded CI machine the redraw of the pose set before a student typed the next one came after
     the typing: it wrote the old pose back into the box, *Set these values* applied it, and the goal was lost."""

@@ -120,3 +120,21 @@ def test_a_value_fits_its_widget_as_viser_converts_it():
         assert fits("no such widget", "x")  # viser ignores it
     finally:
         server.stop()
+
+
+def test_a_value_is_sent_again_the_way_viser_sends_a_changed_one():
+    """``send_value`` queues the message viser's own value setter queues, where that setter queues it."""
+    from viser import _gui_handles
+
+    assert "GuiUpdateMessage(self._impl.uuid, {\"value\": value})" in inspect.getsource(_gui_handles._GuiInputHandle)
+    assert "self._impl.gui_api._websock_interface.queue_message(" in inspect.getsource(_gui_handles._GuiInputHandle)
+    server = viser.ViserServer(port=0, verbose=False)
+    try:
+        slider = server.gui.add_slider("s", min=0.0, max=1.0, step=0.1, initial_value=0.5)
+        sent = []
+        slider._impl.gui_api._websock_interface.queue_message = sent.append
+        viser_internals.send_value(slider)
+        assert [(type(message), message.uuid, message.updates) for message in sent] == [
+            (viser_internals.messages.GuiUpdateMessage, slider._impl.uuid, {"value": 0.5})]
+    finally:
+        server.stop()

@@ -22,6 +22,7 @@ from ..feedback import Beside, chosen
 from ..state import ArmState, Snapshot, joint_value_text
 from ..style import number
 from ..view import Session, View
+from ..viser_internals import send_value
 
 #: Display units between two values of a slider beyond which the second was typed, not dragged.
 DRAG_STEP = 10.0
@@ -98,6 +99,9 @@ class JointPanel(View):
         q = session.state.q
         shown = [round(float(to_display(kind, v)), 2) for kind, v in zip(arm.joint_types, q)]
         self._received = list(shown)  # each slider's last value, as the browser sent or we set it
+        self._pushed: set[int] = set()  # sliders set here since their browser last sent a value
+        #: sliders whose browser sent a value that may have crossed ours on the way: it may show ours
+        self._unsure: set[int] = set()
         self._shown_q = q
         self._typed_text = display_text(arm, q)  # the box as we last wrote it or the student last sent it
         self._typed_over = -1  # the order of the newest change the student's typing was made after
@@ -141,6 +145,9 @@ class JointPanel(View):
             with self._typing_lock:  # read under the lock: callbacks run side by side, and the last must see the newest
                 value = float(self.sliders[index].value)
                 previous, self._received[index] = self._received[index], value
+                if index in self._pushed:
+                    self._pushed.discard(index)
+                    self._unsure.add(index)
                 waiting = self._typing.pop(index, None)
                 if waiting is not None:
                     waiting.cancel()
@@ -191,14 +198,17 @@ class JointPanel(View):
 
     def render_panel(self, snapshot: Snapshot) -> None:
         with self._typing_lock:
-            typing = set(self._typing)
-        for index, (slider, kind, value) in enumerate(zip(self.sliders, self._arm.joint_types, snapshot.q)):
-            value = round(float(to_display(kind, value)), 2)
-            if index in typing or not _same(slider.value, self._received[index]):
-                continue  # the student's newer value, whose callback has yet to run: it is the last word
-            if not abs(slider.value - value) <= 1e-9:  # true for a NaN a bad client left too
-                slider.value = value
-                self._received[index] = value
+            for index, (slider, kind, value) in enumerate(zip(self.sliders, self._arm.joint_types, snapshot.q)):
+                value = round(float(to_display(kind, value)), 2)
+                if index in self._typing or not _same(slider.value, self._received[index]):
+                    continue  # the student's newer value, whose callback has yet to run: it is the last word
+                if not abs(slider.value - value) <= 1e-9:  # true for a NaN a bad client left too
+                    slider.value = value  # its callback returns at once: not a student's move
+                    self._received[index] = value
+                    self._pushed.add(index)
+                elif index in self._unsure:
+                    send_value(slider)  # viser holds this value already, so would not send it
+                self._unsure.discard(index)
         with self._typing_lock:  # a panel drawn late, or before the typing's callback has run, leaves the typing alone
             typed_since = (self.typed.value != self._typed_text or snapshot.order <= self._typed_over
                            or (self._student_text and snapshot.cause == "motion"))

@@ -11,7 +11,8 @@
 * :data:`messages` — viser's message classes, which the gate validates every incoming message against;
 * :func:`labels_of` — every 3D label of a scene (lecture mode sizes them all);
 * :func:`value_fits` — whether a browser's value converts to its widget's type as viser converts it
-  (the gate drops one that would raise inside viser's handler).
+  (the gate drops one that would raise inside viser's handler);
+* :func:`send_value` — a widget's value sent to its browser again, though viser holds it unchanged.
 
 ``tests/test_viser_internals.py`` checks that each of these is still where and what it was:
 a viser upgrade that moves one fails there, not in a classroom.
@@ -27,7 +28,7 @@ from viser import _messages as messages
 
 from .shared_frames import SEND_TIMEOUT
 
-__all__ = ["after_broadcast", "connection_of", "labels_of", "messages", "value_fits"]
+__all__ = ["after_broadcast", "connection_of", "labels_of", "messages", "send_value", "value_fits"]
 
 log = logging.getLogger(__name__)
 
@@ -68,6 +69,14 @@ def value_fits(server, uuid: str, value) -> bool:  # noqa: ANN001
             return False
         return True
     return True
+
+
+def send_value(handle) -> None:  # noqa: ANN001
+    """Send ``handle``'s value (a ``viser`` GUI input's) to its browser again. viser sends a value only when it
+    changes, but a browser whose own value crossed the server's on the way shows the server's, while viser holds
+    the browser's."""
+    impl = handle._impl
+    impl.gui_api._websock_interface.queue_message(messages.GuiUpdateMessage(impl.uuid, {"value": impl.value}))
 
 
 def after_broadcast(client, action: Callable[[], None]) -> None:  # noqa: ANN001
