@@ -111,5 +111,13 @@ def test_a_path_beyond_a_joints_range_is_named_with_the_joint_and_the_time():
     beyond = paths.Path(path.t, np.where(path.t[:, None] > 2.0, [0.0, high + 0.1, 0.0, 0.0], 0.0),
                         path.qdot, path.tool, path.damping)
     message = paths.out_of_range(arm, beyond)
-    assert message.startswith(f"{arm.joint_names[1]} would reach {np.degrees(high + 0.1):.1f}°")
-    assert f"at {path.t[path.t > 2.0][0]:.2f} s" in message
+    assert message.startswith(f"{arm.joint_names[1]} would go beyond its limit of {np.degrees(high):.1f}° at "
+                              f"{path.t[path.t > 2.0][0]:.2f} s, up to {np.degrees(high + 0.1):.1f}°")
+    # only just beyond: not "up to 157.5°" beside a limit of 157.5°
+    barely = paths.Path(path.t, np.tile([0.0, high + 1e-4, 0.0, 0.0], (len(path.t), 1)), path.qdot, path.tool, path.damping)
+    assert "by less than 0.1°" in paths.out_of_range(arm, barely)
+    low_d3 = arm.limits[2, 0]
+    under = paths.Path(path.t, np.where(path.t[:, None] > 1.0, [0.0, 0.0, low_d3 - 0.0123, 0.0], [0.0, 0.0, low_d3, 0.0]),
+                       path.qdot, path.tool, path.damping)
+    assert f"beyond its limit of {1000 * low_d3:.0f} mm" in paths.out_of_range(arm, under)
+    assert f"up to {1000 * (low_d3 - 0.0123):.0f} mm" in paths.out_of_range(arm, under)

@@ -179,7 +179,7 @@ def line_out_of_reach(arm, q_start, T_goal, samples: int = 101) -> tuple[float, 
 
 
 def out_of_range(arm, path: Path) -> str:
-    """Which joint of ``path`` leaves the arm's limits first, when and how far ("" if none does).
+    """Which joint of ``path`` leaves the arm's limits first, when, and how far it goes ("" if none does).
 
     >>> from ur10core import Arm
     >>> arm = Arm.preset("ur10")
@@ -192,7 +192,13 @@ def out_of_range(arm, path: Path) -> str:
     if not outside.any():
         return ""
     k, joint = np.argwhere(outside)[0]
-    value, kind = path.q[k, joint], arm.joint_types[joint]
-    shown = (lambda v: f"{np.degrees(v):.1f}°") if kind == "R" else (lambda v: f"{1000 * v:.0f} mm")
-    return (f"{arm.joint_names[joint]} would reach {shown(value)} at {path.t[k]:.2f} s, "
-            f"outside its range {shown(arm.limits[joint, 0])} to {shown(arm.limits[joint, 1])}")
+    above = bool(path.q[k, joint] > high[joint])
+    limit = arm.limits[joint, 1 if above else 0]
+    furthest = path.q[:, joint].max() if above else path.q[:, joint].min()
+    revolute = arm.joint_types[joint] == "R"
+    shown = (lambda v: f"{np.degrees(v):.1f}°") if revolute else (lambda v: f"{1000 * v:.0f} mm")
+    # a path only just beyond would read "reach 65.0°, outside its range … to 65.0°"
+    far = (f"up to {shown(furthest)}" if shown(furthest) != shown(limit)
+           else f"by less than {'0.1°' if revolute else '1 mm'}")
+    return (f"{arm.joint_names[joint]} would go beyond its limit of {shown(limit)} at {path.t[k]:.2f} s, {far} "
+            f"(its range is {shown(arm.limits[joint, 0])} to {shown(arm.limits[joint, 1])})")
