@@ -182,6 +182,8 @@ class ArmState:
             decimals = typed_fields(dotted, what)  # (not "1.184.3", from 1.184,3: no question then)
             if "," in text and len(decimals) == count and all(f.lstrip("+-").replace(".", "", 1).isdigit() for f in decimals):
                 raise ValueError(f"{what}: {numbers} here? Write decimals with a point: {dotted:.60}")
+            if not parts:
+                raise ValueError(f"{what}: the box is empty; type {numbers} in it")
             raise ValueError(f"{what}: expected {numbers}, got {len(parts)} in {text!r:.60}")
         values = []
         for part in parts:

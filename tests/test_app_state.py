@@ -66,6 +66,8 @@ def test_parse_typed_degrees():
         ArmState.parse_numbers("30, 45, abc, 50, 60, 80", 6)
     with pytest.raises(ValueError, match="expected 6 numbers, got 3"):
         ArmState.parse_numbers("1, 2, 3", 6)
+    with pytest.raises(ValueError, match="^target: the box is empty; type 3 numbers in it$"):  # not "got 0 in ''"
+        ArmState.parse_numbers("  ", 3, "target")
     with pytest.raises(ValueError, match="'inf' is not a finite number"):
         ArmState.parse_numbers("1 2 3 4 5 inf", 6)
 

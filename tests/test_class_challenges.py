@@ -231,7 +231,7 @@ def test_a_client_cannot_claim_solved_and_checks_are_paced(classroom):
             await student.send(messages.GuiUpdateMessage(uuid, {"value": "✓ Solved", "_markdown": "✓ Solved"}))
         await student.set_gui("Your nickname (up to 20 characters)", "<b>Bo</b>\x07\u202e and a very long tail")
         await student.set_gui("Check my answer", True)  # nothing typed yet: refused beside the button, not counted
-        await until(lambda: student.shown("expected 3 numbers, got 0"), what="the refusal of an empty answer")
+        await until(lambda: student.shown("the box is empty; type 3 numbers in it"), what="the refusal of an empty answer")
         assert member.student.attempts == 0
         await student.set_gui("Your numbers (x, y, z)", "1 2 3")
         await student.set_gui("Check my answer", True)
