@@ -57,6 +57,15 @@ def test_bad_joints_are_refused_and_nothing_changes(state, q, message):
     np.testing.assert_array_equal(state.q, before)
 
 
+def test_a_refusal_gives_a_joints_limits_as_its_slider_shows_them():
+    """The SCARA's elbow turns ±157.5°: "from -158° to 158°, got 158.0°" read as within them."""
+    scara = ArmState(Arm.preset("scara"))
+    with pytest.raises(ValueError, match="^θ2: from -157.5° to 157.5°, got 158.0°$"):
+        scara.set_joint(1, np.radians(158.0))
+    with pytest.raises(ValueError, match="^d3: from 0 mm to 210 mm, got 210.5 mm$"):
+        scara.set_joint(2, 0.2105)
+
+
 def test_parse_typed_degrees():
     np.testing.assert_array_equal(ArmState.parse_numbers("30, 45, 26, 50, 60, 80", 6), [30, 45, 26, 50, 60, 80])
     np.testing.assert_array_equal(ArmState.parse_numbers("30 45;26,  50 60° 80", 6), [30, 45, 26, 50, 60, 80])
