@@ -455,6 +455,29 @@ def test_a_slider_shows_the_students_value_when_it_crossed_the_servers_on_the_wa
     asyncio.run(scenario())
 
 
+def test_the_gizmo_shows_where_the_student_dropped_it_when_that_crossed_the_servers_pose(app):
+    """The gizmo put on the target (a path's frame, say) while the student's drop was on its way: the browser
+    showed the server's pose, the target went where the student dropped it, and since viser already held that
+    pose the gizmo was never put there."""
+
+    async def scenario():
+        client = await ViserClient(url(app)).connect()
+        session = session_of(app, client)
+        arm, name = session.arm, session.ik_target.gizmo._impl.name
+        pushed = arm.fk(np.radians([0, -60, 90, -30, 90, 0]))
+        session.apply(lambda state: state.move_target(pushed, cause="typed"))  # the server puts the gizmo there
+        await until(lambda: np.allclose(client.received.positions.get(name, (0, 0, 0)), pushed[:3, 3]), what="the push")
+        dropped = arm.fk(np.radians([20, -70, 100, -30, 90, 0]))  # sent before the browser had the push
+        for phase in ("start", "update", "end"):
+            await client.drag_target(dropped[:3, 3], wxyz_of(dropped), phase, name=name)
+        await until(lambda: session.state.last.cause == "dropped" and np.allclose(session.state.last.target, dropped),
+                    what="the drop applied")
+        await until(lambda: np.allclose(client.received.positions[name], dropped[:3, 3]), what="the gizmo at the drop")
+        await client.close()
+
+    asyncio.run(scenario())
+
+
 def test_what_a_student_types_in_the_all_six_box_outlives_a_late_redraw(app):
     """On a loaded CI machine the redraw of the pose set before a student typed the next one came after
     the typing: it wrote the old pose back into the box, *Set these values* applied it, and the goal was lost."""

@@ -122,19 +122,29 @@ def test_a_value_fits_its_widget_as_viser_converts_it():
         server.stop()
 
 
-def test_a_value_is_sent_again_the_way_viser_sends_a_changed_one():
-    """``send_value`` queues the message viser's own value setter queues, where that setter queues it."""
-    from viser import _gui_handles
+def test_a_value_or_a_pose_is_sent_again_the_way_viser_sends_a_changed_one():
+    """``send_again`` queues the messages viser's own setters queue, where they queue them."""
+    from viser import _gui_handles, _scene_handles
 
     assert "GuiUpdateMessage(self._impl.uuid, {\"value\": value})" in inspect.getsource(_gui_handles._GuiInputHandle)
     assert "self._impl.gui_api._websock_interface.queue_message(" in inspect.getsource(_gui_handles._GuiInputHandle)
+    node_source = inspect.getsource(_scene_handles.SceneNodeHandle)
+    for message in ("SetOrientationMessage", "SetPositionMessage"):
+        assert f"_messages.{message}(self._impl.name, v)" in node_source
+    assert "self._impl.api._queue_scene_message" in node_source
     server = viser.ViserServer(port=0, verbose=False)
     try:
         slider = server.gui.add_slider("s", min=0.0, max=1.0, step=0.1, initial_value=0.5)
+        gizmo = server.scene.add_transform_controls("/gizmo", wxyz=(0.0, 1.0, 0.0, 0.0), position=(1.0, 2.0, 3.0))
         sent = []
         slider._impl.gui_api._websock_interface.queue_message = sent.append
-        viser_internals.send_value(slider)
-        assert [(type(message), message.uuid, message.updates) for message in sent] == [
-            (viser_internals.messages.GuiUpdateMessage, slider._impl.uuid, {"value": 0.5})]
+        gizmo._impl.api._queue_scene_message = sent.append
+        viser_internals.send_again(slider)
+        viser_internals.send_again(gizmo)
+        messages = viser_internals.messages
+        assert [(type(m), m.uuid, m.updates) for m in sent[:1]] == [(messages.GuiUpdateMessage, slider._impl.uuid, {"value": 0.5})]
+        assert [(type(m), m.name) for m in sent[1:]] == [(messages.SetOrientationMessage, "/gizmo"),
+                                                          (messages.SetPositionMessage, "/gizmo")]
+        assert sent[1].wxyz == (0.0, 1.0, 0.0, 0.0) and sent[2].position == (1.0, 2.0, 3.0)
     finally:
         server.stop()

@@ -35,6 +35,7 @@ from ..style import (
     swatch,
 )
 from ..view import HELD_BACK, Session, View
+from ..viser_internals import send_again
 from ..viser_internals.fast_updates import set_instances, stop_echo
 from .branch_labels import BranchLabels
 from .robot import model_slug
@@ -423,6 +424,8 @@ class IKTarget(View):
         self._session = session
         self._drawing = drawing
         self._seen: tuple | None = None
+        self._pushed = False  #: the gizmo was put on the target since the browser's last drag event
+        self._unsure = False  #: a drag event came after that: it may have crossed the push, which the browser shows
         self._seen_lock = threading.Lock()
         arm, snapshot = session.arm, session.state.last
         self.gizmo = controls.add_transform_controls(
@@ -484,6 +487,7 @@ class IKTarget(View):
         try:
             pose = (tuple(self.gizmo.wxyz), tuple(self.gizmo.position), event.phase == "end")
             with self._seen_lock:
+                self._unsure, self._pushed = self._unsure or self._pushed, False
                 if pose == self._seen:
                     return  # a repeated update
                 self._seen = pose
@@ -539,10 +543,16 @@ class IKTarget(View):
 
     def render(self, snapshot: Snapshot) -> None:
         if snapshot.cause != "target":  # the user is not holding the gizmo: put it on the target
+            held = (tuple(self.gizmo.wxyz), tuple(self.gizmo.position))
             self.gizmo.wxyz = quaternion(snapshot.target[:3, :3], check=False)
             self.gizmo.position = snapshot.target[:3, 3]
             with self._seen_lock:
                 self._seen = None  # the next drag starts afresh, even from this very pose
+                if (tuple(self.gizmo.wxyz), tuple(self.gizmo.position)) != held:
+                    self._pushed = True
+                elif self._unsure:  # viser holds the browser's drop as unchanged, so would not send it
+                    send_again(self.gizmo)
+                self._unsure = False
         if self.unreachable is not None:
             self.unreachable.visible = not snapshot.reachable
 

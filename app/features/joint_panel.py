@@ -22,7 +22,7 @@ from ..feedback import Beside, chosen
 from ..state import ArmState, Snapshot, joint_value_text
 from ..style import number
 from ..view import Session, View
-from ..viser_internals import send_value
+from ..viser_internals import send_again
 
 #: Display units between two values of a slider beyond which the second was typed, not dragged.
 DRAG_STEP = 10.0
@@ -207,7 +207,7 @@ class JointPanel(View):
                     self._received[index] = value
                     self._pushed.add(index)
                 elif index in self._unsure:
-                    send_value(slider)  # viser holds this value already, so would not send it
+                    send_again(slider)  # viser holds this value already, so would not send it
                 self._unsure.discard(index)
         with self._typing_lock:  # a panel drawn late, or before the typing's callback has run, leaves the typing alone
             typed_since = (self.typed.value != self._typed_text or snapshot.order <= self._typed_over

@@ -12,7 +12,7 @@
 * :func:`labels_of` — every 3D label of a scene (lecture mode sizes them all);
 * :func:`value_fits` — whether a browser's value converts to its widget's type as viser converts it
   (the gate drops one that would raise inside viser's handler);
-* :func:`send_value` — a widget's value sent to its browser again, though viser holds it unchanged.
+* :func:`send_again` — a widget's value or a node's pose sent to its browser again, though viser holds it unchanged.
 
 ``tests/test_viser_internals.py`` checks that each of these is still where and what it was:
 a viser upgrade that moves one fails there, not in a classroom.
@@ -28,7 +28,7 @@ from viser import _messages as messages
 
 from .shared_frames import SEND_TIMEOUT
 
-__all__ = ["after_broadcast", "connection_of", "labels_of", "messages", "send_value", "value_fits"]
+__all__ = ["after_broadcast", "connection_of", "labels_of", "messages", "send_again", "value_fits"]
 
 log = logging.getLogger(__name__)
 
@@ -71,12 +71,20 @@ def value_fits(server, uuid: str, value) -> bool:  # noqa: ANN001
     return True
 
 
-def send_value(handle) -> None:  # noqa: ANN001
-    """Send ``handle``'s value (a ``viser`` GUI input's) to its browser again. viser sends a value only when it
-    changes, but a browser whose own value crossed the server's on the way shows the server's, while viser holds
-    the browser's."""
+def send_again(handle) -> None:  # noqa: ANN001
+    """Send what viser holds of ``handle`` to its browser again: a GUI input's value, or a scene node's pose.
+
+    viser sends only what changes. A browser whose own change (a slider moved, the gizmo dropped) crossed
+    the server's on the way shows the server's, while viser holds the browser's as unchanged.
+    """
+    import viser
+
     impl = handle._impl
-    impl.gui_api._websock_interface.queue_message(messages.GuiUpdateMessage(impl.uuid, {"value": impl.value}))
+    if isinstance(handle, viser.SceneNodeHandle):
+        impl.api._queue_scene_message(messages.SetOrientationMessage(impl.name, tuple(map(float, impl.wxyz))))
+        impl.api._queue_scene_message(messages.SetPositionMessage(impl.name, tuple(map(float, impl.position))))
+    else:
+        impl.gui_api._websock_interface.queue_message(messages.GuiUpdateMessage(impl.uuid, {"value": impl.value}))
 
 
 def after_broadcast(client, action: Callable[[], None]) -> None:  # noqa: ANN001
