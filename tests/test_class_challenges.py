@@ -219,6 +219,33 @@ async def a_student_in(classroom, title: str, address: str) -> tuple[ViserClient
     return teacher, student, next(m for m in room.members.values() if m.card is not None)
 
 
+@pytest.mark.parametrize("title, box, typed", [
+    ("Where is the flange?", "Your numbers (x, y, z)", "1 2"),
+    ("Type the UR10's DH table", "Your DH table (a α d θ type, mm and °)", "0 90 128 0 R"),
+    ("Straight up", "θ̇2 shoulder (°/s)", 10.0),  # a velocity task's answer: rates, set without moving the arm
+])
+def test_a_student_typing_an_answer_is_counted_working_on_the_projector(classroom, title, box, typed):
+    """Typing at an answer made a student "working" on the server, but the projector's board was not asked to redraw:
+    with numbers to type, the class showed 0 working until someone pressed "Check my answer". Joint rates set for a
+    velocity task did not count at all."""
+
+    async def scenario():
+        teacher, student, member = await a_student_in(classroom, title, "127.0.0.9")
+
+        def working():
+            boards = [board_numbers(text) for text in teacher.markdown.values()]
+            return next((board["working"] for board in boards if board is not None), None)
+
+        await until(lambda: working() == 0, what="the board")
+        await student.set_gui(box, typed)
+        await until(lambda: member.student.acted, what="the typing")
+        await until(lambda: working() == 1, what="the student counted working on the board")
+        for client in (teacher, student):
+            await client.close()
+
+    asyncio.run(scenario())
+
+
 def test_a_client_cannot_claim_solved_and_checks_are_paced(classroom):
     room = classroom.classroom
     room.challenges.clock = lambda: 100.0  # time stands still: a second check is always within the second

@@ -133,10 +133,13 @@ class ChallengeDesk:
 
 
 class ChallengeCard:
-    """A student's "Challenge" folder: the task, their nickname, what they type, "Check my answer" and its verdict."""
+    """A student's "Challenge" folder: the task, their nickname, what they type, "Check my answer" and its verdict.
+
+    ``check()`` checks the answer; ``working()`` is told each time the student types at it.
+    """
 
     def __init__(self, gui: viser.GuiApi, run: ChallengeRun, student: Student, guard: Callable[..., Callable],
-                 check: Callable[[], None]) -> None:
+                 check: Callable[[], None], working: Callable[[], None]) -> None:
         challenge = run.challenge
         self.challenge = challenge
         self.folder = gui.add_folder("Challenge", order=0.05)
@@ -158,15 +161,15 @@ class ChallengeCard:
             self.check.on_click(guard(lambda _: check(), beside=self.refusal))
             self.verdict = gui.add_markdown(verdict_markdown(student.verdict, student.attempts) if student.verdict else "")
         self.nickname.on_update(guard(lambda _: self._renamed(run, student), beside=self.named))
-        for typed in (self.numbers, self.rows):
-            if typed is not None:
-                typed.on_update(guard(lambda _: run.moved(student)))
+        for box in (self.numbers, self.rows):
+            if box is not None:
+                box.on_update(guard(lambda _: working()))
         if self.convention is not None:
-            self.convention.on_update(guard(lambda _: self._convention_changed(run, student)))
+            self.convention.on_update(guard(lambda _: self._convention_changed(working)))
 
-    def _convention_changed(self, run: ChallengeRun, student: Student) -> None:
+    def _convention_changed(self, working: Callable[[], None]) -> None:
         self.convention_chosen()  # refused (and put back) as it comes: the card keeps it when rebuilt
-        run.moved(student)
+        working()
 
     def _renamed(self, run: ChallengeRun, student: Student) -> None:
         name = run.rename(student, self.nickname.value)

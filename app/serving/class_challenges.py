@@ -116,7 +116,7 @@ class ClassChallenges:
         member.observer = lambda snapshot: self._moved(member, snapshot)  # from here on, a change is the student's
         self.watch(member)
         member.card = ChallengeCard(member.client.gui, run, student, lambda handler, beside=None: self._guard(member, handler, beside),
-                                    check=lambda: self.check(member))
+                                    check=lambda: self.check(member), working=lambda: self._moved(member))
         if run.challenge.is_pose:
             student.flange = session.state.last.flange  # drawn on the projector from the start; not yet working
         self.show_goal(member)
@@ -162,8 +162,12 @@ class ClassChallenges:
 
     def watch(self, member: Member) -> None:
         """A student's own arm tells the challenge each change (however they came to have it: the start, Explore on my own)."""
-        if member.observer is not None and member.session is not None and member.observer not in member.session.observers:
-            member.session.observers.append(member.observer)
+        session = member.session
+        if member.observer is not None and session is not None and member.observer not in session.observers:
+            session.observers.append(member.observer)
+            if self.run is not None and self.run.challenge.kind == "velocity":  # its answer, the joint rates, is set without moving the arm
+                for slider in session.velocity.sliders:
+                    slider.on_update(self._guard(member, lambda _: self._moved(member)))
 
     def show_goal(self, member: Member) -> None:
         """The reach target, in ``member``'s own scene (once: a scene reset takes it, and the classroom draws it again)."""
@@ -175,12 +179,13 @@ class ClassChallenges:
             if session is not None:  # its placed labels make way for the target's name (``ArmSession.names_elsewhere``)
                 session.refresher.request(session)
 
-    def _moved(self, member: Member, snapshot) -> None:
-        """A student's arm changed: they are working; the projector draws their tool."""
+    def _moved(self, member: Member, snapshot=None) -> None:
+        """A student's arm changed (``snapshot``), or they typed at their answer: they are working; the projector
+        draws their tool."""
         run, student = self.run, member.student
         if run is None or student is None or run.ended:
             return
-        run.moved(student, snapshot.flange if run.challenge.is_pose else None)
+        run.moved(student, snapshot.flange if snapshot is not None and run.challenge.is_pose else None)
         self._board_changed()
 
     def check(self, member: Member) -> None:
