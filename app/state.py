@@ -169,7 +169,7 @@ class ArmState:
                 raise ValueError(f"{name}: {value} is not a number")
             if not lo - LIMIT_TOLERANCE <= value <= hi + LIMIT_TOLERANCE:
                 # as the slider shows them: the SCARA's ±157.5°, not ±158° beside "got 158.0°"
-                lowest, highest = (joint_value_text(kind, v, ".1f").replace(".0°", "°").replace(".0 mm", " mm") for v in (lo, hi))
+                lowest, highest = (re.sub(r"\.0(?=°| mm)", "", joint_value_text(kind, v)) for v in (lo, hi))
                 raise ValueError(f"{name}: from {lowest} to {highest}, got {joint_value_text(kind, value)}")
         return np.clip(q, low, high)
 

@@ -165,7 +165,7 @@ class ClassChallenges:
         session = member.session
         if member.observer is not None and session is not None and member.observer not in session.observers:
             session.observers.append(member.observer)
-            if self.run is not None and self.run.challenge.kind == "velocity":  # its answer, the joint rates, is set without moving the arm
+            if self.run is not None and self.run.challenge.kind == "velocity":  # its answer: rates, set without a move
                 for slider in session.velocity.sliders:
                     slider.on_update(self._guard(member, lambda _: self._moved(member)))
 
