@@ -270,9 +270,18 @@ class StaticsView(View):
         if self.mapped.value and self.held == "largest_torque":  # a click a browser cannot send while it is off
             put_back(self.mapped, False)
             raise ValueError(HELD_BACK)
+        refused = None
         if self.mapped.value and not session.closed:
-            force = self.fixed_force()
-            shown = force, HEAVY.run(session.client, lambda: torque_map(session.arm, force, TORQUE_MAP_POINTS), cancelled=lambda: session.closed)
+            try:
+                force = self.fixed_force()
+            except ValueError as why:
+                if self._directions[chosen(self.direction, "force direction")] is not None:
+                    raise  # a size refused: the map stays
+                put_back(self.mapped, False)  # the tool's z turns with the arm: no map, nor the last force's left on
+                refused = why
+            else:
+                shown = force, HEAVY.run(session.client, lambda: torque_map(session.arm, force, TORQUE_MAP_POINTS),
+                                         cancelled=lambda: session.closed)
         with self._map_lock:
             if session.closed:
                 return
@@ -284,6 +293,8 @@ class StaticsView(View):
             if shown is None:
                 if camera is not None and MAP_VIEW in camera.extra:  # the arm alone in view again
                     camera.show_also(MAP_VIEW, None)
+                if refused is not None:
+                    raise refused
                 return
             force, (points, norms, worst) = shown
             top = float(norms[worst]) or 1.0
