@@ -14,6 +14,7 @@ import viser
 
 from .serving.gate import TokenBucket
 from .style import DANGER_RED, hex_color, sentence
+from .viser_internals import send_again
 
 log = logging.getLogger(__name__)
 
@@ -44,6 +45,33 @@ def notify(client: viser.ClientHandle, title: str, body: str, color: str = "yell
         client.add_notification(title, sentence(body), auto_close_seconds=8.0, color=color)
     except Exception:
         log.debug("could not notify client %s", client.client_id, exc_info=True)
+
+
+class Crossings:
+    """Which of a view's inputs the browser may show wrongly because its change crossed the server's on the way
+    (docs/architecture.md §1): the server :meth:`sent` a value, then the browser's own was :meth:`received`; once
+    the arm has taken it, :meth:`settle` sends it back, since viser, holding it already, would not. The caller
+    holds its own lock around each call. ``key`` names the input (one per view: None).
+    """
+
+    def __init__(self) -> None:
+        self._sent: set = set()  #: set by the server since the browser last sent a value
+        self._unsure: set = set()  #: the browser's value came after the server's: it may show the server's
+
+    def sent(self, key=None) -> None:
+        self._sent.add(key)
+        self._unsure.discard(key)  # what it shows now is the server's
+
+    def received(self, key=None) -> None:
+        if key in self._sent:
+            self._sent.discard(key)
+            self._unsure.add(key)
+
+    def settle(self, handle, key=None) -> None:
+        """The server holds ``handle``'s value unchanged: the browser is sent it again if it may show another."""
+        if key in self._unsure:
+            self._unsure.discard(key)
+            send_again(handle)
 
 
 class Beside:

@@ -21,7 +21,7 @@ from ur10core.orientation import (
     transform_from_quaternion,
 )
 
-from ..feedback import Beside, chosen
+from ..feedback import Beside, Crossings, chosen
 from ..meshes import SKELETON, ArmModels, skeleton_links
 from ..state import ArmState, Snapshot, joint_value_text
 from ..style import (
@@ -35,7 +35,6 @@ from ..style import (
     swatch,
 )
 from ..view import HELD_BACK, Session, View
-from ..viser_internals import send_again
 from ..viser_internals.fast_updates import set_instances, stop_echo
 from .branch_labels import BranchLabels
 from .robot import model_slug
@@ -424,8 +423,7 @@ class IKTarget(View):
         self._session = session
         self._drawing = drawing
         self._seen: tuple | None = None
-        self._pushed = False  #: the gizmo was put on the target since the browser's last drag event
-        self._unsure = False  #: a drag event came after that: it may have crossed the push, which the browser shows
+        self._crossings = Crossings()  # the gizmo's pose: put on the target here, or dropped by the student
         self._seen_lock = threading.Lock()
         arm, snapshot = session.arm, session.state.last
         self.gizmo = controls.add_transform_controls(
@@ -487,7 +485,7 @@ class IKTarget(View):
         try:
             pose = (tuple(self.gizmo.wxyz), tuple(self.gizmo.position), event.phase == "end")
             with self._seen_lock:
-                self._unsure, self._pushed = self._unsure or self._pushed, False
+                self._crossings.received()
                 if pose == self._seen:
                     return  # a repeated update
                 self._seen = pose
@@ -549,10 +547,9 @@ class IKTarget(View):
             with self._seen_lock:
                 self._seen = None  # the next drag starts afresh, even from this very pose
                 if (tuple(self.gizmo.wxyz), tuple(self.gizmo.position)) != held:
-                    self._pushed = True
-                elif self._unsure:  # viser holds the browser's drop as unchanged, so would not send it
-                    send_again(self.gizmo)
-                self._unsure = False
+                    self._crossings.sent()
+                else:
+                    self._crossings.settle(self.gizmo)
         if self.unreachable is not None:
             self.unreachable.visible = not snapshot.reachable
 

@@ -18,11 +18,10 @@ import viser
 
 from ur10core import to_controller
 
-from ..feedback import Beside, chosen
+from ..feedback import Beside, Crossings, chosen
 from ..state import ArmState, Snapshot, joint_value_text
 from ..style import number
 from ..view import Session, View
-from ..viser_internals import send_again
 
 #: Display units between two values of a slider beyond which the second was typed, not dragged.
 DRAG_STEP = 10.0
@@ -99,9 +98,7 @@ class JointPanel(View):
         q = session.state.q
         shown = [round(float(to_display(kind, v)), 2) for kind, v in zip(arm.joint_types, q)]
         self._received = list(shown)  # each slider's last value, as the browser sent or we set it
-        self._pushed: set[int] = set()  # sliders set here since their browser last sent a value
-        #: sliders whose browser sent a value that may have crossed ours on the way: it may show ours
-        self._unsure: set[int] = set()
+        self._crossings = Crossings()  # by slider index
         self._shown_q = q
         self._typed_text = display_text(arm, q)  # the box as we last wrote it or the student last sent it
         self._typed_over = -1  # the order of the newest change the student's typing was made after
@@ -145,9 +142,7 @@ class JointPanel(View):
             with self._typing_lock:  # read under the lock: callbacks run side by side, and the last must see the newest
                 value = float(self.sliders[index].value)
                 previous, self._received[index] = self._received[index], value
-                if index in self._pushed:
-                    self._pushed.discard(index)
-                    self._unsure.add(index)
+                self._crossings.received(index)
                 waiting = self._typing.pop(index, None)
                 if waiting is not None:
                     waiting.cancel()
@@ -205,10 +200,9 @@ class JointPanel(View):
                 if not abs(slider.value - value) <= 1e-9:  # true for a NaN a bad client left too
                     slider.value = value  # its callback returns at once: not a student's move
                     self._received[index] = value
-                    self._pushed.add(index)
-                elif index in self._unsure:
-                    send_again(slider)  # viser holds this value already, so would not send it
-                self._unsure.discard(index)
+                    self._crossings.sent(index)
+                else:
+                    self._crossings.settle(slider, index)
         with self._typing_lock:  # a panel drawn late, or before the typing's callback has run, leaves the typing alone
             typed_since = (self.typed.value != self._typed_text or snapshot.order <= self._typed_over
                            or (self._student_text and snapshot.cause == "motion"))
