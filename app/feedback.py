@@ -7,6 +7,7 @@ import contextlib
 import functools
 import logging
 import math
+import threading
 import time
 from typing import Any, Callable
 
@@ -24,6 +25,9 @@ NOTICES_PER_SECOND = 2.0
 NOTICE_BURST = 20
 #: The time the notices' rate is kept by (a test sets its own).
 clock = time.monotonic
+#: Seconds a student leaves a slider (or the gizmo) before a value of theirs that crossed the server's is sent
+#: back: a key held down or a drag sends one every 50 ms, and a pause as long as typing's is a pause.
+STILL_FOR = 0.5
 
 
 def notify(client: viser.ClientHandle, title: str, body: str, color: str = "yellow") -> None:
@@ -50,28 +54,43 @@ def notify(client: viser.ClientHandle, title: str, body: str, color: str = "yell
 class Crossings:
     """Which of a view's inputs the browser may show wrongly because its change crossed the server's on the way
     (docs/architecture.md §1): the server :meth:`sent` a value, then the browser's own was :meth:`received`; once
-    the arm has taken it, :meth:`settle` sends it back, since viser, holding it already, would not. The caller
-    holds its own lock around each call. ``key`` names the input (one per view: None).
+    the arm has taken it and the student has left the input still for :data:`STILL_FOR` s, :meth:`settle` sends
+    it back, since viser, holding it already, would not. Sent sooner, it could reach a browser whose student has
+    moved on (a key pressed twice) and show an older value there. A value sent back can cross a newer one in turn.
+
+    ``later()`` asks the view to settle again (it is called once the input has been still long enough). The
+    caller holds its own lock around each call. ``key`` names the input (one per view: None).
     """
 
-    def __init__(self) -> None:
+    def __init__(self, later: Callable[[], None], clock: Callable[[], float] = time.monotonic) -> None:
+        self._later, self._clock = later, clock
         self._sent: set = set()  #: set by the server since the browser last sent a value
-        self._unsure: set = set()  #: the browser's value came after the server's: it may show the server's
+        self._unsure: dict = {}  #: came from the browser after the server's (it may show that), by when
+        self._timer: threading.Timer | None = None
 
     def sent(self, key=None) -> None:
         self._sent.add(key)
-        self._unsure.discard(key)  # what it shows now is the server's
+        self._unsure.pop(key, None)  # what it shows now is the server's
 
     def received(self, key=None) -> None:
-        if key in self._sent:
+        if key in self._sent or key in self._unsure:
             self._sent.discard(key)
-            self._unsure.add(key)
+            self._unsure[key] = self._clock()
 
     def settle(self, handle, key=None) -> None:
         """The server holds ``handle``'s value unchanged: the browser is sent it again if it may show another."""
-        if key in self._unsure:
-            self._unsure.discard(key)
-            send_again(handle)
+        if key not in self._unsure:
+            return
+        wait = self._unsure[key] + STILL_FOR - self._clock()
+        if wait > 0:
+            if self._timer is None or not self._timer.is_alive():
+                self._timer = threading.Timer(wait, self._later)
+                self._timer.daemon = True
+                self._timer.start()
+            return
+        del self._unsure[key]
+        self.sent(key)
+        send_again(handle)
 
 
 class Beside:

@@ -16,6 +16,7 @@ import numpy as np
 from ur10core import Arm
 import pytest
 
+from ur10teach import feedback
 from ur10teach.features import joint_panel
 from ur10teach.serving import workers
 from ur10teach.state import ArmState, joint_value_text
@@ -23,7 +24,7 @@ from ur10teach.style import number, sentence
 
 from .server_support import become_presenter, drag_a_little, member_of, session_of, until, url
 from ur10dev.viser_client import ViserClient, wxyz_of
-from ur10dev.waiting import HANG_TIMEOUT
+from ur10dev.waiting import HANG_TIMEOUT, wait_for
 
 pytestmark = pytest.mark.server
 
@@ -453,6 +454,48 @@ def test_a_slider_shows_the_students_value_when_it_crossed_the_servers_on_the_wa
         await client.close()
 
     asyncio.run(scenario())
+
+
+def test_a_slider_put_right_after_a_crossing_is_put_right_again_when_the_students_next_value_crossed_that(app):
+    """Found in a real browser: a student pressed an arrow key on a slider the panel had just set, and again. The
+    first value was sent back (it had come after the panel's) while the second was on its way: the slider
+    showed the first value, the arm had the second, and nothing put the slider right."""
+
+    async def scenario():
+        client = await ViserClient(url(app)).connect()
+        session = session_of(app, client)
+        label = "θ3 elbow (°)"
+        session.apply(lambda state: state.set_joint(2, np.radians(-120.0)))
+        await until(lambda: client.gui[label]["value"] == -120.0, what="the panel's angle in the browser")
+        await client.set_gui(label, 65.0)  # crossed the panel's -120
+        await until(lambda: client.gui[label]["value"] == 65.0, what="the student's angle sent back")
+        await client.set_gui(label, 64.0)  # the next key press: to the server, it may have crossed that
+        await until(lambda: abs(np.degrees(session.state.q[2]) - 64.0) < 1e-9, what="the next angle applied")
+        await until(lambda: client.gui[label]["value"] == 64.0, what="the slider at the arm's angle again")
+        await client.close()
+
+    asyncio.run(scenario())
+
+
+def test_a_crossed_value_is_sent_back_once_the_student_has_left_the_slider_still(monkeypatch):
+    """Sent back at once, a value could reach a browser whose student had pressed the key again (the throttle
+    sends one value each 50 ms), and the slider showed the value before the last."""
+    resent, asked, now = [], [], [0.0]
+    monkeypatch.setattr(feedback, "send_again", lambda handle: resent.append(handle.value))
+    crossings = feedback.Crossings(later=lambda: asked.append(True), clock=lambda: now[0])
+    slider = types.SimpleNamespace(value=65.0)
+    crossings.sent()
+    crossings.received()  # the student's 65 came after the panel's value
+    crossings.settle(slider)  # the arm has taken 65; the student is still pressing
+    now[0], slider.value = 0.05, 64.0
+    crossings.received()
+    crossings.settle(slider)
+    assert resent == []
+    wait_for(lambda: asked, what="a later look asked for")
+    now[0] = 0.05 + feedback.STILL_FOR
+    crossings.settle(slider)
+    crossings.settle(slider)
+    assert resent == [64.0]  # once, the newest
 
 
 def test_the_gizmo_shows_where_the_student_dropped_it_when_that_crossed_the_servers_pose(app):

@@ -423,7 +423,7 @@ class IKTarget(View):
         self._session = session
         self._drawing = drawing
         self._seen: tuple | None = None
-        self._crossings = Crossings()  # the gizmo's pose: put on the target here, or dropped by the student
+        self._crossings = Crossings(later=session.redraw)  # the gizmo's pose: put on the target here, or dropped by the student
         self._seen_lock = threading.Lock()
         arm, snapshot = session.arm, session.state.last
         self.gizmo = controls.add_transform_controls(

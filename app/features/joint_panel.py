@@ -98,7 +98,7 @@ class JointPanel(View):
         q = session.state.q
         shown = [round(float(to_display(kind, v)), 2) for kind, v in zip(arm.joint_types, q)]
         self._received = list(shown)  # each slider's last value, as the browser sent or we set it
-        self._crossings = Crossings()  # by slider index
+        self._crossings = Crossings(later=lambda: session.refresher.request(session))  # by slider index
         self._shown_q = q
         self._typed_text = display_text(arm, q)  # the box as we last wrote it or the student last sent it
         self._typed_over = -1  # the order of the newest change the student's typing was made after
