@@ -66,7 +66,7 @@ class Crossings:
         self._later, self._clock = later, clock
         self._sent: set = set()  #: set by the server since the browser last sent a value
         self._unsure: dict = {}  #: came from the browser after the server's (it may show that), by when
-        self._timer: threading.Timer | None = None
+        self._asked = -math.inf  #: when the later look asked for comes
 
     def sent(self, key=None) -> None:
         self._sent.add(key)
@@ -81,12 +81,13 @@ class Crossings:
         """The server holds ``handle``'s value unchanged: the browser is sent it again if it may show another."""
         if key not in self._unsure:
             return
-        wait = self._unsure[key] + STILL_FOR - self._clock()
-        if wait > 0:
-            if self._timer is None or not self._timer.is_alive():
-                self._timer = threading.Timer(wait, self._later)
-                self._timer.daemon = True
-                self._timer.start()
+        now, still = self._clock(), self._unsure[key] + STILL_FOR
+        if now < still:
+            if now >= self._asked:  # no later look still to come
+                self._asked = still
+                timer = threading.Timer(still - now, self._later)
+                timer.daemon = True
+                timer.start()
             return
         del self._unsure[key]
         self.sent(key)

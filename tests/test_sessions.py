@@ -482,20 +482,28 @@ def test_a_crossed_value_is_sent_back_once_the_student_has_left_the_slider_still
     sends one value each 50 ms), and the slider showed the value before the last."""
     resent, asked, now = [], [], [0.0]
     monkeypatch.setattr(feedback, "send_again", lambda handle: resent.append(handle.value))
-    crossings = feedback.Crossings(later=lambda: asked.append(True), clock=lambda: now[0])
-    slider = types.SimpleNamespace(value=65.0)
-    crossings.sent()
-    crossings.received()  # the student's 65 came after the panel's value
-    crossings.settle(slider)  # the arm has taken 65; the student is still pressing
-    now[0], slider.value = 0.05, 64.0
-    crossings.received()
-    crossings.settle(slider)
+    crossings = feedback.Crossings(later=lambda: asked.append(now[0]), clock=lambda: now[0])
+    elbow, wrist = types.SimpleNamespace(value=65.0), types.SimpleNamespace(value=10.0)
+    crossings.sent("elbow")
+    crossings.received("elbow")  # the student's 65 came after the panel's value
+    crossings.settle(elbow, "elbow")  # the arm has taken 65; the student is still pressing
+    now[0], elbow.value = 0.05, 64.0
+    crossings.received("elbow")
+    crossings.settle(elbow, "elbow")
     assert resent == []
     wait_for(lambda: asked, what="a later look asked for")
-    now[0] = 0.05 + feedback.STILL_FOR
-    crossings.settle(slider)
-    crossings.settle(slider)
+    crossings.sent("wrist")
+    now[0] = 0.2
+    crossings.received("wrist")
+    now[0] = 0.05 + feedback.STILL_FOR  # that look: the elbow has been still long enough, the wrist not yet
+    crossings.settle(elbow, "elbow")
+    crossings.settle(wrist, "wrist")
+    crossings.settle(elbow, "elbow")
     assert resent == [64.0]  # once, the newest
+    wait_for(lambda: len(asked) == 2, what="another look asked for, for the wrist")
+    now[0] = 0.2 + feedback.STILL_FOR
+    crossings.settle(wrist, "wrist")
+    assert resent == [64.0, 10.0]
 
 
 def test_the_gizmo_shows_where_the_student_dropped_it_when_that_crossed_the_servers_pose(app):
