@@ -29,7 +29,14 @@ def test_a_presenter_and_two_students_run_a_reach_challenge(tmp_path):
             desk = teacher_member.desk
             teacher.wait_for_selector(dom_id(desk.picker), timeout=HANG_TIMEOUT_MS)
             choose(teacher, desk.picker, "Reach the target")
+            # a time limit typed, then the box emptied: the class gets the limit the teacher's page still shows
+            limit = teacher.locator(dom_id(desk.minutes)).locator("xpath=..")  # the slider and its number box
+            limit.locator("input.mantine-NumberInput-input").fill("5")
+            wait_for(lambda: desk.minutes.value == 5, what="the time limit typed")
+            limit.locator("input.mantine-NumberInput-input").fill("")
+            shown = float(limit.locator("[role=slider]").get_attribute("aria-valuenow"))
             click(teacher, desk.start, lambda: room.challenges.run is not None, "Start the challenge")
+            assert room.challenges.run.time_limit == 60 * shown == 300
 
             # both students get their own arm and the task
             for page, member in ((ada, ada_member), (bo, bo_member)):

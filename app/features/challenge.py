@@ -82,7 +82,8 @@ class ChallengeDesk:
             self.picker = gui.add_dropdown("Challenge", titles, hint="Built in, from --challenges FILE, or about the pose shown")
             self.preview = gui.add_markdown("")
             self.picker.on_update(guard(lambda _: self._preview()))
-            self.minutes = gui.add_number("Time limit (min, 0: none)", 0, min=0, max=MAX_TIME_LIMIT_MINUTES, step=1)
+            # a slider, not a number box: a box the teacher empties shows nothing while the server keeps its last value
+            self.minutes = gui.add_slider("Time limit (min, 0: none)", min=0, max=MAX_TIME_LIMIT_MINUTES, step=1, initial_value=0)
             self.refusal = Beside(gui)
             self.start = gui.add_button("Start the challenge", icon=viser.Icon.PLAYER_PLAY, order=self.refusal.line.order - 0.5)
             self.start.on_click(guard(lambda _: start(self.chosen(), self.time_limit()), beside=self.refusal))
