@@ -730,6 +730,26 @@ def test_the_desktop_arms_heaviest_pose_is_found_by_the_student_not_by_its_searc
     asyncio.run(scenario())
 
 
+def test_a_time_limit_beyond_its_range_is_refused_as_it_is_typed(classroom):
+    """Found by a monkey in a real browser: the teacher typed 99999 in the time limit's box and pressed Enter. The
+    slider showed its end, 120, while the server kept 99999, refused only once the challenge was started."""
+    room = classroom.classroom
+    label = "Time limit (min, 0: none)"
+
+    async def scenario():
+        teacher = await ViserClient(url(classroom)).connect()
+        await become_presenter(teacher, classroom)
+        desk = await until(lambda: next((m.desk for m in room.members.values() if m.desk is not None), None), what="the desk")
+        await teacher.set_gui(label, 10)
+        await until(lambda: desk.minutes.value == 10, what="the limit typed")
+        await teacher.set_gui(label, 99999)
+        await until(lambda: teacher.shown("from 0 to 120, got 99999"), what="the refusal beside the limit")
+        await until(lambda: teacher.gui[label]["value"] == desk.minutes.value == 10, what="the limit put back")
+        await teacher.close()
+
+    asyncio.run(scenario())
+
+
 def test_the_presenter_asks_the_class_about_the_pose_it_is_shown(classroom):
     """A question thought of in the lecture, with no file: the teacher puts the class's arm somewhere and asks where
     its tool is, then asks the class to reach that pose. The numbers are asked at the joints shown (p checked

@@ -85,6 +85,7 @@ class ChallengeDesk:
             # a slider, not a number box: a box the teacher empties shows nothing while the server keeps its last value
             self.minutes = gui.add_slider("Time limit (min, 0: none)", min=0, max=MAX_TIME_LIMIT_MINUTES, step=1, initial_value=0)
             self.refusal = Beside(gui)
+            self.minutes.on_update(guard(lambda _: within(self.minutes, "time limit (min)"), beside=self.refusal))
             self.start = gui.add_button("Start the challenge", icon=viser.Icon.PLAYER_PLAY, order=self.refusal.line.order - 0.5)
             self.start.on_click(guard(lambda _: start(self.chosen(), self.time_limit()), beside=self.refusal))
             self.board = gui.add_markdown("")
