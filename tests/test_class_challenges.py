@@ -6,6 +6,7 @@ import asyncio
 import itertools
 import math
 import re
+import types
 
 import numpy as np
 import pytest
@@ -240,6 +241,39 @@ def test_a_student_typing_an_answer_is_counted_working_on_the_projector(classroo
         await student.set_gui(box, typed)
         await until(lambda: member.student.acted, what="the typing")
         await until(lambda: working() == 1, what="the student counted working on the board")
+        for client in (teacher, student):
+            await client.close()
+
+    asyncio.run(scenario())
+
+
+def test_a_students_rate_sliders_count_only_in_a_velocity_challenge_and_are_hooked_once(classroom):
+    """A rate slider was hooked to the board each time a velocity challenge began, and the hooks stayed: a student
+    kept through several gained one per challenge, and moving a rate slider in a later challenge of another kind
+    counted them working on the projector."""
+    room = classroom.classroom
+
+    def turn(slider) -> None:
+        """What viser does on a student's change: every callback of the slider (run here, in order)."""
+        for callback in list(slider._impl.update_cb):
+            callback(types.SimpleNamespace(client=None, client_id=None, target=slider))
+
+    async def scenario():
+        teacher, student, member = await a_student_in(classroom, "Straight up", "127.0.0.11")
+        slider = member.session.velocity.sliders[1]
+        hooked = len(slider._impl.update_cb)
+        turn(slider)
+        assert member.student.acted  # in a velocity challenge, rates are the answer
+        for title in ("Straight up", "Where is the flange?"):
+            before = member.student
+            await teacher.set_gui("End and show the solution", True)
+            await until(lambda: room.challenges.run.ended, what="the challenge over")
+            await teacher.set_gui("Challenge", title)
+            await teacher.set_gui("Start the challenge", True)
+            await until(lambda: member.student not in (None, before) and member.card is not None, what=f"the task {title!r}")
+            assert member.session.velocity.sliders[1] is slider and len(slider._impl.update_cb) == hooked
+        turn(slider)
+        assert not member.student.acted  # rates are no answer to where the flange is
         for client in (teacher, student):
             await client.close()
 

@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import logging
 import time
+import weakref
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -44,6 +45,7 @@ class ClassChallenges:
         self.offered = challenges
         self.run: ChallengeRun | None = None  #: the challenge started last (running, or ended and its results kept)
         self._board_due = False  #: a redraw of the presenter's board is requested
+        self._rates_watched: weakref.WeakSet = weakref.WeakSet()  #: the sessions whose rate sliders tell :meth:`_rates_moved`
         #: the board's own refresher: behind a hundred students' panels in the shared one, it fell 7 s behind
         #: (BENCHMARKS.md, *a class challenge in a lecture hall*); alone in this one it is due every 0.5 s
         self.boards = PanelRefresher(room.app.server.get_event_loop(), interval=ChallengeDesk.panel_interval, duty=0.5)
@@ -165,9 +167,10 @@ class ClassChallenges:
         session = member.session
         if member.observer is not None and session is not None and member.observer not in session.observers:
             session.observers.append(member.observer)
-            if self.run is not None and self.run.challenge.kind == "velocity":  # its answer: rates, set without a move
+            if session not in self._rates_watched:  # once per arm: the session outlives one challenge
+                self._rates_watched.add(session)
                 for slider in session.velocity.sliders:
-                    slider.on_update(self._guard(member, lambda _: self._moved(member)))
+                    slider.on_update(self._guard(member, lambda _: self._rates_moved(member)))
 
     def show_goal(self, member: Member) -> None:
         """The reach target, in ``member``'s own scene (once: a scene reset takes it, and the classroom draws it again)."""
@@ -187,6 +190,11 @@ class ClassChallenges:
             return
         run.moved(student, snapshot.flange if snapshot is not None and run.challenge.is_pose else None)
         self._board_changed()
+
+    def _rates_moved(self, member: Member) -> None:
+        """A student's joint rates changed: their answer in a velocity challenge (set without moving the arm)."""
+        if self.run is not None and self.run.challenge.kind == "velocity":
+            self._moved(member)
 
     def check(self, member: Member) -> None:
         """Check what ``member`` has on the server (their joints, target, rates, typed answer): never what a browser claims."""
