@@ -244,13 +244,21 @@ def about_the_pose(question: str, arm: Arm, q) -> Challenge:
     >>> about_the_pose("Pose shown: holding torques", arm, arm.specs.home)
     Traceback (most recent call last):
     ...
-    ValueError: gravity_torque needs the arm's link masses, known for course, ur10, ur10e, not for 'kr210'
+    ValueError: the holding torques need the arm's link masses, and they are known for the UR10 only
     """
     if question not in POSE_QUESTIONS:
         raise ValueError(f"question must be one of {', '.join(POSE_QUESTIONS)}, got {question!r:.40}")
     if arm.name not in PRESETS:
         raise ValueError("a typed table has no challenges: show the class one of the course's arms")
     kind, asked = POSE_QUESTIONS[question]
+    if asked == "wrist_centre":  # in the teacher's words: the file's field names mean nothing on the desk
+        try:
+            spherical_wrist(arm)
+        except ValueError as why:
+            raise ValueError(f"the wrist centre is where a spherical wrist's three axes meet, and this arm has {why}") from None
+    if asked == "gravity_torque" and arm.name not in MASSES:
+        known = "the UR10" if set(MASSES) <= set(Arm.UR_PRESETS) else ", ".join(sorted(MASSES))
+        raise ValueError(f"the holding torques need the arm's link masses, and they are known for {known} only")
     q = arm.joints(q)
     values = {"title": question, "kind": kind, "arm": "ur10" if arm.name in Arm.UR_PRESETS else arm.name,
               "joints": tuple(q.tolist())}
