@@ -852,7 +852,7 @@ def test_the_presenter_asks_the_class_about_the_pose_it_is_shown(classroom):
         await until(lambda: np.allclose(room.state.q, home), what="the class's arm at home: the pose shown is home")
         await teacher.set_gui("Challenge", "Pose shown: reach it")
         await teacher.set_gui("Start the challenge", True)
-        await until(lambda: teacher.shown("so it is at its home pose: move it away first"), what="the refusal")
+        await until(lambda: teacher.shown("on the answer, and so is its home pose, where it would go instead: move it off the answer first"), what="the refusal")
         assert not room.challenges.running
         for client in (teacher, student):
             await client.close()

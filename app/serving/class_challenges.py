@@ -83,7 +83,8 @@ class ClassChallenges:
             # nobody starts on the answer: the students' arms start where the class's is
             on_answer = challenge.is_pose and check(challenge, state.arm, Answer(q=state.q, target=state.last.target)).solved
             if on_answer and check(challenge, state.arm, Answer(q=home, target=state.arm.fk(home))).solved:
-                raise ValueError("the class's arm is on the answer, and so it is at its home pose: move it away first")
+                raise ValueError("the class's arm is on the answer, and so is its home pose, where it would go instead: "
+                                 "move it off the answer first")
             for other in self.room.members.values():  # the last run's cards and targets go
                 self.step_out(other, keep=False)
             self.run = ChallengeRun(challenge, state.arm, time_limit, clock=lambda: self.clock())
