@@ -803,7 +803,7 @@ def test_the_presenter_asks_the_class_about_the_pose_it_is_shown(classroom):
         await until(lambda: np.allclose(room.state.q, np.radians(shown)), what="the class's arm at the pose")
         await teacher.set_gui("Challenge", "Pose shown: wrist centre")  # the UR10 has no spherical wrist
         await until(lambda: teacher.shown("Not about the arm shown: the wrist centre is where a spherical wrist's three axes meet, and this arm "
-                                          "has no spherical wrist"), what="why not")
+                                          "has none: the last three axes do not meet"), what="why not")
         await teacher.set_gui("Challenge", "Pose shown: tool position")
         given = "**Given:** q = (20°, -70°, 100°, -30°, 60°, 10°)"
         await until(lambda: any("asked of the class's arm as it stands when you start" in t for t in teacher.shown(given)),

@@ -255,7 +255,8 @@ def about_the_pose(question: str, arm: Arm, q) -> Challenge:
         try:
             spherical_wrist(arm)
         except ValueError as why:
-            raise ValueError(f"the wrist centre is where a spherical wrist's three axes meet, and this arm has {why}") from None
+            reason = str(why).removeprefix("no spherical wrist: ")
+            raise ValueError(f"the wrist centre is where a spherical wrist's three axes meet, and this arm has none: {reason}") from None
     if asked == "gravity_torque" and arm.name not in MASSES:
         known = "the UR10" if set(MASSES) <= set(Arm.UR_PRESETS) else ", ".join(sorted(MASSES))
         raise ValueError(f"the holding torques need the arm's link masses, and they are known for {known} only")
