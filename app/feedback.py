@@ -121,7 +121,9 @@ def guard(
 
     ``ValueError`` is a value the user gave that we refuse: it is explained ``beside`` the
     input it came from (or in a notice, "Not accepted") and ``on_refused`` puts the widgets
-    back. Anything else is a bug: it is logged and the user is told the app is still running.
+    back; the explanation stays until the student's next change is accepted (a value the server
+    itself sets, putting one back, is none). Anything else is a bug: it is logged and the user is
+    told the app is still running.
     """
 
     @functools.wraps(handler)
@@ -130,7 +132,7 @@ def guard(
             return
         try:
             handler(event)
-            if beside is not None:
+            if beside is not None and getattr(event, "client", None) is not None:
                 beside.clear()
         except ValueError as error:
             if beside is not None:
@@ -176,8 +178,8 @@ def chosen(handle, what: str) -> str:
 def within(handle, what: str) -> float:
     """The value of a slider or number field, or ``ValueError`` when a client sent one outside its range.
 
-    A browser only sends values within a widget's range; a NaN or a value beyond it came from
-    something else. As :func:`chosen` does for a dropdown, the widget is put back to the last
+    A slider's number box in viser's page takes any number typed (99999 beside a joint's ±360°);
+    a NaN came from something else. As :func:`chosen` does for a dropdown, the widget is put back to the last
     value it accepted (or the value nearest 0 in its range) before the refusal: a value left
     in it would be refused again at every redraw that reads it.
     """

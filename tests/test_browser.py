@@ -119,6 +119,14 @@ def test_a_students_first_visit(open_page, light_app):
     type_text(page, session.joints.typed, "10, 20, 30, 40, 50, 60")
     click(page, session.joints.apply_typed, lambda: np.allclose(np.degrees(session.state.q), [10, 20, 30, 40, 50, 60]),
           "the typed angles")
+    # a slider's number box takes any number: one beyond the joint's limits is refused right below the sliders
+    box = page.locator(dom_id(session.joints.sliders[2])).locator("xpath=..").locator("input.mantine-NumberInput-input")
+    box.fill("99999")
+    box.press("Enter")
+    below = page.locator(dom_id(session.joints.sliders[5])).locator("xpath=following::*").get_by_text("Elbow: from -360° to 360°")
+    wait_for(lambda: below.count() > 0 and below.first.is_visible(), what="the refusal below the sliders")
+    wait_for(lambda: box.input_value() == "30", what="the box put back")
+    assert np.allclose(np.degrees(session.state.q), [10, 20, 30, 40, 50, 60])
 
     # the singularity overlay: det J as MathML, and the wrist button puts the arm on s5 = 0
     unfold(page, "Singularities", session.singularities.enabled)  # folded: the first lesson needs the joints and the target

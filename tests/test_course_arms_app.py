@@ -111,8 +111,9 @@ def test_a_prismatic_joint_is_driven_in_millimetres(app):
         session = await pick(app, client, "Stanford arm (RRP + wrist)")
         await client.set_gui("d3 (mm)", 300.0)
         await until(lambda: math.isclose(session.state.last.q[2], 0.3, abs_tol=1e-9), what="d3 = 300 mm")
-        await client.set_gui("d3 (mm)", 5000.0)  # beyond the stroke: refused, with a message
-        await until(lambda: any("from 0 mm to 762 mm, got 5000.0 mm" in body for _, body in client.received.notifications),
+        await client.set_gui("d3 (mm)", 5000.0)  # beyond the stroke: refused below the sliders, with a message
+        refusal = session.joints.slider_refusal.line
+        await until(lambda: "from 0 mm to 762 mm, got 5000.0 mm" in client.markdown.get(refusal._impl.uuid, "") and refusal.visible,
                     what="the refusal, with the stroke")
         assert math.isclose(session.state.last.q[2], 0.3, abs_tol=1e-9)
         await until(lambda: client.gui["d3 (mm)"]["value"] == 300.0, what="the slider put back")

@@ -62,8 +62,8 @@ def test_the_desktop_arm_is_picked_driven_played_and_searched(app):
         # its base frame stands in the world y up, and the IK target hangs in it (a position-only gizmo)
         np.testing.assert_allclose(world_placement(session.arm)[:3, :3] @ (0.0, 1.0, 0.0), (0.0, 0.0, 1.0))
         await until(lambda: f"{frame}/ik_target" in client.received.nodes, what="the IK target in the course's frame")
-        await client.set_gui("θ3 forearm (°)", 200.0)  # beyond its range: refused, with the range
-        await until(lambda: any("from 0° to 180°" in body for _, body in client.received.notifications), what="the refusal")
+        await client.set_gui("θ3 forearm (°)", 200.0)  # beyond its range: refused below the sliders, with the range
+        await until(lambda: "from 0° to 180°" in session.joints.slider_refusal.line.content, what="the refusal")
         assert session.state.last.q[2] == 0.0
 
         # the course's path: while it plays the arm is on it (θ1 = θ2, θ3 = 3π/4 + ¾ θ1) and the arrows show

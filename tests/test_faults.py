@@ -213,9 +213,12 @@ def test_garbage_and_out_of_range_input_is_refused(app):
             ((0.5, 0.2, 0.5), (np.inf, 0.0, 0.0, 0.0)),
         ):
             await one_by_one("TransformControlsUpdateMessage", bad.drag_step(position, wxyz).update)
-        # nothing of it reached the arm, and the student was told
-        await until(lambda: [title for title, _ in bad.received.notifications].count("Not accepted") >= 5,
+        # nothing of it reached the arm, and the student was told: the slider's values beside the sliders
+        await until(lambda: [title for title, _ in bad.received.notifications].count("Not accepted") >= 3,
                     what="the refusals")
+        refusal = bad_session.joints.slider_refusal.line
+        await until(lambda: refusal.visible and "Base: from -360° to 360°, got -725.0°" in bad.markdown[refusal._impl.uuid],
+                    what="the slider's refusal beside it")
         np.testing.assert_array_equal(bad_session.state.q, before)
         assert np.isfinite(bad_session.state.last.target).all()
         titles = [title for title, _ in bad.received.notifications]
@@ -226,6 +229,7 @@ def test_garbage_and_out_of_range_input_is_refused(app):
         # both students carry on
         await bad.set_gui("θ2 shoulder (°)", 50.0)
         await until(lambda: abs(np.degrees(bad_session.state.q[1]) - 50.0) < 1e-9, what="a good value after the bad ones")
+        await until(lambda: not refusal.visible, what="the refusal gone with the next value accepted")
         target = await drag_a_little(good, good_session, steps=5)
         await until(lambda: np.allclose(good_session.state.last.target, target, atol=1e-9), what="the other student")
         # bytes that are not even a message are dropped at the gate (app/serving/gate.py), before viser sees them
@@ -258,10 +262,12 @@ def test_a_refused_rate_force_or_payload_is_put_back_and_the_arm_goes_on(app, ca
         await until(lambda: session.velocity.readout.content != still, what="the tool's velocity for 10 °/s")
         bad = (("Force at the tool (N)", float("nan")), (rate, float("nan")), ("θ̇2 shoulder (°/s)", 1e6),
                ("Payload (kg)", -1.0))
-        for label, value in bad:
-            await client.set_gui(label, value)
-        await until(lambda: [title for title, _ in client.received.notifications].count("Not accepted") >= len(bad),
-                    what="the refusals")
+        for (label, value), (line, words) in zip(bad, (
+                (session.statics.refusal.line, "Force (N): from 0 to"), (session.velocity.rates_refusal.line, f"{rate}: from -180 to 180"),
+                (session.velocity.rates_refusal.line, "θ̇2 shoulder (°/s): from -180 to 180, got 1000000"),
+                (session.statics.refusal.line, "Payload (kg): from 0 to"))):
+            await client.set_gui(label, value)  # refused beside its slider (its folder's line)
+            await until(lambda: line.visible and words in line.content, what=f"{label}'s refusal")
         handles = (session.statics.newtons, *session.velocity.sliders[:2], session.statics.payload)
         await until(lambda: [handle.value for handle in handles] == [50.0, 10.0, 0.0, 0.0], what="the last values accepted")
         await goes_on(client, session)

@@ -117,6 +117,7 @@ class JointPanel(View):
                          f"{low:g}…{high:g}{unit}. Type an exact value in the box.")
                 slider.precision = 1  # an arrow key moves it a whole degree (or mm); the box takes tenths
                 self.sliders.append(slider)
+            self.slider_refusal = Beside(gui)  # a value typed in a slider's box beyond its joint's limits
             self.poses = gui.add_button_group("Pose", self.pose_names)
             self.typed = gui.add_text(typed_label(arm), display_text(arm, q),
                                       hint="Every joint, separated by commas or spaces: degrees, or mm for a prismatic joint")
@@ -128,7 +129,7 @@ class JointPanel(View):
             self.summary = gui.add_markdown("")
 
         for index, slider in enumerate(self.sliders):
-            slider.on_update(session.guard(self._slider_moved(index)))
+            slider.on_update(session.guard(self._slider_moved(index), beside=self.slider_refusal))
         self.poses.on_click(session.guard(self._pose_button))
         self.typed.on_update(self._text_typed)
         self.apply_typed.on_click(session.guard(self._typed_values, beside=self.refusal))
@@ -147,7 +148,8 @@ class JointPanel(View):
                 if waiting is not None:
                     waiting.cancel()
                 if abs(value - previous) > DRAG_STEP or waiting is not None:  # typed: wait for the next keystroke
-                    timer = threading.Timer(TYPING_PAUSE, self._session.guard(lambda _: self._move(index, value)), (None,))
+                    timer = threading.Timer(TYPING_PAUSE, self._session.guard(lambda _: self._move(index, value),
+                                                                              beside=self.slider_refusal), (event,))
                     timer.daemon = True
                     self._typing[index] = timer
                     timer.start()

@@ -20,7 +20,7 @@ import viser
 from ur10core.dynamics import MASSES
 from ur10core.specs import torque_map
 
-from ..feedback import chosen, put_back, within
+from ..feedback import Beside, chosen, put_back, within
 from ..serving.workers import HEAVY, FoldedRuns
 from ..state import Snapshot
 from ..style import DANGER_RED, SAFE_GREEN, UR10_SIZE, blend, hex_color, number
@@ -128,6 +128,7 @@ class StaticsView(View):
                                               initial_value=next(iter(self._directions)))
             self.payload = gui.add_slider("Payload (kg)", min=0.0, max=payload_kg or 1.0, step=0.5, initial_value=0.0,
                                           visible=payload_kg is not None)
+            self.refusal = Beside(gui)  # a force or payload typed in its slider's box beyond its range
             self.bars = gui.add_html("", visible=False)
             self.mapped = gui.add_checkbox("Colour the workspace by ‖τ‖ for this force", False,
                                            hint=f"{TORQUE_MAP_POINTS:,} random joint vectors; the worst one is marked")
@@ -152,16 +153,18 @@ class StaticsView(View):
         self._worst: tuple[viser.IcosphereHandle, viser.LabelHandle] | None = None
         self._map_lock = threading.Lock()
         self._maps = FoldedRuns(self._draw_map)
-        for widget in (self.enabled, self.newtons, self.direction, self.payload):
-            widget.on_update(session.guard(lambda _: self._changed()))
-        for widget in (self.mapped, self.newtons, self.direction):
-            widget.on_update(session.guard(lambda _: self._maps.start("torque-map", session.guard)))
+        for widget in (self.enabled, self.newtons, self.direction, self.payload, self.mapped):
+            widget.on_update(session.guard(lambda _, widget=widget: self._changed(widget), beside=self.refusal))
 
-    def _changed(self) -> None:
+    def _changed(self, widget) -> None:
         # a size refused here is explained (and put back) at once, not in a redraw; the payload even where hidden
+        within(self.newtons, "force (N)")
         within(self.payload, "payload (kg)")
-        self.loads(self._session.state.last)
-        self._session.redraw()
+        if widget is not self.mapped:
+            self.loads(self._session.state.last)
+            self._session.redraw()
+        if widget in (self.mapped, self.newtons, self.direction):
+            self._maps.start("torque-map", self._session.guard)
 
     async def _handle_dragged(self, event: viser.TransformControlsEvent) -> None:
         """On viser's event loop, as the IK target's drags are: the handle's position as this event left

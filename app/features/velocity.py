@@ -117,6 +117,7 @@ class VelocityView(View):
             self.sliders = [gui.add_slider(rate_label(self._arm, i), min=-RATE_LIMITS[kind], max=RATE_LIMITS[kind], step=0.1,
                                            initial_value=0.0)
                             for i, kind in enumerate(self._kinds)]
+            self.rates_refusal = Beside(gui)  # a rate typed in a slider's box beyond its range
             self.readout = gui.add_markdown("")
             gui.add_markdown(f"Or ask for a {place} velocity and see the joint rates it needs, q̇ = J⁻¹ v:")
             self.typed = gui.add_text("vx vy vz (mm/s) ωx ωy ωz (°/s)", "100 0 0 0 0 0",
@@ -131,8 +132,12 @@ class VelocityView(View):
             for name, colour in (("linear", LINEAR_COLOR), ("angular", ANGULAR_COLOR)))
         self._ends: tuple[np.ndarray, np.ndarray] | None = None  #: where the arrows end while they show
         for slider in self.sliders:
-            slider.on_update(session.guard(lambda _: session.redraw()))
+            slider.on_update(session.guard(lambda _, slider=slider: self._rate_set(slider), beside=self.rates_refusal))
         self.solve.on_click(session.guard(lambda _: self._solve(), beside=self.refusal))
+
+    def _rate_set(self, slider: viser.GuiSliderHandle) -> None:
+        within(slider, slider.label)  # refused beside the sliders as it comes, not in the redraw that reads it
+        self._session.redraw()
 
     def joint_rates(self) -> np.ndarray:
         """(n,) the sliders' joint rates, rad/s (m/s for a prismatic joint)."""

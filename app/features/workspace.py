@@ -16,7 +16,7 @@ import viser
 from ur10core import Arm
 from ur10core.workspace import revolved_boundary, vertical_section
 
-from ..feedback import chosen, within
+from ..feedback import Beside, chosen, within
 from ..serving.workers import HEAVY, FoldedRuns
 from ..style import UR10_SIZE, hex_color
 from ..view import Session, View
@@ -255,10 +255,11 @@ class WorkspaceView(View):
             self.section = gui.add_dropdown("Section", sections, initial_value=SECTIONS[0], hint=missing or None)
             self.height = gui.add_slider("Section height (mm)", min=-600.0, max=1600.0, step=10.0,
                                          initial_value=600.0, visible=False)
+            self.refusal = Beside(gui)  # a height typed in the slider's box beyond its range
             self.progress = gui.add_progress_bar(0.0, animated=True, visible=False)
             self.legend = gui.add_html("", visible=False)
         for widget in (self.enabled, self.count, self.section, self.height):
-            widget.on_update(session.guard(self._changed))
+            widget.on_update(session.guard(self._changed, beside=self.refusal))
 
     def obstacles(self) -> list:
         legend = self.legend_label  # over the cloud, in the drawing's frame
