@@ -117,6 +117,8 @@ def test_a_prismatic_joint_is_driven_in_millimetres(app):
                     what="the refusal, with the stroke")
         assert math.isclose(session.state.last.q[2], 0.3, abs_tol=1e-9)
         await until(lambda: client.gui["d3 (mm)"]["value"] == 300.0, what="the slider put back")
+        await client.set_gui("Pose", "Random")  # the arm set another way: the refusal no longer stands below the sliders
+        await until(lambda: not refusal.visible, what="the refusal gone with the pose")
         await client.close()
 
     asyncio.run(scenario())

@@ -161,15 +161,21 @@ class JointPanel(View):
     def _move(self, index: int, shown: float) -> None:
         with self._typing_lock:
             self._typing.pop(index, None)
-        self._before()
+        self._moving()
         value = float(from_display(self._arm.joint_types[index], shown))
         self._session.apply(lambda state: state.set_joint(index, value))
+
+    def _moving(self) -> None:
+        """A student's change of the joints, about to be made: what was refused before it no longer stands below."""
+        self.slider_refusal.clear()
+        self.refusal.clear()
+        self._before()
 
     def _pose_button(self, event: viser.GuiEvent) -> None:
         choice = chosen(self.poses, "pose")
         arm = self._arm
         q = arm.sample_joints(1, seed=int(self._rng.integers(2**31)))[0] if choice == "Random" else arm.specs.poses[choice.lower()]
-        self._before()
+        self._moving()
         self._session.apply(lambda state: state.set_joints(q))
 
     def _text_typed(self, event: viser.GuiEvent) -> None:
@@ -190,7 +196,7 @@ class JointPanel(View):
         arm = self._arm
         values = ArmState.parse_numbers(self.typed.value, arm.n_joints, "joint values")
         q = [float(from_display(kind, v)) for kind, v in zip(arm.joint_types, values)]
-        self._before()
+        self._moving()
         self._session.apply(lambda state: state.set_joints(q))
 
     def render_panel(self, snapshot: Snapshot) -> None:
