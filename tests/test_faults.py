@@ -249,7 +249,8 @@ def test_garbage_and_out_of_range_input_is_refused(app):
 def test_a_refused_rate_force_or_payload_is_put_back_and_the_arm_goes_on(app, caplog):
     """A NaN or out-of-range value left in a velocity or force slider was refused again by every
     redraw that read it: the panel stopped ("panel redraw failed") and each drag was refused,
-    until the student moved that slider back. The slider is now put back at once."""
+    until the student moved that slider back. The slider is now put back at once, to the value it showed (a section
+    height refused before any other went to 0 mm, not to the 600 mm it started at)."""
     rate = "θ̇1 base (°/s)"
 
     async def scenario():
@@ -261,15 +262,16 @@ def test_a_refused_rate_force_or_payload_is_put_back_and_the_arm_goes_on(app, ca
         await client.set_gui(rate, 10.0)
         await until(lambda: session.velocity.readout.content != still, what="the tool's velocity for 10 °/s")
         bad = (("Force at the tool (N)", float("nan")), (rate, float("nan")), ("θ̇2 shoulder (°/s)", 1e6),
-               ("Payload (kg)", -1.0))
+               ("Payload (kg)", -1.0), ("Section height (mm)", 99999.0))
         for (label, value), (line, words) in zip(bad, (
                 (session.statics.refusal.line, "Force (N): from 0 to"), (session.velocity.rates_refusal.line, f"{rate}: from -180 to 180"),
                 (session.velocity.rates_refusal.line, "θ̇2 shoulder (°/s): from -180 to 180, got 1000000"),
-                (session.statics.refusal.line, "Payload (kg): from 0 to"))):
+                (session.statics.refusal.line, "Payload (kg): from 0 to"),
+                (session.workspace.refusal.line, "Section height (mm): from -600 to 1600, got 99999"))):
             await client.set_gui(label, value)  # refused beside its slider (its folder's line)
             await until(lambda: line.visible and words in line.content, what=f"{label}'s refusal")
-        handles = (session.statics.newtons, *session.velocity.sliders[:2], session.statics.payload)
-        await until(lambda: [handle.value for handle in handles] == [50.0, 10.0, 0.0, 0.0], what="the last values accepted")
+        handles = (session.statics.newtons, *session.velocity.sliders[:2], session.statics.payload, session.workspace.height)
+        await until(lambda: [handle.value for handle in handles] == [50.0, 10.0, 0.0, 0.0, 600.0], what="the last values accepted")
         await goes_on(client, session)
         await client.close()
 

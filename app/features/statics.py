@@ -123,6 +123,7 @@ class StaticsView(View):
                              + gravity_words(arm))
             self.enabled = gui.add_checkbox("Show the torques", False)
             self.newtons = gui.add_slider("Force at the tool (N)", min=0.0, max=MAX_FORCE_N, step=5.0, initial_value=50.0)
+            within(self.newtons, "force (N)")  # accepted: a first value refused puts it back here, not at 0
             self._directions = directions_for(arm)
             self.direction = gui.add_dropdown("Force direction", tuple(self._directions),
                                               initial_value=next(iter(self._directions)))

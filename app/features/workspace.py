@@ -255,6 +255,7 @@ class WorkspaceView(View):
             self.section = gui.add_dropdown("Section", sections, initial_value=SECTIONS[0], hint=missing or None)
             self.height = gui.add_slider("Section height (mm)", min=-600.0, max=1600.0, step=10.0,
                                          initial_value=600.0, visible=False)
+            within(self.height, "section height (mm)")  # accepted: a first value refused puts it back here, not at 0
             self.refusal = Beside(gui)  # a height typed in the slider's box beyond its range
             self.progress = gui.add_progress_bar(0.0, animated=True, visible=False)
             self.legend = gui.add_html("", visible=False)
