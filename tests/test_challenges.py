@@ -785,6 +785,12 @@ def test_a_teachers_file_is_read_in_its_units():
 @pytest.mark.parametrize("change, line, words", [
     (("arm = \"kr210\"", "arm = \"kr2100\""), 5, "arm must be one of"),
     (("joints = [10, 20, -30, 40, 50, 60]", "joints = [10, 20, -30, 40, 50]"), 6, "list of 6 numbers"),
+    # a long list's message is cut short: it says how many values came (it showed six of seven)
+    (("joints = [10, 20, -30, 40, 50, 60]", "joints = [10.1234567, 20.1234567, -30.1234567, 40.1234567, 50.1234567, 60.1234567, 7]"),
+     6, "list of 6 numbers, got 7 values"),
+    (("joints = [10, 20, -30, 40, 50, 60]", "joints = [10, nan, -30, 40, 50, 60]"), 6,
+     "value 2 of joints is nan: each must be a number from -100000 to 100000"),
+    (("kind = \"singularity\"\n", ""), 10, "a challenge needs a kind: one of reach, singularity"),  # (it said "got None")
     (("joints = [10, 20, -30, 40, 50, 60]", "joints = [10, 100, -30, 40, 50, 60]"), 6,
      "A2 is 100°, outside the kr210 arm's limits for it: -45° to 85°"),
     (("arm = \"kr210\"", "arm = \"stanford\""), 6, "d3 is -30 mm, outside the stanford arm's limits for it: 0 mm to 762 mm"),
@@ -825,8 +831,10 @@ def test_files_are_bounded_and_branch_counts_must_exist(tmp_path):
     many = "".join(f'[[challenge]]\ntitle = "t{k}"\nkind = "velocity"\nvelocity_mm_s = [1, 0, 0]\n' for k in range(101))
     with pytest.raises(ValueError, match="at most 100"):
         C.parse(many)
-    with pytest.raises(ValueError, match="line 4: no target .* exactly 3 branches"):
+    with pytest.raises(ValueError, match="line 4: no target .* is one where exactly 3 branches reach"):
         C.parse('[[challenge]]\ntitle = "x"\nkind = "branch_count"\ncount = 3\n')
+    with pytest.raises(ValueError, match="line 4: no target .* is one where exactly 1 branch reaches"):  # ("1 branches")
+        C.parse('[[challenge]]\ntitle = "x"\nkind = "branch_count"\ncount = 1\n')
     with pytest.raises(ValueError, match="line 4: the three_dof arm has no DH table to type"):  # its check raised AttributeError
         C.parse('[[challenge]]\ntitle = "x"\nkind = "dh_table"\narm = "three_dof"\n')
     big = tmp_path / "big.toml"

@@ -390,6 +390,8 @@ def _from_table(table: dict) -> Challenge:
         if field not in _FIELDS:
             raise _FieldError(field, f"unknown key {field!r}")
     kind = table.get("kind")
+    if kind is None:
+        raise _FieldError("kind", f"a challenge needs a kind: one of {', '.join(KINDS)}")
     if kind not in KINDS:
         raise _FieldError("kind", f"kind must be one of {', '.join(KINDS)}, got {kind!r:.40}")
     needs, may = _NEEDS[kind]
@@ -531,9 +533,12 @@ def _integer(table: dict, field: str, low: int, high: int) -> int:
 
 def _numbers(table: dict, field: str, size: int, bound: float) -> list[float]:
     values = table[field]
-    if (not isinstance(values, list) or len(values) != size
-            or any(isinstance(v, bool) or not isinstance(v, (int, float)) or not abs(v) <= bound for v in values)):
-        raise _FieldError(field, f"{field} must be a list of {size} numbers, got {values!r:.60}")
+    if not isinstance(values, list) or len(values) != size:  # (a long list cut short in the message would not show it)
+        got = f"{len(values)} values" if isinstance(values, list) else f"{values!r:.40}"
+        raise _FieldError(field, f"{field} must be a list of {size} numbers, got {got}")
+    for k, v in enumerate(values, 1):
+        if isinstance(v, bool) or not isinstance(v, (int, float)) or not abs(v) <= bound:
+            raise _FieldError(field, f"value {k} of {field} is {v!r:.40}: each must be a number from {-bound:g} to {bound:g}")
     return [float(v) for v in values]
 
 
@@ -842,7 +847,7 @@ def _count_pose(challenge: Challenge, arm: Arm) -> tuple[float, ...]:
     if not len(found):  # (zero branches has no pose to show: any far target is an answer)
         if challenge.count == 0:
             return tuple(arm.specs.home.tolist())
-        raise ValueError(f"no target of the {arm.name} arm at this orientation has exactly {challenge.count} branches")
+        raise ValueError(f"no target of the {arm.name} arm at this orientation is one where exactly {_branches(challenge.count)}")
     pose = int(found[0])
     slot = int(np.flatnonzero(solution.within_limits[pose])[0])
     return tuple(solution.q[pose, slot].tolist())
