@@ -206,6 +206,18 @@ def test_branch_count_agrees_with_the_reach_map():
     assert C.check(task, COURSE, C.Answer(target=turned)).group == "target turned"
 
 
+def test_one_branch_is_one_branch_on_the_projector():
+    """A SCARA target only one branch reaches, where the task asks for both ("1 branches instead of 2")."""
+    scara = Arm.preset("scara")
+    task = C.Challenge("both", "branch_count", "scara", "", count=2)
+    targets = scara.fk(scara.sample_joints(500, seed=3))
+    targets[:, :3, :3] = scara.fk(scara.specs.home)[:3, :3]  # the task's orientation: its arm's at home
+    solutions = scara.ik(targets)
+    one = targets[np.flatnonzero((solutions.valid & solutions.within_limits).sum(axis=-1) == 1)[0]]
+    verdict = C.check(task, scara, C.Answer(target=one))
+    assert (verdict.group, verdict.message) == ("1 branch instead of 2", "1 branch reaches your target; the task asks for 2.")
+
+
 # ---------------------------------------------------------------------- DH table
 
 

@@ -817,7 +817,7 @@ def _check_branch_count(challenge: Challenge, arm: Arm, answer: Answer) -> Verdi
     count = _count(arm, goal)
     if count != challenge.count:
         return Verdict(False, f"{_branches(count)} your target; the task asks for {challenge.count}.",
-                       f"{count} branches instead of {challenge.count}", f"{text}: {count}")
+                       f"{count} branch{'es' * (count != 1)} instead of {challenge.count}", f"{text}: {count}")
     return Verdict(True, f"Solved: exactly {_branches(count)} your target.", "", f"{text}: {count}")
 
 
