@@ -242,6 +242,25 @@ def test_a_typed_dh_table_becomes_an_arm_with_numerical_ik(app):
     asyncio.run(scenario())
 
 
+def test_a_section_of_a_typed_arm_that_holds_no_point_is_refused_saying_so(app):
+    """A table of zero lengths keeps its tool on the base axis: the cut-away holds nothing (numpy's "zero-size array
+    to reduction operation maximum" reached the student)."""
+    from ur10teach.features.workspace import SECTIONS
+
+    async def scenario():
+        client = await ViserClient(url(app)).connect()
+        typed = await build_table(app, client, "0 0 0 0 R", "R", await pick(app, client, CUSTOM))
+        await client.set_gui("Show workspace cloud", True)
+        await until(lambda: typed.workspace._cloud is not None, what="the cloud, a dot on the base axis")
+        await client.set_gui("Section", SECTIONS[3])
+        await until(lambda: any(f"the {SECTIONS[3]} holds no point of this arm's workspace" in body.lower()
+                                for _, body in client.received.notifications), what="the refusal")
+        assert not any(title == "Something went wrong" for title, _ in client.received.notifications)
+        await client.close()
+
+    asyncio.run(scenario())
+
+
 def test_a_typed_tables_branches_are_numbered_where_they_part_once_searched(app):
     """A typed SCARA (RRP) has two elbows over one wrist: its numbers go by the elbows, chosen from the branches its
     search finds. (The SCARA preset's went by the wrist until 2026-12-03: one label, "arm: 1 · 2".)"""
@@ -370,13 +389,20 @@ def test_a_course_arms_workspace_cloud(app):
         await until(lambda: session.workspace.legend.visible, what="the cloud's legend in the panel")
         await until(lambda: f"{session.drawing.root}/workspace" in client.received.nodes, what="the cloud under the arm's root")
         # the UR10's sections, where they apply: the cut-away keeps the half behind the arm's plane
-        from ur10teach.features.workspace import SECTIONS, vertical_section
+        from ur10core.workspace import turnable_into
+        from ur10teach.features.workspace import HULL, SECTIONS, coloured_cloud
 
-        assert SECTIONS[2] not in session.workspace.section.options and "No horizontal section" in session.workspace.section.hint
+        hint = session.workspace.section.hint
+        assert SECTIONS[2] not in session.workspace.section.options and "No horizontal section" in hint
+        # θ1 turns ±105°: no hull, which would turn the outline a full turn; the side view keeps what θ1 turns into it
+        assert HULL not in session.workspace.section.options and "θ1 turns from -105° to 105° only" in hint
         whole = np.asarray(points, dtype=float)
+        turns = coloured_cloud(session.arm, len(whole))[3]
         await client.set_gui("Section", SECTIONS[1])
         q1 = float(session.state.last.q[0])
-        await until(lambda: len(session.workspace._cloud.points) == len(vertical_section(whole, q1)), what="the side view")
+        kept = turnable_into(whole, q1, turns, (-np.radians(105), np.radians(105)))
+        assert 0 < kept.sum() < len(whole)
+        await until(lambda: len(session.workspace._cloud.points) == kept.sum(), what="the side view")
         await client.set_gui("Section", SECTIONS[2])  # a browser never sends a choice it was not given: refused
         await until(lambda: any("section" in body for _, body in client.received.notifications), what="the refusal")
         await client.set_gui("Show workspace cloud", False)

@@ -1,20 +1,23 @@
 """Cross-sections of a sampled workspace (the side and top views the course draws), and the floor check.
 
 :meth:`Arm.sample_workspace` gives flange positions of random joint vectors. θ1 turns
-the whole arm about the base axis, so the workspace is a solid of revolution about z:
-a vertical section through the base axis can use *every* sample, turned about z into
-the section plane, instead of the few that happen to lie in a thin slab.
+the whole arm about the base axis, so a vertical section through the base axis can use
+*every* sample, turned about z into the section plane by θ1 alone, instead of the few that
+happen to lie in a thin slab. Where θ1 turns a full turn the workspace is a solid of
+revolution about z; where it turns less (the SCARA's ±105°), a sample is kept only where θ1
+can turn that far (:func:`base_turn`).
 """
 
 from __future__ import annotations
 
 import functools
+import math
 from dataclasses import dataclass
 
 import numpy as np
 
 from ._validate import as_float_array, check_finite
-from .tolerances import FLOOR_TOLERANCE
+from .tolerances import FLOOR_TOLERANCE, LIMIT_TOLERANCE
 
 
 def _points(points) -> np.ndarray:
@@ -25,11 +28,34 @@ def _points(points) -> np.ndarray:
     return points
 
 
+def base_turn(arm) -> tuple[float, float] | None:
+    """The range (θ1 min, θ1 max) in rad through which ``arm``'s first joint turns the whole arm about the base's z
+    axis, or None where it turns a full turn or more (the workspace is then a solid of revolution about z).
+
+    ``ValueError`` saying why where the first joint does not turn the arm about that axis: it slides, or its
+    axis is tilted or off the base's origin (a typed modified table's a0 or α0), or the arm's vertical is not z.
+
+    >>> from ur10core import Arm
+    >>> base_turn(Arm.preset("ur10")) is None, [round(math.degrees(v)) for v in base_turn(Arm.preset("scara"))]
+    (True, [-105, 105])
+    """
+    if arm.dh is None or tuple(arm.up) != (0.0, 0.0, 1.0):
+        raise ValueError("its vertical is its y axis, not the z axis its base turns about")
+    if arm.joint_types[0] != "R":
+        raise ValueError("its first joint slides: no joint turns the whole arm about the base axis")
+    axes, on_axes = arm.dh.joint_axes(arm.dh.frames(arm.limits.mean(axis=1)))  # (the first axis is the same at any q)
+    if axes[0, 2] < 1.0 - 1e-9 or np.hypot(*on_axes[0, :2]) > 1e-9:
+        raise ValueError("its first joint's axis is not the base's z axis")
+    low, high = (float(v) for v in arm.limits[0])
+    return None if high - low >= 2.0 * math.pi - LIMIT_TOLERANCE else (low, high)
+
+
 def vertical_section(points, azimuth: float = 0.0) -> np.ndarray:
     """Every point turned about the base axis into the vertical plane at ``azimuth`` (rad).
 
     Alternate points go to the two halves of the plane (±ρ), so the section shows both
-    sides of the base axis. Returns (n, 3): ``(ρ cos a, ρ sin a, z)`` with ρ signed.
+    sides of the base axis. Returns (n, 3): ``(ρ cos a, ρ sin a, z)`` with ρ signed. On an arm
+    whose θ1 turns less than a full turn, keep only the points :func:`turnable_into` says.
 
     >>> vertical_section([[3.0, 4.0, 1.0], [0.0, -2.0, 0.5]]).tolist()
     [[5.0, 0.0, 1.0], [-2.0, -0.0, 0.5]]
@@ -38,6 +64,27 @@ def vertical_section(points, azimuth: float = 0.0) -> np.ndarray:
     rho = np.hypot(points[:, 0], points[:, 1])
     rho[1::2] *= -1.0
     return np.stack([rho * np.cos(azimuth), rho * np.sin(azimuth), points[:, 2]], axis=-1)
+
+
+def turnable_into(points, azimuth: float, turns, turn_range: tuple[float, float]) -> np.ndarray:
+    """(n,) bool: the points of :func:`vertical_section` that θ1 alone turns into the plane at ``azimuth``, within its
+    range ``turn_range`` (:func:`base_turn`); ``turns`` (n,) is each point's θ1.
+
+    A point of the section is where the arm puts the tool with θ1 turned by the point's turn about the axis
+    (into the half of the plane :func:`vertical_section` gives it); it is in the arm's workspace only if that θ1 is.
+
+    >>> turnable_into([[3.0, 4.0, 1.0], [0.0, -2.0, 0.5]], 0.0, [0.9, -1.6], (-1.0, 1.0)).tolist()
+    [True, False]
+    """
+    points = _points(points)
+    turns = as_float_array(turns, "turns")
+    if turns.shape != (len(points),):
+        raise ValueError(f"turns must have shape ({len(points)},), one θ1 per point, got {turns.shape}")
+    low, high = turn_range
+    half = azimuth + np.where(np.arange(len(points)) % 2 == 1, math.pi, 0.0)
+    turned = low + np.mod(turns + half - np.arctan2(points[:, 1], points[:, 0]) - low, 2.0 * math.pi)
+    on_axis = np.hypot(points[:, 0], points[:, 1]) < 1e-12  # (any turn leaves it where it is)
+    return on_axis | (turned <= high + LIMIT_TOLERANCE)
 
 
 def horizontal_section(points, height: float, thickness: float = 0.02) -> tuple[np.ndarray, np.ndarray]:

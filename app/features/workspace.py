@@ -14,7 +14,7 @@ import numpy as np
 import viser
 
 from ur10core import Arm
-from ur10core.workspace import revolved_boundary, vertical_section
+from ur10core.workspace import base_turn, revolved_boundary, turnable_into, vertical_section
 
 from ..feedback import Beside, chosen, within
 from ..serving.workers import HEAVY, FoldedRuns
@@ -113,17 +113,20 @@ CLOUDS = KeptClouds()
 
 
 def coloured_cloud(arm: Arm, n: int, compute=lambda make: make(),
-                   holder: object | None = None) -> tuple[np.ndarray, np.ndarray, float]:
-    """(points (n, 3) float32, colours (n, 3) uint8, colour-scale top in m³), shared by all clients.
+                   holder: object | None = None) -> tuple[np.ndarray, np.ndarray, float, np.ndarray | None]:
+    """(points (n, 3) float32, colours (n, 3) uint8, colour-scale top in m³, and each point's θ1 (n,) where θ1
+    turns less than a full turn, for its side view (``ur10core.workspace.vertical_section``), else None), shared
+    by all clients.
 
     ``compute(make)`` runs ``make`` when the cloud is not kept (a session passes its slow-job runner);
     ``holder`` shows it (:class:`KeptClouds`).
     """
 
     def make():
-        points, manipulability = arm.sample_workspace(n, seed=0)
+        points, manipulability, q = arm.sample_workspace(n, seed=0, return_joints=True)
         top = float(np.percentile(manipulability, 99)) or 1.0  # an arm whose measure is zero almost everywhere
-        return points.astype(np.float32), colormap(manipulability, top), top
+        turns = q[:, 0].astype(np.float32) if _turn_range(arm) is not None else None
+        return points.astype(np.float32), colormap(manipulability, top), top, turns
 
     return CLOUDS.get(("cloud", arm, n), lambda: compute(make), holder)
 
@@ -208,21 +211,47 @@ def above(points: np.ndarray, up) -> np.ndarray:
     return up * (float((points @ up).max()) + 0.12)
 
 
+def _turn_range(arm: Arm) -> tuple[float, float] | None:
+    """``ur10core.workspace.base_turn``, None also where θ1 does not turn the arm about z (no side view then)."""
+    try:
+        return base_turn(arm)
+    except ValueError:
+        return None
+
+
 def sections_of(arm: Arm) -> tuple[tuple[str, ...], str]:
-    """The sections ``arm``'s cloud offers, and what the folder says of the one it lacks ("" if none).
+    """The sections ``arm``'s cloud offers, and what the folder says of those it lacks ("" if none).
 
     A horizontal section is sampled in its plane, from the flange height's closed form in θ2,
     which only the UR family has (docs/kinematics.md §3); a slab cut from any cloud would hold
-    a few hundred points.
+    a few hundred points. The side view and the hull turn the cloud about the base axis by θ1: the hull
+    a full turn, so it needs a workspace that is a solid of revolution, and some height.
     """
     if tuple(arm.up) != (0.0, 0.0, 1.0):
         return SECTIONS[:1], ("Only the whole cloud for this arm: the sections are cut about a vertical base axis z, "
                               "and this arm's vertical is its y axis.")
-    if hasattr(arm.solver, "sample_horizontal_section"):
-        return SECTIONS, ""
-    return tuple(s for s in SECTIONS if s != SECTIONS[2]), (
-        "No horizontal section for this arm: it is sampled in its plane from the UR family's closed form of the "
-        "flange's height, which this arm does not have.")
+    sections, missing = list(SECTIONS), []
+    if not hasattr(arm.solver, "sample_horizontal_section"):
+        sections.remove(SECTIONS[2])
+        missing.append("No horizontal section for this arm: it is sampled in its plane from the UR family's closed form "
+                       "of the flange's height, which this arm does not have.")
+    try:
+        turn = base_turn(arm)
+    except ValueError as why:
+        sections.remove(SECTIONS[1])
+        sections.remove(HULL)
+        missing.append(f"No side view and no hull: they turn the cloud about the base axis by θ1, and {why}.")
+    else:
+        if turn is not None:
+            sections.remove(HULL)
+            low, high = (math.degrees(v) for v in turn)
+            missing.append(f"No hull: it turns the cloud's outline a full turn about the base axis, and θ1 turns from "
+                           f"{low:g}° to {high:g}° only, so it would take in places the tool never reaches. The side "
+                           f"view keeps only the points θ1 can turn into its plane.")
+        elif arm.planar:
+            sections.remove(HULL)
+            missing.append("No hull: the tool moves in one horizontal plane, so the workspace has no height to bound.")
+    return tuple(sections), " ".join(missing)
 
 
 class WorkspaceView(View):
@@ -294,12 +323,14 @@ class WorkspaceView(View):
         self.progress.visible = True
         CLOUDS.release(self)  # what it showed until now; it holds what it is about to draw
         try:
-            points, colors, top = coloured_cloud(self._session.arm, count, self._slow_job, holder=self)
+            points, colors, top, turns = coloured_cloud(self._session.arm, count, self._slow_job, holder=self)
             self.progress.value = 60.0
             if section == HULL:
                 vertices, faces = revolved_mesh(*revolved_boundary(points))
             else:
-                points, colors = self._section(section, points, colors, top)
+                points, colors = self._section(section, points, colors, top, turns)
+                if not len(points):  # (a typed arm of zero lengths, all on the base axis)
+                    raise ValueError(f"the {section} holds no point of this arm's workspace")
             legend_at = above(points, self._session.arm.up)
             with self._lock:
                 if self._closed:  # it left while its cloud was made
@@ -329,10 +360,15 @@ class WorkspaceView(View):
             self.progress.value = 100.0
             self.progress.visible = False
 
-    def _section(self, section: str, points: np.ndarray, colors: np.ndarray, top: float) -> tuple[np.ndarray, np.ndarray]:
+    def _section(self, section: str, points: np.ndarray, colors: np.ndarray, top: float,
+                 turns: np.ndarray | None) -> tuple[np.ndarray, np.ndarray]:
         if section == SECTIONS[1]:
             azimuth = float(self._session.state.last.q[0])  # the plane the arm moves in
-            return vertical_section(points, azimuth).astype(np.float32), colors
+            section = vertical_section(points, azimuth).astype(np.float32)
+            if turns is None:
+                return section, colors
+            kept = turnable_into(points, azimuth, turns, _turn_range(self._session.arm))
+            return section[kept], colors[kept]
         if section == SECTIONS[2]:  # sampled in the plane itself: a slab of the cloud holds only a few hundred
             return coloured_horizontal_section(self._session.arm, within(self.height, "section height (mm)") / 1000.0,
                                                min(SECTION_POINTS, len(points)), top, self._slow_job, holder=self)
