@@ -304,10 +304,10 @@ def branch_count_map(arm, target, plane: str = "vertical", resolution: int = 200
 def revolved_boundary(points, bins: int = 48) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """The surfaces bounding a workspace that is a solid of revolution about z, from samples of it.
 
-    θ1 turns the whole arm about the base axis, so the workspace is bounded by an outer
-    surface and an inner one (the hole about the axis) that are both surfaces of
-    revolution: at each height, the largest and smallest distance ρ = √(x² + y²) of a
-    sample from the axis. Sampled, both are estimates from inside: the more samples,
+    For an arm whose θ1 turns the whole arm a full turn about the base axis (:func:`base_turn`
+    is None): its workspace is then bounded by an outer surface and an inner one (the hole
+    about the axis) that are both surfaces of revolution: at each height, the largest and
+    smallest distance ρ = √(x² + y²) of a sample from the axis. Sampled, both are estimates from inside: the more samples,
     the closer (200 k samples put the UR10's hole at 72 mm = d4 − d6 to the millimetre).
 
     Parameters
