@@ -123,9 +123,10 @@ def coloured_cloud(arm: Arm, n: int, compute=lambda make: make(),
     """
 
     def make():
-        points, manipulability, q = arm.sample_workspace(n, seed=0, return_joints=True)
+        partial = _turn_range(arm) is not None  # (the joints kept only then: the UR10's million samples need none)
+        points, manipulability, *joints = arm.sample_workspace(n, seed=0, return_joints=partial)
         top = float(np.percentile(manipulability, 99)) or 1.0  # an arm whose measure is zero almost everywhere
-        turns = q[:, 0].astype(np.float32) if _turn_range(arm) is not None else None
+        turns = joints[0][:, 0].astype(np.float32) if partial else None
         return points.astype(np.float32), colormap(manipulability, top), top, turns
 
     return CLOUDS.get(("cloud", arm, n), lambda: compute(make), holder)
