@@ -105,6 +105,26 @@ def test_picking_the_kr210_builds_its_arm_and_drags_it(app):
     asyncio.run(scenario())
 
 
+def test_a_branch_the_target_does_not_have_is_refused_below_the_branch_buttons(app):
+    """The KR210's first target has branches 1 to 4: pressing 6 is explained right below *Use branch* (it was a
+    notice at the window's far corner), and the next branch taken clears it."""
+
+    async def scenario():
+        client = await ViserClient(url(app)).connect()
+        session = await pick(app, client, "KR210 (spherical wrist)")
+        assert not session.state.last.solution.valid[5]
+        line = session.ik_target.branch_refusal.line
+        await client.set_gui("Use branch", "6")
+        await until(lambda: line.visible and "Branch 6 (shoulder back, elbow up, wrist flipped) does not exist for this "
+                    "target" in client.markdown[line._impl.uuid], what="the refusal below the buttons")
+        assert not any(title == "Not accepted" for title, _ in client.received.notifications)
+        await client.set_gui("Use branch", "2")
+        await until(lambda: session.state.last.slot == 1 and not line.visible, what="branch 2, and the line gone")
+        await client.close()
+
+    asyncio.run(scenario())
+
+
 def test_a_prismatic_joint_is_driven_in_millimetres(app):
     async def scenario():
         client = await ViserClient(url(app)).connect()

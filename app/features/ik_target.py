@@ -449,6 +449,7 @@ class IKTarget(View):
                                                  hint="Coloured skeletons, so the solid arm stands out; or the arm's own "
                                                       "meshes, translucent") if len(styles) > 1 else None)
             self.branch_buttons = gui.add_button_group("Use branch", tuple(str(k + 1) for k in range(slots)))
+            self.branch_refusal = Beside(gui)  # a branch this target does not have, or beyond a joint limit
             self.branches = gui.add_markdown(branches_markdown(snapshot))
             self.typed_pose = gui.add_text(label, "", hint=hint)
             self.move_button = gui.add_button("Move target here", icon=viser.Icon.TARGET)
@@ -457,7 +458,7 @@ class IKTarget(View):
 
         drawing.on_select = self._ghost_clicked
         self.gizmo.on_update(self._dragged)
-        self.branch_buttons.on_click(session.guard(self._branch_button))
+        self.branch_buttons.on_click(session.guard(self._branch_button, beside=self.branch_refusal))
         self.show_ghosts.on_update(session.guard(self._toggle_ghosts))
         self.focus.on_update(session.guard(self._choose_focus))
         if self.ghost_style is not None:
@@ -496,6 +497,8 @@ class IKTarget(View):
     def hold_back(self, asked: str | None) -> None:
         super().hold_back(asked)
         self.branch_buttons.visible = self.held is None
+        if self.held is not None:
+            self.branch_refusal.clear()
 
     def _ghost_clicked(self, client: viser.ClientHandle | None, slot: int) -> None:
         if client is None or client.client_id != self._session.client.client_id:
@@ -509,6 +512,7 @@ class IKTarget(View):
         if self.held:  # the joint panel would show the other branch's joints
             raise ValueError(HELD_BACK)
         self._session.apply(lambda state: state.select_branch(slot))
+        self.branch_refusal.clear()  # (a ghost clicked, too: the branch refused before no longer stands below)
 
     def _toggle_ghosts(self, _: viser.GuiEvent) -> None:
         self._drawing.show_ghosts = bool(self.show_ghosts.value)
