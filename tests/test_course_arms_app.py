@@ -883,8 +883,12 @@ def test_a_course_arm_moves_from_a_remembered_pose_along_both_paths(app, label, 
         motion = session.motion
         assert motion.release.disabled and "no link masses" in motion.gravity_text.content.lower()
         start = session.state.last.q.copy()
+        # a path asked for first is explained below its buttons (it was a notice at the window's far corner)
+        await client.set_gui("Go from the start to here along", "joints interpolated")
+        await until(lambda: motion.refusal.line.visible and "Remember a start pose first" in motion.refusal.line.content,
+                    what="the refusal below the paths")
         await client.set_gui("Remember this pose as the start", True)
-        await until(lambda: motion.start is not None, what="the start remembered")
+        await until(lambda: motion.start is not None and not motion.refusal.line.visible, what="the start remembered")
         goal_q = start.copy()
         goal_q[0] += np.radians(20.0)
         session.apply(lambda state: state.set_joints(goal_q))

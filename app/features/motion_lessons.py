@@ -20,7 +20,7 @@ from ur10core import dynamics, paths
 from ur10core.branches import wrap
 from ur10core.workspace import through_floor
 
-from ..feedback import chosen
+from ..feedback import Beside, chosen
 from ..serving.workers import APART, HEAVY
 from ..style import SLOT_COLORS, hex_color, number
 from ..view import Session, View
@@ -166,6 +166,7 @@ class MotionLessons(View):
             self.remember = gui.add_button("Remember this pose as the start", icon=viser.Icon.PIN)
             self.start_text = gui.add_markdown("No start pose yet.")
             self.path = gui.add_button_group("Go from the start to here along", PATHS)
+            self.refusal = Beside(gui)  # a path asked for before a start pose was remembered
             self.stop = gui.add_button("Stop the motion", icon=viser.Icon.PLAYER_STOP)
             self.summary = gui.add_markdown("")
             self.caption = gui.add_markdown("Both ways between the same two poses, the one played first. Shaded: grey "
@@ -177,9 +178,9 @@ class MotionLessons(View):
             self.energy = energy_chart(gui)
         self.charts = (*self.path_charts.values(), self.energy)
         self.start: np.ndarray | None = None  #: the remembered start pose (rad, m)
-        self.remember.on_click(session.guard(lambda _: self._remember()))
+        self.remember.on_click(session.guard(lambda _: self._remember(), beside=self.refusal))
         self.release.on_click(session.guard(lambda _: self._release()))
-        self.path.on_click(session.guard(lambda _: self._move(chosen(self.path, "path"))))
+        self.path.on_click(session.guard(lambda _: self._move(chosen(self.path, "path")), beside=self.refusal))
         self.stop.on_click(session.guard(lambda _: self.player.stop()))
 
     def _release(self) -> None:
