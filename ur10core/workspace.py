@@ -30,7 +30,8 @@ def _points(points) -> np.ndarray:
 
 def base_turn(arm) -> tuple[float, float] | None:
     """The range (θ1 min, θ1 max) in rad through which ``arm``'s first joint turns the whole arm about the base's z
-    axis, or None where it turns a full turn or more (the workspace is then a solid of revolution about z).
+    axis, or None where it turns a full turn or more (the workspace is then a solid of revolution about z,
+    docs/kinematics.md §3).
 
     ``ValueError`` saying why where the first joint does not turn the arm about that axis: it slides, or its
     axis is tilted or off the base's origin (a typed modified table's a0 or α0), or the arm's vertical is not z.
@@ -307,8 +308,9 @@ def revolved_boundary(points, bins: int = 48) -> tuple[np.ndarray, np.ndarray, n
     For an arm whose θ1 turns the whole arm a full turn about the base axis (:func:`base_turn`
     is None): its workspace is then bounded by an outer surface and an inner one (the hole
     about the axis) that are both surfaces of revolution: at each height, the largest and
-    smallest distance ρ = √(x² + y²) of a sample from the axis. Sampled, both are estimates from inside: the more samples,
-    the closer (200 k samples put the UR10's hole at 72 mm = d4 − d6 to the millimetre).
+    smallest distance ρ = √(x² + y²) of a sample from the axis. Sampled, both are estimates
+    from inside: the more samples, the closer (200 k samples put the UR10's hole at 72 mm =
+    d4 − d6 to the millimetre).
 
     Parameters
     ----------

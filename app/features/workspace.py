@@ -366,11 +366,11 @@ class WorkspaceView(View):
                  turns: np.ndarray | None) -> tuple[np.ndarray, np.ndarray]:
         if section == SECTIONS[1]:
             azimuth = float(self._session.state.last.q[0])  # the plane the arm moves in
-            section = vertical_section(points, azimuth).astype(np.float32)
+            turned = vertical_section(points, azimuth).astype(np.float32)
             if turns is None:
-                return section, colors
+                return turned, colors
             kept = turnable_into(points, azimuth, turns, _turn_range(self._session.arm))
-            return section[kept], colors[kept]
+            return turned[kept], colors[kept]
         if section == SECTIONS[2]:  # sampled in the plane itself: a slab of the cloud holds only a few hundred
             return coloured_horizontal_section(self._session.arm, within(self.height, "section height (mm)") / 1000.0,
                                                min(SECTION_POINTS, len(points)), top, self._slow_job, holder=self)
