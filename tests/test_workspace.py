@@ -272,3 +272,18 @@ def test_a_typed_arm_whose_first_joint_slides_has_no_side_view_nor_hull_and_is_t
     offered, why = sections_of(Arm.from_dh([(0, 0, 0.3, 0), (0.4, 0, 0, 0)], "standard", "PR"))
     assert offered == (SECTIONS[0], SECTIONS[3])
     assert "No side view and no hull: they turn the cloud about the base axis by θ1, and its first joint slides" in why
+
+
+def test_joints_are_sampled_over_each_joints_whole_range():
+    """The KR210's A3 turns from -210° to 65°: its cloud (and every search drawing joints) lost the poses beyond
+    -180°, where the range was cut to one turn; a typed joint limited to 250°..340° could not be sampled at all."""
+    kr210 = Arm.preset("kr210")
+    a3 = np.degrees(kr210.sample_joints(20_000, seed=1)[:, 2])
+    assert a3.min() >= -210 and a3.max() <= 65 and a3.min() < -209 and a3.max() > 64
+    assert (a3 < -180).mean() == pytest.approx(30 / 275, abs=0.01)  # uniform over the whole range
+    typed = Arm.from_dh([(0.5, 0, 0, 0), (0.4, 0, 0, 0)], joint_types="RR", limits=np.radians([[250, 340], [-90, 90]]))
+    q = np.degrees(typed.sample_joints(2000, seed=1)[:, 0])
+    assert q.min() >= 250 and q.max() <= 340 and np.ptp(q) > 85
+    assert typed.sample_workspace(200)[0].shape == (200, 3)
+    whole_turns = np.degrees(Arm.preset("ur10").sample_joints(2000, seed=1))  # ±360°: one turn, every pose once
+    assert whole_turns.min() >= -180 and whole_turns.max() <= 180
