@@ -303,8 +303,9 @@ def test_moving_from_a_remembered_pose_along_a_path(app, kind):
     async def scenario():
         client = await ViserClient(url(app)).connect()
         session = session_of(app, client)
-        await client.set_gui("Go from the start to here along", kind)  # no start yet: refused, with the reason
-        await until(lambda: any("remember a start pose" in body.lower() for _, body in client.received.notifications),
+        await client.set_gui("Go from the start to here along", kind)  # no start yet: refused below it, with the reason
+        line = session.motion.refusal.line
+        await until(lambda: line.visible and "remember a start pose" in client.markdown.get(line._impl.uuid, "").lower(),
                     what="the refusal")
         start = session.state.last.q.copy()
         await client.set_gui("Remember this pose as the start", True)
