@@ -286,4 +286,7 @@ def test_joints_are_sampled_over_each_joints_whole_range():
     assert q.min() >= 250 and q.max() <= 340 and np.ptp(q) > 85
     assert typed.sample_workspace(200)[0].shape == (200, 3)
     whole_turns = np.degrees(Arm.preset("ur10").sample_joints(2000, seed=1))  # ±360°: one turn, every pose once
-    assert whole_turns.min() >= -180 and whole_turns.max() <= 180
+    assert whole_turns.min() >= -180 and whole_turns.max() <= 180 and np.ptp(whole_turns, axis=0).min() > 350
+    lopsided = Arm.from_dh([(0.5, 0, 0, 0)], joint_types="R", limits=np.radians([[0, 400]]))  # a turn, within its limits
+    q = np.degrees(lopsided.sample_joints(2000, seed=1)[:, 0])
+    assert q.min() >= 0 and q.max() <= 360 and np.ptp(q) > 350

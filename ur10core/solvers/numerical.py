@@ -54,16 +54,18 @@ NEARLY_REACHED, NEWTON_STEPS = 1e-3, 20
 
 
 def sampling_range(limits: np.ndarray, revolute: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """(low, high) per joint to draw joint vectors from: the limits, and (−π, π) for a revolute joint whose limits
-    span a turn or more (every pose once). A range short of a turn is kept as it is, past ±π or not: cut to
-    (−π, π), the KR210's A3 (−210° to 65°) lost its poses beyond −180°, and 250° to 340° had none left.
+    """(low, high) per joint to draw joint vectors from: the limits, and one turn within them for a revolute joint
+    whose limits span a turn or more (every pose once: (−π, π) where they allow it, as the UR10's ±360° do). A range
+    short of a turn is kept as it is, past ±π or not: cut to (−π, π), the KR210's A3 (−210° to 65°) lost its poses
+    beyond −180°, and 250° to 340° had none left.
 
     >>> [np.degrees(v).round().tolist() for v in sampling_range(np.radians([[-360, 360], [-210, 65]]), np.array([True, True]))]
     [[-180.0, -210.0], [180.0, 65.0]]
     """
     low, high = np.array(limits[:, 0], dtype=float), np.array(limits[:, 1], dtype=float)
     turn = np.asarray(revolute, bool) & (high - low >= 2.0 * math.pi)
-    low[turn], high[turn] = -math.pi, math.pi
+    centre = np.clip(0.0, low + math.pi, high - math.pi)[turn]
+    low[turn], high[turn] = centre - math.pi, centre + math.pi
     return low, high
 
 
