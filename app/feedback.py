@@ -100,8 +100,10 @@ class Beside:
 
     def __init__(self, gui: viser.GuiApi) -> None:
         self.line = gui.add_markdown("", visible=False)
+        self.said = 0  #: refusals said so far: one said by a run the input started is not cleared by its return
 
     def say(self, message: str) -> None:
+        self.said += 1
         self.line.content = f"<span style='color:{hex_color(DANGER_RED)}'>**Not accepted.** {sentence(message)}</span>"
         self.line.visible = True
 
@@ -130,9 +132,10 @@ def guard(
     def guarded(event: Any) -> None:
         if is_closed():
             return
+        said = beside.said if beside is not None else 0
         try:
             handler(event)
-            if beside is not None and getattr(event, "client", None) is not None:
+            if beside is not None and getattr(event, "client", None) is not None and beside.said == said:
                 beside.clear()
         except ValueError as error:
             if beside is not None:

@@ -76,7 +76,12 @@ def test_the_desktop_arm_is_picked_driven_played_and_searched(app):
         await until(lambda: session.state.last.rates is None, what="the path stopped")
         await until(lambda: client.received.visible.get(f"{frame}/velocity/linear") is False, what="the arrow hidden")
 
-        # the statics exercise: 10 N down (its y), the worst pose has both links level, and the map is drawn
+        # the statics exercise: with no force, no pose needs any torque, said below the button
+        refusal = session.lessons[2].refusal.line
+        await client.set_gui("Force at the tool (N)", 0.0)
+        await client.set_gui("Find the pose that needs the largest ‖τ‖", True)
+        await until(lambda: refusal.visible and "set a force first" in refusal.content.lower(), what="the refusal")
+        # 10 N down (its y), the worst pose has both links level, and the map is drawn
         await client.set_gui("Force at the tool (N)", 10.0)
         assert session.statics.direction.value == "down (−y)"
         await client.set_gui("Find the pose that needs the largest ‖τ‖", True)
@@ -87,6 +92,7 @@ def test_the_desktop_arm_is_picked_driven_played_and_searched(app):
         torques = session.arm.static_torques(worst, (0.0, -10.0, 0.0))
         assert np.linalg.norm(torques) == pytest.approx(10.0 * math.hypot(UPPER_ARM, FOREARM), rel=1e-9)
         await until(lambda: "F √(l5² + l1²) = 18.60 N·m" in session.lessons[2].result.content, what="the course's closed form")
+        assert not refusal.visible
         # the captions and numbers keep clear of its "largest ‖τ‖" (until 2026-12-03 it sat on "y₀ (up)")
         from ur10teach.features.branch_labels import boxes, overlapping
         from ur10teach.features.course_arms.desktop_lessons import WORST_LABEL_RISE

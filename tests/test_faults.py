@@ -186,6 +186,27 @@ def test_a_refusal_reaches_the_student_when_the_widget_went_meanwhile():
         server.stop()
 
 
+def test_a_refusal_said_by_the_run_an_input_started_stays_below_it():
+    """A choice whose work runs on a thread of its own (a cloud, a singularity search) is refused by that run; the
+    input's callback returning cleared the line the run had just filled, when the run was the quicker
+    (2026-12-05: a horizontal section at 999 M samples, its refusal shown for an instant). A refusal said before
+    the input came stays until an input is accepted."""
+    server = viser.ViserServer(host="127.0.0.1", port=0, verbose=False)
+    try:
+        beside = feedback.Beside(server.gui)
+        event = type("Event", (), {"client": object()})()
+
+        def run_that_refuses_first(_) -> None:  # the thread's refusal came before the callback returned
+            beside.say("height 1.600 m is outside the workspace")
+
+        feedback.guard(None, run_that_refuses_first, beside=beside)(event)
+        assert beside.line.visible and "1.600 m" in beside.line.content
+        feedback.guard(None, lambda _: None, beside=beside)(event)  # the next input accepted
+        assert not beside.line.visible
+    finally:
+        server.stop()
+
+
 def test_garbage_and_out_of_range_input_is_refused(app):
     async def scenario():
         bad = await ViserClient(url(app)).connect()

@@ -19,7 +19,7 @@ from ur10core.arm import factor_scales
 from ur10core.orientation import from_frame, in_frame
 from ur10core.serial import PRESETS
 
-from ..feedback import chosen
+from ..feedback import Beside, chosen
 from ..serving.workers import HEAVY, FoldedRuns
 from ..state import Snapshot
 from ..style import (
@@ -338,6 +338,7 @@ class Singularities(View):
                 title="Factors over the last 10 s", aspect=2.0) if names else None
             self.demo = (gui.add_button_group("Put the arm on the", names, hint="Moves as few joints as it can, as "
                                               "little as it can, onto where that factor is zero") if names else None)
+            self.refusal = Beside(gui)  # no pose within the limits puts the arm on that factor
             self.held_back = gui.add_markdown("", visible=False)  #: why the buttons are off (a class challenge)
         self.charts = () if self.plot is None else (self.plot,)
         self._pressed = ""  #: the newest button pressed
@@ -345,7 +346,7 @@ class Singularities(View):
         if self.enabled is not None:
             self.enabled.on_update(session.guard(self._toggled))
         if self.demo is not None:
-            self.demo.on_click(session.guard(self._demo))
+            self.demo.on_click(session.guard(self._demo, beside=self.refusal))
 
     def _toggled(self, _: viser.GuiEvent) -> None:
         with self._session.state.lock:
@@ -364,7 +365,7 @@ class Singularities(View):
         if self.held == "singularity":  # a click a browser cannot send while they are off
             raise ValueError(HELD_BACK)
         self._pressed = chosen(self.demo, "singularity")
-        self._presses.start("singularity", self._session.guard)
+        self._presses.start("singularity", lambda run: self._session.guard(run, beside=self.refusal))
 
     def _place(self) -> None:
         """Presses fold into one under way and one waiting. An arm without closed forms is searched (up to about
@@ -379,6 +380,7 @@ class Singularities(View):
             place()
         else:
             HEAVY.run(session.client, place, cancelled=lambda: session.closed)
+        self.refusal.clear()
 
     def render_panel(self, snapshot: Snapshot) -> None:
         self.gauges.content = HELD_BACK if self.held == "det_j" else factors_html(self._arm, snapshot.q)

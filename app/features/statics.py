@@ -133,6 +133,7 @@ class StaticsView(View):
             self.bars = gui.add_html("", visible=False)
             self.mapped = gui.add_checkbox("Colour the workspace by ‖τ‖ for this force", False,
                                            hint=f"{TORQUE_MAP_POINTS:,} random joint vectors; the worst one is marked")
+            self.map_refusal = Beside(gui)  # a map asked for with the force along the tool's z, which turns with the arm
             self.map_legend = gui.add_markdown("", visible=False)
             self.held_back = gui.add_markdown("", visible=False)  #: why the map is off (a class challenge)
         self._metres_per_n = ARROW_METRES_PER_N * size
@@ -165,7 +166,11 @@ class StaticsView(View):
             self.loads(self._session.state.last)
             self._session.redraw()
         if widget in (self.mapped, self.newtons, self.direction):
-            self._maps.start("torque-map", self._session.guard)
+            self._map_again()
+
+    def _map_again(self) -> None:
+        """The map drawn again for the newest choices, on a thread of its own; its refusal stands below its box."""
+        self._maps.start("torque-map", lambda run: self._session.guard(run, beside=self.map_refusal))
 
     async def _handle_dragged(self, event: viser.TransformControlsEvent) -> None:
         """On viser's event loop, as the IK target's drags are: the handle's position as this event left
@@ -186,7 +191,7 @@ class StaticsView(View):
             self.dragged = offset / length
         self._session.redraw()
         if not self._holding:
-            self._maps.start("torque-map", self._session.guard)
+            self._map_again()
 
     def payload_kg(self) -> float:
         """The payload set here (kg) that the flange holds; 0 for an arm without link masses, which has no slider."""
@@ -290,6 +295,8 @@ class StaticsView(View):
             if session.closed:
                 return
             self._clear_map()
+            if refused is None:
+                self.map_refusal.clear()
             if self.held == "largest_torque":  # a class challenge began while it was drawn
                 shown = None
             self.map_legend.visible = shown is not None

@@ -284,10 +284,12 @@ class WorkspaceView(View):
                                           hint="Every client downloads its cloud: about 9 bytes per point")
             sections, missing = sections_of(session.arm)
             self.section = gui.add_dropdown("Section", sections, initial_value=SECTIONS[0], hint=missing or None)
+            # (said in the folder too: a projector's audience cannot hover over a tooltip)
+            self.sections_missing = gui.add_markdown(missing, visible=bool(missing))
             self.height = gui.add_slider("Section height (mm)", min=-600.0, max=1600.0, step=10.0,
                                          initial_value=600.0, visible=False)
             within(self.height, "section height (mm)")  # accepted: a first value refused puts it back here, not at 0
-            self.refusal = Beside(gui)  # a height typed in the slider's box beyond its range
+            self.refusal = Beside(gui)  # a height beyond the slider's range or the flange's reach, an empty section
             self.progress = gui.add_progress_bar(0.0, animated=True, visible=False)
             self.legend = gui.add_html("", visible=False)
         for widget in (self.enabled, self.count, self.section, self.height):
@@ -299,7 +301,8 @@ class WorkspaceView(View):
 
     def _changed(self, _: viser.GuiEvent) -> None:
         within(self.height, "section height (mm)")  # refused as it comes, shown or not
-        self._clouds.start("workspace", self._session.guard)  # a run under way picks up the newest choices
+        # a run under way picks up the newest choices; what it refuses is said below the inputs
+        self._clouds.start("workspace", lambda run: self._session.guard(run, beside=self.refusal))
 
     def _slow_job(self, make):
         session = self._session
@@ -311,7 +314,7 @@ class WorkspaceView(View):
         except ValueError as error:
             if not self._clouds.waiting:
                 raise  # the browser is told why (a section height nobody reaches, say)
-            self._session.notify("Not accepted", str(error))  # and the newer choice waiting is drawn
+            self.refusal.say(str(error))  # and the newer choice waiting is drawn
 
     def _update(self) -> None:
         section = chosen(self.section, "section")
@@ -354,6 +357,7 @@ class WorkspaceView(View):
                 )
             self.legend.content = HULL_LEGEND if section == HULL else legend_html(top, self._unit)
             self.legend.visible = True
+            self.refusal.clear()  # what an older choice was refused for
             self._look_square_on(section, points, legend_at)
             self._session.refresher.request(self._session)  # the new legend sized for lecture mode, and kept clear of
         finally:

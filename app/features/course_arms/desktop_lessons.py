@@ -13,6 +13,7 @@ import viser.uplot
 from ur10core.specs import largest_torque, torque_grid
 from ur10core.three_dof import course_path
 
+from ...feedback import Beside
 from ...serving.workers import HEAVY, FoldedRuns
 from ...state import Snapshot
 from ...style import DANGER_RED, SLOT_COLORS, hex_color, number
@@ -128,11 +129,14 @@ class StaticsExercise(View):
             self.search = gui.add_button("Find the pose that needs the largest ‖τ‖", icon=viser.Icon.SEARCH,
                                          hint=f"Every joint over its range, {GRID_STEPS} values each: "
                                               f"{GRID_STEPS ** 3:,} poses, coloured by ‖τ‖")
+            self.refusal = Beside(gui)  # a search asked for with no force set
             self.result = gui.add_markdown("")
         self._map: tuple[viser.SceneNodeHandle, ...] = ()
         self._map_lock = threading.Lock()
         self._searches = FoldedRuns(self._search)
-        self.search.on_click(session.guard(lambda _: self._searches.start("torque-search", session.guard)))
+        self.search.on_click(session.guard(
+            lambda _: self._searches.start("torque-search", lambda run: session.guard(run, beside=self.refusal)),
+            beside=self.refusal))
 
     def hold_back(self, asked: str | None) -> None:
         super().hold_back(asked)
