@@ -184,6 +184,31 @@ def test_each_branch_of_every_arm_has_a_number_of_its_own_where_it_parts_from_th
     asyncio.run(scenario())
 
 
+#: The IK target's longest arrow on the smallest canvas a class looks at, at the arm's home pose (px): a student
+#: grabs it with a mouse, and a class sees it from the back of the room.
+GIZMO_MIN_PX = 45
+
+
+@pytest.mark.parametrize("label", EVERY_ARM)
+def test_every_arms_gizmo_is_big_enough_to_grab_on_the_canvas(app, label):
+    """Sized by the arm's reach, the desktop arm's gizmo was 20–25 px long (the others' 50–100): its camera frames
+    the reach on every side of the shoulder, about twice what frames another arm."""
+    from ur10teach.features.camera import arm_points, framed_view
+
+    async def scenario():
+        client = await ViserClient(url(app)).connect()
+        session = await pick(app, client, label)
+        drawing, snapshot, gizmo = session.drawing, session.state.last, session.ik_target.gizmo
+        view = framed_view(arm_points(drawing.framed(snapshot), drawing.body_radius))
+        arrows = np.asarray(gizmo.position) + gizmo.scale * np.eye(4)[:, :3] * [[1], [1], [1], [0]]  # tips, then the centre
+        pixels, _ = view.to_screen(arrows @ drawing.world[:3, :3].T + drawing.world[:3, 3])
+        longest = np.linalg.norm(pixels[:3] - pixels[3], axis=1).max()
+        assert longest >= GIZMO_MIN_PX, f"the gizmo's longest arrow is {longest:.0f} px"
+        await client.close()
+
+    asyncio.run(scenario())
+
+
 @pytest.mark.parametrize("label", EVERY_ARM)
 def test_the_workspace_cloud_of_every_arm_is_its_own(app, label):
     """The cloud drawn is the arm's own sampled workspace, under the arm's own root."""

@@ -78,6 +78,12 @@ class DesktopArmScene(LineDrawing):
         back = CRANK * (elbow - tool) / np.linalg.norm(tool - elbow)
         return np.array([[shoulder, shoulder + back], [shoulder + back, elbow + back], [elbow + back, elbow]])
 
+    @property
+    def target_size(self) -> float:
+        """Twice its reach: its camera frames that reach on every side of the shoulder, about twice what frames another
+        arm, and a gizmo sized by the reach alone was 20–25 px long on a 1280 × 720 canvas (the others' 50–100)."""
+        return 2.0 * self.size
+
     def framed(self, snapshot: Snapshot) -> Framed:
         """What the camera frames: the arm as it is, and its reach about the shoulder and above, in the world."""
         points = self._points(snapshot.frames)

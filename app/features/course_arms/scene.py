@@ -159,6 +159,11 @@ class LineDrawing:
         return chain(pools)
 
     @property
+    def target_size(self) -> float:
+        """The reach (m) the IK target's gizmo, marker and halo are sized by: the arm's own, as the camera frames it."""
+        return self.size
+
+    @property
     def body_radius(self) -> float:
         """Room the camera keeps around each joint (the rods and the gizmo scale with the reach)."""
         return 0.15 * self.size
@@ -166,8 +171,8 @@ class LineDrawing:
     def _add_target_marker(self, scene: viser.SceneApi) -> None:
         """The target, drawn for the shared scene (only the presenter has a gizmo)."""
         name = f"{self.root}/target_marker"
-        self.target = scene.add_frame(name, axes_length=0.08 * self.size, axes_radius=0.004 * self.size)
-        self.unreachable = add_unreachable_halo(scene, name, self.size)
+        self.target = scene.add_frame(name, axes_length=0.08 * self.target_size, axes_radius=0.004 * self.target_size)
+        self.unreachable = add_unreachable_halo(scene, name, self.target_size)
 
     def _render_target(self, snapshot: Snapshot) -> None:
         if self.target is not None:
