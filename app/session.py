@@ -130,7 +130,8 @@ class ArmSession:
         nodes = drawn.root
         self.workspace = WorkspaceView(scene, gui, self, root=nodes, size=drawn.size)
         self.reach_map = ReachMapView(scene, gui, self, root=f"{nodes}/reach_map", world=drawn.world)
-        self.statics = StaticsView(scene, gui, self, root=f"{nodes}/statics", size=drawn.size)
+        self.statics = StaticsView(scene, gui, self, root=f"{nodes}/statics", size=drawn.size,
+                                  handle_size=drawn.handle_size)
         self.ellipsoids = EllipsoidsView(scene, gui, self, root=f"{nodes}/ellipsoids", reach=drawn.size)
         self.velocity = VelocityView(scene, gui, self, root=f"{nodes}/velocity", size=drawn.size)
         self.motion = MotionLessons(gui, self, before=self.stop_lessons, payload_kg=self.statics.payload_kg)

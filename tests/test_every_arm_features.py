@@ -192,8 +192,9 @@ GIZMO_MIN_PX = 45
 @pytest.mark.parametrize("label", EVERY_ARM)
 def test_every_arms_gizmo_is_big_enough_to_grab_on_the_canvas(app, label):
     """Sized by the arm's reach, the desktop arm's gizmo was 20–25 px long (the others' 50–100): its camera frames
-    the reach on every side of the shoulder, about twice what frames another arm."""
+    the reach on every side of the shoulder, about twice what frames another arm. So was its force's handle."""
     from ur10teach.features.camera import arm_points, framed_view
+    from ur10teach.features.statics import HANDLE_SCALE
 
     async def scenario():
         client = await ViserClient(url(app)).connect()
@@ -204,6 +205,8 @@ def test_every_arms_gizmo_is_big_enough_to_grab_on_the_canvas(app, label):
         pixels, _ = view.to_screen(arrows @ drawing.world[:3, :3].T + drawing.world[:3, 3])
         longest = np.linalg.norm(pixels[:3] - pixels[3], axis=1).max()
         assert longest >= GIZMO_MIN_PX, f"the gizmo's longest arrow is {longest:.0f} px"
+        # the force's handle, grabbed the same way, is sized the same way
+        assert session.statics.handle.scale / gizmo.scale == pytest.approx(HANDLE_SCALE / GIZMO_SHARE)
         await client.close()
 
     asyncio.run(scenario())

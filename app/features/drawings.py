@@ -45,7 +45,7 @@ class MeshArm:
 
     root = ""
     world = np.eye(4)
-    size = target_size = UR10_SIZE
+    size = handle_size = UR10_SIZE
     body_radius = BODY_RADIUS
 
     def __init__(self, scene: viser.SceneApi, models: ArmModels, first: Snapshot, target_marker: bool = False) -> None:

@@ -427,13 +427,13 @@ class IKTarget(View):
         self._seen_lock = threading.Lock()
         arm, snapshot = session.arm, session.state.last
         self.gizmo = controls.add_transform_controls(
-            f"{drawing.root}/ik_target", scale=GIZMO_SHARE * drawing.target_size, line_width=GIZMO_LINE_WIDTH[False],
+            f"{drawing.root}/ik_target", scale=GIZMO_SHARE * drawing.handle_size, line_width=GIZMO_LINE_WIDTH[False],
             depth_test=False, opacity=0.85, disable_rotations=arm.task == "position",
             active_axes=(True, True, not arm.planar),
             wxyz=quaternion(snapshot.target[:3, :3], check=False), position=snapshot.target[:3, 3])
         stop_echo(self.gizmo)
         # the halo rides on the gizmo unless the (shared) scene draws the target itself
-        self.unreachable = None if drawing.target is not None else add_unreachable_halo(controls, f"{drawing.root}/ik_target", drawing.target_size)
+        self.unreachable = None if drawing.target is not None else add_unreachable_halo(controls, f"{drawing.root}/ik_target", drawing.handle_size)
         slots = len(arm.slot_labels)
         folder = gui.add_folder(f"IK target: all {slots} branches" if slots > 1 and not arm.numerical else "IK target")
         self.folders = (folder,)

@@ -105,15 +105,16 @@ class StaticsView(View):
     """The "Forces and gravity" folder and the force arrow at the tool, for any arm.
 
     ``root`` is where its nodes go in the scene; ``size`` (the arm's reach, m) scales the
-    arrow, the handle's distance and the map's marker (the UR10's drawing is for 1 m).
+    arrow, the handle's distance and the map's marker; ``handle_size`` (the drawing's: the reach by default) the handle.
     """
 
     answers = ("largest_torque", "torque", "gravity_torque")  # the map marks the pose that needs the most; the bars give τ
 
     def __init__(self, scene: viser.SceneApi, gui: viser.GuiApi, session: Session, root: str = "/statics",
-                 size: float = 1.0) -> None:
+                 size: float = 1.0, handle_size: float | None = None) -> None:
         self._session = session
         self._root, self._size = root, size
+        self._handle_size = size if handle_size is None else handle_size
         arm = session.arm
         payload_kg = arm.specs.payload_kg if arm.name in MASSES else None
         folder = gui.add_folder("Forces and gravity", expand_by_default=False)
@@ -145,7 +146,7 @@ class StaticsView(View):
         self._name: tuple[np.ndarray, str] | None = None  #: (the arrow's tip, its text) while it shows
         #: the direction handle: this browser's own, like the IK target
         self.handle = session.client.scene.add_transform_controls(
-            f"{root}/force_handle", scale=HANDLE_SCALE * size, disable_rotations=True, depth_test=False, visible=False)
+            f"{root}/force_handle", scale=HANDLE_SCALE * self._handle_size, disable_rotations=True, depth_test=False, visible=False)
         stop_echo(self.handle)
         self.dragged = -np.asarray(arm.up, dtype=float)  #: the unit direction the handle was last dragged to (base frame)
         self._holding = False

@@ -79,9 +79,10 @@ class DesktopArmScene(LineDrawing):
         return np.array([[shoulder, shoulder + back], [shoulder + back, elbow + back], [elbow + back, elbow]])
 
     @property
-    def target_size(self) -> float:
+    def handle_size(self) -> float:
         """Twice its reach: its camera frames that reach on every side of the shoulder, about twice what frames another
-        arm, and a gizmo sized by the reach alone was 20–25 px long on a 1280 × 720 canvas (the others' 50–100)."""
+        arm, and a gizmo sized by the reach alone was 20–25 px long on a 1280 × 720 canvas (the others' 50–100), the
+        force's handle too."""
         return 2.0 * self.size
 
     def framed(self, snapshot: Snapshot) -> Framed:

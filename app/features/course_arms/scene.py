@@ -159,8 +159,9 @@ class LineDrawing:
         return chain(pools)
 
     @property
-    def target_size(self) -> float:
-        """The reach (m) the IK target's gizmo, marker and halo are sized by: the arm's own, as the camera frames it."""
+    def handle_size(self) -> float:
+        """The reach (m) what a student grabs or spots is sized by (the IK target's gizmo, marker and halo, the force's
+        handle): the arm's own, as the camera frames it."""
         return self.size
 
     @property
@@ -171,8 +172,8 @@ class LineDrawing:
     def _add_target_marker(self, scene: viser.SceneApi) -> None:
         """The target, drawn for the shared scene (only the presenter has a gizmo)."""
         name = f"{self.root}/target_marker"
-        self.target = scene.add_frame(name, axes_length=0.08 * self.target_size, axes_radius=0.004 * self.target_size)
-        self.unreachable = add_unreachable_halo(scene, name, self.target_size)
+        self.target = scene.add_frame(name, axes_length=0.08 * self.handle_size, axes_radius=0.004 * self.handle_size)
+        self.unreachable = add_unreachable_halo(scene, name, self.handle_size)
 
     def _render_target(self, snapshot: Snapshot) -> None:
         if self.target is not None:
