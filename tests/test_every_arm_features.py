@@ -116,6 +116,14 @@ def test_the_ellipsoids_and_the_gauges_of_every_arm_are_its_own(app, label):
         expected = np.sort(np.maximum(VELOCITY_METRES * np.pad(np.linalg.svd(J[:3] @ free, compute_uv=False), (0, 3))[:3], 1e-4))
         np.testing.assert_allclose(np.sort(session.ellipsoids.velocity.scale), expected, atol=1e-5)
         np.testing.assert_allclose(session.ellipsoids.frame.position, snapshot.flange[:3, 3], atol=1e-9)
+        # the units its joints' rates and efforts are in: "m/s per rad/s" was a false unit on a sliding joint
+        await until(lambda: session.ellipsoids.lengths.visible and "semi-axes" in session.ellipsoids.lengths.content,
+                    what="the semi-axes")
+        lengths, key = session.ellipsoids.lengths.content, session.ellipsoids.key.content
+        slides = "P" in arm.joint_types
+        assert ("m/s per rad/s or m/s of joint rate" in lengths and "N per N·m or N of joint effort" in lengths) == slides
+        assert ("m/s per rad/s of joint rate" in lengths and "N per N·m of joint torque" in lengths) == (not slides)
+        assert ("its shape depends on those units" in key) == slides
         for value in arm.singularity_factors(snapshot.q):
             assert f"= {value:+.4f}".replace("-", "−") in session.singularities.gauges.content.replace("-", "−")
         await client.close()

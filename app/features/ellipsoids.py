@@ -42,10 +42,26 @@ def force_scale(force: np.ndarray, reach: float) -> float:
     return FORCE_METRES if longest * FORCE_METRES <= LONGEST_SHARE * reach else LONGEST_SHARE * reach / longest
 
 
-def key_html() -> str:
-    """Which colour is which ellipsoid, for the panel."""
-    return (f"{swatch(VELOCITY_COLOR)} **velocity ellipsoid**: where joint rates of norm 1 can move the tool  \n"
-            f"{swatch(FORCE_COLOR)} **force ellipsoid**: the forces joint torques of norm 1 can hold")
+def joint_units(joint_types: str) -> tuple[str, str]:
+    """(a joint rate's unit, a joint effort's) for joints ``joint_types`` ("R" turns, "P" slides).
+
+    >>> joint_units("RRRRRR"), joint_units("RRPR")
+    (('rad/s', 'N·m'), ('rad/s or m/s', 'N·m or N'))
+    """
+    kinds = set(joint_types)
+    if kinds == {"P"}:
+        return "m/s", "N"
+    return ("rad/s", "N·m") if "P" not in kinds else ("rad/s or m/s", "N·m or N")
+
+
+def key_html(joint_types: str = "RRRRRR") -> str:
+    """Which colour is which ellipsoid, for the panel; on an arm with turning and sliding joints, that a norm adds
+    rad/s to m/s (N·m to N), so the ellipsoids' shapes depend on those units."""
+    mixed = "in rad/s and m/s alike, so its shape depends on those units" if len(set(joint_types)) > 1 else ""
+    return (f"{swatch(VELOCITY_COLOR)} **velocity ellipsoid**: where joint rates of norm 1 can move the tool"
+            f"{' (' + mixed + ')' if mixed else ''}  \n"
+            f"{swatch(FORCE_COLOR)} **force ellipsoid**: the forces joint torques of norm 1 can hold"
+            f"{' (N·m and N alike)' if mixed else ''}")
 
 
 def ellipsoid_pose(axes: np.ndarray) -> np.ndarray:
@@ -57,15 +73,16 @@ def ellipsoid_pose(axes: np.ndarray) -> np.ndarray:
 
 
 def lengths_markdown(velocity: np.ndarray, force: np.ndarray, place: str = "tool", held: str = "the tool's orientation held",
-                     scales: tuple[float, float] = (VELOCITY_METRES, FORCE_METRES)) -> str:
+                     scales: tuple[float, float] = (VELOCITY_METRES, FORCE_METRES), joint_types: str = "RRRRRR") -> str:
     def listed(values: np.ndarray) -> str:
         return ", ".join("∞" if not np.isfinite(v) else number(v, ".3g") for v in values)
 
+    rate, effort = joint_units(joint_types)
     return (f"The {place}'s ellipsoids{' with ' + held if held else ''} (docs §8.4).  \n"
-            f"**Velocity ellipsoid** semi-axes (m/s per rad/s of joint rate): {listed(velocity)}; "
-            f"drawn at {number(1000 * scales[0], '.3g')} mm per m/s per rad/s  \n"
-            f"**Force ellipsoid** semi-axes (N per N·m of joint torque): {listed(force)}; "
-            f"drawn at {number(1000 * scales[1], '.3g')} mm per N per N·m  \n"
+            f"**Velocity ellipsoid** semi-axes (m/s per {rate} of joint rate): {listed(velocity)}; "
+            f"drawn at {number(1000 * scales[0], '.3g')} mm per m/s per {rate}  \n"
+            f"**Force ellipsoid** semi-axes (N per {effort} of joint {'torque' if effort == 'N·m' else 'effort'}): "
+            f"{listed(force)}; drawn at {number(1000 * scales[1], '.3g')} mm per N per {effort}  \n"
             "Same axes; each force axis is 1 / the velocity axis. Drag towards a singularity and watch "
             "one velocity axis shrink while its force axis grows (drawn smaller, to stay on screen).")
 
@@ -94,7 +111,7 @@ class EllipsoidsView(View):
         with folder:
             self.enabled = gui.add_checkbox(f"Show at the {place}", False)
             self.which = gui.add_dropdown("Ellipsoid", tuple(SHOWN), initial_value="both")
-            self.key = gui.add_markdown(key_html())
+            self.key = gui.add_markdown(key_html(self._arm.joint_types))
             self.lengths = gui.add_markdown("", visible=False)
         # one frame at the tool, turned to the ellipsoids' axes (they share them), so a drag moves one node;
         # in it, a unit sphere per ellipsoid scaled per axis, tiny until first sized, so it never shows a metre wide
@@ -146,7 +163,8 @@ class EllipsoidsView(View):
             translation = self._arm.translation_ellipsoid(snapshot.q)
             self.lengths.content = lengths_markdown(translation.velocity, translation.force, self._place,
                                                     HELD.get(getattr(self._arm, "task", "pose"), ""),
-                                                    (VELOCITY_METRES, force_scale(translation.force, self._reach)))
+                                                    (VELOCITY_METRES, force_scale(translation.force, self._reach)),
+                                                    self._arm.joint_types)
 
     def close(self) -> None:
         """The session has gone: so do its ellipsoids, even from a scene everyone shares."""
