@@ -252,6 +252,7 @@ def test_the_branch_count_map_of_every_arm_is_its_ik_s(app, label):
     to face it edge-on to the arm. Until 2026-12-04 an arm placed in the world by a node of its own had its map
     placed twice: the desktop arm's lay on its back 1.5 m above where it belonged (out of sight), and the Stanford
     arm's, once it stood on its pedestal, 0.41 m too high."""
+    from ur10core.orientation import rotation_from_angle_axis
     from ur10core.workspace import branch_count_map
     from ur10teach.features.reach_map import PLANES, map_image
 
@@ -277,6 +278,24 @@ def test_the_branch_count_map_of_every_arm_is_its_ik_s(app, label):
         T[:3, 3] = expected.points()[i, j]
         solution = session.arm.ik(T)
         assert int(solution.within_limits.sum()) == int(expected.counts[i, j])
+        # what the folder asks of the student holds for this arm: it says turning the gizmo changes the map only
+        # where a turn the arm controls does (until 2026-12-05 also on arms whose gizmo does not turn, and on the
+        # SCARA, whose yaw only turns its roll joint), and "tool turned as now" only where the arm keeps a turn
+        question, arm = view.question.content, session.arm
+        turns = {"pose": np.eye(3), "position and yaw": np.eye(3)[2:]}.get(arm.task, np.zeros((0, 3)))
+        target = session.state.last.target
+        coarse = branch_count_map(arm, target, plane, 40).counts
+
+        def turned(axis):
+            T = target.copy()
+            T[:3, :3] = rotation_from_angle_axis(0.7, axis) @ T[:3, :3]
+            return T
+
+        changes = any((branch_count_map(arm, turned(axis), plane, 40).counts != coarse).any() for axis in turns)
+        assert ("watch the rings change" in question) == changes, question
+        assert ("its gizmo does not turn" in question) == session.ik_target.gizmo.disable_rotations == (arm.task == "position")
+        assert ("tool turned as now" in view._legend[0].text) == (arm.task == "pose")
+        assert ("tool turned as now" in view.legend.content) == (arm.task == "pose")
         await client.close()
 
     asyncio.run(scenario())

@@ -71,21 +71,40 @@ def map_pose(reach: BranchCountMap) -> tuple[np.ndarray, np.ndarray]:
 COLOUR_NAMES = {REACH_COLORS[1][0]: "yellow", REACH_COLORS[2][0]: "green", REACH_COLORS[3][0]: "teal", REACH_COLORS[4][0]: "purple"}
 
 
-def legend_text(slots: int = 8) -> str:
+#: What of the target's orientation each point is reached with, by what the arm controls (``arm.task``).
+KEPT = {"pose": "tool turned as now", "position and yaw": "tool's yaw as now", "position": ""}
+
+#: What the folder asks, by ``arm.task``: an arm that places its tool's position only has a gizmo that does not
+#: turn, and a SCARA's yaw only turns its roll joint (until 2026-12-05 every arm was told "turn the gizmo and
+#: watch the rings change", which changed nothing on those).
+QUESTIONS = {
+    "pose": "Keep the tool turned as the gizmo has it and move it anywhere in a plane: how many of the {slots} "
+            "branches get there? Turn the gizmo and watch the rings change.",
+    "position and yaw": "Move the tool anywhere in a plane, pointing down, with the gizmo's yaw: how many of the "
+                        "{slots} branches get there? The yaw turns the last joint only, so it changes the map only "
+                        "where that joint would go beyond its limits.",
+    "position": "This arm places its tool's position only (its gizmo does not turn): how many of the {slots} "
+                "branches reach each point of a plane through the target?",
+}
+
+
+def legend_text(slots: int = 8, task: str = "pose") -> str:
     """The map's label in 3D: "… yellow 2 · green 4 · teal 6 · purple 8" for the UR10, in two lines that fit a
     projector's canvas in lecture mode."""
     names = " · ".join(f"{COLOUR_NAMES[colour_of(count, slots)]} {count}" for count in legend_counts(slots))
-    return f"branches reaching each point, tool turned as now:\n{names}"
+    kept = KEPT.get(task, "")
+    return f"branches reaching each point{', ' + kept if kept else ''}:\n{names}"
 
 
-def legend_html(slots: int = 8) -> str:
+def legend_html(slots: int = 8, task: str = "pose") -> str:
     entries = [("none", REACH_COLORS[0][0]), *((str(count), colour_of(count, slots)) for count in legend_counts(slots))]
     swatches = "".join(
         f"<span style='display:inline-block;margin-right:10px'><span style='display:inline-block;width:14px;height:14px;"
         f"border-radius:3px;vertical-align:middle;background:{hex_color(rgb)}'></span> {label}</span>"
         for label, rgb in entries
     )
-    return f"<div style='font-size:0.85em'>Branches that reach each point with this orientation:<br>{swatches}</div>"
+    kept = KEPT.get(task, "")
+    return f"<div style='font-size:0.85em'>Branches that reach each point{', ' + kept if kept else ''}:<br>{swatches}</div>"
 
 
 class ReachMapView(View):
@@ -125,13 +144,11 @@ class ReachMapView(View):
                 gui.add_markdown("A typed table's IK is numerical, from one start at a time: a map of thousands of "
                                  "poses would take minutes, so this arm has none. The course's arms all have one.")
             else:
-                gui.add_markdown("Keep the tool turned as the gizmo has it and move it anywhere in a plane: "
-                                 f"how many of the {self.slots} branches get there? Turn the gizmo and watch the "
-                                 "rings change.")
+                self.question = gui.add_markdown(QUESTIONS[arm.task].format(slots=self.slots))
             self.enabled = gui.add_checkbox("Show branch-count map", False, disabled=arm.numerical)
             planes, missing = planes_of(arm)
             self.plane = gui.add_dropdown("Plane", planes, initial_value=planes[0], hint=missing or None)
-            self.legend = gui.add_html(legend_html(max(self.slots, 1)), visible=False)
+            self.legend = gui.add_html(legend_html(max(self.slots, 1), arm.task), visible=False)
             self.held_back = gui.add_markdown("", visible=False)
         self.enabled.on_update(session.guard(self._toggled))
         self.plane.on_update(session.guard(self._toggled))
@@ -199,7 +216,7 @@ class ReachMapView(View):
                     self._root, image, reach.size, reach.size, format="png", wxyz=wxyz, position=position,
                     cast_shadow=False, receive_shadow=False)
                 # in the scene beside the map, so that viewers of a shared scene can read it too
-                label = self._scene.add_label(f"{self._root}/legend", legend_text(self.slots), position=(0.0, top, 0.0),
+                label = self._scene.add_label(f"{self._root}/legend", legend_text(self.slots, self._session.arm.task), position=(0.0, top, 0.0),
                                               font_screen_scale=1.3, anchor="top-center")
             else:
                 label = self._legend[0]
