@@ -1,5 +1,7 @@
 """Inverse kinematics: round trips, the fixed slots, singular and unreachable poses."""
 
+import re
+
 import numpy as np
 import pytest
 
@@ -225,6 +227,21 @@ def test_unreachable_far_pose_says_elbow_reach_with_numbers(course):
     # the number reported is the smallest excess over the branches
     excess_mm = 1e3 * (sol.elbow_distance.min() - (course.a2 + course.a3))
     assert f"{excess_mm:.1f} mm beyond" in reason
+
+
+def test_a_pose_a_hair_beyond_the_reach_says_by_how_much(course):
+    """The stretched pose typed back from its readout (rounded to 0.1 mm) lies micrometres beyond the reach: the
+    reason read "the wrist-1 centre would be 1184.5 mm from the shoulder, 0.0 mm beyond a2 + a3 = 1184.5 mm"."""
+    T = course.fk(np.radians([45, 90, 0, -90, 0, 60]))
+    T[:3, 3] = np.round(T[:3, 3], 4)  # 181.090 mm → 181.1 mm: outwards
+    sol = course.ik(T)
+    assert not sol.valid.any()
+    reason = sol.unreachable_reason()
+    excess_mm = 1e3 * (np.nanmin(sol.elbow_distance) - (course.a2 + course.a3))
+    assert 0 < excess_mm < 0.05
+    match = re.search(r"would be (\d+\.\d+) mm from the shoulder, (\d+\.\d+) mm beyond a2 \+ a3 = (\d+\.\d+) mm", reason)
+    at, off, bound = match.groups()
+    assert at != bound and float(off) == pytest.approx(excess_mm, abs=0.6 * 10 ** -len(off.split(".")[1]))
 
 
 @pytest.mark.parametrize("coordinate", [1e150, 1e300, -1e308])

@@ -345,6 +345,15 @@ def test_unreachable_poses_are_explained_with_numbers(name, position, failure, w
     assert words in reason and "mm" in reason
 
 
+def test_a_target_a_hair_beyond_the_planar_elbows_reach_says_by_how_much():
+    """11 µm beyond a1 + a2 = 900 mm read "900.0 mm from …; the two links reach at most 900.0 mm"."""
+    arm = Arm.preset("planar_elbow")
+    T = np.eye(4)
+    T[0, 3] = 0.9 + 11e-6
+    reason = arm.ik(T).unreachable_reason()
+    assert "900.011 mm from the first joint's axis; the two links reach at most 900.000 mm (0.011 mm short)" in reason
+
+
 def test_scara_refuses_a_tilted_tool_and_says_by_how_much():
     arm = Arm.preset("scara")
     T = arm.fk(np.array([0.3, 0.5, 0.1, 0.2]))

@@ -32,6 +32,19 @@ NOT_FOUND = 6  #: detail: the smallest pose error the numerical solver reached
 _TAU = 2.0 * math.pi
 
 
+def mm_apart(length: float, bound: float) -> tuple[str, str, str]:
+    """``length`` and ``bound`` (m) in mm and how far apart they are, with as many decimals (1 to 4) as it takes to
+    tell them apart: a pose typed from a readout rounded to 0.1 mm can lie 11 µm beyond the reach, and "1184.5 mm,
+    0.0 mm beyond 1184.5 mm" read as a fault.
+
+    >>> mm_apart(1.1845109, 1.1845), mm_apart(2.0, 1.5)
+    (('1184.511', '1184.500', '0.011'), ('2000.0', '1500.0', '500.0'))
+    """
+    gap = abs(1000.0 * (length - bound))
+    decimals = 1 if not gap or not math.isfinite(gap) or gap >= 0.05 else min(4, math.ceil(-math.log10(gap)) + 1)
+    return tuple(f"{1000.0 * value:.{decimals}f}" for value in (length, bound, abs(length - bound)))
+
+
 def wrap(angle: np.ndarray) -> np.ndarray:
     """Angles in (−π, π]."""
     return -np.remainder(-np.asarray(angle) + math.pi, _TAU) + math.pi

@@ -26,7 +26,7 @@ import math
 
 import numpy as np
 
-from ..branches import NOT_FOUND, TOO_FAR, empty_branches, wrap
+from ..branches import NOT_FOUND, TOO_FAR, empty_branches, mm_apart, wrap
 from ..dh import DHTable
 from ..differential import task_gap
 from ..tolerances import LENGTH_TOLERANCE
@@ -144,8 +144,9 @@ class NumericalIK:
 
     def explain(self, failure: int, detail: float) -> str:
         if failure == TOO_FAR:
-            return (f"the target is {1000 * detail:.1f} mm from the base; this chain, every length and stroke laid "
-                    f"end to end, reaches {1000 * self.reach:.1f} mm at most")
+            at, bound, _ = mm_apart(detail, self.reach)
+            return (f"the target is {at} mm from the base; this chain, every length and stroke laid "
+                    f"end to end, reaches {bound} mm at most")
         return (f"the numerical search found no joints that reach this {self.task} from {self.starts} starts "
                 f"(the nearest came within {1000 * detail:.3g} mm / mrad)")
 

@@ -18,7 +18,7 @@ import math
 
 import numpy as np
 
-from ..branches import ORIENTATION, OUT_OF_PLANE, TOO_CLOSE, TOO_FAR, empty_branches, wrap
+from ..branches import ORIENTATION, OUT_OF_PLANE, TOO_CLOSE, TOO_FAR, empty_branches, mm_apart, wrap
 from ..dh import DHTable
 from ..tolerances import CHOICE_TOLERANCE, LENGTH_TOLERANCE
 
@@ -38,11 +38,12 @@ def _reach_words(failure: int, detail: float, a1: float, a2: float, what: str,
                  origin: str = "the first joint's axis") -> str:
     """Why a two-link arm of ``a1`` then ``a2`` does not reach ``what``, ``detail`` m from ``origin`` ("" if it does)."""
     if failure == TOO_FAR:
-        return (f"{what} is {1000 * detail:.1f} mm from {origin}; the two links reach at most "
-                f"{1000 * (a1 + a2):.1f} mm")
+        at, bound, off = mm_apart(detail, a1 + a2)
+        return f"{what} is {at} mm from {origin}; the two links reach at most {bound} mm ({off} mm short)"
     if failure == TOO_CLOSE:
-        return (f"{what} is {1000 * detail:.1f} mm from {origin}; folded, the two links "
-                f"come no closer than {1000 * abs(a1 - a2):.1f} mm")
+        at, bound, off = mm_apart(detail, abs(a1 - a2))
+        return (f"{what} is {at} mm from {origin}; folded, the two links come no closer than {bound} mm "
+                f"({off} mm too close)")
     return ""
 
 

@@ -39,6 +39,7 @@ from ..branches import (
     TOO_FAR,
     IKSolution,
     empty_branches,
+    mm_apart,
     wrap,
 )
 from ..dh import MODIFIED, STANDARD, DHTable
@@ -345,13 +346,15 @@ class ArticulatedArm(_CompiledWristArm):
         return _ARTICULATED, [p[key] for key in ("u0", "w0", "sigma", "a2", "o2", "L", "phi", "s3")] + list(self.reach)
 
     def explain(self, failure: int, detail: float) -> str:
-        near, far = (1000 * r for r in self.reach)
+        near, far = self.reach
         if failure == TOO_FAR:
-            return (f"the wrist centre is {1000 * detail:.1f} mm from the shoulder joint; upper arm and forearm "
-                    f"reach at most {far:.1f} mm ({1000 * detail - far:.1f} mm short)")
+            at, bound, off = mm_apart(detail, far)
+            return (f"the wrist centre is {at} mm from the shoulder joint; upper arm and forearm "
+                    f"reach at most {bound} mm ({off} mm short)")
         if failure == TOO_CLOSE:
-            return (f"the wrist centre is {1000 * detail:.1f} mm from the shoulder joint; folded, the arm "
-                    f"cannot come closer than {near:.1f} mm")
+            at, bound, off = mm_apart(detail, near)
+            return (f"the wrist centre is {at} mm from the shoulder joint; folded, the arm "
+                    f"cannot come closer than {bound} mm ({off} mm too close)")
         return "no branch reaches this pose"
 
     def solve(self, T: np.ndarray, hint: np.ndarray | None) -> dict[str, np.ndarray]:
@@ -470,8 +473,9 @@ class StanfordArm(_CompiledWristArm):
 
     def explain(self, failure: int, detail: float) -> str:
         if failure == INSIDE_OFFSET:
-            return (f"the wrist centre is {1000 * detail:.1f} mm from the base axis, inside the shoulder offset "
-                    f"d2 = {1000 * self.d2:.1f} mm: no θ1 lines the arm up with it")
+            at, bound, _ = mm_apart(detail, self.d2)
+            return (f"the wrist centre is {at} mm from the base axis, inside the shoulder offset "
+                    f"d2 = {bound} mm: no θ1 lines the arm up with it")
         return "no branch reaches this pose"
 
     def solve(self, T: np.ndarray, hint: np.ndarray | None) -> dict[str, np.ndarray]:

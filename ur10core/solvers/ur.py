@@ -34,7 +34,7 @@ from .._backend import kernels
 from .._validate import (
     as_float_array, check_finite, homogeneous_transform, joint_vector, one_joint_vector, poses_and_hints, refuse_pose,
 )
-from ..branches import INSIDE_OFFSET, TOO_FAR, IKSolution, wrap
+from ..branches import INSIDE_OFFSET, TOO_FAR, IKSolution, mm_apart, wrap
 from ..tolerances import WRIST_TOLERANCE
 
 if TYPE_CHECKING:
@@ -315,11 +315,10 @@ class URFamily:
         """Why the pose at ``index`` has no branch, in this family's words and numbers (mm)."""
         failure = solution.failure[index]
         if (failure == INSIDE_OFFSET).all():
-            rho = float(solution.wrist2_radius[index])
+            at, bound, off = mm_apart(float(solution.wrist2_radius[index]), self.d4)
             return (
-                f"unreachable: the wrist-2 point P5 is {1e3 * (self.d4 - rho):.1f} mm inside the "
-                f"shoulder cylinder (it is {1e3 * rho:.1f} mm from the base axis; it must be at "
-                f"least d4 = {1e3 * self.d4:.1f} mm)"
+                f"unreachable: the wrist-2 point P5 is {off} mm inside the shoulder cylinder (it is {at} mm from the "
+                f"base axis; it must be at least d4 = {bound} mm)"
             )
         distance = solution.elbow_distance[index]
         outer, inner = self.a2 + self.a3, abs(self.a2 - self.a3)
@@ -330,19 +329,16 @@ class URFamily:
                 f"(the arm reaches a2 + a3 = {1e3 * outer:.1f} mm from the shoulder)"
             )
         k = int(np.nanargmin(excess))
+        far = failure[k] == TOO_FAR
+        at, bound, off = mm_apart(distance[k], outer if far else inner)
         if solution.wrist_singular[index][k]:
-            where = (
-                f"with the wrist singular (axes 4 and 6 parallel) no θ6 works: the wrist-1 centre "
-                f"stays at least {1e3 * distance[k]:.1f} mm from the shoulder"
-                if failure[k] == TOO_FAR
-                else f"with the wrist singular (axes 4 and 6 parallel) no θ6 works: the wrist-1 centre "
-                f"stays within {1e3 * distance[k]:.1f} mm of the shoulder"
-            )
+            where = (f"with the wrist singular (axes 4 and 6 parallel) no θ6 works: the wrist-1 centre "
+                     f"{f'stays at least {at} mm from' if far else f'stays within {at} mm of'} the shoulder")
         else:
-            where = f"the wrist-1 centre would be {1e3 * distance[k]:.1f} mm from the shoulder"
-        if failure[k] == TOO_FAR:
-            return f"unreachable: elbow reach — {where}, {1e3 * excess[k]:.1f} mm beyond a2 + a3 = {1e3 * outer:.1f} mm"
-        return f"unreachable: elbow reach — {where}, {1e3 * excess[k]:.1f} mm closer than |a2 − a3| = {1e3 * inner:.1f} mm"
+            where = f"the wrist-1 centre would be {at} mm from the shoulder"
+        if far:
+            return f"unreachable: elbow reach — {where}, {off} mm beyond a2 + a3 = {bound} mm"
+        return f"unreachable: elbow reach — {where}, {off} mm closer than |a2 − a3| = {bound} mm"
 
     # ------------------------------------------------------------------ Jacobian
 
