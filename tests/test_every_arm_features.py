@@ -68,6 +68,9 @@ def test_velocity_and_forces_on_every_arm_match_finite_differences(app, label):
         rates = arm.joint_rates(q, parse_twist(typed))
         np.testing.assert_allclose(sum(rates.qdot[i] * position_rate(arm, q, i) for i in range(arm.n_joints)), v / 1000, atol=1e-6)
         assert ("This arm controls its tool's position" in session.velocity.rates.content) == (arm.task != "pose")
+        # J⁻¹ only where it exists: the planar elbow's J over the position it controls is 3 × 2 (said J⁻¹ until 2026-12-05)
+        formula = "q̇ = J⁺ v" if arm.name == "planar_elbow" else "q̇ = J⁻¹ v"
+        assert any(formula in text for text in client.markdown.values()), formula
         # 50 N along +x at the tool: each joint holds ∂p/∂q_i · F (virtual work)
         await client.set_gui("Show the torques", True)
         await client.set_gui("Force direction", "+x")

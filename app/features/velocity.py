@@ -16,6 +16,7 @@ import numpy as np
 import viser
 
 from ur10core.challenges import RATE_LIMITS  # the rates a student can set: a velocity challenge is refused beyond them
+from ur10core.differential import TASK_ROWS
 
 from ..feedback import Beside, within
 from ..state import Snapshot
@@ -86,6 +87,15 @@ def rates_markdown(qdot: np.ndarray, damping: float, asked: np.ndarray, achieved
     return "\n".join(lines)
 
 
+def rates_formula(arm) -> str:
+    """How the folder's joint rates come from a tool velocity: J⁻¹ where the rows the arm controls are as many as
+    its joints, else the pseudo-inverse (the planar elbow's 3 × 2, a typed seven-joint arm's 6 × 7)."""
+    rows, joints = len(TASK_ROWS[arm.task]), arm.n_joints
+    if rows == joints:
+        return "q̇ = J⁻¹ v"
+    return f"q̇ = J⁺ v (J⁺ the pseudo-inverse: the J of what this arm controls is {rows} × {joints}, not square)"
+
+
 class VelocityView(View):
     """The "Velocities" folder and the two arrows at the tool: for the sliders' joint rates, or a playing path's.
 
@@ -119,7 +129,7 @@ class VelocityView(View):
                             for i, kind in enumerate(self._kinds)]
             self.rates_refusal = Beside(gui)  # a rate typed in a slider's box beyond its range
             self.readout = gui.add_markdown("")
-            gui.add_markdown(f"Or ask for a {place} velocity and see the joint rates it needs, q̇ = J⁻¹ v:")
+            gui.add_markdown(f"Or ask for a {place} velocity and see the joint rates it needs, {rates_formula(self._arm)}:")
             self.typed = gui.add_text("vx vy vz (mm/s) ωx ωy ωz (°/s)", "100 0 0 0 0 0",
                                       hint="Three numbers, v alone (ω = 0), or six")
             self.solve = gui.add_button("Find the joint rates")
