@@ -104,7 +104,7 @@ def jacobian_by_differences(arm, q: np.ndarray) -> np.ndarray:
 def test_the_ellipsoids_and_the_gauges_of_every_arm_are_its_own(app, label):
     """The velocity ellipsoid drawn at the tool has the semi-axes of J_v on the joint rates that keep what the
     arm controls of its orientation still (from differences of FK); each gauge shows that factor of det J."""
-    from ur10teach.features.ellipsoids import VELOCITY_METRES
+    from ur10teach.features.ellipsoids import LONGEST_SHARE, VELOCITY_METRES
 
     async def scenario():
         client = await ViserClient(url(app)).connect()
@@ -116,13 +116,19 @@ def test_the_ellipsoids_and_the_gauges_of_every_arm_are_its_own(app, label):
         held = {"pose": J[3:], "position and yaw": J[5:]}.get(arm.task, np.zeros((0, arm.n_joints)))
         _, singular, vt = np.linalg.svd(held) if len(held) else (None, np.zeros(0), np.zeros((0, arm.n_joints)))
         free = vt[int((singular > 1e-9).sum()):].T if len(held) else np.eye(arm.n_joints)  # rates that hold it still
-        expected = np.sort(np.maximum(VELOCITY_METRES * np.pad(np.linalg.svd(J[:3] @ free, compute_uv=False), (0, 3))[:3], 1e-4))
+        sigma = np.pad(np.linalg.svd(J[:3] @ free, compute_uv=False), (0, 3))[:3]
+        expected = np.sort(np.maximum(VELOCITY_METRES * sigma, 1e-4))
         np.testing.assert_allclose(np.sort(session.ellipsoids.velocity.scale), expected, atol=1e-5)
+        # a direction the tool cannot move in (the planar elbow's vertical) is one the joints hold any force along:
+        # the force ellipsoid's longest axis there, not a flat one (drawn as zero until 2026-12-05)
+        if (sigma < 1e-9).any():
+            assert max(session.ellipsoids.force.scale) == pytest.approx(LONGEST_SHARE * session.drawing.size)
         np.testing.assert_allclose(session.ellipsoids.frame.position, snapshot.flange[:3, 3], atol=1e-9)
         # the units its joints' rates and efforts are in: "m/s per rad/s" was a false unit on a sliding joint
         await until(lambda: session.ellipsoids.lengths.visible and "semi-axes" in session.ellipsoids.lengths.content,
                     what="the semi-axes")
         lengths, key = session.ellipsoids.lengths.content, session.ellipsoids.key.content
+        assert ("∞: the joints hold a force along that axis with no torque" in lengths) == (sigma < 1e-9).any()
         slides = "P" in arm.joint_types
         assert ("m/s per rad/s or m/s of joint rate" in lengths and "N per N·m or N of joint effort" in lengths) == slides
         assert ("m/s per rad/s of joint rate" in lengths and "N per N·m of joint torque" in lengths) == (not slides)

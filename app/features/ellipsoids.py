@@ -42,6 +42,18 @@ def force_scale(force: np.ndarray, reach: float) -> float:
     return FORCE_METRES if longest * FORCE_METRES <= LONGEST_SHARE * reach else LONGEST_SHARE * reach / longest
 
 
+def drawn_force_axes(force: np.ndarray, reach: float) -> np.ndarray:
+    """The force ellipsoid's semi-axes as drawn (m), at :func:`force_scale`; an infinite one (a force the joints hold
+    with no torque: the planar elbow's vertical) as long as the longest may be drawn. It was drawn as zero, flat
+    where it is endless, and at an exact singularity the axis that grew as the arm neared it vanished.
+
+    >>> drawn_force_axes(np.array([1.0, 2.0, np.inf]), 1.0).tolist()
+    [0.05, 0.1, 0.35]
+    """
+    finite = np.isfinite(force)
+    return np.where(finite, force_scale(force, reach) * np.where(finite, force, 0.0), LONGEST_SHARE * reach)
+
+
 def joint_units(joint_types: str) -> tuple[str, str]:
     """(a joint rate's unit, a joint effort's) for joints ``joint_types`` ("R" turns, "P" slides).
 
@@ -84,7 +96,9 @@ def lengths_markdown(velocity: np.ndarray, force: np.ndarray, place: str = "tool
             f"**Force ellipsoid** semi-axes (N per {effort} of joint {'torque' if effort == 'N·m' else 'effort'}): "
             f"{listed(force)}; drawn at {number(1000 * scales[1], '.3g')} mm per N per {effort}  \n"
             "Same axes; each force axis is 1 / the velocity axis. Drag towards a singularity and watch "
-            "one velocity axis shrink while its force axis grows (drawn smaller, to stay on screen).")
+            "one velocity axis shrink while its force axis grows (drawn smaller, to stay on screen)."
+            + ("  \n∞: the joints hold a force along that axis with no torque at all (the structure takes it); "
+               "drawn as long as the longest axis may be." if not np.isfinite(force).all() else ""))
 
 
 #: What an arm keeps still for its translational ellipsoid, by what it controls (``arm.task``).
@@ -139,9 +153,8 @@ class EllipsoidsView(View):
             at = self._tool(snapshot)[:3, 3]
             set_orientations([self.frame], ellipsoid_pose(translation.axes)[None])
             set_positions([self.frame], at[None])
-            force = np.where(np.isfinite(translation.force), translation.force, 0.0)
-            sizes = np.maximum([VELOCITY_METRES * translation.velocity,
-                                force_scale(translation.force, self._reach) * force], 1e-4)
+            sizes = np.maximum([VELOCITY_METRES * translation.velocity, drawn_force_axes(translation.force, self._reach)],
+                               1e-4)
             shown = [show_velocity, show_force]  # sized before they show; a zero axis makes a flat disc
             set_scales([node for node, on in zip((self.velocity, self.force), shown) if on], sizes[shown])
             longest = np.argmax(sizes, axis=1)
