@@ -958,7 +958,7 @@ def test_a_course_arm_has_its_branch_count_map_and_a_typed_table_says_why_not(ap
 #: Each teaching feature (issue 29) and the folder it has in an arm's panel.
 FEATURE_FOLDERS = {
     "joints": ("Joints",), "IK target and its branches": ("IK target", *(f"IK target: all {k} branches" for k in (1, 2, 4, 8))),
-    "singularities": ("Singularities",), "workspace": ("Workspace",), "reach map": ("Reachable with this orientation",),
+    "singularities": ("Singularities",), "workspace": ("Workspace",), "reach map": ("Reachable with this orientation", "Reachable points"),
     "velocities": ("Velocities",), "ellipsoids": ("Manipulability ellipsoids",), "forces and gravity": ("Forces and gravity",),
     "motion": ("Motion",), "DH table": ("DH table",), "DH walkthrough": ("DH walkthrough",),
 }

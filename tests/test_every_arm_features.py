@@ -303,6 +303,8 @@ def test_the_branch_count_map_of_every_arm_is_its_ik_s(app, label):
         changes = any((branch_count_map(arm, turned(axis), plane, 40).counts != coarse).any() for axis in turns)
         assert ("watch the rings change" in question) == changes, question
         assert ("its gizmo does not turn" in question) == session.ik_target.gizmo.disable_rotations == (arm.task == "position")
+        title = "Reachable points" if arm.task == "position" else "Reachable with this orientation"
+        assert client.gui[title]["type"] == "GuiFolderMessage"
         assert ("tool turned as now" in view._legend[0].text) == (arm.task == "pose")
         assert ("tool turned as now" in view.legend.content) == (arm.task == "pose")
         await client.close()

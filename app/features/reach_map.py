@@ -74,6 +74,10 @@ COLOUR_NAMES = {REACH_COLORS[1][0]: "yellow", REACH_COLORS[2][0]: "green", REACH
 #: What of the target's orientation each point is reached with, by what the arm controls (``arm.task``).
 KEPT = {"pose": "tool turned as now", "position and yaw": "tool's yaw as now", "position": ""}
 
+#: The folder's title, by ``arm.task``: an arm that places its tool's position only has no orientation to keep.
+TITLES = {"pose": "Reachable with this orientation", "position and yaw": "Reachable with this orientation",
+          "position": "Reachable points"}
+
 #: What the folder asks, by ``arm.task``: an arm that places its tool's position only has a gizmo that does not
 #: turn, and a SCARA's yaw only turns its roll joint (until 2026-12-05 every arm was told "turn the gizmo and
 #: watch the rings change", which changed nothing on those).
@@ -108,7 +112,8 @@ def legend_html(slots: int = 8, task: str = "pose") -> str:
 
 
 class ReachMapView(View):
-    """The "Reachable with this orientation" folder and its map, in the session's scene (``root``).
+    """The "Reachable with this orientation" folder ("Reachable points" where the arm places a position only) and its
+    map, in the session's scene (``root``).
 
     For any arm with a closed-form IK; a typed table's folder says why it has no map.
     ``target_of(snapshot)`` is the pose whose orientation is kept (the IK target; the desktop
@@ -137,7 +142,7 @@ class ReachMapView(View):
         self._closed = False
         self._maps = FoldedRuns(self._draw)
         self._face_next = False  # turn the camera to face the plane once the next map is drawn
-        folder = gui.add_folder("Reachable with this orientation", expand_by_default=False)
+        folder = gui.add_folder(TITLES.get(arm.task, TITLES["pose"]), expand_by_default=False)
         self.folders = (folder,)
         with folder:
             if arm.numerical:
