@@ -137,7 +137,7 @@ class ArmSession:
         self.motion = MotionLessons(gui, self, before=self.stop_lessons, payload_kg=self.statics.payload_kg)
         self.lessons = LESSONS[arm.name](scene, gui, self) if arm.name in LESSONS else ()
         self.camera = (CameraControls(client, lambda: drawn.framed(self.state.last), self.guard, lecture,
-                                      body_radius=drawn.body_radius) if own_camera else None)
+                                      body_radius=drawn.body_radius, up=arm.up) if own_camera else None)
         #: the scene whose 3D labels this browser's lecture mode sizes: its own (a shared one follows the server's)
         self._label_scene = scene if server is None else None
         #: (frame (4, 4)) -> the names drawn in this browser by something else (a challenge's target), as
@@ -302,6 +302,7 @@ class ArmSession:
         """Use this browser's camera (a classroom's member has one for all its sessions): frame with it,
         and place the branch numbers of this session's own drawing for it as it moves."""
         self.camera = camera
+        camera.name_views(self.arm.up)
         if self._label_scene is not None:
             camera.on_moved.append(self._place_numbers)
 

@@ -464,6 +464,7 @@ def test_the_presenter_shows_the_class_another_arm(classroom):
         await until(room.can_switch, what="the class's arm to be ready for a change")
         await teacher.set_gui("Which arm", UR10)
         await until(lambda: room.choice == UR10 and presenter.session is not None, what="the UR10 back")
+        assert "Front (x–z plane)" in presenter.camera.direction.options
         np.testing.assert_array_equal(room.state.q, ur10_q)
         # and showing what the presenter had shown on it, in the panel and in 3D
         assert presenter.session.singularities.enabled.value and room.drawing.overlay.enabled
@@ -501,9 +502,15 @@ def test_the_class_is_shown_the_desktop_arm_played_and_explored(classroom):
         await become_presenter(teacher, classroom)
         presenter = member_of(classroom, 0)
         await until(room.can_switch, what="the class's arm to be ready for a change")
+        watcher = member_of(classroom, 1)
+        await student.set_gui("Look from", "Top (x–y plane)")
+        await until(lambda: watcher.camera.direction.value == "Top (x–y plane)", what="the student's top view")
         await teacher.set_gui("Which arm", DESKTOP)
         await until(lambda: presenter.session is not None and presenter.session.arm.name == "three_dof",
                     what="the class's desktop arm")
+        # its views are named in its own axes (y up), for everyone watching, the view each chose kept
+        await until(lambda: watcher.camera.direction.value == "Top (x–z plane)", what="the student's top view renamed")
+        assert "Front (x–y plane)" in presenter.camera.direction.options
         assert presenter.session.state is room.state and presenter.session.drawing is room.drawing
         for client in (teacher, student):
             await until(lambda: client.received.node_owners.get(f"{ROOT}/base_frame/links") == "", what="the shared desktop arm")
@@ -531,6 +538,7 @@ def test_the_class_is_shown_the_desktop_arm_played_and_explored(classroom):
         await until(room.can_switch, what="the class's arm to be ready for a change")
         await teacher.set_gui("Which arm", UR10)
         await until(lambda: room.choice == UR10 and presenter.session is not None, what="the UR10 back")
+        assert "Front (x–z plane)" in presenter.camera.direction.options
         await teacher.close()
         await student.close()
 

@@ -201,6 +201,29 @@ def test_each_branch_of_every_arm_has_a_number_of_its_own_where_it_parts_from_th
     asyncio.run(scenario())
 
 
+@pytest.mark.parametrize("label", ["UR10 (the app's arm)", "3-DOF desktop arm"])
+def test_each_view_is_named_for_the_plane_it_shows_in_the_arms_own_axes(app, label):
+    """The desktop arm's base frame has y up (its x0, y0, z0 named in 3D); "Top (x–y plane)" showed its x–z plane,
+    named in the world's axes. Each "(a–b plane)" view now looks along the arm's third axis."""
+    async def scenario():
+        client = await ViserClient(url(app)).connect()
+        session = await pick(app, client, label)
+        camera, world = session.camera, session.drawing.world
+        for name in camera.direction.options[1:]:
+            before = camera._framed_at
+            await client.set_gui("Look from", name)
+            await until(lambda: camera.direction.value == name and camera._framed_at is not before, what=name)
+            position, look_at = camera._framed_at
+            along = world[:3, :3].T @ (position - look_at)  # the viewing direction, in the arm's base frame
+            along /= np.linalg.norm(along)
+            a, b = name.split("(")[1].split(" plane")[0].split("–")
+            normal = ({"x", "y", "z"} - {a, b}).pop()
+            assert abs(along["xyz".index(normal)]) > 0.99, (name, along)
+        await client.close()
+
+    asyncio.run(scenario())
+
+
 #: The IK target's longest arrow on the smallest canvas a class looks at, at the arm's home pose (px): a student
 #: grabs it with a mouse, and a class sees it from the back of the room.
 GIZMO_MIN_PX = 45

@@ -30,6 +30,21 @@ VIEWS = {
     "Side (y–z plane)": (1.0, 0.0, 0.0),
     "Top (x–y plane)": (0.0, -0.02, 1.0),  # a hair off vertical: the orbit keeps z up
 }
+#: The views' names for an arm whose vertical is its y axis (the desktop arm, drawn with its y turned to the world's
+#: z): the planes they show in the arm's own axes, which its frame's names in 3D give (they named the world's).
+Y_UP_NAMES = {"Front (x–z plane)": "Front (x–y plane)", "Top (x–y plane)": "Top (x–z plane)"}
+
+
+def views_for(up) -> dict[str, tuple[float, float, float]]:
+    """:data:`VIEWS` named for an arm whose vertical is ``up`` (``Arm.up``) in its own frame.
+
+    >>> list(views_for((0.0, 1.0, 0.0)))[1:]
+    ['Front (x–y plane)', 'Side (y–z plane)', 'Top (x–z plane)']
+    """
+    names = Y_UP_NAMES if tuple(up) == (0.0, 1.0, 0.0) else {}
+    return {names.get(name, name): direction for name, direction in VIEWS.items()}
+
+
 #: Room kept around each joint (the link bodies are up to ~9 cm thick) and at the canvas edges.
 BODY_RADIUS = 0.1
 EDGE_MARGIN = 0.08
@@ -114,11 +129,15 @@ class CameraControls(View):
     body_radius : float
         Room kept around each joint (m): the UR10's link bodies by default; a course arm's
         rods and gizmo scale with its reach.
+    up : tuple
+        The arm's vertical in its own frame (``Arm.up``): the views are named in its axes (:meth:`name_views`).
     """
 
     def __init__(self, client: viser.ClientHandle, snapshot: Callable[[], Snapshot],
-                 guard: Callable[[Callable], Callable], lecture: bool = False, body_radius: float = BODY_RADIUS) -> None:
+                 guard: Callable[[Callable], Callable], lecture: bool = False, body_radius: float = BODY_RADIUS,
+                 up=(0.0, 0.0, 1.0)) -> None:
         self._client = client
+        self._views = views_for(up)  #: the "Look from" choices, named in the axes of the arm shown
         self.body_radius = body_radius  #: the classroom changes it with the arm it shows
         self._snapshot = snapshot
         self._guard = guard
@@ -135,7 +154,7 @@ class CameraControls(View):
         folder = gui.add_folder("View", order=0.5, expand_by_default=False)  # near the top: a teacher wants it first
         self.folders = (folder,)
         with folder:
-            self.direction = gui.add_dropdown("Look from", tuple(VIEWS), initial_value="Course figure")
+            self.direction = gui.add_dropdown("Look from", tuple(self._views), initial_value="Course figure")
             self.frame_button = gui.add_button("Frame the arm", icon=viser.Icon.FOCUS_CENTERED,
                                                hint="The arm, its ghosts, its target and what else is shown")
         self.lecture = LectureMode(gui, folder, lecture, guard)
@@ -160,7 +179,18 @@ class CameraControls(View):
 
     def frame(self) -> None:
         """Point this browser's camera at the arm and its target, from the chosen direction."""
-        self.look_from(VIEWS[chosen(self.direction, "look from")])
+        self.look_from(self._views[chosen(self.direction, "look from")])
+
+    def name_views(self, up) -> None:
+        """Name the views in the axes of the arm now shown, whose vertical is ``up`` (a classroom's camera outlives
+        its arms); the view chosen stays chosen."""
+        views = views_for(up)
+        if tuple(views) == tuple(self._views):
+            return
+        chosen_at = list(self._views).index(self.direction.value) if self.direction.value in self._views else 0
+        self._views = views
+        self.direction.options = tuple(views)  # (a value no longer among them goes to the first, and is framed)
+        self.direction.value = list(views)[chosen_at]
 
     def show_also(self, name: str, points: np.ndarray | None, world: np.ndarray | None = None, now: bool = True) -> None:
         """Keep ``points`` (n, 3; None: no more) in view with the arm from now on, and (``now``) frame them now.

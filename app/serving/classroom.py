@@ -215,7 +215,7 @@ class Classroom:
         member.camera = CameraControls(
             client, lambda: self._watched(member),
             lambda handler: guard(client, handler, is_closed=lambda: member.closed), lecture=self.app.lecture,
-            body_radius=self._body_radius(),
+            body_radius=self._body_radius(), up=self.state.arm.up,
         )
         self._draw_controls(member)
         if self.challenges.running:
@@ -364,6 +364,7 @@ class Classroom:
                 self._hide_class_arm(other)
             elif other.camera is not None:  # the presenter and the viewers look at the new arm
                 other.camera.body_radius = self._body_radius()
+                other.camera.name_views(self.state.arm.up)
                 other.camera.frame()
         app.refresher.request(self.live)
         if failed is not None:  # a challenge must not start on the arm the class had
@@ -456,6 +457,8 @@ class Classroom:
             if member.goal is not None:  # and so did the challenge's target, which a student still needs
                 member.goal = None
                 self.challenges.show_goal(member)
+        if member.camera is not None:  # its views named for the class's arm again
+            member.camera.name_views(self.state.arm.up)
         member.role = VIEWER
 
     # ------------------------------------------------------------------ the Classroom folder
