@@ -545,6 +545,33 @@ def test_the_class_is_shown_the_desktop_arm_played_and_explored(classroom):
     asyncio.run(scenario())
 
 
+def test_an_explorer_back_to_watching_frames_the_arm_the_class_was_shown_meanwhile(classroom):
+    """A student explored the class's UR10 while the presenter showed the class the desktop arm: back to watching,
+    their camera framed it with the UR10's room about each joint and named its views in the UR10's axes."""
+    from ur10teach.features.arm_picker import DESKTOP
+
+    async def scenario():
+        teacher = await ViserClient(f"http://127.0.0.1:{classroom.port}").connect()
+        student = await ViserClient(f"http://127.0.0.1:{classroom.port}").connect()
+        room = classroom.classroom
+        await become_presenter(teacher, classroom)
+        await student.set_gui("Explore on my own", True)
+        explorer = member_of(classroom, 1)
+        await until(lambda: explorer.session is not None, what="the explorer's own UR10")
+        await until(room.can_switch, what="the class's arm to be ready for a change")
+        await teacher.set_gui("Which arm", DESKTOP)
+        await until(lambda: room.state.arm.name == "three_dof", what="the class's desktop arm")
+        assert explorer.camera.body_radius == explorer.session.drawing.body_radius  # still the UR10's
+        await student.set_gui("Back to the presenter's arm", True)
+        await until(lambda: explorer.session is None, what="watching again")
+        assert explorer.camera.body_radius == room.drawing.body_radius != 0.1
+        assert "Top (x–z plane)" in explorer.camera.direction.options
+        await teacher.close()
+        await student.close()
+
+    asyncio.run(scenario())
+
+
 def test_an_arm_that_cannot_be_drawn_leaves_the_class_on_the_arm_it_had(classroom, monkeypatch):
     """The shared scene is cleared before the new arm is drawn: a drawing that failed (a race inside viser did, once)
     left the class with no arm, no presenter panel and removed nodes, and every later change failed."""

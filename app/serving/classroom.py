@@ -457,7 +457,8 @@ class Classroom:
             if member.goal is not None:  # and so did the challenge's target, which a student still needs
                 member.goal = None
                 self.challenges.show_goal(member)
-        if member.camera is not None:  # its views named for the class's arm again
+        if member.camera is not None:  # framed with the class's arm's room again, its views named in its axes
+            member.camera.body_radius = self._body_radius()
             member.camera.name_views(self.state.arm.up)
         member.role = VIEWER
 
