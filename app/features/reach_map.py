@@ -145,11 +145,10 @@ class ReachMapView(View):
         folder = gui.add_folder(TITLES.get(arm.task, TITLES["pose"]), expand_by_default=False)
         self.folders = (folder,)
         with folder:
-            if arm.numerical:
-                gui.add_markdown("A typed table's IK is numerical, from one start at a time: a map of thousands of "
-                                 "poses would take minutes, so this arm has none. The course's arms all have one.")
-            else:
-                self.question = gui.add_markdown(QUESTIONS[arm.task].format(slots=self.slots))
+            self.question = gui.add_markdown(
+                "A typed table's IK is numerical, from one start at a time: a map of thousands of poses would take "
+                "minutes, so this arm has none. The course's arms all have one." if arm.numerical
+                else QUESTIONS[arm.task].format(slots=self.slots))
             self.enabled = gui.add_checkbox("Show branch-count map", False, disabled=arm.numerical)
             planes, missing = planes_of(arm)
             self.plane = gui.add_dropdown("Plane", planes, initial_value=planes[0], hint=missing or None)
