@@ -33,7 +33,7 @@ def test_the_course_arms_in_the_picker(open_page, light_app):
     kr210 = pick(page, app, client_id, "KR210 (spherical wrist)")
     wait_for(lambda: page.get_by_text("reach this target", exact=False).count() > 0, what="the branch table")
     assert page.get_by_text("shoulder front, elbow up, wrist not flipped").count() >= 1
-    assert page.get_by_text("the wrist centre on axis 1", exact=False).count() >= 1
+    assert page.get_by_text("the wrist centre is on axis 1", exact=False).count() >= 1
     assert page.get_by_text("As defined (modified DH)", exact=False).count() >= 1
     with_frames = canvas_changed(page, before, 0.02, "the KR210 drawn in place of the UR10")
     # the DH frames' x axes (red) and z axes (blue) are on screen, and go when switched off (the renderer's

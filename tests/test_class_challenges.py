@@ -723,7 +723,7 @@ def test_the_desktop_arms_heaviest_pose_is_found_by_the_student_not_by_its_searc
         teacher, student, member = await a_student_in(classroom, "Desktop arm: heaviest pose", "127.0.0.8")
         session = member.session
         assert session.arm.name == "three_dof"
-        assert "Top (x–z plane)" in member.camera.direction.options  # its views named in its own axes (y up)
+        await until(lambda: "Top (x–z plane)" in member.camera.direction.options, what="its views named in its axes (y up)")
         await until(lambda: teacher.shown("*largest torque, on 3-DOF desktop arm*"), what="the arm named as the picker names it")
         search, mapped = session.lessons[2].search, session.statics.mapped
         await until(lambda: student.gui.get("Find the pose that needs the largest ‖τ‖", {}).get("visible") is False

@@ -464,7 +464,7 @@ def test_the_presenter_shows_the_class_another_arm(classroom):
         await until(room.can_switch, what="the class's arm to be ready for a change")
         await teacher.set_gui("Which arm", UR10)
         await until(lambda: room.choice == UR10 and presenter.session is not None, what="the UR10 back")
-        assert "Front (x–z plane)" in presenter.camera.direction.options
+        await until(lambda: "Front (x–z plane)" in presenter.camera.direction.options, what="the UR10's views")
         np.testing.assert_array_equal(room.state.q, ur10_q)
         # and showing what the presenter had shown on it, in the panel and in 3D
         assert presenter.session.singularities.enabled.value and room.drawing.overlay.enabled
@@ -509,8 +509,8 @@ def test_the_class_is_shown_the_desktop_arm_played_and_explored(classroom):
         await until(lambda: presenter.session is not None and presenter.session.arm.name == "three_dof",
                     what="the class's desktop arm")
         # its views are named in its own axes (y up), for everyone watching, the view each chose kept
-        await until(lambda: watcher.camera.direction.value == "Top (x–z plane)", what="the student's top view renamed")
-        assert "Front (x–y plane)" in presenter.camera.direction.options
+        await until(lambda: watcher.camera.direction.value == "Top (x–z plane)"
+                    and "Front (x–y plane)" in presenter.camera.direction.options, what="the views renamed")
         assert presenter.session.state is room.state and presenter.session.drawing is room.drawing
         for client in (teacher, student):
             await until(lambda: client.received.node_owners.get(f"{ROOT}/base_frame/links") == "", what="the shared desktop arm")
@@ -538,7 +538,7 @@ def test_the_class_is_shown_the_desktop_arm_played_and_explored(classroom):
         await until(room.can_switch, what="the class's arm to be ready for a change")
         await teacher.set_gui("Which arm", UR10)
         await until(lambda: room.choice == UR10 and presenter.session is not None, what="the UR10 back")
-        assert "Front (x–z plane)" in presenter.camera.direction.options
+        await until(lambda: "Front (x–z plane)" in presenter.camera.direction.options, what="the UR10's views")
         await teacher.close()
         await student.close()
 
@@ -563,9 +563,9 @@ def test_an_explorer_back_to_watching_frames_the_arm_the_class_was_shown_meanwhi
         await until(lambda: room.state.arm.name == "three_dof", what="the class's desktop arm")
         assert explorer.camera.body_radius == explorer.session.drawing.body_radius  # still the UR10's
         await student.set_gui("Back to the presenter's arm", True)
-        await until(lambda: explorer.session is None, what="watching again")
-        assert explorer.camera.body_radius == room.drawing.body_radius != 0.1
-        assert "Top (x–z plane)" in explorer.camera.direction.options
+        await until(lambda: explorer.session is None and explorer.role == "viewer", what="watching again")
+        await until(lambda: explorer.camera.body_radius == room.drawing.body_radius != 0.1
+                    and "Top (x–z plane)" in explorer.camera.direction.options, what="the class's arm's room and views")
         await teacher.close()
         await student.close()
 

@@ -626,7 +626,7 @@ def test_singularity_gauges_empty_and_turn_red_at_each_factors_singularity():
 
     kr210 = Arm.preset("kr210")
     regular = factors_html(kr210, np.radians([0, 15, -30, 20, 40, 10]))
-    assert "width:0.0%" not in regular and "zero when the wrist centre on axis 1" in regular
+    assert "width:0.0%" not in regular and "zero when the wrist centre is on axis 1" in regular
     aligned = factors_html(kr210, np.radians([0, 15, -30, 20, 0, 10]))  # θ5 = 0
     wrist = aligned[aligned.index("gauge-wrist"):]
     assert wrist.split("width:")[1].startswith("0.0%") and "#dc2626" in wrist[:200]

@@ -114,3 +114,14 @@ def test_the_searched_singularity_is_the_nearest_by_one_joint(name, kind, start,
     found = arm.singular_configuration(kind, to_joint(start))
     shown = np.where(arm.revolute, np.degrees(found), found)
     np.testing.assert_allclose(shown, expected, atol=1e-4)
+
+
+def test_each_factors_meaning_reads_as_a_clause_after_zero_when():
+    """The gauges write "zero when {meaning}": "zero when the wrist centre on axis 1" lacked its verb (KR210, elbow
+    arm). Each meaning's condition, before its colon, is an equation or has its verb."""
+    from ur10core.symbolic_arms import MEANINGS
+
+    for name, factors in MEANINGS.items():
+        for factor, meaning in factors:
+            condition = meaning.split(":")[0]
+            assert "=" in condition or " is " in condition or " are " in condition, (name, factor, meaning)

@@ -50,11 +50,11 @@ CACHE_PATH = Path(__file__).with_name("symbolic_arms_cache.json")
 
 #: What each factor means, per preset: (name, what makes it zero, in words for the app).
 MEANINGS: dict[str, tuple[tuple[str, str], ...]] = {
-    "kr210": (("shoulder", "the wrist centre on axis 1: θ1 no longer moves it"),
-              ("elbow", "upper arm and forearm in line (stretched or folded): the wrist centre cannot move along the arm"),
+    "kr210": (("shoulder", "the wrist centre is on axis 1: θ1 no longer moves it"),
+              ("elbow", "upper arm and forearm are in line (stretched or folded): the wrist centre cannot move along the arm"),
               ("wrist", "θ5 = 0: axes 4 and 6 in line, only θ4 + θ6 counts")),
-    "elbow": (("shoulder", "the wrist centre on axis 1: θ1 no longer moves it"),
-              ("elbow", "upper arm and forearm in line (stretched or folded): the wrist centre cannot move along the arm"),
+    "elbow": (("shoulder", "the wrist centre is on axis 1: θ1 no longer moves it"),
+              ("elbow", "upper arm and forearm are in line (stretched or folded): the wrist centre cannot move along the arm"),
               ("wrist", "θ5 = 0: axes 4 and 6 in line, only θ4 + θ6 counts")),
     "stanford": (("stroke", "d3 = 0: the wrist centre on the shoulder, θ2 no longer moves it"),
                  ("shoulder", "θ2 = 0 or 180°: the boom along axis 1, the wrist centre on the d2 cylinder (both shoulder branches meet)"),
