@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import asyncio
+import re
 import threading
 
 import numpy as np
@@ -101,10 +102,12 @@ def test_a_joint_over_its_rating_is_flagged():
     assert "width:100.0%" in html and "width:80.0%" in html and ratings[2] == 150.0
 
 
-def test_without_ratings_each_bar_is_against_the_largest_and_a_slide_holds_newtons():
+def test_without_ratings_each_bar_is_against_the_largest_of_its_unit_and_a_slide_holds_newtons():
+    """The slide's 10 N was drawn as a quarter of the shoulder's 40 N·m: newtons against newton-metres."""
     html = bars_html(np.array([20.0, -40.0, 10.0]), np.zeros(3), None, ("θ1", "θ2", "d3"), "RRP")
     assert "No published ratings" in html and "over its rating" not in html and "rated" not in html
-    assert "width:50.0%" in html and "width:100.0%" in html and "width:25.0%" in html
+    assert "largest of its kind (N·m for a turning joint, N for a sliding one)" in html
+    assert [float(w) for w in re.findall(r"width:([\d.]+)%", html)] == [50.0, 100.0, 100.0]
     assert "+10.0 N " in html and ("−40.0 N·m" in html or "-40.0 N·m" in html)
 
 

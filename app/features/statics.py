@@ -70,12 +70,18 @@ def force_vector(direction: str, newtons: float, flange: np.ndarray, dragged, di
 def bars_html(force_torques: np.ndarray, gravity: np.ndarray, capacity: np.ndarray | None,
               labels: tuple[str, ...], kinds: str) -> str:
     """Per joint: a bar of |τ_force + τ_gravity| against its rated torque ``capacity`` (N·m), green to red,
-    with the three numbers; without published ratings (``None``), against the largest of them. Then ‖Jᵀ F‖,
+    with the three numbers; without published ratings (``None``), against the largest of them in its unit. Then ‖Jᵀ F‖,
     the force's alone: what the statics exercise and the ‖τ‖ map weigh a pose by.
     ``kinds``: ``"R"``/``"P"`` per joint (a prismatic joint holds a force, in N)."""
     totals = np.asarray(force_torques) + np.asarray(gravity)
-    scale = capacity if capacity is not None else np.full(len(totals), max(float(np.abs(totals).max()), 1e-9))
-    rows = [] if capacity is not None else ["<div>No published ratings for this arm: each bar against the largest.</div>"]
+    mixed = len(set(kinds)) > 1  # N·m and N: a bar is measured against its own kind's largest, not across units
+    if capacity is not None:
+        scale, rows = capacity, []
+    else:
+        kind_of = np.array(list(kinds))
+        scale = np.array([max(float(np.abs(totals[kind_of == kind]).max()), 1e-9) for kind in kinds])
+        rows = ["<div>No published ratings for this arm: each bar against the largest"
+                + (" of its kind (N·m for a turning joint, N for a sliding one)" if mixed else "") + ".</div>"]
     for label, kind, f, g, total, cap in zip(labels, kinds, force_torques, gravity, totals, scale):
         unit = "N·m" if kind == "R" else "N"
         share = min(abs(total) / cap, 1.0)
