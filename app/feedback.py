@@ -124,8 +124,9 @@ def guard(
     ``ValueError`` is a value the user gave that we refuse: it is explained ``beside`` the
     input it came from (or in a notice, "Not accepted") and ``on_refused`` puts the widgets
     back; the explanation stays until the student's next change is accepted (a value the server
-    itself sets, putting one back, is none). Anything else is a bug: it is logged and the user is
-    told the app is still running.
+    itself sets, putting one back, is none, and neither is work run on a thread of its own: the put-back's
+    run cleared the refusal it followed). Anything else is a bug: it is logged and the user is told the app is
+    still running.
     """
 
     @functools.wraps(handler)

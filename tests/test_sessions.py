@@ -439,6 +439,28 @@ def test_a_section_height_the_flange_never_reaches_is_refused_in_the_folder(app)
     asyncio.run(scenario())
 
 
+def test_a_refused_height_stays_said_while_the_section_is_drawn_again(app):
+    """99999 mm typed in the height's box is refused and the slider put back; putting it back draws the section
+    again on a thread of its own, and that run, done, cleared the refusal it had not seen (2026-12-05)."""
+
+    async def scenario():
+        client = await ViserClient(url(app)).connect()
+        session = session_of(app, client)
+        view, line = session.workspace, session.workspace.refusal.line
+        await client.set_gui("Samples", "10 k")
+        await client.set_gui("Section", "horizontal section (top view)")
+        await client.set_gui("Show workspace cloud", True)
+        await until(lambda: view._cloud is not None and not view._clouds.busy, what="the section")
+        drawn = view._cloud
+        await client.set_gui("Section height (mm)", 99999.0)
+        await until(lambda: line.visible and "from -600 to 1600, got 99999" in line.content, what="the refusal")
+        await until(lambda: view._cloud is not drawn and not view._clouds.busy, what="the section drawn again")
+        assert line.visible and "got 99999" in line.content
+        await client.close()
+
+    asyncio.run(scenario())
+
+
 def test_a_students_slider_value_is_not_put_back_by_a_redraw_before_its_callback_runs(app):
     """On a loaded machine a panel redraw ran between viser storing a student's slider value and
     running its callback: the redraw put the arm's old angle back, and the student's value was lost."""

@@ -380,7 +380,6 @@ class Singularities(View):
             place()
         else:
             HEAVY.run(session.client, place, cancelled=lambda: session.closed)
-        self.refusal.clear()
 
     def render_panel(self, snapshot: Snapshot) -> None:
         self.gauges.content = HELD_BACK if self.held == "det_j" else factors_html(self._arm, snapshot.q)

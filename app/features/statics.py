@@ -302,7 +302,7 @@ class StaticsView(View):
             if session.closed:
                 return
             self._clear_map()
-            if refused is None:
+            if refused is None:  # (a refusal is raised after the run its put-back asked for: it is said after this)
                 self.map_refusal.clear()
             if self.held == "largest_torque":  # a class challenge began while it was drawn
                 shown = None

@@ -357,7 +357,6 @@ class WorkspaceView(View):
                 )
             self.legend.content = HULL_LEGEND if section == HULL else legend_html(top, self._unit)
             self.legend.visible = True
-            self.refusal.clear()  # what an older choice was refused for
             self._look_square_on(section, points, legend_at)
             self._session.refresher.request(self._session)  # the new legend sized for lecture mode, and kept clear of
         finally:
