@@ -302,8 +302,7 @@ class ArmSession:
         """Use this browser's camera (a classroom's member has one for all its sessions): frame with it,
         and place the branch numbers of this session's own drawing for it as it moves."""
         self.camera = camera
-        camera.body_radius = self.drawing.body_radius  # framed with this arm's room, its views named in its axes
-        camera.name_views(self.arm.up)
+        camera.show_arm(self.drawing.body_radius, self.arm.up)
         if self._label_scene is not None:
             camera.on_moved.append(self._place_numbers)
 

@@ -130,7 +130,7 @@ class CameraControls(View):
         Room kept around each joint (m): the UR10's link bodies by default; a course arm's
         rods and gizmo scale with its reach.
     up : tuple
-        The arm's vertical in its own frame (``Arm.up``): the views are named in its axes (:meth:`name_views`).
+        The arm's vertical in its own frame (``Arm.up``): the views are named in its axes (:meth:`show_arm`).
     """
 
     def __init__(self, client: viser.ClientHandle, snapshot: Callable[[], Snapshot],
@@ -138,7 +138,7 @@ class CameraControls(View):
                  up=(0.0, 0.0, 1.0)) -> None:
         self._client = client
         self._views = views_for(up)  #: the "Look from" choices, named in the axes of the arm shown
-        self.body_radius = body_radius  #: the classroom changes it with the arm it shows
+        self.body_radius = body_radius  #: the arm shown's (:meth:`show_arm`)
         self._snapshot = snapshot
         self._guard = guard
         self.closed = False
@@ -181,9 +181,11 @@ class CameraControls(View):
         """Point this browser's camera at the arm and its target, from the chosen direction."""
         self.look_from(self._views[chosen(self.direction, "look from")])
 
-    def name_views(self, up) -> None:
-        """Name the views in the axes of the arm now shown, whose vertical is ``up`` (a classroom's camera outlives
-        its arms); the view chosen stays chosen."""
+    def show_arm(self, body_radius: float, up) -> None:
+        """Look at another arm (a classroom's camera outlives its arms): frame it with ``body_radius`` of room about
+        each joint from now on, and name the views in its axes, its vertical being ``up`` (the view chosen stays
+        chosen; a renamed one is framed again)."""
+        self.body_radius = body_radius
         views = views_for(up)
         if tuple(views) == tuple(self._views):
             return

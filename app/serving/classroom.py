@@ -363,8 +363,7 @@ class Classroom:
             if other.role == EXPLORER:
                 self._hide_class_arm(other)
             elif other.camera is not None:  # the presenter and the viewers look at the new arm
-                other.camera.body_radius = self._body_radius()
-                other.camera.name_views(self.state.arm.up)
+                other.camera.show_arm(self._body_radius(), self.state.arm.up)
                 other.camera.frame()
         app.refresher.request(self.live)
         if failed is not None:  # a challenge must not start on the arm the class had
@@ -458,8 +457,7 @@ class Classroom:
                 member.goal = None
                 self.challenges.show_goal(member)
         if member.camera is not None:  # framed with the class's arm's room again, its views named in its axes
-            member.camera.body_radius = self._body_radius()
-            member.camera.name_views(self.state.arm.up)
+            member.camera.show_arm(self._body_radius(), self.state.arm.up)
         member.role = VIEWER
 
     # ------------------------------------------------------------------ the Classroom folder
