@@ -121,3 +121,15 @@ def sentence(text: str) -> str:
 def swatch(rgb: tuple[int, int, int]) -> str:
     """A small coloured square for markdown tables."""
     return f'<span style="display:inline-block;width:0.9em;height:0.9em;border-radius:2px;background:{hex_color(rgb)}"></span>'
+
+
+def joint_units(joint_types: str) -> tuple[str, str]:
+    """(a joint rate's unit, a joint effort's) for joints ``joint_types`` ("R" turns, "P" slides).
+
+    >>> joint_units("RRRRRR"), joint_units("RRPR")
+    (('rad/s', 'N·m'), ('rad/s or m/s', 'N·m or N'))
+    """
+    kinds = set(joint_types)
+    if kinds == {"P"}:
+        return "m/s", "N"
+    return ("rad/s", "N·m") if "P" not in kinds else ("rad/s or m/s", "N·m or N")

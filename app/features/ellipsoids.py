@@ -19,7 +19,7 @@ from ur10core.orientation import quaternion
 
 from ..feedback import chosen
 from ..state import Snapshot
-from ..style import number, swatch
+from ..style import joint_units, number, swatch
 from ..view import HELD_BACK, Session, View
 from ..viser_internals.fast_updates import set_orientations, set_positions, set_scales
 
@@ -52,18 +52,6 @@ def drawn_force_axes(force: np.ndarray, reach: float) -> np.ndarray:
     """
     finite = np.isfinite(force)
     return np.where(finite, force_scale(force, reach) * np.where(finite, force, 0.0), LONGEST_SHARE * reach)
-
-
-def joint_units(joint_types: str) -> tuple[str, str]:
-    """(a joint rate's unit, a joint effort's) for joints ``joint_types`` ("R" turns, "P" slides).
-
-    >>> joint_units("RRRRRR"), joint_units("RRPR")
-    (('rad/s', 'N·m'), ('rad/s or m/s', 'N·m or N'))
-    """
-    kinds = set(joint_types)
-    if kinds == {"P"}:
-        return "m/s", "N"
-    return ("rad/s", "N·m") if "P" not in kinds else ("rad/s or m/s", "N·m or N")
 
 
 def key_html(joint_types: str = "RRRRRR") -> str:

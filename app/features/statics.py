@@ -23,7 +23,7 @@ from ur10core.specs import torque_map
 from ..feedback import Beside, chosen, put_back, within
 from ..serving.workers import HEAVY, FoldedRuns
 from ..state import Snapshot
-from ..style import DANGER_RED, SAFE_GREEN, UR10_SIZE, blend, hex_color, number
+from ..style import DANGER_RED, SAFE_GREEN, UR10_SIZE, blend, hex_color, joint_units, number
 from ..view import HELD_BACK, Session, View, say_held_back
 from ..viser_internals.fast_updates import set_positions, stop_echo
 from .branch_labels import obstacle
@@ -83,7 +83,7 @@ def bars_html(force_torques: np.ndarray, gravity: np.ndarray, capacity: np.ndarr
         rows = ["<div>No published ratings for this arm: each bar against the largest"
                 + (" of its kind (N·m for a turning joint, N for a sliding one)" if mixed else "") + ".</div>"]
     for label, kind, f, g, total, cap in zip(labels, kinds, force_torques, gravity, totals, scale):
-        unit = "N·m" if kind == "R" else "N"
+        unit = joint_units(kind)[1]
         share = min(abs(total) / cap, 1.0)
         colour = hex_color(blend(SAFE_GREEN, DANGER_RED, share))
         over = " <b style='color:#dc2626'>over its rating</b>" if capacity is not None and abs(total) > cap else ""
@@ -320,7 +320,7 @@ class StaticsView(View):
                                                     point_size=POINT_SIZE * self._size / UR10_SIZE, point_shape="circle")
             radius = WORST_RADIUS * self._size
             marker = self._scene.add_icosphere(f"{self._root}/worst", radius=radius, color=DANGER_RED, position=points[worst])
-            unit = "N·m" if "P" not in session.arm.joint_types else "N·m or N"
+            unit = joint_units(session.arm.joint_types)[1]
             # standing on the ball: at its centre, the label hid its upper half
             label = self._scene.add_label(f"{self._root}/worst/label", f"largest ‖τ‖ = {top:.0f} {unit}", font_screen_scale=1.4,
                                           anchor="bottom-center", position=tuple(1.2 * radius * np.asarray(session.arm.up)))
