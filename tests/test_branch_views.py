@@ -157,3 +157,25 @@ def test_every_legend_drawn_in_3d_fits_a_projectors_canvas_in_lecture_mode(legen
         text = reach_map.legend_text(int(legend.split()[1]))
     width, _ = label_size(text, label_scale(1.3, lecture=True))  # both are drawn at 1.3
     assert width <= 0.9 * DEFAULT_VIEW.width, (text, width)
+
+
+@pytest.mark.parametrize("name", ["stanford", "elbow", "three_dof"])
+def test_a_ghost_the_arm_cannot_be_put_on_reads_limit_and_one_it_can_does_not(name):
+    """Half a Stanford arm's branches need d3 < 0: their ghosts looked like the others, and a click on one was
+    refused. A group of coinciding branches all beyond a limit is labelled "⚠ limit", on its lead slot; one with
+    a branch within the limits carries its label on that branch, the one a click takes."""
+    arm = Arm.preset(name)
+    seen_beyond = seen_mixed = 0
+    for q in arm.sample_joints(60, seed=7):
+        snapshot = ArmState(arm, q).last
+        within = snapshot.solution.within_limits
+        groups = same_pose_groups(snapshot.ghost_frames, snapshot.solution.valid)
+        labels = branch_labels(snapshot, groups)
+        for group in groups:
+            carrier = [k for k in group if labels[k]]
+            assert len(carrier) == 1
+            assert ("⚠ limit" in labels[carrier[0]]) == (not within[list(group)].any())
+            assert within[carrier[0]] == within[list(group)].any()  # a click on the ghost takes a branch it can
+            seen_beyond += not within[list(group)].any()
+            seen_mixed += bool(within[list(group)].any() and not within[list(group)].all())
+    assert seen_beyond and seen_mixed  # both cases were met

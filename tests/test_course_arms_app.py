@@ -1021,7 +1021,10 @@ def test_a_target_only_branches_beyond_a_limit_reach_keeps_the_arm_and_draws_the
         await until(lambda: "beyond a joint limit (d2:" in session.state.last.reason, what="the reason")
         np.testing.assert_allclose(session.state.q, before)
         await until(lambda: "beyond a joint limit (d2:" in session.ik_target.branches.content, what="the panel")
-        assert all(ghost.visible for ghost in session.drawing.ghosts[:2])
+        # the two lie on each other (θ1 half a turn on, d3 < 0): one ghost, marked as one the arm cannot take
+        assert [ghost.visible for ghost in session.drawing.ghosts[:2]].count(True) == 1
+        await until(lambda: [text[:13] for _, text, _ in session.drawing.numbers.placed] == ["1 = 2 ⚠ limit"],
+                    what=f"its number, not {[text for _, text, _ in session.drawing.numbers.placed]}")
         await client.set_gui("θ1 (°)", 40.0)
         await until(lambda: math.isclose(session.state.q[0], math.radians(40.0), abs_tol=1e-9), what="θ1 = 40°")
         assert not client.received.notifications, client.received.notifications
@@ -1072,13 +1075,14 @@ def test_no_ghosts_disc_sits_on_a_joint_of_the_solid_arm(app, label):
         drawing = session.drawing
         tool = getattr(drawing, "tool", None)  # the desktop arm's tool frame; a DH skeleton's tool is its last joint's
         solid = [joint.position for joint in drawing.joints] + ([tool.position] if tool is not None else [])
-        with_discs = [k for k, discs in enumerate(drawing.ghost_joints) if discs.visible and drawing.ghosts[k].visible]
+        balls = drawing.ghost_joints
+        drawn = balls.batched_scales > 0
         poses = same_pose_groups(session.state.last.ghost_frames, session.state.last.solution.valid)
-        assert with_discs or len(poses) == 1, "no ghost drawn with its joints"  # the cylindrical arm's two are one
-        for k in with_discs:
-            points = np.asarray(drawing.ghost_joints[k].points)
-            nearest = np.linalg.norm(points[:, None] - np.array(solid)[None], axis=-1).min(axis=1)
-            assert (nearest > 1e-4).all(), f"ghost {k + 1} has a disc on a joint of the solid arm"
+        assert drawn.any() or len(poses) == 1, "no ghost drawn with its joints"  # the cylindrical arm's two are one
+        for k in np.flatnonzero(drawn) // drawing.joints_per_ghost:
+            assert drawing.ghosts[k].visible, f"ghost {k + 1}'s joints drawn without it"
+        nearest = np.linalg.norm(balls.batched_positions[drawn][:, None] - np.array(solid)[None], axis=-1).min(axis=1)
+        assert (nearest > 1e-4).all(), "a ghost has a ball on a joint of the solid arm"
         await client.close()
 
     asyncio.run(scenario())
@@ -1129,6 +1133,76 @@ def test_lecture_mode_sizes_the_axes_of_every_chart_on_every_arm(app):
         assert len(desktop.lessons) and lecture_sized(desktop, True)  # built in lecture mode: sized as it is built
         await client.set_gui("Lecture mode", False)
         await until(lambda: lecture_sized(desktop, False), what="the desktop arm's charts at their own size")
+        await client.close()
+
+    asyncio.run(scenario())
+
+
+@pytest.mark.parametrize("label", [label for label, name in ARM_CHOICES.items()
+                                   if name not in (None, "custom", "cylindrical", "cylindrical_wrist")])  # (their 2 are 1)
+def test_a_click_on_a_line_drawn_ghosts_joint_puts_the_arm_on_its_branch(app, label):
+    """The IK folder says "click a ghost … to put the arm on it", but only the UR family's mesh ghosts could be
+    clicked: viser reports no click on a line, and the other arms' ghosts are lines (until 2026-12-05). The
+    balls at their joints are one clickable mesh, slot by slot."""
+    from ur10teach.features.ik_target import lead, same_pose_groups
+    from ur10teach.state import ArmState
+
+    arm = Arm.preset(ARM_CHOICES[label])
+    for q in arm.sample_joints(50, seed=2):  # a pose with a ghost the arm can be put on
+        last = ArmState(arm, q).last
+        within = last.solution.within_limits
+        slots = [lead(g, within) for g in same_pose_groups(last.ghost_frames, last.solution.valid) if last.slot not in g]
+        if any(within[k] for k in slots):
+            break
+
+    async def scenario():
+        client = await ViserClient(url(app)).connect()
+        session = await pick(app, client, label)
+        drawing = session.drawing
+        assert "click a ball at a ghost's joint" in client.shown("Drag the gizmo")[0]
+        session.apply(lambda state: state.set_joints(q, cause="typed"))
+        drawn = lambda: drawing.ghost_joints.batched_scales.reshape(-1, drawing.joints_per_ghost).any(axis=1)  # noqa: E731
+        slot = next(k for k in slots if within[k])
+        await until(lambda: np.allclose(session.state.q, q) and drawn()[slot] and drawing.ghosts[slot].visible,
+                    what=f"ghost {slot + 1} drawn with its joints")
+        ball = slot * drawing.joints_per_ghost + int(np.argmax(drawing.ghost_joints.batched_scales.reshape(-1, drawing.joints_per_ghost)[slot]))
+        await client.click_node(drawing.ghost_joints.name, ball)
+        await until(lambda: session.state.last.slot == slot, what=f"the arm on branch {slot + 1}")
+        np.testing.assert_allclose(session.state.last.flange[:3, 3], last.flange[:3, 3], atol=1e-9)  # the same target
+        await client.close()
+
+    asyncio.run(scenario())
+
+
+def test_a_ghost_clicked_where_branches_coincide_takes_the_one_within_the_limits(app):
+    """A Stanford arm's wrist flip moves no joint: branches 1 and 5, say, are one ghost. Where 1 needs d3 < 0 and
+    5 does not, the ghost drawn must be 5's, or a click on it is refused as beyond a limit: the ghost drawn and
+    clicked for such a group is the first of it within the limits."""
+    from ur10teach.features.ik_target import same_pose_groups
+    from ur10teach.state import ArmState
+
+    arm = Arm.preset("stanford")
+    for q in arm.sample_joints(400, seed=3):
+        last = ArmState(arm, q).last
+        within = last.solution.within_limits
+        group = next((g for g in same_pose_groups(last.ghost_frames, last.solution.valid)
+                      if not within[g[0]] and within[list(g)].any() and last.slot not in g), None)
+        if group is not None:
+            break
+    lead = next(k for k in group if within[k])
+
+    async def scenario():
+        client = await ViserClient(url(app)).connect()
+        session = await pick(app, client, "Stanford arm (RRP + wrist)")
+        drawing, per_ghost = session.drawing, session.drawing.joints_per_ghost
+        session.apply(lambda state: state.set_joints(q, cause="typed"))
+        drawn = lambda: drawing.ghost_joints.batched_scales.reshape(-1, per_ghost).any(axis=1)  # noqa: E731
+        await until(lambda: np.allclose(session.state.last.q, q) and drawn()[lead] and drawn()[list(group)].sum() == 1,
+                    what=f"one ghost for branches {group}: {lead + 1}'s")
+        ball = lead * per_ghost + int(np.argmax(drawing.ghost_joints.batched_scales[lead * per_ghost:(lead + 1) * per_ghost]))
+        await client.click_node(drawing.ghost_joints.name, ball)
+        await until(lambda: session.state.last.slot == lead, what=f"the arm on branch {lead + 1}")
+        assert not any(title == "Not accepted" for title, _ in client.received.notifications)
         await client.close()
 
     asyncio.run(scenario())

@@ -296,6 +296,12 @@ class ViserClient:
         await until(lambda: label in self.gui, timeout, what=f"the widget {label!r}")
         await self.send(messages.GuiUpdateMessage(self.gui[label]["uuid"], {"value": value}))
 
+    async def click_node(self, name: str, instance: int | None = None) -> None:
+        """Click scene node ``name`` (instance ``instance`` of a batched one), as a browser reports a click on it."""
+        await self.send(messages.SceneNodeClickMessage(
+            name=name, instance_index=instance, ray_origin=(0.0, 0.0, 0.0), ray_direction=(1.0, 0.0, 0.0),
+            screen_pos=(0.5, 0.5), modifier=None, owner=self.received.node_owners.get(name, "")))
+
     def drag_step(self, position, wxyz, phase: str = "update", name: str = "/ik_target") -> DragStep:
         """The frames a browser sends for one gizmo event, encoded now so that sending costs little.
 

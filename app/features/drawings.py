@@ -70,6 +70,7 @@ class MeshArm:
     on_select = _of_branches("on_select")
 
     ghost_styles = GHOST_STYLES
+    clicked = "a ghost"  #: what a student clicks to put the arm on a ghost's branch
 
     @property
     def ghost_style(self) -> str:

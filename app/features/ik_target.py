@@ -143,22 +143,36 @@ def same_pose_groups(ghost_frames: np.ndarray, valid: np.ndarray, tolerance: flo
     return tuple(groups)
 
 
+def lead(group: tuple[int, ...], within_limits: np.ndarray) -> int:
+    """The slot that stands for a group of coinciding branches: the ghost drawn, clicked and labelled. The first
+    within the joint limits, so a click on the ghost puts the arm there whenever one of them can.
+
+    >>> lead((0, 4), np.array([False, True, True, True, True, True, True, True]))
+    4
+    """
+    return next((k for k in group if within_limits[k]), group[0])
+
+
 def branch_labels(snapshot: Snapshot, groups: tuple[tuple[int, ...], ...]) -> list[str]:
     """The 3D label of each slot ("" for none): its number, "3 = 4" for coinciding branches ("all 8" where every
-    slot does: "1 = 2 = … = 8" was too wide to find a free spot in lecture mode), the arm's marked.
+    slot does: "1 = 2 = … = 8" was too wide to find a free spot in lecture mode), the arm's marked, and a ghost
+    the arm cannot be put on (every branch of it beyond a joint limit) marked so before a student clicks it.
 
-    Only the first slot of a group carries the group's label.
+    Only the :func:`lead` slot of a group carries the group's label.
     """
-    slots = len(snapshot.solution.labels)
+    solution = snapshot.solution
+    slots = len(solution.labels)
     texts = [""] * slots
     floor = snapshot.through_floor[1:]
     for group in groups:
         text = f"all {slots}" if len(group) == slots > 2 else " = ".join(str(k + 1) for k in group)
         if snapshot.slot in group:
             text = f"arm: {text}"
+        if not solution.within_limits[list(group)].any():
+            text += " ⚠ limit"
         if floor[list(group)].any():
             text += " ⚠ floor"
-        texts[group[0]] = text
+        texts[lead(group, solution.within_limits)] = text
     return texts
 
 
@@ -373,7 +387,8 @@ class BranchesScene(View):
             shown = np.zeros(8, bool)
             for group in groups:
                 # one ghost per pose, none where the solid arm is: the arm is never tinted by a ghost
-                shown[group[0]] = self.show_ghosts and focus[list(group)].any() and snapshot.slot not in group
+                shown[lead(group, snapshot.solution.within_limits)] = (self.show_ghosts and focus[list(group)].any()
+                                                                       and snapshot.slot not in group)
         self.shown = shown
         # a ghost's link where the solid arm's is (the shoulder, for the branches on the arm's side) is
         # not drawn: the two surfaces would flicker through each other
@@ -404,9 +419,9 @@ def numbered(snapshot: Snapshot, show_ghosts: bool, focus: str) -> list[str]:
     groups = same_pose_groups(snapshot.ghost_frames, snapshot.solution.valid)
     shown_focus = focused(focus, snapshot.slot, snapshot.arm)
     texts = branch_labels(snapshot, groups)
-    for group in groups:  # a group's label is its first slot's; the arm's is shown whatever the focus
+    for group in groups:  # a group's label is its lead slot's; the arm's is shown whatever the focus
         if not (snapshot.slot in group or (show_ghosts and bool(shown_focus[list(group)].any()))):
-            texts[group[0]] = ""
+            texts[lead(group, snapshot.solution.within_limits)] = ""
     return texts
 
 
@@ -440,7 +455,7 @@ class IKTarget(View):
         label, hint = TYPED_TARGET[typed_target_kind(arm)]
         with folder:
             gui.add_markdown("Drag the gizmo at the tool. Each ghost arm is one IK branch, numbered as in the "
-                             "table; click a ghost or a number below to put the arm on it.")
+                             f"table; click {drawing.clicked} or a number below to put the arm on it.")
             self.show_ghosts = gui.add_checkbox("Show ghost arms", drawing.show_ghosts)
             self.focus = gui.add_dropdown("Ghosts shown", focus_options(arm), initial_value=drawing.focus,
                                           hint="One branch, or the arm's branch beside the one a single choice away")

@@ -56,7 +56,7 @@ class DesktopArmScene(LineDrawing):
         #: the base frame's axes and what the joints are, named apart on the screen like the branch numbers
         self.captions = BranchLabels(scene, f"{root}/names", len(NAMES), scale=1.3, merge_px=4.0)
         self._name_points = np.zeros((len(NAMES), 3))
-        self._add_ghosts(scene, arm, self._links(points)[1:], 0.03, 0.09)
+        self._add_ghosts(scene, arm, first.frames, 0.03, 0.09)
         self.label_sets = self._label_sets((self.captions, self.numbers))  # the numbers keep clear of the captions
         if target_marker:
             self._add_target_marker(scene)

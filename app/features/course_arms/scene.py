@@ -3,8 +3,8 @@
 The arm is drawn as the DH method builds it: from each frame origin to the next along d
 and a (:func:`skeleton`), a short rod along each joint axis (a box for a prismatic joint),
 and, optionally, the x and z axes of every frame with their names (:mod:`..dh_frames`). Each IK slot is a ghost skeleton in
-its slot colour with discs at its joints and its number by the joint where the branches part, as the UR10's
-ghosts are by their elbows.
+its slot colour with balls at its joints (a click on one puts the arm on that branch) and its number by the joint
+where the branches part, as the UR10's ghosts are by their elbows.
 """
 
 from __future__ import annotations
@@ -12,6 +12,7 @@ from __future__ import annotations
 from typing import NamedTuple
 
 import numpy as np
+import trimesh
 import viser
 
 from ur10core import Arm
@@ -23,7 +24,7 @@ from ...style import JOINT_CAP_GREY, SLOT_COLORS
 from ...viser_internals.fast_updates import set_orientations, set_positions
 from ..branch_labels import BranchLabels, chain
 from ..dh_frames import DHFrames, show
-from ..ik_target import ALL_BRANCHES, SAME_POSE, add_unreachable_halo, focused, numbered
+from ..ik_target import ALL_BRANCHES, SAME_POSE, add_unreachable_halo, focused, lead, numbered, same_pose_groups
 from ..singularity import SingularityOverlay, has_overlay
 
 ROOT = "/course_arm"
@@ -114,7 +115,8 @@ class LineDrawing:
     names: tuple[str, ...] = ()  #: one way to draw it: no "Arm drawn as"
     show_ghosts = True
     focus = ALL_BRANCHES
-    on_select = None  #: the ghosts are lines: nothing to click
+    on_select = None  #: called with (browser, slot) when a ball at a ghost's joint is clicked (the IK target sets it)
+    clicked = "a ball at a ghost's joint"  #: what a student clicks to put the arm on a ghost's branch
     overlay = None  #: det J's factors in 3D, where the arm has them
     target = unreachable = None
     top: str
@@ -182,10 +184,13 @@ class LineDrawing:
             show(self.unreachable, not snapshot.reachable)
 
     def shown_ghosts(self, snapshot: Snapshot, count: int) -> np.ndarray:
-        """(count,) bool: the ghosts to draw, as the snapshot and the "Ghosts shown" choice say."""
+        """(count,) bool: the ghosts to draw, as the snapshot and the "Ghosts shown" choice say, one per pose: of
+        branches that coincide, the :func:`lead` one, which its number names and a click takes."""
         shown = np.zeros(count, bool)
-        if self.show_ghosts and len(snapshot.ghosts):
-            shown[:len(snapshot.ghosts)] = snapshot.ghosts & focused(self.focus, snapshot.slot, snapshot.arm)
+        if self.show_ghosts and snapshot.ghosts.any():
+            focus = focused(self.focus, snapshot.slot, snapshot.arm)
+            for group in same_pose_groups(snapshot.ghost_frames, snapshot.solution.valid):
+                shown[lead(group, snapshot.solution.within_limits)] = snapshot.slot not in group and focus[list(group)].any()
         return shown
 
     def render_panel(self, snapshot: Snapshot) -> None:
@@ -198,40 +203,53 @@ class LineDrawing:
             return
         self.numbers.show(self._ghost_labels(snapshot), numbered(snapshot, self.show_ghosts, self.focus))
 
-    def _add_ghosts(self, scene: viser.SceneApi, arm: Arm, segments: np.ndarray, thickness: float, disc: float) -> None:
-        """One skeleton per slot in its colour with a disc at each joint, and the numbers (hidden until a branch is there)."""
-        slots = range(len(arm.slot_labels))
-        self.ghosts = [scene.add_line_segments(f"{self.root}/ghosts/slot{k + 1}", segments, SLOT_COLORS[k % len(SLOT_COLORS)],
-                                               thickness=thickness, visible=False) for k in slots]
-        self.ghost_joints = [scene.add_point_cloud(f"{self.root}/ghosts/slot{k + 1}/joints", np.zeros((1, 3), np.float32),
-                                                   SLOT_COLORS[k % len(SLOT_COLORS)], point_size=disc, point_shape="circle",
-                                                   visible=False) for k in slots]
-        self.numbers = BranchLabels(scene, f"{self.root}/ghosts", len(slots),
-                                    colours=[SLOT_COLORS[k % len(SLOT_COLORS)] for k in slots])
+    def _add_ghosts(self, scene: viser.SceneApi, arm: Arm, frames: np.ndarray, thickness: float, ball: float) -> None:
+        """One skeleton per slot in its colour, a ball of diameter ``ball`` at each of its joints, and the numbers
+        (hidden until a branch is there). The balls are one batched mesh, slot by slot: viser reports a click on a
+        mesh, not on a line, so they are what a student clicks to take a ghost's branch."""
+        slots = len(arm.slot_labels)
+        colours = [SLOT_COLORS[k % len(SLOT_COLORS)] for k in range(slots)]
+        self.ghosts = [scene.add_line_segments(f"{self.root}/ghosts/slot{k + 1}", self._ghost_lines(frames), colours[k],
+                                               thickness=thickness, visible=False) for k in range(slots)]
+        self.joints_per_ghost = len(self._ghost_joints(frames))
+        balls = slots * self.joints_per_ghost
+        sphere = trimesh.creation.icosphere(subdivisions=2, radius=ball / 2)
+        self.ghost_joints = scene.add_batched_meshes_simple(
+            f"{self.root}/ghosts/joints", sphere.vertices, sphere.faces, batched_wxyzs=np.tile([1.0, 0.0, 0.0, 0.0], (balls, 1)),
+            batched_positions=np.zeros((balls, 3)), batched_scales=np.zeros(balls),
+            batched_colors=np.repeat(np.array(colours, dtype=np.uint8), self.joints_per_ghost, axis=0),
+            lod="off", cast_shadow=False, receive_shadow=False)
+        self.ghost_joints.on_click(self._ball_clicked)
+        self.numbers = BranchLabels(scene, f"{self.root}/ghosts", slots, colours=colours)
         self.label_sets = (self.numbers,)
+
+    def _ball_clicked(self, event) -> None:
+        if self.on_select is not None and event.instance_index is not None:
+            self.on_select(event.client, int(event.instance_index) // self.joints_per_ghost)
 
     def _render_ghosts(self, snapshot: Snapshot) -> None:
         """The target marker, and each branch shown as the drawing draws an arm (``_ghost_lines``), with
         its joints (``_ghost_joints``); what lies on the solid arm is left to it (the two would flicker, and
-        a ghost's disc on the arm's joint would colour the arm as that branch's)."""
+        a ghost's ball on the arm's joint would colour the arm as that branch's)."""
         self._render_target(snapshot)
         shown = self.shown_ghosts(snapshot, len(self.ghosts))
-        with_joints = np.zeros_like(shown)
+        positions = np.zeros((len(self.ghosts), self.joints_per_ghost, 3), np.float32)
+        scales = np.zeros((len(self.ghosts), self.joints_per_ghost), np.float32)
         solid, solid_joints = self._ghost_lines(snapshot.frames), self._ghost_joints(snapshot.frames)
         for k in np.flatnonzero(shown):
             lines = self._ghost_lines(snapshot.ghost_frames[k])
             own = none_of(lines, solid)
             shown[k] = own.any()
-            joints = self._ghost_joints(snapshot.ghost_frames[k])
-            own_joints = none_of(joints, solid_joints)
-            with_joints[k] = shown[k] and own_joints.any()
             if shown[k]:
                 self.ghosts[k].points = lines[own]
-            if with_joints[k]:
-                self.ghost_joints[k].points = joints[own_joints].astype(np.float32)
-        for ghost, joints, show_it, show_joints in zip(self.ghosts, self.ghost_joints, shown, with_joints):
+                positions[k] = self._ghost_joints(snapshot.ghost_frames[k])
+                scales[k] = none_of(positions[k], solid_joints)
+        for ghost, show_it in zip(self.ghosts, shown):
             show(ghost, show_it)
-            show(joints, show_joints)
+        if scales.tobytes() != self.ghost_joints.batched_scales.tobytes():
+            self.ghost_joints.batched_scales = scales.reshape(-1)
+        if scales.any():
+            self.ghost_joints.batched_positions = positions.reshape(-1, 3)
 
 
 class CourseArmScene(LineDrawing):
@@ -261,7 +279,7 @@ class CourseArmScene(LineDrawing):
         #: the DH frames, x and z named, and a row's parameters (the DH folders switch them)
         self.dh_frames = DHFrames(scene, arm, first.frames, size, root)
         self._label_frame: int | None = None  #: chosen from the first branches apart (a typed table's come with its search)
-        self._add_ghosts(scene, arm, segments, 0.009 * size, 0.04 * size)
+        self._add_ghosts(scene, arm, first.frames, 0.009 * size, 0.04 * size)
         #: det J's factors in 3D (a preset's; a typed table's det J is not derived)
         self.overlay = SingularityOverlay(scene, arm, first, size, root) if has_overlay(arm) else None
         #: the 3D labels placed apart for a camera, in order, each pool clear of those before it
