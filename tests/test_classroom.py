@@ -446,6 +446,14 @@ def test_the_presenter_shows_the_class_another_arm(classroom):
         await teacher.drag_target(T[:3, 3], wxyz_of(T), "start", name=f"{room.drawing.root}/ik_target")
         await until(lambda: np.abs(room.state.arm.fk(room.state.last.q) - T).max() < 1e-9, what="the class's arm moved")
         await until(lambda: "d3 300.00 mm" in room.live.joints.content, what="d3 in the live panel")
+        # the presenter clicks a ball at a ghost's joint in the shared scene: the class's arm takes that branch
+        balls, per_ghost = room.drawing.ghost_joints, room.drawing.joints_per_ghost
+        within = room.state.last.solution.within_limits
+        await until(lambda: any(within[k // per_ghost] for k in np.flatnonzero(balls.batched_scales > 0)), what="a ghost to take")
+        ball = next(int(k) for k in np.flatnonzero(balls.batched_scales > 0) if within[k // per_ghost])
+        await teacher.click_node(balls.name, ball)
+        await until(lambda: room.state.last.slot == ball // per_ghost, what="the class's arm on the clicked ghost's branch")
+        assert np.abs(room.state.arm.fk(room.state.last.q) - T).max() < 1e-9  # at the same target
         # a student explores the same arm on their own, under a root of its own; the class's is hidden for them
         await student.set_gui("Explore on my own", True)
         explorer = member_of(classroom, 1)
