@@ -179,3 +179,30 @@ def test_a_ghost_the_arm_cannot_be_put_on_reads_limit_and_one_it_can_does_not(na
             seen_beyond += not within[list(group)].any()
             seen_mixed += bool(within[list(group)].any() and not within[list(group)].all())
     assert seen_beyond and seen_mixed  # both cases were met
+
+
+@pytest.mark.parametrize("name", ["stanford", "elbow"])
+def test_only_branch_k_draws_and_numbers_k_where_another_lies_on_it(name):
+    """A flipped wrist moves no joint: branches 1 and 5 are one ghost. With *Ghosts shown: Only branch 5* the ghost
+    drawn (and so clicked) is 5's and its number's line has 5's colour, not 1's, which a click would have taken."""
+    from types import SimpleNamespace
+
+    from ur10teach.features.course_arms.scene import LineDrawing
+    from ur10teach.features.ik_target import numbered
+
+    arm = Arm.preset(name)
+    for q in arm.sample_joints(100, seed=8):
+        snapshot = ArmState(arm, q).last
+        within = snapshot.solution.within_limits
+        pairs = [g for g in same_pose_groups(snapshot.ghost_frames, snapshot.solution.valid)
+                 if snapshot.slot not in g and within[list(g)].sum() >= 2]
+        if pairs:
+            break
+    later = [k for k in pairs[0] if within[k]][1]  # not the group's first within the limits
+    focus = f"Only branch {later + 1}"
+    drawing = SimpleNamespace(show_ghosts=True, focus=focus)
+    assert LineDrawing.shown_ghosts(drawing, snapshot, 8).nonzero()[0].tolist() == [later]
+    texts = numbered(snapshot, True, focus)
+    assert texts[later] and all(not texts[k] for k in pairs[0] if k != later)
+    everything = LineDrawing.shown_ghosts(SimpleNamespace(show_ghosts=True, focus=ALL_BRANCHES), snapshot, 8)
+    assert not everything[later] and everything[[k for k in pairs[0] if within[k]][0]]

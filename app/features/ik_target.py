@@ -143,22 +143,24 @@ def same_pose_groups(ghost_frames: np.ndarray, valid: np.ndarray, tolerance: flo
     return tuple(groups)
 
 
-def lead(group: tuple[int, ...], within_limits: np.ndarray) -> int:
+def lead(group: tuple[int, ...], within_limits: np.ndarray, focus: np.ndarray | None = None) -> int:
     """The slot that stands for a group of coinciding branches: the ghost drawn, clicked and labelled. The first
-    within the joint limits, so a click on the ghost puts the arm there whenever one of them can.
+    within the joint limits, so a click on the ghost puts the arm there whenever one of them can; of those, the
+    first of ``focus`` ((k,) bool, the branches *Ghosts shown* asks for), so "Only branch 5" draws and takes 5.
 
-    >>> lead((0, 4), np.array([False, True, True, True, True, True, True, True]))
-    4
+    >>> within = np.array([False, True, True, True, True, True, True, True])
+    >>> lead((0, 4), within), lead((1, 5), within), lead((1, 5), within, focus=np.arange(8) == 5)
+    (4, 1, 5)
     """
-    return next((k for k in group if within_limits[k]), group[0])
+    return min(group, key=lambda k: (not within_limits[k], focus is not None and not focus[k]))
 
 
-def branch_labels(snapshot: Snapshot, groups: tuple[tuple[int, ...], ...]) -> list[str]:
+def branch_labels(snapshot: Snapshot, groups: tuple[tuple[int, ...], ...], focus: np.ndarray | None = None) -> list[str]:
     """The 3D label of each slot ("" for none): its number, "3 = 4" for coinciding branches ("all 8" where every
     slot does: "1 = 2 = … = 8" was too wide to find a free spot in lecture mode), the arm's marked, and a ghost
     the arm cannot be put on (every branch of it beyond a joint limit) marked so before a student clicks it.
 
-    Only the :func:`lead` slot of a group carries the group's label.
+    Only the :func:`lead` slot of a group (for the branches ``focus`` asks for) carries the group's label.
     """
     solution = snapshot.solution
     slots = len(solution.labels)
@@ -172,7 +174,7 @@ def branch_labels(snapshot: Snapshot, groups: tuple[tuple[int, ...], ...]) -> li
             text += " ⚠ limit"
         if floor[list(group)].any():
             text += " ⚠ floor"
-        texts[lead(group, solution.within_limits)] = text
+        texts[lead(group, solution.within_limits, focus)] = text
     return texts
 
 
@@ -387,8 +389,8 @@ class BranchesScene(View):
             shown = np.zeros(8, bool)
             for group in groups:
                 # one ghost per pose, none where the solid arm is: the arm is never tinted by a ghost
-                shown[lead(group, snapshot.solution.within_limits)] = (self.show_ghosts and focus[list(group)].any()
-                                                                       and snapshot.slot not in group)
+                shown[lead(group, snapshot.solution.within_limits, focus)] = (self.show_ghosts and focus[list(group)].any()
+                                                                              and snapshot.slot not in group)
         self.shown = shown
         # a ghost's link where the solid arm's is (the shoulder, for the branches on the arm's side) is
         # not drawn: the two surfaces would flicker through each other
@@ -418,10 +420,10 @@ def numbered(snapshot: Snapshot, show_ghosts: bool, focus: str) -> list[str]:
     """The number each slot's ghost carries ("" for none): one per pose, the arm's always, the others as shown."""
     groups = same_pose_groups(snapshot.ghost_frames, snapshot.solution.valid)
     shown_focus = focused(focus, snapshot.slot, snapshot.arm)
-    texts = branch_labels(snapshot, groups)
+    texts = branch_labels(snapshot, groups, shown_focus)
     for group in groups:  # a group's label is its lead slot's; the arm's is shown whatever the focus
         if not (snapshot.slot in group or (show_ghosts and bool(shown_focus[list(group)].any()))):
-            texts[lead(group, snapshot.solution.within_limits)] = ""
+            texts[lead(group, snapshot.solution.within_limits, shown_focus)] = ""
     return texts
 
 

@@ -190,7 +190,7 @@ class LineDrawing:
         if self.show_ghosts and snapshot.ghosts.any():
             focus = focused(self.focus, snapshot.slot, snapshot.arm)
             for group in same_pose_groups(snapshot.ghost_frames, snapshot.solution.valid):
-                shown[lead(group, snapshot.solution.within_limits)] = snapshot.slot not in group and focus[list(group)].any()
+                shown[lead(group, snapshot.solution.within_limits, focus)] = snapshot.slot not in group and focus[list(group)].any()
         return shown
 
     def render_panel(self, snapshot: Snapshot) -> None:
