@@ -91,3 +91,45 @@ def test_the_course_arms_in_the_picker(open_page, light_app):
     click(page, next_button, lambda: elbow.walkthrough.step == 2, "step 3")  # row 1's θ1 and α1 (d1 too: a1 = 0 is listed, not drawn)
     wait_for(lambda: page.get_by_text("Row 1.", exact=False).count() > 0, what="row 1's text")
     canvas_changed(page, with_x, 0.002, "row 1's parameters drawn")
+
+
+def test_a_click_on_a_ghost_puts_the_arm_on_its_branch(open_page, light_app):
+    """The IK folder says: click a ghost to put the arm on its branch. In the browser, on the UR10's mesh ghosts and
+    on the balls at a line-drawn ghost's joints (viser reports no click on a line: until 2026-12-05 a click on the
+    Stanford arm's ghosts did nothing)."""
+    from ur10core import Arm
+    from ur10teach.features.branch_labels import ScreenView
+    from ur10teach.features.ik_target import lead, same_pose_groups
+    from ur10teach.state import ArmState
+
+    app = light_app
+    page, session = open_page()
+    client_id = next(k for k, v in app.sessions.items() if v is session)
+    canvas = page.locator("canvas").first.bounding_box()
+
+    def click_at(point: np.ndarray, session) -> None:
+        """Click where the browser's camera shows ``point`` (world, m)."""
+        settled_canvas(page)
+        (x, y), = ScreenView.of(session.client.camera).to_screen(np.asarray(point, dtype=float)[None])[0]
+        page.mouse.click(canvas["x"] + canvas["width"] / 2 + x, canvas["y"] + canvas["height"] / 2 - y)
+
+    snapshot = session.state.last
+    slot = int(np.flatnonzero(session.drawing.branches.shown)[0])
+    click_at(snapshot.ghost_frames[slot, 2:4, :3, 3].mean(axis=0), session)  # the middle of its forearm
+    wait_for(lambda: session.state.last.slot == slot, what=f"the UR10 on branch {slot + 1}")
+
+    arm = Arm.preset("stanford")
+    for q in arm.sample_joints(50, seed=2):  # a pose with a ghost the arm can be put on
+        last = ArmState(arm, q).last
+        within = last.solution.within_limits
+        slots = [lead(g, within) for g in same_pose_groups(last.ghost_frames, last.solution.valid) if last.slot not in g]
+        if any(within[k] for k in slots):
+            break
+    stanford = pick(page, app, client_id, "Stanford arm (RRP + wrist)")
+    stanford.apply(lambda state: state.set_joints(q, cause="typed"))
+    drawing, slot = stanford.drawing, next(k for k in slots if within[k])
+    balls = lambda: drawing.ghost_joints.batched_scales.reshape(-1, drawing.joints_per_ghost)  # noqa: E731
+    wait_for(lambda: balls()[slot].any(), what=f"ghost {slot + 1}'s joints drawn")
+    ball = drawing.ghost_joints.batched_positions[slot * drawing.joints_per_ghost + int(np.argmax(balls()[slot]))]
+    click_at(ball @ drawing.world[:3, :3].T + drawing.world[:3, 3], stanford)
+    wait_for(lambda: stanford.state.last.slot == slot, what=f"the Stanford arm on branch {slot + 1}")
