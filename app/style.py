@@ -77,7 +77,14 @@ def blend(calm: tuple[int, int, int], alarm: tuple[int, int, int], alarm_level: 
 
 
 def number(value: float, spec: str) -> str:
-    """``format(value, spec)``, except that what rounds to zero never shows a minus sign ("−0.0")."""
+    """``format(value, spec)``, except that what rounds to zero never shows a minus sign ("−0.0"), and a value of a
+    billion or more is written with four figures and a power of ten (a slide typed 1e300 m out read as 300 digits).
+
+    >>> number(-0.04, ".1f"), number(1e300, "+.1f")
+    ('0.0', '+1e+300')
+    """
+    if spec.endswith("f") and abs(value) >= 1e9:
+        spec = spec.rsplit(".", 1)[0] + ".4g"
     text = format(value, spec)
     if text.lstrip("+-").strip("0.") == "" and text.startswith("-"):
         return format(0.0, spec)

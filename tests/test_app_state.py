@@ -417,3 +417,18 @@ def test_the_clouds_nobody_shows_are_forgotten_once_browsers_leave():
     kept.release(shown)
     kept.forget_unheld()
     assert kept.nbytes == 0
+
+
+@pytest.mark.parametrize("name", ["stanford", "cylindrical", "scara", "kr210", "three_dof", "ur10"])
+def test_a_target_typed_1e300_m_out_is_refused_in_a_reason_of_a_few_words(name):
+    """Until 2026-12-05 the Stanford arm's raised OverflowError (the nearest branch's distance), and the lengths of a
+    reason read as 300 digits: "got 14142135623730952903445465077352849385153726695921116…  mm"."""
+    from ur10core import Arm
+
+    state = ArmState(Arm.preset(name))
+    for coordinate in (1e300, -1e300, 1e30):
+        T = state.last.target.copy()
+        T[:2, 3] = coordinate
+        snapshot = state.move_target(T, cause="typed")
+        assert not snapshot.reachable and len(snapshot.reason) < 200, snapshot.reason
+        assert "e+" in snapshot.reason or "too far away to measure" in snapshot.reason, snapshot.reason

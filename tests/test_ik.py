@@ -244,6 +244,22 @@ def test_a_pose_a_hair_beyond_the_reach_says_by_how_much(course):
     assert at != bound and float(off) == pytest.approx(excess_mm, abs=0.6 * 10 ** -len(off.split(".")[1]))
 
 
+@pytest.mark.parametrize("name", ["stanford", "cylindrical", "cylindrical_wrist", "scara", "kr210", "three_dof"])
+def test_a_target_a_slide_reaches_1e300_m_out_has_a_nearest_branch(name):
+    """A sliding joint reaches any distance: the Stanford arm's branches for a target 1e300 m out have d3 ≈ 1.4e303
+    m. The nearest branch's distance, a float's ** 2, raised OverflowError ("(34, 'Numerical result out of range')",
+    until 2026-12-05). Every distance is then inf: the first valid slot is as near as any, and none is within the
+    limits."""
+    arm = Arm.preset(name)
+    for coordinate in (1e300, -1e300, 1e155):
+        T = arm.fk(arm.limits.mean(axis=1))
+        T[:2, 3] = coordinate
+        solution = arm.ik(T)
+        first = int(np.flatnonzero(solution.valid)[0]) if solution.valid.any() else -1
+        assert int(solution.nearest(arm.limits.mean(axis=1)).slot) == first
+        assert int(solution.nearest(arm.limits.mean(axis=1), within_limits=True).slot) == -1
+
+
 @pytest.mark.parametrize("coordinate", [1e150, 1e300, -1e308])
 def test_absurdly_far_finite_pose_is_unreachable_not_nan(course, coordinate):
     """Finite but huge coordinates overflow the reach to inf or NaN: every slot must still say "too far"."""

@@ -37,12 +37,15 @@ def mm_apart(length: float, bound: float) -> tuple[str, str, str]:
     tell them apart: a pose typed from a readout rounded to 0.1 mm can lie 11 µm beyond the reach, and "1184.5 mm,
     0.0 mm beyond 1184.5 mm" read as a fault.
 
-    >>> mm_apart(1.1845109, 1.1845), mm_apart(2.0, 1.5)
-    (('1184.511', '1184.500', '0.011'), ('2000.0', '1500.0', '500.0'))
+    A length of a million metres or more has four figures and a power of ten: a target typed 1e300 m out read as 300 digits.
+
+    >>> mm_apart(1.1845109, 1.1845), mm_apart(2.0, 1.5), mm_apart(1e300, 0.6)
+    (('1184.511', '1184.500', '0.011'), ('2000.0', '1500.0', '500.0'), ('1e+303', '600.0', '1e+303'))
     """
     gap = abs(1000.0 * (length - bound))
     decimals = 1 if not gap or not math.isfinite(gap) or gap >= 0.05 else min(4, math.ceil(-math.log10(gap)) + 1)
-    return tuple(f"{1000.0 * value:.{decimals}f}" for value in (length, bound, abs(length - bound)))
+    return tuple(f"{1000.0 * value:.4g}" if abs(value) >= 1e6 else f"{1000.0 * value:.{decimals}f}"
+                 for value in (length, bound, abs(length - bound)))
 
 
 def wrap(angle: np.ndarray) -> np.ndarray:
@@ -290,10 +293,11 @@ def _nearest_one(solution: IKSolution, current: list, prefer: int, low: list, hi
                 elif value > hi and value - _TAU >= lo:
                     value -= _TAU
             shifted.append(value)
-        distance = sum((a - b) ** 2 for a, b in zip(shifted, current))
+        # (a - b) * (a - b): a float's ** 2 raises OverflowError past 1e154 (a slide typed 1e300 m out), a product is inf
+        distance = sum((a - b) * (a - b) for a, b in zip(shifted, current))
         distances.append(distance)
         turned.append(shifted)
-        if distance < chosen_distance:
+        if chosen < 0 or distance < chosen_distance:
             chosen, chosen_distance, chosen_q = k, distance, shifted
     if chosen < 0:
         return Branch(np.full(len(current), np.nan), np.array(-1))
