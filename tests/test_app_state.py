@@ -432,3 +432,35 @@ def test_a_target_typed_1e300_m_out_is_refused_in_a_reason_of_a_few_words(name):
         snapshot = state.move_target(T, cause="typed")
         assert not snapshot.reachable and len(snapshot.reason) < 200, snapshot.reason
         assert "e+" in snapshot.reason or "too far away to measure" in snapshot.reason, snapshot.reason
+
+
+@pytest.mark.parametrize("name", ["course", "kr210", "stanford", "elbow", "scara", "cylindrical", "cylindrical_wrist",
+                                  "planar_elbow"])
+def test_each_walkthrough_row_names_the_value_its_joint_moves(name):
+    """The walkthrough's rows read alike for every joint; each now says which value varies ("θ2 = q2 − 90°", "d3 =
+    q3"). Checked against the row's geometry: move only that joint and see which of θ, d, a, α changes, and by how much."""
+    import math
+    import re
+
+    from ur10core import Arm
+    from ur10teach.features.dh_table import walkthrough_steps
+
+    arm = Arm.preset(name)
+    q = arm.limits.mean(axis=1)
+    for text, _, row in walkthrough_steps(arm)[2:]:
+        before = arm.dh.row_geometry(q, row).values
+        match = re.search(r"\*Joint (\d+) (turns|slides): (θ|d)<sub>(\d+)</sub> = q(\d+)(?: ([+−]) ([\d.]+)°?)? varies", text)
+        if arm.dh.rows[row - 1].joint is None:
+            assert "A fixed row" in text and match is None
+            continue
+        joint = int(match.group(1)) - 1
+        moved = q.copy()
+        moved[joint] += 0.01
+        after = arm.dh.row_geometry(moved, row).values
+        changed = [key for key in ("theta", "d", "a", "alpha") if not math.isclose(before[key], after[key], abs_tol=1e-12)]
+        assert changed == ["theta" if match.group(3) == "θ" else "d"], (text, changed)
+        assert int(match.group(4)) == row and match.group(5) == match.group(1)
+        assert (match.group(2) == "turns") == (match.group(3) == "θ") == (arm.joint_types[joint] == "R")
+        offset = 0.0 if match.group(6) is None else float(match.group(7)) * (1 if match.group(6) == "+" else -1)
+        value = math.degrees(before["theta"]) - math.degrees(q[joint]) if match.group(3) == "θ" else 1000 * (before["d"] - q[joint])
+        assert math.isclose(value, offset, abs_tol=0.51), (text, value)

@@ -139,8 +139,29 @@ def walkthrough_steps(arm: Arm) -> list[tuple[str, str, int | None]]:
             text = (f"**Row {row}.** a<sub>{row - 1}</sub>: along x<sub>{row - 1}</sub>; α<sub>{row - 1}</sub>: about "
                     f"x<sub>{row - 1}</sub>, from z<sub>{row - 1}</sub> to z<sub>{row}</sub>; d<sub>{row}</sub>: along "
                     f"z<sub>{row}</sub>; θ<sub>{row}</sub>: about z<sub>{row}</sub>, from x<sub>{row - 1}</sub> to x<sub>{row}</sub>.")
-        steps.append((text, FRAMES_XZ, row))
+        steps.append((f"{text} {row_variable(arm, row)}", FRAMES_XZ, row))
     return steps
+
+
+def row_variable(arm: Arm, row: int) -> str:
+    """Which of row ``row``'s four values its joint moves (θ for a revolute joint, d for a prismatic one), as the
+    table's q<sub>k</sub> says, or that the row has none.
+
+    >>> from ur10core import Arm
+    >>> kr210 = Arm.preset("kr210")
+    >>> row_variable(Arm.preset("stanford"), 3), row_variable(kr210, 2), row_variable(kr210, 7)  # doctest: +NORMALIZE_WHITESPACE
+    ('*Joint 3 slides: d<sub>3</sub> = q3 varies; the other three are fixed.*',
+     '*Joint 2 turns: θ<sub>2</sub> = q2 − 90° varies; the other three are fixed.*',
+     '*A fixed row: all four are constants.*')
+    """
+    values = arm.dh.rows[row - 1]
+    if values.joint is None:
+        return "*A fixed row: all four are constants.*"
+    joint = arm.dh.joint_rows.index(row - 1) + 1
+    revolute = values.joint == "R"
+    name, verb = ("θ", "turns") if revolute else ("d", "slides")
+    variable = _cell(values.theta if revolute else values.d, values.joint, True, f"q{joint}", revolute)
+    return f"*Joint {joint} {verb}: {name}<sub>{row}</sub> = {variable} varies; the other three are fixed.*"
 
 
 class DHWalkthrough(View):
