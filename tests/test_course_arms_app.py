@@ -1109,6 +1109,37 @@ def test_the_planar_elbows_typed_target_is_a_point_of_its_plane(app):
     asyncio.run(scenario())
 
 
+@pytest.mark.parametrize("label", ["Cylindrical arm (RPP)", "Stanford arm (RRP + wrist)"])
+def test_a_target_typed_far_beyond_the_room_is_refused_and_one_within_10_m_is_framed(app, label):
+    """A target typed 1e300 m out was taken: a sliding joint's branches reach it, so ghosts were drawn there and
+    the camera framing them became NaN (until 2026-12-05). A typed position is within 10 m of the base, as the
+    KR210's gripper pose is; 8 m out is taken and framed."""
+    from ur10teach.features.camera import arm_points, framing
+
+    async def scenario():
+        client = await ViserClient(url(app)).connect()
+        session = await pick(app, client, label)
+        field = next(name for name in client.gui if name.startswith("Target x y z"))
+        rest = " 0" * (len(field.split(",")) > 1 and 3)  # the angles, where it asks for them
+        before = session.state.last.target
+        await client.set_gui(field, "1e300 0 0" + rest)
+        await client.set_gui("Move target here", True)
+        line = session.ik_target.refusal.line
+        await until(lambda: line.visible and "within 10 m of the base" in line.content and "1e+300 mm" in line.content,
+                    what="the refusal below the box")
+        np.testing.assert_array_equal(session.state.last.target, before)
+        await client.set_gui(field, "8000 0 0" + rest)
+        await client.set_gui("Move target here", True)
+        await until(lambda: session.state.last.cause == "typed" and not line.visible, what="8 m taken")
+        assert not session.state.last.reachable and "beyond a joint limit" in session.state.last.reason
+        position, look_at = framing(arm_points(session.drawing.framed(session.state.last), session.drawing.body_radius),
+                                    (1.0, -1.0, 0.6), 1.0, 16 / 9)
+        assert np.isfinite(position).all() and 3.5 < np.abs(look_at).max() < 20.0  # midway to the target 8 m out
+        await client.close()
+
+    asyncio.run(scenario())
+
+
 def test_lecture_mode_sizes_the_axes_of_every_chart_on_every_arm(app):
     """uPlot draws a chart's tick numbers and axis names on its canvas in px, out of reach of the page's type:
     in lecture mode they stayed at 12 px. They are 20 px on every chart of the arm shown, on a panel built in

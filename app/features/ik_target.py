@@ -31,6 +31,7 @@ from ..style import (
     UNREACHABLE_RED,
     UR10_SIZE,
     hex_color,
+    number,
     sentence,
     swatch,
 )
@@ -67,6 +68,9 @@ TYPED_TARGET = {"pose": ("Target x y z (mm), α β γ (°)", "Position in mm and
                 "position in its plane": ("Target x y (mm)", "Position in the plane the arm moves in, in mm, e.g. 600, 200")}
 #: How many numbers each kind of typed target takes.
 TYPED_COUNT = {"pose": 6, "position and yaw": 4, "position": 3, "position in its plane": 2}
+#: The farthest a typed target's x, y or z may be from the base (mm), as for the KR210's gripper pose: the camera
+#: frames a typed target, and one 1e300 m out (a sliding joint's ghosts with it) made it NaN.
+MAX_TYPED_MM = 10_000.0
 
 
 def typed_target_kind(arm) -> str:
@@ -549,8 +553,12 @@ class IKTarget(View):
         arm = self._session.arm
         count = TYPED_COUNT[typed_target_kind(arm)]
         values = ArmState.parse_numbers(self.typed_pose.value, count=count, what="target")
-        T = np.array(self._session.state.last.target)
         position = min(count, 3)  # x y, or x y z
+        if np.abs(values[:position]).max() > MAX_TYPED_MM:
+            raise ValueError(f"target: a position within {MAX_TYPED_MM / 1000:.0f} m of the base, please (each of "
+                             f"{'x y z'[:2 * position - 1]} from {-MAX_TYPED_MM:.0f} to {MAX_TYPED_MM:.0f} mm); got "
+                             f"{number(float(np.abs(values[:position]).max()), '.1f')} mm")
+        T = np.array(self._session.state.last.target)
         T[:position, 3] = values[:position] / 1000.0
         if count == 6:
             T[:3, :3] = rotation_from_zyx_euler(np.radians(values[3:]))
