@@ -10,7 +10,23 @@ from ur10teach.serving.server import TeachingServer
 from ur10dev.viser_client import BROWSER_SEND_INTERVAL, ViserClient, wxyz_of
 from ur10dev.waiting import until, wait_for
 
-__all__ = ["become_presenter", "drag_a_little", "member_of", "scene_pose", "session_of", "until", "url", "wait_for"]
+__all__ = ["a_ghost_to_take", "become_presenter", "drag_a_little", "member_of", "scene_pose", "session_of", "until", "url",
+           "wait_for"]
+
+
+def a_ghost_to_take(arm, seed: int = 2) -> tuple[np.ndarray, int]:
+    """(joints, slot): a pose of ``arm`` where a ghost is drawn (one apart from the arm, the one standing for its
+    pose) whose branch is within the joint limits, and that ghost's slot."""
+    from ur10teach.features.ik_target import lead, same_pose_groups
+    from ur10teach.state import ArmState
+
+    for q in arm.sample_joints(50, seed=seed):
+        last = ArmState(arm, q).last
+        within = last.solution.within_limits
+        slots = [lead(g, within) for g in same_pose_groups(last.ghost_frames, last.solution.valid) if last.slot not in g]
+        if any(within[k] for k in slots):
+            return q, next(k for k in slots if within[k])
+    raise AssertionError(f"no pose of the {arm.name} arm with a ghost it can take")
 
 
 def url(server: TeachingServer) -> str:

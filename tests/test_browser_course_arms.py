@@ -99,8 +99,8 @@ def test_a_click_on_a_ghost_puts_the_arm_on_its_branch(open_page, light_app):
     Stanford arm's ghosts did nothing)."""
     from ur10core import Arm
     from ur10teach.features.branch_labels import ScreenView
-    from ur10teach.features.ik_target import lead, same_pose_groups
-    from ur10teach.state import ArmState
+
+    from .server_support import a_ghost_to_take
 
     app = light_app
     page, session = open_page()
@@ -118,16 +118,10 @@ def test_a_click_on_a_ghost_puts_the_arm_on_its_branch(open_page, light_app):
     click_at(snapshot.ghost_frames[slot, 2:4, :3, 3].mean(axis=0), session)  # the middle of its forearm
     wait_for(lambda: session.state.last.slot == slot, what=f"the UR10 on branch {slot + 1}")
 
-    arm = Arm.preset("stanford")
-    for q in arm.sample_joints(50, seed=2):  # a pose with a ghost the arm can be put on
-        last = ArmState(arm, q).last
-        within = last.solution.within_limits
-        slots = [lead(g, within) for g in same_pose_groups(last.ghost_frames, last.solution.valid) if last.slot not in g]
-        if any(within[k] for k in slots):
-            break
+    q, slot = a_ghost_to_take(Arm.preset("stanford"))
     stanford = pick(page, app, client_id, "Stanford arm (RRP + wrist)")
     stanford.apply(lambda state: state.set_joints(q, cause="typed"))
-    drawing, slot = stanford.drawing, next(k for k in slots if within[k])
+    drawing = stanford.drawing
     balls = lambda: drawing.ghost_joints.batched_scales.reshape(-1, drawing.joints_per_ghost)  # noqa: E731
     wait_for(lambda: balls()[slot].any(), what=f"ghost {slot + 1}'s joints drawn")
     ball = drawing.ghost_joints.batched_positions[slot * drawing.joints_per_ghost + int(np.argmax(balls()[slot]))]

@@ -17,7 +17,7 @@ from ur10teach.features.velocity import METRES_PER_SPEED
 from ur10teach.session import ArmSession
 from ur10core import Arm
 
-from .server_support import session_of, until, url
+from .server_support import a_ghost_to_take, session_of, until, url
 from ur10dev.viser_client import ViserClient, wxyz_of
 
 pytestmark = pytest.mark.server
@@ -1175,16 +1175,8 @@ def test_a_click_on_a_line_drawn_ghosts_joint_puts_the_arm_on_its_branch(app, la
     """The IK folder says "click a ghost … to put the arm on it", but only the UR family's mesh ghosts could be
     clicked: viser reports no click on a line, and the other arms' ghosts are lines (until 2026-12-05). The
     balls at their joints are one clickable mesh, slot by slot."""
-    from ur10teach.features.ik_target import lead, same_pose_groups
-    from ur10teach.state import ArmState
-
     arm = Arm.preset(ARM_CHOICES[label])
-    for q in arm.sample_joints(50, seed=2):  # a pose with a ghost the arm can be put on
-        last = ArmState(arm, q).last
-        within = last.solution.within_limits
-        slots = [lead(g, within) for g in same_pose_groups(last.ghost_frames, last.solution.valid) if last.slot not in g]
-        if any(within[k] for k in slots):
-            break
+    q, slot = a_ghost_to_take(arm)
 
     async def scenario():
         client = await ViserClient(url(app)).connect()
@@ -1193,13 +1185,12 @@ def test_a_click_on_a_line_drawn_ghosts_joint_puts_the_arm_on_its_branch(app, la
         assert "click a ball at a ghost's joint" in client.shown("Drag the gizmo")[0]
         session.apply(lambda state: state.set_joints(q, cause="typed"))
         drawn = lambda: drawing.ghost_joints.batched_scales.reshape(-1, drawing.joints_per_ghost).any(axis=1)  # noqa: E731
-        slot = next(k for k in slots if within[k])
         await until(lambda: np.allclose(session.state.q, q) and drawn()[slot] and drawing.ghosts[slot].visible,
                     what=f"ghost {slot + 1} drawn with its joints")
         ball = slot * drawing.joints_per_ghost + int(np.argmax(drawing.ghost_joints.batched_scales.reshape(-1, drawing.joints_per_ghost)[slot]))
         await client.click_node(drawing.ghost_joints.name, ball)
         await until(lambda: session.state.last.slot == slot, what=f"the arm on branch {slot + 1}")
-        np.testing.assert_allclose(session.state.last.flange[:3, 3], last.flange[:3, 3], atol=1e-9)  # the same target
+        np.testing.assert_allclose(session.state.last.flange[:3, 3], arm.fk(q)[:3, 3], atol=1e-9)  # the same target
         await client.close()
 
     asyncio.run(scenario())
