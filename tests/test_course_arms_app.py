@@ -257,6 +257,13 @@ def test_a_typed_dh_table_becomes_an_arm_with_numerical_ik(app):
         # a 2R arm has room for two solutions, not sixteen, and none is listed empty (issue 30, bug 3)
         assert len(solution.labels) == 2 and "found numerically 2" in shown
         assert "**2 solutions** found (this chain has at most 2)" in shown and "no solution" not in shown
+        # a click on the other elbow's ball puts the arm on it
+        other, balls = 1 - typed.state.last.slot, typed.drawing.ghost_joints
+        drawn = lambda: balls.batched_scales.reshape(2, -1)[other]  # noqa: E731
+        await until(lambda: drawn().any(), what="the other elbow's ghost")
+        await client.click_node(balls.name, other * typed.drawing.joints_per_ghost + int(np.argmax(drawn())))
+        await until(lambda: typed.state.last.slot == other, what="the arm on the other elbow")
+        np.testing.assert_allclose(typed.arm.fk(typed.state.last.q)[:3, 3], goal[:3, 3], atol=1e-9)
         await client.close()
 
     asyncio.run(scenario())
