@@ -10,6 +10,7 @@ import pytest
 
 from ur10core.orientation import from_frame
 from ur10teach.features.arm_picker import DESKTOP, UR10
+from ur10teach.features.course_arms.desktop_lessons import PATH_VIEW, SEARCH_VIEW
 from ur10teach.features.course_arms.scene import COURSE_TO_WORLD, world_placement
 from ur10teach.features.readouts import pose_markdown
 from ur10teach.features.ik_target import lead, same_pose_groups
@@ -73,8 +74,10 @@ def test_the_desktop_arm_is_picked_driven_played_and_searched(app):
         q = session.state.last.q
         assert q[0] == pytest.approx(q[1]) and q[2] == pytest.approx(3 * math.pi / 4 + 0.75 * q[0])
         await until(lambda: client.received.visible.get(f"{frame}/velocity/linear") is True, what="the velocity arrow")
+        # the camera frames the arm, not its reach: the path is kept in view while it plays, and no longer after
+        assert PATH_VIEW in session.camera.extra
         await client.set_gui("Stop", True)
-        await until(lambda: session.state.last.rates is None, what="the path stopped")
+        await until(lambda: session.state.last.rates is None and PATH_VIEW not in session.camera.extra, what="the path stopped")
         await until(lambda: client.received.visible.get(f"{frame}/velocity/linear") is False, what="the arrow hidden")
 
         # the statics exercise: with no force, no pose needs any torque, said below the button
@@ -88,6 +91,7 @@ def test_the_desktop_arm_is_picked_driven_played_and_searched(app):
         await client.set_gui("Find the pose that needs the largest ‖τ‖", True)
         await until(lambda: f"{frame}/torque_map" in client.received.nodes, what="the torque map")
         await until(lambda: abs(math.cos(session.state.last.q[1])) > 0.999, what="the arm at the worst pose")
+        assert len(session.camera.extra[SEARCH_VIEW]) > 1000  # the map in view with the arm
         worst = session.state.last.q
         assert abs(math.cos(worst[2])) == pytest.approx(1.0)
         torques = session.arm.static_torques(worst, (0.0, -10.0, 0.0))
@@ -128,6 +132,28 @@ def test_the_desktop_arm_is_picked_driven_played_and_searched(app):
         await client.close()
 
     asyncio.run(scenario())
+
+
+def test_the_desktop_arms_camera_frames_the_arm_as_large_as_another_arms():
+    """Its camera framed its reach on every side of the shoulder: the arm filled a third of the canvas (134 × 224 px
+    at home on 1280 × 720, until 2026-12-05; a KR210 301 × 284). It frames the arm, its ghosts and target as every
+    arm's does; a path played or a torque map is kept in view beside it (the test above)."""
+    import viser
+
+    from ur10teach.features.camera import arm_points, framed_view
+    from ur10teach.features.drawings import arm_drawing
+
+    server = viser.ViserServer(port=0, verbose=False)
+    try:
+        arm = Arm.preset("three_dof")
+        snapshot = ArmState(arm).last
+        drawing = arm_drawing(server.scene, arm, snapshot)
+        view = framed_view(arm_points(drawing.framed(snapshot), drawing.body_radius))
+        shown = from_frame(drawing.world, drawing._points(snapshot.frames))  # foot, shoulder, elbow, tool
+        width, height = np.ptp(view.to_screen(shown)[0], axis=0)
+        assert height > 0.45 * view.height and width > 0.15 * view.width, (width, height)
+    finally:
+        server.stop()
 
 
 def test_the_desktop_arm_has_its_branch_count_map_standing_the_right_way_up(app):

@@ -13,12 +13,12 @@ import numpy as np
 import viser
 
 from ur10core import Arm
-from ur10core.orientation import from_frame, quaternion
+from ur10core.orientation import quaternion
 
 from ...state import Snapshot
 from ...style import JOINT_CAP_GREY, SHOULDER_COLOR
 from ..branch_labels import BranchLabels
-from .scene import Framed, LineDrawing
+from .scene import LineDrawing
 
 ROOT = "/desktop_arm"
 #: A classroom explorer's own desktop arm, apart from the class's (which it hides in that one browser).
@@ -56,11 +56,18 @@ class DesktopArmScene(LineDrawing):
         #: the base frame's axes and what the joints are, named apart on the screen like the branch numbers
         self.captions = BranchLabels(scene, f"{root}/names", len(NAMES), scale=1.3, merge_px=4.0)
         self._name_points = np.zeros((len(NAMES), 3))
-        self._add_ghosts(scene, arm, first.frames, 0.03, 0.09)
+        self._add_ghosts(scene, arm, first.frames, 0.03, 0.05 * size)
         self.label_sets = self._label_sets((self.captions, self.numbers))  # the numbers keep clear of the captions
         if target_marker:
             self._add_target_marker(scene)
         self.render(first)
+
+    @property
+    def handle_size(self) -> float:
+        """1.5 × its reach: its ghosts reach behind the shoulder as far as the arm reaches in front (θ1 + 180°), so
+        its camera frames about twice the arm, and a gizmo sized by the reach alone was 43 px long on a 1280 × 720
+        canvas (the other arms' 63–104), the force's handle too."""
+        return 1.5 * self.size
 
     def _points(self, frames: np.ndarray) -> np.ndarray:
         """(4, 3) the pedestal's foot, the shoulder, the elbow and the tool, in the course's frame."""
@@ -77,22 +84,6 @@ class DesktopArmScene(LineDrawing):
         _, shoulder, elbow, tool = points
         back = CRANK * (elbow - tool) / np.linalg.norm(tool - elbow)
         return np.array([[shoulder, shoulder + back], [shoulder + back, elbow + back], [elbow + back, elbow]])
-
-    @property
-    def handle_size(self) -> float:
-        """Twice its reach: its camera frames that reach on every side of the shoulder, about twice what frames another
-        arm, and a gizmo sized by the reach alone was 20–25 px long on a 1280 × 720 canvas (the others' 50–100), the
-        force's handle too."""
-        return 2.0 * self.size
-
-    def framed(self, snapshot: Snapshot) -> Framed:
-        """What the camera frames: the arm as it is, and its reach about the shoulder and above, in the world."""
-        points = self._points(snapshot.frames)
-        ends = points[1] + self.size * np.array([[1.0, 0, 0], [-1.0, 0, 0], [0, 1.0, 0], [0, -1.0, 0], [0, 0, 1.0]])
-        world = from_frame(self.world, np.vstack([points, ends]))
-        frames = np.tile(np.eye(4), (len(world), 1, 1))
-        frames[:, :3, 3] = world
-        return Framed(frames, frames[3], (world[0],))
 
     def render(self, snapshot: Snapshot) -> None:
         points = self._points(snapshot.frames)

@@ -29,6 +29,8 @@ PATH_STEPS = 361
 GRID_STEPS = 31
 #: How far above the worst pose's ball its label sits (m, the course's y: up): clear of the base frame's labels.
 WORST_LABEL_RISE = 0.8
+#: What the camera keeps in view with the arm while the course's path plays, and while the torque search's map shows.
+PATH_VIEW, SEARCH_VIEW = "the course's path", "the torque search"
 
 
 class DesktopAbout(View):
@@ -58,6 +60,7 @@ class CoursePathLesson(View):
         q, qdot = course_path(t)
         twist = session.arm.tool_twist(q, qdot)
         self.path = (t, np.hstack([q, qdot]))
+        self._tool_path = session.arm.fk(q[::10])[:, :3, 3]  #: kept in view while it plays
         folder = gui.add_folder("Velocities along the course's path", order=2.0, expand_by_default=False)
         self.folders = (folder,)
         xyz = ("x", "y", "z")
@@ -91,13 +94,20 @@ class CoursePathLesson(View):
     def halt(self) -> None:
         """Stop the path where it is: the arm stays, its rates (and the arrows) go to zero."""
         self.player.stop()
-        self._session.apply(lambda state: state.set_joints(state.last.q))
+        self._done()
 
     def start(self) -> None:
         session = self._session
+        if session.camera is not None:  # the whole way in view (the camera frames the arm, not its reach)
+            session.camera.show_also(PATH_VIEW, self._tool_path, session.drawing.world)
         self.player.play(lambda: self.path, "motion",
-                         show=lambda state, row: state.set_joints(row[:3], "motion", rates=row[3:]),
-                         done=lambda: session.apply(lambda state: state.set_joints(state.last.q)))
+                         show=lambda state, row: state.set_joints(row[:3], "motion", rates=row[3:]), done=self._done)
+
+    def _done(self) -> None:
+        """Played or stopped: the arm at rest where it is, and the path no longer kept in view."""
+        if self._session.camera is not None:
+            self._session.camera.show_also(PATH_VIEW, None, now=False)
+        self._session.apply(lambda state: state.set_joints(state.last.q))
 
     def render_panel(self, snapshot: Snapshot) -> None:
         self.velocity.visible = self.held is None
@@ -110,6 +120,8 @@ class CoursePathLesson(View):
 
     def close(self) -> None:
         self.player.stop()
+        if self._session.camera is not None:  # a classroom's browser keeps its camera for its next arm
+            self._session.camera.show_also(PATH_VIEW, None, now=False)
 
 
 class StaticsExercise(View):
@@ -175,6 +187,10 @@ class StaticsExercise(View):
             label = self._scene.add_label(f"{self._root}/worst/label", f"largest ‖τ‖ = {top:.1f} N·m", font_screen_scale=1.4,
                                           anchor="bottom-center", position=(0.0, WORST_LABEL_RISE, 0.0))
             self._map = (cloud, marker, label)
+        if session.camera is not None:  # the map and its red ball in view with the arm
+            session.camera.show_also(SEARCH_VIEW, np.vstack([points[:: max(1, len(points) // 2000)],
+                                                             arm.fk(worst.q)[:3, 3] + (0.0, WORST_LABEL_RISE, 0.0)]),
+                                     session.drawing.world)
         session.refresher.request(session)  # its label sized for lecture mode, and kept clear of
         self.result.content = (
             f"Largest ‖τ‖ = **{worst.norm:.2f} N·m** for {np.linalg.norm(force):.0f} N, at θ = ("
@@ -199,6 +215,8 @@ class StaticsExercise(View):
         for node in self._map[:2]:
             node.remove()  # the marker's label and stalk go with it
         self._map = ()
+        if self._session.camera is not None:  # (a classroom's browser keeps its camera for its next arm)
+            self._session.camera.show_also(SEARCH_VIEW, None, now=False)
 
     def close(self) -> None:
         """The session has gone: so does its map, even from a scene everyone shares."""
