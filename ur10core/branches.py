@@ -37,7 +37,8 @@ def mm_apart(length: float, bound: float) -> tuple[str, str, str]:
     tell them apart: a pose typed from a readout rounded to 0.1 mm can lie 11 µm beyond the reach, and "1184.5 mm,
     0.0 mm beyond 1184.5 mm" read as a fault.
 
-    A length of a million metres or more has four figures and a power of ten: a target typed 1e300 m out read as 300 digits.
+    A length of a million metres or more has four figures and a power of ten: a target typed 1e300 m out read as
+    300 digits.
 
     >>> mm_apart(1.1845109, 1.1845), mm_apart(2.0, 1.5), mm_apart(1e300, 0.6)
     (('1184.511', '1184.500', '0.011'), ('2000.0', '1500.0', '500.0'), ('1e+303', '600.0', '1e+303'))
