@@ -78,6 +78,13 @@ def test_the_desktop_arm_is_picked_driven_played_and_searched(app):
         assert PATH_VIEW in session.camera.extra
         await client.set_gui("Stop", True)
         await until(lambda: session.state.last.rates is None and PATH_VIEW not in session.camera.extra, what="the path stopped")
+        # stopped by a slider instead (it stops whatever plays): no longer kept in view either (until 2026-12-05 a
+        # path stopped so stayed in every framing after, the Motion folder's too)
+        await client.set_gui("Play the course's path", True)
+        await until(lambda: PATH_VIEW in session.camera.extra and session.state.last.rates is not None, what="playing again")
+        await client.set_gui("θ1 base (°)", 10.0)
+        await until(lambda: PATH_VIEW not in session.camera.extra and session.state.last.q[0] == pytest.approx(math.radians(10.0)),
+                    what="the path stopped by the slider")
         await until(lambda: client.received.visible.get(f"{frame}/velocity/linear") is False, what="the arrow hidden")
 
         # the statics exercise: with no force, no pose needs any torque, said below the button

@@ -40,19 +40,20 @@ class Player:
         return self._stop.is_set() or self._session.closed
 
     def play(self, compute: Callable[[], tuple[np.ndarray, np.ndarray]], cause: str, done: Callable[[], None] = lambda: None,
-             show: Callable[[Any, np.ndarray], Any] | None = None) -> None:
+             show: Callable[[Any, np.ndarray], Any] | None = None, ended: Callable[[], None] = lambda: None) -> None:
         """Compute ``(t (m,), q (m, n))`` in the background, then move the arm along it in real time.
 
         ``show(state, q[k])`` is the change that puts each frame on the arm (by default
         ``state.set_joints(q[k], cause=cause)``). Once :meth:`stop` has returned, no frame is
-        applied: a change the caller then applies is the last word.
+        applied: a change the caller then applies is the last word. ``done()`` follows the last frame;
+        ``ended()`` follows a computed motion however it ends (played, stopped, replaced, refused).
         """
         if show is None:
             def show(state, joints: np.ndarray):
                 return state.set_joints(joints, cause=cause)
         with self._lock:
             self._stop.set()
-            self._pending = (compute, show, done)
+            self._pending = (compute, show, done, ended)
             if self._running:
                 return
             self._running = True
@@ -66,18 +67,21 @@ class Player:
                     if self._pending is None or self._session.closed:
                         self._pending = None
                         return
-                    (compute, show, done), self._pending = self._pending, None
+                    (compute, show, done, ended), self._pending = self._pending, None
                     self._stop = stop = threading.Event()
-                self._session.guard(lambda _: self._run_unless_cancelled(compute, show, stop, done))(None)
+                self._session.guard(lambda _: self._run_unless_cancelled(compute, show, stop, done, ended))(None)
         finally:
             with self._lock:
                 self._running = False
 
-    def _run_unless_cancelled(self, compute, show, stop: threading.Event, done: Callable[[], None]) -> None:
+    def _run_unless_cancelled(self, compute, show, stop: threading.Event, done: Callable[[], None],
+                              ended: Callable[[], None]) -> None:
         try:
             self._run(compute, show, stop, done)
         except Cancelled:
             pass
+        finally:
+            ended()
 
     def _run(self, compute, show: Callable[[Any, np.ndarray], Any], stop: threading.Event, done: Callable[[], None]) -> None:
         t, q = compute()

@@ -255,14 +255,13 @@ class MotionLessons(View):
 
         n = arm.n_joints  # each frame carries its rates: the velocity arrows show them while it plays
         self.player.play(compute, "motion", show=lambda state, row: state.set_joints(row[:n], "motion", rates=row[n:]),
-                         done=lambda: self._done(session))
+                         done=lambda: session.apply(lambda state: state.set_joints(state.q, "motion")),
+                         ended=self._forget_path)
 
-    @staticmethod
-    def _done(session) -> None:
-        """The path has been played: the arm at rest, and the path no longer kept in view (it is not drawn)."""
-        if session.camera is not None:
-            session.camera.extra.pop("path", None)
-        session.apply(lambda state: state.set_joints(state.q, "motion"))
+    def _forget_path(self) -> None:
+        """Played, stopped or refused: the path, not drawn, is no longer kept in view."""
+        if self._session.camera is not None:
+            self._session.camera.show_also("path", None, now=False)
 
     def close(self) -> None:
         self.player.stop()

@@ -94,20 +94,21 @@ class CoursePathLesson(View):
     def halt(self) -> None:
         """Stop the path where it is: the arm stays, its rates (and the arrows) go to zero."""
         self.player.stop()
-        self._done()
+        self._session.apply(lambda state: state.set_joints(state.last.q))
 
     def start(self) -> None:
         session = self._session
-        if session.camera is not None:  # the whole way in view (the camera frames the arm, not its reach)
-            session.camera.show_also(PATH_VIEW, self._tool_path, session.drawing.world)
-        self.player.play(lambda: self.path, "motion",
-                         show=lambda state, row: state.set_joints(row[:3], "motion", rates=row[3:]), done=self._done)
+        self.player.play(self._shown_path, "motion", show=lambda state, row: state.set_joints(row[:3], "motion", rates=row[3:]),
+                         done=lambda: session.apply(lambda state: state.set_joints(state.last.q)),
+                         ended=lambda: self._keep_in_view(None))
 
-    def _done(self) -> None:
-        """Played or stopped: the arm at rest where it is, and the path no longer kept in view."""
+    def _shown_path(self) -> tuple[np.ndarray, np.ndarray]:
+        self._keep_in_view(self._tool_path)  # the whole way in view while it plays (the camera frames the arm)
+        return self.path
+
+    def _keep_in_view(self, points: np.ndarray | None) -> None:
         if self._session.camera is not None:
-            self._session.camera.show_also(PATH_VIEW, None, now=False)
-        self._session.apply(lambda state: state.set_joints(state.last.q))
+            self._session.camera.show_also(PATH_VIEW, points, self._session.drawing.world, now=points is not None)
 
     def render_panel(self, snapshot: Snapshot) -> None:
         self.velocity.visible = self.held is None
@@ -120,8 +121,7 @@ class CoursePathLesson(View):
 
     def close(self) -> None:
         self.player.stop()
-        if self._session.camera is not None:  # a classroom's browser keeps its camera for its next arm
-            self._session.camera.show_also(PATH_VIEW, None, now=False)
+        self._keep_in_view(None)  # a classroom's browser keeps its camera for its next arm
 
 
 class StaticsExercise(View):
