@@ -298,7 +298,7 @@ def _nearest_one(solution: IKSolution, current: list, prefer: int, low: list, hi
         distance = sum((a - b) * (a - b) for a, b in zip(shifted, current))
         distances.append(distance)
         turned.append(shifted)
-        if chosen < 0 or distance < chosen_distance:
+        if distance < chosen_distance or (chosen < 0 and distance == math.inf):  # (every distance inf: the first)
             chosen, chosen_distance, chosen_q = k, distance, shifted
     if chosen < 0:
         return Branch(np.full(len(current), np.nan), np.array(-1))
