@@ -497,3 +497,28 @@ def test_the_torque_map_and_the_cloud_are_framed_with_the_arm_and_the_legend_is_
         await client.close()
 
     asyncio.run(scenario())
+
+
+@pytest.mark.parametrize("label", EVERY_ARM)
+def test_no_3d_label_sits_in_the_gizmos_centre(app, label):
+    """The desktop arm names its tool in 3D, and its IK gizmo stands there: "tool" was drawn under the gizmo's
+    handles (until 2026-12-05). Every label placed keeps clear of the gizmo's centre, as of another label."""
+    from ur10teach.features.branch_labels import boxes, overlapping
+
+    async def scenario():
+        client = await ViserClient(url(app)).connect()
+        session = await pick(app, client, label)
+        world = session.drawing.world
+        await until(lambda: session.drawing.label_sets[-1].placed, what="the labels placed")
+        centre = from_frame(world, np.asarray(session.ik_target.gizmo.position, dtype=float))
+        for pool in session.drawing.label_sets:
+            pool.place()
+            view = pool.view()
+            gizmo = np.tile(view.to_screen(centre[None])[0][0], 2) + [-15.0, -15.0, 15.0, 15.0]  # where its handles cross
+            over = [label for _, label, position in pool.placed
+                    if overlapping(boxes(view.to_screen(from_frame(world, position)[None])[0], [label],
+                                         pool.labels[0].font_screen_scale, "bottom-center")[0], gizmo, gap=0.0)]
+            assert not over, f"in the gizmo's centre: {over}"
+        await client.close()
+
+    asyncio.run(scenario())

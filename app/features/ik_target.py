@@ -487,6 +487,11 @@ class IKTarget(View):
         self.move_button.on_click(session.guard(self._typed_target, beside=self.refusal))
         self.snap_button.on_click(session.guard(lambda _: session.apply(lambda state: state.set_joints(state.q))))
 
+    def obstacles(self) -> list:
+        """The gizmo's centre, where its handles cross: a 3D label placed there (the desktop arm's "tool") was drawn
+        under them. As a blank label about 45 × 35 px, centred on it."""
+        return [(np.asarray(self.gizmo.position, dtype=float), "  ", 2.0, "center-center")]
+
     def thicken(self, lecture: bool) -> None:
         """The gizmo's lines for lecture mode (thick) or not."""
         self.gizmo.line_width = GIZMO_LINE_WIDTH[lecture]
