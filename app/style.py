@@ -130,13 +130,18 @@ def swatch(rgb: tuple[int, int, int]) -> str:
     return f'<span style="display:inline-block;width:0.9em;height:0.9em;border-radius:2px;background:{hex_color(rgb)}"></span>'
 
 
+def turning_and_sliding(joint_types: str) -> bool:
+    """Whether joints ``joint_types`` ("R" turns, "P" slides) are of both kinds: a norm over them adds rad/s to
+    m/s, N·m to N."""
+    return {"R", "P"} <= set(joint_types)
+
+
 def joint_units(joint_types: str) -> tuple[str, str]:
     """(a joint rate's unit, a joint effort's) for joints ``joint_types`` ("R" turns, "P" slides).
 
     >>> joint_units("RRRRRR"), joint_units("RRPR")
     (('rad/s', 'N·m'), ('rad/s or m/s', 'N·m or N'))
     """
-    kinds = set(joint_types)
-    if kinds == {"P"}:
-        return "m/s", "N"
-    return ("rad/s", "N·m") if "P" not in kinds else ("rad/s or m/s", "N·m or N")
+    if turning_and_sliding(joint_types):
+        return "rad/s or m/s", "N·m or N"
+    return ("m/s", "N") if "R" not in joint_types else ("rad/s", "N·m")

@@ -19,7 +19,7 @@ from ur10core.orientation import quaternion
 
 from ..feedback import chosen
 from ..state import Snapshot
-from ..style import joint_units, number, swatch
+from ..style import joint_units, number, swatch, turning_and_sliding
 from ..view import HELD_BACK, Session, View
 from ..viser_internals.fast_updates import set_orientations, set_positions, set_scales
 
@@ -57,7 +57,7 @@ def drawn_force_axes(force: np.ndarray, reach: float) -> np.ndarray:
 def key_html(joint_types: str = "RRRRRR") -> str:
     """Which colour is which ellipsoid, for the panel; on an arm with turning and sliding joints, that a norm adds
     rad/s to m/s (N·m to N), so the ellipsoids' shapes depend on those units."""
-    mixed = "in rad/s and m/s alike, so its shape depends on those units" if len(set(joint_types)) > 1 else ""
+    mixed = "in rad/s and m/s alike, so its shape depends on those units" if turning_and_sliding(joint_types) else ""
     return (f"{swatch(VELOCITY_COLOR)} **velocity ellipsoid**: where joint rates of norm 1 can move the tool"
             f"{' (' + mixed + ')' if mixed else ''}  \n"
             f"{swatch(FORCE_COLOR)} **force ellipsoid**: the forces joint torques of norm 1 can hold"

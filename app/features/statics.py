@@ -23,7 +23,7 @@ from ur10core.specs import torque_map
 from ..feedback import Beside, chosen, put_back, within
 from ..serving.workers import HEAVY, FoldedRuns
 from ..state import Snapshot
-from ..style import DANGER_RED, SAFE_GREEN, UR10_SIZE, blend, hex_color, joint_units, number
+from ..style import DANGER_RED, SAFE_GREEN, UR10_SIZE, blend, hex_color, joint_units, number, turning_and_sliding
 from ..view import HELD_BACK, Session, View, say_held_back
 from ..viser_internals.fast_updates import set_positions, stop_echo
 from .branch_labels import obstacle
@@ -74,7 +74,7 @@ def bars_html(force_torques: np.ndarray, gravity: np.ndarray, capacity: np.ndarr
     the force's alone: what the statics exercise and the ‖τ‖ map weigh a pose by.
     ``kinds``: ``"R"``/``"P"`` per joint (a prismatic joint holds a force, in N)."""
     totals = np.asarray(force_torques) + np.asarray(gravity)
-    mixed = len(set(kinds)) > 1  # N·m and N: a bar is measured against its own kind's largest, not across units
+    mixed = turning_and_sliding(kinds)  # N·m and N: a bar is measured against its own kind's largest, not across units
     if capacity is not None:
         scale, rows = capacity, []
     else:

@@ -171,7 +171,7 @@ class StaticsExercise(View):
             return grid, largest_torque(arm, force, GRID_STEPS, grid=grid)
 
         (q, norms), worst = HEAVY.run(session.client, search, cancelled=lambda: session.closed)
-        points = arm.fk(q)[:, :3, 3]
+        points, worst_at = arm.fk(q)[:, :3, 3], arm.fk(worst.q)[:3, 3]
         with self._map_lock:
             if session.closed or self.held:  # gone, or a class challenge began meanwhile
                 return
@@ -180,7 +180,7 @@ class StaticsExercise(View):
             cloud = self._scene.add_point_cloud(f"{self._root}/torque_map", points.astype(np.float32), colormap(norms, top),
                                                 point_size=0.025, point_shape="circle")
             marker = self._scene.add_icosphere(f"{self._root}/worst", radius=0.08, color=DANGER_RED,
-                                               position=arm.fk(worst.q)[:3, 3])
+                                               position=worst_at)
             # raised on a red stalk: at the ball it sat on the base frame's and the joints' labels
             rise = np.array([[[0.0, 0.0, 0.0], [0.0, WORST_LABEL_RISE, 0.0]]], np.float32)
             self._scene.add_line_segments(f"{self._root}/worst/stalk", rise, DANGER_RED, thickness=0.015)
@@ -189,7 +189,7 @@ class StaticsExercise(View):
             self._map = (cloud, marker, label)
         if session.camera is not None:  # the map and its red ball in view with the arm
             session.camera.show_also(SEARCH_VIEW, np.vstack([points[:: max(1, len(points) // 2000)],
-                                                             arm.fk(worst.q)[:3, 3] + (0.0, WORST_LABEL_RISE, 0.0)]),
+                                                             worst_at + (0.0, WORST_LABEL_RISE, 0.0)]),
                                      session.drawing.world)
         session.refresher.request(session)  # its label sized for lecture mode, and kept clear of
         self.result.content = (
