@@ -68,9 +68,25 @@ TYPED_TARGET = {"pose": ("Target x y z (mm), α β γ (°)", "Position in mm and
                 "position in its plane": ("Target x y (mm)", "Position in the plane the arm moves in, in mm, e.g. 600, 200")}
 #: How many numbers each kind of typed target takes.
 TYPED_COUNT = {"pose": 6, "position and yaw": 4, "position": 3, "position in its plane": 2}
-#: The farthest a typed target's x, y or z may be from the base (mm), as for the KR210's gripper pose: the camera
-#: frames a typed target, and one 1e300 m out (a sliding joint's ghosts with it) made it NaN.
-MAX_TYPED_MM = 10_000.0
+#: The farthest a target's x, y or z may be from the base (mm), typed or dragged, as for the KR210's gripper pose: a
+#: sliding joint's branches reach any target, and ghosts 1e300 m out made the camera's framing NaN and overflowed
+#: the browser's float32.
+MAX_TARGET_MM = 10_000.0
+
+
+def check_target_position(position_mm: np.ndarray) -> None:
+    """``ValueError`` unless each of a target's x y (z) (mm, (2,) or (3,)) is within :data:`MAX_TARGET_MM` of the base.
+
+    >>> check_target_position(np.array([12_000.0, 0.0, 0.0]))
+    Traceback (most recent call last):
+    ...
+    ValueError: target: a position within 10 m of the base, please (each of x y z from -10000 to 10000 mm); got 12000.0 mm
+    """
+    farthest = float(np.abs(position_mm).max())
+    if not farthest <= MAX_TARGET_MM:
+        raise ValueError(f"target: a position within {MAX_TARGET_MM / 1000:.0f} m of the base, please (each of "
+                         f"{'x y z'[:2 * len(position_mm) - 1]} from {-MAX_TARGET_MM:.0f} to {MAX_TARGET_MM:.0f} mm); "
+                         f"got {number(farthest, '.1f')} mm")
 
 
 def typed_target_kind(arm) -> str:
@@ -489,8 +505,12 @@ class IKTarget(View):
 
     def obstacles(self) -> list:
         """The gizmo's centre, where its handles cross: a 3D label placed there (the desktop arm's "tool") was drawn
-        under them. As a blank label about 45 × 35 px, centred on it."""
-        return [(np.asarray(self.gizmo.position, dtype=float), "  ", 2.0, "center-center")]
+        under them. As a blank label about 45 × 35 px, centred on it; on the target where a refused drag left the
+        gizmo beyond :data:`MAX_TARGET_MM` (1e300 m out, it overflowed the labels' placing)."""
+        centre = np.asarray(self.gizmo.position, dtype=float)
+        if not np.abs(centre).max() <= MAX_TARGET_MM / 1000.0:
+            centre = self._session.state.last.target[:3, 3]
+        return [(centre, "  ", 2.0, "center-center")]
 
     def thicken(self, lecture: bool) -> None:
         """The gizmo's lines for lecture mode (thick) or not."""
@@ -559,10 +579,7 @@ class IKTarget(View):
         count = TYPED_COUNT[typed_target_kind(arm)]
         values = ArmState.parse_numbers(self.typed_pose.value, count=count, what="target")
         position = min(count, 3)  # x y, or x y z
-        if np.abs(values[:position]).max() > MAX_TYPED_MM:
-            raise ValueError(f"target: a position within {MAX_TYPED_MM / 1000:.0f} m of the base, please (each of "
-                             f"{'x y z'[:2 * position - 1]} from {-MAX_TYPED_MM:.0f} to {MAX_TYPED_MM:.0f} mm); got "
-                             f"{number(float(np.abs(values[:position]).max()), '.1f')} mm")
+        check_target_position(values[:position])
         T = np.array(self._session.state.last.target)
         T[:position, 3] = values[:position] / 1000.0
         if count == 6:
@@ -592,6 +609,9 @@ class IKTarget(View):
 
 
 def pose_from_gizmo(pose) -> tuple[np.ndarray, bool]:
-    """A filed drag ``(wxyz, position, released)`` → (T (4, 4), released)."""
+    """A filed drag ``(wxyz, position, released)`` → (T (4, 4), released); ``ValueError`` for a pose no gizmo
+    reports (not a rotation, or beyond :data:`MAX_TARGET_MM`)."""
     wxyz, position, released = pose
-    return transform_from_quaternion(wxyz, position), released
+    T = transform_from_quaternion(wxyz, position)
+    check_target_position(1000.0 * T[:3, 3])
+    return T, released

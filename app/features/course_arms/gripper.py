@@ -14,7 +14,7 @@ from ...feedback import Beside
 from ...state import Snapshot
 from ...style import number, typed_fields
 from ...view import HELD_BACK, Session, View
-from ..ik_target import MAX_TYPED_MM
+from ..ik_target import check_target_position
 
 
 def pose_text(T: np.ndarray) -> str:
@@ -33,8 +33,9 @@ def parse_pose(text: str) -> np.ndarray:
         values = [float(f) for f in fields]
     except ValueError:
         raise ValueError(f"x y z roll pitch yaw must be numbers, got {text!r:.60}") from None
-    if not all(math.isfinite(v) for v in values) or max(abs(v) for v in values[:3]) > MAX_TYPED_MM:
-        raise ValueError(f"the position must be finite and within {MAX_TYPED_MM / 1000:.0f} m")
+    if not all(math.isfinite(v) for v in values):
+        raise ValueError(f"x y z roll pitch yaw must be finite numbers, got {text!r:.60}")
+    check_target_position(np.array(values[:3]))
     T = np.eye(4)
     T[:3, :3] = rotation_from_xyz_fixed(np.radians(values[3:]))
     T[:3, 3] = np.array(values[:3]) / 1000
