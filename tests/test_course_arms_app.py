@@ -1117,10 +1117,10 @@ def test_the_planar_elbows_typed_target_is_a_point_of_its_plane(app):
 
 
 @pytest.mark.parametrize("label", ["Cylindrical arm (RPP)", "Stanford arm (RRP + wrist)"])
-def test_a_target_typed_or_dragged_far_beyond_the_room_is_refused_and_one_within_10_m_is_framed(app, label):
+def test_a_target_typed_far_beyond_the_room_is_refused_dragged_there_stops_and_one_within_10_m_is_framed(app, label):
     """A target typed 1e300 m out was taken: a sliding joint's branches reach it, so ghosts were drawn there and
     the camera framing them became NaN (until 2026-12-05). A typed position is within 10 m of the base, as the
-    KR210's gripper pose is; 8 m out is taken and framed."""
+    KR210's gripper pose is; 8 m out is taken and framed. A target dragged farther stops 10 m out, without a notice."""
     from ur10teach.features.camera import arm_points, framing
 
     async def scenario():
@@ -1142,16 +1142,16 @@ def test_a_target_typed_or_dragged_far_beyond_the_room_is_refused_and_one_within
         position, look_at = framing(arm_points(session.drawing.framed(session.state.last), session.drawing.body_radius),
                                     (1.0, -1.0, 0.6), 1.0, 16 / 9)
         assert np.isfinite(position).all() and 3.5 < np.abs(look_at).max() < 20.0  # midway to the target 8 m out
-        # a drag is bounded as a typed target is: a forged one 1e300 m out had its ghosts drawn there
-        before = session.state.last.target
+        # a dragged target stops 10 m out, as a typed one does: a forged drag 1e300 m out had its ghosts drawn there
         gizmo = session.ik_target.gizmo.name
-        for x in (12.0, 1e300):
-            await client.drag_target((x, 0.0, 0.5), (1.0, 0.0, 0.0, 0.0), "update", name=gizmo)
-        await until(lambda: sum("within 10 m of the base" in body for _, body in client.received.notifications) == 2,
-                    what="both drags refused")
-        np.testing.assert_array_equal(session.state.last.target, before)
+        for position in ((12.0, 0.3, 0.5), (1e300, 0.0, -1e300)):
+            await client.drag_target(position, (1.0, 0.0, 0.0, 0.0), "update", name=gizmo)
+        await until(lambda: np.array_equal(session.state.last.target[:3, 3], (10.0, 0.0, -10.0)), what="the drag's stop")
+        assert "beyond a joint limit" in session.state.last.reason
+        assert np.abs(session.state.last.ghost_frames).max() < 100.0
+        assert not any(title == "Not accepted" for title, _ in client.received.notifications)  # a drag is no refusal
         # the 3D labels keep clear of the gizmo where a target can be: not 1e300 m out, where placing them overflowed
-        np.testing.assert_array_equal(session.ik_target.obstacles()[0][0], before[:3, 3])
+        np.testing.assert_array_equal(session.ik_target.obstacles()[0][0], (10.0, 0.0, -10.0))
         await client.drag_target((0.4, 0.1, 0.5), (1.0, 0.0, 0.0, 0.0), "end", name=gizmo)
         await until(lambda: np.allclose(session.state.last.target[:3, 3], (0.4, 0.1, 0.5)), what="a drag within reach")
         await client.close()

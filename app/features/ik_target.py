@@ -68,9 +68,9 @@ TYPED_TARGET = {"pose": ("Target x y z (mm), α β γ (°)", "Position in mm and
                 "position in its plane": ("Target x y (mm)", "Position in the plane the arm moves in, in mm, e.g. 600, 200")}
 #: How many numbers each kind of typed target takes.
 TYPED_COUNT = {"pose": 6, "position and yaw": 4, "position": 3, "position in its plane": 2}
-#: The farthest a target's x, y or z may be from the base (mm), typed or dragged, as for the KR210's gripper pose: a
-#: sliding joint's branches reach any target, and ghosts 1e300 m out made the camera's framing NaN and overflowed
-#: the browser's float32.
+#: The farthest a target's x, y or z may be from the base (mm): one typed beyond is refused (the KR210's gripper pose
+#: too), one dragged beyond stops there. A sliding joint's branches reach any target, and ghosts 1e300 m out made the
+#: camera's framing NaN and overflowed the browser's float32.
 MAX_TARGET_MM = 10_000.0
 
 
@@ -609,9 +609,10 @@ class IKTarget(View):
 
 
 def pose_from_gizmo(pose) -> tuple[np.ndarray, bool]:
-    """A filed drag ``(wxyz, position, released)`` → (T (4, 4), released); ``ValueError`` for a pose no gizmo
-    reports (not a rotation, or beyond :data:`MAX_TARGET_MM`)."""
+    """A filed drag ``(wxyz, position, released)`` → (T (4, 4), released); ``ValueError`` for a pose that is not
+    one. A target dragged beyond :data:`MAX_TARGET_MM` stops there, as at the edge of the room: a notice for each
+    of a drag's twenty updates a second would bury the panel's own word, and the gizmo, let go, goes back onto it."""
     wxyz, position, released = pose
     T = transform_from_quaternion(wxyz, position)
-    check_target_position(1000.0 * T[:3, 3])
+    T[:3, 3] = np.clip(T[:3, 3], -MAX_TARGET_MM / 1000.0, MAX_TARGET_MM / 1000.0)
     return T, released
