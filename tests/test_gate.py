@@ -8,6 +8,7 @@ protocol (``ur10dev/viser_client.py``), so they can send what no browser would.
 from __future__ import annotations
 
 import asyncio
+import logging
 import os
 import socket
 import subprocess
@@ -406,6 +407,45 @@ def test_a_click_without_its_fields_is_dropped_at_the_gate(app):
         await until(lambda: app.gate.dropped["malformed SceneNodeClickMessage"] == 1, what="the click to be dropped")
         await click_is_applied(client, session)  # still connected, still served
         assert client._websocket.close_code is None
+        await client.close()
+
+    asyncio.run(scenario())
+
+
+def camera_message(**changes) -> messages.ViewerCameraMessage:
+    """What a browser reports of its camera (as headless Chromium's does, orbited), with ``changes``."""
+    fields = dict(wxyz=(0.0, 0.0, 0.0, 1.0), position=(2.0, -2.0, 1.5), fov=0.87, near=0.01, far=1000.0,
+                  image_height=630, image_width=827, look_at=(0.0, 0.0, 0.5), up_direction=(0.0, 0.0, 1.0))
+    return messages.ViewerCameraMessage(**{**fields, **changes})
+
+
+@pytest.mark.parametrize("changes", [
+    dict(fov=0.0), dict(fov=-0.5), dict(fov=4.0), dict(position=(np.nan, 0.0, 1.0)), dict(look_at=(np.inf, 0.0, 0.0)),
+    dict(position=(1e300, 1e300, 1e300)), dict(position=(0.0, 0.0, 0.5)), dict(up_direction=(0.0, 0.0, 0.0)),
+    dict(position=(0.0, 0.0, 2.0), up_direction=(0.0, 0.0, 1.0)), dict(image_height=0), dict(image_width=-5),
+    dict(image_width=10**9), dict(far=np.nan),
+])
+def test_a_camera_no_browser_has_is_dropped_at_the_gate(app, changes, caplog):
+    """A forged camera with no field of view made every panel redraw of its browser fail (a ZeroDivisionError placing
+    the 3D labels, logged with its traceback each time, and "Something went wrong" shown); a NaN or one looking along
+    its up direction made the placing's numbers NaN. Dropped at the gate, the browser keeps the camera it had."""
+    assert message_key(encode(camera_message())) == ("ViewerCameraMessage",)
+    # a camera orbited to the top (headless Chromium's, measured): nearly along its up direction, and taken
+    top = camera_message(position=(0.28156015, 0.11095501, 2.28427878), look_at=(0.28155928, 0.1109565, 0.55534848),
+                         up_direction=(4.93038066e-32, 0.0, 1.0))
+    assert message_key(encode(top)) == ("ViewerCameraMessage",)
+
+    async def scenario():
+        client = await ViserClient(url(app)).connect()
+        session = session_of(app, client)
+        await client.send(camera_message(**changes))
+        await until(lambda: sum(app.gate.dropped.values()) == 1, what="the camera dropped")
+        await click_is_applied(client, session)
+        session.render_panel()  # the 3D labels placed for this browser's camera
+        camera = session.client.camera
+        assert np.isfinite([*camera.position, *camera.look_at, camera.fov]).all() and camera.fov > 0.0
+        assert not [record for record in caplog.records if record.levelno >= logging.ERROR]
+        assert "Something went wrong" not in [title for title, _ in client.received.notifications]
         await client.close()
 
     asyncio.run(scenario())

@@ -11,6 +11,7 @@ import contextlib
 import http
 import ipaddress
 import logging
+import math
 import os
 import socket
 import threading
@@ -69,6 +70,10 @@ _CLASSES = {kind: getattr(viser_messages, kind) for kind in ALLOWED}
 _SCALARS = (str, int, float, bool)
 _LONGEST_TEXT = 1000
 _LONGEST_LIST = 16
+#: A camera a browser reports stands within this many metres of the world's origin, on a canvas at most this many
+#: pixels a side (an 8K screen has 7,680).
+_FARTHEST_CAMERA = 1e5
+_LARGEST_CANVAS = 32_768
 
 
 class TokenBucket:
@@ -139,6 +144,8 @@ def classify(raw: bytes | str, value_fits=lambda uuid, value: True) -> tuple[tup
         return None, f"malformed {kind}"
     if kind == "GuiUpdateMessage" and not value_fits(message["uuid"], message["updates"]["value"]):
         return None, f"{kind} of another type than its widget's"  # viser's conversion would raise in its handler
+    if kind == "ViewerCameraMessage" and not _camera_a_browser_could_have(message):
+        return None, f"{kind} of a camera no browser has"
     key = tuple(message.get(field) for field in fields)
     if not all(value is None or isinstance(value, (str, int)) for value in key):
         return None, f"malformed {kind}"
@@ -148,6 +155,27 @@ def classify(raw: bytes | str, value_fits=lambda uuid, value: True) -> tuple[tup
 def message_key(raw: bytes) -> tuple | None:
     """What the gate knows a browser's message by, or None when it is not one the app takes."""
     return classify(raw)[0]
+
+
+def _camera_a_browser_could_have(camera: dict) -> bool:
+    """Finite, within :data:`_FARTHEST_CAMERA`, apart from the point it looks at and not looking along its up
+    direction, with a field of view and a canvas. A zero field of view, a NaN or a canvas of no pixels failed the
+    3D labels' placing and the framing for that browser, at every redraw, each time logged with its traceback.
+
+    >>> camera = dict(wxyz=(1.0, 0, 0, 0), position=(2, -2, 1.5), fov=0.87, near=0.01, far=100.0, image_height=720,
+    ...               image_width=1280, look_at=(0, 0, 0.5), up_direction=(0, 0, 1))
+    >>> _camera_a_browser_could_have(camera), _camera_a_browser_could_have({**camera, "fov": 0.0})
+    (True, False)
+    """
+    position, look_at, up = camera["position"], camera["look_at"], camera["up_direction"]
+    numbers = (*camera["wxyz"], *position, *look_at, *up, camera["near"], camera["far"])
+    if not all(math.isfinite(v) and abs(v) <= _FARTHEST_CAMERA for v in numbers):
+        return False
+    forward = [b - a for a, b in zip(position, look_at)]
+    across = (forward[1] * up[2] - forward[2] * up[1], forward[2] * up[0] - forward[0] * up[2],
+              forward[0] * up[1] - forward[1] * up[0])
+    return (0.0 < camera["fov"] < math.pi and math.hypot(*across) > 1e-9 * math.hypot(*forward) * math.hypot(*up) > 0.0
+            and 0 < camera["image_height"] <= _LARGEST_CANVAS and 0 < camera["image_width"] <= _LARGEST_CANVAS)
 
 
 def _plain_value_update(updates: Any) -> bool:
