@@ -160,7 +160,7 @@ def message_key(raw: bytes) -> tuple | None:
 def _camera_a_browser_could_have(camera: dict) -> bool:
     """Finite, within :data:`_FARTHEST_CAMERA`, apart from the point it looks at and not looking along its up
     direction, with a field of view and a canvas. A zero field of view, a NaN or a canvas of no pixels failed the
-    3D labels' placing and the framing for that browser, at every redraw, each time logged with its traceback.
+    3D labels' placing and the framing for that browser, at every redraw, each time an error in the teacher's console.
 
     >>> camera = dict(wxyz=(1.0, 0, 0, 0), position=(2, -2, 1.5), fov=0.87, near=0.01, far=100.0, image_height=720,
     ...               image_width=1280, look_at=(0, 0, 0.5), up_direction=(0, 0, 1))
