@@ -614,5 +614,7 @@ def pose_from_gizmo(pose) -> tuple[np.ndarray, bool]:
     of a drag's twenty updates a second would bury the panel's own word, and the gizmo, let go, goes back onto it."""
     wxyz, position, released = pose
     T = transform_from_quaternion(wxyz, position)
-    T[:3, 3] = np.clip(T[:3, 3], -MAX_TARGET_MM / 1000.0, MAX_TARGET_MM / 1000.0)
+    farthest = MAX_TARGET_MM / 1000.0
+    if not all(-farthest <= v <= farthest for v in T[:3, 3].tolist()):  # (no numpy call on every drag's way)
+        T[:3, 3] = np.clip(T[:3, 3], -farthest, farthest)
     return T, released
