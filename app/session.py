@@ -201,7 +201,7 @@ class ArmSession:
         self.stop_lessons()  # a path playing stops: the drag has the last word, under the arm's lock
 
         def move(state: ArmState) -> Snapshot:
-            T, released = pose_from_gizmo(pose)  # ValueError for a pose a bad client made up
+            T, released = pose_from_gizmo(pose, state.arm)  # ValueError for a pose a bad client made up
             return state.move_target(T, cause="dropped" if released else "target")
 
         self.guard(lambda _: self.apply(move, timed="drag"))(None)

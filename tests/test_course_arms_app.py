@@ -1159,6 +1159,28 @@ def test_a_target_typed_far_beyond_the_room_is_refused_dragged_there_stops_and_o
     asyncio.run(scenario())
 
 
+def test_a_typed_arm_reaching_beyond_10_m_takes_a_target_it_reaches_there(app):
+    """The 10 m room of a typed or dragged target is the room of an arm that reaches less far: a typed table of three
+    5 m slides reaches 15 m up, and a target 12 m up is taken, typed or dragged, never refused."""
+
+    async def scenario():
+        client = await ViserClient(url(app)).connect()
+        session = await pick(app, client, CUSTOM)
+        typed = await build_table(app, client, "0 0 0 0 P 0 5000\n" * 3 + "1000 0 0 0 R", "PPPR", session)
+        assert typed.arm.reach_bound == 16.0
+        field = next(name for name in client.gui if name.startswith("Target x y z"))
+        await client.set_gui(field, "1000 0 12000")
+        await client.set_gui("Move target here", True)
+        await until(lambda: typed.state.last.cause == "typed", what="the typed target")
+        assert not typed.ik_target.refusal.line.visible
+        await until(lambda: np.allclose(typed.state.last.flange[:3, 3], (1.0, 0.0, 12.0), atol=1e-6), what="the arm there")
+        await client.drag_target((0.0, 1.0, 12.5), (1.0, 0.0, 0.0, 0.0), "end", name=TARGET)
+        await until(lambda: np.allclose(typed.state.last.flange[:3, 3], (0.0, 1.0, 12.5), atol=1e-6), what="dragged there")
+        await client.close()
+
+    asyncio.run(scenario())
+
+
 def test_lecture_mode_sizes_the_axes_of_every_chart_on_every_arm(app):
     """uPlot draws a chart's tick numbers and axis names on its canvas in px, out of reach of the page's type:
     in lecture mode they stayed at 12 px. They are 20 px on every chart of the arm shown, on a panel built in

@@ -93,6 +93,25 @@ def test_arms_compare_by_what_they_are_and_travel_to_a_worker_process(name, make
     assert Arm.preset("course") != Arm.preset("ur10")
 
 
+#: Two 5 m slides up one axis and a 1 m link: its tool gets 10.05 m from the base, beyond a preset's 10 m room.
+LONG_TYPED = ("typed with long slides", lambda: Arm.from_dh(
+    [(0.0, 0.0, 0.0, 0.0, "P"), (0.0, 0.0, 0.0, 0.0, "P"), (1.0, 0.0, 0.0, 0.0, "R")],
+    limits=[(0.0, 5.0), (0.0, 5.0), (-np.pi, np.pi)], name="long"))
+
+
+@pytest.mark.parametrize("name, make", [*EVERY_ARM, LONG_TYPED], ids=[name for name, _ in [*EVERY_ARM, LONG_TYPED]])
+def test_the_reach_bound_is_never_passed_and_is_reached_where_the_links_line_up(name, make):
+    """``reach_bound`` against the tool's distance over 100,000 random joints and every corner of the joint limits:
+    never beyond it; and close to it where the chain can line its links up (the planar elbow stretched)."""
+    arm = make()
+    q = np.concatenate([arm.sample_joints(100_000, seed=4), np.array(list(itertools.product(*arm.limits)))])
+    farthest = np.linalg.norm(arm.fk(q)[:, :3, 3], axis=-1).max()
+    assert farthest <= arm.reach_bound + 1e-12
+    if name in ("planar_elbow", "three_dof", "typed RR"):
+        assert farthest > arm.reach_bound - 1e-3
+    assert arm.reach_bound < 4.3 if name != "typed with long slides" else farthest > 10.0
+
+
 def test_nearest_turns_a_joint_next_to_the_current_one_within_the_limits():
     """KR210's A4 turns ±350°: at 300° the arm stays at 300°, not at the wrapped −60°."""
     kr210 = Arm.preset("kr210")

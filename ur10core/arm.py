@@ -240,6 +240,21 @@ class Arm(JacobianUses, HasSpecs):
         """Its vertical in the base frame: z, or y for the course's desktop arm."""
         return getattr(self.solver, "up", (0.0, 0.0, 1.0))
 
+    @functools.cached_property
+    def reach_bound(self) -> float:
+        """An upper bound on the tool's distance from the base (m), whatever the joints: the table's lengths laid end
+        to end (each row's |a| and |d|, a sliding joint's with the end of its stroke farthest from 0), or the desktop
+        arm's two links (docs/kinematics.md §7).
+
+        >>> round(Arm.preset("course").reach_bound * 1000, 1)   # 128 + 612.9 + 571.6 + 163.9 + 115.7 + 92.2 mm
+        1684.3
+        """
+        if self.dh is None:
+            return float(self.solver.upper_arm + self.solver.forearm)
+        stroke = dict(zip(self.dh.joint_rows, np.abs(self.limits).max(axis=1).tolist()))
+        return float(sum(abs(row.a) + abs(row.d) + (stroke[k] if row.joint == PRISMATIC else 0.0)
+                         for k, row in enumerate(self.dh.rows)))
+
     @property
     def base_height(self) -> float:
         """How high its base frame's origin stands above the floor, along :attr:`up` (m): 0 for an arm standing

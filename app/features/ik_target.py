@@ -68,14 +68,20 @@ TYPED_TARGET = {"pose": ("Target x y z (mm), α β γ (°)", "Position in mm and
                 "position in its plane": ("Target x y (mm)", "Position in the plane the arm moves in, in mm, e.g. 600, 200")}
 #: How many numbers each kind of typed target takes.
 TYPED_COUNT = {"pose": 6, "position and yaw": 4, "position": 3, "position in its plane": 2}
-#: The farthest a target's x, y or z may be from the base (mm): one typed beyond is refused (the KR210's gripper pose
-#: too), one dragged beyond stops there. A sliding joint's branches reach any target, and ghosts 1e300 m out made the
-#: camera's framing NaN and overflowed the browser's float32.
+#: The farthest a target's x, y or z may be from the base (mm) on an arm that reaches less far: one typed beyond is
+#: refused (the KR210's gripper pose too), one dragged beyond stops there. A sliding joint's branches reach any
+#: target, and ghosts 1e300 m out made the camera's framing NaN and overflowed the browser's float32.
 MAX_TARGET_MM = 10_000.0
 
 
-def check_target_position(position_mm: np.ndarray) -> None:
-    """``ValueError`` unless each of a target's x y (z) (mm, (2,) or (3,)) is within :data:`MAX_TARGET_MM` of the base.
+def target_room_mm(arm) -> float:
+    """How far a target's x, y or z may be from ``arm``'s base (mm): :data:`MAX_TARGET_MM`, or farther on a typed
+    arm whose links reach farther (``arm.reach_bound``): a target it reaches is never refused."""
+    return max(MAX_TARGET_MM, 1000.0 * arm.reach_bound)
+
+
+def check_target_position(position_mm: np.ndarray, room_mm: float = MAX_TARGET_MM) -> None:
+    """``ValueError`` unless each of a target's x y (z) (mm, (2,) or (3,)) is within ``room_mm`` of the base.
 
     >>> check_target_position(np.array([12_000.0, 0.0, 0.0]))
     Traceback (most recent call last):
@@ -83,10 +89,10 @@ def check_target_position(position_mm: np.ndarray) -> None:
     ValueError: target: a position within 10 m of the base, please (each of x y z from -10000 to 10000 mm); got 12000.0 mm
     """
     farthest = float(np.abs(position_mm).max())
-    if not farthest <= MAX_TARGET_MM:
-        raise ValueError(f"target: a position within {MAX_TARGET_MM / 1000:.0f} m of the base, please (each of "
-                         f"{'x y z'[:2 * len(position_mm) - 1]} from {-MAX_TARGET_MM:.0f} to {MAX_TARGET_MM:.0f} mm); "
-                         f"got {number(farthest, '.1f')} mm")
+    if not farthest <= room_mm:
+        raise ValueError(f"target: a position within {number(room_mm / 1000, '.4g')} m of the base, please (each of "
+                         f"{'x y z'[:2 * len(position_mm) - 1]} from {number(-room_mm, '.0f')} to "
+                         f"{number(room_mm, '.0f')} mm); got {number(farthest, '.1f')} mm")
 
 
 def typed_target_kind(arm) -> str:
@@ -506,9 +512,9 @@ class IKTarget(View):
     def obstacles(self) -> list:
         """The gizmo's centre, where its handles cross: a 3D label placed there (the desktop arm's "tool") was drawn
         under them. As a blank label about 45 × 35 px, centred on it; on the target where a refused drag left the
-        gizmo beyond :data:`MAX_TARGET_MM` (1e300 m out, it overflowed the labels' placing)."""
+        gizmo beyond :func:`target_room_mm` (1e300 m out, it overflowed the labels' placing)."""
         centre = np.asarray(self.gizmo.position, dtype=float)
-        if not np.abs(centre).max() <= MAX_TARGET_MM / 1000.0:
+        if not np.abs(centre).max() <= target_room_mm(self._session.arm) / 1000.0:
             centre = self._session.state.last.target[:3, 3]
         return [(centre, "  ", 2.0, "center-center")]
 
@@ -579,7 +585,7 @@ class IKTarget(View):
         count = TYPED_COUNT[typed_target_kind(arm)]
         values = ArmState.parse_numbers(self.typed_pose.value, count=count, what="target")
         position = min(count, 3)  # x y, or x y z
-        check_target_position(values[:position])
+        check_target_position(values[:position], target_room_mm(arm))
         T = np.array(self._session.state.last.target)
         T[:position, 3] = values[:position] / 1000.0
         if count == 6:
@@ -608,13 +614,14 @@ class IKTarget(View):
         self.branches.content = status_markdown(snapshot) + "\n\n" + HELD_BACK if self.held else branches_markdown(snapshot)
 
 
-def pose_from_gizmo(pose) -> tuple[np.ndarray, bool]:
-    """A filed drag ``(wxyz, position, released)`` → (T (4, 4), released); ``ValueError`` for a pose that is not
-    one. A target dragged beyond :data:`MAX_TARGET_MM` stops there, as at the edge of the room: a notice for each
-    of a drag's twenty updates a second would bury the panel's own word, and the gizmo, let go, goes back onto it."""
+def pose_from_gizmo(pose, arm) -> tuple[np.ndarray, bool]:
+    """A filed drag ``(wxyz, position, released)`` of ``arm``'s target → (T (4, 4), released); ``ValueError`` for a
+    pose that is not one. A target dragged beyond :func:`target_room_mm` stops there, as at the edge of the room: a
+    notice for each of a drag's twenty updates a second would bury the panel's own word, and the gizmo, let go, goes
+    back onto it."""
     wxyz, position, released = pose
     T = transform_from_quaternion(wxyz, position)
-    farthest = MAX_TARGET_MM / 1000.0
+    farthest = target_room_mm(arm) / 1000.0
     if not all(-farthest <= v <= farthest for v in T[:3, 3].tolist()):  # (no numpy call on every drag's way)
         T[:3, 3] = np.clip(T[:3, 3], -farthest, farthest)
     return T, released
