@@ -511,8 +511,8 @@ class IKTarget(View):
 
     def obstacles(self) -> list:
         """The gizmo's centre, where its handles cross: a 3D label placed there (the desktop arm's "tool") was drawn
-        under them. As a blank label about 45 × 35 px, centred on it; on the target where a refused drag left the
-        gizmo beyond :func:`target_room_mm` (1e300 m out, it overflowed the labels' placing)."""
+        under them. As a blank label about 45 × 35 px, centred on it; on the target while a drag holds the gizmo
+        beyond :func:`target_room_mm` (1e300 m out, it overflowed the labels' placing)."""
         centre = np.asarray(self.gizmo.position, dtype=float)
         if not np.abs(centre).max() <= target_room_mm(self._session.arm) / 1000.0:
             centre = self._session.state.last.target[:3, 3]
