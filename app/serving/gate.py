@@ -70,9 +70,9 @@ _CLASSES = {kind: getattr(viser_messages, kind) for kind in ALLOWED}
 _SCALARS = (str, int, float, bool)
 _LONGEST_TEXT = 1000
 _LONGEST_LIST = 16
-#: A camera a browser reports stands within this many metres of the world's origin, on a canvas at most this many
-#: pixels a side (an 8K screen has 7,680).
-_FARTHEST_CAMERA = 1e5
+#: A camera a browser reports stands within this many metres of the world's origin (a student zooming out for a
+#: minute stays far inside it), on a canvas at most this many pixels a side (an 8K screen has 7,680).
+_FARTHEST_CAMERA = 1e7
 _LARGEST_CANVAS = 32_768
 
 
