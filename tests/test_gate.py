@@ -426,9 +426,10 @@ def camera_message(**changes) -> messages.ViewerCameraMessage:
     dict(image_width=10**9), dict(far=np.nan),
 ])
 def test_a_camera_no_browser_has_is_dropped_at_the_gate(app, changes, caplog):
-    """A forged camera with no field of view made every panel redraw of its browser fail (a ZeroDivisionError placing
-    the 3D labels, an error in the teacher's console each time, and "Something went wrong" shown); a NaN or one looking along
-    its up direction made the placing's numbers NaN. Dropped at the gate, the browser keeps the camera it had."""
+    """A forged camera with no field of view made every panel redraw of its browser fail (a ZeroDivisionError
+    placing the 3D labels, an error in the teacher's console each time, and "Something went wrong" shown); a NaN
+    or one looking along its up direction made the placing's numbers NaN. Dropped at the gate, the browser keeps
+    the camera it had."""
     assert message_key(encode(camera_message())) == ("ViewerCameraMessage",)
     # a camera orbited to the top (headless Chromium's, measured): nearly along its up direction, and taken
     top = camera_message(position=(0.28156015, 0.11095501, 2.28427878), look_at=(0.28155928, 0.1109565, 0.55534848),
