@@ -5,6 +5,7 @@ from __future__ import annotations
 import asyncio
 import re
 import threading
+import warnings
 
 import numpy as np
 import pytest
@@ -84,6 +85,11 @@ def test_the_force_points_where_its_handle_is_dragged(app):
                     what="the handle at the new flange")
         await until(lambda: np.allclose(client.received.positions["/statics/force"], new_tip, atol=1e-5),
                     what="the arrow at the new flange")
+        # a handle 1e300 m out (no browser drags it there) still names a direction: the norm's squares overflowed
+        with warnings.catch_warnings():
+            warnings.simplefilter("error")  # numpy's "overflow encountered in dot"
+            await client.drag_target(new_tip + 1e300 * np.array([0.0, -0.6, 0.8]), (1.0, 0, 0, 0), "end", name=handle)
+            await until(lambda: np.allclose(statics.dragged, (0.0, -0.6, 0.8), atol=1e-9), what="the far handle's direction")
         # another direction hides the handle
         await client.set_gui("Force direction", "+x")
         await until(lambda: client.received.visible.get(handle) is False, what="the handle hidden")

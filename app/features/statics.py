@@ -191,11 +191,11 @@ class StaticsView(View):
         """The student dragged the handle to ``position``: the force points from the tool towards it."""
         self._holding = not released
         offset = position - self._session.state.last.flange[:3, 3]
-        length = float(np.linalg.norm(offset))
-        if not np.isfinite(length):
+        if not np.isfinite(offset).all():
             raise ValueError("force direction: the handle's position must be finite")
-        if length > 1e-3:  # on the tool itself it names no direction: keep the last one
-            self.dragged = offset / length
+        scale = float(np.abs(offset).max())  # divided out first: a handle 1e300 m out overflowed the norm's squares
+        if scale > 1e-3:  # on the tool itself it names no direction: keep the last one
+            self.dragged = (offset / scale) / np.linalg.norm(offset / scale)
         self._session.redraw()
         if not self._holding:
             self._map_again()
