@@ -195,7 +195,8 @@ class StaticsView(View):
             raise ValueError("force direction: the handle's position must be finite")
         scale = float(np.abs(offset).max())  # divided out first: a handle 1e300 m out overflowed the norm's squares
         if scale > 1e-3:  # on the tool itself it names no direction: keep the last one
-            self.dragged = (offset / scale) / np.linalg.norm(offset / scale)
+            along = offset / scale
+            self.dragged = along / np.linalg.norm(along)
         self._session.redraw()
         if not self._holding:
             self._map_again()
