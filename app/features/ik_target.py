@@ -181,6 +181,16 @@ def lead(group: tuple[int, ...], within_limits: np.ndarray, focus: np.ndarray | 
     return min(group, key=lambda k: (not within_limits[k], focus is not None and not focus[k]))
 
 
+def one_ghost_per_pose(snapshot: Snapshot, groups: tuple[tuple[int, ...], ...], focus: np.ndarray) -> np.ndarray:
+    """(k,) bool: the ghosts drawn for ``groups`` (:func:`same_pose_groups`): one per pose, the :func:`lead` one, which
+    its number names and a click takes; none where the solid arm is (a ghost would tint it), none of the branches
+    ``focus`` ((k,) bool) leaves out."""
+    shown = np.zeros(len(snapshot.solution.valid), bool)
+    for group in groups:
+        shown[lead(group, snapshot.solution.within_limits, focus)] = snapshot.slot not in group and focus[list(group)].any()
+    return shown
+
+
 def branch_labels(snapshot: Snapshot, groups: tuple[tuple[int, ...], ...], focus: np.ndarray | None = None) -> list[str]:
     """The 3D label of each slot ("" for none): its number, "3 = 4" for coinciding branches ("all 8" where every
     slot does: "1 = 2 = … = 8" was too wide to find a free spot in lecture mode), the arm's marked, and a ghost
@@ -412,11 +422,7 @@ class BranchesScene(View):
             if snapshot.slot >= 0:
                 shown[snapshot.slot] = False  # the solid arm is there already
         else:
-            shown = np.zeros(8, bool)
-            for group in groups:
-                # one ghost per pose, none where the solid arm is: the arm is never tinted by a ghost
-                shown[lead(group, snapshot.solution.within_limits, focus)] = (self.show_ghosts and focus[list(group)].any()
-                                                                              and snapshot.slot not in group)
+            shown = one_ghost_per_pose(snapshot, groups, focus) & self.show_ghosts
         self.shown = shown
         # a ghost's link where the solid arm's is (the shoulder, for the branches on the arm's side) is
         # not drawn: the two surfaces would flicker through each other

@@ -24,7 +24,7 @@ from ...style import JOINT_CAP_GREY, SLOT_COLORS
 from ...viser_internals.fast_updates import set_orientations, set_positions
 from ..branch_labels import BranchLabels, chain
 from ..dh_frames import DHFrames, show
-from ..ik_target import ALL_BRANCHES, SAME_POSE, add_unreachable_halo, focused, lead, numbered, same_pose_groups
+from ..ik_target import ALL_BRANCHES, SAME_POSE, add_unreachable_halo, focused, numbered, one_ghost_per_pose, same_pose_groups
 from ..singularity import SingularityOverlay, has_overlay
 
 ROOT = "/course_arm"
@@ -185,13 +185,11 @@ class LineDrawing:
 
     def shown_ghosts(self, snapshot: Snapshot, count: int) -> np.ndarray:
         """(count,) bool: the ghosts to draw, as the snapshot and the "Ghosts shown" choice say, one per pose: of
-        branches that coincide, the :func:`lead` one, which its number names and a click takes."""
-        shown = np.zeros(count, bool)
-        if self.show_ghosts and snapshot.ghosts.any():
-            focus = focused(self.focus, snapshot.slot, snapshot.arm)
-            for group in same_pose_groups(snapshot.ghost_frames, snapshot.solution.valid):
-                shown[lead(group, snapshot.solution.within_limits, focus)] = snapshot.slot not in group and focus[list(group)].any()
-        return shown
+        branches that coincide, the lead one, which its number names and a click takes (``ik_target.one_ghost_per_pose``)."""
+        if not (self.show_ghosts and snapshot.ghosts.any()):
+            return np.zeros(count, bool)
+        groups = same_pose_groups(snapshot.ghost_frames, snapshot.solution.valid)
+        return one_ghost_per_pose(snapshot, groups, focused(self.focus, snapshot.slot, snapshot.arm))
 
     def render_panel(self, snapshot: Snapshot) -> None:
         """The DH axes' names and the branch numbers, placed apart on the screen, at the panel's pace."""
