@@ -102,14 +102,21 @@ class Beside:
         self.line = gui.add_markdown("", visible=False)
         self.said = 0  #: refusals said so far: one said by a run the input started is not cleared by its return
 
-    def say(self, message: str) -> None:
+    def say(self, message: str) -> bool:
+        """Show ``message``; False where the line has gone with its panel, which another browser's action (a
+        challenge ended, the presenter's role taken) can rebuild while this input's value is being checked."""
         self.said += 1
-        self.line.content = f"<span style='color:{hex_color(DANGER_RED)}'>**Not accepted.** {sentence(message)}</span>"
-        self.line.visible = True
+        try:
+            self.line.content = f"<span style='color:{hex_color(DANGER_RED)}'>**Not accepted.** {sentence(message)}</span>"
+            self.line.visible = True
+        except RuntimeError:  # viser's "Cannot assign to 'content' on a removed" widget
+            return False
+        return True
 
     def clear(self) -> None:
         if self.line.visible:
-            self.line.visible = False
+            with contextlib.suppress(RuntimeError):  # gone with its panel meanwhile (see say): nothing left to clear
+                self.line.visible = False
 
 
 def guard(
@@ -121,12 +128,11 @@ def guard(
 ) -> Callable[[Any], None]:
     """Wrap a viser callback of ``client``'s.
 
-    ``ValueError`` is a value the user gave that we refuse: it is explained ``beside`` the
-    input it came from (or in a notice, "Not accepted") and ``on_refused`` puts the widgets
-    back; the explanation stays until the student's next change is accepted (a value the server
-    itself sets, putting one back, is none, and neither is work run on a thread of its own: the put-back's
-    run cleared the refusal it followed). Anything else is a bug: it is logged and the user is told the app is
-    still running.
+    ``ValueError`` is a value the user gave that we refuse: it is explained ``beside`` the input it came from (or in
+    a notice, "Not accepted", where there is no such line or it has gone) and ``on_refused`` puts the widgets back;
+    the explanation stays until the student's next change is accepted (a value the server itself sets, putting one
+    back, is none, and neither is work run on a thread of its own: the put-back's run cleared the refusal it
+    followed). Anything else is a bug: it is logged and the user is told the app is still running.
     """
 
     @functools.wraps(handler)
@@ -139,9 +145,7 @@ def guard(
             if beside is not None and getattr(event, "client", None) is not None and beside.said == said:
                 beside.clear()
         except ValueError as error:
-            if beside is not None:
-                beside.say(str(error))
-            else:
+            if beside is None or not beside.say(str(error)):
                 notify(client, "Not accepted", str(error))
             if on_refused is not None:
                 on_refused()

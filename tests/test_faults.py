@@ -7,6 +7,7 @@ do what a browser never would: vanish mid-drag, stop reading, send garbage.
 from __future__ import annotations
 
 import asyncio
+import logging
 import time
 import traceback
 
@@ -203,6 +204,45 @@ def test_a_refusal_said_by_the_run_an_input_started_stays_below_it():
         assert beside.line.visible and "1.600 m" in beside.line.content
         feedback.guard(None, lambda _: None, beside=beside)(event)  # the next input accepted
         assert not beside.line.visible
+    finally:
+        server.stop()
+
+
+def test_a_refusal_line_gone_with_its_panel_meanwhile_is_no_error(caplog):
+    """A classroom monkey (2026-12-05): a presenter's input with a refusal shown below it was accepted while another
+    browser's action rebuilt that panel. Clearing the line, removed with it, raised: "Something went wrong" in the
+    browser and an error logged. A refusal whose line has gone is told in a notice instead."""
+    shown = []
+
+    class Browser:
+        client_id = 7
+
+        def add_notification(self, title, body, **_):
+            shown.append((title, body))
+
+    server = viser.ViserServer(host="127.0.0.1", port=0, verbose=False)
+    try:
+        event = type("Event", (), {"client": object()})()
+        beside = feedback.Beside(server.gui)
+        def refused(_) -> None:
+            raise ValueError("no challenge chosen")
+
+        feedback.guard(Browser(), refused, beside=beside)(event)
+        assert beside.line.visible and shown == []
+
+        def accepted_as_the_panel_goes(_) -> None:  # another browser's action, meanwhile
+            beside.line.remove()
+
+        feedback.guard(Browser(), accepted_as_the_panel_goes, beside=beside)(event)
+        beside = feedback.Beside(server.gui)
+
+        def refused_as_the_panel_goes(_) -> None:
+            beside.line.remove()
+            raise ValueError("a challenge is running: end it first")
+
+        feedback.guard(Browser(), refused_as_the_panel_goes, beside=beside)(event)
+        assert shown == [("Not accepted", "A challenge is running: end it first")]
+        assert not [record for record in caplog.records if record.levelno >= logging.ERROR]
     finally:
         server.stop()
 
