@@ -1,10 +1,11 @@
 #!/usr/bin/env bash
 # Install what the tests need, then run every test once, and the core's tests on its other backend.
-#   - Debian's chromium for the browser tests (playwright drives it; it never downloads one)
+#   - a Chromium for the browser tests (playwright drives it; it never downloads one): $UR10_TEACH_CHROMIUM,
+#     a chromium on the PATH, or Debian's, installed with apt-get
 #   - a virtual environment ($UR10_TEST_VENV, default .venv-test) with the project and its
 #     test extras; .ci/run points it at a new, empty folder every time
 # Two runs share the two cores: the browser and install tests (mostly Chromium's and pip's work),
-# beside everything else and then the core's tests on numpy. Each run's output is printed when it ends.
+# beside everything else and then the core's tests on numpy. Each run's output is printed once both have ended.
 # Extra arguments go to one pytest run on the default backend, e.g. scripts/test.sh -k ik
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -14,12 +15,23 @@ stage() {  # stage NAME: a heading with the time since the start
     echo "== ($((SECONDS - STARTED)) s) $1"
 }
 
-if ! command -v chromium >/dev/null 2>&1; then
-    stage "installing Debian's chromium for the browser tests"
-    SUDO=""
-    if [ "$(id -u)" != "0" ]; then SUDO="sudo"; fi
-    $SUDO apt-get update -qq
-    $SUDO env DEBIAN_FRONTEND=noninteractive apt-get install -y -qq chromium
+# the browser tests' Chromium: $UR10_TEACH_CHROMIUM, else a chromium on the PATH, else Debian's, installed here
+if [ -z "${UR10_TEACH_CHROMIUM:-}" ]; then
+    if ! command -v chromium >/dev/null 2>&1; then
+        if ! command -v apt-get >/dev/null 2>&1; then
+            echo "no chromium here, and no apt-get to install Debian's: set UR10_TEACH_CHROMIUM to a Chromium" \
+                 "or Chrome binary for the browser tests (on macOS, for example," \
+                 "\"/Applications/Google Chrome.app/Contents/MacOS/Google Chrome\")" >&2
+            exit 1
+        fi
+        stage "installing Debian's chromium for the browser tests"
+        SUDO=""
+        if [ "$(id -u)" != "0" ]; then SUDO="sudo"; fi
+        $SUDO apt-get update -qq
+        $SUDO env DEBIAN_FRONTEND=noninteractive apt-get install -y -qq chromium
+    fi
+    UR10_TEACH_CHROMIUM="$(command -v chromium)"
+    export UR10_TEACH_CHROMIUM
 fi
 
 stage "installing ur10-teach with its test dependencies into $VENV"
@@ -69,23 +81,32 @@ other_run() {
 }
 
 stage "two runs side by side, on the $BACKEND backend: the browser and install tests, and everything else"
-declare -A NAME
-browser_run > "$LOGS/browser.log" 2>&1 &
-NAME[$!]="browser and install tests"
-other_run > "$LOGS/other.log" 2>&1 &
-NAME[$!]="core, app and server tests, then the core's tests on numpy"
+# (in bash 3.2 too, macOS's own: no associative arrays, no wait -n)
+lane() {  # lane RUN: RUN's output into $LOGS/RUN.log; its exit code and when it ended (s) into $LOGS/RUN.end
+    local code=0
+    "$1" > "$LOGS/$1.log" 2>&1 || code=$?
+    echo "$code $((SECONDS - STARTED))" > "$LOGS/$1.end"
+}
+lane browser_run &
+lane other_run &
+wait
 FAILED=0
-for _ in 1 2; do
-    set +e
-    wait -n -p DONE
-    CODE=$?
-    set -e
-    LOG="$LOGS/other.log"
-    if [ "${NAME[$DONE]}" = "browser and install tests" ]; then LOG="$LOGS/browser.log"; fi
-    stage "${NAME[$DONE]}: $([ $CODE -eq 0 ] && echo passed || echo "FAILED (exit $CODE)")"
-    cat "$LOG"
-    if [ $CODE -ne 0 ]; then FAILED=1; fi
-done
+report() {  # report RUN WHAT: the run's result, at the time it ended, then its output
+    local code ended
+    read -r code ended < "$LOGS/$1.end"
+    echo "== ($ended s) $2: $([ "$code" -eq 0 ] && echo passed || echo "FAILED (exit $code)")"
+    cat "$LOGS/$1.log"
+    if [ "$code" -ne 0 ]; then FAILED=1; fi
+}
+BROWSER="browser and install tests"
+OTHER="core, app and server tests, then the core's tests on numpy"
+read -r _ BROWSER_ENDED < "$LOGS/browser_run.end"
+read -r _ OTHER_ENDED < "$LOGS/other_run.end"
+if [ "$BROWSER_ENDED" -le "$OTHER_ENDED" ]; then
+    report browser_run "$BROWSER"; report other_run "$OTHER"
+else
+    report other_run "$OTHER"; report browser_run "$BROWSER"
+fi
 rm -rf "$LOGS"
 stage "done"
 exit $FAILED

@@ -36,3 +36,24 @@ def test_nothing_imports_the_app_by_its_folder_name():
     sources = [path for top in ("app", "tests", "ur10dev", "benchmarks", "scripts") for path in (ROOT / top).rglob("*.py")]
     offenders = [str(path.relative_to(ROOT)) for path in sources if bare.search(path.read_text())]
     assert not offenders, offenders
+
+
+def test_the_test_script_says_what_to_do_where_it_cannot_install_chromium(tmp_path):
+    """On a machine without Debian's apt-get (macOS, say), ``scripts/test.sh`` ended on "apt-get: command not
+    found": it now names the variable that points the browser tests at a Chromium or Chrome, before it builds
+    anything."""
+    import os
+    import shutil
+    import subprocess
+
+    tools = tmp_path / "bin"  # a PATH with the shell's own tools only: no chromium, no apt-get
+    tools.mkdir()
+    for tool in ("bash", "dirname", "id"):
+        (tools / tool).symlink_to(shutil.which(tool))
+    env = {key: value for key, value in os.environ.items() if key != "UR10_TEACH_CHROMIUM"}
+    env.update(PATH=str(tools), UR10_TEST_VENV=str(tmp_path / "venv"))
+    result = subprocess.run([str(tools / "bash"), str(ROOT / "scripts" / "test.sh")], env=env, capture_output=True,
+                            text=True, timeout=120)
+    assert result.returncode == 1
+    assert "set UR10_TEACH_CHROMIUM to a Chromium or Chrome binary" in result.stderr, result.stderr
+    assert not (tmp_path / "venv").exists()
