@@ -236,6 +236,27 @@ def test_find_every_branch_puts_a_typed_arm_that_stopped_short_on_the_nearest_br
     state.set_joint(0, found.q[0] + 0.01)  # and the sliders move it on
 
 
+def test_a_typed_arm_never_calls_a_target_it_did_not_search_enough_unreachable():
+    """A typed Stanford arm told "Target unreachable." of a pose typed from its own joints (114 of 200 such poses)
+    when its search from the arm's joints stopped short, or took a branch beyond a limit, while its reason said
+    another branch "may reach it" (until 2026-12-05). Its headline says not reached; Find every branch reaches it."""
+    stanford, typed, q, _ = wrist_centre_behind_the_shoulder()
+    state = ArmState(typed, q)
+    goal = typed.sample_joints(200, seed=3)[0]  # within the limits: reachable by construction
+    stopped = state.move_target(typed.fk(goal), cause="typed")
+    assert not stopped.reachable and "Find every branch" in stopped.reason
+    assert "**Target not reached.**" in status_markdown(stopped) and "unreachable" not in status_markdown(stopped).lower()
+    found = state.with_branches(stopped, typed.ik(stopped.target, hint=stopped.q))
+    assert found.reachable
+    np.testing.assert_allclose(typed.fk(found.q), typed.fk(goal), atol=1e-9)
+    far = np.eye(4)
+    far[:3, 3] = (5.0, 0.0, 0.0)
+    beyond = state.move_target(far, cause="typed")
+    searched = state.with_branches(beyond, typed.ik(beyond.target, hint=beyond.q))  # and its search says why
+    assert "every length and stroke laid end to end, reaches" in status_markdown(searched)
+    assert "**Target not reached.**" in status_markdown(searched)
+
+
 def test_a_target_reachable_only_beyond_a_limit_is_unreachable_with_its_branches_listed():
     """The cylindrical arm's tool below its base needs d2 < 0: its two branches reach it, beyond d2's range."""
     from ur10teach.features.ik_target import branches_markdown

@@ -274,7 +274,10 @@ def status_markdown(snapshot: Snapshot) -> str:
     solution = snapshot.solution
     if not snapshot.reachable:
         reason = snapshot.reason.removeprefix("unreachable: ")
-        return f"<span style='color:{hex_color(DANGER_RED)}'>**Target unreachable.**</span> {sentence(reason)}."
+        # a typed table's search, from the arm's joints or from many starts, proves nothing out of reach: its reason
+        # says how close it came, or (beyond every length laid end to end) that no joints could reach it
+        verdict = "Target not reached" if snapshot.arm.numerical else "Target unreachable"
+        return f"<span style='color:{hex_color(DANGER_RED)}'>**{verdict}.**</span> {sentence(reason)}."
     if solution is None:  # a typed table, not searched yet
         return ("The arm follows the target from its own joints (damped least squares). "
                 "**Find every branch** searches from many starts for the others.")
