@@ -1181,6 +1181,29 @@ def test_a_typed_arm_reaching_beyond_10_m_takes_a_target_it_reaches_there(app):
     asyncio.run(scenario())
 
 
+def test_a_typed_target_the_arms_own_search_does_not_reach_is_searched_for_at_once(app):
+    """A typed 2R arm at (34°, 92°), given the point (685, -515) mm that (-21°, -36°) reaches, stayed where it was: its
+    search from its own joints came within 609 mm, and it waited for Find every branch (until 2026-12-05). A typed
+    target is searched for as that button would: the arm goes there."""
+
+    async def scenario():
+        client = await ViserClient(url(app)).connect()
+        session = await pick(app, client, CUSTOM)
+        typed = await build_table(app, client, "500 0 0 0 R\n400 0 0 0 R", "RR", session)
+        await client.set_gui("All 2 (°)", "34, 92")
+        await client.set_gui("Set these values", True)
+        await until(lambda: np.allclose(np.degrees(typed.state.last.q), (34.0, 92.0)), what="the arm at (34°, 92°)")
+        await client.set_gui("Target x y (mm)", "685, -515")
+        await client.set_gui("Move target here", True)
+        await until(lambda: typed.state.last.solution is not None, what="the search")
+        last = typed.state.last
+        assert last.reachable and last.solution.method == "found numerically"
+        np.testing.assert_allclose(last.flange[:2, 3], (0.685, -0.515), atol=1e-9)
+        await client.close()
+
+    asyncio.run(scenario())
+
+
 def test_lecture_mode_sizes_the_axes_of_every_chart_on_every_arm(app):
     """uPlot draws a chart's tick numbers and axis names on its canvas in px, out of reach of the page's type:
     in lecture mode they stayed at 12 px. They are 20 px on every chart of the arm shown, on a panel built in

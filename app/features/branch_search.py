@@ -1,4 +1,5 @@
-"""A typed table's "Find every branch": its numerical IK from many starts, in the worker process."""
+"""A typed table's "Find every branch": its numerical IK from many starts, in the worker process; by itself for
+a typed target the arm's own search did not reach."""
 
 from __future__ import annotations
 
@@ -14,12 +15,20 @@ class BranchSearch(View):
     def __init__(self, gui: viser.GuiApi, session: Session) -> None:
         self._session = session
         self._runs = FoldedRuns(self._search)
+        self._searched = None  #: the last typed target searched for without a press
         folder = gui.add_folder("Numerical IK", order=0.3)
         self.folders = (folder,)
         with folder:
             self.button = gui.add_button("Find every branch", icon=viser.Icon.SEARCH,
                                          hint="Damped least squares from 48 starts: every distinct solution it finds")
         self.button.on_click(session.guard(lambda _: self._runs.start("branch-search", session.guard)))
+
+    def render_panel(self, snapshot) -> None:
+        # a target typed, not dragged, that the arm's search from its own joints did not reach: the student asked for
+        # that pose, so every branch is searched for, as "Find every branch" would (a drag's many poses are not)
+        if snapshot.cause == "typed" and snapshot.solution is None and not snapshot.reachable and snapshot is not self._searched:
+            self._searched = snapshot
+            self._runs.start("branch-search", self._session.guard)
 
     def _search(self) -> None:
         session = self._session
