@@ -106,8 +106,9 @@ class Beside:
         """Show ``message``; False where the line has gone with its panel, which another browser's action (a
         challenge ended, the presenter's role taken) can rebuild while this input's value is being checked."""
         self.said += 1
+        text = f"<span style='color:{hex_color(DANGER_RED)}'>**Not accepted.** {sentence(message)}</span>"
         try:
-            self.line.content = f"<span style='color:{hex_color(DANGER_RED)}'>**Not accepted.** {sentence(message)}</span>"
+            self.line.content = text
             self.line.visible = True
         except RuntimeError:  # viser's "Cannot assign to 'content' on a removed" widget
             return False

@@ -26,7 +26,8 @@ class BranchSearch(View):
     def render_panel(self, snapshot) -> None:
         # a target typed, not dragged, that the arm's search from its own joints did not reach: the student asked for
         # that pose, so every branch is searched for, as "Find every branch" would (a drag's many poses are not)
-        if snapshot.cause == "typed" and snapshot.solution is None and not snapshot.reachable and snapshot is not self._searched:
+        unreached = snapshot.solution is None and not snapshot.reachable
+        if snapshot.cause == "typed" and unreached and snapshot is not self._searched:
             self._searched = snapshot
             self._runs.start("branch-search", self._session.guard)
 
