@@ -206,6 +206,39 @@ def test_joint_rates_draw_the_flange_velocity_and_a_typed_velocity_gets_its_rate
     asyncio.run(scenario())
 
 
+def test_the_joint_rates_a_velocity_needs_follow_the_arm_to_a_singularity(app):
+    """The rates *Find the joint rates* gave stayed those of the pose it was pressed at (until 2026-12-05): moving the
+    arm towards the wrist singularity showed nothing. They now follow the arm, and turn red over the limits there."""
+    from ur10teach.features.velocity import parse_twist, rates_markdown
+
+    async def scenario():
+        client = await ViserClient(url(app)).connect()
+        session = session_of(app, client)
+        view, arm = session.velocity, session.arm
+        asked = parse_twist("0 0 0 0 0 30")
+        limits = np.degrees(arm.specs.speed_limits)
+
+        def shown_for(q) -> str:
+            rates = arm.joint_rates(q, asked)
+            return rates_markdown(rates.qdot, float(rates.damping), asked, rates.achieved, arm.joint_names, "RRRRRR", limits)
+
+        await client.set_gui("vx vy vz (mm/s) ωx ωy ωz (°/s)", "0 0 0 0 0 30")
+        await client.set_gui("Find the joint rates", True)
+        await until(lambda: view.rates.content == shown_for(session.state.last.q), what="the joint rates")
+        assert "For v = (+0, +0, +0) mm/s, ω = (+0, +0, +30) °/s" in view.rates.content
+        assert "Every joint within its speed limit." in view.rates.content
+        near = arm.singular_configuration("wrist", session.state.last.q)
+        near[4] += 0.05  # 3° from s5 = 0
+        await client.set_gui("All 6 (°)", ", ".join(f"{v:.4f}" for v in np.degrees(near)))
+        await client.set_gui("Set these values", True)  # no press of Find the joint rates after it
+        await until(lambda: np.allclose(session.state.last.q, near, atol=1e-6), what="the arm near the singularity")
+        await until(lambda: view.rates.content == shown_for(session.state.last.q), what="the rates there")
+        assert "over the limit" in view.rates.content
+        await client.close()
+
+    asyncio.run(scenario())
+
+
 def test_near_a_singularity_the_needed_rates_are_red_and_on_it_damped():
     """3° from the wrist singularity, turning the flange at 30 °/s about z needs a wrist far over its
     180 °/s (undamped); 0.06° from it the damping keeps every joint within its limit, and says what

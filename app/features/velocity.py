@@ -4,7 +4,8 @@
 A joint-rate slider per joint draws v (blue) and ω (reddish purple) at the tool (the UR10's
 flange), live with the drag. A typed tool velocity gets its joint rates from the damped
 inverse, each in red where it exceeds the joint's speed limit (the UR10's, docs/kinematics.md
-§1; the course's other arms have none), with the damping it took.
+§1; the course's other arms have none), with the damping it took; live too, so that moving the
+arm towards a singularity shows the rates it needs grow.
 """
 
 from __future__ import annotations
@@ -66,12 +67,14 @@ def rates_markdown(qdot: np.ndarray, damping: float, asked: np.ndarray, achieved
     and, on an arm that controls less than a pose (``task``), what of the velocity was not asked of it."""
     shown = shown_rates(qdot, kinds)
     over_limit = np.abs(shown) > limits if limits is not None else np.zeros(len(shown), bool)
+    for_velocity = (f"For v = ({', '.join(number(1000 * v, '+.0f') for v in asked[:3])}) mm/s, ω = "
+                    f"({', '.join(number(math.degrees(w), '+.0f') for w in asked[3:])}) °/s, at the arm's pose now:")
     cells = []
     for k, (label, rate, kind) in enumerate(zip(labels, shown, kinds)):
         text = f"{number(rate, '+.1f')}{'°/s' if kind == 'R' else ' mm/s'}"
         cells.append(f"| {label} | " + (f"<b style='color:#dc2626'>{text} (limit {limits[k]:.0f})</b>" if over_limit[k]
                                         else f"{text}") + " |")
-    lines = ["| joint | rate |", "|---|---:|", *cells]
+    lines = [for_velocity, "", "| joint | rate |", "|---|---:|", *cells]
     over = int(over_limit.sum())
     lines.append("")
     if limits is not None:
@@ -141,6 +144,7 @@ class VelocityView(View):
                              head_length=0.03 * size, visible=False)
             for name, colour in (("linear", LINEAR_COLOR), ("angular", ANGULAR_COLOR)))
         self._ends: tuple[np.ndarray, np.ndarray] | None = None  #: where the arrows end while they show
+        self._asked: np.ndarray | None = None  #: (6,) the tool velocity asked last, whose rates follow the arm
         for slider in self.sliders:
             slider.on_update(session.guard(lambda _, slider=slider: self._rate_set(slider), beside=self.rates_refusal))
         self.solve.on_click(session.guard(lambda _: self._solve(), beside=self.refusal))
@@ -158,16 +162,15 @@ class VelocityView(View):
         super().hold_back(asked)
         for widget in (self.typed, self.solve, self.rates):
             widget.visible = self.held != "velocity"
+        if self.held == "velocity":  # the rates asked before it began would follow the arm to the answer
+            self._asked = None
         say_held_back(self.held_back, self.held == "velocity")
 
     def _solve(self) -> None:
         if self.held == "velocity":  # a click a browser cannot send while it is off
             raise ValueError(HELD_BACK)
-        twist = parse_twist(str(self.typed.value))
-        snapshot = self._session.state.last
-        rates = self._arm.joint_rates(snapshot.q, twist)
-        self.rates.content = rates_markdown(rates.qdot, float(rates.damping), twist, rates.achieved,
-                                            self._labels, self._kinds, self._limits, self._arm.task)
+        self._asked = parse_twist(str(self.typed.value))
+        self._session.redraw()  # and the panel: the rates, there and on every change of the arm after it
 
     def render(self, snapshot: Snapshot) -> None:
         playing = snapshot.rates is not None and bool(np.any(snapshot.rates))  # a path playing: its own rates
@@ -190,6 +193,14 @@ class VelocityView(View):
         return list(zip(ends, NAMES, (LINEAR_COLOR, ANGULAR_COLOR)))
 
     def render_panel(self, snapshot: Snapshot) -> None:
+        asked = self._asked
+        if self.held == "velocity":
+            if self.rates.content:  # (written by a redraw under way as the challenge began)
+                self.rates.content = ""
+        elif asked is not None:
+            rates = self._arm.joint_rates(snapshot.q, asked)
+            self.rates.content = rates_markdown(rates.qdot, float(rates.damping), asked, rates.achieved,
+                                                self._labels, self._kinds, self._limits, self._arm.task)
         if self.held == "tool_velocity":
             self.readout.content = HELD_BACK
             return
