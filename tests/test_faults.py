@@ -130,26 +130,30 @@ def test_a_client_that_stops_reading_is_dropped_and_holds_up_no_one(app, monkeyp
         asyncio.run(scenario())
 
 
+class NotifiedBrowser:
+    """A stand-in for a viser client: the notifications it was shown, as (title, body), in ``shown``."""
+
+    client_id = 7
+
+    def __init__(self) -> None:
+        self.shown: list[tuple[str, str]] = []
+
+    def add_notification(self, title, body, **_):
+        self.shown.append((title, body))
+
+
 def test_refusals_are_shown_at_a_readable_pace(monkeypatch):
     """Review 2, finding 2: a paused browser sent bad values at 60/s and the server queued a
     notification for each (0.21 MiB/s, for as long as it lasted)."""
-    shown = []
-
-    class Browser:
-        client_id = 7
-
-        def add_notification(self, title, body, **_):
-            shown.append(body)
-
     now = [0.0]
     monkeypatch.setattr(feedback, "clock", lambda: now[0])
-    browser = Browser()
+    browser = NotifiedBrowser()
     for _ in range(600):  # ten seconds of bad values at 60/s, all at one instant of the clock
         feedback.notify(browser, "Not accepted", "θ2: not a number")
-    assert len(shown) == feedback.NOTICE_BURST
+    assert len(browser.shown) == feedback.NOTICE_BURST
     now[0] += 10.0
     feedback.notify(browser, "Not accepted", "θ2: not a number")
-    assert shown[-1] == f"θ2: not a number ({600 - feedback.NOTICE_BURST} more messages were not shown.)"
+    assert browser.shown[-1][1] == f"θ2: not a number ({600 - feedback.NOTICE_BURST} more messages were not shown.)"
 
 
 def test_a_refusal_reaches_the_student_when_the_widget_went_meanwhile():
@@ -157,23 +161,16 @@ def test_a_refusal_reaches_the_student_when_the_widget_went_meanwhile():
     presenter's role over. The pick was refused ("only the presenter ...") and the picker, meanwhile
     removed with the presenter's controls, could not be put back: the student saw "Something went
     wrong" instead of why. The same holds for any widget a refused value is put back into."""
-    shown = []
-
-    class Browser:
-        client_id = 7
-
-        def add_notification(self, title, body, **_):
-            shown.append((title, body))
-
+    browser = NotifiedBrowser()
     server = viser.ViserServer(host="127.0.0.1", port=0, verbose=False)
     try:
         def taken_over(label: str) -> None:  # the role went to someone else while this pick was on its way
             picker.folder.remove()
             raise ValueError("only the presenter chooses the class's arm")
 
-        picker = ArmPicker(server.gui, UR10, taken_over, lambda handler: feedback.guard(Browser(), handler))
+        picker = ArmPicker(server.gui, UR10, taken_over, lambda handler: feedback.guard(browser, handler))
         picker.dropdown.value = "SCARA (RRP + roll)"
-        assert shown == [("Not accepted", "Only the presenter chooses the class's arm")]
+        assert browser.shown == [("Not accepted", "Only the presenter chooses the class's arm")]
         slider = server.gui.add_slider("Force at the tool (N)", min=0.0, max=400.0, step=5.0, initial_value=50.0)
         dropdown = server.gui.add_dropdown("Plane", ("vertical", "horizontal"))
         for widget in (slider, dropdown):
@@ -212,14 +209,7 @@ def test_a_refusal_line_gone_with_its_panel_meanwhile_is_no_error(caplog):
     """A classroom monkey (2026-12-05): a presenter's input with a refusal shown below it was accepted while another
     browser's action rebuilt that panel. Clearing the line, removed with it, raised: "Something went wrong" in the
     browser and an error logged. A refusal whose line has gone is told in a notice instead."""
-    shown = []
-
-    class Browser:
-        client_id = 7
-
-        def add_notification(self, title, body, **_):
-            shown.append((title, body))
-
+    browser = NotifiedBrowser()
     server = viser.ViserServer(host="127.0.0.1", port=0, verbose=False)
     try:
         event = type("Event", (), {"client": object()})()
@@ -227,21 +217,21 @@ def test_a_refusal_line_gone_with_its_panel_meanwhile_is_no_error(caplog):
         def refused(_) -> None:
             raise ValueError("no challenge chosen")
 
-        feedback.guard(Browser(), refused, beside=beside)(event)
-        assert beside.line.visible and shown == []
+        feedback.guard(browser, refused, beside=beside)(event)
+        assert beside.line.visible and browser.shown == []
 
         def accepted_as_the_panel_goes(_) -> None:  # another browser's action, meanwhile
             beside.line.remove()
 
-        feedback.guard(Browser(), accepted_as_the_panel_goes, beside=beside)(event)
+        feedback.guard(browser, accepted_as_the_panel_goes, beside=beside)(event)
         beside = feedback.Beside(server.gui)
 
         def refused_as_the_panel_goes(_) -> None:
             beside.line.remove()
             raise ValueError("a challenge is running: end it first")
 
-        feedback.guard(Browser(), refused_as_the_panel_goes, beside=beside)(event)
-        assert shown == [("Not accepted", "A challenge is running: end it first")]
+        feedback.guard(browser, refused_as_the_panel_goes, beside=beside)(event)
+        assert browser.shown == [("Not accepted", "A challenge is running: end it first")]
         assert not [record for record in caplog.records if record.levelno >= logging.ERROR]
     finally:
         server.stop()
