@@ -1181,10 +1181,10 @@ def test_a_typed_arm_reaching_beyond_10_m_takes_a_target_it_reaches_there(app):
     asyncio.run(scenario())
 
 
-def test_a_typed_target_the_arms_own_search_does_not_reach_is_searched_for_at_once(app):
+def test_a_target_typed_or_dropped_that_the_arms_own_search_does_not_reach_is_searched_for_at_once(app):
     """A typed 2R arm at (34°, 92°), given the point (685, -515) mm that (-21°, -36°) reaches, stayed where it was: its
-    search from its own joints came within 609 mm, and it waited for Find every branch (until 2026-12-05). A typed
-    target is searched for as that button would: the arm goes there."""
+    search from its own joints came within 609 mm, and it waited for Find every branch (until 2026-12-05). A target
+    typed, or dragged there and let go of, is searched for as that button would: the arm goes there."""
 
     async def scenario():
         client = await ViserClient(url(app)).connect()
@@ -1199,6 +1199,15 @@ def test_a_typed_target_the_arms_own_search_does_not_reach_is_searched_for_at_on
         last = typed.state.last
         assert last.reachable and last.solution.method == "found numerically"
         np.testing.assert_allclose(last.flange[:2, 3], (0.685, -0.515), atol=1e-9)
+        # the same point, the target dragged there in one move and let go of: searched for too
+        await client.set_gui("All 2 (°)", "34, 92")
+        await client.set_gui("Set these values", True)
+        await until(lambda: typed.state.last.cause == "joints" and np.allclose(np.degrees(typed.state.last.q), (34.0, 92.0)),
+                    what="the arm back at (34°, 92°)")
+        await client.drag_target((0.685, -0.515, 0.0), (1.0, 0.0, 0.0, 0.0), "end", name=TARGET)
+        await until(lambda: typed.state.last.cause == "branch", what="the search after the drop")
+        assert typed.state.last.reachable
+        np.testing.assert_allclose(typed.state.last.flange[:2, 3], (0.685, -0.515), atol=1e-9)
         await client.close()
 
     asyncio.run(scenario())

@@ -1,5 +1,5 @@
 """A typed table's "Find every branch": its numerical IK from many starts, in the worker process; by itself for
-a typed target the arm's own search did not reach."""
+a target typed or let go of that the arm's own search did not reach."""
 
 from __future__ import annotations
 
@@ -15,7 +15,7 @@ class BranchSearch(View):
     def __init__(self, gui: viser.GuiApi, session: Session) -> None:
         self._session = session
         self._runs = FoldedRuns(self._search)
-        self._searched = None  #: the last typed target searched for without a press
+        self._searched = None  #: the last target typed or let go of that was searched for without a press
         folder = gui.add_folder("Numerical IK", order=0.3)
         self.folders = (folder,)
         with folder:
@@ -24,10 +24,11 @@ class BranchSearch(View):
         self.button.on_click(session.guard(lambda _: self._runs.start("branch-search", session.guard)))
 
     def render_panel(self, snapshot) -> None:
-        # a target typed, not dragged, that the arm's search from its own joints did not reach: the student asked for
-        # that pose, so every branch is searched for, as "Find every branch" would (a drag's many poses are not)
+        # a target typed, or let go of, that the arm's search from its own joints did not reach (stopped short, or on a
+        # branch that would leave a joint's range): the student chose that pose, so every branch is searched for, as
+        # "Find every branch" would. A drag's poses on the way are not: the arm follows them from its joints.
         unreached = snapshot.solution is None and not snapshot.reachable
-        if snapshot.cause == "typed" and unreached and snapshot is not self._searched:
+        if snapshot.cause in ("typed", "dropped") and unreached and snapshot is not self._searched:
             self._searched = snapshot
             self._runs.start("branch-search", self._session.guard)
 
