@@ -67,8 +67,8 @@ def rates_markdown(qdot: np.ndarray, damping: float, asked: np.ndarray, achieved
     and, on an arm that controls less than a pose (``task``), what of the velocity was not asked of it."""
     shown = shown_rates(qdot, kinds)
     over_limit = np.abs(shown) > limits if limits is not None else np.zeros(len(shown), bool)
-    for_velocity = (f"For v = ({', '.join(number(1000 * v, '+.0f') for v in asked[:3])}) mm/s, ω = "
-                    f"({', '.join(number(math.degrees(w), '+.0f') for w in asked[3:])}) °/s, at the arm's pose now:")
+    for_velocity = (f"For v = ({', '.join(number(1000 * v, '+.4g') for v in asked[:3])}) mm/s, ω = "
+                    f"({', '.join(number(math.degrees(w), '+.4g') for w in asked[3:])}) °/s, at the arm's pose now:")
     cells = []
     for k, (label, rate, kind) in enumerate(zip(labels, shown, kinds)):
         text = f"{number(rate, '+.1f')}{'°/s' if kind == 'R' else ' mm/s'}"
