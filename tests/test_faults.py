@@ -214,6 +214,7 @@ def test_a_refusal_line_gone_with_its_panel_meanwhile_is_no_error(caplog):
     try:
         event = type("Event", (), {"client": object()})()
         beside = feedback.Beside(server.gui)
+
         def refused(_) -> None:
             raise ValueError("no challenge chosen")
 

@@ -229,7 +229,7 @@ def test_the_joint_rates_a_velocity_needs_follow_the_arm_to_a_singularity(app):
         assert "Every joint within its speed limit." in view.rates.content
         near = arm.singular_configuration("wrist", session.state.last.q)
         near[4] += 0.05  # 3° from s5 = 0
-        await client.set_gui("All 6 (°)", ", ".join(f"{v:.4f}" for v in np.degrees(near)))
+        await client.set_gui("All 6 (°)", ", ".join(f"{v:.6f}" for v in np.degrees(near)))
         await client.set_gui("Set these values", True)  # no press of Find the joint rates after it
         await until(lambda: np.allclose(session.state.last.q, near, atol=1e-6), what="the arm near the singularity")
         await until(lambda: view.rates.content == shown_for(session.state.last.q), what="the rates there")
