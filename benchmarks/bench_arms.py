@@ -5,7 +5,7 @@
 For each preset with a closed form: one-pose IK (every slot, no hint), batch IK of
 100 000 poses, per pose, on the backend this run has and, for the spherical-wrist arms,
 on their numpy code too, beside the UR10's in the same run; and the app's work on one drag
-event. For the KR210 also the numerical solver (damped least squares from 48 starts,
+event. For the KR210 also the numerical solver (damped least squares from ``STARTS`` starts,
 :mod:`ur10core.solvers.numerical`): its time for one pose and how often it finds every
 branch the closed form lists. Figures are medians over repeats, from one run.
 """
@@ -28,6 +28,7 @@ from _report import machine, steady_cpu, table, write_section  # noqa: E402
 
 from ur10core import BACKEND, Arm  # noqa: E402
 from ur10core.serial import PRESETS  # noqa: E402
+from ur10core.solvers.numerical import STARTS  # noqa: E402
 
 BATCH = 100_000
 NUMERICAL_POSES = 200
@@ -153,7 +154,7 @@ def main() -> None:
     server.stop()
     kr210 = Arm.preset("kr210")
     ms, complete, share, strays = numerical_rate(kr210)
-    rows.append(["`kr210`, numerical IK (48 starts, damped least squares)", f"{ms * 1e3:.0f} µs", "—", "—", "—",
+    rows.append([f"`kr210`, numerical IK ({STARTS} starts, damped least squares)", f"{ms * 1e3:.0f} µs", "—", "—", "—",
                  f"all of the closed form's branches on {100 * complete:.1f} % of {NUMERICAL_POSES} random poses; "
                  f"{100 * share:.1f} % of its branches; {strays} solutions it does not list"])
     body = "\n".join([

@@ -5,6 +5,8 @@ from __future__ import annotations
 
 import viser
 
+from ur10core.solvers.numerical import STARTS
+
 from ..serving.workers import APART, HEAVY, FoldedRuns
 from ..view import Session, View
 
@@ -20,7 +22,7 @@ class BranchSearch(View):
         self.folders = (folder,)
         with folder:
             self.button = gui.add_button("Find every branch", icon=viser.Icon.SEARCH,
-                                         hint="Damped least squares from 48 starts: every distinct solution it finds")
+                                         hint=f"Damped least squares from {STARTS} starts: every distinct solution it finds")
         self.button.on_click(session.guard(lambda _: self._runs.start("branch-search", session.guard)))
 
     def render_panel(self, snapshot) -> None:

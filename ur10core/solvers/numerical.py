@@ -31,6 +31,10 @@ from ..dh import DHTable
 from ..differential import task_gap
 from ..tolerances import LENGTH_TOLERANCE
 
+#: Joint vectors each pose is searched from: the hint, then random ones. At 48, a typed UR10 missed 6 of the 2,162
+#: branches its closed form has within the limits over 300 random poses (a start now and then misses a basin); at 64,
+#: none, in about the same time per pose (the solving is batched over the starts).
+STARTS = 64
 #: A start has converged when its error (m and rad) is below this.
 CONVERGED = 1e-12
 #: A start whose error is below this (and whose FK is within 1e-9 of the pose) is a solution.
@@ -128,7 +132,7 @@ class NumericalIK:
 
     method = "found numerically"
 
-    def __init__(self, table: DHTable, limits: np.ndarray, starts: int = 48, iterations: int = 150,
+    def __init__(self, table: DHTable, limits: np.ndarray, starts: int = STARTS, iterations: int = 150,
                  slots: int | None = None, seed: int = 0) -> None:
         self.table = table
         self.limits = np.asarray(limits, dtype=float)
