@@ -27,7 +27,7 @@ from .branches import IKSolution
 from .dh import PRISMATIC, REVOLUTE, STANDARD, DHTable
 from .differential import TASK_ROWS, JacobianUses, task_gap
 from .specs import HasSpecs
-from .solvers.numerical import NumericalIK, sampling_range
+from .solvers.numerical import NumericalIK, reach_bound, sampling_range
 from .serial import PRESETS as COURSE_ARMS
 from .solvers.ur import DESCRIPTIONS, DH_ALPHA, JOINT_LIMIT, JOINT_NAMES, LENGTHS, SingularityGeometry, URFamily
 from ._validate import homogeneous_transform, poses_and_hints
@@ -251,9 +251,7 @@ class Arm(JacobianUses, HasSpecs):
         """
         if self.dh is None:
             return float(self.solver.upper_arm + self.solver.forearm)
-        stroke = dict(zip(self.dh.joint_rows, np.abs(self.limits).max(axis=1).tolist()))
-        return float(sum(abs(row.a) + abs(row.d) + (stroke[k] if row.joint == PRISMATIC else 0.0)
-                         for k, row in enumerate(self.dh.rows)))
+        return reach_bound(self.dh, self.limits)
 
     @property
     def base_height(self) -> float:

@@ -126,6 +126,15 @@ def task_of(table: DHTable) -> str:
     return "position"
 
 
+def reach_bound(table: DHTable, limits: np.ndarray) -> float:
+    """No joint values within ``limits`` (n, 2) put the tool of ``table`` farther from the base origin than this (m):
+    every row's |a| and |d| laid end to end, a sliding joint's with the end of its stroke farthest from 0
+    (docs/kinematics.md §7.4)."""
+    strokes = [max(abs(low), abs(high)) for (low, high), kind in zip(np.asarray(limits).tolist(), table.joint_types)
+               if kind == "P"]
+    return float(sum(abs(row.a) + abs(row.d) for row in table.rows) + sum(strokes))
+
+
 class NumericalIK:
     """Damped least squares from ``starts`` starts; up to ``slots`` distinct solutions per pose
     (by default as many as the chain can have, :func:`most_solutions`)."""
@@ -142,9 +151,7 @@ class NumericalIK:
             slots = 2 if self.task == "position and yaw" and table.n_joints == 4 else most_solutions(table.n_joints)
         self.labels = tuple(f"found numerically {k + 1}" for k in range(slots))
         self.revolute = np.array([t == "R" for t in table.joint_types])
-        # no joint values put the tool farther from the base origin than every length and stroke laid end to end
-        strokes = [max(abs(low), abs(high)) for (low, high), kind in zip(self.limits, table.joint_types) if kind == "P"]
-        self.reach = sum(abs(row.a) + abs(row.d) for row in table.rows) + sum(strokes)
+        self.reach = reach_bound(table, self.limits)
 
     def explain(self, failure: int, detail: float) -> str:
         if failure == TOO_FAR:
