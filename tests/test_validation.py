@@ -136,6 +136,14 @@ def test_bad_workspace_size(course, n):
         course.sample_workspace(n)
 
 
+@pytest.mark.parametrize("name", ["course", "scara"])
+def test_a_sample_too_large_for_memory_is_refused_before_anything_is_allocated(name):
+    arm = Arm.preset(name)
+    for sample in (arm.sample_workspace, arm.sample_joints):
+        with pytest.raises(ValueError, match="n must be at most 10,000,000 samples, got 1,000,000,000,000"):
+            sample(10**12)
+
+
 def test_bad_controller_input():
     with pytest.raises(ValueError, match=r"q_controller must have shape"):
         from_controller([1, 2, 3])

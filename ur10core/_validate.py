@@ -90,6 +90,22 @@ def within_reason(array: np.ndarray, name: str) -> np.ndarray:
     return array
 
 
+#: A workspace sample is at most this many joint vectors: ten million already take 0.5 GB (a
+#: laptop's memory is the limit; the app asks at most a million).
+MAX_SAMPLES = 10_000_000
+
+
+def sample_size(n, seed) -> tuple[int, int]:
+    """``(n, seed)`` of a workspace sample as ints, or ``ValueError`` naming the one that is wrong."""
+    if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < 1:
+        raise ValueError(f"n must be a positive integer number of samples, got {n!r}")
+    if n > MAX_SAMPLES:
+        raise ValueError(f"n must be at most {MAX_SAMPLES:,} samples, got {int(n):,}")
+    if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
+        raise ValueError(f"seed must be a non-negative integer, got {seed!r}")
+    return int(n), int(seed)
+
+
 def joint_vector(q, name: str = "q") -> np.ndarray:
     """Validate joint angles of shape ``(..., 6)`` in radians; returns a float array."""
     q = as_float_array(q, name)

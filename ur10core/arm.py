@@ -30,7 +30,7 @@ from .specs import HasSpecs
 from .solvers.numerical import NumericalIK, reach_bound, sampling_range
 from .serial import PRESETS as COURSE_ARMS
 from .solvers.ur import DESCRIPTIONS, DH_ALPHA, JOINT_LIMIT, JOINT_NAMES, LENGTHS, SingularityGeometry, URFamily
-from ._validate import homogeneous_transform, poses_and_hints
+from ._validate import homogeneous_transform, poses_and_hints, sample_size
 from .tolerances import LIMIT_TOLERANCE
 
 __all__ = ["Arm", "DH_ALPHA", "JOINT_LIMIT", "JOINT_NAMES", "SingularityGeometry", "factor_scales"]
@@ -516,14 +516,12 @@ class Arm(JacobianUses, HasSpecs):
         """``n`` joint vectors drawn uniformly within the limits, (n, n_joints).
 
         The joints behind :meth:`sample_workspace`'s cloud, without its forward kinematics:
-        the same ``n`` and ``seed`` give the same vectors.
+        the same ``n`` and ``seed`` give the same vectors. ``n`` is at most ten million
+        (:data:`ur10core._validate.MAX_SAMPLES`), for either.
         """
-        if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < 1:
-            raise ValueError(f"n must be a positive integer number of samples, got {n!r}")
-        if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
-            raise ValueError(f"seed must be a non-negative integer, got {seed!r}")
+        n, seed = sample_size(n, seed)
         low, high = sampling_range(self.limits, self.revolute)
-        return np.random.default_rng(int(seed)).uniform(low, high, (int(n), self.n_joints))
+        return np.random.default_rng(seed).uniform(low, high, (n, self.n_joints))
 
     def sample_workspace(self, n: int, seed: int = 0, return_joints: bool = False):
         """Tool positions of ``n`` joint vectors drawn uniformly within the limits, and their manipulability.

@@ -33,6 +33,7 @@ from .. import ik_reference
 from .._backend import kernels
 from .._validate import (
     as_float_array, check_finite, homogeneous_transform, joint_vector, one_joint_vector, poses_and_hints, refuse_pose,
+    sample_size,
 )
 from ..branches import INSIDE_OFFSET, TOO_FAR, IKSolution, mm_apart, wrap
 from ..tolerances import WRIST_TOLERANCE
@@ -474,17 +475,13 @@ class URFamily:
         joints : ndarray, shape (n, 6)
             Only with ``return_joints=True``: the joint vectors sampled.
         """
-        if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < 1:
-            raise ValueError(f"n must be a positive integer number of samples, got {n!r}")
-        if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
-            raise ValueError(f"seed must be a non-negative integer, got {seed!r}")
-        n = int(n)
+        n, seed = sample_size(n, seed)
         points = np.empty((n, 3))
         manipulability = np.empty(n)
         joints = np.zeros((n, 6)) if return_joints else None
         block = 65536
         starts = range(0, n, block)
-        streams = np.random.SeedSequence(int(seed)).spawn(len(starts))
+        streams = np.random.SeedSequence(seed).spawn(len(starts))
 
         def run(index: int) -> None:
             start = starts[index]
