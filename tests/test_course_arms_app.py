@@ -1095,6 +1095,36 @@ def test_no_ghosts_disc_sits_on_a_joint_of_the_solid_arm(app, label):
     asyncio.run(scenario())
 
 
+def test_a_typed_pose_on_the_stanford_arms_wrist_singularity_keeps_its_shoulder_and_its_wrist_within_limits(app):
+    """At θ5 = 0 only θ4 + θ6 is fixed (here −165°), and the arm's own θ4 (20°) would have put θ6 at 175°, beyond
+    the wrist's ±170°: the status counted 2 branches within the limits, not 4, and the arm swung its shoulder
+    around for a pose its wrist reaches with a turn (until 2026-12-05)."""
+    from ur10core.orientation import zyx_euler
+
+    async def scenario():
+        client = await ViserClient(url(app)).connect()
+        stanford = await pick(app, client, "Stanford arm (RRP + wrist)")
+        home = stanford.arm.specs.home
+        np.testing.assert_allclose(stanford.state.last.q, home)
+        q = home.copy()
+        q[3:] = np.radians([-120.0, 0.0, -45.0])
+        T = stanford.arm.fk(q)
+        typed = [*(1000 * T[:3, 3]), *np.degrees(zyx_euler(T[:3, :3]))]
+        at_home = stanford.ik_target.branches.content
+        await client.set_gui("Target x y z (mm), α β γ (°)", ", ".join(repr(float(v)) for v in typed))
+        await client.set_gui("Move target here", True)
+        await until(lambda: stanford.state.last.cause == "typed", what="the typed target")
+        last = stanford.state.last
+        await until(lambda: stanford.ik_target.branches.content != at_home, what="the typed target's branches")
+        assert "**4 of 8 branches** reach this target within the joint limits" in stanford.ik_target.branches.content
+        assert last.slot in (0, 1) and stanford.arm.within_limits(last.q)  # the shoulder it had, the wrist turned
+        np.testing.assert_allclose(last.q[:3], home[:3], atol=1e-9)
+        assert stanford.arm.pose_error(last.q, T) < 1e-9
+        await client.close()
+
+    asyncio.run(scenario())
+
+
 def test_the_planar_elbows_typed_target_is_a_point_of_its_plane(app):
     """The planar elbow moves in its plane z = 0, but its typed target asked for x y z and dropped the z
     it was given without a word (until 2026-12-03): it asks for x and y."""

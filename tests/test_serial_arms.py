@@ -312,6 +312,36 @@ def test_wrist_singular_keeps_the_hints_theta4():
     assert abs(other.q[slot, 3]) < 1e-12 and math.isclose(other.q[slot, 5], math.radians(85), abs_tol=1e-9)
 
 
+def test_a_free_wrist_joint_turns_from_the_hints_value_where_that_would_leave_the_branch_beyond_a_limit():
+    """The Stanford arm's wrist turns ±170°. At θ5 = 0 only θ4 + θ6 is fixed (here −165°): the hint's θ4 of 20° would
+    leave θ6 at 175° (−185°), beyond its limit, though θ4 and θ6 at 102° and 93° reach the pose within the limits."""
+    arm = Arm.preset("stanford")
+    home = arm.specs.home  # θ4 = 20°, θ6 = 10°
+    q = home.copy()
+    q[3:] = np.radians([-120.0, 0.0, -45.0])
+    T = arm.fk(q)
+    one, batch = arm.ik(T, hint=home), arm.ik(np.stack([T, np.eye(4)]), hint=home)
+    for sol, q_slots, within in ((one, one.q, one.within_limits), (batch, batch.q[0], batch.within_limits[0])):
+        assert within[:4].all() and not within[4:].any()  # d3 < 0 beyond either way
+        assert arm.pose_error(q_slots[:4], T).max() < 1e-9
+        np.testing.assert_allclose(np.degrees(q_slots[0, 3:]), [102.0, 0.0, 93.0], atol=1e-9)
+    assert one.nearest(home, within_limits=True).slot in (0, 1)  # the arm keeps its shoulder
+    raw = arm._branches(T, home)  # what the closed form alone gives: the hint's θ4
+    np.testing.assert_allclose(np.degrees(raw.q[0, 3:]), [20.0, 0.0, 175.0], atol=1e-9)
+
+
+@pytest.mark.parametrize("name", ["stanford", "kr210", "elbow", "cylindrical_wrist"])
+def test_a_wrist_singular_pose_within_the_limits_always_has_a_branch_within_them(name):
+    arm = Arm.preset(name)
+    q = arm.sample_joints(4000, seed=4)
+    q[:, 4] = 0.0
+    T = arm.fk(q)
+    sol = arm.ik(T, hint=arm.sample_joints(4000, seed=9))
+    assert (sol.valid & sol.within_limits).any(axis=-1).all()
+    error = arm.pose_error(np.where(sol.valid[..., None], sol.q, 0.0), T[:, None])
+    assert error[sol.valid].max() < 1e-9
+
+
 def test_wrist_centre_on_axis_one_keeps_the_hints_theta1():
     arm = Arm.preset("kr210")
     T = np.eye(4)

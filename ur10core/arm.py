@@ -23,7 +23,7 @@ import math
 
 import numpy as np
 
-from .branches import IKSolution
+from .branches import IKSolution, keep_free_values_within_limits
 from .dh import PRISMATIC, REVOLUTE, STANDARD, DHTable
 from .differential import TASK_ROWS, JacobianUses, task_gap
 from .specs import HasSpecs
@@ -99,6 +99,10 @@ class Arm(JacobianUses, HasSpecs):
         self._geometry = self.solver if hasattr(self.solver, "fk") else table
         self._own_ik = getattr(self.solver, "ik", None)
         self._own_factors = getattr(self.solver, "singularity_factors", None)
+        # a joint's range narrower than a turn can leave the hint's value of a free joint beyond a limit (a closed
+        # form's only; the numerical search keeps within them itself)
+        self._free_values_meet_limits = not isinstance(self.solver, NumericalIK) and bool(
+            (~self.revolute | (self.limits[:, 1] - self.limits[:, 0] < 2 * _PI)).any())
         self._identity = self._key()  # arms are keys of caches: compared and hashed often
         # the drag path calls these hundreds of times a second: straight to the closed form, not through a method here
         self.fk, self.frames, self.jacobian = self._geometry.fk, self._geometry.frames, self._geometry.jacobian
@@ -289,12 +293,16 @@ class Arm(JacobianUses, HasSpecs):
     def within_limits(self, q) -> np.ndarray:
         """(...) bool: every joint inside its limits (revolute joints also one turn either way), to
         :data:`~ur10core.tolerances.LIMIT_TOLERANCE`."""
+        return self.joints_within_limits(q).all(axis=-1)
+
+    def joints_within_limits(self, q) -> np.ndarray:
+        """(..., n) bool: which joints of ``q`` are inside their limits, as :meth:`within_limits` counts them."""
         q = self.joints(q)
         low, high = self.limits[:, 0] - LIMIT_TOLERANCE, self.limits[:, 1] + LIMIT_TOLERANCE
         inside = (q >= low) & (q <= high)
         turned = np.where(self.revolute, (q + 2 * _PI >= low) & (q + 2 * _PI <= high)
                           | (q - 2 * _PI >= low) & (q - 2 * _PI <= high), False)
-        return (inside | turned).all(axis=-1)
+        return inside | turned
 
     def ik(self, T, hint=None) -> IKSolution:
         """Every IK branch of base → tool poses, in fixed labelled slots (docs/kinematics.md §4, §7.3).
@@ -306,7 +314,9 @@ class Arm(JacobianUses, HasSpecs):
             is not a proper transform raises ``ValueError``; an unreachable one does not.
         hint : array_like, shape (..., n), optional
             The current joints: where the pose leaves a joint free (a singular wrist, a
-            wrist centre on axis 1), the hint's value is kept; the numerical IK starts there.
+            wrist centre on axis 1), the hint's value is kept, or the value nearest it that
+            keeps the slot within the joint limits where the hint's does not
+            (:func:`~ur10core.branches.keep_free_values_within_limits`); the numerical IK starts there.
 
         Returns
         -------
@@ -319,6 +329,13 @@ class Arm(JacobianUses, HasSpecs):
         >>> int(sol.valid.sum()), np.degrees(sol.q[4]).round(6).tolist(), sol.labels[4]
         (8, [30.0, 45.0, 26.0, 50.0, 60.0, 80.0], 'shoulder right, elbow down, wrist not flipped')
         """
+        solution = self._branches(T, hint)
+        if self._free_values_meet_limits:
+            keep_free_values_within_limits(solution, self._branches, T, hint)
+        return solution
+
+    def _branches(self, T, hint) -> IKSolution:
+        """:meth:`ik` as the family's solver gives it: a free joint at the hint's value, whatever its limits."""
         if self._own_ik is not None:  # the family solves whole batches itself (the UR kernels, the desktop arm)
             return self._own_ik(self, T, hint)
         T = homogeneous_transform(T)

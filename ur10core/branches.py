@@ -316,3 +316,62 @@ def empty_branches(batch: tuple[int, ...], slots: int, joints: int) -> dict[str,
         failure=np.zeros(batch + (slots,), np.int8),
         detail=np.full(batch + (slots,), np.nan),
     )
+
+
+#: Values of a free joint tried by :func:`keep_free_values_within_limits`, evenly over its range (1° apart on ±170°).
+FREE_VALUES = 341
+#: A joint that moves less than this (rad or m) when the hint's value of another changes is not moved by it.
+_UNMOVED = 1e-9
+
+
+def keep_free_values_within_limits(solution: IKSolution, solve, T, hint) -> None:
+    """Where a singular pose left a joint free and the hint's value of it put a slot beyond a joint limit, the value
+    nearest the hint that keeps the slot within them, of :data:`FREE_VALUES` over the joint's range (in place).
+
+    A closed form keeps the hint's value of a joint the pose leaves free (docs/kinematics.md §7.3): the Stanford
+    arm's θ4 at θ5 = 0, where only θ4 + θ6 is fixed. With its wrist's ±170°, the hint's θ4 can leave θ6 at 175°
+    while θ4 turned by 5° puts both within: the slot would read "beyond a joint limit" of a pose it reaches within
+    them. ``solve(T, hint)`` is the closed form (:meth:`Arm.ik` without this step). A joint is free in a slot where
+    another hint value of it moves that slot's joints; it is searched only where it moves every joint that is beyond
+    a limit (turning θ4 cannot pull a reversed stroke back into its range).
+    """
+    if not np.count_nonzero(solution.singular):  # the usual case, told in a fraction of a µs (a drag's every step)
+        return
+    stuck = solution.valid & solution.singular & ~solution.within_limits
+    if not stuck.any():
+        return
+    arm, n = solution.arm, solution.arm.n_joints
+    slots = stuck.shape[-1]
+    q = solution.q.reshape(-1, slots, n).copy()
+    stuck = stuck.reshape(-1, slots)
+    T = np.broadcast_to(np.asarray(T, dtype=float), solution.valid.shape[:-1] + (4, 4)).reshape(-1, 4, 4)
+    hint = np.zeros((len(q), n)) if hint is None else np.broadcast_to(
+        arm.joints(hint, "hint"), solution.valid.shape[:-1] + (n,)).reshape(-1, n)
+    poses = np.flatnonzero(stuck.any(axis=-1))
+    low, high = arm.limits[:, 0], arm.limits[:, 1]
+    # each joint's hint value moved to another point of its range, one joint at a time: (pose, joint, n)
+    probes = np.repeat(hint[poses, None], n, axis=1)
+    probes[:, np.arange(n), np.arange(n)] = np.where(np.abs(hint[poses] - low) > np.abs(hint[poses] - high), low, high)
+    probed = solve(np.broadcast_to(T[poses, None], probes.shape[:-1] + (4, 4)), probes).q  # (pose, joint, slot, n)
+    gap = probed - q[poses, None]
+    moved = np.abs(np.where(arm.revolute, wrap(gap), gap)) > _UNMOVED
+    beyond = ~arm.joints_within_limits(np.where(np.isfinite(q[poses]), q[poses], 0.0))  # (pose, slot, n)
+    searched = stuck[poses, None] & (moved | ~beyond[:, None]).all(axis=-1) & moved.any(axis=-1)
+    which, joint = np.nonzero(searched.any(axis=-1))
+    if not len(which):
+        return
+    values = np.linspace(low, high, FREE_VALUES)  # (values, n)
+    tries = np.repeat(hint[poses[which], None], FREE_VALUES, axis=1)  # (search, value, n)
+    tries[np.arange(len(which)), :, joint] = values[:, joint].T
+    found = solve(np.broadcast_to(T[poses[which], None], tries.shape[:-1] + (4, 4)), tries)
+    nearest: dict[tuple[int, int], float] = {}  # (pose, slot): the largest turn of the value taken, over every joint
+    for search, slot in zip(*np.nonzero(searched[which, joint])):
+        within = found.within_limits[search, :, slot]
+        if within.any():
+            pose, candidates = poses[which[search]], found.q[search, within, slot]
+            gap = candidates - hint[pose]
+            gap = np.abs(np.where(arm.revolute, wrap(gap), gap)).max(axis=-1)
+            if gap.min() < nearest.get((pose, slot), np.inf):
+                nearest[pose, slot] = gap.min()
+                q[pose, slot] = candidates[np.argmin(gap)]
+    solution.q, solution._within_limits = q.reshape(solution.q.shape), None

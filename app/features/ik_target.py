@@ -292,7 +292,8 @@ def status_markdown(snapshot: Snapshot) -> str:
             notes.append("Wrist singular: axes 4 and 6 are parallel; θ6 was kept and θ2…θ4 follow it.")
     else:
         if solution.singular[snapshot.slot]:
-            notes.append("Singular: the pose does not fix every joint; the arm's own value was kept.")
+            notes.append("Singular: the pose does not fix every joint; the arm's own value was kept, or the nearest one "
+                         "within the joint limits.")
         together = " and ".join(" = ".join(str(k + 1) for k in group) for group in drawn_as_one(snapshot))
         if together:
             notes.append(f"Ghosts {together} lie on each other: their joints sit in the same places, turned or slid "
