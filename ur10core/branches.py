@@ -351,9 +351,11 @@ def keep_free_values_within_limits(solution: IKSolution, solve, T, hint) -> None
         arm.joints(hint, "hint"), solution.valid.shape[:-1] + (n,)).reshape(-1, n)
     poses = np.flatnonzero(stuck.any(axis=-1))
     low, high = arm.limits[:, 0], arm.limits[:, 1]
-    # each joint's hint value moved to another point of its range, one joint at a time: (pose, joint, n)
+    # each joint's hint value moved a third of its range (at most 60°) towards its farther end, one joint at a time:
+    # (pose, joint, n); never a whole turn, which a revolute joint's value would not show
+    shift = np.minimum(high - low, math.pi) / 3
     probes = np.repeat(hint[poses, None], n, axis=1)
-    probes[:, np.arange(n), np.arange(n)] = np.where(np.abs(hint[poses] - low) > np.abs(hint[poses] - high), low, high)
+    probes[:, np.arange(n), np.arange(n)] = hint[poses] + np.where(hint[poses] - low > high - hint[poses], -shift, shift)
     probed = solve(np.broadcast_to(T[poses, None], probes.shape[:-1] + (4, 4)), probes).q  # (pose, joint, slot, n)
     gap = probed - q[poses, None]
     moved = np.abs(np.where(arm.revolute, wrap(gap), gap)) > _UNMOVED
