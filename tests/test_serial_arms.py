@@ -331,6 +331,21 @@ def test_a_free_wrist_joint_turns_from_the_hints_value_where_that_would_leave_th
     np.testing.assert_allclose(np.degrees(raw.q[0, 3:]), [20.0, 0.0, 175.0], atol=1e-9)
 
 
+def test_a_typed_tables_search_pins_a_free_joint_where_every_joint_stays_within_its_limits():
+    """The numerical search, too, moves each solution on a curve of them to where its last free joint has the hint's
+    value: a typed Stanford arm's θ6 at 10° put θ4 at −175° on the shoulder the arm was on (until 2026-12-05)."""
+    arm = Arm.preset("stanford")
+    typed = typed_copy(arm, with_limits=True)
+    home = arm.specs.home
+    q = home.copy()
+    q[3:] = np.radians([-120.0, 0.0, -45.0])
+    T = arm.fk(q)
+    sol = typed.ik(T, hint=home)
+    on_its_shoulder = sol.valid & (np.abs(sol.q[..., :3] - home[:3]).max(axis=-1) < 1e-6)
+    assert on_its_shoulder.sum() == 1 and sol.within_limits[on_its_shoulder].all()
+    assert typed.pose_error(sol.q[on_its_shoulder], T).max() < 1e-9
+
+
 @pytest.mark.parametrize("name", ["stanford", "kr210", "elbow", "cylindrical_wrist"])
 def test_a_wrist_singular_pose_within_the_limits_always_has_a_branch_within_them(name):
     arm = Arm.preset(name)

@@ -27,11 +27,10 @@ from .branches import IKSolution, keep_free_values_within_limits
 from .dh import PRISMATIC, REVOLUTE, STANDARD, DHTable
 from .differential import TASK_ROWS, JacobianUses, task_gap
 from .specs import HasSpecs
-from .solvers.numerical import NumericalIK, reach_bound, sampling_range
+from .solvers.numerical import NumericalIK, reach_bound, sampling_range, within_limits
 from .serial import PRESETS as COURSE_ARMS
 from .solvers.ur import DESCRIPTIONS, DH_ALPHA, JOINT_LIMIT, JOINT_NAMES, LENGTHS, SingularityGeometry, URFamily
 from ._validate import homogeneous_transform, poses_and_hints, sample_size
-from .tolerances import LIMIT_TOLERANCE
 
 __all__ = ["Arm", "DH_ALPHA", "JOINT_LIMIT", "JOINT_NAMES", "SingularityGeometry", "factor_scales"]
 
@@ -297,12 +296,7 @@ class Arm(JacobianUses, HasSpecs):
 
     def joints_within_limits(self, q) -> np.ndarray:
         """(..., n) bool: which joints of ``q`` are inside their limits, as :meth:`within_limits` counts them."""
-        q = self.joints(q)
-        low, high = self.limits[:, 0] - LIMIT_TOLERANCE, self.limits[:, 1] + LIMIT_TOLERANCE
-        inside = (q >= low) & (q <= high)
-        turned = np.where(self.revolute, (q + 2 * _PI >= low) & (q + 2 * _PI <= high)
-                          | (q - 2 * _PI >= low) & (q - 2 * _PI <= high), False)
-        return inside | turned
+        return within_limits(self.joints(q), self.limits, self.revolute)
 
     def ik(self, T, hint=None) -> IKSolution:
         """Every IK branch of base → tool poses, in fixed labelled slots (docs/kinematics.md §4, §7.3).

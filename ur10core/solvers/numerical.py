@@ -29,7 +29,7 @@ import numpy as np
 from ..branches import NOT_FOUND, TOO_FAR, empty_branches, mm_apart, wrap
 from ..dh import DHTable
 from ..differential import task_gap
-from ..tolerances import LENGTH_TOLERANCE
+from ..tolerances import LENGTH_TOLERANCE, LIMIT_TOLERANCE
 
 #: Joint vectors each pose is searched from: the hint, then random ones. At 48, a typed UR10 missed 6 of the 2,162
 #: branches its closed form has within the limits over 300 random poses (a start now and then misses a basin); at 64,
@@ -50,11 +50,28 @@ SAME, NEAR = 1e-6, 1e-2
 NULL_SINGULAR_VALUE = 1e-10
 #: Damped steps that bring a solution moved along a curve of solutions back onto it, one joint held.
 PIN_STEPS = 40
+#: Values of a pinned joint tried over its range where the hint's leaves another joint beyond its limits
+#: (:meth:`NumericalIK._pinned`; 14° apart on ±170°).
+PIN_VALUES = 25
 #: λ never shrinks below this: λ² = 1e-12 keeps J Jᵀ + λ² I invertible in floating point.
 MIN_DAMPING = 1e-6
 #: A start that stopped short of the pose but this close (m and rad) takes this many undamped
 #: steps (see :meth:`NumericalIK._newton`).
 NEARLY_REACHED, NEWTON_STEPS = 1e-3, 20
+
+
+def within_limits(q: np.ndarray, limits: np.ndarray, revolute: np.ndarray) -> np.ndarray:
+    """(..., n) bool: which joints of ``q`` (..., n) lie within ``limits`` (n, 2), to :data:`LIMIT_TOLERANCE`, a
+    revolute joint also one turn either way (what :meth:`ur10core.Arm.within_limits` counts): −195° is 165°.
+
+    >>> within_limits(np.radians([[175.0, 30.0], [-195.0, 30.0]]), np.radians([[-170, 170], [0, 90]]), np.array([True, True])).tolist()
+    [[False, True], [True, True]]
+    """
+    low, high = limits[:, 0] - LIMIT_TOLERANCE, limits[:, 1] + LIMIT_TOLERANCE
+    inside = (q >= low) & (q <= high)
+    turned = np.where(revolute, (q + 2 * math.pi >= low) & (q + 2 * math.pi <= high)
+                      | (q - 2 * math.pi >= low) & (q - 2 * math.pi <= high), False)
+    return inside | turned
 
 
 def sampling_range(limits: np.ndarray, revolute: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -242,7 +259,8 @@ class NumericalIK:
 
     def _pinned(self, q: np.ndarray, target: np.ndarray, ok: np.ndarray, hint: np.ndarray | None) -> np.ndarray:
         """Solutions ``q`` (N, starts, n) (where ``ok``) on a curve of solutions, moved along it to where the last
-        joint that moves along it has the hint's value (else 0), where the tool still reaches ``target`` there.
+        joint that moves along it has the hint's value (else 0), where the tool still reaches ``target`` there;
+        where that value leaves a joint beyond its limits, to the value nearest it that keeps them all within.
 
         Where the pose leaves one direction of the joints free (J has one null direction: a spherical wrist
         with axes 4 and 6 in line, whose θ4 + θ6 alone is fixed; the UR10's at θ5 = 0, its four parallel axes;
@@ -267,15 +285,36 @@ class NumericalIK:
         joint = (n - 1 - np.argmax(moves[:, ::-1], axis=-1))[:, None]
         wanted = (np.clip(0.0, self.limits[:, 0], self.limits[:, 1]) if hint is None
                   else np.asarray(hint, dtype=float)[:, None, :])
-        offset = np.take_along_axis(np.broadcast_to(wanted, q.shape)[at] - q[at], joint, -1)
-        offset = np.where(self.revolute[joint], wrap(offset), offset)
-        moved = q[at] + offset / np.take_along_axis(free, joint, -1) * free
-        held = (np.arange(n) != joint).astype(float)
-        moved, size = self._descend(moved, target[at], PIN_STEPS, moving=held)
-        stuck = (size > REACHED) & (size < NEARLY_REACHED)
-        if stuck.any():
-            moved[stuck], _ = self._newton(moved[stuck], target[at][stuck], NEWTON_STEPS, moving=held[stuck])
-        still = self._reached(moved, target[at], np.maximum(2 * np.linalg.norm(error[line], axis=-1), 10 * CONVERGED))
+        wanted = np.broadcast_to(wanted, q.shape)[at]
+        on_curve, targets, held = q[at], target[at], (np.arange(n) != joint).astype(float)
+        close_as = np.maximum(2 * np.linalg.norm(error[line], axis=-1), 10 * CONVERGED)
+
+        def pin(rows: np.ndarray, value: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+            """Solutions ``rows`` moved along their curve to where their pinned joint has ``value`` (rows, 1): the
+            joints, and whether they still reach the pose."""
+            offset = value - np.take_along_axis(on_curve[rows], joint[rows], -1)
+            offset = np.where(self.revolute[joint[rows]], wrap(offset), offset)
+            moved = on_curve[rows] + offset / np.take_along_axis(free[rows], joint[rows], -1) * free[rows]
+            moved, size = self._descend(moved, targets[rows], PIN_STEPS, moving=held[rows])
+            stuck = (size > REACHED) & (size < NEARLY_REACHED)
+            if stuck.any():
+                moved[stuck], _ = self._newton(moved[stuck], targets[rows][stuck], NEWTON_STEPS, moving=held[rows][stuck])
+            return moved, self._reached(moved, targets[rows], close_as[rows])
+
+        moved, still = pin(np.arange(len(joint)), np.take_along_axis(wanted, joint, -1))
+        # the hint's value can leave another joint beyond its limits (a wrist whose θ4 + θ6 alone is fixed, each
+        # ±170°): there, of PIN_VALUES over the pinned joint's range, the nearest the hint that keeps them within
+        outside = np.flatnonzero(still & ~within_limits(moved, self.limits, self.revolute).all(axis=-1))
+        if len(outside):
+            low, high = self.limits[joint[outside], 0], self.limits[joint[outside], 1]
+            nearest = np.full(len(outside), np.inf)
+            for share in np.linspace(0.0, 1.0, PIN_VALUES):
+                tried, reached = pin(outside, low + share * (high - low))
+                gap = tried - wanted[outside]
+                gap = np.abs(np.where(self.revolute, wrap(gap), gap)).max(axis=-1)
+                gap[~(reached & within_limits(tried, self.limits, self.revolute).all(axis=-1))] = np.inf
+                better = gap < nearest
+                moved[outside[better]], nearest[better] = tried[better], gap[better]
         q = q.copy()
         q[tuple(index[still] for index in at)] = moved[still]
         return q
