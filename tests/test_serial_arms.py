@@ -314,14 +314,15 @@ def test_wrist_singular_keeps_the_hints_theta4():
 
 def test_a_free_wrist_joint_turns_from_the_hints_value_where_that_would_leave_the_branch_beyond_a_limit():
     """The Stanford arm's wrist turns ±170°. At θ5 = 0 only θ4 + θ6 is fixed (here −165°): the hint's θ4 of 20° would
-    leave θ6 at 175° (−185°), beyond its limit, though θ4 and θ6 near 102.5° and 92.5° reach the pose within the limits."""
+    leave θ6 at 175° (−185°), beyond its limit, though θ4 and θ6 near 102.5° and 92.5° reach the pose within the
+    limits."""
     arm = Arm.preset("stanford")
     home = arm.specs.home  # θ4 = 20°, θ6 = 10°
     q = home.copy()
     q[3:] = np.radians([-120.0, 0.0, -45.0])
     T = arm.fk(q)
     one, batch = arm.ik(T, hint=home), arm.ik(np.stack([T, np.eye(4)]), hint=home)
-    for sol, q_slots, within in ((one, one.q, one.within_limits), (batch, batch.q[0], batch.within_limits[0])):
+    for q_slots, within in ((one.q, one.within_limits), (batch.q[0], batch.within_limits[0])):
         assert within[:4].all() and not within[4:].any()  # d3 < 0 beyond either way
         assert arm.pose_error(q_slots[:4], T).max() < 1e-9
         # the nearest: θ4 and θ6 each turned 82.5° from the hint's 20° and 10°, to within half of the 4.7° tried apart
