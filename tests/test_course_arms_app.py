@@ -1229,8 +1229,10 @@ def test_a_target_typed_or_dropped_that_the_arms_own_search_does_not_reach_is_se
         last = typed.state.last
         assert last.reachable and last.solution.method == "found numerically"
         np.testing.assert_allclose(last.flange[:2, 3], (0.685, -0.515), atol=1e-9)
-        # the same point, the target dragged there in one move and let go of: searched for too
-        await client.set_gui("All 2 (°)", "34, 92")
+        # the same point, the target dragged there in one move and let go of: searched for too. (Typed as other text
+        # than "34, 92", which the box showed before the search moved the arm: a redraw of the box still to come would
+        # take that for its own text, and write the arm's new joints over it before the click.)
+        await client.set_gui("All 2 (°)", "34.0, 92.0")
         await client.set_gui("Set these values", True)
         await until(lambda: typed.state.last.cause == "joints" and np.allclose(np.degrees(typed.state.last.q), (34.0, 92.0)),
                     what="the arm back at (34°, 92°)")
