@@ -362,6 +362,8 @@ def keep_free_values_within_limits(solution: IKSolution, solve, T, hint) -> None
     beyond = ~arm.joints_within_limits(np.where(np.isfinite(q[poses]), q[poses], 0.0))  # (pose, slot, n)
     searched = stuck[poses, None] & (moved | ~beyond[:, None]).all(axis=-1) & moved.any(axis=-1)  # (pose, joint, slot)
     search, joint = np.nonzero(searched.any(axis=-1))  # one search per pose and free joint, for all its slots
+    if not len(search):  # only slots no free joint can bring within (a reversed stroke)
+        return
     pose = poses[search]
     values = np.linspace(low[joint], high[joint], FREE_VALUES, axis=-1)  # (search, value)
     tries = np.repeat(hint[pose, None], FREE_VALUES, axis=1)  # (search, value, n)
