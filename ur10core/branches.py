@@ -54,6 +54,12 @@ def wrap(angle: np.ndarray) -> np.ndarray:
     return -np.remainder(-np.asarray(angle) + math.pi, _TAU) + math.pi
 
 
+def wrap_revolute(values: np.ndarray, revolute: np.ndarray) -> np.ndarray:
+    """``values`` (..., n) with those of the revolute joints (``revolute``, bool, broadcast against them) in (−π, π]:
+    a difference of joints as the shorter way round for a turning joint, as it is for a sliding one."""
+    return np.where(revolute, wrap(values), values)
+
+
 class Branch(NamedTuple):
     """The branch :meth:`IKSolution.nearest` picks."""
 
@@ -358,7 +364,7 @@ def keep_free_values_within_limits(solution: IKSolution, solve, T, hint) -> None
     probes[:, np.arange(n), np.arange(n)] = hint[poses] + np.where(hint[poses] - low > high - hint[poses], -shift, shift)
     probed = solve(np.broadcast_to(T[poses, None], probes.shape[:-1] + (4, 4)), probes).q  # (pose, joint, slot, n)
     gap = probed - q[poses, None]
-    moved = np.abs(np.where(arm.revolute, wrap(gap), gap)) > _UNMOVED
+    moved = np.abs(wrap_revolute(gap, arm.revolute)) > _UNMOVED
     beyond = ~arm.joints_within_limits(np.where(np.isfinite(q[poses]), q[poses], 0.0))  # (pose, slot, n)
     searched = stuck[poses, None] & (moved | ~beyond[:, None]).all(axis=-1) & moved.any(axis=-1)  # (pose, joint, slot)
     search, joint = np.nonzero(searched.any(axis=-1))  # one search per pose and free joint, for all its slots
@@ -370,7 +376,7 @@ def keep_free_values_within_limits(solution: IKSolution, solve, T, hint) -> None
     tries[np.arange(len(pose)), :, joint] = values
     found = solve(np.broadcast_to(T[pose, None], tries.shape[:-1] + (4, 4)), tries)
     gap = found.q - hint[pose, None, None]  # (search, value, slot, n)
-    gap = np.where(found.within_limits, np.abs(np.where(arm.revolute, wrap(gap), gap)).max(axis=-1), np.inf)
+    gap = np.where(found.within_limits, np.abs(wrap_revolute(gap, arm.revolute)).max(axis=-1), np.inf)
     best = np.full(q.shape[:2], np.inf)  # (pose, slot): the largest turn of any joint, for the value taken
     for k, slot in zip(*np.nonzero(searched[search, joint])):
         nearest = np.argmin(gap[k, :, slot])

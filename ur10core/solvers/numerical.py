@@ -26,7 +26,7 @@ import math
 
 import numpy as np
 
-from ..branches import NOT_FOUND, TOO_FAR, empty_branches, mm_apart, wrap
+from ..branches import NOT_FOUND, TOO_FAR, empty_branches, mm_apart, wrap_revolute
 from ..dh import DHTable
 from ..differential import task_gap
 from ..tolerances import LENGTH_TOLERANCE, LIMIT_TOLERANCE
@@ -229,7 +229,7 @@ class NumericalIK:
             index = tuple(np.argwhere(active)[better].T)
             q[index], error[index], J[index], size[index] = trial[better], trial_error[better], trial_J[better], trial_size[better]
             damping[active] = np.where(better, np.maximum(damping[active] / 3, MIN_DAMPING), np.minimum(damping[active] * 4, 1e3))
-        return np.where(self.revolute, wrap(q), q), size
+        return wrap_revolute(q, self.revolute), size
 
     def _newton(self, q: np.ndarray, target: np.ndarray, steps: int, moving=None) -> tuple[np.ndarray, np.ndarray]:
         """``steps`` undamped Gauss–Newton steps q ← q + J⁺ e from starts ``q`` (..., n) already near ``target``:
@@ -247,7 +247,7 @@ class NumericalIK:
             error, J = self._error(q, target, moving)
             size = np.linalg.norm(error, axis=-1)
             best_q, best = np.where((size < best)[..., None], q, best_q), np.minimum(size, best)
-        return np.where(self.revolute, wrap(best_q), best_q), best
+        return wrap_revolute(best_q, self.revolute), best
 
     def _finish(self, q: np.ndarray, target: np.ndarray, size: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """The starts that stopped short of ``target`` but within :data:`NEARLY_REACHED`, taken the rest of the way
@@ -293,7 +293,7 @@ class NumericalIK:
             """Solutions ``rows`` moved along their curve to where their pinned joint has ``value`` (rows, 1): the
             joints, and whether they still reach the pose."""
             offset = value - np.take_along_axis(on_curve[rows], joint[rows], -1)
-            offset = np.where(self.revolute[joint[rows]], wrap(offset), offset)
+            offset = wrap_revolute(offset, self.revolute[joint[rows]])
             moved = on_curve[rows] + offset / np.take_along_axis(free[rows], joint[rows], -1) * free[rows]
             moved, size = self._descend(moved, targets[rows], PIN_STEPS, moving=held[rows])
             stuck = (size > REACHED) & (size < NEARLY_REACHED)
@@ -311,7 +311,7 @@ class NumericalIK:
             for share in np.linspace(0.0, 1.0, PIN_VALUES):
                 tried, reached = pin(outside, low + share * (high - low))
                 gap = tried - wanted[outside]
-                gap = np.abs(np.where(self.revolute, wrap(gap), gap)).max(axis=-1)
+                gap = np.abs(wrap_revolute(gap, self.revolute)).max(axis=-1)
                 gap[~(reached & within_limits(tried, self.limits, self.revolute).all(axis=-1))] = np.inf
                 better = gap < nearest
                 moved[outside[better]], nearest[better] = tried[better], gap[better]
@@ -339,7 +339,7 @@ class NumericalIK:
         kept: list[tuple[np.ndarray, float]] = []
         for row, size in zip(q, sizes):
             for other, other_size in kept:
-                step = np.where(self.revolute, wrap(row - other), row - other)
+                step = wrap_revolute(row - other, self.revolute)
                 apart = np.abs(step).max()
                 if apart <= SAME or apart <= NEAR and self._reached(other + step / 2, target,
                                                                      2 * max(size, other_size)):
