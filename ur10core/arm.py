@@ -102,6 +102,8 @@ class Arm(JacobianUses, HasSpecs):
         # form's only; the numerical search keeps within them itself)
         self._free_values_meet_limits = not isinstance(self.solver, NumericalIK) and bool(
             (~self.revolute | (self.limits[:, 1] - self.limits[:, 0] < 2 * _PI)).any())
+        # the UR family's kernels, whose joints turn two turns: called straight from ik, the drag's one-pose path
+        self._straight_ik = None if self._free_values_meet_limits else self._own_ik
         self._identity = self._key()  # arms are keys of caches: compared and hashed often
         # the drag path calls these hundreds of times a second: straight to the closed form, not through a method here
         self.fk, self.frames, self.jacobian = self._geometry.fk, self._geometry.frames, self._geometry.jacobian
@@ -323,6 +325,8 @@ class Arm(JacobianUses, HasSpecs):
         >>> int(sol.valid.sum()), np.degrees(sol.q[4]).round(6).tolist(), sol.labels[4]
         (8, [30.0, 45.0, 26.0, 50.0, 60.0, 80.0], 'shoulder right, elbow down, wrist not flipped')
         """
+        if self._straight_ik is not None:
+            return self._straight_ik(self, T, hint)
         solution = self._branches(T, hint)
         if self._free_values_meet_limits:
             keep_free_values_within_limits(solution, self._branches, T, hint)
