@@ -268,27 +268,36 @@ class ArmSession:
 
     # ------------------------------------------------------------------ display choices
 
+    def _kept_views(self):
+        """The panel's views whose choices the server keeps with the arm: lecture mode follows the browser,
+        and the state has the pose."""
+        return (view for view in self.panel_views if view is not self.camera and view is not self.joints)
+
     def _switches(self):
-        """((view, label), handle) of each checkbox, dropdown and slider of the panel: what is shown and the
-        settings of the lessons (joint rates, the force, a section's height), not where the arm is."""
-        for view in self.panel_views:
-            if view is self.camera or view is self.joints:  # lecture mode follows the browser; the state has the pose
-                continue
+        """((view, label), handle) of each checkbox, dropdown, slider and text box of the panel: what is shown,
+        the settings of the lessons (joint rates, the force, a section's height) and what was typed, not where
+        the arm is."""
+        for view in self._kept_views():
             for value in vars(view).values():
                 for handle in value if isinstance(value, list) else (value,):  # the Velocities' rate sliders
-                    if isinstance(handle, (viser.GuiCheckboxHandle, viser.GuiDropdownHandle, viser.GuiSliderHandle)):
+                    if isinstance(handle, (viser.GuiCheckboxHandle, viser.GuiDropdownHandle, viser.GuiSliderHandle,
+                                           viser.GuiTextHandle)):
                         yield (type(view).__name__, handle.label), handle
 
     def display_choices(self) -> dict[tuple[str, str], Any]:
-        """What the student chose to show (ghosts, overlay, cloud, frames, …) and set (joint rates, the force,
-        the payload, a section's height): the server keeps it with the arm."""
-        return {key: handle.value for key, handle in self._switches()}
+        """What the student chose to show (ghosts, overlay, cloud, frames, …), set (joint rates, the force,
+        the payload, a section's height), typed and asked (a tool velocity): the server keeps it with the arm."""
+        kept = {(type(view).__name__, None): view.kept() for view in self._kept_views()}
+        return {key: handle.value for key, handle in self._switches()} | {key: value for key, value in kept.items() if value}
 
-    def show_choices(self, choices: dict[tuple[str, str], Any]) -> None:
+    def show_choices(self, choices: dict[tuple[str, Any], Any]) -> None:
         """Show what was chosen when the browser last had this arm (each switch's own callback applies it)."""
         for key, handle in self._switches():
             if key in choices and handle.value != choices[key]:
                 handle.value = choices[key]
+        for view in self._kept_views():
+            if (type(view).__name__, None) in choices:
+                view.restore(choices[type(view).__name__, None])
 
     # ------------------------------------------------------------------ the browser
 

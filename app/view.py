@@ -83,6 +83,14 @@ class View:
         The session places them apart, before the drawing's own labels."""
         return []
 
+    def kept(self) -> dict:
+        """What the student set in it beyond its switches and boxes (a velocity asked): the server keeps it with
+        the arm, and :meth:`restore` gives it back when the browser comes back to the arm."""
+        return {}
+
+    def restore(self, kept: dict) -> None:
+        pass
+
     def obstacles(self) -> list:
         """The 3D labels it draws where they stay (a map's largest ‖τ‖, say), as label nodes or
         ``branch_labels.obstacle`` tuples in the drawing's frame: the placed labels keep clear of them."""

@@ -798,7 +798,8 @@ def test_the_tabs_of_one_address_change_arms_no_more_often_than_one_tab():
 def test_going_back_to_an_arm_finds_its_pose_target_typed_table_and_display_as_left(app):
     """Issue 29: switching to another arm and back lost the UR10's pose and target, a typed table
     went back to the starting one, and what the student had switched on was off again (and, until
-    2026-12-03, the joint rates and the force the student had set)."""
+    2026-12-03, the joint rates and the force the student had set; until 2026-12-05, a velocity asked and the
+    texts typed)."""
     async def scenario():
         client = await ViserClient(url(app)).connect()
         ur10 = session_of(app, client)
@@ -815,9 +816,15 @@ def test_going_back_to_an_arm_finds_its_pose_target_typed_table_and_display_as_l
         rate = stanford.velocity.sliders[2].label  # and what its lessons were set to: the stroke's rate, the force
         await client.set_gui(rate, 120.0)
         await client.set_gui("Force at the tool (N)", 200.0)
+        await client.set_gui("vx vy vz (mm/s) ωx ωy ωz (°/s)", "0 0 50 0 0 0")  # a tool velocity asked
+        await client.set_gui("Find the joint rates", True)
+        await client.set_gui("vx vy vz (mm/s) ωx ωy ωz (°/s)", "0 0 80")  # and one typed, not yet asked
+        await client.set_gui(stanford.ik_target.typed_pose.label, "100 200 300")  # a target typed, not yet moved to
         await until(lambda: not stanford.drawing.show_ghosts and stanford.drawing.overlay.enabled
-                    and stanford.velocity.sliders[2].value == 120.0 and stanford.statics.newtons.value == 200.0,
-                    what="the choices applied")
+                    and stanford.velocity.sliders[2].value == 120.0 and stanford.statics.newtons.value == 200.0
+                    and "| joint | rate |" in stanford.velocity.rates.content and stanford.ik_target.typed_pose.value == "100 200 300"
+                    and stanford.velocity.typed.value == "0 0 80", what="the choices applied")
+        rates_left = stanford.velocity.rates.content
         typed = await pick(app, client, CUSTOM)
         await build_table(app, client, "500 0 0 0 R\n400 0 0 0 R", "RR", typed)
 
@@ -831,6 +838,8 @@ def test_going_back_to_an_arm_finds_its_pose_target_typed_table_and_display_as_l
         assert not back.ik_target.show_ghosts.value and not back.drawing.show_ghosts  # shown as chosen, in the panel and 3D
         assert back.singularities.enabled.value and back.drawing.overlay.enabled and back.drawing.overlay.lines["wrist"].visible
         assert back.velocity.sliders[2].value == 120.0 and back.statics.newtons.value == 200.0
+        assert back.velocity.typed.value == "0 0 80" and back.ik_target.typed_pose.value == "100 200 300"  # as typed
+        await until(lambda: back.velocity.rates.content == rates_left, what="the joint rates of the velocity asked")
         assert [slider.value for slider in back.joints.sliders] == pytest.approx(  # the pose is the state's, not a kept setting
             np.degrees(stanford_left.q) * np.where(np.array(list(back.arm.joint_types)) == "R", 1.0, 0.0)
             + 1000 * stanford_left.q * (np.array(list(back.arm.joint_types)) == "P"), abs=0.06)

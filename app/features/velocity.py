@@ -172,6 +172,14 @@ class VelocityView(View):
         self._asked = parse_twist(str(self.typed.value))
         self._session.redraw()  # and the panel: the rates, there and on every change of the arm after it
 
+    def kept(self) -> dict:
+        return {} if self._asked is None else {"asked": self._asked}
+
+    def restore(self, kept: dict) -> None:
+        if self.held != "velocity":
+            self._asked = kept["asked"]
+            self._session.refresher.request(self._session)
+
     def render(self, snapshot: Snapshot) -> None:
         playing = snapshot.rates is not None and bool(np.any(snapshot.rates))  # a path playing: its own rates
         moving = playing or any(slider.value != 0.0 for slider in self.sliders)  # on every drag: no arrays while all are still
