@@ -116,3 +116,28 @@ def test_the_app_starts_no_helpers_and_frees_its_port_when_killed():
     with socket.socket() as again:  # a restarted app gets the same port
         again.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
         again.bind(("127.0.0.1", port))
+
+
+def test_a_launcher_without_the_main_guard_gets_one_server_and_its_slow_jobs_still_run(tmp_path):
+    """The worker process ("spawn") runs the script that started the app again. A teacher's own launcher
+    without ``if __name__ == "__main__":`` started a second server there, on the next port, and the first
+    server's gravity drop, straight line or branch search waited on it for ever. Now the worker refuses to
+    start a server and ends; the jobs run in the server, and no new worker is started for each."""
+    import subprocess
+    import sys
+
+    launcher = tmp_path / "start_class.py"
+    launcher.write_text(
+        "from ur10teach.serving.server import TeachingServer\n"
+        "from ur10teach.serving.workers import APART\n"
+        "app = TeachingServer(port=0)\n"
+        "print('a server started', flush=True)\n"
+        "try:\n"
+        "    print('jobs', APART.run(sum, [1, 2, 3]), APART.run(sum, [4, 5]), APART.processes_started, flush=True)\n"
+        "finally:\n"
+        "    app.stop()\n")
+    done = subprocess.run([sys.executable, str(launcher)], capture_output=True, text=True, timeout=HANG_TIMEOUT,
+                          cwd=tmp_path)
+    assert done.returncode == 0, done.stderr
+    assert done.stdout.count("a server started") == 1 and "jobs 6 9 1" in done.stdout
+    assert 'start the app under `if __name__ == "__main__":`' in done.stderr

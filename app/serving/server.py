@@ -38,7 +38,7 @@ from ..style import BRAND_BLUE
 from ..viser_internals import fast_updates, shared_frames, value_fits
 from .classroom import Classroom
 from .gate import Gate, TokenBucket, budget_of, gated_serve
-from .workers import APART, JOINS, Cancelled, DragQueue, PanelRefresher
+from .workers import APART, JOINS, Cancelled, DragQueue, PanelRefresher, refuse_in_worker_process
 
 log = logging.getLogger(__name__)
 
@@ -194,6 +194,7 @@ class TeachingServer:
     def __init__(self, preset: str = "course", first_arm: str = "ur10", host: str = "127.0.0.1", port: int = 8080, shared: bool = False,
                  allowed_origins=(), gate: Gate | None = None, lecture: bool = False, light: bool = False,
                  challenges: tuple[Challenge, ...] | None = None) -> None:
+        refuse_in_worker_process()
         self.arm = Arm.preset(preset)
         if first_arm not in FIRST_ARMS:
             raise ValueError(f"first_arm: {first_arm!r} is not an arm of the picker")

@@ -15,8 +15,10 @@ import logging
 import multiprocessing
 import os
 import signal
+import sys
 import threading
 import time
+import weakref
 from typing import Any, Protocol
 
 from .gate import budget_of
@@ -376,6 +378,19 @@ def _worker_started() -> None:
         os.nice(5)
 
 
+def refuse_in_worker_process() -> None:
+    """Raise ``RuntimeError`` in a worker process that is running the script which started the server.
+
+    A "spawn" worker runs the main script again, named ``__mp_main__``, before its first job. A
+    teacher's own launcher without ``if __name__ == "__main__":`` would start a second server
+    there, and the server's job would wait on it for ever. Refused, the worker ends, and the
+    server runs its slow jobs itself (:class:`WorkerProcess`).
+    """
+    if getattr(sys.modules.get("__mp_main__"), "__name__", None) == "__mp_main__":  # (the parent's own is "__main__")
+        raise RuntimeError("the app's worker process ran the script that starts the app again: start the app "
+                           "under `if __name__ == \"__main__\":` in that script (until then, slow jobs run in the server)")
+
+
 class WorkerProcess:
     """Runs ``function(*args, **kwargs)`` in a process of its own, from the thread that waits for it.
 
@@ -384,7 +399,8 @@ class WorkerProcess:
     that its memory (about 60 MiB) is the server's only while jobs come. One job runs at a time
     (:data:`HEAVY` runs one at a time anyway). The function and its arguments must pickle (a
     function of a module, an arm). Where no process can be started, or the one started has
-    died, the job runs in the caller's thread.
+    died, the job runs in the caller's thread; a process that died before its first job
+    came back is not started again (it cannot start: see :func:`refuse_in_worker_process`).
     """
 
     IDLE = 10.0
@@ -398,15 +414,22 @@ class WorkerProcess:
         self.processes_started = 0  #: (for the tests)
         self._jobs = 0  #: jobs handed over and not yet back
         self._idle: threading.Timer | None = None
+        self._served: weakref.WeakSet = weakref.WeakSet()  #: the pools a job came back from
 
     def run(self, function, *args, **kwargs):
         pool = self._started()
         try:
             if pool is not None:
                 try:
-                    return pool.submit(function, *args, **kwargs).result()
+                    result = pool.submit(function, *args, **kwargs).result()
+                    self._served.add(pool)
+                    return result
                 except concurrent.futures.BrokenExecutor as broken:  # raised by the pool, never by the job
-                    log.warning("the worker process is gone (%s); this job runs in the server", broken)
+                    if pool in self._served:
+                        log.warning("the worker process is gone (%s); this job runs in the server", broken)
+                    else:
+                        log.warning("the worker process could not start (%s): slow jobs run in the server", broken)
+                        self._unavailable = True
                     self._discard(pool)
                 except RuntimeError as error:
                     if not str(error).startswith("cannot schedule new futures"):
