@@ -351,7 +351,12 @@ def keep_free_values_within_limits(solution: IKSolution, solve, T, hint) -> None
     arm, n = solution.arm, solution.arm.n_joints
     slots = stuck.shape[-1]
     q = solution.q.reshape(-1, slots, n).copy()
-    stuck = stuck.reshape(-1, slots)
+    # a joint a pose leaves free turns the arm about an axis, and no stroke changes as it turns: a slot with a stroke
+    # beyond its range (a point beyond the arm's reach, on a reach map) is not probed
+    stroke_beyond = (~arm.joints_within_limits(np.where(np.isfinite(q), q, 0.0)) & ~arm.revolute).any(axis=-1)
+    stuck = stuck.reshape(-1, slots) & ~stroke_beyond
+    if not stuck.any():
+        return
     T = np.broadcast_to(np.asarray(T, dtype=float), solution.valid.shape[:-1] + (4, 4)).reshape(-1, 4, 4)
     hint = np.zeros((len(q), n)) if hint is None else np.broadcast_to(
         arm.joints(hint, "hint"), solution.valid.shape[:-1] + (n,)).reshape(-1, n)
