@@ -75,7 +75,8 @@ class ArmSession:
         the next, and a viewer could see the arm moved and its ghosts not yet.
     own_camera, lecture : bool
         Build the browser's "View" folder (camera framing, :mod:`ur10teach.features.camera`; lecture
-        mode, starting as ``lecture`` says); the classroom builds one per browser instead.
+        mode, starting as ``lecture`` says), handed the browser's camera moves by whoever holds the session
+        (``camera.relay_camera_moves``); the classroom builds one per browser instead.
     rebuild, text, convention : optional
         For a typed table: ``rebuild(arm, text, convention)`` puts a newly typed arm in this
         one's place (the server does it); ``text`` and ``convention`` fill the DH editor.
@@ -136,8 +137,9 @@ class ArmSession:
         self.velocity = VelocityView(scene, gui, self, root=f"{nodes}/velocity", size=drawn.size)
         self.motion = MotionLessons(gui, self, before=self.stop_lessons, payload_kg=self.statics.payload_kg)
         self.lessons = LESSONS[arm.name](scene, gui, self) if arm.name in LESSONS else ()
-        self.camera = (CameraControls(client, lambda: drawn.framed(self.state.last), self.guard, lecture,
-                                      body_radius=drawn.body_radius, up=arm.up) if own_camera else None)
+        self.camera = (CameraControls(client, lambda: drawn.framed(self.state.last), self.guard, lecture,  # moves
+                                      body_radius=drawn.body_radius, up=arm.up, follow=False)  # relayed by the server
+                       if own_camera else None)
         #: the scene whose 3D labels this browser's lecture mode sizes: its own (a shared one follows the server's)
         self._label_scene = scene if server is None else None
         #: (frame (4, 4)) -> the names drawn in this browser by something else (a challenge's target), as

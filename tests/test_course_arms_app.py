@@ -3,7 +3,9 @@
 from __future__ import annotations
 
 import asyncio
+import dataclasses
 import math
+import weakref
 
 import numpy as np
 import pytest
@@ -18,7 +20,7 @@ from ur10teach.session import ArmSession
 from ur10core import Arm
 
 from .server_support import a_ghost_to_take, session_of, until, url
-from ur10dev.viser_client import ViserClient, wxyz_of
+from ur10dev.viser_client import CAMERA, ViserClient, wxyz_of
 
 pytestmark = pytest.mark.server
 
@@ -845,6 +847,26 @@ def test_going_back_to_an_arm_finds_its_pose_target_typed_table_and_display_as_l
             + 1000 * stanford_left.q * (np.array(list(back.arm.joint_types)) == "P"), abs=0.06)
         back = await pick(app, client, CUSTOM)
         assert back.arm.joint_types == "RR" and back.editor.rows.value.startswith("500 0 0 0 R\n400")
+        await client.close()
+
+    asyncio.run(scenario())
+
+
+def test_an_arm_the_browser_has_left_is_freed_and_its_camera_moves_reach_the_arm_shown(app):
+    """viser keeps a camera callback for the browser's whole visit. Each arm a browser changed to registered its own,
+    so every arm it had left stayed in memory with its drawing and views (sixty changes of arm: sixty arms), and each
+    ran on every message of its camera (until 2026-12-05)."""
+    async def scenario():
+        client = await ViserClient(url(app)).connect()
+        left = [weakref.ref(session_of(app, client)),
+                weakref.ref(await pick(app, client, "Stanford arm (RRP + wrist)")),
+                weakref.ref(await pick(app, client, KR210))]
+        shown = await pick(app, client, UR10)
+        await asyncio.to_thread(app.janitor.sweep)  # what the server does a few seconds after a change of arm
+        assert [ref() for ref in left] == [None, None, None]
+        # the browser's camera still reaches the arm it shows: a new canvas size frames it again
+        await client.send(dataclasses.replace(CAMERA, image_width=1000, image_height=700))
+        await until(lambda: shown.camera._framed_size == (1000, 700), what="the arm framed for the new canvas size")
         await client.close()
 
     asyncio.run(scenario())

@@ -114,6 +114,21 @@ def arm_points(snapshot: Snapshot, body_radius: float = BODY_RADIUS) -> np.ndarr
     return (centres[:, None, :] + corners[None]).reshape(-1, 3)
 
 
+def relay_camera_moves(client: viser.ClientHandle, controls: Callable[[], CameraControls | None]) -> None:
+    """Hand each move of ``client``'s camera to the camera controls ``controls()`` gives (None: to none).
+
+    viser keeps a camera callback for the browser's whole visit and cannot take one back. Camera controls that
+    followed the camera themselves, one for each arm a browser changed to, kept every arm it had left in
+    memory, and each ran on every move of its camera: the server registers this once per browser instead.
+    """
+    def moved(camera: viser.CameraHandle) -> None:
+        current = controls()
+        if current is not None:
+            current.camera_moved(camera)
+
+    client.camera.on_update(moved)
+
+
 class CameraControls(View):
     """One browser's camera: framed on arrival and on every new canvas size, and the "View" folder.
 
@@ -131,11 +146,14 @@ class CameraControls(View):
         rods and gizmo scale with its reach.
     up : tuple
         The arm's vertical in its own frame (``Arm.up``): the views are named in its axes (:meth:`show_arm`).
+    follow : bool
+        Follow the browser's camera itself, for the browser's whole visit (a classroom's member has one for all
+        its arms); otherwise it is handed the moves (:func:`relay_camera_moves`).
     """
 
     def __init__(self, client: viser.ClientHandle, snapshot: Callable[[], Snapshot],
                  guard: Callable[[Callable], Callable], lecture: bool = False, body_radius: float = BODY_RADIUS,
-                 up=(0.0, 0.0, 1.0)) -> None:
+                 up=(0.0, 0.0, 1.0), follow: bool = True) -> None:
         self._client = client
         self._views = views_for(up)  #: the "Look from" choices, named in the axes of the arm shown
         self.body_radius = body_radius  #: the arm shown's (:meth:`show_arm`)
@@ -160,12 +178,13 @@ class CameraControls(View):
         self.lecture = LectureMode(gui, folder, lecture, guard)
         self.direction.on_update(guard(lambda _: self.frame()))
         self.frame_button.on_click(guard(lambda _: self.frame()))
-        client.camera.on_update(self._camera_moved)
+        if follow:
+            client.camera.on_update(self.camera_moved)
 
     def close(self) -> None:
         self.closed = True
 
-    def _camera_moved(self, camera: viser.CameraHandle) -> None:
+    def camera_moved(self, camera: viser.CameraHandle) -> None:
         if self.closed:
             return
         for moved in self.on_moved:

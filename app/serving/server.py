@@ -29,6 +29,7 @@ from ..features.arm_picker import (
     panel_title,
 )
 from ..features.branch_labels import CAMERA_FOV_DEGREES, CAMERA_LOOK_AT, CAMERA_POSITION
+from ..features.camera import relay_camera_moves
 from ..features.course_arms.editor import STARTING_TABLE, parse_table
 from ..features.floor import add_floor_grid
 from ..features.workspace import CLOUDS
@@ -290,6 +291,7 @@ class TeachingServer:
         if self.classroom is not None:
             self.classroom.connect(client)
         else:
+            relay_camera_moves(client, lambda: getattr(self._sessions.get(client.client_id), "camera", None))
             self._start_session(client, self.first_choice, self.lecture)
 
     def _start_session(self, client: viser.ClientHandle, choice: str, lecture: bool, typed=None) -> None:
