@@ -137,9 +137,9 @@ class ArmSession:
         self.velocity = VelocityView(scene, gui, self, root=f"{nodes}/velocity", size=drawn.size)
         self.motion = MotionLessons(gui, self, before=self.stop_lessons, payload_kg=self.statics.payload_kg)
         self.lessons = LESSONS[arm.name](scene, gui, self) if arm.name in LESSONS else ()
-        self.camera = (CameraControls(client, lambda: drawn.framed(self.state.last), self.guard, lecture,  # moves
-                                      body_radius=drawn.body_radius, up=arm.up, follow=False)  # relayed by the server
-                       if own_camera else None)
+        # its camera's moves are handed to it (``camera.relay_camera_moves``): viser would keep a callback of its own
+        self.camera = (CameraControls(client, lambda: drawn.framed(self.state.last), self.guard, lecture,
+                                      body_radius=drawn.body_radius, up=arm.up, follow=False) if own_camera else None)
         #: the scene whose 3D labels this browser's lecture mode sizes: its own (a shared one follows the server's)
         self._label_scene = scene if server is None else None
         #: (frame (4, 4)) -> the names drawn in this browser by something else (a challenge's target), as
@@ -286,7 +286,7 @@ class ArmSession:
                                            viser.GuiTextHandle)):
                         yield (type(view).__name__, handle.label), handle
 
-    def display_choices(self) -> dict[tuple[str, str], Any]:
+    def display_choices(self) -> dict[tuple[str, Any], Any]:
         """What the student chose to show (ghosts, overlay, cloud, frames, …), set (joint rates, the force,
         the payload, a section's height), typed and asked (a tool velocity): the server keeps it with the arm."""
         kept = {(type(view).__name__, None): view.kept() for view in self._kept_views()}
