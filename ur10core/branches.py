@@ -351,10 +351,10 @@ def keep_free_values_within_limits(solution: IKSolution, solve, T, hint) -> None
     arm, n = solution.arm, solution.arm.n_joints
     slots = stuck.shape[-1]
     q = solution.q.reshape(-1, slots, n).copy()
+    beyond = ~arm.joints_within_limits(np.where(np.isfinite(q), q, 0.0))  # (pose, slot, n)
     # a joint a pose leaves free turns the arm about an axis, and no stroke changes as it turns: a slot with a stroke
     # beyond its range (a point beyond the arm's reach, on a reach map) is not probed
-    stroke_beyond = (~arm.joints_within_limits(np.where(np.isfinite(q), q, 0.0)) & ~arm.revolute).any(axis=-1)
-    stuck = stuck.reshape(-1, slots) & ~stroke_beyond
+    stuck = stuck.reshape(-1, slots) & ~(beyond & ~arm.revolute).any(axis=-1)
     if not stuck.any():
         return
     T = np.broadcast_to(np.asarray(T, dtype=float), solution.valid.shape[:-1] + (4, 4)).reshape(-1, 4, 4)
@@ -370,8 +370,7 @@ def keep_free_values_within_limits(solution: IKSolution, solve, T, hint) -> None
     probed = solve(np.broadcast_to(T[poses, None], probes.shape[:-1] + (4, 4)), probes).q  # (pose, joint, slot, n)
     gap = probed - q[poses, None]
     moved = np.abs(wrap_revolute(gap, arm.revolute)) > _UNMOVED
-    beyond = ~arm.joints_within_limits(np.where(np.isfinite(q[poses]), q[poses], 0.0))  # (pose, slot, n)
-    searched = stuck[poses, None] & (moved | ~beyond[:, None]).all(axis=-1) & moved.any(axis=-1)  # (pose, joint, slot)
+    searched = stuck[poses, None] & (moved | ~beyond[poses, None]).all(axis=-1) & moved.any(axis=-1)  # (pose, joint, slot)
     search, joint = np.nonzero(searched.any(axis=-1))  # one search per pose and free joint, for all its slots
     if not len(search):  # only slots no free joint can bring within (a reversed stroke)
         return
