@@ -5,6 +5,7 @@ from __future__ import annotations
 import asyncio
 import dataclasses
 import math
+import time
 import weakref
 
 import numpy as np
@@ -848,6 +849,50 @@ def test_going_back_to_an_arm_finds_its_pose_target_typed_table_and_display_as_l
         back = await pick(app, client, CUSTOM)
         assert back.arm.joint_types == "RR" and back.editor.rows.value.startswith("500 0 0 0 R\n400")
         await client.close()
+
+    asyncio.run(scenario())
+
+
+def test_a_browser_back_from_its_computer_finds_its_arms_as_it_left_them(app):
+    """viser makes a browser that reconnects (a reload, a laptop woken, the Wi-Fi back) a new client: it started again
+    on the UR10 at home, its typed table and what it showed gone (until 2026-12-05). Another computer starts afresh,
+    and so does this one once it has been away longer than ``RETURN_WINDOW``."""
+    from ur10teach.serving.server import RETURN_WINDOW
+
+    async def connect(address: str) -> tuple[ViserClient, ArmSession]:
+        client = await ViserClient(url(app), local_address=address).connect()
+        session = session_of(app, client)
+        await arrived(client, session)
+        return client, session
+
+    async def scenario():
+        laptop, ur10 = await connect("127.0.0.2")
+        ur10.apply(lambda state: state.set_joints(np.radians([10.0, -70.0, 80.0, -20.0, 50.0, 30.0])))
+        ur10_left = ur10.state.last
+        typed = await build_table(app, laptop, "500 0 0 0 R\n400 0 0 0 R", "RR", await pick(app, laptop, CUSTOM))
+        await laptop.set_gui("Show ghost arms", False)
+        await until(lambda: not typed.drawing.show_ghosts, what="the ghosts off")
+        typed_left = typed.state.last
+        await laptop.close()
+        await until(lambda: not app.sessions, what="the laptop gone")
+
+        neighbour, fresh = await connect("127.0.0.3")  # another computer: nothing of the laptop's
+        assert fresh.choice == UR10 and fresh.state.last is not ur10_left and not neighbour.received.notifications
+        again, back = await connect("127.0.0.2")
+        assert back.choice == CUSTOM and back.state.last is typed_left and not back.drawing.show_ghosts
+        assert back.editor.rows.value.startswith("500 0 0 0 R\n400")
+        await until(lambda: again.received.panel_label == CUSTOM, what="the title naming the typed arm")
+        await until(lambda: ("Welcome back", "Your arms are as this computer left them.") in again.received.notifications,
+                    what="the welcome back")
+        assert (await pick(app, again, UR10)).state.last is ur10_left
+        await again.close()
+        await until(lambda: len(app.sessions) == 1, what="the laptop gone again")
+
+        app.clock = lambda: time.monotonic() + RETURN_WINDOW + 1.0  # away longer than the window: afresh
+        late, afresh = await connect("127.0.0.2")
+        assert afresh.choice == UR10 and afresh.state.last is not ur10_left
+        for client in (neighbour, late):
+            await client.close()
 
     asyncio.run(scenario())
 

@@ -33,12 +33,13 @@ from ..features.camera import relay_camera_moves
 from ..features.course_arms.editor import STARTING_TABLE, parse_table
 from ..features.floor import add_floor_grid
 from ..features.workspace import CLOUDS
+from ..feedback import notify
 from ..meshes import load_models
 from ..session import ArmSession
 from ..style import BRAND_BLUE
 from ..viser_internals import fast_updates, shared_frames, value_fits
 from .classroom import Classroom
-from .gate import Gate, TokenBucket, budget_of, gated_serve
+from .gate import Gate, TokenBucket, address_of, budget_of, gated_serve
 from .workers import APART, JOINS, Cancelled, DragQueue, PanelRefresher, refuse_in_worker_process
 
 log = logging.getLogger(__name__)
@@ -68,6 +69,11 @@ def lan_addresses() -> list[str]:
 
 #: Addresses whose arm changes are remembered (all forgotten beyond it).
 MAX_SWITCH_BUDGETS = 10_000
+#: How long (s) the arms of a browser that left are kept for its address, and for how many addresses at most (the
+#: oldest forgotten first): viser makes a browser that reconnects (a reload, a laptop woken, the Wi-Fi back) a new
+#: client, which would otherwise start again at the first arm's home pose and lose a typed table.
+RETURN_WINDOW = 7200.0
+MAX_RETURNING = 256
 #: Open files the server asks for at start: a connection is one, and 1 024 (a common default) ran out
 #: when one address held a thousand half-open requests.
 OPEN_FILES = 65_536
@@ -238,6 +244,9 @@ class TeachingServer:
         #: client id → picker choice → (state, typed table, display choices) of each arm the browser has
         #: left: going back to one finds its pose, target, typed table and what it showed as they were
         self._left_arms: dict[int, dict[str, tuple]] = {}
+        self._addresses: dict[int, str] = {}  # client id → the address it connected from
+        #: address → (when, choice shown, its left arms, lecture mode) of the browser that left from there last
+        self._departed: dict[str, tuple[float, str, dict[str, tuple], bool]] = {}
         self._switches: dict[str, TokenBucket] = {}  # budget (an address) → its arm changes
         self.clock = time.monotonic  #: the time the arm changes of an address are paced by (a test sets its own)
         self._sessions_lock = threading.Lock()
@@ -292,7 +301,16 @@ class TeachingServer:
             self.classroom.connect(client)
         else:
             relay_camera_moves(client, lambda: getattr(self._sessions.get(client.client_id), "camera", None))
-            self._start_session(client, self.first_choice, self.lecture)
+            choice, lecture, address = self.first_choice, self.lecture, address_of(client)
+            with self._sessions_lock:
+                self._addresses[client.client_id] = address
+                when, *left = self._departed.pop(address, (-math.inf, None, {}, False))
+                back = self.clock() - when <= RETURN_WINDOW  # from where a browser left: its arms as it left them
+                if back:
+                    choice, self._left_arms[client.client_id], lecture = left
+            self._start_session(client, choice, lecture)
+            if back:
+                notify(client, "Welcome back", "Your arms are as this computer left them.", color="blue")
 
     def _start_session(self, client: viser.ClientHandle, choice: str, lecture: bool, typed=None) -> None:
         """Build the arm ``choice`` (an ``ARM_CHOICES`` label) in this browser, with the picker above it.
@@ -346,7 +364,7 @@ class TeachingServer:
             self._last_switch[client.client_id] = math.inf  # refused while this one is being built
             old = self._sessions.pop(client.client_id, None)
             if old is not None:
-                self._left_arms.setdefault(client.client_id, {})[old.choice] = (old.state, old.typed, old.display_choices())
+                self._leave(client.client_id, old)
         lecture = self.lecture
         if old is not None:
             if old.camera is not None:
@@ -375,10 +393,25 @@ class TeachingServer:
             with self._sessions_lock:
                 session = self._sessions.pop(client.client_id, None)
                 self._last_switch.pop(client.client_id, None)
-                self._left_arms.pop(client.client_id, None)
+                if session is not None:
+                    self._leave(client.client_id, session)
+                left = self._left_arms.pop(client.client_id, {})
+                address = self._addresses.pop(client.client_id, None)
+                if address is not None and left:  # kept for its return (one that left mid-change: the arm it changed from)
+                    lecture = session.camera.lecture.on if session is not None and session.camera is not None else self.lecture
+                    self._departed.pop(address, None)
+                    self._departed[address] = (self.clock(), next(reversed(left)), left, lecture)
+                    if len(self._departed) > MAX_RETURNING:
+                        del self._departed[next(iter(self._departed))]
             if session is not None:
                 session.close()
         self.janitor.soon()
+
+    def _leave(self, client_id: int, session: ArmSession) -> None:
+        """Keep ``session``'s arm as the browser leaves it, the most recent last (the caller holds the sessions' lock)."""
+        left = self._left_arms.setdefault(client_id, {})
+        left.pop(session.choice, None)
+        left[session.choice] = (session.state, session.typed, session.display_choices())
 
     def stop(self) -> None:
         self.refresher.stop()
