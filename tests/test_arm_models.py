@@ -65,7 +65,7 @@ def test_a_new_presenter_sees_the_classrooms_choice(classroom):
         views = classroom.classroom.drawing
         await until(lambda: views.robot.model == SCHEMATIC, what="the shared scene's schematic arm")
         await first.close()
-        second = await ViserClient(url(classroom)).connect()
+        second = await ViserClient(url(classroom), local_address="127.0.0.2").connect()  # another computer: a new presenter
         await become_presenter(second, classroom)
         session = classroom.classroom.presenter.session
         await until(lambda: session.arm_model.dropdown.value == SCHEMATIC, what="the dropdown showing the choice")

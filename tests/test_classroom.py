@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 from ur10teach.serving.classroom import EXPLORER, LOCKOUT_SECONDS, MAX_WRONG_CODES, PRESENTER, VIEWER, make_join_code, normalise_code
-from ur10teach.serving.gate import Gate
+from ur10teach.serving.gate import RETURN_WINDOW, Gate
 from ur10teach.serving.server import TeachingServer
 
 from .server_support import become_presenter, member_of, until
@@ -204,6 +204,52 @@ def test_handing_over_and_leaving(classroom):
         await first.close()
 
     asyncio.run(scenario())
+
+
+def test_a_presenter_back_from_their_computer_presents_again_unless_the_role_was_taken():
+    """viser makes a browser that reconnects a new client: the projector's page reloaded (or its Wi-Fi back) was a
+    viewer, the class saw "No presenter yet", and the teacher had to find the join code again (until 2026-12-05)."""
+    app = lan_classroom()
+    url, room = f"http://127.0.0.1:{app.port}", app.classroom
+
+    async def leave(client: ViserClient) -> None:
+        await client.close()
+        await until(lambda: room.presenter is None, what="the presenter gone")
+
+    async def scenario():
+        projector = await ViserClient(url, local_address="127.0.0.2").connect()
+        await become_presenter(projector, app)
+        student = await ViserClient(url, local_address="127.0.0.3").connect()
+        await leave(projector)
+        again = await ViserClient(url, local_address="127.0.0.2").connect()  # no code typed
+        await until(lambda: room.presenter is not None and room.presenter.client.client_id == int(again.gizmo_owner or -1)
+                    and "Stop presenting" in again.gui, what="the projector presenting again")
+        assert ("Welcome back", "You are presenting again.") in again.received.notifications
+        assert "Stop presenting" not in student.gui and "Become presenter" in student.gui
+        second_tab = await ViserClient(url, local_address="127.0.0.2").connect()  # once: a second tab there watches
+        assert member_of(app, 2).role == VIEWER and room.presenter.client.client_id == int(again.gizmo_owner)
+
+        # each laptop connects three times at most here (the gate's burst): the next two cases on laptops of their own
+        await leave(again)
+        away = await ViserClient(url, local_address="127.0.0.4").connect()
+        await become_presenter(away, app)
+        await leave(away)
+        await become_presenter(student, app)  # the role taken meanwhile: that laptop's next page watches
+        await student.close()
+        await until(lambda: room.presenter is None, what="the student gone")
+        back = await ViserClient(url, local_address="127.0.0.4").connect()
+        assert room.presenter is None and "Become presenter" in back.gui
+        late = await ViserClient(url, local_address="127.0.0.5").connect()
+        await become_presenter(late, app)
+        await leave(late)
+        app.clock = lambda: time.monotonic() + RETURN_WINDOW + 1.0  # away longer than the window: watching
+        later = await ViserClient(url, local_address="127.0.0.5").connect()
+        assert room.presenter is None and "Become presenter" in later.gui
+        for client in (second_tab, back, later):
+            await client.close()
+
+    asyncio.run(scenario())
+    app.stop()
 
 
 def test_a_claim_while_the_presenters_controls_are_drawn_leaves_them_one_folder(classroom, monkeypatch):

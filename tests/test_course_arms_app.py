@@ -857,7 +857,7 @@ def test_a_browser_back_from_its_computer_finds_its_arms_as_it_left_them(app):
     """viser makes a browser that reconnects (a reload, a laptop woken, the Wi-Fi back) a new client: it started again
     on the UR10 at home, its typed table and what it showed gone (until 2026-12-05). Another computer starts afresh,
     and so does this one once it has been away longer than ``RETURN_WINDOW``."""
-    from ur10teach.serving.server import RETURN_WINDOW
+    from ur10teach.serving.gate import RETURN_WINDOW
 
     async def connect(address: str) -> tuple[ViserClient, ArmSession]:
         client = await ViserClient(url(app), local_address=address).connect()
@@ -893,6 +893,34 @@ def test_a_browser_back_from_its_computer_finds_its_arms_as_it_left_them(app):
         assert afresh.choice == UR10 and afresh.state.last is not ur10_left
         for client in (neighbour, late):
             await client.close()
+
+    asyncio.run(scenario())
+
+
+def test_a_return_whose_kept_arm_cannot_be_built_starts_afresh(app, monkeypatch, caplog):
+    """What a computer left must not stop its every return: an arm that failed to build would be kept again as that
+    browser left, and fail again at the next return, for the whole window."""
+    from ur10teach.serving import server as serving
+
+    built = serving.ArmSession
+
+    def failing(client, arm, *args, state=None, **kwargs):
+        if state is not None:
+            raise RuntimeError("a bug in building a kept arm")
+        return built(client, arm, *args, state=state, **kwargs)
+
+    async def scenario():
+        laptop = await ViserClient(url(app), local_address="127.0.0.2").connect()
+        await pick(app, laptop, "Stanford arm (RRP + wrist)")
+        await laptop.close()
+        await until(lambda: not app.sessions, what="the laptop gone")
+        monkeypatch.setattr(serving, "ArmSession", failing)
+        again = await ViserClient(url(app), local_address="127.0.0.2").connect()
+        fresh = session_of(app, again)
+        await arrived(again, fresh)
+        assert fresh.choice == UR10 and "could not bring back the arms" in caplog.text
+        assert not any(title == "Welcome back" for title, _ in again.received.notifications)
+        await again.close()
 
     asyncio.run(scenario())
 

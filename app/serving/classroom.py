@@ -36,12 +36,12 @@ from ..features.joint_panel import joints_markdown
 from ..features.lecture import size_labels
 from ..features.readouts import flange_markdown
 from ..features.singularity import factors_html
-from ..feedback import guard
+from ..feedback import guard, notify
 from ..session import ArmSession
 from ..state import ArmState
 from ..viser_internals import after_broadcast
 from .class_challenges import ClassChallenges
-from .gate import address_of
+from .gate import RETURN_WINDOW, address_of
 
 if TYPE_CHECKING:
     from .server import TeachingServer
@@ -137,6 +137,7 @@ class Member:
 
     def __init__(self, client: viser.ClientHandle) -> None:
         self.client = client
+        self.address = address_of(client)  #: where it connected from
         self.role = VIEWER
         self.session: ArmSession | None = None
         self.folder: viser.GuiFolderHandle | None = None
@@ -175,6 +176,9 @@ class Classroom:
         self.members: dict[int, Member] = {}
         self.presenter: Member | None = None
         self.guesses: dict[str, Guesses] = {}  #: by address
+        #: (address, when) of a presenter whose browser left: the next browser from there presents again, unless
+        #: another has taken the role (viser makes a browser that reconnects, the projector's reloaded, a new client)
+        self.presenter_left: tuple[str, float] | None = None
         self.claims = 0  #: join codes answered, right or wrong (for the tests)
         self.challenges = ClassChallenges(self, app.challenges)  #: the presenter's challenges to the class
         self._lock = threading.RLock()
@@ -211,12 +215,20 @@ class Classroom:
         member = Member(client)
         with self._lock:
             self.members[client.client_id] = member
+            left = self.presenter_left
+            back = (left is not None and self.presenter is None and left[0] == member.address
+                    and self.app.clock() - left[1] <= RETURN_WINDOW)
+            if back:  # once: a second tab from there is a viewer
+                self.presenter_left = None
         # one camera per browser, whatever its role: it frames the arm this browser is watching
         member.camera = CameraControls(
             client, lambda: self._watched(member),
             lambda handler: guard(client, handler, is_closed=lambda: member.closed), lecture=self.app.lecture,
             body_radius=self._body_radius(), up=self.state.arm.up,
         )
+        if back:
+            self._present(member)
+            notify(client, "Welcome back", "You are presenting again.", color="blue")
         self._draw_controls(member)
         if self.challenges.running:
             self.challenges.enlist(member)
@@ -247,6 +259,7 @@ class Classroom:
             if self.presenter is member:
                 self.presenter = None
                 self.live.presenter_here = False
+                self.presenter_left = (member.address, self.app.clock())
         self.app.refresher.request(self.live)
 
     @property
@@ -259,7 +272,7 @@ class Classroom:
 
     def claim(self, member: Member, code: str) -> None:
         """Make ``member`` the presenter if ``code`` is the join code (``ValueError`` if not)."""
-        address = address_of(member.client)
+        address = member.address
         with self._lock:  # one claim at a time, and none for a browser that has gone meanwhile
             self.claims += 1
             if member.closed:
@@ -275,18 +288,23 @@ class Classroom:
                 self._wrong_code(address, member, now)
                 raise ValueError("that is not the join code (the teacher's screen shows it)")
             self.guesses.pop(address, None)
-            previous = self.presenter
-            if previous is member:
+            if self.presenter is member:
                 return
+            self._present(member)
+        self._draw_controls(member)
+
+    def _present(self, member: Member) -> None:
+        """``member`` takes the role of presenter from whoever has it."""
+        with self._lock:
+            previous = self.presenter
             if previous is not None:
                 self._leave_role(previous)
                 self._draw_controls(previous)
             self.challenges.step_out(member)  # a student who presents now: their attempt is kept
             self._leave_role(member)
             member.session, member.role = self._presenter_session(member), PRESENTER
-            self.presenter = member
+            self.presenter, self.presenter_left = member, None
             self.live.presenter_here = True
-        self._draw_controls(member)
         self.app.refresher.request(self.live)
         log.info("client %s is presenting", member.client.client_id)
 

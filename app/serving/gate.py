@@ -349,6 +349,12 @@ def _address(connection) -> str:
     return str(remote[0]) if remote else "?"
 
 
+#: How long (s) a browser that left is known again by its address: viser makes one that reconnects (a reload, a
+#: laptop woken, the Wi-Fi back) a new client, and the server gives the next browser from that address what the
+#: last one left (its arms; the presenter's role).
+RETURN_WINDOW = 7200.0
+
+
 def address_of(client) -> str:  # noqa: ANN001
     """The address ``client`` (a ``viser.ClientHandle``) connected from, or "?" once it has gone."""
     connection = _connection_of(client)

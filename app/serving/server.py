@@ -39,7 +39,7 @@ from ..session import ArmSession
 from ..style import BRAND_BLUE
 from ..viser_internals import fast_updates, shared_frames, value_fits
 from .classroom import Classroom
-from .gate import Gate, TokenBucket, address_of, budget_of, gated_serve
+from .gate import RETURN_WINDOW, Gate, TokenBucket, address_of, budget_of, gated_serve
 from .workers import APART, JOINS, Cancelled, DragQueue, PanelRefresher, refuse_in_worker_process
 
 log = logging.getLogger(__name__)
@@ -69,10 +69,7 @@ def lan_addresses() -> list[str]:
 
 #: Addresses whose arm changes are remembered (all forgotten beyond it).
 MAX_SWITCH_BUDGETS = 10_000
-#: How long (s) the arms of a browser that left are kept for its address, and for how many addresses at most (the
-#: oldest forgotten first): viser makes a browser that reconnects (a reload, a laptop woken, the Wi-Fi back) a new
-#: client, which would otherwise start again at the first arm's home pose and lose a typed table.
-RETURN_WINDOW = 7200.0
+#: Addresses whose browsers' arms are kept for their return (``gate.RETURN_WINDOW``; the oldest forgotten first).
 MAX_RETURNING = 256
 #: Open files the server asks for at start: a connection is one, and 1 024 (a common default) ran out
 #: when one address held a thousand half-open requests.
@@ -308,7 +305,19 @@ class TeachingServer:
                 back = self.clock() - when <= RETURN_WINDOW  # from where a browser left: its arms as it left them
                 if back:
                     choice, self._left_arms[client.client_id], lecture = left
-            self._start_session(client, choice, lecture)
+            try:
+                self._start_session(client, choice, lecture)
+            except Exception:
+                if not back:
+                    raise
+                # what was kept must not stop this computer's every return: it starts afresh
+                log.exception("could not bring back the arms browser %s's computer left; it starts afresh", client.client_id)
+                with self._sessions_lock:
+                    self._left_arms.pop(client.client_id, None)
+                client.gui.reset()
+                client.scene.reset()
+                self._start_session(client, self.first_choice, self.lecture)
+                return
             if back:
                 notify(client, "Welcome back", "Your arms are as this computer left them.", color="blue")
 
