@@ -220,6 +220,30 @@ async def a_student_in(classroom, title: str, address: str) -> tuple[ViserClient
     return teacher, student, next(m for m in room.members.values() if m.card is not None)
 
 
+def test_a_student_back_before_the_server_noticed_they_had_gone_keeps_their_number_and_attempt(classroom):
+    """A page whose websocket dropped retries every second, and is often back before the server notices its old
+    connection has died (viser's websockets ping every 20 s and wait 20 s more). It joined as a new student: the
+    board counted one student twice, and the attempt and the arm as left were not theirs (until 2026-12-05)."""
+    room = classroom.classroom
+
+    async def scenario():
+        teacher, student, member = await a_student_in(classroom, "Where is the flange?", "127.0.0.9")
+        attempt = member.student
+        await student.set_gui("Your numbers (x, y, z)", "1 2 3")
+        await until(lambda: member.card.typed().get("numbers") == "1 2 3", what="the typing on the server")
+        student.freeze()  # off the network: its old connection answers nothing, and nothing has told the server
+        again = await ViserClient(url(classroom), local_address="127.0.0.9").connect()
+        await until(lambda: any(m.student is attempt and m.client.client_id == int(again.gizmo_owner or -1)
+                                for m in room.members.values()), what="the same student back")
+        assert len(room.challenges.run.students) == 1 and attempt.connected
+        await until(lambda: (again.gui.get("Your numbers (x, y, z)") or {}).get("value") == "1 2 3", what="their typing back")
+        for client in (teacher, again):
+            await client.close()
+        student.abort()
+
+    asyncio.run(scenario())
+
+
 @pytest.mark.parametrize("title, box, typed", [
     ("Where is the flange?", "Your numbers (x, y, z)", "1 2"),
     ("Type the UR10's DH table", "Your DH table (a α d θ type, mm and °)", "0 90 128 0 R"),

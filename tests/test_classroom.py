@@ -177,6 +177,42 @@ def test_exploring_on_your_own_and_back(classroom):
     asyncio.run(scenario())
 
 
+@pytest.mark.parametrize("shown", ["cloud", "reach map"])
+def test_a_cloud_or_map_framed_as_its_arm_goes_leaves_the_browsers_camera(classroom, monkeypatch, shown):
+    """A classroom's camera outlives an explorer's arm. A cloud (or branch-count map) made as the arm went was framed
+    after its view had taken it out of the camera's framing: the class's arm was framed with it from then on (seen
+    once in CI, 2026-12-05)."""
+    from ur10teach.features.reach_map import ReachMapView
+    from ur10teach.features.workspace import WorkspaceView
+
+    view, method = (WorkspaceView, "_look_square_on") if shown == "cloud" else (ReachMapView, "_face")
+    original = getattr(view, method)
+    framed = []
+
+    def as_the_arm_goes(self, *args):
+        self.close()  # what the arm's going does to its views, just before this one frames what it made
+        original(self, *args)
+        framed.append(self)
+
+    monkeypatch.setattr(view, method, as_the_arm_goes)
+
+    async def scenario():
+        student = await ViserClient(f"http://127.0.0.1:{classroom.port}").connect()
+        await student.set_gui("Explore on my own", True)
+        explorer = member_of(classroom, 0)
+        await until(lambda: explorer.role == EXPLORER and explorer.session is not None, what="the explorer's role")
+        if shown == "cloud":
+            await student.set_gui("Samples", "10 k")
+            await student.set_gui("Show workspace cloud", True)
+        else:
+            await student.set_gui("Show branch-count map", True)
+        await until(lambda: framed, what=f"the {shown} made and framed")
+        await until(lambda: shown not in explorer.camera.extra, what=f"the {shown} out of the camera's framing")
+        await student.close()
+
+    asyncio.run(scenario())
+
+
 def test_handing_over_and_leaving(classroom):
     async def scenario():
         first = await ViserClient(f"http://127.0.0.1:{classroom.port}").connect()
@@ -247,6 +283,28 @@ def test_a_presenter_back_from_their_computer_presents_again_unless_the_role_was
         assert room.presenter is None and "Become presenter" in later.gui
         for client in (second_tab, back, later):
             await client.close()
+
+    asyncio.run(scenario())
+    app.stop()
+
+
+def test_a_projector_back_before_the_server_noticed_it_had_gone_presents_again():
+    """A page whose websocket dropped retries every second, and is often back before the server notices its old
+    connection has died (viser's websockets ping every 20 s and wait 20 s more): the projector came back a viewer, the
+    role held by its dead page (until 2026-12-05)."""
+    app = lan_classroom()
+    url, room = f"http://127.0.0.1:{app.port}", app.classroom
+
+    async def scenario():
+        projector = await ViserClient(url, local_address="127.0.0.2").connect()
+        await become_presenter(projector, app)
+        projector.freeze()  # off the network: its old connection answers nothing, and nothing has told the server
+        again = await ViserClient(url, local_address="127.0.0.2").connect()
+        await until(lambda: room.presenter is not None and room.presenter.client.client_id == int(again.gizmo_owner or -1),
+                    what="the projector presenting again")
+        assert len(room.members) == 1
+        await again.close()
+        projector.abort()
 
     asyncio.run(scenario())
     app.stop()

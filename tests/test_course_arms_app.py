@@ -897,6 +897,29 @@ def test_a_browser_back_from_its_computer_finds_its_arms_as_it_left_them(app):
     asyncio.run(scenario())
 
 
+def test_a_browser_back_before_the_server_noticed_it_had_gone_finds_its_arms(app):
+    """A page whose websocket dropped retries every second, and is often back before the server notices its old
+    connection has died (viser's websockets ping every 20 s and wait 20 s more): it started afresh, and its arms
+    were kept for a later return. A live tab of the same computer is left alone."""
+    async def scenario():
+        laptop = await ViserClient(url(app), local_address="127.0.0.2").connect()
+        stanford = await pick(app, laptop, "Stanford arm (RRP + wrist)")
+        left = stanford.state.last
+        laptop.freeze()  # off the network: its old connection answers nothing, and nothing has told the server
+        again = await ViserClient(url(app), local_address="127.0.0.2").connect()
+        back = session_of(app, again)
+        assert back.choice == "Stanford arm (RRP + wrist)" and back.state.last is left
+        assert len(app.sessions) == 1
+        await until(lambda: int(laptop.gizmo_owner) not in app.server.get_clients(), what="the old connection hung up")
+        tab = await ViserClient(url(app), local_address="127.0.0.2").connect()  # a second tab there: its own arm
+        assert session_of(app, tab).choice == UR10 and len(app.sessions) == 2 and not again.closed_by_server
+        for client in (again, tab):
+            await client.close()
+        laptop.abort()
+
+    asyncio.run(scenario())
+
+
 def test_a_return_whose_kept_arm_cannot_be_built_starts_afresh(app, monkeypatch, caplog):
     """What a computer left must not stop its every return: an arm that failed to build would be kept again as that
     browser left, and fail again at the next return, for the whole window."""

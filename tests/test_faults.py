@@ -115,7 +115,7 @@ def test_a_client_that_stops_reading_is_dropped_and_holds_up_no_one(app, monkeyp
             if frozen_session.closed:
                 break
         # a student next to it drags and is answered (how fast, beside a frozen client, is bench_hostile's)
-        active = await ViserClient(url(app)).connect()
+        active = await ViserClient(url(app), local_address="127.0.0.2").connect()  # (from its own laptop: not the frozen one's return)
         session = session_of(app, active)
         target = await drag_a_little(active, session, steps=20)
         await until(lambda: any((np.abs(flanges - target[:3, 3]).max(axis=-1) < 1e-5).any()

@@ -235,6 +235,8 @@ class ReachMapView(View):
         if self._face_next:
             self._face_next = False
             self._face(reach)
+            if self._closed:  # it left as it was framed: the camera (a classroom's outlives the arm) frames it no more
+                self.clear()
 
     def _face(self, reach: BranchCountMap) -> None:
         """Turn the camera square-on to the plane, framing the part of it that some branch reaches."""

@@ -358,6 +358,8 @@ class WorkspaceView(View):
             self.legend.content = HULL_LEGEND if section == HULL else legend_html(top, self._unit)
             self.legend.visible = True
             self._look_square_on(section, points, legend_at)
+            if self._closed:  # it left as it was framed: the camera (a classroom's outlives the arm) frames it no more
+                self.clear()
             self._session.refresher.request(self._session)  # the new legend sized for lecture mode, and kept clear of
         finally:
             if self._closed:  # it left while its cloud was made: it holds none

@@ -353,12 +353,35 @@ def _address(connection) -> str:
 #: laptop woken, the Wi-Fi back) a new client, and the server gives the next browser from that address what the
 #: last one left (its arms; the presenter's role).
 RETURN_WINDOW = 7200.0
+#: How long (s) a browser has to answer a ping when another connects from its address. A browser that reconnects
+#: (its page retries every second) often comes back before the server notices its old connection has died: its
+#: websocket is pinged every 20 s and given 20 s more. A pong follows what was sent before the ping: a live page
+#: still reading a large scene over a slow Wi-Fi takes seconds.
+ANSWER_SECONDS = 3.0
 
 
 def address_of(client) -> str:  # noqa: ANN001
     """The address ``client`` (a ``viser.ClientHandle``) connected from, or "?" once it has gone."""
     connection = _connection_of(client)
     return _address(connection) if connection is not None else "?"
+
+
+async def hang_up_silent(clients: list, timeout: float = ANSWER_SECONDS) -> list:
+    """Ping each of ``clients`` (``viser.ClientHandle``) and drop, without a goodbye, those that do not answer within
+    ``timeout`` s; returns those (on viser's event loop)."""
+    async def silent(client) -> bool:  # noqa: ANN001
+        connection = _connection_of(client)
+        if connection is None:
+            return True
+        try:
+            await asyncio.wait_for(await connection.ping(), timeout)
+            return False
+        except (asyncio.TimeoutError, websockets.ConnectionClosed):
+            connection.transport.abort()
+            return True
+
+    found = await asyncio.gather(*(silent(client) for client in clients))
+    return [client for client, gone in zip(clients, found) if gone]
 
 
 def budget_of(client) -> str:  # noqa: ANN001

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import asyncio
 import ctypes
 import functools
 import gc
@@ -39,7 +40,7 @@ from ..session import ArmSession
 from ..style import BRAND_BLUE
 from ..viser_internals import fast_updates, shared_frames, value_fits
 from .classroom import Classroom
-from .gate import RETURN_WINDOW, Gate, TokenBucket, address_of, budget_of, gated_serve
+from .gate import RETURN_WINDOW, Gate, TokenBucket, address_of, budget_of, gated_serve, hang_up_silent
 from .workers import APART, JOINS, Cancelled, DragQueue, PanelRefresher, refuse_in_worker_process
 
 log = logging.getLogger(__name__)
@@ -276,6 +277,7 @@ class TeachingServer:
             return dict(self._sessions)
 
     def _connected(self, client: viser.ClientHandle) -> None:
+        self._drop_dead_twins(client)
         try:
             JOINS.run(client, lambda: self._build_first(client),
                       cancelled=lambda: client.client_id not in self.server.get_clients())
@@ -292,6 +294,22 @@ class TeachingServer:
         # browser that left while its arm was being built was not here to be freed yet
         if client.client_id not in self.server.get_clients():
             self._disconnected(client)
+
+    def _drop_dead_twins(self, client: viser.ClientHandle) -> None:
+        """Let the browsers of this address that no longer answer leave now (``gate.hang_up_silent``): the browser
+        connecting may be one of them back, before the server has noticed it had gone."""
+        address = address_of(client)
+        if self.classroom is not None:
+            known = self.classroom.addresses()
+        else:
+            with self._sessions_lock:
+                known = dict(self._addresses)
+        twins = [other for other_id, other in self.server.get_clients().items()
+                 if other_id != client.client_id and known.get(other_id) == address]
+        if twins:
+            for twin in asyncio.run_coroutine_threadsafe(hang_up_silent(twins), self.server.get_event_loop()).result():
+                log.info("browser %s from %s no longer answers: it has left", twin.client_id, address)
+                self._disconnected(twin)
 
     def _build_first(self, client: viser.ClientHandle) -> None:
         if self.classroom is not None:
