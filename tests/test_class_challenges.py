@@ -220,10 +220,14 @@ async def a_student_in(classroom, title: str, address: str) -> tuple[ViserClient
     return teacher, student, next(m for m in room.members.values() if m.card is not None)
 
 
-def test_a_student_back_before_the_server_noticed_they_had_gone_keeps_their_number_and_attempt(classroom):
+def test_a_student_back_before_the_server_noticed_they_had_gone_keeps_their_number_and_attempt():
     """A page whose websocket dropped retries every second, and is often back before the server notices its old
     connection has died (viser's websockets ping every 20 s and wait 20 s more). It joined as a new student: the
     board counted one student twice, and the attempt and the arm as left were not theirs (until 2026-12-05)."""
+    from ur10teach.serving.gate import Gate
+    from ur10teach.serving.server import TeachingServer
+
+    classroom = TeachingServer(port=0, shared=True, gate=Gate(trust_loopback=False))  # loopback addresses stand for laptops
     room = classroom.classroom
 
     async def scenario():
@@ -242,6 +246,7 @@ def test_a_student_back_before_the_server_noticed_they_had_gone_keeps_their_numb
         student.abort()
 
     asyncio.run(scenario())
+    classroom.stop()
 
 
 @pytest.mark.parametrize("title, box, typed", [

@@ -897,10 +897,15 @@ def test_a_browser_back_from_its_computer_finds_its_arms_as_it_left_them(app):
     asyncio.run(scenario())
 
 
-def test_a_browser_back_before_the_server_noticed_it_had_gone_finds_its_arms(app):
+def test_a_browser_back_before_the_server_noticed_it_had_gone_finds_its_arms():
     """A page whose websocket dropped retries every second, and is often back before the server notices its old
     connection has died (viser's websockets ping every 20 s and wait 20 s more): it started afresh, and its arms
     were kept for a later return. A live tab of the same computer is left alone."""
+    from ur10teach.serving.gate import Gate
+    from ur10teach.serving.server import TeachingServer
+
+    app = TeachingServer(port=0, gate=Gate(trust_loopback=False))  # loopback addresses stand for laptops
+
     async def scenario():
         laptop = await ViserClient(url(app), local_address="127.0.0.2").connect()
         stanford = await pick(app, laptop, "Stanford arm (RRP + wrist)")
@@ -916,6 +921,23 @@ def test_a_browser_back_before_the_server_noticed_it_had_gone_finds_its_arms(app
         for client in (again, tab):
             await client.close()
         laptop.abort()
+
+    asyncio.run(scenario())
+    app.stop()
+
+
+def test_this_machines_own_tabs_are_not_pinged_as_another_opens(app):
+    """A tab on the machine the server runs on does not drop off the network; a load test's hundred clients from
+    there, each busy reading, are not hung up for answering slowly."""
+    async def scenario():
+        busy = await ViserClient(url(app)).connect()
+        session = session_of(app, busy)
+        busy.freeze()  # would not answer a ping
+        other = await ViserClient(url(app)).connect()
+        session_of(app, other)
+        assert not session.closed and len(app.sessions) == 2
+        await other.close()
+        busy.abort()
 
     asyncio.run(scenario())
 
