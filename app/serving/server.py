@@ -277,7 +277,8 @@ class TeachingServer:
             return dict(self._sessions)
 
     def _connected(self, client: viser.ClientHandle) -> None:
-        self._drop_dead_twins(client)
+        if client.client_id in self.server.get_clients():  # (one gone already is not built either: below)
+            self._drop_dead_twins(client)
         try:
             JOINS.run(client, lambda: self._build_first(client),
                       cancelled=lambda: client.client_id not in self.server.get_clients())
