@@ -926,6 +926,31 @@ def test_a_browser_back_before_the_server_noticed_it_had_gone_finds_its_arms():
     app.stop()
 
 
+def test_the_arms_kept_for_returns_are_bounded_the_oldest_forgotten_first(app, monkeypatch):
+    """A server running for days, or addresses made up on the class network, must not grow it without end."""
+    from ur10teach.serving import server as serving
+
+    monkeypatch.setattr(serving, "MAX_RETURNING", 1)
+
+    async def visit(address: str, label: str | None = None) -> str:
+        client = await ViserClient(url(app), local_address=address).connect()
+        session = session_of(app, client)
+        await arrived(client, session)
+        if label is not None:
+            session = await pick(app, client, label)
+        await client.close()
+        await until(lambda: not app.sessions, what=f"{address} gone")
+        return session.choice
+
+    async def scenario():
+        await visit("127.0.0.2", "Stanford arm (RRP + wrist)")
+        await visit("127.0.0.3", "SCARA (RRP + roll)")  # one more than the bound: the first is forgotten
+        assert await visit("127.0.0.3") == "SCARA (RRP + roll)"
+        assert await visit("127.0.0.2") == UR10
+
+    asyncio.run(scenario())
+
+
 def test_this_machines_own_tabs_are_not_pinged_as_another_opens(app):
     """A tab on the machine the server runs on does not drop off the network; a load test's hundred clients from
     there, each busy reading, are not hung up for answering slowly."""
