@@ -23,7 +23,7 @@ def pick(page, app, client_id: int, label: str):
 
 def test_the_course_arms_in_the_picker(open_page, light_app):
     """The KR210 with its DH frames and det J's factors on the arm, a table a student types, and the
-    elbow arm's DH walkthrough, one after the other in one browser."""
+    elbow arm's DH walkthrough, one after the other in one browser; then the page reloaded finds them again."""
     app = light_app
     page, session = open_page()
     client_id = next(k for k, v in app.sessions.items() if v is session)
@@ -91,6 +91,16 @@ def test_the_course_arms_in_the_picker(open_page, light_app):
     click(page, next_button, lambda: elbow.walkthrough.step == 2, "step 3")  # row 1's θ1 and α1 (d1 too: a1 = 0 is listed, not drawn)
     wait_for(lambda: page.get_by_text("Row 1.", exact=False).count() > 0, what="row 1's text")
     canvas_changed(page, with_x, 0.002, "row 1's parameters drawn")
+
+    # the page reloaded (viser makes it a new client): the elbow arm is back, and so is the typed table
+    page.reload()
+    wait_for(lambda: any(k != client_id and s.built and s.choice == "Elbow arm + spherical wrist"
+                         for k, s in app.sessions.items()), what="the elbow arm back after the reload")
+    client_id = next(k for k, s in app.sessions.items() if s.choice == "Elbow arm + spherical wrist")
+    wait_for(lambda: page.get_by_text("Your arms are as this computer left them.", exact=True).count() > 0, what="the welcome back")
+    page.wait_for_selector(dom_id(app.sessions[client_id].joints.sliders[0]), timeout=HANG_TIMEOUT_MS)
+    typed_back = pick(page, app, client_id, "Your own DH table")
+    assert typed_back.arm.joint_types == "RRP" and typed_back.editor.rows.value == typed_rows
 
 
 def test_a_click_on_a_ghost_puts_the_arm_on_its_branch(open_page, light_app):
