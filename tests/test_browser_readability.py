@@ -70,8 +70,8 @@ def test_the_arm_is_framed_beside_the_panel_in_any_window(open_page):
 
         def beside() -> bool:  # the panel docks once the page has laid it out (on a busy machine, a moment after)
             canvas = page.locator("canvas").first.bounding_box()
-            slider = page.locator(dom_id(session.joints.sliders[0])).bounding_box()
-            return slider["x"] >= canvas["x"] + canvas["width"] - 1
+            slider = page.locator(dom_id(session.joints.sliders[0])).bounding_box()  # None while the panel is laid out anew
+            return canvas is not None and slider is not None and slider["x"] >= canvas["x"] + canvas["width"] - 1
 
         wait_for(beside, what=f"the panel beside the 3D view, not over it, at {window}")
         wait_for(lambda: in_canvas(page, session, key_points(session)), what=f"the arm and target framed at {window}")
