@@ -262,11 +262,6 @@ class Classroom:
                 self.presenter_left = (member.address, self.app.clock())
         self.app.refresher.request(self.live)
 
-    def addresses(self) -> dict[int, str]:
-        """Client id → the address each member connected from."""
-        with self._lock:
-            return {client_id: member.address for client_id, member in self.members.items()}
-
     @property
     def sessions(self) -> dict[int, ArmSession]:
         """The sessions of the presenter and the explorers."""

@@ -302,13 +302,8 @@ class TeachingServer:
         address = address_of(client)
         if self.gate.trusted(address):  # this machine's own tabs do not drop off the network (nor its load tests)
             return
-        if self.classroom is not None:
-            known = self.classroom.addresses()
-        else:
-            with self._sessions_lock:
-                known = dict(self._addresses)
         twins = [other for other_id, other in self.server.get_clients().items()
-                 if other_id != client.client_id and known.get(other_id) == address]
+                 if other_id != client.client_id and address_of(other) == address]
         if twins:
             for twin in asyncio.run_coroutine_threadsafe(hang_up_silent(twins), self.server.get_event_loop()).result():
                 log.info("browser %s from %s no longer answers: it has left", twin.client_id, address)
@@ -395,10 +390,8 @@ class TeachingServer:
             old = self._sessions.pop(client.client_id, None)
             if old is not None:
                 self._leave(client.client_id, old)
-        lecture = self.lecture
+        lecture = self._lecture_of(old)
         if old is not None:
-            if old.camera is not None:
-                lecture = old.camera.lecture.on
             old.close()
             self.janitor.soon()
         try:
@@ -428,14 +421,17 @@ class TeachingServer:
                 left = self._left_arms.pop(client.client_id, {})
                 address = self._addresses.pop(client.client_id, None)
                 if address is not None and left:  # kept for its return (one that left mid-change: the arm it changed from)
-                    lecture = session.camera.lecture.on if session is not None and session.camera is not None else self.lecture
                     self._departed.pop(address, None)
-                    self._departed[address] = (self.clock(), next(reversed(left)), left, lecture)
+                    self._departed[address] = (self.clock(), next(reversed(left)), left, self._lecture_of(session))
                     if len(self._departed) > MAX_RETURNING:
                         del self._departed[next(iter(self._departed))]
             if session is not None:
                 session.close()
         self.janitor.soon()
+
+    def _lecture_of(self, session: ArmSession | None) -> bool:
+        """Whether lecture mode is on in the browser of ``session`` (the server's default without one)."""
+        return session.camera.lecture.on if session is not None and session.camera is not None else self.lecture
 
     def _leave(self, client_id: int, session: ArmSession) -> None:
         """Keep ``session``'s arm as the browser leaves it, the most recent last (the caller holds the sessions' lock)."""
