@@ -150,13 +150,49 @@ def test_every_legend_drawn_in_3d_fits_a_projectors_canvas_in_lecture_mode(legen
     at. Each now comes in lines that fit it."""
     from ur10teach.features import reach_map, workspace
     from ur10teach.features.branch_labels import DEFAULT_VIEW, label_size
-    from ur10teach.style import label_scale
+    from ur10teach.style import NAME_SCALE, label_scale
 
     text = {"hull": workspace.HULL_LEGEND, "cloud": workspace.legend_text(0.123)}.get(legend)
     if text is None:
         text = reach_map.legend_text(int(legend.split()[1]))
-    width, _ = label_size(text, label_scale(1.3, lecture=True))  # both are drawn at 1.3
+    scale = 1.3 if legend in ("hull", "cloud") else NAME_SCALE  # the map's is placed with the names at the tool
+    width, _ = label_size(text, label_scale(scale, lecture=True))
     assert width <= 0.9 * DEFAULT_VIEW.width, (text, width)
+
+
+def test_a_long_label_near_the_canvas_edge_is_drawn_whole_on_it_and_first():
+    """The map's legend, placed with the names at the tool, stands on the top of the map, often at the canvas's top
+    edge and beside the cloud's legend (2026-12-05, the desktop arm in lecture mode). Only spots whole on the canvas
+    are taken, and the spots are label heights apart in both directions at once: a 650 px wide legend near the
+    edge had one, over the cloud's legend, and was drawn there. It is now first pulled onto the canvas. It is also
+    placed before the one-line names: taken first by a name beside it, its only free spot sent it half a screen
+    away."""
+    from ur10teach.features.branch_labels import ScreenView, boxes, overlapping, place
+
+    view = ScreenView((0.0, -3.0, 0.0), (0.0, 0.0, 0.0), up=(0.0, 0.0, 1.0), height=720.0, width=736.0)
+    legend = "branches reaching each point:\nyellow 1 · green 2 · teal 3 · purple 4"
+    scale = 2.24
+
+    def box(point, text, anchor="bottom-center"):
+        return boxes(view.to_screen(np.array([point], dtype=float))[0], [text], scale, anchor)[0]
+
+    def at(pixel):  # the point in the plane y = 0 drawn at (x, y) px from the canvas's centre
+        per_px = 2 * np.tan(view.fov / 2) * 3.0 / view.height
+        return np.array([pixel[0] * per_px, 0.0, pixel[1] * per_px])
+
+    top = at((70.0, 330.0))  # its box would stand over the top and right edges
+    cloud = (at((65.0, 240.0)), "colour = manipulability |det J|:\ndark violet 0 (singular) … yellow ≥ 3.433", scale,
+             "bottom-center")
+    name = at((-200.0, 250.0))  # a name under where the legend would come, left of it
+    placed = place(np.array([top, name]), [legend, "velocity"], view, scale, fixed=[cloud])
+    drawn = {text: box(position, text) for _, text, position, _ in placed}
+    canvas = np.array([-view.width / 2, -view.height / 2, view.width / 2, view.height / 2])
+    for text, b in drawn.items():
+        assert (b[:2] >= canvas[:2] - 1e-6).all() and (b[2:] <= canvas[2:] + 1e-6).all(), (text, b)
+        assert not overlapping(b, box(*cloud[:2], cloud[3]), gap=0.0), text
+    assert not overlapping(drawn[legend], drawn["velocity"], gap=0.0)
+    # right under the cloud's legend: the name moved, not the legend
+    assert box(*cloud[:2], cloud[3])[1] - drawn[legend][3] < 2 * (drawn[legend][3] - drawn[legend][1])
 
 
 @pytest.mark.parametrize("name", ["stanford", "elbow", "three_dof"])

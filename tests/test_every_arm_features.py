@@ -328,7 +328,7 @@ def test_the_branch_count_map_of_every_arm_is_its_ik_s(app, label):
         assert ("its gizmo does not turn" in question) == session.ik_target.gizmo.disable_rotations == (arm.task == "position")
         title = "Reachable points" if arm.task == "position" else "Reachable with this orientation"
         assert client.gui[title]["type"] == "GuiFolderMessage"
-        assert ("tool turned as now" in view._legend[0].text) == (arm.task == "pose")
+        assert ("tool turned as now" in view.legend_text) == (arm.task == "pose")
         assert ("tool turned as now" in view.legend.content) == (arm.task == "pose")
         await client.close()
 
@@ -404,24 +404,35 @@ def test_no_two_3d_labels_overlap_with_velocities_forces_and_ellipsoids_shown(ap
 
 
 @pytest.mark.parametrize("label, plane", [("SCARA (RRP + roll)", "horizontal, at the target's height"),
-                                          ("UR10 (the app's arm)", "vertical, through the base axis and the target")])
-def test_the_placed_labels_keep_clear_of_the_branch_count_maps_legend(app, label, plane):
-    """The map's legend hangs in the map's own turned frame, beside the map; until 2026-12-03 the placed labels
-    did not keep clear of it ("x4" under it on the SCARA's horizontal map)."""
-    from ur10teach.viser_internals import labels_of
+                                          ("UR10 (the app's arm)", "vertical, through the base axis and the target"),
+                                          ("Cylindrical arm (RPP)", None), ("Planar elbow (2R)", None),
+                                          ("3-DOF desktop arm", None)])
+def test_the_branch_count_maps_legend_keeps_clear_of_the_clouds_and_of_every_placed_label(app, label, plane):
+    """The map's legend names the top of the map, and the cloud's stands over the cloud: with both shown, on a
+    projector. Until 2026-12-05 the map's was drawn where it fell, hanging from the map's top edge, and the cloud's
+    over it on the cylindrical arm, the planar elbow and the desktop arm, unreadable (the tops of one reach); until
+    2026-12-03 the placed labels did not keep clear of it ("x4" under it on the SCARA's horizontal map)."""
 
     async def scenario():
         client = await ViserClient(url(app)).connect()
         session = await pick(app, client, label)
-        view = session.reach_map
-        await client.set_gui("Plane", plane)
+        view, workspace = session.reach_map, session.workspace
+        await client.set_gui("Lecture mode", True)
+        if plane is not None:
+            await client.set_gui("Plane", plane)
         await client.set_gui("Show branch-count map", True)
         await until(lambda: view.image is not None and view.shown_key is not None, what="the map")
-        image = view.image
-        legend = next(node for node in labels_of(session.client.scene) if node.name == f"{image.name}/legend")
-        where = scene_pose(session.client.scene, legend)[:3, 3]  # in the scene, through the image and every node above it
-        placed, clashes = overlapping_labels(session, also=[(where, legend.text, legend.font_screen_scale, legend.anchor)])
-        assert placed and not clashes, f"overlapping: {clashes}"
+        await client.set_gui(workspace.count.label, "10 k")
+        await client.set_gui(workspace.enabled.label, True)  # framed last: the camera square-on to the cloud
+        await until(lambda: workspace.legend_label is not None, what="the cloud")
+        await until(lambda: view.legend_text in {text for _, text, _ in session.names.placed}, what="the map's legend")
+        legend = workspace.legend_label
+        cloud = (from_frame(session.drawing.world, legend.position), legend.text, legend.font_screen_scale, legend.anchor)
+        placed, clashes = overlapping_labels(session, also=[cloud])
+        assert view.legend_text in placed and not clashes, f"overlapping: {clashes}"
+        # the map gone, its legend goes with it
+        await client.set_gui("Show branch-count map", False)
+        await until(lambda: view.legend_text not in {text for _, text, _ in session.names.placed}, what="the legend gone")
         await client.close()
 
     asyncio.run(scenario())

@@ -152,14 +152,18 @@ def place(anchors: np.ndarray, texts: list[str], view: ScreenView, scale: float,
     right, up, _ = view.axes()
     canvas = np.array([-view.width / 2, -view.height / 2, view.width / 2, view.height / 2])
     placed: list[tuple[tuple[int, ...], str, np.ndarray, np.ndarray, np.ndarray]] = []  # with each one's box
-    for group in groups:
+    # a label of several lines (a map's legend among the names) first: the fewest spots are free for it
+    for group in sorted(groups, key=lambda group: -max(texts[k].count("\n") for k in group)):
         text, point = JOIN.join(texts[k] for k in group), anchors[group].mean(axis=0)
         pixel, depth = view.to_screen(point[None])
         own = boxes(pixel, [text], scale)[0]
+        if depth[0] > 0 and (np.abs(pixel[0]) <= canvas[2:]).all():  # a long one near an edge: pulled onto the canvas
+            own += np.tile(np.clip(0.0, canvas[:2] - own[:2], canvas[2:] - own[2:]), 2)
         step = own[3] - own[1] + GAP_PX
         dx, dy = OFFSETS[_free_spot(own + step * OFFSETS[:, [0, 1, 0, 1]], obstacles + [entry[4] for entry in placed], canvas)]
         world_per_px = 2 * math.tan(view.fov / 2) * depth[0] / view.height
-        position = point + (right * dx + up * dy) * step * world_per_px
+        moved = own[:2] + step * np.array([dx, dy]) - boxes(pixel, [text], scale)[0][:2]  # px, right and up
+        position = point + (right * moved[0] + up * moved[1]) * world_per_px
         placed.append((tuple(sorted(group)), text, position, point, own + step * np.array([dx, dy, dx, dy])))
     return [entry[:4] for entry in sorted(placed, key=lambda entry: entry[0])]
 

@@ -21,6 +21,7 @@ from ..serving.workers import MAPS, FoldedRuns
 from ..state import Snapshot
 from ..style import REACH_COLORS, hex_color
 from ..view import HELD_BACK, Session, View, say_held_back
+from .branch_labels import LEADER_GREY
 from .workspace import FROM_ABOVE
 
 PLANES = {"vertical, through the base axis and the target": "vertical", "horizontal, at the target's height": "horizontal"}
@@ -93,11 +94,12 @@ QUESTIONS = {
 
 
 def legend_text(slots: int = 8, task: str = "pose") -> str:
-    """The map's label in 3D: "… yellow 2 · green 4 · teal 6 · purple 8" for the UR10, in two lines that fit a
-    projector's canvas in lecture mode."""
+    """The map's label in 3D: "… yellow 2 · green 4 · teal 6 · purple 8" for the UR10, in lines that fit a
+    projector's canvas in lecture mode (at the names' size: it is placed with them)."""
     names = " · ".join(f"{COLOUR_NAMES[colour_of(count, slots)]} {count}" for count in legend_counts(slots))
-    kept = KEPT.get(task, "")
-    return f"branches reaching each point{', ' + kept if kept else ''}:\n{names}"
+    kept = KEPT.get(task)
+    heading = "branches reaching each point" + (f",\n{kept}" if kept else "")
+    return f"{heading}:\n{names}"
 
 
 def legend_html(slots: int = 8, task: str = "pose") -> str:
@@ -134,8 +136,9 @@ class ReachMapView(View):
         self.resolution = RESOLUTION if isinstance(arm.solver, URFamily) else COURSE_RESOLUTION  # the kernels' speed
         self.slots = 0 if arm.numerical else int(arm.ik(arm.fk(arm.specs.home)).q.shape[-2])
         self.image: viser.ImageHandle | None = None
-        #: (the legend's label, where it is in the drawing's frame) while a map is shown
-        self._legend: tuple[viser.LabelHandle, np.ndarray] | None = None
+        #: the legend's point, the middle of the map's top edge in the drawing's frame, while a map is shown
+        self.legend_at: np.ndarray | None = None
+        self.legend_text = legend_text(max(self.slots, 1), arm.task)
         self.shown_key: tuple | None = None  #: (target bytes, plane) of the map on screen
         self.computed = 0  #: maps computed so far (tests and benchmarks read it)
         self._lock = threading.Lock()
@@ -157,11 +160,10 @@ class ReachMapView(View):
         self.enabled.on_update(session.guard(self._toggled))
         self.plane.on_update(session.guard(self._toggled))
 
-    def obstacles(self) -> list:
-        if self._legend is None:
-            return []
-        label, where = self._legend  # hung in the map's turned frame, beside the map
-        return [(where, label.text, label.font_screen_scale, label.anchor)]
+    def names(self) -> list[tuple]:
+        # placed with the names at the tool, not where it falls: standing where the cloud's legend stands (the
+        # top of the same reach), it would be drawn over it
+        return [(self.legend_at, self.legend_text, LEADER_GREY)]
 
     def hold_back(self, asked: str | None) -> None:
         super().hold_back(asked)
@@ -211,7 +213,6 @@ class ReachMapView(View):
                          cancelled=lambda: self._closed or self._session.closed)
         self.computed += 1
         image, (wxyz, position) = map_image(reach.counts, self.slots), map_pose(reach)
-        top = reach.size / 2 - 0.06  # the legend, along the map's v, just inside its edge
         with self._lock:
             if self._closed or not self.enabled.value or self.held:  # gone, off, or a class challenge began meanwhile
                 return
@@ -219,19 +220,15 @@ class ReachMapView(View):
                 self.image = self._scene.add_image(
                     self._root, image, reach.size, reach.size, format="png", wxyz=wxyz, position=position,
                     cast_shadow=False, receive_shadow=False)
-                # in the scene beside the map, so that viewers of a shared scene can read it too
-                label = self._scene.add_label(f"{self._root}/legend", legend_text(self.slots, self._session.arm.task), position=(0.0, top, 0.0),
-                                              font_screen_scale=1.3, anchor="top-center")
             else:
-                label = self._legend[0]
                 self.image.image = image
                 if not np.allclose(self.image.position, position) or not np.allclose(self.image.wxyz, wxyz):
                     self.image.wxyz, self.image.position = wxyz, position
-            before, self._legend = self._legend, (label, reach.centre + top * reach.v)
-            moved = before is None or not np.allclose(before[1], self._legend[1])
+            before, self.legend_at = self.legend_at, reach.centre + reach.size / 2 * reach.v
+            moved = before is None or not np.allclose(before, self.legend_at)
             self.shown_key = key
         if moved:
-            self._session.refresher.request(self._session)  # the placed labels keep clear of the legend where it now is
+            self._session.refresher.request(self._session)  # the legend placed where the map now is
         if self._face_next:
             self._face_next = False
             self._face(reach)
@@ -257,8 +254,9 @@ class ReachMapView(View):
     def clear(self) -> None:
         with self._lock:
             if self.image is not None:
-                self.image.remove()  # and the legend under it
-                self.image = self._legend = None
+                self.image.remove()
+                self.image = self.legend_at = None
+                self._session.refresher.request(self._session)  # and its legend taken away
             self.shown_key = None
         camera = getattr(self._session, "camera", None)
         if camera is not None:
