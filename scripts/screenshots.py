@@ -32,6 +32,7 @@ def show_the_map(page, session) -> None:
     page.get_by_text("Reachable with this orientation", exact=True).first.click()
     page.locator(dom_id(session.reach_map.enabled)).check()
     wait_for(lambda: session.reach_map.image is not None, what="the map")
+    page.get_by_text("Branches that reach each point", exact=False).first.scroll_into_view_if_needed()  # its key too
 
 
 def pick_arm(page, session, label: str):
