@@ -193,6 +193,14 @@ def test_a_long_label_near_the_canvas_edge_is_drawn_whole_on_it_and_first():
     assert not overlapping(drawn[legend], drawn["velocity"], gap=0.0)
     # right under the cloud's legend: the name moved, not the legend
     assert box(*cloud[:2], cloud[3])[1] - drawn[legend][3] < 2 * (drawn[legend][3] - drawn[legend][1])
+    # a canvas narrower than the legend (lecture mode's wide panel beside a 1280 px window): centred on it, and
+    # still clear of the cloud's legend (until then no spot was whole on the canvas, and it stayed over it)
+    view = ScreenView((0.0, -3.0, 0.0), (0.0, 0.0, 0.0), up=(0.0, 0.0, 1.0), height=630.0, width=600.0)
+    top, cloud = at((0.0, 300.0)), (at((0.0, 200.0)), *cloud[1:])
+    (_, _, position, _), = place(np.array([top]), [legend], view, scale, fixed=[cloud])
+    b = box(position, legend)
+    assert b[0] == pytest.approx(-b[2]) and b[2] > view.width / 2 and -view.height / 2 <= b[1] < b[3] <= view.height / 2
+    assert not overlapping(b, box(*cloud[:2], cloud[3]), gap=0.0)
 
 
 @pytest.mark.parametrize("name", ["stanford", "elbow", "three_dof"])
