@@ -42,6 +42,7 @@ from .serving.metrics import LATENCY
 from .serving.workers import DragQueue, PanelRefresher
 from .state import ArmState, Snapshot
 from .style import NAME_SCALE
+from .view import View
 
 log = logging.getLogger(__name__)
 
@@ -327,6 +328,11 @@ class ArmSession:
     def _names_beside(self) -> list:
         """What the drawing's placed labels keep clear of: the views' names (:attr:`names`) and the fixed labels."""
         return [] if self.closed else [*self.names.labels, *self._fixed_labels()]
+
+    def colouring_shown(self, shown: View) -> None:
+        for view in self.panel_views:
+            if view is not shown:
+                view.hide_colouring()
 
     def _named(self) -> list[tuple]:
         return [name for view in self.panel_views for name in view.names()]

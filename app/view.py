@@ -39,6 +39,9 @@ class Session(Protocol):
 
     def notify(self, title: str, body: str, color: str = "yellow") -> None: ...
 
+    def colouring_shown(self, shown: View) -> None:
+        """``shown`` has just coloured the workspace's points: every other view's colouring goes (``View.hide_colouring``)."""
+
 
 class View:
     """A feature's part of the scene and of the panel.
@@ -90,6 +93,10 @@ class View:
 
     def restore(self, kept: dict) -> None:
         pass
+
+    def hide_colouring(self) -> None:
+        """Take away the colours it paints the workspace's points with (|det J|, ‖τ‖): another view has just shown
+        its own there, and the two in one space, in one colour scale, would read as one."""
 
     def obstacles(self) -> list:
         """The 3D labels it draws where they stay (a map's largest ‖τ‖, say), as label nodes or

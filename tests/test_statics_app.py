@@ -435,6 +435,43 @@ def test_the_workspace_coloured_by_the_torque_a_force_needs(app):
     asyncio.run(scenario())
 
 
+@pytest.mark.parametrize("label", ["UR10 (the app's arm)", "3-DOF desktop arm"])
+def test_the_workspace_is_coloured_one_way_at_a_time(app, label):
+    """The cloud's |det J|, the ‖τ‖ map and the desktop arm's search of every pose colour the same points of space
+    in one colour scale, purple to yellow. Until 2026-12-05 each could be shown over the other, under one legend
+    in 3D ("colour = manipulability |det J|") that named only one of them, and the search's map could not be taken
+    away at all. Showing one now takes the others away, and their boxes are unticked."""
+    from .test_course_arms_app import pick
+
+    async def scenario():
+        client = await ViserClient(url(app)).connect()
+        session = await pick(app, client, label) if label != "UR10 (the app's arm)" else session_of(app, client)
+        workspace, statics = session.workspace, session.statics
+        cloud_box, map_box = workspace.enabled.label, "Colour the workspace by ‖τ‖ for this force"
+        await client.set_gui(workspace.count.label, "10 k")
+        await client.set_gui(cloud_box, True)
+        await until(lambda: workspace._cloud is not None and workspace.legend_label is not None, what="the cloud")
+        await client.set_gui(map_box, True)
+        await until(lambda: statics._map is not None, what="the torque map")
+        await until(lambda: workspace._cloud is None and workspace.legend_label is None
+                    and client.gui[cloud_box]["value"] is False, what="the cloud gone, its box unticked")
+        await client.set_gui(cloud_box, True)
+        await until(lambda: workspace._cloud is not None, what="the cloud again")
+        await until(lambda: statics._map is None and not statics.map_legend.visible and client.gui[map_box]["value"] is False,
+                    what="the torque map gone, its box unticked")
+        if label == "3-DOF desktop arm":  # and the course's exercise: the pose that needs the largest ‖τ‖
+            search = session.lessons[2]
+            await client.set_gui("Find the pose that needs the largest ‖τ‖", True)
+            await until(lambda: search._map, what="the search's map")
+            await until(lambda: workspace._cloud is None and client.gui[cloud_box]["value"] is False, what="the cloud gone")
+            await client.set_gui(map_box, True)
+            await until(lambda: statics._map is not None and not search._map and not search.obstacles(),
+                        what="the search's map gone, its ball and label too")
+        await client.close()
+
+    asyncio.run(scenario())
+
+
 def test_presses_fold_into_one_run_on_one_thread_and_none_for_a_browser_that_left(app):
     """Review 2, finding 3: *Release the arm* pressed 30 times a second for 20 s left 543 threads,
     each with its second of dynamics, running long after the student had gone."""

@@ -172,8 +172,13 @@ class StaticsView(View):
         if widget is not self.mapped:
             self.loads(self._session.state.last)
             self._session.redraw()
+        if widget is self.mapped and self.mapped.value:
+            self._session.colouring_shown(self)
         if widget in (self.mapped, self.newtons, self.direction):
             self._map_again()
+
+    def hide_colouring(self) -> None:
+        self.mapped.value = False  # its callback takes the map away
 
     def _map_again(self) -> None:
         """The map drawn again for the newest choices, on a thread of its own; its refusal stands below its box."""

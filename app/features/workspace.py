@@ -299,10 +299,15 @@ class WorkspaceView(View):
         legend = self.legend_label  # over the cloud, in the drawing's frame
         return [] if legend is None else [legend]
 
-    def _changed(self, _: viser.GuiEvent) -> None:
+    def _changed(self, event: viser.GuiEvent) -> None:
         within(self.height, "section height (mm)")  # refused as it comes, shown or not
+        if event.target is self.enabled and self.enabled.value:
+            self._session.colouring_shown(self)
         # a run under way picks up the newest choices; what it refuses is said below the inputs
         self._clouds.start("workspace", lambda run: self._session.guard(run, beside=self.refusal))
+
+    def hide_colouring(self) -> None:
+        self.enabled.value = False  # its callback takes the cloud away
 
     def _slow_job(self, make):
         session = self._session

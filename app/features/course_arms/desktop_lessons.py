@@ -165,6 +165,7 @@ class StaticsExercise(View):
         arm, force = session.arm, session.statics.fixed_force()
         if not force.any():
             raise ValueError("set a force first: with none, no pose needs any torque")
+        session.colouring_shown(self)
 
         def search():
             grid = torque_grid(arm, force, GRID_STEPS)
@@ -210,6 +211,10 @@ class StaticsExercise(View):
         if not shown:
             return []
         return [obstacle(shown[2], under=shown[1].position)]  # the label, under the marker
+
+    def hide_colouring(self) -> None:
+        with self._map_lock:
+            self._clear()
 
     def _clear(self) -> None:
         for node in self._map[:2]:
