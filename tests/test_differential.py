@@ -172,6 +172,33 @@ def test_at_each_ur10_singularity_one_ellipsoid_flattens(kind):
     assert max(translation.force.max(), rotation.force.max()) > 1e5
 
 
+@pytest.mark.parametrize("name", PRESETS)
+def test_on_a_singularity_a_lost_axis_is_zero_and_its_force_axis_endless_not_rounding(name):
+    """The SVD gives the axis a singularity takes away as rounding, 1e-17 m/s, not 0; its force axis was then 1e17 N,
+    and the panel read "semi-axes 0.911, 0.132, 3.46e-17" and "8.79e+15 N per N·m, drawn at 1.05e-13 mm" (the
+    desktop arm's; until 2026-12-05, on every arm's singularity buttons). Within 1e-12 of the longest it is 0, and its
+    force axis ∞, as where J has fewer columns than the ellipsoid has axes."""
+    arm = Arm.preset(name)
+    flattened = 0
+    for kind in arm.factor_names:
+        try:
+            on = arm.singular_configuration(kind, arm.specs.home)
+        except ValueError:  # no pose within the limits is on it (the cylindrical arms' reach)
+            continue
+        for ellipsoid in arm.ellipsoids(on):
+            small = ellipsoid.velocity <= 1e-12 * ellipsoid.velocity.max()
+            np.testing.assert_array_equal(ellipsoid.velocity[small], 0.0)
+            assert np.isinf(ellipsoid.force[small]).all() and np.isfinite(ellipsoid.force[~small]).all()
+            flattened += int(small.any())
+    assert flattened or name in ("cylindrical", "cylindrical_wrist"), "no singularity of this arm flattens an ellipsoid"
+    # near one, an axis is small, not zero: what a student dragging towards it sees shrink
+    from ur10core.differential import _ellipsoid
+
+    near = _ellipsoid(np.diag([2.0, 1e-11, 1e-17]))
+    assert near.velocity.tolist() == [2.0, 1e-11, 0.0]
+    np.testing.assert_allclose(near.force, [0.5, 1e11, np.inf])
+
+
 @pytest.mark.parametrize("kind", ["shoulder", "elbow", "wrist"])
 def test_at_a_singularity_the_ellipsoids_are_still_those_of_the_held_map(kind):
     """Where the held rows lose rank too (the rank decision is the core's own, from one SVD), the

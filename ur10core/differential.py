@@ -100,6 +100,9 @@ def cross(u: np.ndarray, v: np.ndarray) -> np.ndarray:
 
 #: A singular value of the held rows at most this share of their largest counts as zero (``np.linalg.pinv``'s default).
 NULL_SPACE_RCOND = 1e-15
+#: An ellipsoid's semi-axis at most this share of its longest is 0 (its force axis ∞): on a singularity, the axis it
+#: takes away comes out of the SVD as rounding, 1e-17 to 2e-15 of the longest on the presets' singularity buttons.
+FLAT = 1e-12
 
 
 def _on_null_space(M: np.ndarray, held: np.ndarray) -> np.ndarray:
@@ -116,8 +119,10 @@ def _on_null_space(M: np.ndarray, held: np.ndarray) -> np.ndarray:
 
 
 def _ellipsoid(J: np.ndarray) -> Ellipsoid:
-    """The ellipsoid of J (..., 3, n): left singular vectors, singular values (0 past n) and their inverses."""
+    """The ellipsoid of J (..., 3, n): left singular vectors, singular values (0 past n, and within rounding of 0) and
+    their inverses (∞ where 0: a flat velocity axis, an endless force axis, not 1e-17 and 1e17)."""
     U, sigma, _ = np.linalg.svd(J, full_matrices=J.shape[-1] < 3)  # U (..., 3, 3) either way
+    sigma = np.where(sigma <= FLAT * sigma[..., :1], 0.0, sigma)
     lengths = sigma if sigma.shape[-1] == 3 else np.concatenate(
         [sigma, np.zeros(sigma.shape[:-1] + (3 - sigma.shape[-1],))], axis=-1)
     force = np.divide(1.0, lengths, out=np.full_like(lengths, np.inf), where=lengths > 0.0)
