@@ -672,6 +672,21 @@ def test_manipulability_vanishes_at_the_singularities():
     np.testing.assert_allclose(kr210.manipulability(q), abs(np.linalg.det(kr210.jacobian(q))), rtol=1e-12)
     stanford = Arm.preset("stanford")
     assert stanford.manipulability(np.array([0.3, 0.4, 0.0, 0.2, 0.5, 0.1])) < 1e-12
+    # fewer joints than rows: √det(Jᵀ J), built here from J, away from a singularity; on one, as small as σ_min
+    # (the root of a rounding-level det was 5e-9 on the stretched planar elbow until 2026-12-05)
+    planar = Arm.preset("planar_elbow")
+    q = np.array([[0.3, 0.8], [-1.0, 2.5]])
+    J = planar.jacobian(q)[..., :3, :]
+    np.testing.assert_allclose(planar.manipulability(q), np.sqrt(np.linalg.det(np.swapaxes(J, -1, -2) @ J)), rtol=1e-12)
+    for start in (q[0], q[1], planar.specs.home):
+        stretched = planar.singular_configuration("elbow", start)
+        assert planar.manipulability(stretched) <= 10 * planar.smallest_singular_value(stretched) < 1e-15
+    # more joints than rows (a typed 7R table): √det(J Jᵀ)
+    seven = Arm.from_dh([(0, np.pi / 2, 0.3, 0, "R"), (0.4, 0, 0, 0, "R"), (0.3, 0, 0, 0, "R"), (0, np.pi / 2, 0, 0, "R"),
+                         (0, -np.pi / 2, 0.2, 0, "R"), (0, np.pi / 2, 0.1, 0, "R"), (0, 0, 0.1, 0, "R")], "standard")
+    q = seven.sample_joints(20)
+    J = seven.jacobian(q)
+    np.testing.assert_allclose(seven.manipulability(q), np.sqrt(np.linalg.det(J @ np.swapaxes(J, -1, -2))), rtol=1e-9)
 
 
 @pytest.mark.parametrize("rows, words", [
