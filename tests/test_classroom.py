@@ -155,11 +155,10 @@ def test_exploring_on_your_own_and_back(classroom):
         await student.set_gui(rate, -30.0)
         await until(lambda: explorer.session.drawing.overlay.enabled and explorer.session.velocity.sliders[1].value == -30.0,
                     what="the student's choices")
-        await student.set_gui("Samples", "10 k")  # a cloud and a torque map, framed with the student's own arm
+        await student.set_gui("Samples", "10 k")  # a cloud and a branch-count map, framed with the student's own arm
         await student.set_gui("Show workspace cloud", True)
-        await student.set_gui("Show the torques", True)
-        await student.set_gui(explorer.session.statics.mapped.label, True)
-        await until(lambda: {"cloud", "torque map"} <= set(explorer.camera.extra), what="the cloud and the map framed")
+        await student.set_gui("Show branch-count map", True)
+        await until(lambda: {"cloud", "reach map"} <= set(explorer.camera.extra), what="the cloud and the map framed")
         # back to the class: the private arm is gone, and so is what the browser's camera framed with it
         await student.set_gui("Back to the presenter's arm", True)
         await until(lambda: explorer.role == VIEWER and explorer.session is None, what="re-attaching")
