@@ -122,7 +122,7 @@ def _ellipsoid(J: np.ndarray) -> Ellipsoid:
     """The ellipsoid of J (..., 3, n): left singular vectors, singular values (0 past n, and within rounding of 0) and
     their inverses (∞ where 0: a flat velocity axis, an endless force axis, not 1e-17 and 1e17)."""
     U, sigma, _ = np.linalg.svd(J, full_matrices=J.shape[-1] < 3)  # U (..., 3, 3) either way
-    sigma = np.where(sigma <= FLAT * sigma[..., :1], 0.0, sigma)
+    sigma[sigma <= FLAT * sigma[..., :1]] = 0.0  # (the SVD's own array)
     lengths = sigma if sigma.shape[-1] == 3 else np.concatenate(
         [sigma, np.zeros(sigma.shape[:-1] + (3 - sigma.shape[-1],))], axis=-1)
     force = np.divide(1.0, lengths, out=np.full_like(lengths, np.inf), where=lengths > 0.0)

@@ -156,15 +156,18 @@ def place(anchors: np.ndarray, texts: list[str], view: ScreenView, scale: float,
     for group in sorted(groups, key=lambda group: -max(texts[k].count("\n") for k in group)):
         text, point = JOIN.join(texts[k] for k in group), anchors[group].mean(axis=0)
         pixel, depth = view.to_screen(point[None])
-        at_point = own = boxes(pixel, [text], scale)[0]
-        # the canvas, or as much more as a box larger than it needs (a legend in lecture mode on a small one)
-        room = np.tile(np.maximum(canvas[2:], (own[2:] - own[:2]) / 2), 2) * [-1, -1, 1, 1]
-        if depth[0] > 0 and (np.abs(pixel[0]) <= canvas[2:]).all():  # a long one near an edge: pulled onto the canvas
-            own = own + np.tile(np.clip(0.0, room[:2] - own[:2], room[2:] - own[2:]), 2)
+        own = boxes(pixel, [text], scale)[0]
+        room, pulled = canvas, np.zeros(2)
+        if not ((own[:2] >= canvas[:2]).all() and (own[2:] <= canvas[2:]).all()) and depth[0] > 0 \
+                and (np.abs(pixel[0]) <= canvas[2:]).all():  # a long one near an edge: pulled onto the canvas
+            half = np.maximum(canvas[2:], (own[2:] - own[:2]) / 2)  # or centred, if wider than a small one
+            room = np.concatenate([-half, half])
+            pulled = np.clip(0.0, room[:2] - own[:2], room[2:] - own[2:])
+            own = own + np.tile(pulled, 2)
         step = own[3] - own[1] + GAP_PX
         dx, dy = OFFSETS[_free_spot(own + step * OFFSETS[:, [0, 1, 0, 1]], obstacles + [entry[4] for entry in placed], room)]
         world_per_px = 2 * math.tan(view.fov / 2) * depth[0] / view.height
-        moved = own[:2] + step * np.array([dx, dy]) - at_point[:2]  # px, right and up
+        moved = pulled + step * np.array([dx, dy])  # px, right and up
         position = point + (right * moved[0] + up * moved[1]) * world_per_px
         placed.append((tuple(sorted(group)), text, position, point, own + step * np.array([dx, dy, dx, dy])))
     return [entry[:4] for entry in sorted(placed, key=lambda entry: entry[0])]
