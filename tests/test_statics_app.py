@@ -462,11 +462,12 @@ def test_the_workspace_is_coloured_one_way_at_a_time(app, label):
         if label == "3-DOF desktop arm":  # and the course's exercise: the pose that needs the largest ‖τ‖
             search = session.lessons[2]
             await client.set_gui("Find the pose that needs the largest ‖τ‖", True)
-            await until(lambda: search._map, what="the search's map")
+            await until(lambda: search._map and "Largest ‖τ‖" in search.result.content, what="the search's map")
             await until(lambda: workspace._cloud is None and client.gui[cloud_box]["value"] is False, what="the cloud gone")
             await client.set_gui(map_box, True)
             await until(lambda: statics._map is not None and not search._map and not search.obstacles(),
                         what="the search's map gone, its ball and label too")
+            assert "map is hidden" in search.result.content
         await client.close()
 
     asyncio.run(scenario())

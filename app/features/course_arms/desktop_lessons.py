@@ -214,7 +214,9 @@ class StaticsExercise(View):
 
     def hide_colouring(self) -> None:
         with self._map_lock:
-            self._clear()
+            if self._map:  # its numbers stay; the red ball they point to goes
+                self._clear()
+                self.result.content += "  \n*Its map is hidden, for the workspace's other colouring: find it again to show it.*"
 
     def _clear(self) -> None:
         for node in self._map[:2]:
