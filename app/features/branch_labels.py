@@ -124,7 +124,9 @@ def place(anchors: np.ndarray, texts: list[str], view: ScreenView, scale: float,
     whose points lie within ``merge_px`` of each other on the screen read as one ("1 · 8"), left
     to right; a label that would overlap another, or one of ``fixed`` ((position, text, scale,
     anchor): labels drawn by something else), moves to the nearest free spot on the canvas
-    (:data:`OFFSETS`; a leader line then joins it to its point).
+    (:data:`OFFSETS`; a leader line then joins it to its point). A label whose box would stand
+    over the canvas's edge is pulled onto it first (centred, on a canvas narrower than it), and
+    labels of several lines (legends) are placed before the others.
 
     >>> view = ScreenView((0.0, -3.0, 0.0), (0.0, 0.0, 0.0))
     >>> placed = place(np.array([[0.0, 0, 0], [0.001, 0, 0], [0.2, 0, 0]]), ["1", "8", "3"], view, 1.6)
