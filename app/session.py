@@ -113,6 +113,8 @@ class ArmSession:
         self.closed = False
         #: called after every change, e.g. to refresh the classroom's live panel
         self.observers: list[Callable[[Snapshot], None]] = []
+        #: called after a redraw with the state unchanged (a toggle): the live panel shows the overlay's gauges with it
+        self.redrawn: list[Callable[[], None]] = []
         scene = client.scene if server is None else server.scene
         self._senders: tuple[viser.ClientHandle | viser.ViserServer, ...] = (client,) if server is None else (client, server)
         gui = client.gui
@@ -230,6 +232,8 @@ class ArmSession:
         with self.state.lock:
             self.render(self.state.last)
         self.refresher.request(self)
+        for follower in self.redrawn:
+            follower()
 
     def render(self, snapshot: Snapshot) -> None:
         """The 3D scene, atomically, to every sender."""

@@ -11,7 +11,7 @@ import types
 import numpy as np
 import pytest
 
-from ur10core import challenges as C
+from ur10core import Arm, challenges as C
 from ur10core.dh import DHTable
 from ur10core.orientation import zyx_euler
 from ur10teach.features.branch_labels import JOIN
@@ -677,6 +677,84 @@ def test_a_numbers_challenges_answer_cannot_be_read_off_a_panel(classroom, title
             await client.close()
 
     without_failures(scenario, caplog)
+
+
+#: An arm the class is shown, and joints at which no joint value reads as one of the tool's coordinates.
+POSE_SHOWN = {"UR10 (the app's arm)": [20, -70, 100, -30, 60, 10], "Stanford arm (RRP + wrist)": [35, 70, 304, 40, 65, 40],
+              "KR210 (spherical wrist)": [20, 10, -20, 30, 40, 50]}
+
+
+@pytest.mark.parametrize("label", POSE_SHOWN)
+def test_a_question_about_the_pose_shown_is_answered_on_no_screen(classroom, label):
+    """A question about the pose shown is asked at the joints the class's arm stands at, and the class's live panel,
+    last in every browser's panel (the projector's too), showed that arm's tool pose and det J's factors: *Pose
+    shown: tool position* was answered there (until 2026-12-05), and by the decoupling folder, which starts from p:
+    the Stanford arm's tool frame is its wrist centre ("WC = p"), and the UR10's P5 is p moved 92 mm along z6. The
+    KR210's gripper box was filled with p, and filled again when its convention was switched. While it runs, no panel on either screen shows p, to
+    0.1 mm or to the mm; det J's gauges are off likewise; both are back at its end."""
+    from ur10core.serial import kr210_to_urdf
+    from ur10dev.viser_client import HELD_BACK_START
+    from ur10teach.style import number
+
+    assert HELD_BACK.startswith(HELD_BACK_START)  # (a browser whose tool pose is held back is ready all the same)
+    room = classroom.classroom
+
+    async def scenario():
+        teacher = await ViserClient(url(classroom)).connect()
+        await become_presenter(teacher, classroom)
+        student = await ViserClient(url(classroom), local_address="127.0.0.7").connect()
+        if room.choice != label:
+            await teacher.set_gui("Which arm", label)
+            await until(lambda: room.choice == label and room.presenter.session is not None
+                        and room.presenter.session.built, what="the class shown the arm")
+        arm = room.state.arm
+        await teacher.set_gui(typed_label(arm), " ".join(str(v) for v in POSE_SHOWN[label]))
+        await teacher.set_gui("Set these values", True)
+        q = arm.joints([np.radians(v) if kind == "R" else v / 1000 for v, kind in zip(POSE_SHOWN[label], arm.joint_types)])
+        await until(lambda: np.allclose(room.state.q, q), what="the class's arm at the pose")
+        await teacher.set_gui("Show singularity overlay", True)
+        live = room.live
+        await until(lambda: live.gauges.visible and live.flange.content.startswith("| n |"), what="the live panel in full")
+        p = 1000 * arm.fk(q)[:3, 3]
+        given = [re.compile(rf"(?<![\d.]){re.escape(number(abs(v), '.1f'))}(?!\d)") for v in p] + \
+                [re.compile(rf"(?<![\d.]){re.escape(number(abs(v), '.0f'))}(?![\d.])") for v in p]
+
+        await teacher.set_gui("Challenge", "Pose shown: tool position")
+        await teacher.set_gui("Start the challenge", True)
+        member = await until(lambda: next((m for m in room.members.values() if m.card is not None), None), what="the card")
+        held = [live.flange] + [view for session in (member.session, room.presenter.session)
+                                for view in (session.readouts.pose, session.decoupling.steps if arm.name in Arm.UR_PRESETS
+                                             else session.decoupling.readout,
+                                             *(lesson.readout for lesson in session.lessons if "position" in lesson.answers))]
+        for client in (teacher, student):
+            await until(lambda: all(client.markdown.get(m._impl.uuid) == HELD_BACK for m in held if m._impl.uuid in client.markdown),
+                        what="the readouts held back on the screen")
+            typed = [str(entry["value"]) for entry in client.gui.values() if entry["type"] == "GuiTextMessage"]
+            shown = [text for text in [*client.markdown.values(), *typed] if any(pattern.search(text) for pattern in given)]
+            assert not shown, shown
+            if arm.name == "kr210":  # (its gripper's box, filled with the target's pose in either convention)
+                await client.set_gui("ROS/Gazebo gripper convention", True)
+        if arm.name == "kr210":
+            await until(lambda: all(session.lessons[0].urdf.value for session in (member.session, room.presenter.session)),
+                        what="the gripper shown in the URDF convention")
+            for client in (teacher, student):
+                box = client.gui["x y z (mm) roll pitch yaw (°)"]
+                assert not any(pattern.search(str(box["value"])) for pattern in given), box
+        await teacher.set_gui("End and show the solution", True)
+        await until(lambda: live.flange.content.startswith("| n |"), what="the class's tool pose back")
+        if arm.name == "kr210":  # the box filled again
+            await until(lambda: member.session.lessons[0].typed.value.startswith(number(1000 * kr210_to_urdf(arm.fk(q))[0, 3], ".1f")),
+                        what="the gripper's box filled again")
+
+        await teacher.set_gui("Challenge", "Pose shown: det J")
+        await teacher.set_gui("Start the challenge", True)
+        await until(lambda: room.challenges.running and live.gauges.content == HELD_BACK, what="the live gauges held back")
+        await teacher.set_gui("End and show the solution", True)
+        await until(lambda: live.gauges.content != HELD_BACK, what="the gauges back")
+        for client in (teacher, student):
+            await client.close()
+
+    asyncio.run(scenario())
 
 
 def test_the_buttons_that_would_answer_a_velocity_a_branch_count_or_a_dh_table_are_off_while_it_runs(classroom):

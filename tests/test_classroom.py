@@ -212,6 +212,23 @@ def test_a_cloud_or_map_framed_as_its_arm_goes_leaves_the_browsers_camera(classr
     asyncio.run(scenario())
 
 
+def test_the_live_panel_shows_det_js_gauges_as_the_presenter_shows_the_overlay(classroom):
+    """Every browser's live panel shows det J's gauges while the presenter shows the singularity overlay. A tick
+    redraws the presenter's arm without changing it, and the live panel followed only changes: its gauges stayed as
+    they were until the arm next moved (until 2026-12-05)."""
+
+    async def scenario():
+        teacher = await ViserClient(f"http://127.0.0.1:{classroom.port}").connect()
+        await become_presenter(teacher, classroom)
+        gauges = classroom.classroom.live.gauges
+        for shown in (True, False, True):
+            await teacher.set_gui("Show singularity overlay", shown)
+            await until(lambda: gauges.visible is shown, what=f"the live gauges {'shown' if shown else 'hidden'}")
+        await teacher.close()
+
+    asyncio.run(scenario())
+
+
 def test_handing_over_and_leaving(classroom):
     async def scenario():
         first = await ViserClient(f"http://127.0.0.1:{classroom.port}").connect()

@@ -168,3 +168,18 @@ def test_joint_limit_is_the_ur_familys_alone():
     course = Arm.preset("course")
     q = course.specs.home
     assert int(course.ik(course.fk(q)).nearest(q, joint_limit=4.0).slot) == 4
+
+
+def test_the_readmes_tour_of_the_core_runs():
+    """The README's code block, with the arrays it names given values, runs as written."""
+    from pathlib import Path
+
+    readme = (Path(__file__).resolve().parent.parent / "README.md").read_text()
+    tour = readme.split("## The kinematics core", 1)[1].split("```python\n", 1)[1].split("```", 1)[0]
+    q = np.radians([10, -60, 80, -30, 70, 20])
+    names = {"np": np, "q": q, "q6": np.radians([10, 20, -30, 40, 50, 60]), "qdot": np.full(6, 0.1),
+             "twist": np.array([0.1, 0, 0, 0, 0, 0]), "force": np.array([0, 0, -10.0]), "moment": np.zeros(3),
+             "q0": q, "q1": q + 0.3, "T_goal": Arm.preset("course").fk(q + 0.3)}
+    exec(compile(tour, "README.md", "exec"), names)
+    assert names["reach"].counts.shape == (200, 200)
+    assert np.allclose(names["branch"].q, q) and names["points"].shape == (200_000, 3)

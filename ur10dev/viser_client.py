@@ -34,6 +34,8 @@ from .waiting import HANG_TIMEOUT, until
 
 FLANGE_MM = re.compile(r"\*\*([+-]?[0-9]+\.[0-9])\*\*")
 GHOST_FLANGE = re.compile(r"/ghosts/\w+/link6")
+#: How a readout a class challenge holds back begins (``ur10teach.view.HELD_BACK``): the tool pose's, while p is asked.
+HELD_BACK_START = "Off while the class challenge"
 #: A browser sends a gizmo's or a panel's updates at most this often (viser throttles them to 50 ms):
 #: a client that stands in for a student paces its drags so.
 BROWSER_SEND_INTERVAL = 0.05
@@ -84,6 +86,7 @@ class Received:
     #: behind the other clients of this process decoding theirs (a load generator's own delay)
     ghost_flanges_read: list[float] = dataclasses.field(default_factory=list)
     notifications: list[tuple[str, str]] = dataclasses.field(default_factory=list)
+    held_back: bool = False  #: a readout was held back by a class challenge (the tool pose's, say: no flange updates then)
     #: scene nodes added (name -> the message's type), removed, and each node's last position
     nodes: dict[str, str] = dataclasses.field(default_factory=dict)
     removed_nodes: list[str] = dataclasses.field(default_factory=list)
@@ -246,6 +249,7 @@ class ViserClient:
             self.markdown[message["uuid"]] = message.get("props", {}).get("_markdown", "")
         elif kind == "GuiUpdateMessage" and "_markdown" in message.get("updates", {}) and message["uuid"] in self.markdown:
             self.markdown[message["uuid"]] = message["updates"]["_markdown"]
+            self.received.held_back |= message["updates"]["_markdown"].startswith(HELD_BACK_START)
         if kind == "GuiUpdateMessage" and "visible" in message.get("updates", {}):
             for entry in self.gui.values():
                 if entry["uuid"] == message["uuid"]:
@@ -271,7 +275,7 @@ class ViserClient:
             self.received.notifications.append((props.get("title", ""), props.get("body", "")))
         # ready once the arm is drawn and either a whole session (own gizmo and panel) is
         # built or, in the classroom's shared mode, the watcher's controls are there
-        if self.received.flange_updates and (
+        if (self.received.flange_updates or self.received.held_back) and (
             (self.gizmo_owner is not None and "Show workspace cloud" in self.gui) or "Explore on my own" in self.gui
         ):
             self.ready.set()

@@ -103,7 +103,9 @@ class DecouplingView(View):
     (the UR family, the small arms), the folder says why its pose does not split, and the UR family's shows its
     own steps instead, with P5 named in 3D when asked."""
 
-    answers = ("theta1", "wrist_centre")  # the UR family's steps give both θ1; a split gives WC
+    #: the UR family's steps give both θ1; a split gives WC; both start from the tool pose (P5 and WC are p moved
+    #: along the tool's axes; the Stanford arm's WC is p)
+    answers = ("theta1", "wrist_centre", "position")
 
     def __init__(self, gui: viser.GuiApi, session: Session) -> None:
         arm = self._arm = session.arm

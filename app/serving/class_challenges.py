@@ -92,6 +92,7 @@ class ClassChallenges:
         if on_answer:  # so the class's arm goes home
             member.session.apply(lambda arm_state: arm_state.set_joints(home, cause="typed"))
         self.hold_back(member.session)
+        self.hold_back_live()
         self.show_goal(member)
         for other in members:
             try:
@@ -155,6 +156,13 @@ class ClassChallenges:
         run = self.run
         if run is not None and not run.ended and session is not None and session.arm == run.arm:
             session.hold_back(run.challenge.asks)
+
+    def hold_back_live(self) -> None:
+        """The class's live panel, which every browser shows (the projector too), gives away nothing of the running
+        challenge on the class's arm: a question about the pose shown is asked at the joints it shows."""
+        run, live = self.run, self.room.live
+        live.asked = run.challenge.asks if self.running and self.room.state.arm == run.arm else None
+        self.room.app.refresher.request(live)
 
     def set_aside(self, member: Member) -> None:
         """A student's own arm is going (they watch the class, or leave): where it is, kept for :meth:`resume`."""
@@ -226,6 +234,7 @@ class ClassChallenges:
                 raise ValueError("no challenge is running")
             run.ended = True
             members = list(self.room.members.values())
+        self.hold_back_live()
         challenge, arm = run.challenge, run.arm
         common = solution(challenge, arm, self.room.state.q)
         run.solution_words = common[1]

@@ -39,6 +39,7 @@ from ..features.singularity import factors_html
 from ..feedback import guard, notify
 from ..session import ArmSession
 from ..state import ArmState
+from ..view import HELD_BACK
 from ..viser_internals import after_broadcast
 from .class_challenges import ClassChallenges
 from .gate import RETURN_WINDOW, address_of
@@ -96,6 +97,9 @@ class LivePanel:
         self._state = state
         self._overlay = overlay  #: the class's singularity overlay: its gauges show with it (or always, without one)
         self.presenter_here = presenter_here
+        #: what a class challenge running on this arm asks (``Challenge.asks``): its answer is not shown here, on any
+        #: screen (``ClassChallenges.hold_back_live``)
+        self.asked: str | None = None
         self.closed = False  # the refresher's protocol
         self.on_render: list = []  #: called before each redraw (the shared scene's labels sized for the hall)
         # last in every panel: below the presenter's or an explorer's own controls
@@ -124,12 +128,13 @@ class LivePanel:
             sized()
         self.status.content = self._status()
         self.joints.content = joints_markdown(arm, snapshot.q)
-        self.branches.content = branches_markdown(snapshot)
-        self.flange.content = flange_markdown(snapshot)
+        # the branches give both θ1, the tool pose p, the gauges det J's factors (as the sessions' own folders do)
+        self.branches.content = HELD_BACK if self.asked == "theta1" else branches_markdown(snapshot)
+        self.flange.content = HELD_BACK if self.asked == "position" else flange_markdown(snapshot)
         # a shared widget's update is sent to every browser: the gauges only while the presenter shows the overlay
         self.gauges.visible = self._overlay is None or self._overlay.enabled
         if self.gauges.visible:
-            self.gauges.content = factors_html(arm, snapshot.q)
+            self.gauges.content = HELD_BACK if self.asked == "det_j" else factors_html(arm, snapshot.q)
 
 
 class Member:
@@ -316,6 +321,7 @@ class Classroom:
         session.follow_lecture_mode(member.camera.lecture)
         session.names_elsewhere = member.goal_name
         session.observers.append(lambda _: app.refresher.request(self.live))
+        session.redrawn.append(lambda: app.refresher.request(self.live))
         session.observers.append(lambda _: self.challenges.class_arm_moved())
         session.watch_camera(member.camera)  # the browser's own camera, for the workspace sections
         self.challenges.hold_back(session)  # the projector shows this panel
@@ -353,7 +359,7 @@ class Classroom:
         """
         if label not in CLASS_CHOICES:
             raise ValueError(f"arm: {label!r:.40} is not one of the choices")
-        app, failed = self.app, None
+        failed = None
         with self._lock:
             if member.closed or self.presenter is not member:
                 raise ValueError("only the presenter chooses the class's arm")
@@ -383,7 +389,7 @@ class Classroom:
             elif other.camera is not None:  # the presenter and the viewers look at the new arm
                 other.camera.show_arm(self._body_radius(), self.state.arm.up)
                 other.camera.frame()
-        app.refresher.request(self.live)
+        self.challenges.hold_back_live()  # (redraws it)
         if failed is not None:  # a challenge must not start on the arm the class had
             raise RuntimeError(f"the {label} could not be drawn; the class still sees the {previous}") from failed
         log.info("the class is shown the %s", label)

@@ -65,8 +65,15 @@ class GripperPose(View):
         return kr210_to_urdf(T) if self.urdf.value else T
 
     def _convention_changed(self) -> None:
-        self.typed.value = pose_text(self._shown(self._session.state.last.target))
+        if not self.held:
+            self.typed.value = pose_text(self._shown(self._session.state.last.target))
         self._session.refresher.request(self._session)
+
+    def hold_back(self, asked: str | None) -> None:
+        was = self.held
+        super().hold_back(asked)
+        if self.held != was:  # the box is filled with the target's pose, and the target is on the tool
+            self.typed.value = "" if self.held else pose_text(self._shown(self._session.state.last.target))
 
     def _go(self) -> None:
         T = parse_pose(str(self.typed.value))
