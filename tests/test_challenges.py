@@ -815,6 +815,8 @@ def test_a_teachers_file_is_read_in_its_units():
     (("factor = \"wrist\"", "count = 3"), 12, "needs 'factor'"),
     (("kind = \"singularity\"", "kind = \"singularity\"\nvelocity_mm_s = [0, 0, 1]"), 13, "not used by a singularity"),
     (("title = \"Stroke\"", "title = \"Reach it\""), 11, "two challenges titled"),
+    # the desk offers it as its own question, asked at the joints shown: the file's took its place in the list
+    (("title = \"Stroke\"", "title = \"Pose shown: det J\""), 11, "is the desk's own question about the pose shown"),
     (("title = \"Stroke\"", "title = \"Stroke"), 11, "Illegal character"),
     (("factor = \"wrist\"", "factor = \"stroke\"\nmin_tool_height_mm = 5000"), 14, "5000 mm above the floor"),  # TOML's own syntax error names its line
     # a table or a list where a name goes (for quantity it raised TypeError, "unhashable type")

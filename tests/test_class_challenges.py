@@ -690,8 +690,9 @@ def test_a_question_about_the_pose_shown_is_answered_on_no_screen(classroom, lab
     last in every browser's panel (the projector's too), showed that arm's tool pose and det J's factors: *Pose
     shown: tool position* was answered there (until 2026-12-05), and by the decoupling folder, which starts from p:
     the Stanford arm's tool frame is its wrist centre ("WC = p"), and the UR10's P5 is p moved 92 mm along z6. The
-    KR210's gripper box was filled with p, and filled again when its convention was switched. While it runs, no panel on either screen shows p, to
-    0.1 mm or to the mm; det J's gauges are off likewise; both are back at its end."""
+    KR210's gripper box was filled with p, and filled again when its convention was switched. While it runs, no
+    panel or box on either screen shows p, to 0.1 mm or to the mm, and det J's gauges are off likewise; both are
+    back at its end."""
     from ur10core.serial import kr210_to_urdf
     from ur10dev.viser_client import HELD_BACK_START
     from ur10teach.style import number

@@ -346,6 +346,9 @@ def parse(text: str, source: str = "challenges") -> tuple[Challenge, ...]:
     for index, key in enumerate(keys):
         if keys.index(key) != index:
             raise ValueError(f"{source}, line {_line(text, index, 'title')}: two challenges titled {challenges[index].title!r}")
+        if challenges[index].title in POSE_QUESTIONS:  # (the presenter's desk would offer one of the two)
+            raise ValueError(f"{source}, line {_line(text, index, 'title')}: {challenges[index].title!r} is the desk's own "
+                             "question about the pose shown: give yours another title")
     return tuple(challenges)
 
 

@@ -273,8 +273,8 @@ class ViserClient:
         elif kind == "NotificationShowMessage":
             props = message.get("props", {})
             self.received.notifications.append((props.get("title", ""), props.get("body", "")))
-        # ready once the arm is drawn and either a whole session (own gizmo and panel) is
-        # built or, in the classroom's shared mode, the watcher's controls are there
+        # ready once the arm is drawn (its tool pose read, or held back by a class challenge) and either a whole
+        # session (own gizmo and panel) is built or, in the classroom's shared mode, the watcher's controls are there
         if (self.received.flange_updates or self.received.held_back) and (
             (self.gizmo_owner is not None and "Show workspace cloud" in self.gui) or "Explore on my own" in self.gui
         ):
