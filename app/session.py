@@ -81,6 +81,9 @@ class ArmSession:
     rebuild, text, convention : optional
         For a typed table: ``rebuild(arm, text, convention)`` puts a newly typed arm in this
         one's place (the server does it); ``text`` and ``convention`` fill the DH editor.
+    asks : str, optional
+        What a class challenge running on this arm asks (``Challenge.asks``): the views hold back what would answer
+        it from the first draw on (``hold_back``), so that a browser is never sent it.
 
     Its widgets reach the browser as they are made, so a quick click can run a callback before
     the constructor ends: until the constructor sets ``built``, nothing is drawn, and the first
@@ -104,6 +107,7 @@ class ArmSession:
         models: ArmModels | None = None, state: ArmState | None = None, server: viser.ViserServer | None = None,
         drawing=None, own_camera: bool = True, lecture: bool = False, root: str | None = None,
         rebuild: Callable[[Arm, str, str], None] | None = None, text: str = "", convention: str = "standard",
+        asks: str | None = None,
     ) -> None:
         self.client = client
         self.arm = arm
@@ -172,6 +176,9 @@ class ArmSession:
                 labels.view = self._screen_view
         if self.camera is not None:
             self.watch_camera(self.camera)
+        if asks is not None:  # before anything is drawn: a browser is sent no readout a challenge asks
+            for view in self.panel_views:
+                view.hold_back(asks)
         self.built = True
         self.render(self.state.last)  # as a click during the build may have left it
         self.render_panel()

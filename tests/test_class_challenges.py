@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import asyncio
+import functools
 import itertools
 import math
 import re
@@ -679,6 +680,24 @@ def test_a_numbers_challenges_answer_cannot_be_read_off_a_panel(classroom, title
     without_failures(scenario, caplog)
 
 
+def recording(handle, texts: list, now, message, buffers) -> None:
+    """A headless browser's ``_handle`` that first keeps every text of ``message`` in ``texts``, as (its widget's
+    uuid, the text); not the uuids, names and owners themselves."""
+    def strings(value) -> None:
+        if isinstance(value, str):
+            texts.append((message.get("uuid"), value))
+        elif isinstance(value, dict):
+            for key, item in value.items():
+                if not key.endswith(("uuid", "name", "owner")):
+                    strings(item)
+        elif isinstance(value, (list, tuple)):
+            for item in value:
+                strings(item)
+
+    strings({key: value for key, value in message.items() if key != "type"})
+    handle(now, message, buffers)
+
+
 #: An arm the class is shown, and joints at which no joint value reads as one of the tool's coordinates.
 POSE_SHOWN = {"UR10 (the app's arm)": [20, -70, 100, -30, 60, 10], "Stanford arm (RRP + wrist)": [35, 70, 304, 40, 65, 40],
               "KR210 (spherical wrist)": [20, 10, -20, 30, 40, 50]}
@@ -690,9 +709,9 @@ def test_a_question_about_the_pose_shown_is_answered_on_no_screen(classroom, lab
     last in every browser's panel (the projector's too), showed that arm's tool pose and det J's factors: *Pose
     shown: tool position* was answered there (until 2026-12-05), and by the decoupling folder, which starts from p:
     the Stanford arm's tool frame is its wrist centre ("WC = p"), and the UR10's P5 is p moved 92 mm along z6. The
-    KR210's gripper box was filled with p, and filled again when its convention was switched. While it runs, no
-    panel or box on either screen shows p, to 0.1 mm or to the mm, and det J's gauges are off likewise; both are
-    back at its end."""
+    KR210's gripper box was filled with p, and filled again when its convention was switched. A student's arm, made
+    as the challenge started, was sent its tool pose and then held back. While it runs, no browser is sent p, to
+    0.1 mm or to the mm, in any panel or box, and det J's gauges are off likewise; both are back at its end."""
     from ur10core.serial import kr210_to_urdf
     from ur10dev.viser_client import HELD_BACK_START
     from ur10teach.style import number
@@ -721,6 +740,9 @@ def test_a_question_about_the_pose_shown_is_answered_on_no_screen(classroom, lab
                 [re.compile(rf"(?<![\d.]){re.escape(number(abs(v), '.0f'))}(?![\d.])") for v in p]
 
         await teacher.set_gui("Challenge", "Pose shown: tool position")
+        sent = {teacher: [], student: []}  # every text each browser is sent from here on: a panel made now is made held
+        for client, texts in sent.items():
+            client._handle = functools.partial(recording, client._handle, texts)
         await teacher.set_gui("Start the challenge", True)
         member = await until(lambda: next((m for m in room.members.values() if m.card is not None), None), what="the card")
         held = [live.flange] + [view for session in (member.session, room.presenter.session)
@@ -730,8 +752,9 @@ def test_a_question_about_the_pose_shown_is_answered_on_no_screen(classroom, lab
         for client in (teacher, student):
             await until(lambda: all(client.markdown.get(m._impl.uuid) == HELD_BACK for m in held if m._impl.uuid in client.markdown),
                         what="the readouts held back on the screen")
-            typed = [str(entry["value"]) for entry in client.gui.values() if entry["type"] == "GuiTextMessage"]
-            shown = [text for text in [*client.markdown.values(), *typed] if any(pattern.search(text) for pattern in given)]
+            # (the live panel's last redraw before the start may arrive after it: its text now is held back, above)
+            shown = [text for uuid, text in sent[client] if uuid != live.flange._impl.uuid
+                     and any(pattern.search(text) for pattern in given)]
             assert not shown, shown
             if arm.name == "kr210":  # (its gripper's box, filled with the target's pose in either convention)
                 await client.set_gui("ROS/Gazebo gripper convention", True)
@@ -739,8 +762,10 @@ def test_a_question_about_the_pose_shown_is_answered_on_no_screen(classroom, lab
             await until(lambda: all(session.lessons[0].urdf.value for session in (member.session, room.presenter.session)),
                         what="the gripper shown in the URDF convention")
             for client in (teacher, student):
-                box = client.gui["x y z (mm) roll pitch yaw (°)"]
-                assert not any(pattern.search(str(box["value"])) for pattern in given), box
+                assert "x y z (mm) roll pitch yaw (°)" in client.gui
+                shown = [text for uuid, text in sent[client] if uuid != live.flange._impl.uuid
+                         and any(pattern.search(text) for pattern in given)]
+                assert not shown, shown
         await teacher.set_gui("End and show the solution", True)
         await until(lambda: live.flange.content.startswith("| n |"), what="the class's tool pose back")
         if arm.name == "kr210":  # the box filled again
@@ -752,6 +777,35 @@ def test_a_question_about_the_pose_shown_is_answered_on_no_screen(classroom, lab
         await until(lambda: room.challenges.running and live.gauges.content == HELD_BACK, what="the live gauges held back")
         await teacher.set_gui("End and show the solution", True)
         await until(lambda: live.gauges.content != HELD_BACK, what="the gauges back")
+        for client in (teacher, student):
+            await client.close()
+
+    asyncio.run(scenario())
+
+
+def test_a_student_joining_a_dh_table_challenge_is_not_sent_the_table(classroom):
+    """A student's arm is made as the challenge starts. Its *DH table* folder was made with the table in it and then
+    hidden: hidden in the panel, but sent to the browser (until 2026-12-05). A panel made while a challenge runs is
+    made with what it asks held back, and the table comes at the end."""
+    from ur10teach.features.dh_table import dh_table_markdown
+
+    room = classroom.classroom
+
+    async def scenario():
+        teacher = await ViserClient(url(classroom)).connect()
+        await become_presenter(teacher, classroom)
+        student = await ViserClient(url(classroom), local_address="127.0.0.7").connect()
+        rows = [line for line in dh_table_markdown(room.state.arm.dh).splitlines()[2:]]  # the table's rows
+        sent: list = []
+        student._handle = functools.partial(recording, student._handle, sent)
+        await teacher.set_gui("Challenge", "Type the UR10's DH table")
+        await teacher.set_gui("Start the challenge", True)
+        member = await until(lambda: next((m for m in room.members.values() if m.card is not None), None), what="the card")
+        table = member.session.dh_table.table
+        await until(lambda: student.markdown.get(member.session.dh_table.held_back._impl.uuid) == HELD_BACK, what="the folder held back")
+        assert not [text for _, text in sent if any(row in text for row in rows)]
+        await teacher.set_gui("End and show the solution", True)
+        await until(lambda: all(row in student.markdown.get(table._impl.uuid, "") for row in rows), what="the table at the end")
         for client in (teacher, student):
             await client.close()
 

@@ -73,9 +73,10 @@ class DHTableView(View):
             self.highlight = gui.add_dropdown("Show a row on the arm", self.row_choices, initial_value="none",
                                               hint="Its d and a as segments, its θ and α as arcs, with their values")
             self.row_values = gui.add_markdown("")
-            self.table = gui.add_markdown(f"**{arm.description}.** As defined ({arm.convention} DH):\n\n" + dh_table_markdown(arm.dh)
-                                          + f"\n\nThe same chain in {other.convention} DH (the tool pose is the same; "
-                                          "the frames slide to the neighbouring joint axes):\n\n" + dh_table_markdown(other))
+            self._table = (f"**{arm.description}.** As defined ({arm.convention} DH):\n\n" + dh_table_markdown(arm.dh)
+                           + f"\n\nThe same chain in {other.convention} DH (the tool pose is the same; "
+                           "the frames slide to the neighbouring joint axes):\n\n" + dh_table_markdown(other))
+            self.table = gui.add_markdown("")  # (filled by render_panel unless a challenge asks the table)
             self.held_back = gui.add_markdown("", visible=False)
         self.show_frames.on_update(session.guard(lambda _: self._apply()))
         self.highlight.on_update(session.guard(lambda _: self._apply()))
@@ -103,6 +104,8 @@ class DHTableView(View):
     def render_panel(self, snapshot: Snapshot) -> None:
         if self._session.arm.dh is None:
             return
+        if self.held is None and self.table.content != self._table:
+            self.table.content = self._table
         row = self._frames.highlight_row
         self.row_values.content = "" if row is None else row_values_markdown(self._session.arm, snapshot.q, row)
 

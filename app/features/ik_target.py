@@ -503,7 +503,7 @@ class IKTarget(View):
                                                       "meshes, translucent") if len(styles) > 1 else None)
             self.branch_buttons = gui.add_button_group("Use branch", tuple(str(k + 1) for k in range(slots)))
             self.branch_refusal = Beside(gui)  # a branch this target does not have, or beyond a joint limit
-            self.branches = gui.add_markdown(branches_markdown(snapshot))
+            self.branches = gui.add_markdown("")  # (filled by the first render_panel, held back if a challenge asks θ1)
             self.typed_pose = gui.add_text(label, "", hint=hint)
             self.move_button = gui.add_button("Move target here", icon=viser.Icon.TARGET)
             self.refusal = Beside(gui)

@@ -72,7 +72,7 @@ class Readouts(View):
     def __init__(self, gui: viser.GuiApi, first: Snapshot) -> None:
         folder = gui.add_folder(pose_title(first), expand_by_default=False)
         with folder:
-            self.pose = gui.add_markdown(flange_markdown(first))
+            self.pose = gui.add_markdown("")  # (filled by the first render_panel, held back if a challenge asks p)
         self.folders = (folder,)
 
     def render_panel(self, snapshot: Snapshot) -> None:

@@ -326,7 +326,7 @@ class Singularities(View):
                                  "that have a DH table and a factored det J; the gauges below are what there is.")
             if arm.name in arm.UR_PRESETS:
                 gui.add_html("<div style='font-size:1.05em'>" + symbolic.det_j_mathml() + "</div>")
-            self.gauges = gui.add_html(factors_html(arm, session.state.q))
+            self.gauges = gui.add_html("")  # (filled by the first render_panel, held back if a challenge asks det J)
             self.plot = gui.add_uplot(
                 data=(np.zeros(2, np.float32), *(np.ones(2, np.float32) for _ in names)),
                 series=(viser.uplot.Series(label="time (s)"),

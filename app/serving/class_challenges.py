@@ -150,19 +150,23 @@ class ClassChallenges:
             if not np.array_equal(session.state.q, start):
                 session.apply(lambda state: state.set_joints(start, cause="typed"))
 
+    def asked_of(self, arm: Arm) -> str | None:
+        """What the running challenge asks (``Challenge.asks``) if it runs on ``arm``, else None: what a panel of
+        that arm holds back (a session made now is handed it: ``ArmSession(asks=...)``)."""
+        return self.run.challenge.asks if self.running and arm == self.run.arm else None
+
     def hold_back(self, session) -> None:
         """Nothing in ``session``'s panel gives away the running challenge (on its arm): a student's, and the
         presenter's, which the class sees on the projector."""
-        run = self.run
-        if run is not None and not run.ended and session is not None and session.arm == run.arm:
-            session.hold_back(run.challenge.asks)
+        asked = None if session is None else self.asked_of(session.arm)
+        if asked is not None:
+            session.hold_back(asked)
 
     def hold_back_live(self) -> None:
         """The class's live panel, which every browser shows (the projector too), gives away nothing of the running
         challenge on the class's arm: a question about the pose shown is asked at the joints it shows."""
-        run, live = self.run, self.room.live
-        live.asked = run.challenge.asks if self.running and self.room.state.arm == run.arm else None
-        self.room.app.refresher.request(live)
+        self.room.live.asked = self.asked_of(self.room.state.arm)
+        self.room.app.refresher.request(self.room.live)
 
     def set_aside(self, member: Member) -> None:
         """A student's own arm is going (they watch the class, or leave): where it is, kept for :meth:`resume`."""

@@ -317,14 +317,13 @@ class Classroom:
         """The presenter's panel and gizmo, driving the class's arm in the shared scene."""
         app, arm = self.app, self.state.arm
         session = ArmSession(member.client, arm, app.refresher, app.drags, models=self._models(arm), state=self.state,
-                             server=app.server, drawing=self.drawing, own_camera=False)
+                             server=app.server, drawing=self.drawing, own_camera=False, asks=self.challenges.asked_of(arm))
         session.follow_lecture_mode(member.camera.lecture)
         session.names_elsewhere = member.goal_name
         session.observers.append(lambda _: app.refresher.request(self.live))
         session.redrawn.append(lambda: app.refresher.request(self.live))
         session.observers.append(lambda _: self.challenges.class_arm_moved())
         session.watch_camera(member.camera)  # the browser's own camera, for the workspace sections
-        self.challenges.hold_back(session)  # the projector shows this panel
         app.janitor.settle()
         return session
 
@@ -428,7 +427,7 @@ class Classroom:
                 member.client, arm, app.refresher, app.drags, models=models, own_camera=False,
                 state=ArmState(arm, self.state.q if arm == self.state.arm else None,
                                body_points=None if models is None else models.outline),
-                root=DESKTOP_EXPLORER_ROOT if arm.dh is None else EXPLORER_ROOT)
+                root=DESKTOP_EXPLORER_ROOT if arm.dh is None else EXPLORER_ROOT, asks=self.challenges.asked_of(arm))
             member.session.show_choices(member.displays.get(arm, {}))
             member.session.follow_lecture_mode(member.camera.lecture)
             member.session.names_elsewhere = member.goal_name

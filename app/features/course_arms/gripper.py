@@ -55,9 +55,10 @@ class GripperPose(View):
             self.urdf = gui.add_checkbox("ROS/Gazebo gripper convention", False,
                                          hint="The simulation model's gripper frame: R_DH = R_URDF · Rz(180°) · Ry(−90°)")
             self.readout = gui.add_markdown("")
-            self.typed = gui.add_text("x y z (mm) roll pitch yaw (°)", pose_text(session.state.last.target))
+            self.typed = gui.add_text("x y z (mm) roll pitch yaw (°)", "")  # (filled by render_panel unless held)
             self.go = gui.add_button("Go to this pose", icon=viser.Icon.ARROW_RIGHT)
             self.refusal = Beside(gui)
+        self._filled = False  #: the box has had the target's pose put in (since the last challenge that asked p)
         self.urdf.on_update(session.guard(lambda _: self._convention_changed()))
         self.go.on_click(session.guard(lambda _: self._go(), beside=self.refusal))
 
@@ -65,15 +66,13 @@ class GripperPose(View):
         return kr210_to_urdf(T) if self.urdf.value else T
 
     def _convention_changed(self) -> None:
-        if not self.held:
-            self.typed.value = pose_text(self._shown(self._session.state.last.target))
+        self._filled = False  # the target's pose again, in the convention chosen
         self._session.refresher.request(self._session)
 
     def hold_back(self, asked: str | None) -> None:
-        was = self.held
         super().hold_back(asked)
-        if self.held != was:  # the box is filled with the target's pose, and the target is on the tool
-            self.typed.value = "" if self.held else pose_text(self._shown(self._session.state.last.target))
+        if self.held and self._filled:  # the box is filled with the target's pose, and the target is on the tool
+            self.typed.value, self._filled = "", False
 
     def _go(self) -> None:
         T = parse_pose(str(self.typed.value))
@@ -85,5 +84,7 @@ class GripperPose(View):
         if self.held:
             self.readout.content = HELD_BACK
             return
+        if not self._filled:  # first, after a switch of convention, or after a challenge that asked p
+            self.typed.value, self._filled = pose_text(self._shown(snapshot.target)), True
         name = "URDF (ROS/Gazebo)" if self.urdf.value else "DH (frame G)"
         self.readout.content = f"Target in the {name} convention: **{pose_text(self._shown(snapshot.target))}**"
