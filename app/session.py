@@ -176,9 +176,8 @@ class ArmSession:
                 labels.view = self._screen_view
         if self.camera is not None:
             self.watch_camera(self.camera)
-        if asks is not None:  # before anything is drawn: a browser is sent no readout a challenge asks
-            for view in self.panel_views:
-                view.hold_back(asks)
+        if asks is not None:  # before anything is drawn (not yet built): a browser is sent no readout a challenge asks
+            self.hold_back(asks)
         self.built = True
         self.render(self.state.last)  # as a click during the build may have left it
         self.render_panel()

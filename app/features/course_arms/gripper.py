@@ -84,7 +84,8 @@ class GripperPose(View):
         if self.held:
             self.readout.content = HELD_BACK
             return
+        shown = pose_text(self._shown(snapshot.target))
         if not self._filled:  # first, after a switch of convention, or after a challenge that asked p
-            self.typed.value, self._filled = pose_text(self._shown(snapshot.target)), True
+            self.typed.value, self._filled = shown, True
         name = "URDF (ROS/Gazebo)" if self.urdf.value else "DH (frame G)"
-        self.readout.content = f"Target in the {name} convention: **{pose_text(self._shown(snapshot.target))}**"
+        self.readout.content = f"Target in the {name} convention: **{shown}**"
