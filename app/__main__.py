@@ -57,8 +57,9 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
                         help="lecture mode in every browser: type of 20 px and more, thick lines (each browser "
                              "can switch it in its View folder)")
     parser.add_argument("--light", action="store_true",
-                        help="a light view for laptops without a graphics driver (software WebGL): the arm and "
-                             "its ghosts toon-shaded, no shadows, no environment lighting; drawn several times faster")
+                        help="the light view in every browser, for laptops without a graphics driver (software "
+                             "WebGL): the schematic arm, toon-shaded, no shadows, no environment lighting; drawn several times "
+                             "faster (each browser can switch it in its View folder)")
     parser.add_argument("--allow-origin", action="append", default=[], metavar="URL",
                         help="a web page besides the app's own that may connect, e.g. http://course-site:8000 "
                              "(repeat for more; by default only the app's own page can)")

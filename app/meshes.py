@@ -89,10 +89,11 @@ def load_real_links(model: str = "ur10", mesh_dir: Path = MESH_DIR) -> tuple[Lin
 class ArmModels:
     """The ways one arm can be drawn, by name (the first is the default), and how they are shaded.
 
-    ``light`` (``--light``): toon shading and no shadows (the server also turns off the shadow
-    maps and the environment map). Software WebGL, on a laptop without a graphics driver,
+    ``light`` (``--light``): toon shading and no shadows, as every browser's light view starts
+    (``ur10teach.features.light_view``). Software WebGL, on a laptop without a graphics driver,
     draws the arm and its translucent ghosts with physically based shading, shadows and
-    image-based lighting several times more slowly.
+    image-based lighting several times more slowly; without the environment map's light, only
+    toon shading keeps the ghosts' colours.
     """
 
     by_name: dict[str, tuple[LinkMesh, ...]]
@@ -100,8 +101,8 @@ class ArmModels:
 
     @property
     def material(self) -> str:
-        """viser's material for the arm and its ghosts."""
-        return "toon3" if self.light else "standard"
+        """viser's material for the arm and its ghosts (:func:`material`)."""
+        return material(self.light)
 
     @property
     def shadows(self) -> bool:
@@ -119,6 +120,11 @@ class ArmModels:
     def outline(self) -> np.ndarray:
         """(7, P, 3) the default model's :func:`body_points`: the floor check tests the arm that would collide."""
         return body_points(self.default)
+
+
+def material(light: bool) -> str:
+    """viser's material for the arm and its ghosts, in the light view or out of it."""
+    return "toon3" if light else "standard"
 
 
 @functools.lru_cache(maxsize=None)

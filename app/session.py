@@ -28,6 +28,7 @@ from .features.ellipsoids import EllipsoidsView
 from .features.ik_target import IKTarget, pose_from_gizmo
 from .features.joint_panel import JointPanel
 from .features.lecture import LectureMode, size_chart, size_labels
+from .features.light_view import LightView
 from .features.motion_lessons import MotionLessons
 from .features.reach_map import ReachMapView
 from .features.readouts import Readouts
@@ -37,7 +38,7 @@ from .features.statics import StaticsView
 from .features.velocity import VelocityView
 from .features.workspace import WorkspaceView
 from .feedback import Beside, guard, notify
-from .meshes import ArmModels
+from .meshes import SCHEMATIC, ArmModels, material
 from .serving.metrics import LATENCY
 from .serving.workers import DragQueue, PanelRefresher
 from .state import ArmState, Snapshot
@@ -74,9 +75,9 @@ class ArmSession:
         server's queue, which a redraw batches (``atomic``) and sends at once (``flush``) as it
         does the browser's own: viser otherwise holds a message up to 1/60 s to batch it with
         the next, and a viewer could see the arm moved and its ghosts not yet.
-    own_camera, lecture : bool
+    own_camera, lecture, light : bool
         Build the browser's "View" folder (camera framing, :mod:`ur10teach.features.camera`; lecture
-        mode, starting as ``lecture`` says), handed the browser's camera moves by whoever holds the session
+        mode and the light view, starting as ``lecture`` and ``light`` say), handed the browser's camera moves by whoever holds the session
         (``camera.relay_camera_moves``); the classroom builds one per browser instead.
     rebuild, text, convention : optional
         For a typed table: ``rebuild(arm, text, convention)`` puts a newly typed arm in this
@@ -97,6 +98,7 @@ class ArmSession:
     lessons: tuple = ()
     camera: CameraControls | None = None
     _lecture: LectureMode | None = None  #: the lecture switch it follows, once it follows one
+    _light: LightView | None = None  #: the light-view switch it follows, once it follows one
     #: the arm picker's label of this arm, and the typed table (arm, text, convention) it was
     #: built from: the server sets them, and keeps the state under them when the browser leaves the arm
     choice: str = ""
@@ -107,7 +109,7 @@ class ArmSession:
         models: ArmModels | None = None, state: ArmState | None = None, server: viser.ViserServer | None = None,
         drawing=None, own_camera: bool = True, lecture: bool = False, root: str | None = None,
         rebuild: Callable[[Arm, str, str], None] | None = None, text: str = "", convention: str = "standard",
-        asks: str | None = None,
+        asks: str | None = None, light: bool = False,
     ) -> None:
         self.client = client
         self.arm = arm
@@ -146,7 +148,8 @@ class ArmSession:
         self.lessons = LESSONS[arm.name](scene, gui, self) if arm.name in LESSONS else ()
         # its camera's moves are handed to it (``camera.relay_camera_moves``): viser would keep a callback of its own
         self.camera = (CameraControls(client, lambda: drawn.framed(self.state.last), self.guard, lecture,
-                                      body_radius=drawn.body_radius, up=arm.up, follow=False) if own_camera else None)
+                                      body_radius=drawn.body_radius, up=arm.up, follow=False, light=light)
+                       if own_camera else None)
         #: the scene whose 3D labels this browser's lecture mode sizes: its own (a shared one follows the server's)
         self._label_scene = scene if server is None else None
         #: (frame (4, 4)) -> the names drawn in this browser by something else (a challenge's target), as
@@ -160,6 +163,7 @@ class ArmSession:
         self.views = (drawn, *self.panel_views)
         if self.camera is not None:
             self.follow_lecture_mode(self.camera.lecture)
+            self.follow_light_view(self.camera.light)
         #: what the views name at moving points (``View.names``: the arrows' tips), placed apart before the
         #: drawing's own labels, which keep clear of them
         colours = [colour for _, _, colour in self._named()]
@@ -373,6 +377,23 @@ class ArmSession:
             size_chart(chart, on)
         self.refresher.request(self)
 
+    def follow_light_view(self, light: LightView) -> None:
+        """The arm drawn as the schematic while the browser's light view is on, its first model after (until this
+        session closes). Only a session with a drawing of its own follows: the class's arm is the presenter's."""
+        light.on_change.append(self._light_changed)
+        self._light = light
+        if light.on:
+            self._light_changed(True)
+
+    def _light_changed(self, on: bool) -> None:
+        names = self.drawing.names
+        if self.arm_model is None or SCHEMATIC not in names:
+            return
+        with self.state.lock:
+            self.drawing.set_material(material(on))  # without the environment map's light, toon keeps the colours
+            self.drawing.show(SCHEMATIC if on else names[0])  # ("Arm drawn as" follows at its next render)
+        self.redraw()
+
     def close(self) -> None:
         """The browser has gone (or handed over): stop drawing and let go of everything shared."""
         self._leave(lambda view: view.close())
@@ -386,6 +407,9 @@ class ArmSession:
         if self._lecture is not None and self._lecture_changed in self._lecture.on_change:
             self._lecture.on_change.remove(self._lecture_changed)
         self._lecture = None
+        if self._light is not None and self._light_changed in self._light.on_change:
+            self._light.on_change.remove(self._light_changed)
+        self._light = None
         if self.camera is not None and self._place_numbers in self.camera.on_moved:
             self.camera.on_moved.remove(self._place_numbers)
         self.closed = True

@@ -177,24 +177,25 @@ class ArmState:
     def parse_numbers(text: str, count: int, what: str = "joint values") -> np.ndarray:
         """``"30, 45, 26, 50, 60, 80"`` (commas or spaces, a ° allowed) → floats, with a message a student understands."""
         parts = typed_fields(text, what)
+        numbers = f"{count} number{'s' * (count != 1)}"
         if len(parts) != count:
-            numbers = f"{count} number{'s' * (count != 1)}"
             dotted = re.sub(r"(\d),(\d)", r"\1.\2", text.strip())  # decimal commas as points
             decimals = typed_fields(dotted, what)  # (not "1.184.3", from 1.184,3: no question then)
             if "," in text and len(decimals) == count and all(f.lstrip("+-").replace(".", "", 1).isdigit() for f in decimals):
                 raise ValueError(f"{what}: {numbers} here? Write decimals with a point: {dotted:.60}")
             if not parts:
                 raise ValueError(f"{what}: the box is empty; type {numbers} in it")
-            raise ValueError(f"{what}: expected {numbers}, got {len(parts)} in {text!r:.60}")
         values = []
-        for part in parts:
+        for part in parts:  # a word first: "512 mm 30 mm" is a unit typed, not six numbers for three
             try:
                 value = float(part)
             except ValueError:
-                raise ValueError(f"{what}: {part!r} is not a number") from None
+                raise ValueError(f"{what}: {part!r} is not a number; type the numbers alone") from None
             if not math.isfinite(value):
                 raise ValueError(f"{what}: {part!r} is not a finite number")
             values.append(value)
+        if len(values) != count:
+            raise ValueError(f"{what}: expected {numbers}, got {len(parts)} in {text!r:.60}")
         return np.array(values)
 
     # ------------------------------------------------------------------ changes

@@ -2,8 +2,9 @@
 
     python benchmarks/bench_light_view.py
 
-Starts the app in its own process (``ur10dev/app_process.py``), once as ``ur10-teach`` and
-once as ``ur10-teach --light``, and opens it in headless Chromium from Debian at 1024×768
+Starts the app in its own process (``ur10dev/app_process.py``), as ``ur10-teach``, as
+``ur10-teach --light``, and as ``ur10-teach`` with *Light view* ticked in the browser's View
+folder (one laptop's own choice), and opens it in headless Chromium from Debian at 1024×768
 with SwiftShader, the software renderer Chromium falls back on. Once the scene is complete,
 the mouse turns the view for :data:`SECONDS` (viser then draws every frame anew), and the page
 counts the frames drawn, each made to wait for the one before it (:data:`COUNT_FRAMES`). Target:
@@ -59,13 +60,17 @@ COUNT_FRAMES = """(() => {
 })();"""
 
 
-def frames_per_second(url: str, playwright) -> float:
+def frames_per_second(url: str, playwright, tick_light_view: bool = False) -> float:
     browser = launch(playwright)
     try:
         page = browser.new_page(viewport=WINDOW)
         page.add_init_script(COUNT_FRAMES)
         page.goto(url)
         page.wait_for_selector(CONNECTED, state="attached", timeout=60_000)
+        dismiss_software_notice(page)
+        if tick_light_view:
+            page.get_by_text("View", exact=True).first.click()
+            page.get_by_role("checkbox", name="Light view").check()
         page.wait_for_timeout(1000 * SETTLE_S)
         dismiss_software_notice(page)
         box = page.locator("canvas").first.bounding_box()
@@ -91,11 +96,12 @@ def main() -> None:
     quiet_machine(max_wait=300.0)
     rows = []
     with sync_playwright() as playwright:
-        for label, args in (("default view", ()), ("light view (`--light`)", ("--light",))):
+        for label, args, tick in (("default view", (), False), ("light view (`--light`)", ("--light",), True),
+                                  ("default, *Light view* ticked in the browser", (), True)):
             with running_app(*args) as app:
-                fps = frames_per_second(app.url, playwright)
-            verdict = ("PASS" if fps >= TARGET_FPS else "FAIL") if args else "(reference)"
-            rows.append([label, f"{fps:.1f}", f"≥ {TARGET_FPS:.0f}" if args else "—", verdict])
+                fps = frames_per_second(app.url, playwright, tick_light_view=tick and not args)
+            verdict = ("PASS" if fps >= TARGET_FPS else "FAIL") if tick else "(reference)"
+            rows.append([label, f"{fps:.1f}", f"≥ {TARGET_FPS:.0f}" if tick else "—", verdict])
             print(rows[-1], flush=True)
     body = "\n".join([
         "## Frames a second without a graphics driver (`benchmarks/bench_light_view.py`)",
@@ -103,7 +109,9 @@ def main() -> None:
         f"Run: {machine()}. The app in its own process, opened in headless Chromium from Debian at "
         f"{WINDOW['width']}×{WINDOW['height']} with SwiftShader (software WebGL). Once the scene is complete the mouse "
         f"turns the view for {SECONDS:.0f} s, and the page counts the frames drawn (each waits for the last to finish, "
-        "by reading a pixel back). The UR10 at its home pose with its seven ghosts.",
+        "by reading a pixel back). The UR10 at its home pose with its seven ghosts. *Light view* ticked in one "
+        "browser turns off its shadows and environment lighting and draws its arm as the schematic, toon-shaded; "
+        "`--light` ticks it in every browser.",
         "",
         table(["view", "frames a second", "target", ""], rows),
     ])

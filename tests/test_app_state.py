@@ -75,6 +75,11 @@ def test_parse_typed_degrees():
         ArmState.parse_numbers("30, 45, abc, 50, 60, 80", 6)
     with pytest.raises(ValueError, match="expected 6 numbers, got 3"):
         ArmState.parse_numbers("1, 2, 3", 6)
+    # a unit or a name typed with the numbers is named, not counted as more numbers ("expected 3 numbers, got 6")
+    with pytest.raises(ValueError, match="^target: 'mm' is not a number; type the numbers alone$"):
+        ArmState.parse_numbers("512 mm, -256 mm, 243 mm", 3, "target")
+    with pytest.raises(ValueError, match="'x' is not a number"):
+        ArmState.parse_numbers("x = 512, y = -256, z = 243", 3, "target")
     with pytest.raises(ValueError, match="^target: the box is empty; type 3 numbers in it$"):  # not "got 0 in ''"
         ArmState.parse_numbers("  ", 3, "target")
     with pytest.raises(ValueError, match="'inf' is not a finite number"):

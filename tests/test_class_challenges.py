@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import asyncio
+import codecs
 import functools
 import itertools
 import math
@@ -199,7 +200,7 @@ def test_thirty_students_every_kind_and_the_projector_counts_exactly(classroom):
                 q, _ = C.solution(challenge, classroom.arm)
                 assert all(np.allclose(member_of(k).session.state.q, q) for k in range(STUDENTS))
                 assert np.allclose(room.state.q, q)
-            rows = room.challenges.run.results_csv().decode().splitlines()
+            rows = room.challenges.run.results_csv().decode("utf-8-sig").splitlines()
             assert len(rows) == 1 + STUDENTS and rows[0] == "student,nickname,attempts,solved,seconds_to_solve,final_answer"
             assert sum(",yes," in row for row in rows) == PLAN.count("right")
         for client in (teacher, *students):
@@ -344,6 +345,40 @@ def test_a_client_cannot_claim_solved_and_checks_are_paced(classroom):
     asyncio.run(scenario())
 
 
+def test_the_teacher_takes_the_nicknames_off_the_projector(classroom):
+    """A nickname the teacher would rather not show is on the projector by that student's tool as soon as it is
+    typed. *Nicknames on the projector* off names every tool by its student's number, at once, for the rest of
+    the class; the results file keeps the nicknames, and ticking it again brings them back."""
+    room = classroom.classroom
+
+    async def scenario():
+        teacher, student, member = await a_student_in(classroom, "Reach the target", "127.0.0.12")
+        await student.set_gui("Your nickname (up to 20 characters)", "Not for the class")
+        await until(lambda: member.student.nickname == "Not for the class", what="the nickname")
+        await drag_a_little(student, member.session)
+
+        def projected() -> set[str]:
+            tools = room.presenter.tools
+            return set() if tools is None or tools.names is None else {
+                name for label in tools.names.labels if label.visible for name in label.text.split(JOIN)}
+
+        numbered = f"student {member.student.number}"
+        await until(lambda: projected() == {"Not for the class"}, what="the nickname on the projector")
+        await teacher.set_gui("Nicknames on the projector", False)
+        await until(lambda: projected() == {numbered}, what="the student's number in its place")
+        assert not room.challenges.nicknames and "Not for the class" in room.challenges.run.results_csv().decode("utf-8-sig")
+        dot = np.array(room.presenter.tools.working.points)
+        await drag_a_little(student, member.session)  # the projector redrawn as the student works: still the number
+        await until(lambda: not np.array_equal(room.presenter.tools.working.points, dot), what="the student's dot moved")
+        assert projected() == {numbered}
+        await teacher.set_gui("Nicknames on the projector", True)
+        await until(lambda: projected() == {"Not for the class"}, what="the nickname back")
+        for client in (teacher, student):
+            await client.close()
+
+    asyncio.run(scenario())
+
+
 def test_on_the_ur10e_the_holding_challenge_gives_and_checks_the_ur10es_masses():
     """The ur10e had no link masses until 2026-12-04 (no holding challenge there); the task's terms gave the
     CB3 UR10's masses on any preset, where the check took the preset's. The preview, the student's task and the
@@ -394,6 +429,10 @@ def test_run_bookkeeping_bounds_and_time_limit():
     assert run.summary().seconds_left == 0.0 and run.summary().solved == 1
     assert clean_nickname("a\nb\tc\u200bd") == "a b cd" and len(clean_nickname("x" * 100)) == 20
     assert spreadsheet_safe("=HYPERLINK(1)") == "'=HYPERLINK(1)" and spreadsheet_safe("Ada") == "Ada"
+    # the results file opens in Excel with "Zoë" as typed: UTF-8 marked as such (Excel reads unmarked files as ANSI)
+    run.rename(ada, "Zoë")
+    results = run.results_csv()
+    assert results.startswith(codecs.BOM_UTF8) and "\r\n1,Zoë,1,yes," in results.decode("utf-8-sig")
     # one computer's departed attempt goes back to it, and only to it
     run.leave(ada, {"numbers": "1 2 3"})
     bo = run.join("10.0.0.2")

@@ -176,6 +176,33 @@ def test_exploring_on_your_own_and_back(classroom):
     asyncio.run(scenario())
 
 
+def test_a_viewers_light_view_lights_its_own_browser_and_draws_its_own_arm(classroom):
+    """A viewer's *Light view* turns off its own browser's shadows and environment lighting; the class's arm stays as
+    the presenter draws it, and the viewer's own arm, once exploring, is drawn as the schematic."""
+    from ur10teach.meshes import REAL, SCHEMATIC
+
+    async def scenario():
+        teacher = await ViserClient(f"http://127.0.0.1:{classroom.port}").connect()
+        student = await ViserClient(f"http://127.0.0.1:{classroom.port}").connect()
+        await become_presenter(teacher, classroom)
+        await student.set_gui("Light view", True)
+        await until(lambda: (student.received.shadows, student.received.environment_image) == (False, False),
+                    what="the viewer's light view")
+        assert classroom.classroom.drawing.robot.model == REAL and teacher.received.shadows is None
+        await student.set_gui("Explore on my own", True)
+        explorer = member_of(classroom, 1)
+        await until(lambda: explorer.session is not None and explorer.session.drawing.robot.model == SCHEMATIC,
+                    what="the explorer's own arm as the schematic")
+        await student.set_gui("Light view", False)
+        await until(lambda: explorer.session.drawing.robot.model == REAL and student.received.shadows,
+                    what="UR's meshes and shadows back")
+        assert classroom.classroom.drawing.robot.model == REAL
+        for client in (teacher, student):
+            await client.close()
+
+    asyncio.run(scenario())
+
+
 @pytest.mark.parametrize("shown", ["cloud", "reach map"])
 def test_a_cloud_or_map_framed_as_its_arm_goes_leaves_the_browsers_camera(classroom, monkeypatch, shown):
     """A classroom's camera outlives an explorer's arm. A cloud (or branch-count map) made as the arm went was framed

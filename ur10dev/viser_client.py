@@ -95,6 +95,9 @@ class Received:
     visible: dict[str, bool] = dataclasses.field(default_factory=dict)
     removed_gui: set[str] = dataclasses.field(default_factory=set)
     panel_label: str | None = None  #: the panel's title, once the server has set it for this browser
+    #: the 3D view's lighting as last set for this browser: shadows cast, an environment map's image sent
+    shadows: bool | None = None
+    environment_image: bool | None = None
     #: seconds from the server sending a frame (its perf_counter, the same clock) to its arrival here
     delivery_lag: list[float] = dataclasses.field(default_factory=list)
 
@@ -270,6 +273,10 @@ class ViserClient:
             self._read_flange(now, message["updates"]["_markdown"])
         elif kind == "SetGuiPanelLabelMessage":
             self.received.panel_label = message.get("label")
+        elif kind == "EnableLightsMessage":
+            self.received.shadows = bool(message["enabled"] and message["cast_shadow"])
+        elif kind == "EnvironmentMapMessage":
+            self.received.environment_image = message.get("hdri_data") is not None
         elif kind == "NotificationShowMessage":
             props = message.get("props", {})
             self.received.notifications.append((props.get("title", ""), props.get("body", "")))

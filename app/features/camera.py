@@ -1,4 +1,5 @@
-"""The "View" folder: frame what is drawn in the part of the window the panel leaves, the standard views, lecture mode.
+"""The "View" folder: frame what is drawn in the part of the window the panel leaves, the standard views, lecture mode,
+the light view.
 
 The panel is docked at the right edge (``main_panel.dock_right``), so the 3D canvas is
 the window minus the panel and nothing of the arm hides under it. The camera frames the
@@ -22,6 +23,7 @@ from ..state import Snapshot
 from ..view import View
 from .branch_labels import DEFAULT_VIEW, ScreenView
 from .lecture import LectureMode
+from .light_view import LightView
 
 #: Where each view looks from (a direction from the arm towards the camera; z is up).
 VIEWS = {
@@ -139,8 +141,9 @@ class CameraControls(View):
         The newest snapshot of the arm this browser is looking at.
     guard : callable
         Wraps a handler so that nothing it raises escapes (``ArmSession.guard``, ``feedback.guard``).
-    lecture : bool
-        Start in lecture mode (:mod:`ur10teach.features.lecture`, whose switch is in this folder too).
+    lecture, light : bool
+        Start in lecture mode (:mod:`ur10teach.features.lecture`) or in the light view
+        (:mod:`ur10teach.features.light_view`), whose switches are in this folder too.
     body_radius : float
         Room kept around each joint (m): the UR10's link bodies by default; a course arm's
         rods and gizmo scale with its reach.
@@ -153,7 +156,7 @@ class CameraControls(View):
 
     def __init__(self, client: viser.ClientHandle, snapshot: Callable[[], Snapshot],
                  guard: Callable[[Callable], Callable], lecture: bool = False, body_radius: float = BODY_RADIUS,
-                 up=(0.0, 0.0, 1.0), follow: bool = True) -> None:
+                 up=(0.0, 0.0, 1.0), follow: bool = True, light: bool = False) -> None:
         self._client = client
         self._views = views_for(up)  #: the "Look from" choices, named in the axes of the arm shown
         self.body_radius = body_radius  #: the arm shown's (:meth:`show_arm`)
@@ -176,6 +179,7 @@ class CameraControls(View):
             self.frame_button = gui.add_button("Frame the arm", icon=viser.Icon.FOCUS_CENTERED,
                                                hint="The arm, its ghosts, its target and what else is shown")
         self.lecture = LectureMode(gui, folder, lecture, guard)
+        self.light = LightView(client, folder, light, guard)
         self.direction.on_update(guard(lambda _: self.frame()))
         self.frame_button.on_click(guard(lambda _: self.frame()))
         if follow:

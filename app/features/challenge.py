@@ -66,7 +66,8 @@ class ChallengeDesk:
                  start: Callable[[Challenge, float | None], None], end: Callable[[], None], download: Callable[[], None],
                  run: Callable[[], ChallengeRun | None], on_render: Callable[[], None] = lambda: None,
                  about_pose: Callable[[str], Challenge] | None = None,
-                 arm_of: Callable[[Challenge], Arm | None] = lambda challenge: None) -> None:
+                 arm_of: Callable[[Challenge], Arm | None] = lambda challenge: None,
+                 nicknames: bool = True, show_nicknames: Callable[[bool], None] = lambda shown: None) -> None:
         self.closed = False
         self._arm_of = arm_of  #: the arm a challenge would be checked on (None: its ``Arm.preset``)
         self._on_render = on_render  #: the scene's part of the board (every student's tool)
@@ -89,6 +90,10 @@ class ChallengeDesk:
             self.start = gui.add_button("Start the challenge", icon=viser.Icon.PLAYER_PLAY, order=self.refusal.line.order - 0.5)
             self.start.on_click(guard(lambda _: start(self.chosen(), self.time_limit()), beside=self.refusal))
             self.board = gui.add_markdown("")
+            # a name the teacher would rather not project is gone at the next redraw, without finding whose it is
+            self.nicknames = gui.add_checkbox("Nicknames on the projector", nicknames,
+                                              hint="Off: every student's tool is named by their number only")
+            self.nicknames.on_update(guard(lambda _: show_nicknames(bool(self.nicknames.value))))
             self.end = gui.add_button("End and show the solution", icon=viser.Icon.FLAG, visible=False)
             self.end.on_click(guard(lambda _: end(), beside=self.refusal))
             self.download = gui.add_button("Download results (CSV)", icon=viser.Icon.DOWNLOAD, visible=False)
@@ -246,8 +251,8 @@ class ClassTools:
             self.names.view, self.names.fixed = self._view, self._fixed
         return self.names
 
-    def show(self, run: ChallengeRun) -> None:
-        names, poses, solved = run.flanges()
+    def show(self, run: ChallengeRun, nicknames: bool = True) -> None:
+        names, poses, solved = run.flanges(nicknames)
         points = from_frame(self._world, poses[:, :3, 3])
         for dots, which, colour in ((self.working, ~solved, WORKING_COLOR), (self.solved, solved, SOLVED_COLOR)):
             if which.any():

@@ -84,6 +84,10 @@ class MeshArm:
         self.robot.show(model)
         self.branches.show(model)
 
+    def set_material(self, material: str) -> None:
+        self.robot.set_material(material)
+        self.branches.set_material(material)
+
     def framed(self, snapshot: Snapshot) -> Snapshot:
         return snapshot
 

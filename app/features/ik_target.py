@@ -347,7 +347,7 @@ class BranchesScene(View):
             self.target = scene.add_frame("/target", axes_length=0.1, axes_radius=0.004, origin_radius=0.008,
                                           wxyz=first.flange_wxyz, position=first.flange[:3, 3])
             self.unreachable = add_unreachable_halo(scene, "/target", UR10_SIZE)
-        self._scene, self._models = scene, models
+        self._scene, self._models, self._material = scene, models, models.material
         self._geometries = {SKELETON: skeleton_links(first.arm.dh), **models.by_name}
         #: each geometry's batched ghost meshes, links 1..6, sent when first shown
         #: (every branch shares the base with the solid arm)
@@ -380,12 +380,18 @@ class BranchesScene(View):
                 f"/ghosts/{model_slug(name)}/link{link.index}", vertices, faces,
                 batched_wxyzs=identity, batched_positions=np.zeros((8, 3)), batched_scales=np.zeros(8),
                 batched_colors=np.array(SLOT_COLORS, dtype=np.uint8), opacity=1.0 if name == SKELETON else GHOST_OPACITY,
-                lod="off", material=self._models.material, cast_shadow=False, receive_shadow=False,
+                lod="off", material=self._material, cast_shadow=False, receive_shadow=False,
             )
             ghost.on_click(self._clicked)
             ghosts.append(ghost)
         self.models[name] = ghosts
         return ghosts
+
+    def set_material(self, material: str) -> None:
+        """Shade the ghosts with viser's ``material``, those sent so far and those to come."""
+        self._material = material
+        for ghost in (ghost for ghosts in self.models.values() for ghost in ghosts):
+            ghost.material = material
 
     def show(self, model: str) -> None:
         """The solid arm is drawn as ``model``: so are the ghosts, when drawn as meshes."""

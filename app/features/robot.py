@@ -49,6 +49,7 @@ class RobotScene(View):
         scene.add_frame("/base_frame", axes_length=0.3, axes_radius=0.008, origin_radius=0.015)
         wxyz, position = poses(first.arm.link_transforms(first.q))
         self._scene, self._models = scene, models
+        self._shading = {"material": models.material, "cast_shadow": models.shadows, "receive_shadow": models.shadows}
         self.names: tuple[str, ...] = tuple(models.names)  #: the models it can be drawn as
         self.model = models.names[0]
         self.links: list[viser.FrameHandle] = []
@@ -61,8 +62,7 @@ class RobotScene(View):
         scene.add_frame(f"{node_name(6)}/flange_frame", axes_length=0.15, axes_radius=0.005, origin_radius=0.01)
 
     def _send(self, name: str) -> None:
-        models, handles = self._models, []
-        shading = {"material": models.material, "cast_shadow": models.shadows, "receive_shadow": models.shadows}
+        models, handles, shading = self._models, [], self._shading
         for link in models.by_name[name]:
             parent = f"{node_name(link.index)}/{model_slug(name)}"
             handles.append(self._scene.add_mesh_simple(
@@ -71,6 +71,12 @@ class RobotScene(View):
                 handles.append(self._scene.add_mesh_simple(
                     f"{parent}/cap", link.cap_vertices, link.cap_faces, color=JOINT_CAP_GREY, **shading))
         self.meshes[name] = handles
+
+    def set_material(self, material: str) -> None:
+        """Shade the arm with viser's ``material`` ("standard", "toon3"), the models sent so far and those to come."""
+        self._shading["material"] = material
+        for handle in (handle for handles in self.meshes.values() for handle in handles):
+            handle.material = material
 
     def show(self, model: str) -> None:
         """Draw the arm as ``model`` (one of :attr:`names`)."""

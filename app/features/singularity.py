@@ -335,7 +335,7 @@ class Singularities(View):
                 scales={"x": viser.uplot.Scale(time=False, range=(-PLOT_SECONDS, 0.0)),
                         "y": viser.uplot.Scale(range=(0.0, 1.0))},
                 axes=(viser.uplot.Axis(label="seconds (0 = now)"), viser.uplot.Axis(label="|factor| / scale")),
-                title="Factors over the last 10 s", aspect=2.0) if names else None
+                title="Factors over the last 10 s", aspect=1.5) if names else None
             self.demo = (gui.add_button_group("Put the arm on the", names, hint="Moves as few joints as it can, as "
                                               "little as it can, onto where that factor is zero") if names else None)
             self.refusal = Beside(gui)  # no pose within the limits puts the arm on that factor

@@ -71,7 +71,12 @@ class Student:
 
     @property
     def name(self) -> str:
-        return self.nickname or f"student {self.number}"
+        return self.nickname or self.numbered
+
+    @property
+    def numbered(self) -> str:
+        """The name the projector shows with nicknames off."""
+        return f"student {self.number}"
 
 
 @dataclasses.dataclass(frozen=True)
@@ -183,15 +188,20 @@ class ChallengeRun:
             fastest=solved[0] if solved else None, median=float(np.median(solved)) if solved else None,
             seconds_left=self.seconds_left, ended=self.ended)
 
-    def flanges(self) -> tuple[list[str], np.ndarray, np.ndarray]:
-        """(names, (k, 4, 4) tool poses, (k,) solved) of the students here whose tool has been seen."""
+    def flanges(self, nicknames: bool = True) -> tuple[list[str], np.ndarray, np.ndarray]:
+        """(names, (k, 4, 4) tool poses, (k,) solved) of the students here whose tool has been seen; with
+        ``nicknames`` False, each named by their number only."""
         with self._lock:
             shown = [s for s in self.students.values() if s.connected and s.flange is not None]
         poses = np.array([s.flange for s in shown]).reshape(-1, 4, 4)
-        return [s.name for s in shown], poses, np.array([s.solved_after is not None for s in shown], bool)
+        names = [s.name if nicknames else s.numbered for s in shown]
+        return names, poses, np.array([s.solved_after is not None for s in shown], bool)
 
     def results_csv(self) -> bytes:
-        """The results file: anonymous id, nickname, attempts, solved, seconds to solve, final answer."""
+        """The results file: anonymous id, nickname, attempts, solved, seconds to solve, final answer.
+
+        UTF-8 with a byte-order mark: without it, Excel on Windows reads the file in the system's code page, and a
+        nickname "Zoë" or an answer "90°" arrives as "ZoÃ«" and "90Â°"."""
         out = io.StringIO()
         writer = csv.writer(out)
         writer.writerow(["student", "nickname", "attempts", "solved", "seconds_to_solve", "final_answer"])
@@ -201,7 +211,7 @@ class ChallengeRun:
             writer.writerow([s.number, spreadsheet_safe(s.nickname), s.attempts, "yes" if s.solved_after is not None else "no",
                              "" if s.solved_after is None else f"{s.solved_after:.1f}",
                              spreadsheet_safe(s.verdict.answer if s.verdict else "")])
-        return out.getvalue().encode("utf-8")
+        return out.getvalue().encode("utf-8-sig")
 
 
 def terms_markdown(challenge: Challenge, arm: Arm | None = None) -> str:

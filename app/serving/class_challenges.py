@@ -50,6 +50,7 @@ class ClassChallenges:
         #: (BENCHMARKS.md, *a class challenge in a lecture hall*); alone in this one it is due every 0.5 s
         self.boards = PanelRefresher(room.app.server.get_event_loop(), interval=ChallengeDesk.panel_interval, duty=0.5)
         self.clock = time.monotonic  #: what a challenge's times and check pacing are kept by (a test sets its own)
+        self.nicknames = True  #: the projector names each student's tool by their nickname (else by their number)
 
     @property
     def running(self) -> bool:
@@ -63,7 +64,12 @@ class ClassChallenges:
                              start=lambda challenge, limit: self.start(member, challenge, limit),
                              end=lambda: self.end(member), download=lambda: self.download(member),
                              run=lambda: self.run, on_render=lambda: self._render_board(member), about_pose=self.about_the_pose,
-                             arm_of=lambda challenge: self.room.app.arm if challenge.arm == "ur10" else None)
+                             arm_of=lambda challenge: self.room.app.arm if challenge.arm == "ur10" else None,
+                             nicknames=self.nicknames, show_nicknames=self.show_nicknames)
+
+    def show_nicknames(self, shown: bool) -> None:
+        self.nicknames = shown
+        self._board_changed()
 
     def about_the_pose(self, question: str) -> Challenge:
         """A question of ``POSE_QUESTIONS`` about the class's arm as it is now."""
@@ -308,7 +314,7 @@ class ClassChallenges:
                                       keep_in_view=lambda points: member.camera.keep_in_view("class", points), size=drawing.size)
             member.camera.on_moved.append(member.tools.place)
         if member.tools is not None and self.run is not None:
-            member.tools.show(self.run)
+            member.tools.show(self.run, self.nicknames)
 
     def _guard(self, member: Member, handler, beside=None):
         return guard(member.client, handler, is_closed=lambda: member.closed, beside=beside)

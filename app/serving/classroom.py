@@ -229,7 +229,7 @@ class Classroom:
         member.camera = CameraControls(
             client, lambda: self._watched(member),
             lambda handler: guard(client, handler, is_closed=lambda: member.closed), lecture=self.app.lecture,
-            body_radius=self._body_radius(), up=self.state.arm.up,
+            body_radius=self._body_radius(), up=self.state.arm.up, light=self.app.light,
         )
         if back:
             self._present(member)
@@ -430,6 +430,7 @@ class Classroom:
                 root=DESKTOP_EXPLORER_ROOT if arm.dh is None else EXPLORER_ROOT, asks=self.challenges.asked_of(arm))
             member.session.show_choices(member.displays.get(arm, {}))
             member.session.follow_lecture_mode(member.camera.lecture)
+            member.session.follow_light_view(member.camera.light)
             member.session.names_elsewhere = member.goal_name
             member.session.watch_camera(member.camera)
             app.janitor.settle()

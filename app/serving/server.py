@@ -207,7 +207,7 @@ class TeachingServer:
         self.first_choice = UR10 if first_arm == "ur10" else choice_of(first_arm)
         # what the app's own UR10 cannot be asked on this preset is not offered
         self.challenges = tuple(c for c in (builtin() if challenges is None else challenges) if not unfit(c, preset))
-        self.lecture = lecture
+        self.lecture, self.light = lecture, light
         self.models = load_models(preset, light)
         symbolic.load()  # read the cached derivations now rather than in the first student's callback
         for name in ARM_CHOICES.values():
@@ -231,9 +231,6 @@ class TeachingServer:
         self.server.initial_camera.up = (0.0, 0.0, 1.0)
         self.server.initial_camera.fov = math.radians(CAMERA_FOV_DEGREES)
         add_floor_grid(self.server.scene)
-        if light:  # shadow maps and image-based lighting cost software WebGL more than the scene itself
-            self.server.scene.configure_default_lights(enabled=True, cast_shadow=False)
-            self.server.scene.configure_environment_map(hdri=None)
         loop = self.server.get_event_loop()
         self.refresher = PanelRefresher(loop)
         self.drags = DragQueue(loop)
@@ -243,8 +240,8 @@ class TeachingServer:
         #: left: going back to one finds its pose, target, typed table and what it showed as they were
         self._left_arms: dict[int, dict[str, tuple]] = {}
         self._addresses: dict[int, str] = {}  # client id → the address it connected from
-        #: address → (when, choice shown, its left arms, lecture mode) of the browser that left from there last
-        self._departed: dict[str, tuple[float, str, dict[str, tuple], bool]] = {}
+        #: address → (when, choice shown, its left arms, (lecture mode, light view)) of the browser that left from there last
+        self._departed: dict[str, tuple[float, str, dict[str, tuple], tuple[bool, bool]]] = {}
         self._switches: dict[str, TokenBucket] = {}  # budget (an address) → its arm changes
         self.clock = time.monotonic  #: the time the arm changes of an address are paced by (a test sets its own)
         self._sessions_lock = threading.Lock()
@@ -314,15 +311,15 @@ class TeachingServer:
             self.classroom.connect(client)
         else:
             relay_camera_moves(client, lambda: getattr(self._sessions.get(client.client_id), "camera", None))
-            choice, lecture, address = self.first_choice, self.lecture, address_of(client)
+            choice, view, address = self.first_choice, self._view_of(None), address_of(client)
             with self._sessions_lock:
                 self._addresses[client.client_id] = address
-                when, *left = self._departed.pop(address, (-math.inf, None, {}, False))
+                when, *left = self._departed.pop(address, (-math.inf, None, {}, view))
                 back = self.clock() - when <= RETURN_WINDOW  # from where a browser left: its arms as it left them
                 if back:
-                    choice, self._left_arms[client.client_id], lecture = left
+                    choice, self._left_arms[client.client_id], view = left
             try:
-                self._start_session(client, choice, lecture)
+                self._start_session(client, choice, view)
             except Exception:
                 if not back:
                     raise
@@ -332,32 +329,35 @@ class TeachingServer:
                     self._left_arms.pop(client.client_id, None)
                 client.gui.reset()
                 client.scene.reset()
-                self._start_session(client, self.first_choice, self.lecture)
+                self._start_session(client, self.first_choice, self._view_of(None))
                 return
             if back:
                 notify(client, "Welcome back", "Your arms are as this computer left them.", color="blue")
 
-    def _start_session(self, client: viser.ClientHandle, choice: str, lecture: bool, typed=None) -> None:
+    def _start_session(self, client: viser.ClientHandle, choice: str, view: tuple[bool, bool], typed=None) -> None:
         """Build the arm ``choice`` (an ``ARM_CHOICES`` label) in this browser, with the picker above it.
 
-        ``typed``: (arm, text, convention) of a table typed in the DH editor.
+        ``view``: (lecture mode, light view) (:meth:`_view_of`); ``typed``: (arm, text, convention) of a table
+        typed in the DH editor.
         """
         name = ARM_CHOICES[choice]
+        lecture, light = view
         state, display = None, {}
         if typed is None:  # not a newly typed table: the arm as this browser left it, if it has been here
             with self._sessions_lock:
                 state, typed, display = self._left_arms.get(client.client_id, {}).get(choice, (None, None, {}))
         if name is None:
-            session = ArmSession(client, self.arm, self.refresher, self.drags, models=self.models, lecture=lecture, state=state)
+            session = ArmSession(client, self.arm, self.refresher, self.drags, models=self.models, lecture=lecture, state=state,
+                                 light=light)
         elif name == "custom":
             typed = typed or (parse_table(STARTING_TABLE, "standard"), STARTING_TABLE, "standard")
             arm, text, convention = typed
             session = ArmSession(
-                client, arm, self.refresher, self.drags, lecture=lecture, text=text, convention=convention, state=state,
+                client, arm, self.refresher, self.drags, lecture=lecture, light=light, text=text, convention=convention, state=state,
                 rebuild=lambda new, new_text, new_convention: self._switch(client, CUSTOM, (new, new_text, new_convention)))
         else:
             session = ArmSession(client, state.arm if state else Arm.preset(name), self.refresher, self.drags,
-                                 lecture=lecture, state=state)
+                                 lecture=lecture, light=light, state=state)
         session.choice, session.typed = choice, typed
         session.show_choices(display)
         client.gui.set_panel_label(panel_title(choice, self.arm.name))
@@ -390,14 +390,14 @@ class TeachingServer:
             old = self._sessions.pop(client.client_id, None)
             if old is not None:
                 self._leave(client.client_id, old)
-        lecture = self._lecture_of(old)
+        view = self._view_of(old)
         if old is not None:
             old.close()
             self.janitor.soon()
         try:
             client.gui.reset()
             client.scene.reset()
-            self._start_session(client, choice, lecture, typed)
+            self._start_session(client, choice, view, typed)
         finally:
             with self._sessions_lock:
                 if self._last_switch.get(client.client_id) == math.inf:  # the build failed before its picker
@@ -422,16 +422,18 @@ class TeachingServer:
                 address = self._addresses.pop(client.client_id, None)
                 if address is not None and left:  # kept for its return (one that left mid-change: the arm it changed from)
                     self._departed.pop(address, None)
-                    self._departed[address] = (self.clock(), next(reversed(left)), left, self._lecture_of(session))
+                    self._departed[address] = (self.clock(), next(reversed(left)), left, self._view_of(session))
                     if len(self._departed) > MAX_RETURNING:
                         del self._departed[next(iter(self._departed))]
             if session is not None:
                 session.close()
         self.janitor.soon()
 
-    def _lecture_of(self, session: ArmSession | None) -> bool:
-        """Whether lecture mode is on in the browser of ``session`` (the server's default without one)."""
-        return session.camera.lecture.on if session is not None and session.camera is not None else self.lecture
+    def _view_of(self, session: ArmSession | None) -> tuple[bool, bool]:
+        """(lecture mode, light view) in the browser of ``session`` (the server's defaults without one)."""
+        if session is None or session.camera is None:
+            return self.lecture, self.light
+        return session.camera.lecture.on, session.camera.light.on
 
     def _leave(self, client_id: int, session: ArmSession) -> None:
         """Keep ``session``'s arm as the browser leaves it, the most recent last (the caller holds the sessions' lock)."""
