@@ -77,8 +77,9 @@ class ArmSession:
         the next, and a viewer could see the arm moved and its ghosts not yet.
     own_camera, lecture, light : bool
         Build the browser's "View" folder (camera framing, :mod:`ur10teach.features.camera`; lecture
-        mode and the light view, starting as ``lecture`` and ``light`` say), handed the browser's camera moves by whoever holds the session
-        (``camera.relay_camera_moves``); the classroom builds one per browser instead.
+        mode and the light view, starting as ``lecture`` and ``light`` say), handed the browser's camera
+        moves by whoever holds the session (``camera.relay_camera_moves``); the classroom builds one per
+        browser instead.
     rebuild, text, convention : optional
         For a typed table: ``rebuild(arm, text, convention)`` puts a newly typed arm in this
         one's place (the server does it); ``text`` and ``convention`` fill the DH editor.

@@ -240,7 +240,8 @@ class TeachingServer:
         #: left: going back to one finds its pose, target, typed table and what it showed as they were
         self._left_arms: dict[int, dict[str, tuple]] = {}
         self._addresses: dict[int, str] = {}  # client id → the address it connected from
-        #: address → (when, choice shown, its left arms, (lecture mode, light view)) of the browser that left from there last
+        #: address → (when, choice shown, its left arms, (lecture mode, light view)) of the browser that left from
+        #: there last
         self._departed: dict[str, tuple[float, str, dict[str, tuple], tuple[bool, bool]]] = {}
         self._switches: dict[str, TokenBucket] = {}  # budget (an address) → its arm changes
         self.clock = time.monotonic  #: the time the arm changes of an address are paced by (a test sets its own)
@@ -347,13 +348,14 @@ class TeachingServer:
             with self._sessions_lock:
                 state, typed, display = self._left_arms.get(client.client_id, {}).get(choice, (None, None, {}))
         if name is None:
-            session = ArmSession(client, self.arm, self.refresher, self.drags, models=self.models, lecture=lecture, state=state,
-                                 light=light)
+            session = ArmSession(client, self.arm, self.refresher, self.drags, models=self.models, lecture=lecture,
+                                 light=light, state=state)
         elif name == "custom":
             typed = typed or (parse_table(STARTING_TABLE, "standard"), STARTING_TABLE, "standard")
             arm, text, convention = typed
             session = ArmSession(
-                client, arm, self.refresher, self.drags, lecture=lecture, light=light, text=text, convention=convention, state=state,
+                client, arm, self.refresher, self.drags, lecture=lecture, light=light, text=text, convention=convention,
+                state=state,
                 rebuild=lambda new, new_text, new_convention: self._switch(client, CUSTOM, (new, new_text, new_convention)))
         else:
             session = ArmSession(client, state.arm if state else Arm.preset(name), self.refresher, self.drags,
