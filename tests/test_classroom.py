@@ -30,6 +30,48 @@ def test_join_codes():
     assert normalise_code(" abc-def ") == "ABCDEF"
 
 
+def test_the_address_students_type_is_on_the_projector(classroom, monkeypatch):
+    """The address to type was printed on the teacher's console only, which the class does not see: the teacher
+    copied it to the board. A classroom that students can reach shows it in every browser's *Classroom* folder, the
+    projector's too, and without ``--shared`` the teacher's own browser shows it under *Arm* (a student's does not
+    need it); a server for this machine alone (``--host`` left at 127.0.0.1) shows none."""
+    from ur10teach.serving import server as serving
+
+    monkeypatch.setattr(serving, "lan_addresses", lambda: ["192.0.2.7", "198.51.100.3"])
+    on_the_network = TeachingServer(port=0, shared=True, host="0.0.0.0")
+    port = on_the_network.port
+    wanted = f"Students open **http://192.0.2.7:{port}** or **http://198.51.100.3:{port}**"
+
+    async def scenario():
+        teacher = await ViserClient(f"http://127.0.0.1:{port}").connect()
+        await become_presenter(teacher, on_the_network)
+        student = await ViserClient(f"http://127.0.0.1:{port}").connect()
+        await until(lambda: teacher.shown(wanted) and student.shown(wanted), what="the address on both screens")
+        alone = await ViserClient(f"http://127.0.0.1:{classroom.port}").connect()
+        await until(lambda: "Explore on my own" in alone.gui, what="the loopback classroom's controls")
+        assert not alone.shown("Students open")
+        own_port = independent.port
+        teachers_own = await ViserClient(f"http://127.0.0.1:{own_port}").connect()
+        await until(lambda: teachers_own.shown(f"Students open **http://192.0.2.7:{own_port}**"),
+                    what="the address on the teacher's own screen")
+        a_laptop = await ViserClient(f"http://127.0.0.1:{laptops.port}", local_address="127.0.0.2").connect()
+        await until(lambda: "Which arm" in a_laptop.gui, what="the laptop's arm picker")
+        moves = len(a_laptop.received.flange_updates)
+        await a_laptop.set_gui("θ1 base (°)", 12.0)  # its answer comes after anything sent with the picker
+        await until(lambda: len(a_laptop.received.flange_updates) > moves, what="the laptop's arm moved")
+        assert not a_laptop.shown("Students open")
+        for client in (teacher, student, alone, teachers_own, a_laptop):
+            await client.close()
+
+    independent = TeachingServer(port=0, host="0.0.0.0")
+    laptops = TeachingServer(port=0, host="0.0.0.0", gate=Gate(trust_loopback=False))  # loopback stands for laptops
+    try:
+        asyncio.run(scenario())
+    finally:
+        for app in (on_the_network, independent, laptops):
+            app.stop()
+
+
 def test_viewers_watch_and_the_code_makes_a_presenter(classroom):
     async def scenario():
         teacher = await ViserClient(f"http://127.0.0.1:{classroom.port}").connect()

@@ -166,6 +166,11 @@ class Member:
         return [] if goal is None else [goal.name(frame)]
 
 
+def join_markdown(urls: list[str]) -> str:
+    """What students type to join, for the teacher's screen: ``Students open **http://192.0.2.7:8080**``."""
+    return "Students open " + " or ".join(f"**{url}**" for url in urls)
+
+
 class Classroom:
     def __init__(self, app: "TeachingServer") -> None:
         self.app = app
@@ -510,6 +515,8 @@ class Classroom:
             member.desk = self.challenges.desk(member)
         member.folder, member.picker = gui.add_folder("Classroom", order=0.0), None
         with member.folder:
+            if self.app.join_urls:  # on the projector, where the class reads it
+                gui.add_markdown(join_markdown(self.app.join_urls))
             if member.role == PRESENTER:
                 gui.add_markdown("You are **presenting**: everyone sees your arm, target and overlays.")
                 stop = gui.add_button("Stop presenting", icon=viser.Icon.PLAYER_STOP)

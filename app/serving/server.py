@@ -39,7 +39,7 @@ from ..meshes import load_models
 from ..session import ArmSession
 from ..style import BRAND_BLUE
 from ..viser_internals import fast_updates, shared_frames, value_fits
-from .classroom import Classroom
+from .classroom import Classroom, join_markdown
 from .gate import RETURN_WINDOW, Gate, TokenBucket, address_of, budget_of, gated_serve, hang_up_silent
 from .workers import APART, JOINS, Cancelled, DragQueue, PanelRefresher, refuse_in_worker_process
 
@@ -248,6 +248,9 @@ class TeachingServer:
         self._sessions_lock = threading.Lock()
         self.janitor = Janitor(forget=(CLOUDS.forget_unheld,))
         #: shared demo mode (``--shared``): everyone watches the presenter (``ur10teach.serving.classroom``)
+        #: what students type to join: the addresses of this machine the server listens on beyond itself (none
+        #: when it serves this machine only), shown on the teacher's screen (:func:`join_markdown`)
+        self.join_urls = [url for url in self.urls if not url.startswith(("http://127.", "http://localhost"))]
         self.classroom = Classroom(self) if shared else None
         self.server.on_client_connect(self._connected)
         self.server.on_client_disconnect(self._disconnected)
@@ -367,6 +370,9 @@ class TeachingServer:
             if client.client_id in self._last_switch:  # a change of arm: the interval starts before its picker shows
                 self._last_switch[client.client_id] = time.monotonic()
         session.arm_picker = ArmPicker(client.gui, choice, lambda label: self._switch(client, label), session.guard)
+        if self.join_urls and self.gate.trusted(address_of(client)):  # the teacher's own screen
+            with session.arm_picker.folder:
+                client.gui.add_markdown(join_markdown(self.join_urls))
         self.janitor.settle()
         with self._sessions_lock:
             self._sessions[client.client_id] = session
