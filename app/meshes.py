@@ -92,8 +92,8 @@ class ArmModels:
     ``light`` (``--light``): toon shading and no shadows, as every browser's light view starts
     (``ur10teach.features.light_view``). Software WebGL, on a laptop without a graphics driver,
     draws the arm and its translucent ghosts with physically based shading, shadows and
-    image-based lighting several times more slowly; without the environment map's light, only
-    toon shading keeps the ghosts' colours.
+    image-based lighting several times more slowly; without the environment map's light, toon
+    shading keeps the ghosts' colours.
     """
 
     by_name: dict[str, tuple[LinkMesh, ...]]

@@ -102,4 +102,4 @@ def test_the_light_view_shades_the_arm_and_ghosts_for_software_webgl(light, monk
         assert ("configure_default_lights", (), {"enabled": True, "cast_shadow": False}) in calls
         assert ("configure_environment_map", (), {"hdri": None}) in calls
     else:
-        assert not calls  # viser's defaults: lights that cast shadows, and the warehouse environment map
+        assert not calls  # viser's defaults: lights that cast shadows, and its own environment map

@@ -219,8 +219,10 @@ def test_exploring_on_your_own_and_back(classroom):
 
 
 def test_a_viewers_light_view_lights_its_own_browser_and_draws_its_own_arm(classroom):
-    """A viewer's *Light view* turns off its own browser's shadows and environment lighting; the class's arm stays as
-    the presenter draws it, and the viewer's own arm, once exploring, is drawn as the schematic."""
+    """A viewer's *Light view* turns off its own browser's shadows and environment lighting and lights it evenly (a
+    fill light in its own scene, which keeps the class's arm grey: without it, near black); the class's arm stays
+    as the presenter draws it, and the viewer's own arm, once exploring, is drawn as the schematic."""
+    from ur10teach.features.light_view import FILL_NAME
     from ur10teach.meshes import REAL, SCHEMATIC
 
     async def scenario():
@@ -228,16 +230,23 @@ def test_a_viewers_light_view_lights_its_own_browser_and_draws_its_own_arm(class
         student = await ViserClient(f"http://127.0.0.1:{classroom.port}").connect()
         await become_presenter(teacher, classroom)
         await student.set_gui("Light view", True)
-        await until(lambda: (student.received.shadows, student.received.environment_image) == (False, False),
-                    what="the viewer's light view")
+        await until(lambda: (student.received.shadows, student.received.environment_image) == (False, False)
+                    and FILL_NAME in student.received.nodes, what="the viewer's light view")
         assert classroom.classroom.drawing.robot.model == REAL and teacher.received.shadows is None
         await student.set_gui("Explore on my own", True)
         explorer = member_of(classroom, 1)
-        await until(lambda: explorer.session is not None and explorer.session.drawing.robot.model == SCHEMATIC,
+        await until(lambda: explorer.role == EXPLORER and explorer.session.drawing.robot.model == SCHEMATIC,
                     what="the explorer's own arm as the schematic")
+        light, fill = explorer.camera.light, explorer.camera.light.fill
+        await student.set_gui("Back to the presenter's arm", True)  # its own scene emptied: the fill light again
+        await until(lambda: explorer.role == VIEWER and light.fill is not fill, what="watching again, a new fill light")
+        await until(lambda: light.fill is not None and FILL_NAME in student.received.nodes, what="the fill light shown")
+        await student.set_gui("Explore on my own", True)
+        await until(lambda: explorer.session is not None and explorer.session.drawing.robot.model == SCHEMATIC,
+                    what="exploring again, schematic")
         await student.set_gui("Light view", False)
-        await until(lambda: explorer.session.drawing.robot.model == REAL and student.received.shadows,
-                    what="UR's meshes and shadows back")
+        await until(lambda: explorer.session.drawing.robot.model == REAL and student.received.shadows
+                    and FILL_NAME not in student.received.nodes, what="UR's meshes, shadows and no fill light")
         assert classroom.classroom.drawing.robot.model == REAL
         for client in (teacher, student):
             await client.close()

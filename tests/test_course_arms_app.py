@@ -900,10 +900,11 @@ def test_a_browser_back_from_its_computer_finds_its_arms_as_it_left_them(app):
 def test_the_light_view_is_one_browsers_and_goes_with_it(app):
     """A laptop without a graphics driver draws the real UR10 at about 4 frames a second, and only a server started
     with ``--light`` helped it (until 2026-12-06): a class started without it had nothing for the few such laptops.
-    *Light view* in a browser's View folder turns off that browser's shadows and environment lighting and draws its
-    arm as the schematic, toon-shaded, which alone keeps the ghosts' colours without the environment's light (13
-    frames a second then, BENCHMARKS.md). It stays on across a change of arm and a return from the same computer;
-    a neighbour's view is untouched, and turning it off brings viser's lighting back."""
+    *Light view* in a browser's View folder turns off that browser's shadows and environment lighting, lights it
+    evenly instead (a fill light in its own scene) and draws its arm as the schematic, toon-shaded (13 frames a
+    second then, BENCHMARKS.md). It stays on across a change of arm and a return from the same computer; a neighbour's view is
+    untouched, and turning it off brings viser's lighting back."""
+    from ur10teach.features.light_view import FILL_NAME
     from ur10teach.meshes import REAL, SCHEMATIC
 
     async def connect(address: str) -> tuple[ViserClient, ArmSession]:
@@ -912,8 +913,8 @@ def test_the_light_view_is_one_browsers_and_goes_with_it(app):
         await arrived(client, session)
         return client, session
 
-    def lighting(client: ViserClient) -> tuple:
-        return client.received.shadows, client.received.environment_image
+    def lighting(client: ViserClient) -> tuple:  # shadows, the environment map's image, the fill light
+        return client.received.shadows, client.received.environment_image, FILL_NAME in client.received.nodes
 
     def shading(session: ArmSession) -> set[str]:  # of the arm and its ghosts, every model sent
         drawing = session.drawing
@@ -923,25 +924,28 @@ def test_the_light_view_is_one_browsers_and_goes_with_it(app):
     async def scenario():
         laptop, ur10 = await connect("127.0.0.2")
         neighbour, theirs = await connect("127.0.0.3")
-        assert lighting(laptop) == (None, None) and ur10.drawing.robot.model == REAL  # viser's own lighting, UR's meshes
+        assert lighting(laptop) == (None, None, False) and ur10.drawing.robot.model == REAL  # viser's own, UR's meshes
         assert shading(ur10) == {"standard"}
         await laptop.set_gui("Light view", True)
-        await until(lambda: lighting(laptop) == (False, False), what="no shadows and no environment map")
+        await until(lambda: lighting(laptop) == (False, False, True), what="no shadows or environment map; a fill light")
         await until(lambda: ur10.drawing.robot.model == SCHEMATIC and laptop.gui["Arm drawn as"]["value"] == SCHEMATIC,
                     what="the schematic arm, named in its dropdown")
         assert shading(ur10) == {"toon3"}
-        assert lighting(neighbour) == (None, None) and theirs.drawing.robot.model == REAL and shading(theirs) == {"standard"}
+        assert lighting(neighbour) == (None, None, False) and theirs.drawing.robot.model == REAL
+        assert shading(theirs) == {"standard"}
         assert (await pick(app, laptop, "Stanford arm (RRP + wrist)")).camera.light.on
         back_on_ur10 = await pick(app, laptop, UR10)
         assert back_on_ur10.camera.light.on and back_on_ur10.drawing.robot.model == SCHEMATIC
+        assert back_on_ur10.camera.light.fill is not None and lighting(laptop)[2]  # again in the scene the new arm emptied
         assert shading(back_on_ur10) == {"toon3"}
         await laptop.close()
         await until(lambda: len(app.sessions) == 1, what="the laptop gone")
         again, session = await connect("127.0.0.2")
-        assert again.gui["Light view"]["value"] is True and lighting(again) == (False, False)
+        assert again.gui["Light view"]["value"] is True
+        await until(lambda: lighting(again) == (False, False, True), what="the light view back with the computer")
         assert session.drawing.robot.model == SCHEMATIC
         await again.set_gui("Light view", False)
-        await until(lambda: lighting(again) == (True, True), what="shadows and viser's environment map back")
+        await until(lambda: lighting(again) == (True, True, False), what="shadows and viser's environment map back")
         await until(lambda: session.drawing.robot.model == REAL, what="UR's meshes back")
         assert shading(session) == {"standard"}
         for client in (again, neighbour):

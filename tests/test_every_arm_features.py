@@ -174,7 +174,7 @@ def test_every_arm_is_put_on_each_of_its_singularities_by_its_buttons(app, label
             assert after < 1e-6 * before, (kind, after, before)
             await until(lambda: f"<b>{kind}</b>" in session.singularities.gauges.content
                         and "width:0.0%" in session.singularities.gauges.content, what="its gauge at zero")
-            placed, clashes = overlapping_labels(session)  # the panel drawn for this pose: the drawing's first
+            placed, clashes = await overlapping_labels(session)  # the panel drawn for this pose: the drawing's first
             assert placed and not clashes, f"on the {kind} singularity, overlapping: {clashes}"
         await client.close()
 
@@ -335,7 +335,7 @@ def test_the_branch_count_map_of_every_arm_is_its_ik_s(app, label):
     asyncio.run(scenario())
 
 
-def overlapping_labels(session, also=()) -> tuple[list[str], list[tuple[str, str]]]:
+async def overlapping_labels(session, also=()) -> tuple[list[str], list[tuple[str, str]]]:
     """Every placed 3D label of ``session`` (the names at the tool, then the drawing's pools), placed again in order
     as a camera move places them, and the pairs whose boxes overlap on the screen they are placed for; ``also``:
     labels that stay where they are, as (position (3,) in the scene, text, scale, anchor), checked against them."""
@@ -349,13 +349,15 @@ def overlapping_labels(session, also=()) -> tuple[list[str], list[tuple[str, str
     def framing() -> bool:  # a framing is under way: its position set, its look-at not yet (a view no one sees)
         return camera is not None and not camera._where_framed()
 
-    with session.names.placing:  # not placed again by the panel's refresher while they are read
-        # for one camera, the same before the placing and after the reading, and not one half-way through a framing:
-        # a framing may still be arriving from the browser, and a camera move (a map turning the camera to face its
-        # plane) places them again for the new one
-        deadline = time.monotonic() + HANG_TIMEOUT
-        while view is None or view != pools[0].view() or framing():
-            assert time.monotonic() < deadline, "the camera never came to rest"
+    # for one camera, the same before the placing and after the reading, and not one half-way through a framing:
+    # a framing may still be arriving from the browser, and a camera move (a map turning the camera to face its
+    # plane) places them again for the new one. It is waited for with the labels let go: a framing that comes
+    # with a redraw places them, and waited for while the test held them, it never came (until 2026-12-06)
+    deadline = time.monotonic() + HANG_TIMEOUT
+    while True:
+        assert time.monotonic() < deadline, "the camera never came to rest"
+        await until(lambda: not framing(), what="the camera at rest")
+        with session.names.placing:  # not placed again by the panel's refresher while they are read
             view, placed = pools[0].view(), []
             place_in_order(pools)
             for pool in pools:
@@ -363,6 +365,8 @@ def overlapping_labels(session, also=()) -> tuple[list[str], list[tuple[str, str
                 for _, text, position in pool.placed:  # in the arm's base frame (the desktop arm's y is up)
                     seen = from_frame(world, position)
                     placed.append((text, boxes(view.to_screen(seen[None])[0], [text], scale)[0]))
+            if view == pools[0].view() and not framing():
+                break
     stay = [(text, boxes(view.to_screen(np.array([position], dtype=float))[0], [text], scale, anchor)[0])
             for position, text, scale, anchor in also]
     clashes = [(a, b) for k, (a, box_a) in enumerate(placed) for b, box_b in [*placed[k + 1:], *stay]
@@ -395,7 +399,7 @@ def test_no_two_3d_labels_overlap_with_velocities_forces_and_ellipsoids_shown(ap
             return {name for _, text, _ in session.names.placed for name in text.split(JOIN)}
 
         await until(lambda: wanted <= named(), what="the names at the tool placed")
-        placed, clashes = overlapping_labels(session)
+        placed, clashes = await overlapping_labels(session)
         assert len(placed) > len(wanted), "no labels to check"
         assert not clashes, f"overlapping: {clashes}"
         await client.close()
@@ -428,7 +432,7 @@ def test_the_branch_count_maps_legend_keeps_clear_of_the_clouds_and_of_every_pla
         await until(lambda: view.legend_text in {text for _, text, _ in session.names.placed}, what="the map's legend")
         legend = workspace.legend_label
         cloud = (from_frame(session.drawing.world, legend.position), legend.text, legend.font_screen_scale, legend.anchor)
-        placed, clashes = overlapping_labels(session, also=[cloud])
+        placed, clashes = await overlapping_labels(session, also=[cloud])
         assert view.legend_text in placed and not clashes, f"overlapping: {clashes}"
         # the map gone, its legend goes with it
         await client.set_gui("Show branch-count map", False)

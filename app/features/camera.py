@@ -255,10 +255,12 @@ class CameraControls(View):
         camera = self._client.camera
         shown = np.vstack([arm_points(self._snapshot(), self.body_radius), *self.extra.values()])
         position, look_at = framing(shown, direction, camera.fov, camera.aspect)
-        with self._client.atomic():
+        # one framing at a time (a worker's map and a redraw may frame at once): two interleaved left the camera
+        # at one's position and the other's look-at, which no framing had chosen, taken for a view the user chose
+        with self._lock, self._client.atomic():
             camera.up_direction = (0.0, 0.0, 1.0)
             camera.position = position
             camera.look_at = look_at  # after the position: viser moves both together otherwise
-        self._framed_at = (position, look_at)
+            self._framed_at = (position, look_at)
         for moved in self.on_moved:  # placed for where the camera is going (the browser reports only a change)
             moved()

@@ -2,9 +2,10 @@
 
 One switch per browser, in its "View" folder; ``ur10-teach --light`` starts every browser with it on.
 Software WebGL spends most of a frame on the shadow maps, the environment map's lighting and the real
-UR10's triangles: the switch turns both lightings off in this browser only, and a session with its
-own arm draws it as the schematic, toon-shaded, which keeps the ghosts' colours without the environment's
-light (BENCHMARKS.md, *frames a second without a graphics driver*).
+UR10's triangles: the switch turns both lightings off in this browser only and lights its scene with an
+even fill instead (without the environment map the real arm is near black), and a session with its own
+arm draws it as the schematic, toon-shaded (which keeps the ghosts' colours; BENCHMARKS.md, *frames a
+second without a graphics driver*).
 """
 
 from __future__ import annotations
@@ -15,6 +16,9 @@ import viser
 
 #: The environment map a browser draws when the server never sets one (viser's client embeds only it).
 VISER_DEFAULT_ENVIRONMENT = "city"
+#: The even light standing in for the environment map's: the real arm grey, not near black; any brighter, and it
+#: washes out the toon-shaded ghosts' colours (``test_the_solid_arm_stands_apart_from_its_ghosts``).
+FILL_NAME, FILL_INTENSITY = "/light_view_fill", 0.6
 
 
 class LightView:
@@ -26,6 +30,7 @@ class LightView:
     def __init__(self, client: viser.ClientHandle, folder: viser.GuiFolderHandle, enabled: bool,
                  guard: Callable[[Callable], Callable]) -> None:
         self._scene = client.scene
+        self.fill: viser.AmbientLightHandle | None = None  #: the fill light in this browser's scene, while on
         self.on_change: list[Callable[[bool], None]] = []
         with folder:
             self.enabled = client.gui.add_checkbox(
@@ -45,6 +50,15 @@ class LightView:
         for callback in self.on_change:
             callback(on)
 
+    def scene_reset(self) -> None:
+        """The browser's own scene was emptied (``scene.reset``), its fill light with it: light it again."""
+        self.fill = None
+        if self.on:
+            self.fill = self._scene.add_light_ambient(FILL_NAME, intensity=FILL_INTENSITY)
+
     def _light(self, on: bool) -> None:
         self._scene.configure_default_lights(enabled=True, cast_shadow=not on)
         self._scene.configure_environment_map(hdri=None if on else VISER_DEFAULT_ENVIRONMENT)
+        if self.fill is not None:
+            self.fill.remove()
+        self.fill = self._scene.add_light_ambient(FILL_NAME, intensity=FILL_INTENSITY) if on else None

@@ -482,6 +482,8 @@ class Classroom:
             self.app.janitor.soon()
         if member.role == EXPLORER:
             member.client.scene.reset()  # the private arm goes; the shared one is visible again
+            if member.camera is not None:
+                member.camera.light.scene_reset()
             if member.goal is not None:  # and so did the challenge's target, which a student still needs
                 member.goal = None
                 self.challenges.show_goal(member)
