@@ -379,8 +379,9 @@ class ArmSession:
         self.refresher.request(self)
 
     def follow_light_view(self, light: LightView) -> None:
-        """The arm drawn as the schematic while the browser's light view is on, its first model after (until this
-        session closes). Only a session with a drawing of its own follows: the class's arm is the presenter's."""
+        """The arm drawn as the schematic, toon-shaded, while the browser's light view is on, as first drawn after
+        (until this session closes). Only a session with a drawing of its own follows: the class's arm is the
+        presenter's."""
         light.on_change.append(self._light_changed)
         self._light = light
         if light.on:
