@@ -902,8 +902,8 @@ def test_the_light_view_is_one_browsers_and_goes_with_it(app):
     with ``--light`` helped it (until 2026-12-06): a class started without it had nothing for the few such laptops.
     *Light view* in a browser's View folder turns off that browser's shadows and environment lighting, lights it
     evenly instead (a fill light in its own scene) and draws its arm as the schematic, toon-shaded (13 frames a
-    second then, BENCHMARKS.md). It stays on across a change of arm and a return from the same computer; a neighbour's view is
-    untouched, and turning it off brings viser's lighting back."""
+    second then, BENCHMARKS.md). It stays on across a change of arm and a return from the same computer; a
+    neighbour's view is untouched, and turning it off brings viser's lighting back."""
     from ur10teach.features.light_view import FILL_NAME
     from ur10teach.meshes import REAL, SCHEMATIC
 

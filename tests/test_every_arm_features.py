@@ -351,8 +351,8 @@ async def overlapping_labels(session, also=()) -> tuple[list[str], list[tuple[st
 
     # for one camera, the same before the placing and after the reading, and not one half-way through a framing:
     # a framing may still be arriving from the browser, and a camera move (a map turning the camera to face its
-    # plane) places them again for the new one. It is waited for with the labels let go: a framing that comes
-    # with a redraw places them, and waited for while the test held them, it never came (until 2026-12-06)
+    # plane) places them again for the new one. It is waited for with the labels let go, since a framing's redraw
+    # places them (on 2026-12-06, under load, a wait that held them never ended)
     deadline = time.monotonic() + HANG_TIMEOUT
     while True:
         assert time.monotonic() < deadline, "the camera never came to rest"
