@@ -23,7 +23,7 @@ from .features.course_arms.editor import DHEditor
 from .features.course_arms.kr210_lessons import kr210_lessons
 from .features.decoupling import DecouplingView
 from .features.dh_table import DHTableView, DHWalkthrough
-from .features.drawings import arm_drawing
+from .features.drawings import MeshArm, arm_drawing
 from .features.ellipsoids import EllipsoidsView
 from .features.ik_target import IKTarget, pose_from_gizmo
 from .features.joint_panel import JointPanel
@@ -388,12 +388,12 @@ class ArmSession:
             self._light_changed(True)
 
     def _light_changed(self, on: bool) -> None:
-        names = self.drawing.names
-        if self.arm_model is None or SCHEMATIC not in names:
+        drawing = self.drawing
+        if not isinstance(drawing, MeshArm):  # a line drawing is drawn unlit
             return
         with self.state.lock:
-            self.drawing.set_material(material(on))  # without the environment map's light, toon keeps the colours
-            self.drawing.show(SCHEMATIC if on else names[0])  # ("Arm drawn as" follows at its next render)
+            drawing.set_material(material(on))  # without the environment map's light, toon keeps the colours
+            drawing.show(SCHEMATIC if on else drawing.names[0])  # ("Arm drawn as", if any, follows at its next render)
         self.redraw()
 
     def close(self) -> None:

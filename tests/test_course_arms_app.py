@@ -954,6 +954,35 @@ def test_the_light_view_is_one_browsers_and_goes_with_it(app):
     asyncio.run(scenario())
 
 
+def test_the_light_view_shades_an_arm_drawn_one_way_only():
+    """The UR10e has its schematic arm alone (no "Arm drawn as"): the light view left its ghosts in the standard
+    material, which without the environment map's light greys them. They are toon-shaded as the UR10's are."""
+    from ur10teach.serving.server import TeachingServer
+
+    app = TeachingServer(port=0, preset="ur10e")
+
+    async def scenario():
+        client = await ViserClient(url(app)).connect()
+        session = session_of(app, client)
+        drawing = session.drawing
+        assert session.arm_model is None and len(drawing.names) == 1
+
+        def shading() -> set[str]:
+            return {mesh.material for meshes in (*drawing.robot.meshes.values(), *drawing.branches.models.values())
+                    for mesh in meshes}
+
+        await client.set_gui("Light view", True)
+        await until(lambda: shading() == {"toon3"}, what="the UR10e's arm and ghosts toon-shaded")
+        await client.set_gui("Light view", False)
+        await until(lambda: shading() == {"standard"}, what="their own shading back")
+        await client.close()
+
+    try:
+        asyncio.run(scenario())
+    finally:
+        app.stop()
+
+
 @pytest.mark.parametrize("shared", [False, True])
 def test_the_light_flag_starts_every_browser_in_the_light_view(shared):
     """``--light`` ticks *Light view* in every browser, a classroom's viewers' too: each can untick its own."""

@@ -54,7 +54,7 @@ class LightView:
         """The browser's own scene was emptied (``scene.reset``), its fill light with it: light it again."""
         self.fill = None
         if self.on:
-            self.fill = self._scene.add_light_ambient(FILL_NAME, intensity=FILL_INTENSITY)
+            self._light(True)
 
     def _light(self, on: bool) -> None:
         self._scene.configure_default_lights(enabled=True, cast_shadow=not on)
