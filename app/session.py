@@ -75,11 +75,11 @@ class ArmSession:
         server's queue, which a redraw batches (``atomic``) and sends at once (``flush``) as it
         does the browser's own: viser otherwise holds a message up to 1/60 s to batch it with
         the next, and a viewer could see the arm moved and its ghosts not yet.
-    own_camera, lecture, light : bool
+    own_camera, lecture, light, phone : bool
         Build the browser's "View" folder (camera framing, :mod:`ur10teach.features.camera`; lecture
-        mode and the light view, starting as ``lecture`` and ``light`` say), handed the browser's camera
-        moves by whoever holds the session (``camera.relay_camera_moves``); the classroom builds one per
-        browser instead.
+        mode and the light view, starting as ``lecture`` and ``light`` say; framed above the panel on a
+        ``phone``), handed the browser's camera moves by whoever holds the session
+        (``camera.relay_camera_moves``); the classroom builds one per browser instead.
     rebuild, text, convention : optional
         For a typed table: ``rebuild(arm, text, convention)`` puts a newly typed arm in this
         one's place (the server does it); ``text`` and ``convention`` fill the DH editor.
@@ -110,7 +110,7 @@ class ArmSession:
         models: ArmModels | None = None, state: ArmState | None = None, server: viser.ViserServer | None = None,
         drawing=None, own_camera: bool = True, lecture: bool = False, root: str | None = None,
         rebuild: Callable[[Arm, str, str], None] | None = None, text: str = "", convention: str = "standard",
-        asks: str | None = None, light: bool = False,
+        asks: str | None = None, light: bool = False, phone: bool = False,
     ) -> None:
         self.client = client
         self.arm = arm
@@ -149,7 +149,8 @@ class ArmSession:
         self.lessons = LESSONS[arm.name](scene, gui, self) if arm.name in LESSONS else ()
         # its camera's moves are handed to it (``camera.relay_camera_moves``): viser would keep a callback of its own
         self.camera = (CameraControls(client, lambda: drawn.framed(self.state.last), self.guard, lecture,
-                                      body_radius=drawn.body_radius, up=arm.up, follow=False, light=light)
+                                      body_radius=drawn.body_radius, up=arm.up, follow=False, light=light,
+                                      phone=phone)
                        if own_camera else None)
         #: the scene whose 3D labels this browser's lecture mode sizes: its own (a shared one follows the server's)
         self._label_scene = scene if server is None else None

@@ -116,9 +116,10 @@ def playwright():
 def open_page(playwright, request):
     """Opens the app in a fresh browser, like one student's laptop; closes them after the test.
 
-    ``open_page(known=0, viewport=SMALL_VIEWPORT, zoom=1.0, server=None, drawn=True)`` → (page, the
+    ``open_page(known=0, viewport=SMALL_VIEWPORT, zoom=1.0, server=None, drawn=True, device=None)`` → (page, the
     browser's session), once the panel is drawn and (``drawn``) the 3D view has settled:
-    ``known`` sessions exist already, ``zoom`` is the browser's zoom (1.5 = 150 %), and the
+    ``known`` sessions exist already, ``zoom`` is the browser's zoom (1.5 = 150 %), ``device`` a phone
+    (``ur10dev.browser.PHONE``) or the like, and the
     server is the ``light_app`` fixture's unless given (it must be in independent mode). One browser process per page:
     tabs of one process share its software-GPU process, and a second tab starves while the
     first renders. Every page must stay offline: a request to any other host fails the test.
@@ -130,11 +131,12 @@ def open_page(playwright, request):
 
     opened = []
 
-    def open_page(known: int = 0, viewport: dict = SMALL_VIEWPORT, zoom: float = 1.0, server=None, drawn: bool = True):
+    def open_page(known: int = 0, viewport: dict = SMALL_VIEWPORT, zoom: float = 1.0, server=None, drawn: bool = True,
+                  device: dict | None = None):
         server = server or request.getfixturevalue("light_app")
         url = f"http://127.0.0.1:{server.port}"
         browser = launch(playwright)
-        page = open_app(browser, url, viewport, zoom)
+        page = open_app(browser, url, viewport, zoom, device)
         opened.append((browser, page, url))
         try:
             wait_for(lambda: len(server.sessions) > known, what="the server to set up the client")

@@ -13,7 +13,7 @@ import pytest
 from ur10teach.serving.server import TeachingServer
 from ur10teach.style import DANGER_RED, GHOST_OPACITY
 from ur10dev.browser import (
-    HANG_TIMEOUT_MS, canvas_changed, changed_mask, choose, click, dom_id, neighbourhood, project, set_checkbox,
+    HANG_TIMEOUT_MS, PHONE, canvas_changed, changed_mask, choose, click, dom_id, neighbourhood, project, set_checkbox,
     settled_canvas, type_text, unfold,
 )
 from ur10dev.colour_vision import MIN_DELTA_E, closest_pair
@@ -87,6 +87,25 @@ def test_the_arm_is_framed_beside_the_panel_in_any_window(open_page):
     choose(page, session.camera.direction, "Front (x–z plane)")
     wait_for(lambda: abs(np.asarray(session.client.camera.position)[2] - np.asarray(session.client.camera.look_at)[2]) < 1e-3,
              what="a level view from the front")
+
+
+def test_on_a_phone_held_upright_the_arm_is_seen_above_the_panel(open_page):
+    """A phone's browser, 390 × 664 CSS pixels: viser lays the panel over the canvas's lower part, and the arm and
+    its target are framed above it, where the student sees them while moving the sliders below."""
+    page, session = open_page(viewport={"width": 390, "height": 664}, device=PHONE)
+    assert session.camera.phone
+
+    def sheet_top() -> float:  # the top of the panel that lies over the canvas (viser's sheet, fixed at the bottom)
+        return page.locator(dom_id(session.joints.sliders[0])).evaluate(
+            "e => { while (e && getComputedStyle(e).position !== 'fixed') e = e.parentElement;"
+            " return e ? e.getBoundingClientRect().top : null; }")
+
+    canvas = page.locator("canvas").first.bounding_box()
+    top = sheet_top()
+    assert top is not None and canvas["y"] < top < canvas["y"] + canvas["height"] * 0.7, (top, canvas)
+    wait_for(lambda: all(canvas["y"] < v < top and canvas["x"] < u < canvas["x"] + canvas["width"]
+                         for u, v in (project(session.client.camera, point, canvas) for point in key_points(session))),
+             what="the arm and its target framed above the panel")
 
 
 def test_lecture_mode_for_the_presenter_and_the_class(open_page, playwright):

@@ -41,3 +41,21 @@ def test_arm_points_hold_the_target_and_every_joint(course):
     points = arm_points(snapshot)
     for centre in [*snapshot.frames[:, :3, 3], snapshot.target[:3, 3]]:
         assert np.linalg.norm(points - centre, axis=1).min() < 0.2
+
+
+@pytest.mark.parametrize("aspect", [390 / 844, 390 / 664, 0.9])
+@pytest.mark.parametrize("view", list(VIEWS))
+def test_on_an_upright_phone_the_arm_fills_the_band_above_the_panel(course, aspect, view):
+    """A phone's panel covers the canvas below its top 40 %: every point of the arm, the nearest and the farthest,
+    is inside that band by the margin, and as large as the band allows (the plain centring, sunk by one amount for
+    every depth, put near points above the canvas's top)."""
+    top, margin = 0.4, 0.08
+    high, low = 1 - margin * top, 1 - 2 * top + margin * top  # the band, in the canvas's -1..1
+    rng = np.random.default_rng(len(view))
+    for _ in range(20):
+        points = arm_points(ArmState(course, rng.uniform(-np.pi, np.pi, 6)).last)
+        fov = np.radians(rng.uniform(30, 70))
+        position, look_at = framing(points, VIEWS[view], fov, aspect, margin=margin, top=top)
+        x, y = projected(points, position, look_at, fov, aspect).T
+        assert np.abs(x).max() <= 1 - margin + 1e-9 and low - 1e-9 <= y.min() and y.max() <= high + 1e-9
+        assert np.abs(x).max() >= 1 - margin - 1e-6 or (y.min() <= low + 1e-6 and y.max() >= high - 1e-6)

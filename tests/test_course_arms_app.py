@@ -1124,6 +1124,46 @@ def test_an_arm_the_browser_has_left_is_freed_and_its_camera_moves_reach_the_arm
     asyncio.run(scenario())
 
 
+@pytest.mark.parametrize("server", ["app", "classroom"])
+@pytest.mark.parametrize("phone", [True, False])
+def test_on_a_phone_held_upright_the_arm_is_framed_above_the_panel(request, server, phone):
+    """In a window narrower than 576 px viser shows the panel as a sheet over the lower 60 % of the canvas. On a
+    phone held upright, the arm was framed in the whole canvas, its lower half under the sliders that move it. A
+    phone's browser (its User-Agent says so) now frames it in the band above; held sideways the panel docks beside
+    the canvas, and the arm fills it. A laptop's narrow window keeps the whole canvas (its panel docks)."""
+    from ur10dev.browser import PHONE
+    from ur10teach.features.camera import PHONE_UNCOVERED, arm_points
+    from ur10teach.features.branch_labels import ScreenView
+
+    app = request.getfixturevalue(server)
+
+    async def scenario():
+        client = await ViserClient(url(app), user_agent=PHONE["user_agent"] if phone else None).connect()
+        controls = (next(iter(app.classroom.members.values())).camera if app.classroom is not None
+                    else session_of(app, client).camera)
+
+        def rows(size):
+            """(highest, lowest) of the arm's points, as shares of the canvas's height from its top, once framed
+            for ``size``."""
+            if controls._framed_size != size or controls._framed_at is None:
+                return None
+            view = ScreenView.of(controls._client.camera)
+            pixels, depth = view.to_screen(arm_points(controls._snapshot(), controls.body_radius))
+            assert (depth > 0).all() and (np.abs(pixels[:, 0]) <= view.width / 2).all()
+            from_top = (view.height / 2 - pixels[:, 1]) / view.height
+            return from_top.min(), from_top.max()
+
+        for size in [(390, 664), (664, 390)]:
+            await client.send(dataclasses.replace(CAMERA, image_width=size[0], image_height=size[1]))
+            highest, lowest = await until(lambda: rows(size), what=f"the arm framed for a {size} canvas")
+            assert highest >= 0
+            upright_phone = phone and size[0] < size[1]
+            assert lowest <= PHONE_UNCOVERED if upright_phone else lowest > 0.8, lowest
+        await client.close()
+
+    asyncio.run(scenario())
+
+
 @pytest.mark.parametrize("first_arm, shared", [("scara", False), ("three_dof", False), ("kr210", True), ("three_dof", True)])
 def test_a_teacher_can_open_every_browser_on_another_arm(first_arm, shared):
     """``--arm``: a lecture on the SCARA opens every browser on it (in shared mode, the class sees it first and a

@@ -69,13 +69,19 @@ def launch(playwright):
     return playwright.chromium.launch(executable_path=CHROMIUM, headless=True, args=ARGS)
 
 
-def open_app(browser, url: str, viewport: dict = VIEWPORT, zoom: float = 1.0):
+#: A phone, as playwright's device descriptors give one (an iPhone's Safari): its window is set apart.
+PHONE = {"user_agent": "Mozilla/5.0 (iPhone; CPU iPhone OS 17_5 like Mac OS X) AppleWebKit/605.1.15 (KHTML, like Gecko) "
+                       "Version/17.5 Mobile/15E148 Safari/604.1", "is_mobile": True, "has_touch": True}
+
+
+def open_app(browser, url: str, viewport: dict = VIEWPORT, zoom: float = 1.0, device: dict | None = None):
     """A page of the app in a fresh context of ``browser``, recording every request it makes (``page.requests``).
 
     ``zoom`` is the browser's zoom (1.5 = 150 %): fewer CSS pixels in the same window, each drawn larger.
+    ``device``: what else the browser says and does (:data:`PHONE`).
     """
     page = browser.new_page(viewport={"width": round(viewport["width"] / zoom), "height": round(viewport["height"] / zoom)},
-                            device_scale_factor=zoom)
+                            device_scale_factor=zoom, **(device or {}))
     page.requests, page.console = [], []
     page.on("request", lambda request: page.requests.append(request.url))
     page.on("websocket", lambda socket: page.requests.append(socket.url))

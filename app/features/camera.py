@@ -6,6 +6,7 @@ the window minus the panel and nothing of the arm hides under it. The camera fra
 arm, its ghosts, its target and whatever else is shown (a cloud, a path) in that canvas,
 from the direction the student chose: when the canvas changes size, on "Frame the arm",
 and after a change that moves the arm far (a singularity button, a typed target, a path).
+On a phone held upright viser lays the panel over the canvas instead: the arm is framed above it.
 """
 
 from __future__ import annotations
@@ -50,18 +51,28 @@ def views_for(up) -> dict[str, tuple[float, float, float]]:
 #: Room kept around each joint (the link bodies are up to ~9 cm thick) and at the canvas edges.
 BODY_RADIUS = 0.1
 EDGE_MARGIN = 0.08
+#: The share of a phone's upright canvas its panel leaves uncovered: in a window narrower than 576 px (a phone held
+#: upright) viser shows the panel as a sheet over the canvas's lower part, up to 60 % of its height.
+PHONE_UNCOVERED = 0.4
 
 
-def framing(points: np.ndarray, direction, fov: float, aspect: float, margin: float = EDGE_MARGIN) -> tuple[np.ndarray, np.ndarray]:
+def framing(points: np.ndarray, direction, fov: float, aspect: float, margin: float = EDGE_MARGIN,
+            top: float = 1.0) -> tuple[np.ndarray, np.ndarray]:
     """(camera position, look-at point) that show every one of ``points`` (n, 3) in the canvas.
 
     The camera looks at the points' bounding-box centre from ``direction``, with z up,
     vertical field of view ``fov`` (rad) and ``aspect`` = width / height, and stands just
     far enough back that each point is inside the canvas by ``margin`` of its half-size.
+    With ``top`` < 1 the points are framed in that share of the canvas's height from its top
+    (a phone's panel covers the rest): camera and look-at sink together, as little as puts every
+    point, near or far, in that band.
 
     >>> position, look_at = framing(np.array([[1.0, 0, 0], [-1.0, 0, 0]]), (0, -1, 0), np.radians(90), 1.0, margin=0.0)
     >>> position.round(6).tolist(), look_at.tolist()
     ([0.0, -1.0, 0.0], [0.0, 0.0, 0.0])
+    >>> position, look_at = framing(np.array([[0, 0, 1.0], [0, 0, -1.0]]), (0, -1, 0), np.radians(90), 1.0, margin=0.0, top=0.5)
+    >>> position.round(6).tolist(), look_at.round(6).tolist()  # 2 back, the canvas spans z -2..2 about its middle
+    ([0.0, -2.0, -1.0], [0.0, 0.0, -1.0])
     """
     points = np.asarray(points, dtype=float)
     back = np.asarray(direction, dtype=float)
@@ -73,12 +84,20 @@ def framing(points: np.ndarray, direction, fov: float, aspect: float, margin: fl
     centre = (points.min(axis=0) + points.max(axis=0)) / 2
     relative = points - centre
     x, y, depth = relative @ right, relative @ up, relative @ forward
-    tan_v = np.tan(fov / 2) * (1 - margin)
-    tan_h = tan_v * aspect
+    tan_half = np.tan(fov / 2)
+    tan_v, tan_h = tan_half * (1 - margin), tan_half * aspect * (1 - margin)
     # a point at depth d beyond the centre is seen at x / (distance + d): solve for the distance
-    distance = max(float(np.max(np.abs(x) / tan_h - depth)), float(np.max(np.abs(y) / tan_v - depth)),
-                   float(np.max(-depth)) + 0.05)  # and never inside the arm
-    return centre + distance * back, centre
+    distance = max(float(np.max(np.abs(x) / tan_h - depth)), float(np.max(-depth)) + 0.05)  # never inside the arm
+    if top >= 1:
+        distance = max(distance, float(np.max(np.abs(y) / tan_v - depth)))
+        return centre + distance * back, centre
+    # sunk by s, a point is in the band when low ≤ (y + s) / (distance + d) ≤ high: the least distance that leaves
+    # room for an s, then the s in the middle of that room
+    high, low = tan_half * (1 - margin * top), tan_half * (1 - 2 * top + margin * top)
+    distance = max(distance, float(np.max(low * depth - y) - np.min(high * depth - y)) / (high - low))
+    sink = (np.max(low * (distance + depth) - y) + np.min(high * (distance + depth) - y)) / 2
+    look_at = centre - sink * up
+    return look_at + distance * back, look_at
 
 
 def framed_view(points: np.ndarray, direction=VIEWS["Course figure"]) -> ScreenView:
@@ -152,12 +171,16 @@ class CameraControls(View):
     follow : bool
         Follow the browser's camera itself, for the browser's whole visit (a classroom's member has one for all
         its arms); otherwise it is handed the moves (:func:`relay_camera_moves`).
+    phone : bool
+        The browser is a phone's: held upright (a canvas taller than wide), its panel covers the canvas's lower
+        part, and the arm is framed above it (:data:`PHONE_UNCOVERED`).
     """
 
     def __init__(self, client: viser.ClientHandle, snapshot: Callable[[], Snapshot],
                  guard: Callable[[Callable], Callable], lecture: bool = False, body_radius: float = BODY_RADIUS,
-                 up=(0.0, 0.0, 1.0), follow: bool = True, light: bool = False) -> None:
+                 up=(0.0, 0.0, 1.0), follow: bool = True, light: bool = False, phone: bool = False) -> None:
         self._client = client
+        self.phone = phone
         self._views = views_for(up)  #: the "Look from" choices, named in the axes of the arm shown
         self.body_radius = body_radius  #: the arm shown's (:meth:`show_arm`)
         self._snapshot = snapshot
@@ -239,8 +262,14 @@ class CameraControls(View):
             return
         view = ScreenView.of(self._client.camera)
         pixels, depth = view.to_screen(self.extra[name])
-        if (depth <= 0).any() or (np.abs(pixels) > (view.width / 2, view.height / 2)).any():
+        bottom = view.height / 2 - self._uncovered(self._client.camera) * view.height
+        if (depth <= 0).any() or (np.abs(pixels[:, 0]) > view.width / 2).any() or \
+                ((pixels[:, 1] > view.height / 2) | (pixels[:, 1] < bottom)).any():
             self.frame()
+
+    def _uncovered(self, camera: viser.CameraHandle) -> float:
+        """The share of the canvas's height, from its top, that the panel leaves uncovered."""
+        return PHONE_UNCOVERED if self.phone and camera.aspect < 1 else 1.0
 
     def _where_framed(self) -> bool:
         """The camera is where this last framed it."""
@@ -254,7 +283,7 @@ class CameraControls(View):
             return
         camera = self._client.camera
         shown = np.vstack([arm_points(self._snapshot(), self.body_radius), *self.extra.values()])
-        position, look_at = framing(shown, direction, camera.fov, camera.aspect)
+        position, look_at = framing(shown, direction, camera.fov, camera.aspect, top=self._uncovered(camera))
         # one framing at a time (a worker's map and a redraw may frame at once): two interleaved left the camera
         # at one's position and the other's look-at, which no framing had chosen, taken for a view the user chose
         with self._lock, self._client.atomic():

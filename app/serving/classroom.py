@@ -42,7 +42,7 @@ from ..state import ArmState
 from ..view import HELD_BACK
 from ..viser_internals import after_broadcast
 from .class_challenges import ClassChallenges
-from .gate import RETURN_WINDOW, address_of
+from .gate import RETURN_WINDOW, address_of, on_a_phone
 
 if TYPE_CHECKING:
     from .server import TeachingServer
@@ -234,7 +234,7 @@ class Classroom:
         member.camera = CameraControls(
             client, lambda: self._watched(member),
             lambda handler: guard(client, handler, is_closed=lambda: member.closed), lecture=self.app.lecture,
-            body_radius=self._body_radius(), up=self.state.arm.up, light=self.app.light,
+            body_radius=self._body_radius(), up=self.state.arm.up, light=self.app.light, phone=on_a_phone(client),
         )
         if back:
             self._present(member)

@@ -366,6 +366,13 @@ def address_of(client) -> str:  # noqa: ANN001
     return _address(connection) if connection is not None else "?"
 
 
+def on_a_phone(client) -> bool:  # noqa: ANN001
+    """Whether ``client``'s browser (a ``viser.ClientHandle``) says it runs on a phone: "Mobi" in its User-Agent, as
+    browsers' makers advise (tablets leave it out)."""
+    connection = _connection_of(client)
+    return connection is not None and "Mobi" in connection.request.headers.get("User-Agent", "")
+
+
 async def hang_up_silent(clients: list, timeout: float = ANSWER_SECONDS) -> list:
     """Ping each of ``clients`` (``viser.ClientHandle``) and drop, without a goodbye, those that do not answer within
     ``timeout`` s; returns those (on viser's event loop)."""

@@ -40,7 +40,7 @@ from ..session import ArmSession
 from ..style import BRAND_BLUE
 from ..viser_internals import fast_updates, shared_frames, value_fits
 from .classroom import Classroom, join_markdown
-from .gate import RETURN_WINDOW, Gate, TokenBucket, address_of, budget_of, gated_serve, hang_up_silent
+from .gate import RETURN_WINDOW, Gate, TokenBucket, address_of, budget_of, gated_serve, hang_up_silent, on_a_phone
 from .workers import APART, JOINS, Cancelled, DragQueue, PanelRefresher, refuse_in_worker_process
 
 log = logging.getLogger(__name__)
@@ -346,23 +346,24 @@ class TeachingServer:
         """
         name = ARM_CHOICES[choice]
         lecture, light = view
+        phone = on_a_phone(client)
         state, display = None, {}
         if typed is None:  # not a newly typed table: the arm as this browser left it, if it has been here
             with self._sessions_lock:
                 state, typed, display = self._left_arms.get(client.client_id, {}).get(choice, (None, None, {}))
         if name is None:
             session = ArmSession(client, self.arm, self.refresher, self.drags, models=self.models, lecture=lecture,
-                                 light=light, state=state)
+                                 light=light, phone=phone, state=state)
         elif name == "custom":
             typed = typed or (parse_table(STARTING_TABLE, "standard"), STARTING_TABLE, "standard")
             arm, text, convention = typed
             session = ArmSession(
-                client, arm, self.refresher, self.drags, lecture=lecture, light=light, text=text, convention=convention,
-                state=state,
+                client, arm, self.refresher, self.drags, lecture=lecture, light=light, phone=phone, text=text,
+                convention=convention, state=state,
                 rebuild=lambda new, new_text, new_convention: self._switch(client, CUSTOM, (new, new_text, new_convention)))
         else:
             session = ArmSession(client, state.arm if state else Arm.preset(name), self.refresher, self.drags,
-                                 lecture=lecture, light=light, state=state)
+                                 lecture=lecture, light=light, phone=phone, state=state)
         session.choice, session.typed = choice, typed
         session.show_choices(display)
         client.gui.set_panel_label(panel_title(choice, self.arm.name))
