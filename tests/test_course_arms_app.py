@@ -20,8 +20,9 @@ from ur10teach.features.velocity import METRES_PER_SPEED
 from ur10teach.session import ArmSession
 from ur10core import Arm
 
-from .server_support import a_ghost_to_take, session_of, until, url
+from .server_support import a_ghost_to_take, become_presenter, session_of, until, url
 from ur10dev.viser_client import CAMERA, ViserClient, wxyz_of
+from ur10dev.waiting import HANG_TIMEOUT
 
 pytestmark = pytest.mark.server
 
@@ -1033,6 +1034,53 @@ def test_a_browser_back_before_the_server_noticed_it_had_gone_finds_its_arms():
 
     asyncio.run(scenario())
     app.stop()
+
+
+@pytest.mark.parametrize("shared", [False, True])
+def test_a_browser_back_before_its_old_one_has_finished_leaving_finds_what_it_left(monkeypatch, shared):
+    """viser lists a client gone, then runs the server's disconnect callback on its thread pool, where a class's
+    arrivals may hold it up. A page reloaded meanwhile came back before its old connection had left: a student's
+    laptop started afresh (its arms were kept for a later return), a projector came back as a viewer."""
+    import threading
+
+    from ur10teach.serving.gate import Gate
+    from ur10teach.serving.server import TeachingServer
+
+    leaving, held = TeachingServer._disconnected, threading.Event()
+    seen: set[int] = set()
+
+    def held_up(self, client):  # the first call for each client (viser's) waits until the test lets it go
+        if client.client_id not in seen:
+            seen.add(client.client_id)
+            held.wait(HANG_TIMEOUT)
+        leaving(self, client)
+
+    monkeypatch.setattr(TeachingServer, "_disconnected", held_up)
+    app = TeachingServer(port=0, shared=shared, gate=Gate(trust_loopback=False))  # loopback addresses stand for laptops
+
+    async def scenario():
+        laptop = await ViserClient(url(app), local_address="127.0.0.2").connect()
+        if shared:
+            await become_presenter(laptop, app)
+        else:
+            await pick(app, laptop, "Stanford arm (RRP + wrist)")
+        await laptop.close()  # a reload: the old page closes its connection, the new one opens another
+        await until(lambda: not app.server.get_clients(), what="viser to let the old page go")
+        again = await ViserClient(url(app), local_address="127.0.0.2").connect()
+        if not shared:
+            assert session_of(app, again).choice == "Stanford arm (RRP + wrist)"
+        await until(lambda: any(title == "Welcome back" for title, _ in again.received.notifications),
+                    what="the page welcomed back")
+        assert not shared or app.classroom.presenter is not None and app.classroom.presenter.client.client_id in \
+            app.server.get_clients()
+        held.set()
+        await again.close()
+
+    try:
+        asyncio.run(scenario())
+    finally:
+        held.set()
+        app.stop()
 
 
 def test_the_arms_kept_for_returns_are_bounded_the_oldest_forgotten_first(app, monkeypatch):

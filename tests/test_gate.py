@@ -555,3 +555,21 @@ def test_a_value_of_another_type_than_its_widgets_is_dropped_at_the_gate(app):
         await client.close()
 
     asyncio.run(scenario())
+
+
+def test_a_twin_whose_socket_is_backed_up_is_hung_up_in_time(monkeypatch):
+    """A laptop whose lid closed mid-download stops reading, and the server's writes to it back up: sending it a
+    ping then waits for them to leave (websockets drains first). Only the pong was timed, so a browser back from
+    that laptop waited, unbuilt, until the old connection was dropped for not reading (15 s, ``SEND_TIMEOUT``)."""
+    class BackedUp:
+        aborted = False
+
+        async def ping(self):
+            await asyncio.Event().wait()  # the queue ahead of it never leaves
+
+    connection = BackedUp()
+    connection.transport = type("Transport", (), {"abort": lambda _: setattr(connection, "aborted", True)})()
+    monkeypatch.setattr(gate_module, "_connection_of", lambda client: connection)
+    laptop = object()
+    gone = asyncio.run(asyncio.wait_for(gate_module.hang_up_silent([laptop], timeout=0.05), HANG_TIMEOUT))
+    assert gone == [laptop] and connection.aborted

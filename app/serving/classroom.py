@@ -272,6 +272,11 @@ class Classroom:
                 self.presenter_left = (member.address, self.app.clock())
         self.app.refresher.request(self.live)
 
+    def members_from(self, address: str) -> list[Member]:
+        """The browsers in the class that connected from ``address``."""
+        with self._lock:
+            return [member for member in self.members.values() if member.address == address]
+
     @property
     def sessions(self) -> dict[int, ArmSession]:
         """The sessions of the presenter and the explorers."""

@@ -376,12 +376,15 @@ def on_a_phone(client) -> bool:  # noqa: ANN001
 async def hang_up_silent(clients: list, timeout: float = ANSWER_SECONDS) -> list:
     """Ping each of ``clients`` (``viser.ClientHandle``) and drop, without a goodbye, those that do not answer within
     ``timeout`` s; returns those (on viser's event loop)."""
+    async def answered(connection) -> None:  # noqa: ANN001
+        await (await connection.ping())  # (sending it waits for what is queued before it to leave)
+
     async def silent(client) -> bool:  # noqa: ANN001
         connection = _connection_of(client)
         if connection is None:
             return True
-        try:
-            await asyncio.wait_for(await connection.ping(), timeout)
+        try:  # a laptop that stopped reading mid-download backs its socket up: the ping's sending is timed too
+            await asyncio.wait_for(answered(connection), timeout)
             return False
         except (asyncio.TimeoutError, websockets.ConnectionClosed):
             connection.transport.abort()

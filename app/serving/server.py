@@ -239,7 +239,8 @@ class TeachingServer:
         #: client id → picker choice → (state, typed table, display choices) of each arm the browser has
         #: left: going back to one finds its pose, target, typed table and what it showed as they were
         self._left_arms: dict[int, dict[str, tuple]] = {}
-        self._addresses: dict[int, str] = {}  # client id → the address it connected from
+        #: client id → (the address it connected from, the client)
+        self._addresses: dict[int, tuple[str, viser.ClientHandle]] = {}
         #: address → (when, choice shown, its left arms, (lecture mode, light view)) of the browser that left from
         #: there last
         self._departed: dict[str, tuple[float, str, dict[str, tuple], tuple[bool, bool]]] = {}
@@ -299,8 +300,19 @@ class TeachingServer:
 
     def _drop_dead_twins(self, client: viser.ClientHandle) -> None:
         """Let the browsers of this address that no longer answer leave now (``gate.hang_up_silent``): the browser
-        connecting may be one of them back, before the server has noticed it had gone."""
+        connecting may be one of them back, before the server has noticed it had gone. Those viser has let go
+        already leave now too: viser lists a client gone, then runs its disconnect callback on its thread pool,
+        where thirty students' arrivals may hold it up, and a reloaded projector would come back as a viewer."""
         address = address_of(client)
+        if self.classroom is not None:
+            let_go = [member.client for member in self.classroom.members_from(address)]
+        else:
+            with self._sessions_lock:
+                let_go = [other for at, other in self._addresses.values() if at == address]
+        current = self.server.get_clients()  # (after: each of those was listed before it was kept)
+        for gone in let_go:
+            if gone.client_id not in current:
+                self._disconnected(gone)
         if self.gate.trusted(address):  # this machine's own tabs do not drop off the network (nor its load tests)
             return
         twins = [other for other_id, other in self.server.get_clients().items()
@@ -317,7 +329,7 @@ class TeachingServer:
             relay_camera_moves(client, lambda: getattr(self._sessions.get(client.client_id), "camera", None))
             choice, view, address = self.first_choice, self._view_of(None), address_of(client)
             with self._sessions_lock:
-                self._addresses[client.client_id] = address
+                self._addresses[client.client_id] = (address, client)
                 when, *left = self._departed.pop(address, (-math.inf, None, {}, view))
                 back = self.clock() - when <= RETURN_WINDOW  # from where a browser left: its arms as it left them
                 if back:
@@ -428,7 +440,7 @@ class TeachingServer:
                 if session is not None:
                     self._leave(client.client_id, session)
                 left = self._left_arms.pop(client.client_id, {})
-                address = self._addresses.pop(client.client_id, None)
+                address, _ = self._addresses.pop(client.client_id, (None, None))
                 if address is not None and left:  # kept for its return (one that left mid-change: the arm it changed from)
                     self._departed.pop(address, None)
                     self._departed[address] = (self.clock(), next(reversed(left)), left, self._view_of(session))
