@@ -1178,7 +1178,8 @@ def test_on_a_phone_held_upright_the_arm_is_framed_above_the_panel(request, serv
     """In a window narrower than 576 px viser shows the panel as a sheet over the lower 60 % of the canvas. On a
     phone held upright, the arm was framed in the whole canvas, its lower half under the sliders that move it. A
     phone's browser (its User-Agent says so) now frames it in the band above; held sideways the panel docks beside
-    the canvas, and the arm fills it. A laptop's narrow window keeps the whole canvas (its panel docks)."""
+    the canvas, and the arm fills it. A laptop's narrow window keeps the whole canvas (its panel docks). viser's
+    ``minimize`` does not fold the sheet: "Hide the panel" did nothing on an upright phone."""
     from ur10dev.browser import PHONE
     from ur10teach.features.camera import PHONE_UNCOVERED, arm_points
     from ur10teach.features.branch_labels import ScreenView
@@ -1207,6 +1208,10 @@ def test_on_a_phone_held_upright_the_arm_is_framed_above_the_panel(request, serv
             assert highest >= 0
             upright_phone = phone and size[0] < size[1]
             assert lowest <= PHONE_UNCOVERED if upright_phone else lowest > 0.8, lowest
+            if upright_phone:  # "Hide the panel" cannot fold viser's sheet: the student is told what does
+                await client.set_gui("Hide the panel", True)
+                await until(lambda: any("Tap the panel's title" in body for _, body in client.received.notifications),
+                            what="what folds the panel on a phone")
         await client.close()
 
     asyncio.run(scenario())

@@ -19,7 +19,7 @@ import viser
 
 from ur10core.orientation import from_frame
 
-from ..feedback import chosen
+from ..feedback import chosen, notify
 from ..state import Snapshot
 from ..view import View
 from .branch_labels import DEFAULT_VIEW, ScreenView
@@ -201,7 +201,7 @@ class CameraControls(View):
             self.direction = gui.add_dropdown("Look from", tuple(self._views), initial_value="Course figure")
             self.frame_button = gui.add_button("Frame the arm", icon=viser.Icon.FOCUS_CENTERED,
                                                hint="The arm, its ghosts, its target and what else is shown")
-        self.lecture = LectureMode(gui, folder, lecture, guard)
+        self.lecture = LectureMode(gui, folder, lecture, guard, hide=self._hide_panel)
         self.light = LightView(client, folder, light, guard)
         self.direction.on_update(guard(lambda _: self.frame()))
         self.frame_button.on_click(guard(lambda _: self.frame()))
@@ -266,6 +266,14 @@ class CameraControls(View):
         if (depth <= 0).any() or (np.abs(pixels[:, 0]) > view.width / 2).any() or \
                 ((pixels[:, 1] > view.height / 2) | (pixels[:, 1] < bottom)).any():
             self.frame()
+
+    def _hide_panel(self) -> None:
+        """Fold the panel to a strip at the edge; a phone held upright has none, and is told what does fold it."""
+        if self._uncovered(self._client.camera) < 1:
+            notify(self._client, "On a phone held upright",
+                   "Tap the panel's title to fold the panel away, and again to bring it back.", color="blue")
+        else:
+            self._client.gui.main_panel.minimize()
 
     def _uncovered(self, camera: viser.CameraHandle) -> float:
         """The share of the canvas's height, from its top, that the panel leaves uncovered."""

@@ -40,11 +40,12 @@ LECTURE_PADDING = (16, 18, 0, 0)
 class LectureMode:
     """The lecture-mode switch and "Hide the panel" button in one browser's "View" folder.
 
-    ``on_change`` callbacks get the new state (the session thickens its gizmo's lines there).
+    ``on_change`` callbacks get the new state (the session thickens its gizmo's lines there). ``hide`` hides the
+    panel (viser's ``minimize`` by default).
     """
 
     def __init__(self, gui: viser.GuiApi, folder: viser.GuiFolderHandle, enabled: bool,
-                 guard: Callable[[Callable], Callable]) -> None:
+                 guard: Callable[[Callable], Callable], hide: Callable[[], None] | None = None) -> None:
         self._gui = gui
         self.on_change: list[Callable[[bool], None]] = []
         # outside every folder: a style in a folded folder would not be on the page
@@ -54,7 +55,7 @@ class LectureMode:
             self.hide_button = gui.add_button("Hide the panel", icon=viser.Icon.LAYOUT_SIDEBAR_RIGHT_COLLAPSE,
                                               hint="Click the strip at the edge to bring it back")
         self.enabled.on_update(guard(lambda _: self.apply()))
-        self.hide_button.on_click(guard(lambda _: gui.main_panel.minimize()))
+        self.hide_button.on_click(guard(lambda _: (hide or gui.main_panel.minimize)()))
         gui.main_panel.set_width(PANEL_WIDTH_PX[enabled])
 
     @property
