@@ -14,9 +14,8 @@ from ur10dev.browser import (
     choose,
     click,
     dom_id,
-    drawn_frames,
+    drag_the_gizmo,
     foreign_requests,
-    project,
     set_checkbox,
     settled_canvas,
     step_slider,
@@ -26,36 +25,6 @@ from ur10dev.browser import (
 from ur10dev.waiting import wait_for
 
 pytestmark = pytest.mark.browser
-
-
-def drag_the_gizmo(page, session, gate) -> None:
-    """Grab one of the gizmo's arrows with the mouse and pull, until a drag reaches the server.
-
-    Each try ends in one of two ways the server sees: the gizmo's drag ended (the arrow was
-    under the mouse), or the camera moved (the mouse orbited the view instead).
-    """
-    box = page.locator("canvas").first.bounding_box()
-    flange = session.state.last.flange
-    size = session.ik_target.gizmo.scale  # the arrows' length, sized to the arm
-
-    for axis, share in [(0, 0.75), (0, 0.6), (1, 0.75), (2, 0.75), (0, 0.9)]:
-        u, v = project(session.client.camera, flange[:3, 3] + share * size * flange[:3, axis], box)
-        drags, cameras = gate.passed["TransformControlsDragEndMessage"], gate.passed["ViewerCameraMessage"]
-        # the gizmo reads the pointer once a frame: each move is given a drawn frame
-        page.mouse.move(u, v)
-        drawn_frames(page, 2)
-        page.mouse.down()
-        drawn_frames(page, 2)
-        for step in range(1, 11):
-            page.mouse.move(u - 3 * step, v + 2 * step)
-            drawn_frames(page, 1)
-        page.mouse.up()
-        wait_for(lambda: gate.passed["TransformControlsDragEndMessage"] > drags
-                 or gate.passed["ViewerCameraMessage"] > cameras, what="the server to hear the drag or the orbit")
-        if gate.passed["TransformControlsDragEndMessage"] > drags:
-            wait_for(lambda: session.state.last.cause in ("target", "dropped"), what="the drag applied")
-            return
-    raise AssertionError("no arrow of the gizmo was under the mouse")
 
 
 def test_a_students_first_visit(open_page, light_app):

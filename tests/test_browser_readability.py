@@ -13,8 +13,8 @@ import pytest
 from ur10teach.serving.server import TeachingServer
 from ur10teach.style import DANGER_RED, GHOST_OPACITY
 from ur10dev.browser import (
-    HANG_TIMEOUT_MS, PHONE, canvas_changed, changed_mask, choose, click, dom_id, neighbourhood, project, set_checkbox,
-    settled_canvas, type_text, unfold,
+    HANG_TIMEOUT_MS, PHONE, canvas_changed, changed_mask, choose, click, dom_id, drag_the_gizmo, neighbourhood, project,
+    set_checkbox, settled_canvas, type_text, unfold,
 )
 from ur10dev.colour_vision import MIN_DELTA_E, closest_pair
 from ur10dev.waiting import wait_for
@@ -89,9 +89,10 @@ def test_the_arm_is_framed_beside_the_panel_in_any_window(open_page):
              what="a level view from the front")
 
 
-def test_on_a_phone_held_upright_the_arm_is_seen_above_the_panel(open_page):
+def test_on_a_phone_held_upright_the_arm_is_seen_above_the_panel(open_page, light_app):
     """A phone's browser, 390 × 664 CSS pixels: viser lays the panel over the canvas's lower part, and the arm and
-    its target are framed above it, where the student sees them while moving the sliders below."""
+    its target are framed above it, where the student sees them while moving the sliders below, and drags the
+    target with a finger."""
     page, session = open_page(viewport={"width": 390, "height": 664}, device=PHONE)
     assert session.camera.phone
 
@@ -106,6 +107,12 @@ def test_on_a_phone_held_upright_the_arm_is_seen_above_the_panel(open_page):
     wait_for(lambda: all(canvas["y"] < v < top and canvas["x"] < u < canvas["x"] + canvas["width"]
                          for u, v in (project(session.client.camera, point, canvas) for point in key_points(session))),
              what="the arm and its target framed above the panel")
+    # and a finger drags the target there
+    session.ik_target.show_ghosts.value = False  # nothing between the finger and the gizmo
+    settled_canvas(page)
+    before = session.state.q
+    drag_the_gizmo(page, session, light_app.gate, finger=True)
+    assert session.state.last.reachable and np.abs(session.state.q - before).max() > 1e-3
 
 
 def test_lecture_mode_for_the_presenter_and_the_class(open_page, playwright):

@@ -246,6 +246,49 @@ def project(camera, point, box) -> tuple[float, float]:
     return box["x"] + box["width"] / 2 + focal * p[0] / p[2], box["y"] + box["height"] / 2 + focal * p[1] / p[2]
 
 
+def drag_the_gizmo(page, session, gate, finger: bool = False) -> None:
+    """Grab one of the gizmo's arrows with the mouse (or a ``finger``, on a touch screen) and pull, until a drag
+    reaches the server.
+
+    Each try ends in one of two ways the server sees: the gizmo's drag ended (the arrow was
+    under the pointer), or the camera moved (the pointer orbited the view instead).
+    """
+    box = page.locator("canvas").first.bounding_box()
+    flange = session.state.last.flange
+    size = session.ik_target.gizmo.scale  # the arrows' length, sized to the arm
+    touch = page.context.new_cdp_session(page) if finger else None
+
+    def press(kind: str, u: float | None = None, v: float | None = None) -> None:
+        if touch is not None:
+            points = [] if kind == "up" else [{"x": u, "y": v}]
+            touch.send("Input.dispatchTouchEvent", {"type": {"down": "touchStart", "move": "touchMove", "up": "touchEnd"}[kind],
+                                                    "touchPoints": points})
+        elif kind == "move":
+            page.mouse.move(u, v)
+        else:
+            getattr(page.mouse, kind)()
+
+    for axis, share in [(0, 0.75), (0, 0.6), (1, 0.75), (2, 0.75), (0, 0.9)]:
+        u, v = project(session.client.camera, flange[:3, 3] + share * size * flange[:3, axis], box)
+        drags, cameras = gate.passed["TransformControlsDragEndMessage"], gate.passed["ViewerCameraMessage"]
+        # the gizmo reads the pointer once a frame: each move is given a drawn frame
+        if touch is None:
+            press("move", u, v)
+            drawn_frames(page, 2)
+        press("down", u, v)
+        drawn_frames(page, 2)
+        for step in range(1, 11):
+            press("move", u - 3 * step, v + 2 * step)
+            drawn_frames(page, 1)
+        press("up")
+        wait_for(lambda: gate.passed["TransformControlsDragEndMessage"] > drags
+                 or gate.passed["ViewerCameraMessage"] > cameras, what="the server to hear the drag or the orbit")
+        if gate.passed["TransformControlsDragEndMessage"] > drags:
+            wait_for(lambda: session.state.last.cause in ("target", "dropped"), what="the drag applied")
+            return
+    raise AssertionError("no arrow of the gizmo was under the pointer")
+
+
 def neighbourhood(pixels: np.ndarray, u: float, v: float, box: dict, radius: int = 4) -> np.ndarray:
     """The (2r+1)² pixels around page point (u, v), from a canvas screenshot."""
     x, y = int(round(u - box["x"])), int(round(v - box["y"]))
