@@ -89,23 +89,24 @@ def test_the_arm_is_framed_beside_the_panel_in_any_window(open_page):
              what="a level view from the front")
 
 
+def above_the_panel(page, camera, points, inside) -> bool:
+    """Every world point lands in the 3D canvas above the panel that lies over its lower part (viser's sheet, on a
+    phone held upright), as the browser's camera sees it; ``inside`` is an element of the panel."""
+    canvas = page.locator("canvas").first.bounding_box()
+    top = inside.evaluate("e => { while (e && getComputedStyle(e).position !== 'fixed') e = e.parentElement;"
+                          " return e ? e.getBoundingClientRect().top : null; }")
+    assert top is not None and canvas["y"] < top < canvas["y"] + canvas["height"] * 0.7, (top, canvas)
+    return all(canvas["y"] < v < top and canvas["x"] < u < canvas["x"] + canvas["width"]
+               for u, v in (project(camera, point, canvas) for point in points))
+
+
 def test_on_a_phone_held_upright_the_arm_is_seen_above_the_panel(open_page, light_app):
     """A phone's browser, 390 × 664 CSS pixels: viser lays the panel over the canvas's lower part, and the arm and
     its target are framed above it, where the student sees them while moving the sliders below, and drags the
     target with a finger."""
     page, session = open_page(viewport={"width": 390, "height": 664}, device=PHONE)
     assert session.camera.phone
-
-    def sheet_top() -> float:  # the top of the panel that lies over the canvas (viser's sheet, fixed at the bottom)
-        return page.locator(dom_id(session.joints.sliders[0])).evaluate(
-            "e => { while (e && getComputedStyle(e).position !== 'fixed') e = e.parentElement;"
-            " return e ? e.getBoundingClientRect().top : null; }")
-
-    canvas = page.locator("canvas").first.bounding_box()
-    top = sheet_top()
-    assert top is not None and canvas["y"] < top < canvas["y"] + canvas["height"] * 0.7, (top, canvas)
-    wait_for(lambda: all(canvas["y"] < v < top and canvas["x"] < u < canvas["x"] + canvas["width"]
-                         for u, v in (project(session.client.camera, point, canvas) for point in key_points(session))),
+    wait_for(lambda: above_the_panel(page, session.client.camera, key_points(session), page.locator(dom_id(session.joints.sliders[0]))),
              what="the arm and its target framed above the panel")
     # and a finger drags the target there
     session.ik_target.show_ghosts.value = False  # nothing between the finger and the gizmo

@@ -1217,6 +1217,40 @@ def test_on_a_phone_held_upright_the_arm_is_framed_above_the_panel(request, serv
     asyncio.run(scenario())
 
 
+@pytest.mark.parametrize("server", ["app", "classroom"])
+def test_a_page_that_puts_its_camera_back_at_the_start_is_framed_again(request, server):
+    """viser's page puts its camera back at the initial one as its 3D view mounts, and a phone's page mounts it
+    late: at times after the server's first framing had arrived, which it undid (the arm stood under a phone's
+    panel). A camera reported there, at the server's initial camera or at viser's own, is framed again; one the
+    student moved elsewhere is left where it is. A classroom's browser is framed as it joins (its page may send no
+    other camera until the student moves it)."""
+    from ur10teach.features.camera import RESET_POSES
+
+    app = request.getfixturevalue(server)
+
+    async def scenario():
+        client = await ViserClient(url(app)).connect()
+        controls = (next(iter(app.classroom.members.values())).camera if app.classroom is not None
+                    else session_of(app, client).camera)
+        await until(lambda: controls._framed_at is not None and controls._where_framed(), what="the first framing")
+        framed = controls._framed_at[0].copy()
+        reports = []
+        controls.on_moved.append(lambda: reports.append(1))
+        orbit = ((2.5, -0.4, 1.7), (0.1, 0.2, 0.3))  # a view the student turned to
+        for position, look_at in [*RESET_POSES, orbit]:
+            heard = len(reports)
+            await client.send(dataclasses.replace(CAMERA, position=position, look_at=look_at))
+            await until(lambda: len(reports) > heard, what="the camera's report handled")
+            if (position, look_at) == orbit:
+                assert not controls._where_framed() and np.allclose(controls._client.camera.position, position)
+            else:
+                await until(lambda: controls._where_framed(), what="the camera framed again")
+                np.testing.assert_allclose(controls._framed_at[0], framed, atol=1e-9)
+        await client.close()
+
+    asyncio.run(scenario())
+
+
 @pytest.mark.parametrize("first_arm, shared", [("scara", False), ("three_dof", False), ("kr210", True), ("three_dof", True)])
 def test_a_teacher_can_open_every_browser_on_another_arm(first_arm, shared):
     """``--arm``: a lecture on the SCARA opens every browser on it (in shared mode, the class sees it first and a

@@ -384,8 +384,9 @@ def canvas_changed(page, before: np.ndarray, at_least: float, what: str) -> np.n
 
 
 @contextlib.contextmanager
-def class_browsers(app, count: int = 2, viewport: dict = SMALL_VIEWPORT) -> Iterator[tuple[list, list]]:
-    """``count`` browsers on a classroom server (``--shared``), each in a process of its own.
+def class_browsers(app, count: int = 2, viewport: dict = SMALL_VIEWPORT, device: dict | None = None) -> Iterator[tuple[list, list]]:
+    """``count`` browsers on a classroom server (``--shared``), each in a process of its own (``device``: a
+    :data:`PHONE`'s, say).
 
     Yields (pages, members) in the order they joined, the members being ``ur10teach.serving.classroom``'s,
     all still watching; closes the browsers after, and fails if any page asked anything of another host.
@@ -398,7 +399,7 @@ def class_browsers(app, count: int = 2, viewport: dict = SMALL_VIEWPORT) -> Iter
         try:
             pages = []
             for browser in browsers:  # one at a time: the members' order is the pages'
-                pages.append(open_app(browser, url, viewport))
+                pages.append(open_app(browser, url, viewport, device=device))
                 wait_for(lambda: len(app.classroom.members) == len(pages), what="the browser to join")
             yield pages, list(app.classroom.members.values())
             for page in pages:

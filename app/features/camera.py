@@ -51,6 +51,10 @@ def views_for(up) -> dict[str, tuple[float, float, float]]:
 #: Room kept around each joint (the link bodies are up to ~9 cm thick) and at the canvas edges.
 BODY_RADIUS = 0.1
 EDGE_MARGIN = 0.08
+#: (position, look-at) viser's page puts its camera back to as its 3D view mounts: the server's initial camera, or
+#: viser's own before that has arrived. A phone's page mounts it late, at times after the first framing has arrived,
+#: which it then undid; no orbit of a student's lands on one exactly, so a camera found there is framed again.
+RESET_POSES = ((DEFAULT_VIEW.position, DEFAULT_VIEW.look_at), ((3.0, 3.0, 3.0), (0.0, 0.0, 0.0)))
 #: The share of a phone's upright canvas its panel leaves uncovered: in a window narrower than 576 px (a phone held
 #: upright) viser shows the panel as a sheet over the canvas's lower part, up to 60 % of its height.
 PHONE_UNCOVERED = 0.4
@@ -218,7 +222,10 @@ class CameraControls(View):
             moved()
         size = (camera.image_width, camera.image_height)
         with self._lock:
-            if size == self._framed_size or 0 in size:
+            reset = self._framed_at is not None and not self._where_framed() and any(
+                np.allclose(camera.position, position, atol=1e-3) and np.allclose(camera.look_at, look_at, atol=1e-3)
+                for position, look_at in RESET_POSES)
+            if (size == self._framed_size and not reset) or 0 in size:
                 return  # an orbit or zoom of the student's own: leave it
             self._framed_size = size
         self._guard(lambda _: self.frame())(None)
@@ -299,5 +306,6 @@ class CameraControls(View):
             camera.position = position
             camera.look_at = look_at  # after the position: viser moves both together otherwise
             self._framed_at = (position, look_at)
+            self._framed_size = (camera.image_width, camera.image_height)  # a report of that size then is the student's
         for moved in self.on_moved:  # placed for where the camera is going (the browser reports only a change)
             moved()

@@ -242,6 +242,7 @@ class Classroom:
         self._draw_controls(member)
         if self.challenges.running:
             self.challenges.enlist(member)
+        member.camera.frame()  # (its page may send no other camera until the student moves it)
 
     def _watched(self, member: Member):
         """The newest snapshot of the arm ``member`` looks at: its own, or the class's."""
