@@ -1178,7 +1178,7 @@ def test_on_a_phone_held_upright_the_arm_is_framed_above_the_panel(request, serv
     """In a window narrower than 576 px viser shows the panel as a sheet over the lower 60 % of the canvas. On a
     phone held upright, the arm was framed in the whole canvas, its lower half under the sliders that move it. A
     phone's browser (its User-Agent says so) now frames it in the band above; held sideways the panel docks beside
-    the canvas, and the arm fills it. A laptop's narrow window keeps the whole canvas (its panel docks). viser's
+    the canvas, and the arm fills it. A laptop's canvas taller than wide keeps it whole (its panel docks). viser's
     ``minimize`` does not fold the sheet: "Hide the panel" did nothing on an upright phone."""
     from ur10dev.browser import PHONE
     from ur10teach.features.camera import PHONE_UNCOVERED, arm_points

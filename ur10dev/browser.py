@@ -69,7 +69,7 @@ def launch(playwright):
     return playwright.chromium.launch(executable_path=CHROMIUM, headless=True, args=ARGS)
 
 
-#: A phone, as playwright's device descriptors give one (an iPhone's Safari): its window is set apart.
+#: A phone, as playwright's device descriptors give one (an iPhone's Safari); its window's size is given apart.
 PHONE = {"user_agent": "Mozilla/5.0 (iPhone; CPU iPhone OS 17_5 like Mac OS X) AppleWebKit/605.1.15 (KHTML, like Gecko) "
                        "Version/17.5 Mobile/15E148 Safari/604.1", "is_mobile": True, "has_touch": True}
 

@@ -132,14 +132,12 @@ class DragStep(NamedTuple):
 class ViserClient:
     """One headless student. Use ``await client.connect()`` then the actions below."""
 
-    def __init__(self, url: str, read: bool = True, local_address: str | None = None, user_agent: str | None = None,
-                 camera: messages.ViewerCameraMessage | None = None) -> None:
+    def __init__(self, url: str, read: bool = True, local_address: str | None = None, user_agent: str | None = None) -> None:
         self.url = url
         self.read = read  # False: a client that never reads its socket (a frozen laptop)
         #: where it connects from: another loopback address (127.0.0.2, ...) stands in for another laptop
         self.local_address = local_address
         self.user_agent = user_agent  #: the browser it says it is (None: the websockets library's own name)
-        self.camera = camera or CAMERA  #: its first camera: the canvas's size
         self.received = Received()
         self.gui: dict[str, dict[str, Any]] = {}  # label -> {"uuid", "type", "value"}
         self.markdown: dict[str, str] = {}  # uuid -> the content of each markdown widget shown
@@ -158,7 +156,7 @@ class ViserClient:
             **({"local_addr": (self.local_address, 0)} if self.local_address else {}),
             **({"user_agent_header": self.user_agent} if self.user_agent else {}),
         )
-        await self.send(self.camera)  # the server counts a client as connected from its first camera
+        await self.send(CAMERA)  # the server counts a client as connected from its first camera
         if self.read:
             self._reader = asyncio.create_task(self._read())
             await asyncio.wait_for(self.ready.wait(), timeout)
