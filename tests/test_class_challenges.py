@@ -744,16 +744,11 @@ POSE_SHOWN = {"UR10 (the app's arm)": [20, -70, 100, -30, 60, 10], "Stanford arm
 
 def given_away(texts: list, shown_before: set, given: list) -> list:
     """The texts of ``texts`` (``recording``'s, from the start of a challenge) that give away what ``given``'s
-    patterns match: in a widget made since, or in one already sent :data:`HELD_BACK`. A redraw that was under way
-    when the challenge started may still arrive before the hold, with what that screen already showed."""
-    held = set()
-    away = []
-    for uuid, text in texts:
-        if text == HELD_BACK:
-            held.add(uuid)
-        elif (uuid in held or uuid not in shown_before) and any(pattern.search(text) for pattern in given):
-            away.append(text)
-    return away
+    patterns match. Only one is let pass: in a widget shown before the start and sent :data:`HELD_BACK` after it
+    (a redraw under way as the challenge started, with what that screen already showed)."""
+    held_at = {uuid: at for at, (uuid, text) in reversed(list(enumerate(texts))) if text == HELD_BACK}  # the first
+    return [text for at, (uuid, text) in enumerate(texts) if any(pattern.search(text) for pattern in given)
+            and not (uuid in shown_before and at < held_at.get(uuid, -1))]
 
 
 @pytest.mark.parametrize("label", POSE_SHOWN)
