@@ -1217,6 +1217,44 @@ def test_on_a_phone_held_upright_the_arm_is_framed_above_the_panel(request, serv
     asyncio.run(scenario())
 
 
+def test_a_framing_for_a_canvas_the_browser_has_since_resized_is_not_shown(app, monkeypatch):
+    """A framing takes a moment, and the browser may report a new canvas meanwhile (a phone turned). Once framings
+    noted the size they were for, the one for the old canvas, shown last, was noted as being for the new: its report
+    then looked like the student's own move, and the arm stayed framed for the old canvas (a CI run, 2026-12-06)."""
+    from ur10teach.features import camera as camera_module
+    from ur10teach.features.branch_labels import ScreenView
+    from ur10teach.features.camera import arm_points
+    from ur10dev.waiting import wait_for
+
+    framing = camera_module.framing
+    turned = dataclasses.replace(CAMERA, image_width=390, image_height=664)
+
+    async def scenario():
+        client = await ViserClient(url(app)).connect()
+        controls = session_of(app, client).camera
+        await until(lambda: controls._framed_at is not None and controls._where_framed(), what="the first framing")
+        loop = asyncio.get_running_loop()
+        first = []
+
+        def slow(*args, **kwargs):  # the first framing meets the turn, and finishes after the new canvas's framing
+            result = framing(*args, **kwargs)
+            if not first:
+                first.append(1)
+                asyncio.run_coroutine_threadsafe(client.send(turned), loop).result()
+                wait_for(lambda: controls._framed_size == (390, 664) and controls._where_framed(),
+                         what="the new canvas framed")
+            return result
+
+        monkeypatch.setattr(camera_module, "framing", slow)
+        await asyncio.to_thread(controls.frame)
+        view = ScreenView.of(controls._client.camera)
+        pixels, _ = view.to_screen(arm_points(controls._snapshot(), controls.body_radius))
+        assert (np.abs(pixels) <= (view.width / 2, view.height / 2)).all(), "framed for the old canvas"
+        await client.close()
+
+    asyncio.run(scenario())
+
+
 @pytest.mark.parametrize("server", ["app", "classroom"])
 def test_a_page_that_puts_its_camera_back_at_the_start_is_framed_again(request, server):
     """viser's page puts its camera back at the initial one as its 3D view mounts, and a phone's page mounts it

@@ -269,22 +269,23 @@ class CameraControls(View):
             return
         view = ScreenView.of(self._client.camera)
         pixels, depth = view.to_screen(self.extra[name])
-        bottom = view.height / 2 - self._uncovered(self._client.camera) * view.height
+        bottom = view.height / 2 - self._uncovered(view.width / view.height) * view.height
         if (depth <= 0).any() or (np.abs(pixels[:, 0]) > view.width / 2).any() or \
                 ((pixels[:, 1] > view.height / 2) | (pixels[:, 1] < bottom)).any():
             self.frame()
 
     def _hide_panel(self) -> None:
         """Fold the panel to a strip at the edge; a phone held upright has none, and is told what does fold it."""
-        if self._uncovered(self._client.camera) < 1:
+        if self._uncovered(self._client.camera.aspect) < 1:
             notify(self._client, "On a phone held upright",
                    "Tap the panel's title to fold the panel away, and again to bring it back.", color="blue")
         else:
             self._client.gui.main_panel.minimize()
 
-    def _uncovered(self, camera: viser.CameraHandle) -> float:
-        """The share of the canvas's height, from its top, that the panel leaves uncovered."""
-        return PHONE_UNCOVERED if self.phone and camera.aspect < 1 else 1.0
+    def _uncovered(self, aspect: float) -> float:
+        """The share of the canvas's height, from its top, that the panel leaves uncovered, for a canvas of
+        ``aspect`` (width / height)."""
+        return PHONE_UNCOVERED if self.phone and aspect < 1 else 1.0
 
     def _where_framed(self) -> bool:
         """The camera is where this last framed it."""
@@ -297,15 +298,19 @@ class CameraControls(View):
         if self.closed:
             return
         camera = self._client.camera
+        size = (camera.image_width, camera.image_height)
         shown = np.vstack([arm_points(self._snapshot(), self.body_radius), *self.extra.values()])
-        position, look_at = framing(shown, direction, camera.fov, camera.aspect, top=self._uncovered(camera))
+        aspect = size[0] / size[1]
+        position, look_at = framing(shown, direction, camera.fov, aspect, top=self._uncovered(aspect))
         # one framing at a time (a worker's map and a redraw may frame at once): two interleaved left the camera
         # at one's position and the other's look-at, which no framing had chosen, taken for a view the user chose
         with self._lock, self._client.atomic():
+            if (camera.image_width, camera.image_height) != size:
+                return  # the canvas changed meanwhile: the framing its report asks for is the one to show
             camera.up_direction = (0.0, 0.0, 1.0)
             camera.position = position
             camera.look_at = look_at  # after the position: viser moves both together otherwise
             self._framed_at = (position, look_at)
-            self._framed_size = (camera.image_width, camera.image_height)  # a report of that size then is the student's
+            self._framed_size = size  # a later report of this size is the student's own move
         for moved in self.on_moved:  # placed for where the camera is going (the browser reports only a change)
             moved()
