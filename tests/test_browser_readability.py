@@ -118,7 +118,7 @@ def test_on_a_phone_held_upright_the_arm_is_seen_above_the_panel(open_page, ligh
 
 def test_lecture_mode_for_the_presenter_and_the_class(open_page, playwright):
     """``--lecture``: 20 px type and thick gizmo lines in the teacher's browser, the panel folds away
-    and comes back, each browser can switch it off; the class's browsers get it too."""
+    and comes back, each browser can switch it off; the class's browsers get it too, and a phone's panel fits."""
     from ur10dev.browser import SMALL_VIEWPORT, ask_to_present, launch, open_app
 
     from .test_browser_lecture_hall import cut_choices
@@ -140,6 +140,15 @@ def test_lecture_mode_for_the_presenter_and_the_class(open_page, playwright):
         set_checkbox(page, session.camera.lecture.enabled, False)
         wait_for(lambda: font_px(text) < 16, what="normal type again")
         assert session.ik_target.gizmo.line_width < 6
+        # a phone in that class: its panel, a sheet 20 em wide, was wider than the phone at lecture type, and the
+        # joints' names were cut off at its left; a phone keeps the page's own type
+        phone, on_phone = open_page(known=1, server=server, viewport={"width": 390, "height": 664}, device=PHONE,
+                                    drawn=False)
+        sheet = phone.locator(dom_id(on_phone.joints.sliders[0])).evaluate(
+            "e => { while (e && getComputedStyle(e).position !== 'fixed') e = e.parentElement;"
+            " const box = e.getBoundingClientRect(); return [box.left, box.right]; }")
+        assert 0 <= sheet[0] and sheet[1] <= 390, sheet
+        assert on_phone.camera.lecture.on  # the switch is on: the 3D labels and the gizmo are lecture-sized
     finally:
         server.stop()
     server = TeachingServer(port=0, shared=True, lecture=True, light=True)

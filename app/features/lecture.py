@@ -20,14 +20,16 @@ from ..viser_internals import labels_of
 ROOT_FONT_PX = 25.6
 PANEL_WIDTH_PX = {False: 330, True: 540}  #: a third of a 1024 px window at most, and the lecture one
 STYLE = (
-    "<style>"
+    # not in a window as narrow as a phone's (viser's 36 em breakpoint): there the panel is a sheet 20 em wide,
+    # which at this size was wider than the phone, and cut off the joints' names; a phone is held close anyway
+    "<style>@media not all and (max-width: 36em) {"
     f"html {{ font-size: {ROOT_FONT_PX}px !important; }}"
     # the sliders' tick labels and the inputs size themselves in px: bring them up too
     ".mantine-Slider-markLabel, .mantine-Input-input, .mantine-Button-label {"
     " font-size: 0.85rem !important; }"
     # a chart's legend, under it, is the page's; its axes are drawn on its canvas (LECTURE_AXIS)
     ".u-legend { font-size: 0.8rem !important; }"
-    "</style>"
+    "}</style>"
 )
 #: uPlot draws a chart's tick numbers and axis names on its canvas in px (12 by default), out of the page's
 #: type's reach: in lecture mode at the panel's 20 px, with the room they take under the plot (x, the first
