@@ -89,12 +89,20 @@ def test_the_arm_is_framed_beside_the_panel_in_any_window(open_page):
              what="a level view from the front")
 
 
+def sheet_box(inside) -> dict | None:
+    """The page box (left, top, right, bottom) of the panel laid over the canvas (viser's sheet on a phone held
+    upright, fixed at the window's bottom) that holds the element ``inside``; None if it is in no such panel."""
+    return inside.evaluate("e => { while (e && getComputedStyle(e).position !== 'fixed') e = e.parentElement;"
+                           " if (!e) return null; const box = e.getBoundingClientRect();"
+                           " return {left: box.left, top: box.top, right: box.right, bottom: box.bottom}; }")
+
+
 def above_the_panel(page, camera, points, inside) -> bool:
     """Every world point lands in the 3D canvas above the panel that lies over its lower part (viser's sheet, on a
     phone held upright), as the browser's camera sees it; ``inside`` is an element of the panel."""
     canvas = page.locator("canvas").first.bounding_box()
-    top = inside.evaluate("e => { while (e && getComputedStyle(e).position !== 'fixed') e = e.parentElement;"
-                          " return e ? e.getBoundingClientRect().top : null; }")
+    sheet = sheet_box(inside)
+    top = None if sheet is None else sheet["top"]
     assert top is not None and canvas["y"] < top < canvas["y"] + canvas["height"] * 0.7, (top, canvas)
     return all(canvas["y"] < v < top and canvas["x"] < u < canvas["x"] + canvas["width"]
                for u, v in (project(camera, point, canvas) for point in points))
@@ -144,10 +152,8 @@ def test_lecture_mode_for_the_presenter_and_the_class(open_page, playwright):
         # joints' names were cut off at its left; a phone keeps the page's own type
         phone, on_phone = open_page(known=1, server=server, viewport={"width": 390, "height": 664}, device=PHONE,
                                     drawn=False)
-        sheet = phone.locator(dom_id(on_phone.joints.sliders[0])).evaluate(
-            "e => { while (e && getComputedStyle(e).position !== 'fixed') e = e.parentElement;"
-            " const box = e.getBoundingClientRect(); return [box.left, box.right]; }")
-        assert 0 <= sheet[0] and sheet[1] <= 390, sheet
+        sheet = sheet_box(phone.locator(dom_id(on_phone.joints.sliders[0])))
+        assert sheet is not None and 0 <= sheet["left"] and sheet["right"] <= 390, sheet
         assert on_phone.camera.lecture.on  # the switch is on: the 3D labels and the gizmo are lecture-sized
     finally:
         server.stop()

@@ -43,11 +43,11 @@ class LectureMode:
     """The lecture-mode switch and "Hide the panel" button in one browser's "View" folder.
 
     ``on_change`` callbacks get the new state (the session thickens its gizmo's lines there). ``hide`` hides the
-    panel (viser's ``minimize`` by default).
+    panel (the camera's controls know whether viser's ``minimize`` can).
     """
 
     def __init__(self, gui: viser.GuiApi, folder: viser.GuiFolderHandle, enabled: bool,
-                 guard: Callable[[Callable], Callable], hide: Callable[[], None] | None = None) -> None:
+                 guard: Callable[[Callable], Callable], hide: Callable[[], None]) -> None:
         self._gui = gui
         self.on_change: list[Callable[[bool], None]] = []
         # outside every folder: a style in a folded folder would not be on the page
@@ -57,7 +57,7 @@ class LectureMode:
             self.hide_button = gui.add_button("Hide the panel", icon=viser.Icon.LAYOUT_SIDEBAR_RIGHT_COLLAPSE,
                                               hint="Click the strip at the edge to bring it back")
         self.enabled.on_update(guard(lambda _: self.apply()))
-        self.hide_button.on_click(guard(lambda _: (hide or gui.main_panel.minimize)()))
+        self.hide_button.on_click(guard(lambda _: hide()))
         gui.main_panel.set_width(PANEL_WIDTH_PX[enabled])
 
     @property
