@@ -17,7 +17,9 @@ roll at the tool point of a position-only chain), a solution is moved along it t
 value of its last joint. Solutions closer than 1e-6 in every joint are one, and so are
 solutions up to 1e-2 apart whose midpoint is as close to the pose as they are; the hint's is
 kept first, and they are sorted so that the same pose always lists them in the same order,
-labelled "found numerically".
+labelled "found numerically". Solutions within the joint limits come before the others; where no
+start ends within them, the starts go again with every step kept within them
+(:func:`into_limits`), a joint at a stop that the step would take further held.
 """
 
 from __future__ import annotations
@@ -72,6 +74,22 @@ def within_limits(q: np.ndarray, limits: np.ndarray, revolute: np.ndarray) -> np
     turned = np.where(revolute, (q + 2 * math.pi >= low) & (q + 2 * math.pi <= high)
                       | (q - 2 * math.pi >= low) & (q - 2 * math.pi <= high), False)
     return inside | turned
+
+
+def into_limits(q: np.ndarray, limits: np.ndarray, revolute: np.ndarray) -> np.ndarray:
+    """``q`` (..., n) with each joint beyond its ``limits`` (n, 2) put on the nearer one: a sliding joint's stroke
+    clipped, a turning joint's angle first turned by a whole turn where that brings it within (as
+    :func:`within_limits` counts it), else set to the limit the shorter way round from it.
+
+    >>> np.degrees(into_limits(np.radians([[175.0, -20.0], [-195.0, 100.0], [-100.0, 30.0]]),
+    ...                        np.radians([[-170, 170], [0, 90]]), np.array([True, True]))).round(6).tolist()
+    [[170.0, 0.0], [165.0, 90.0], [-100.0, 30.0]]
+    """
+    low, high = limits[:, 0], limits[:, 1]
+    turned = low + np.mod(q - low, 2.0 * math.pi)  # in [low, low + 2π): within where not past high
+    nearer = np.where(turned - high <= low + 2.0 * math.pi - turned, high, low)
+    angle = np.where((q >= low) & (q <= high), q, np.where(turned <= high, turned, nearer))
+    return np.where(revolute, np.where(high - low >= 2.0 * math.pi, q, angle), np.clip(q, low, high))
 
 
 def sampling_range(limits: np.ndarray, revolute: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -152,6 +170,17 @@ def reach_bound(table: DHTable, limits: np.ndarray) -> float:
     return float(sum(abs(row.a) + abs(row.d) for row in table.rows) + sum(strokes))
 
 
+def _damped_step(J: np.ndarray, error: np.ndarray, damping: np.ndarray) -> np.ndarray:
+    """(k, n) damped least-squares steps Δq = Jᵀ (J Jᵀ + λ² I)⁻¹ e for Jacobians ``J`` (k, m, n), errors ``e``
+    (k, m) and dampings λ (k,)."""
+    A = J @ np.swapaxes(J, -1, -2) + (damping**2)[:, None, None] * np.eye(error.shape[-1])
+    try:
+        weights = np.linalg.solve(A, error[..., None])[..., 0]
+    except np.linalg.LinAlgError:  # a chain that cannot move along some direction at all: J Jᵀ has zero rows
+        weights = np.einsum("kij,kj->ki", np.linalg.pinv(A), error)
+    return np.einsum("kji,kj->ki", J, weights)
+
+
 class NumericalIK:
     """Damped least squares from ``starts`` starts; up to ``slots`` distinct solutions per pose
     (by default as many as the chain can have, :func:`most_solutions`)."""
@@ -168,6 +197,8 @@ class NumericalIK:
             slots = 2 if self.task == "position and yaw" and table.n_joints == 4 else most_solutions(table.n_joints)
         self.labels = tuple(f"found numerically {k + 1}" for k in range(slots))
         self.revolute = np.array([t == "R" for t in table.joint_types])
+        #: The joints with ends to their travel: a sliding one, a turning one with less than a turn between its limits.
+        self.has_stops = ~self.revolute | (self.limits[:, 1] - self.limits[:, 0] < 2.0 * math.pi)
         self.reach = reach_bound(table, self.limits)
 
     def explain(self, failure: int, detail: float) -> str:
@@ -187,6 +218,15 @@ class NumericalIK:
             q[:, 0] = hint
         return q
 
+    def _search(self, starts: np.ndarray, target: np.ndarray, hint: np.ndarray | None,
+                bounded: bool = False) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Every start ``starts`` (N, s, n) taken to ``target`` (N, s, 4, 4): (joints, whether they reach it, error
+        size). ``bounded``: every step kept within the limits (:func:`into_limits`)."""
+        q, size = self._descend(starts.copy(), target, self.iterations, bounded=bounded)
+        q, size = self._finish(q, target, size, bounded)
+        ok = self._reached(q, target, size=size)
+        return self._pinned(q, target, ok, hint), ok, size
+
     def _error(self, q: np.ndarray, target: np.ndarray, moving=None) -> tuple[np.ndarray, np.ndarray]:
         """Pose error (…, m) and the Jacobian rows that go with it (…, m, n), m = 6, 4 (position and yaw) or 3
         (position), as :attr:`task` has it. ``moving`` (…, n), 1 or 0:
@@ -205,24 +245,26 @@ class NumericalIK:
         return np.concatenate([position, turn], axis=-1), J
 
     def _descend(self, q: np.ndarray, target: np.ndarray, iterations: int,
-                 moving=None) -> tuple[np.ndarray, np.ndarray]:
+                 moving=None, bounded: bool = False) -> tuple[np.ndarray, np.ndarray]:
         """Levenberg–Marquardt from the starts ``q`` (..., n) towards ``target`` (..., 4, 4): (joints, error size).
-        ``moving``: as for :meth:`_error`."""
+        ``moving``: as for :meth:`_error`. ``bounded``: each step ends within the limits (:func:`into_limits`)."""
+        if bounded:
+            q[...] = into_limits(q, self.limits, self.revolute)
         damping = np.full(q.shape[:-1], 1e-2)
         error, J = self._error(q, target, moving)
         size = np.linalg.norm(error, axis=-1)
-        rows = error.shape[-1]
         for _ in range(iterations):
             active = size > CONVERGED
             if not active.any():
                 break
-            A = J[active] @ np.swapaxes(J[active], -1, -2) + (damping[active] ** 2)[:, None, None] * np.eye(rows)
-            try:
-                weights = np.linalg.solve(A, error[active][..., None])[..., 0]
-            except np.linalg.LinAlgError:  # a chain that cannot move along some direction at all: J Jᵀ has zero rows
-                weights = np.einsum("kij,kj->ki", np.linalg.pinv(A), error[active])
-            step = np.einsum("kji,kj->ki", J[active], weights)
+            step = _damped_step(J[active], error[active], damping[active])
             trial = q[active] + step
+            if bounded:  # a joint at a limit that the step would take past it is held, and the step found without it
+                low, high = self.limits[:, 0], self.limits[:, 1]
+                held = self.has_stops & ((q[active] >= high) & (step > 0) | (q[active] <= low) & (step < 0))
+                if held.any():
+                    step = _damped_step(J[active] * ~held[:, None, :], error[active], damping[active])
+                trial = into_limits(q[active] + step, self.limits, self.revolute)
             trial_error, trial_J = self._error(trial, target[active], None if moving is None else moving[active])
             trial_size = np.linalg.norm(trial_error, axis=-1)
             better = trial_size < size[active]
@@ -231,10 +273,11 @@ class NumericalIK:
             damping[active] = np.where(better, np.maximum(damping[active] / 3, MIN_DAMPING), np.minimum(damping[active] * 4, 1e3))
         return wrap_revolute(q, self.revolute), size
 
-    def _newton(self, q: np.ndarray, target: np.ndarray, steps: int, moving=None) -> tuple[np.ndarray, np.ndarray]:
+    def _newton(self, q: np.ndarray, target: np.ndarray, steps: int, moving=None,
+                bounded: bool = False) -> tuple[np.ndarray, np.ndarray]:
         """``steps`` undamped Gauss–Newton steps q ← q + J⁺ e from starts ``q`` (..., n) already near ``target``:
         the best joints each start passed through, and their error size. ``moving`` (..., n), 1 or 0: only the
-        joints it marks move.
+        joints it marks move. ``bounded``: each step ends within the limits.
 
         Near a singularity J's smallest singular value falls below :data:`MIN_DAMPING`, and damped
         least squares then holds back the very step that remains. The pseudo-inverse takes it whole;
@@ -244,17 +287,20 @@ class NumericalIK:
         best_q, best = q, np.linalg.norm(error, axis=-1)
         for _ in range(steps):
             q = q + np.einsum("...ij,...j->...i", np.linalg.pinv(J), error)
+            if bounded:
+                q = into_limits(q, self.limits, self.revolute)
             error, J = self._error(q, target, moving)
             size = np.linalg.norm(error, axis=-1)
             best_q, best = np.where((size < best)[..., None], q, best_q), np.minimum(size, best)
         return wrap_revolute(best_q, self.revolute), best
 
-    def _finish(self, q: np.ndarray, target: np.ndarray, size: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    def _finish(self, q: np.ndarray, target: np.ndarray, size: np.ndarray,
+                bounded: bool = False) -> tuple[np.ndarray, np.ndarray]:
         """The starts that stopped short of ``target`` but within :data:`NEARLY_REACHED`, taken the rest of the way
         by :meth:`_newton`: near a singularity the damped steps converge slowly, not quadratically."""
         stuck = (size > REACHED) & (size < NEARLY_REACHED)
         if stuck.any():
-            q[stuck], size[stuck] = self._newton(q[stuck], target[stuck], NEWTON_STEPS)
+            q[stuck], size[stuck] = self._newton(q[stuck], target[stuck], NEWTON_STEPS, bounded=bounded)
         return q, size
 
     def _pinned(self, q: np.ndarray, target: np.ndarray, ok: np.ndarray, hint: np.ndarray | None) -> np.ndarray:
@@ -269,7 +315,7 @@ class NumericalIK:
         branch. The closed forms keep the hint's value there; so does this: a step along the null direction,
         then damped steps with that joint held. A solution they do not bring as close to the pose as it was
         stays as it was (next to a singularity, a step along a direction that barely moves the tool still
-        moves it)."""
+        moves it), and so does one within the limits that no value tried keeps within them."""
         n = self.table.n_joints
         if not ok.any():
             return q
@@ -315,6 +361,9 @@ class NumericalIK:
                 gap[~(reached & within_limits(tried, self.limits, self.revolute).all(axis=-1))] = np.inf
                 better = gap < nearest
                 moved[outside[better]], nearest[better] = tried[better], gap[better]
+        # a solution within the limits stays where it is if no value of its pinned joint keeps them within
+        still &= within_limits(moved, self.limits, self.revolute).all(axis=-1) | ~within_limits(
+            on_curve, self.limits, self.revolute).all(axis=-1)
         q = q.copy()
         q[tuple(index[still] for index in at)] = moved[still]
         return q
@@ -353,7 +402,9 @@ class NumericalIK:
 
         What a drag needs: the target moves a little between events, so the arm's own
         joints are a start that converges in a few steps, in about a millisecond per step;
-        the other branches come from :meth:`solve`'s many starts.
+        the other branches come from :meth:`solve`'s many starts. Joints that end beyond
+        their limits are searched for again with every step kept within them, and taken
+        where they reach the pose as closely (a redundant chain that can keep clear of a stop).
         """
         T = np.asarray(T, dtype=float)
         distance = math.hypot(*T[:3, 3].tolist())  # scaled: no overflow
@@ -361,6 +412,11 @@ class NumericalIK:
             return np.array(hint, dtype=float), distance - self.reach
         q, size = self._descend(np.array(hint, dtype=float)[None], T[None], iterations)
         q, size = self._finish(q, T[None], size)
+        if not within_limits(q, self.limits, self.revolute).all():
+            kept, kept_size = self._descend(np.array(hint, dtype=float)[None], T[None], iterations, bounded=True)
+            kept, kept_size = self._finish(kept, T[None], kept_size, bounded=True)
+            if kept_size[0] <= max(size[0], REACHED):
+                return kept[0], float(kept_size[0])
         return q[0], float(size[0])
 
     def solve(self, T: np.ndarray, hint: np.ndarray | None) -> dict[str, np.ndarray]:
@@ -378,12 +434,19 @@ class NumericalIK:
             return out
         starts = self._starts(hint, N)
         target = np.broadcast_to(T[:, None], starts.shape[:-1] + (4, 4))
-        q, size = self._descend(starts, target, self.iterations)
-        q, size = self._finish(q, target, size)
-        ok = self._reached(q, target, size=size)
-        q = self._pinned(q, target, ok, hint)
-        for k in range(N):  # the hint's own solution first, so that it is kept however many others there are
-            found = self._distinct(q[k][ok[k]], T[k])[:slots]
+        q, ok, size = self._search(starts, target, hint)
+        # where no start ended within the limits, the starts again with every step kept within them: the steps that
+        # led out (a stroke below 0, a redundant chain's drift) may have passed by a solution within them
+        again = np.flatnonzero(~(ok & within_limits(q, self.limits, self.revolute).all(axis=-1)).any(axis=-1))
+        if len(again):
+            kept, kept_ok, kept_size = self._search(starts[again], target[again],
+                                                    None if hint is None else hint[again], bounded=True)
+            q, ok, size = (np.concatenate([np.zeros_like(q), q], axis=1), np.concatenate([np.zeros_like(ok), ok], axis=1),
+                           np.concatenate([np.full_like(size, np.inf), size], axis=1))
+            q[again, :self.starts], ok[again, :self.starts], size[again, :self.starts] = kept, kept_ok, kept_size
+        inside = within_limits(q, self.limits, self.revolute).all(axis=-1)
+        for k in range(N):  # those within the limits first, the hint's own first of all: kept however many others there are
+            found = self._distinct(q[k][ok[k]][np.argsort(~inside[k][ok[k]], kind="stable")], T[k])[:slots]
             found = found[np.lexsort(found.T[::-1])] if len(found) else found
             out["q"][k, : len(found)] = found
             out["valid"][k, : len(found)] = True
