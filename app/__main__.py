@@ -7,7 +7,10 @@ import ctypes
 import os
 import signal
 import time
+from pathlib import Path
 
+#: Where class challenges' results files are saved unless ``--results`` says otherwise.
+RESULTS_FOLDER = Path.home() / "ur10-teach-results"
 #: Buffers from this size up get pages of their own, handed back to the system once freed.
 MMAP_THRESHOLD = 1 << 20
 
@@ -66,7 +69,13 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
     parser.add_argument("--challenges", metavar="FILE",
                         help="with --shared: the teacher's own class challenges, a TOML file (README, For teachers); "
                              "the built-in ones stay offered after them")
+    parser.add_argument("--results", metavar="FOLDER", type=Path,
+                        help=f"with --shared: where each class challenge's results file is saved as it ends, and as "
+                             f"the server stops (default {RESULTS_FOLDER})")
     args = parser.parse_args(argv)
+    if args.results is not None and not args.shared:
+        parser.error("--results needs --shared (the results are a class challenge's)")
+    args.results = (args.results or RESULTS_FOLDER).expanduser().absolute()
     args.challenge_list = builtin()
     if args.challenges is not None:
         if not args.shared:
@@ -97,7 +106,7 @@ def main(argv: list[str] | None = None, started=None) -> None:
 
     app = TeachingServer(preset=args.preset, first_arm=args.arm, host=args.host, port=args.port, shared=args.shared,
                          allowed_origins=args.allow_origin, lecture=args.lecture, light=args.light,
-                         challenges=args.challenge_list)
+                         challenges=args.challenge_list, results=args.results if args.shared else None)
     moved = "" if args.port in (0, app.port) else f" (port {args.port} was busy)"
     mode = "shared demo mode" if args.shared else "every browser has its own arm"
     kernel = "compiled kernel" if ur10core.BACKEND == "compiled" else "numpy, no compiled kernel"
@@ -110,7 +119,8 @@ def main(argv: list[str] | None = None, started=None) -> None:
         print("Students on the same network use one of the addresses above.", flush=True)
     if app.classroom is not None:
         print(f"Join code for the presenter: {app.classroom.code}", flush=True)
-        print(f"Class challenges: {len(args.challenge_list)} (the presenter's Challenge folder)", flush=True)
+        print(f"Class challenges: {len(args.challenge_list)} (the presenter's Challenge folder); each one's results "
+              f"are saved in {args.results} as it ends", flush=True)
     if started is not None:
         started(app)
     print("Press Ctrl+C to stop.", flush=True)

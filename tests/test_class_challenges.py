@@ -251,6 +251,67 @@ def test_a_student_back_before_the_server_noticed_they_had_gone_keeps_their_numb
     classroom.stop()
 
 
+def test_each_challenges_results_are_kept_on_the_servers_computer_as_it_ends_and_as_the_server_stops(tmp_path):
+    """A teacher who had not pressed *Download results* lost the class's results when the next challenge started or
+    the server stopped (until 2026-12-06). Each run's file is now written to the results folder (``--results``) as it
+    ends, named after the challenge and the time it started; a run still going as the server stops is written then.
+    *Download results* gives the same file under the same name."""
+    from ur10teach.serving.server import TeachingServer
+
+    folder = tmp_path / "results"
+    classroom = TeachingServer(port=0, shared=True, results=folder)
+    room = classroom.classroom
+
+    async def scenario():
+        teacher, student, member = await a_student_in(classroom, "Where is the flange?", "127.0.0.9")
+        await student.set_gui("Your nickname (up to 20 characters)", "Zoë")
+        await student.set_gui("Your numbers (x, y, z)", "1 2 3")
+        await student.set_gui("Check my answer", True)
+        await until(lambda: member.student.attempts == 1 and member.student.nickname == "Zoë", what="the check")
+        first = room.challenges.run
+        assert not folder.exists()  # nothing written while it runs
+        await teacher.set_gui("End and show the solution", True)
+        await until(lambda: (folder / first.file_name).exists(), what="the results file")
+        assert first.file_name.startswith("challenge-where-is-the-flange-20")
+        assert (folder / first.file_name).read_bytes() == first.results_csv()
+        assert "\r\n1,Zoë,1,no,,1 2 3\r\n" in first.results_csv().decode("utf-8-sig")
+        await until(lambda: teacher.shown(f"Results saved on the server's computer as *{first.file_name}*"),
+                    what="the file's name on the board")
+        await teacher.set_gui("Download results (CSV)", True)
+        await until(lambda: any(len(data) == len(first.results_csv()) for _, data in teacher.received.downloads.values()),
+                    what="the download")
+        assert [(name, bytes(data)) for name, data in teacher.received.downloads.values()] == [(first.file_name, first.results_csv())]
+        await teacher.set_gui("Challenge", "Reach it elbow down")
+        await teacher.set_gui("Start the challenge", True)
+        await until(lambda: room.challenges.running and room.challenges.run is not first, what="the second challenge")
+        for client in (teacher, student):
+            await client.close()
+        return first, room.challenges.run
+
+    first, second = asyncio.run(scenario())
+    classroom.stop()  # with the second challenge still running
+    assert sorted(path.name for path in folder.iterdir()) == sorted([first.file_name, second.file_name])
+    assert first.file_name != second.file_name and (folder / second.file_name).read_bytes() == second.results_csv()
+
+
+def test_results_that_cannot_be_saved_are_said_so_on_the_console_and_not_claimed_on_the_board(classroom, tmp_path, caplog):
+    blocked = tmp_path / "a file, not a folder"
+    blocked.write_text("")
+    classroom.results = blocked
+    room = classroom.classroom
+
+    async def scenario():
+        teacher, student, member = await a_student_in(classroom, "Where is the flange?", "127.0.0.9")
+        await teacher.set_gui("End and show the solution", True)
+        await until(lambda: teacher.shown("The challenge has ended") or teacher.shown("**Ended**"), what="the end")
+        await until(lambda: "could not save the results of 'Where is the flange?'" in caplog.text, what="the warning")
+        assert not room.challenges.run.saved and not teacher.shown("Results saved")
+        for client in (teacher, student):
+            await client.close()
+
+    asyncio.run(scenario())
+
+
 @pytest.mark.parametrize("title, box, typed", [
     ("Where is the flange?", "Your numbers (x, y, z)", "1 2"),
     ("Type the UR10's DH table", "Your DH table (a α d θ type, mm and °)", "0 90 128 0 R"),

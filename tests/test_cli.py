@@ -30,6 +30,17 @@ def test_defaults_are_loopback_8080_course():
     assert parse_args([]).arm == "ur10" and parse_args(["--arm", "three_dof"]).arm == "three_dof"
 
 
+def test_challenge_results_are_saved_in_the_users_home_unless_told_where(capsys, tmp_path, monkeypatch):
+    from ur10teach.__main__ import RESULTS_FOLDER
+
+    assert RESULTS_FOLDER == Path.home() / "ur10-teach-results" and parse_args(["--shared"]).results == RESULTS_FOLDER
+    monkeypatch.chdir(tmp_path)
+    assert parse_args(["--shared", "--results", "lesson 3"]).results == tmp_path / "lesson 3"
+    with pytest.raises(SystemExit):
+        parse_args(["--results", "lesson 3"])
+    assert "--results needs --shared" in capsys.readouterr().err
+
+
 def test_the_arm_to_open_on_is_one_of_the_picker(capsys):
     with pytest.raises(SystemExit):
         parse_args(["--arm", "ur10e"])  # the UR10's numbers are --preset's
@@ -79,10 +90,11 @@ def test_prints_the_real_port_when_the_asked_one_is_busy():
     assert served != port
 
 
-def test_lan_address_and_join_code_in_shared_mode():
-    with running_app("--host", "0.0.0.0", "--shared", "--arm", "scara") as app:
+def test_lan_address_and_join_code_in_shared_mode(tmp_path):
+    with running_app("--host", "0.0.0.0", "--shared", "--arm", "scara", "--results", str(tmp_path / "results")) as app:
         text = "".join(app.output)
     assert "shared demo mode" in text
+    assert f"each one's results are saved in {tmp_path / 'results'} as it ends" in text
     assert "Browsers open on the SCARA (RRP + roll); every arm stays in the picker." in text
     assert re.search(r"Join code for the presenter: [A-Z0-9]{3}-[A-Z0-9]{3}", text)
     for address in lan_addresses():

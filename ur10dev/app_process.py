@@ -75,6 +75,8 @@ def running_app(*args: str, timeout: float = 60.0, env: dict[str, str] | None = 
         else:
             module = "ur10teach" if "ur10teach" in (root / "pyproject.toml").read_text() else "app"
         command = [sys.executable, "-m", module, "--port", "0", *args]
+        if "--shared" in args and "--results" not in args and "--results" in (root / "app" / "__main__.py").read_text("utf-8"):
+            command += ["--results", str(Path(folder) / "results")]  # a challenge's results: not in the user's home
         with serving(command, root, environment, timeout) as (process, output):
             url = next(URL.search(line).group(1) for line in output if line.startswith("    ") and URL.search(line))
             yield AppProcess(process, url, metrics, output)

@@ -86,6 +86,8 @@ class Received:
     #: behind the other clients of this process decoding theirs (a load generator's own delay)
     ghost_flanges_read: list[float] = dataclasses.field(default_factory=list)
     notifications: list[tuple[str, str]] = dataclasses.field(default_factory=list)
+    #: files the server sent to download: transfer id -> (file name, its bytes so far)
+    downloads: dict[str, tuple[str, bytearray]] = dataclasses.field(default_factory=dict)
     held_back: bool = False  #: a readout was held back by a class challenge (the tool pose's, say: no flange updates then)
     #: scene nodes added (name -> the message's type), removed, and each node's last position
     nodes: dict[str, str] = dataclasses.field(default_factory=dict)
@@ -243,6 +245,10 @@ class ViserClient:
             self.received.node_owners[name] = message.get("owner", "")
             if "position" in message.get("props", {}):
                 self.received.positions[name] = tuple(message["props"]["position"])
+        if kind == "FileTransferStartDownload":
+            self.received.downloads[message["transfer_uuid"]] = (message["filename"], bytearray())
+        elif kind == "FileTransferPart" and message["transfer_uuid"] in self.received.downloads:
+            self.received.downloads[message["transfer_uuid"]][1].extend(message["content"])
         if kind == "SceneNodeUpdateMessage" and GHOST_FLANGE.fullmatch(str(name)):  # the shown model's
             positions = message.get("updates", {}).get("batched_positions")
             if positions is not None:

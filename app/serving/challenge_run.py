@@ -103,6 +103,9 @@ class ChallengeRun:
         self.challenge, self.arm = challenge, arm
         self.clock = clock
         self.started = clock()
+        #: its results file's name, after the challenge and the wall-clock time it started (one file per run)
+        self.file_name = time.strftime(f"challenge-{challenge.key}-%Y-%m-%d-%H%M%S.csv")
+        self.saved = False  #: its results file is on the server's disk (``ClassChallenges.keep_results``)
         self.time_limit = time_limit if time_limit is not None else challenge.time_limit
         self.ended = False
         self.solution_words = ""  #: what the class is shown at the end
@@ -229,6 +232,8 @@ def summary_markdown(run: ChallengeRun) -> str:
         lines.append(f"Time to solve: fastest {_duration(s.fastest)}, median {_duration(s.median)}")
     if s.ended:
         lines.append(f"**Ended**: the solution is on every screen. {html.escape(run.solution_words)}")
+        if run.saved:
+            lines.append(f"Results saved on the server's computer as *{run.file_name}*.")
     elif s.seconds_left is not None:
         lines.append("**Time is up.**" if s.seconds_left == 0 else f"Time left: {_duration(s.seconds_left)} (as of this update)")
     if s.groups:

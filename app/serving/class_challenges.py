@@ -263,6 +263,7 @@ class ClassChallenges:
             except Exception:  # one browser's trouble must not keep the solution from the rest
                 if not other.closed:
                     log.exception("could not show browser %s the solution", other.client.client_id)
+        self.keep_results()
         self._board_changed()
         summary = run.summary()
         log.info("challenge %r ended: %d of %d solved", challenge.title, summary.solved, summary.joined)
@@ -270,7 +271,29 @@ class ClassChallenges:
     def download(self, member: Member) -> None:
         if self.room.presenter is not member or self.run is None:
             raise ValueError("only the presenter downloads the results, after starting a challenge")
-        member.client.send_file_download(f"challenge-{self.run.challenge.key}.csv", self.run.results_csv())
+        member.client.send_file_download(self.run.file_name, self.run.results_csv())
+
+    def keep_results(self) -> None:
+        """The last run's results file, written to the teacher's results folder (``--results``): as the run ends, and
+        as the server stops, so that a teacher who never pressed *Download* still has them."""
+        run, folder = self.run, self.room.app.results
+        if run is None or folder is None:
+            return
+        path = folder / run.file_name
+        try:
+            folder.mkdir(parents=True, exist_ok=True)
+            stem, number = path.stem, 2
+            while not run.saved and path.exists():  # another run's file: two started within one second
+                path, number = folder / f"{stem}-{number}.csv", number + 1
+            run.file_name = path.name
+            written = path.with_suffix(".part")
+            written.write_bytes(run.results_csv())
+            written.replace(path)  # whole or not at all: the server may be stopping
+        except OSError as error:
+            log.warning("could not save the results of %r in %s: %s", run.challenge.title, folder, error)
+            return
+        run.saved = True
+        log.info("results of %r saved: %s", run.challenge.title, path)
 
     def step_out(self, member: Member, keep: bool = True) -> None:
         """``member`` leaves the challenge (their browser went: ``keep`` their attempt and arm for their return)."""

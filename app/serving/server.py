@@ -12,6 +12,7 @@ import socket
 import threading
 import time
 import warnings
+from pathlib import Path
 
 import viser
 
@@ -194,11 +195,14 @@ class TeachingServer:
         :class:`ur10teach.meshes.ArmModels`).
     challenges : tuple of Challenge
         What the classroom's presenter can set (``--challenges``; the built-in ones by default).
+    results : Path, optional
+        The folder each class challenge's results file is written to as it ends, and as the server stops
+        (``--results``); none written without it.
     """
 
     def __init__(self, preset: str = "course", first_arm: str = "ur10", host: str = "127.0.0.1", port: int = 8080, shared: bool = False,
                  allowed_origins=(), gate: Gate | None = None, lecture: bool = False, light: bool = False,
-                 challenges: tuple[Challenge, ...] | None = None) -> None:
+                 challenges: tuple[Challenge, ...] | None = None, results: Path | None = None) -> None:
         refuse_in_worker_process()
         self.arm = Arm.preset(preset)
         if first_arm not in FIRST_ARMS:
@@ -207,6 +211,7 @@ class TeachingServer:
         self.first_choice = UR10 if first_arm == "ur10" else choice_of(first_arm)
         # what the app's own UR10 cannot be asked on this preset is not offered
         self.challenges = tuple(c for c in (builtin() if challenges is None else challenges) if not unfit(c, preset))
+        self.results = results
         self.lecture, self.light = lecture, light
         self.models = load_models(preset, light)
         symbolic.load()  # read the cached derivations now rather than in the first student's callback
@@ -465,6 +470,7 @@ class TeachingServer:
     def stop(self) -> None:
         self.refresher.stop()
         if self.classroom is not None:
+            self.classroom.challenges.keep_results()  # a challenge still running as the teacher stops the server
             self.classroom.challenges.boards.stop()
         self.drags.stop()
         self.janitor.stop()
