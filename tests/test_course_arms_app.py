@@ -1194,7 +1194,8 @@ def test_on_a_phone_held_upright_the_arm_is_framed_above_the_panel(request, serv
         def rows(size):
             """(highest, lowest) of the arm's points, as shares of the canvas's height from its top, once framed
             for ``size``."""
-            if controls._framed_size != size or controls._framed_at is None:
+            # (the size is noted as its report arrives, before its framing has moved the camera)
+            if controls._framed_size != size or not controls._where_framed():
                 return None
             view = ScreenView.of(controls._client.camera)
             pixels, depth = view.to_screen(arm_points(controls._snapshot(), controls.body_radius))
