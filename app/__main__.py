@@ -70,8 +70,8 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
                         help="with --shared: the teacher's own class challenges, a TOML file (README, For teachers); "
                              "the built-in ones stay offered after them")
     parser.add_argument("--results", metavar="FOLDER", type=Path,
-                        help=f"with --shared: where each class challenge's results file is saved as it ends, and as "
-                             f"the server stops (default {RESULTS_FOLDER})")
+                        help=f"with --shared: where each class challenge's results file is saved while students check, "
+                             f"as it ends and as the server stops (default {RESULTS_FOLDER})")
     args = parser.parse_args(argv)
     if args.results is not None and not args.shared:
         parser.error("--results needs --shared (the results are a class challenge's)")
@@ -119,8 +119,8 @@ def main(argv: list[str] | None = None, started=None) -> None:
         print("Students on the same network use one of the addresses above.", flush=True)
     if app.classroom is not None:
         print(f"Join code for the presenter: {app.classroom.code}", flush=True)
-        print(f"Class challenges: {len(args.challenge_list)} (the presenter's Challenge folder); each one's results "
-              f"are saved in {args.results} as it ends", flush=True)
+        print(f"Class challenges: {len(args.challenge_list)} (the presenter's Challenge folder); their results are "
+              f"saved in {args.results}", flush=True)
     if started is not None:
         started(app)
     print("Press Ctrl+C to stop.", flush=True)

@@ -251,30 +251,49 @@ def test_a_student_back_before_the_server_noticed_they_had_gone_keeps_their_numb
     classroom.stop()
 
 
-def test_each_challenges_results_are_kept_on_the_servers_computer_as_it_ends_and_as_the_server_stops(tmp_path):
+def test_each_challenges_results_are_kept_on_the_servers_computer_as_students_check_as_it_ends_and_as_the_server_stops(
+        tmp_path, caplog):
     """A teacher who had not pressed *Download results* lost the class's results when the next challenge started or
-    the server stopped (until 2026-12-06). Each run's file is now written to the results folder (``--results``) as it
-    ends, named after the challenge and the time it started; a run still going as the server stops is written then.
-    *Download results* gives the same file under the same name."""
+    the server stopped (until 2026-12-06). Each run's file is now written to the results folder (``--results``),
+    named after the challenge and the time it started: as students check, every 30 s at most (a laptop that dies
+    mid-lesson loses no more), as it ends, and as the server stops with it still running. The console names it
+    the first time and at the end. *Download results* gives the same file under the same name."""
+    from ur10teach.serving.class_challenges import SAVE_EVERY
     from ur10teach.serving.server import TeachingServer
 
+    caplog.set_level("INFO", logger="ur10teach.serving.class_challenges")
     folder = tmp_path / "results"
     classroom = TeachingServer(port=0, shared=True, results=folder)
     room = classroom.classroom
+    now = [1000.0]
+    room.challenges.clock = lambda: now[0]
+
+    async def answer(student, member, typed: str, attempts: int) -> None:
+        await student.set_gui("Your numbers (x, y, z)", typed)
+        await until(lambda: member.card.typed().get("numbers") == typed, what="the typing on the server")
+        await student.set_gui("Check my answer", True)
+        await until(lambda: member.student.attempts == attempts, what=f"check {attempts}")
 
     async def scenario():
         teacher, student, member = await a_student_in(classroom, "Where is the flange?", "127.0.0.9")
         await student.set_gui("Your nickname (up to 20 characters)", "Zoë")
-        await student.set_gui("Your numbers (x, y, z)", "1 2 3")
-        await student.set_gui("Check my answer", True)
-        await until(lambda: member.student.attempts == 1 and member.student.nickname == "Zoë", what="the check")
+        await until(lambda: member.student.nickname == "Zoë", what="the nickname")
         first = room.challenges.run
-        assert not folder.exists()  # nothing written while it runs
+        path = folder / first.file_name
+        assert first.file_name.startswith("challenge-where-is-the-flange-20") and not folder.exists()
+        await answer(student, member, "1 2 3", 1)
+        await until(lambda: path.exists(), what="the results file, as the first check is made")
+        assert "\r\n1,Zoë,1,no,,1 2 3\r\n" in path.read_bytes().decode("utf-8-sig")
+        now[0] += 5.0
+        await answer(student, member, "4 5 6", 2)
+        assert "1,Zoë,1,no,,1 2 3" in path.read_bytes().decode("utf-8-sig")  # not again within 30 s
+        now[0] += SAVE_EVERY
+        await answer(student, member, "7 8 9", 3)
+        await until(lambda: "1,Zoë,3,no,,7 8 9" in path.read_bytes().decode("utf-8-sig"), what="the file written again")
         await teacher.set_gui("End and show the solution", True)
-        await until(lambda: (folder / first.file_name).exists(), what="the results file")
-        assert first.file_name.startswith("challenge-where-is-the-flange-20")
-        assert (folder / first.file_name).read_bytes() == first.results_csv()
-        assert "\r\n1,Zoë,1,no,,1 2 3\r\n" in first.results_csv().decode("utf-8-sig")
+        await until(lambda: first.ended and path.read_bytes() == first.results_csv() and first.saved_at == now[0],
+                    what="the file as the challenge ended")
+        assert caplog.text.count("results of 'Where is the flange?' saved") == 2  # the first check's, the end's
         await until(lambda: teacher.shown(f"Results saved on the server's computer as *{first.file_name}*"),
                     what="the file's name on the board")
         await teacher.set_gui("Download results (CSV)", True)
@@ -289,7 +308,7 @@ def test_each_challenges_results_are_kept_on_the_servers_computer_as_it_ends_and
         return first, room.challenges.run
 
     first, second = asyncio.run(scenario())
-    classroom.stop()  # with the second challenge still running
+    classroom.stop()  # with the second challenge still running, and no check made in it
     assert sorted(path.name for path in folder.iterdir()) == sorted([first.file_name, second.file_name])
     assert first.file_name != second.file_name and (folder / second.file_name).read_bytes() == second.results_csv()
 

@@ -94,7 +94,7 @@ def test_lan_address_and_join_code_in_shared_mode(tmp_path):
     with running_app("--host", "0.0.0.0", "--shared", "--arm", "scara", "--results", str(tmp_path / "results")) as app:
         text = "".join(app.output)
     assert "shared demo mode" in text
-    assert f"each one's results are saved in {tmp_path / 'results'} as it ends" in text
+    assert f"their results are saved in {tmp_path / 'results'}" in text
     assert "Browsers open on the SCARA (RRP + roll); every arm stays in the picker." in text
     assert re.search(r"Join code for the presenter: [A-Z0-9]{3}-[A-Z0-9]{3}", text)
     for address in lan_addresses():

@@ -7,6 +7,7 @@ projector's scene, ``ur10teach.features.challenge``. Why it is built so: docs/ar
 from __future__ import annotations
 
 import logging
+import threading
 import time
 import weakref
 from typing import TYPE_CHECKING
@@ -31,6 +32,10 @@ if TYPE_CHECKING:
 
 log = logging.getLogger(__name__)
 
+#: While a challenge runs, its results file is written again as students check, at most this often (s): a teacher's
+#: laptop that dies mid-lesson loses no more of the class's answers than this.
+SAVE_EVERY = 30.0
+
 
 class ClassChallenges:
     """The challenges the presenter can set (``offered``), the one started last (``run``), and the board.
@@ -50,6 +55,7 @@ class ClassChallenges:
         #: (BENCHMARKS.md, *a class challenge in a lecture hall*); alone in this one it is due every 0.5 s
         self.boards = PanelRefresher(room.app.server.get_event_loop(), interval=ChallengeDesk.panel_interval, duty=0.5)
         self.clock = time.monotonic  #: what a challenge's times and check pacing are kept by (a test sets its own)
+        self._saving = threading.Lock()  #: one writer of a results file at a time (a check, the end, the stop)
         self.nicknames = True  #: the projector names each student's tool by their nickname (else by their number)
 
     @property
@@ -233,6 +239,8 @@ class ClassChallenges:
         verdict = run.check(student, Answer(q=snapshot.q, target=snapshot.target, table=table, numbers=numbers, rates=rates))
         card.show(verdict, student.attempts)
         self._board_changed()
+        if run.saved_at is None or self.clock() - run.saved_at >= SAVE_EVERY:
+            self.keep_results(quiet=True)
 
     def end(self, member: Member) -> None:
         """The presenter ends the challenge: everyone is shown the solution (a pose: every arm moves to it)."""
@@ -273,27 +281,32 @@ class ClassChallenges:
             raise ValueError("only the presenter downloads the results, after starting a challenge")
         member.client.send_file_download(self.run.file_name, self.run.results_csv())
 
-    def keep_results(self) -> None:
-        """The last run's results file, written to the teacher's results folder (``--results``): as the run ends, and
-        as the server stops, so that a teacher who never pressed *Download* still has them."""
+    def keep_results(self, quiet: bool = False) -> None:
+        """The last run's results file, written to the teacher's results folder (``--results``): as students check
+        (every :data:`SAVE_EVERY` s at most), as the run ends, and as the server stops, so that a teacher who never
+        pressed *Download* still has them. The console names the file the first time and, unless ``quiet``, again."""
         run, folder = self.run, self.room.app.results
         if run is None or folder is None:
             return
-        path = folder / run.file_name
-        try:
-            folder.mkdir(parents=True, exist_ok=True)
-            stem, number = path.stem, 2
-            while not run.saved and path.exists():  # another run's file: two started within one second
-                path, number = folder / f"{stem}-{number}.csv", number + 1
-            run.file_name = path.name
-            written = path.with_suffix(".part")
-            written.write_bytes(run.results_csv())
-            written.replace(path)  # whole or not at all: the server may be stopping
-        except OSError as error:
-            log.warning("could not save the results of %r in %s: %s", run.challenge.title, folder, error)
-            return
-        run.saved = True
-        log.info("results of %r saved: %s", run.challenge.title, path)
+        with self._saving:
+            quiet = quiet and run.saved
+            run.saved_at = self.clock()
+            path = folder / run.file_name
+            try:
+                folder.mkdir(parents=True, exist_ok=True)
+                stem, number = path.stem, 2
+                while not run.saved and path.exists():  # another run's file: two started within one second
+                    path, number = folder / f"{stem}-{number}.csv", number + 1
+                run.file_name = path.name
+                written = path.with_suffix(".part")
+                written.write_bytes(run.results_csv())
+                written.replace(path)  # whole or not at all: the server may be stopping
+            except OSError as error:
+                log.warning("could not save the results of %r in %s: %s", run.challenge.title, folder, error)
+                return
+            run.saved = True
+        if not quiet:
+            log.info("results of %r saved: %s", run.challenge.title, path)
 
     def step_out(self, member: Member, keep: bool = True) -> None:
         """``member`` leaves the challenge (their browser went: ``keep`` their attempt and arm for their return)."""
