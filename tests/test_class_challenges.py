@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import asyncio
+import dataclasses
 import codecs
 import functools
 import itertools
@@ -311,6 +312,37 @@ def test_each_challenges_results_are_kept_on_the_servers_computer_as_students_ch
     classroom.stop()  # with the second challenge still running, and no check made in it
     assert sorted(path.name for path in folder.iterdir()) == sorted([first.file_name, second.file_name])
     assert first.file_name != second.file_name and (folder / second.file_name).read_bytes() == second.results_csv()
+
+
+def test_the_reach_targets_name_hangs_towards_the_middle_of_each_browsers_canvas(classroom):
+    """The target's name hung to its right: with the target in the right half of a browser's canvas (the presenter's
+    in lecture mode, a narrow window), "challenge target" ran under the panel, cut off (until 2026-12-06). It now
+    hangs on the side towards the canvas's middle, for each browser's camera as it moves."""
+    from ur10teach.features.branch_labels import ScreenView
+    from ur10dev.viser_client import CAMERA
+
+    room = classroom.classroom
+
+    async def scenario():
+        teacher, student, member = await a_student_in(classroom, "Reach it elbow down", "127.0.0.9")
+        presenter = room.presenter
+        for client, someone in ((teacher, presenter), (student, member)):
+            await until(lambda: someone.goal is not None, what="the target drawn")
+            target = someone.goal.pose[:3, 3]
+            sides = set()
+            for position in [(0.0, -3.0, 1.0), (0.0, 3.0, 1.0), (3.0, 0.0, 1.0), (-3.0, 0.0, 1.0)]:
+                camera = dataclasses.replace(CAMERA, position=position, look_at=(0.0, 0.0, 0.5))
+                await client.send(camera)
+                right = ScreenView(position, (0.0, 0.0, 0.5), fov=CAMERA.fov, height=CAMERA.image_height,
+                                   width=CAMERA.image_width).to_screen(target[None])[0][0, 0] > 0
+                side = "bottom-right" if right else "bottom-left"
+                await until(lambda: someone.goal.label.anchor == side, what=f"the name hung {side} from {position}")
+                sides.add(side)
+            assert sides == {"bottom-left", "bottom-right"}  # the four cameras put it on both sides
+        for client in (teacher, student):
+            await client.close()
+
+    asyncio.run(scenario())
 
 
 def test_results_that_cannot_be_saved_are_said_so_on_the_console_and_not_claimed_on_the_board(classroom, tmp_path, caplog):

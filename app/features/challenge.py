@@ -216,6 +216,14 @@ class GoalMarker:
                                      axes_length=0.15 * scale, axes_radius=0.01 * scale, origin_radius=GOAL_RADIUS * scale)
         self.label = add_label(scene, f"{GOAL_ROOT}/name", "challenge target", 1.4, lecture, anchor="bottom-left")
 
+    def face(self, view: ScreenView) -> None:
+        """Its name on the side of the target towards the middle of ``view``'s canvas: hung to the right of a target in
+        the canvas's right half, it ran off the canvas (under the panel)."""
+        pixels, _ = view.to_screen(self.pose[None, :3, 3])
+        anchor = "bottom-right" if pixels[0, 0] > 0 else "bottom-left"
+        if self.label.anchor != anchor:
+            self.label.anchor = anchor
+
     def name(self, frame: np.ndarray) -> tuple | None:
         """Its label as the placed labels keep clear of it (``branch_labels.obstacle``), in ``frame`` (4, 4): where
         their nodes hang in the world (the label itself hangs under the target's frame)."""

@@ -204,8 +204,16 @@ class ClassChallenges:
         pose = goal_pose(self.run.challenge, self.run.arm, drawing.world)
         if pose is not None and member.goal is None:
             member.goal = GoalMarker(member.client.scene, pose, self.room.app.lecture, drawing.size)
+            self.face_goal(member)
             if session is not None:  # its placed labels make way for the target's name (``ArmSession.names_elsewhere``)
                 session.refresher.request(session)
+
+    @staticmethod
+    def face_goal(member: Member) -> None:
+        """The reach target's name turned towards the middle of ``member``'s canvas, for its camera as it is now."""
+        goal = member.goal
+        if goal is not None:
+            goal.face(screen_view(member.client))
 
     def _moved(self, member: Member, snapshot=None) -> None:
         """A student's arm changed (``snapshot``), or they typed at their answer: they are working; the projector

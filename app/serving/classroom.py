@@ -236,6 +236,7 @@ class Classroom:
             lambda handler: guard(client, handler, is_closed=lambda: member.closed), lecture=self.app.lecture,
             body_radius=self._body_radius(), up=self.state.arm.up, light=self.app.light, phone=on_a_phone(client),
         )
+        member.camera.on_moved.append(lambda: self.challenges.face_goal(member))
         if back:
             self._present(member)
             notify(client, "Welcome back", "You are presenting again.", color="blue")
