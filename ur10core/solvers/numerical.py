@@ -441,11 +441,12 @@ class NumericalIK:
         if len(again):
             kept, kept_ok, kept_size = self._search(starts[again], target[again],
                                                     None if hint is None else hint[again], bounded=True)
-            q, ok, size = (np.concatenate([np.zeros_like(q), q], axis=1), np.concatenate([np.zeros_like(ok), ok], axis=1),
-                           np.concatenate([np.full_like(size, np.inf), size], axis=1))
+            q, ok = np.concatenate([np.zeros_like(q), q], axis=1), np.concatenate([np.zeros_like(ok), ok], axis=1)
+            size = np.concatenate([np.full_like(size, np.inf), size], axis=1)
             q[again, :self.starts], ok[again, :self.starts], size[again, :self.starts] = kept, kept_ok, kept_size
+        # those within the limits first, each kind in the starts' order (the hint's first): kept however many others
         inside = within_limits(q, self.limits, self.revolute).all(axis=-1)
-        for k in range(N):  # those within the limits first, the hint's own first of all: kept however many others there are
+        for k in range(N):
             found = self._distinct(q[k][ok[k]][np.argsort(~inside[k][ok[k]], kind="stable")], T[k])[:slots]
             found = found[np.lexsort(found.T[::-1])] if len(found) else found
             out["q"][k, : len(found)] = found
