@@ -705,6 +705,37 @@ def test_a_typed_redundant_chains_drag_keeps_clear_of_a_stop_it_can_keep_clear_o
         assert arm.within_limits(snapshot.q) and arm.pose_error(snapshot.q, T) < 1e-9
 
 
+def test_a_typed_redundant_chain_stalled_at_a_stop_moves_its_joints_off_their_stops_and_follows_on():
+    """A drag follows the target by the shortest step: this chain, with two joints to spare for a position, drifted
+    until its last slide met its stop at 0, and from there 30 of the 40 steps of the drag were refused (until
+    2026-12-06), though the joints the targets were made from reach each within the limits. Stalled so, it now tries
+    once more from its joints moved along J's null space towards the middle of their travel."""
+    from ur10teach.state import ArmState
+
+    rows = [(0.0, 0.0, 0.344, 0.0), (0.487, -1.571, 0.0, 0.0), (0.178, 0.0, 0.307, 0.0), (0.0, 1.571, 0.0, 0.0),
+            (0.0, 0.0, 0.0, 0.0)]
+    arm = Arm.from_dh(rows, joint_types="RRPRP",
+                      limits=[(-2.628, 2.628), (-2.6, 2.6), (0.0, 0.831), (-2.374, 2.374), (0.0, 0.794)])
+    start, goal = np.array([1.8492, 2.0014, 0.6363, -2.2211, 0.0399]), np.array([-0.8966, 1.9552, 0.7902, 0.1548, 0.6234])
+    state = ArmState(arm, start)
+    refused = []
+    for share in np.linspace(0.0, 1.0, 41)[1:]:
+        T = arm.fk((1 - share) * start + share * goal)
+        snapshot = state.move_target(T)
+        if not snapshot.reachable:
+            refused.append(f"{share:.3f}: {snapshot.reason}")
+        else:
+            assert arm.within_limits(snapshot.q) and arm.pose_error(snapshot.q, T) < 1e-9
+    assert not refused, f"{len(refused)} of 40 steps refused, the first at {refused[0]}"
+    assert arm.solver.redundant
+    # where it stalled: the centring leaves the tool where it is (here exactly: θ4 turns it about its own axis) and
+    # brings the joints nearer the middle of their travel
+    q = np.array([1.5878, 1.7396, 0.5665, -2.2401, 0.0])
+    centred, middle = arm.solver._centred(q), arm.limits.mean(axis=1)
+    assert arm.within_limits(centred) and np.linalg.norm(arm.fk(centred)[:3, 3] - arm.fk(q)[:3, 3]) < 1e-9
+    assert np.abs(centred - middle).sum() < np.abs(q - middle).sum() - 2.0
+
+
 def test_a_custom_arm_typed_by_a_student():
     arm = Arm.from_dh([(0.5, 0, 0, 0), (0.4, 0, 0, 0), (0, 0, 0, 0)], convention="standard", joint_types="RRP")
     assert arm.joint_types == "RRP" and arm.task == "position"

@@ -60,6 +60,9 @@ MIN_DAMPING = 1e-6
 #: A start that stopped short of the pose but this close (m and rad) takes this many undamped
 #: steps (see :meth:`NumericalIK._newton`).
 NEARLY_REACHED, NEWTON_STEPS = 1e-3, 20
+#: Steps that move a redundant chain's joints towards the middle of their travel, each half of what is left of the way
+#: where J's null space allows (:meth:`NumericalIK._centred`).
+CENTRING_STEPS = 8
 
 
 def within_limits(q: np.ndarray, limits: np.ndarray, revolute: np.ndarray) -> np.ndarray:
@@ -199,6 +202,8 @@ class NumericalIK:
         self.revolute = np.array([t == "R" for t in table.joint_types])
         #: The joints with ends to their travel: a sliding one, a turning one with less than a turn between its limits.
         self.has_stops = ~self.revolute | (self.limits[:, 1] - self.limits[:, 0] < 2.0 * math.pi)
+        #: More joints than the task needs: a continuum of solutions for each pose.
+        self.redundant = table.n_joints > {"pose": 6, "position and yaw": 4, "position": 3}[self.task]
         self.reach = reach_bound(table, self.limits)
 
     def explain(self, failure: int, detail: float) -> str:
@@ -404,7 +409,9 @@ class NumericalIK:
         joints are a start that converges in a few steps, in about a millisecond per step;
         the other branches come from :meth:`solve`'s many starts. Joints that end beyond
         their limits are searched for again with every step kept within them, and taken
-        where they reach the pose as closely (a redundant chain that can keep clear of a stop).
+        where they reach the pose as closely (a redundant chain that can keep clear of a stop);
+        a redundant chain stalled at a stop that way tries once more from its joints moved
+        towards the middle of their travel first (:meth:`_centred`).
         """
         T = np.asarray(T, dtype=float)
         distance = math.hypot(*T[:3, 3].tolist())  # scaled: no overflow
@@ -415,9 +422,28 @@ class NumericalIK:
         if not within_limits(q, self.limits, self.revolute).all():
             kept, kept_size = self._descend(np.array(hint, dtype=float)[None], T[None], iterations, bounded=True)
             kept, kept_size = self._finish(kept, T[None], kept_size, bounded=True)
+            if kept_size[0] > max(size[0], REACHED) and self.redundant:
+                kept, kept_size = self._descend(self._centred(np.array(hint, dtype=float))[None], T[None], iterations,
+                                                bounded=True)
+                kept, kept_size = self._finish(kept, T[None], kept_size, bounded=True)
             if kept_size[0] <= max(size[0], REACHED):
                 return kept[0], float(kept_size[0])
         return q[0], float(size[0])
+
+    def _centred(self, q: np.ndarray, steps: int = CENTRING_STEPS) -> np.ndarray:
+        """Joints ``q`` (n,) of a redundant chain moved towards the middle of the travel of the joints with stops,
+        along the null space of J, where the tool stays (to first order): q ← q + ½ (I − J⁺J)(q_middle − q).
+
+        A drag follows the target by the shortest step, so a chain with joints to spare drifts until one meets
+        its stop, and stalls there short of a target its other solutions reach within the limits. From joints
+        away from the stops the same search reaches it.
+        """
+        middle = self.limits.mean(axis=1)
+        for _ in range(steps):
+            _, J = self._error(q[None], np.eye(4)[None])
+            null = np.eye(len(q)) - np.linalg.pinv(J[0]) @ J[0]
+            q = into_limits(q + 0.5 * null @ np.where(self.has_stops, middle - q, 0.0), self.limits, self.revolute)
+        return q
 
     def solve(self, T: np.ndarray, hint: np.ndarray | None) -> dict[str, np.ndarray]:
         N, n, slots = len(T), self.table.n_joints, len(self.labels)
