@@ -3,8 +3,8 @@
 from __future__ import annotations
 
 import asyncio
-import dataclasses
 import codecs
+import dataclasses
 import functools
 import itertools
 import math
