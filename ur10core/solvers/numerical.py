@@ -227,8 +227,7 @@ class NumericalIK:
                 bounded: bool = False) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Every start ``starts`` (N, s, n) taken to ``target`` (N, s, 4, 4): (joints, whether they reach it, error
         size). ``bounded``: every step kept within the limits (:func:`into_limits`)."""
-        q, size = self._descend(starts.copy(), target, self.iterations, bounded=bounded)
-        q, size = self._finish(q, target, size, bounded)
+        q, size = self._converge(starts, target, self.iterations, bounded)
         ok = self._reached(q, target, size=size)
         return self._pinned(q, target, ok, hint), ok, size
 
@@ -298,6 +297,12 @@ class NumericalIK:
             size = np.linalg.norm(error, axis=-1)
             best_q, best = np.where((size < best)[..., None], q, best_q), np.minimum(size, best)
         return wrap_revolute(best_q, self.revolute), best
+
+    def _converge(self, starts: np.ndarray, target: np.ndarray, iterations: int,
+                  bounded: bool = False) -> tuple[np.ndarray, np.ndarray]:
+        """:meth:`_descend` from (a copy of) ``starts`` (..., n), then :meth:`_finish`: (joints, error size)."""
+        q, size = self._descend(starts.copy(), target, iterations, bounded=bounded)
+        return self._finish(q, target, size, bounded)
 
     def _finish(self, q: np.ndarray, target: np.ndarray, size: np.ndarray,
                 bounded: bool = False) -> tuple[np.ndarray, np.ndarray]:
@@ -417,15 +422,12 @@ class NumericalIK:
         distance = math.hypot(*T[:3, 3].tolist())  # scaled: no overflow
         if distance > self.reach + LENGTH_TOLERANCE:  # nowhere to go (and a huge error's square would overflow)
             return np.array(hint, dtype=float), distance - self.reach
-        q, size = self._descend(np.array(hint, dtype=float)[None], T[None], iterations)
-        q, size = self._finish(q, T[None], size)
+        start = np.array(hint, dtype=float)[None]
+        q, size = self._converge(start, T[None], iterations)
         if not within_limits(q, self.limits, self.revolute).all():
-            kept, kept_size = self._descend(np.array(hint, dtype=float)[None], T[None], iterations, bounded=True)
-            kept, kept_size = self._finish(kept, T[None], kept_size, bounded=True)
+            kept, kept_size = self._converge(start, T[None], iterations, bounded=True)
             if kept_size[0] > max(size[0], REACHED) and self.redundant:
-                kept, kept_size = self._descend(self._centred(np.array(hint, dtype=float))[None], T[None], iterations,
-                                                bounded=True)
-                kept, kept_size = self._finish(kept, T[None], kept_size, bounded=True)
+                kept, kept_size = self._converge(self._centred(start[0])[None], T[None], iterations, bounded=True)
             if kept_size[0] <= max(size[0], REACHED):
                 return kept[0], float(kept_size[0])
         return q[0], float(size[0])
