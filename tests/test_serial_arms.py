@@ -721,22 +721,29 @@ def test_random_typed_tables_with_stops_find_every_pose_they_reach_within_their_
     assert not missed, f"{len(missed)} of 300 poses not found within the limits: {missed[:5]}"
 
 
+def dragged_along(arm: Arm, start: np.ndarray, goal: np.ndarray, steps: int = 40) -> list[tuple]:
+    """An arm at ``start`` whose target is dragged to ``goal``'s tool along the tool's path between the two joint
+    vectors, as the app takes a drag (``ArmState.move_target``): (share of the way, target, snapshot) at each step."""
+    from ur10teach.state import ArmState
+
+    state, steps_taken = ArmState(arm, start), []
+    for share in np.linspace(0.0, 1.0, steps + 1)[1:]:
+        T = arm.fk((1 - share) * start + share * goal)
+        steps_taken.append((share, T, state.move_target(T)))
+    return steps_taken
+
+
 def test_a_typed_redundant_chains_drag_keeps_clear_of_a_stop_it_can_keep_clear_of():
     """A chain with more joints than its task needs (five for a position) can reach the target many ways. The
     drag's search from the arm's joints took the shortest step, which here takes the slide d3 past its end: the drag
     was refused as "reachable only beyond a joint limit" (until 2026-12-06), though the joints the target was made
     from reach it within the limits. A step that would take a joint past its stop is now found without that joint."""
-    from ur10teach.state import ArmState
-
     rows = [(0.0, 1.571, 0.0, 0.0), (0.0, 0.0, 0.0, 0.0), (0.0, 1.571, 0.351, 0.0), (0.0, 1.571, 0.0, 0.0),
             (0.163, 1.571, 0.0, 0.0)]
     arm = Arm.from_dh(rows, joint_types="RRPRR",
                       limits=[(-2.419, 2.419), (-2.786, 2.786), (0.0, 0.431), (-2.531, 2.531), (-1.624, 1.624)])
     start, goal = np.array([1.1877, 1.604, 0.4056, -0.7233, 0.0111]), np.array([1.0676, 0.3018, 0.3417, -0.2777, -0.4395])
-    state = ArmState(arm, start)
-    for share in np.linspace(0.0, 1.0, 41)[1:]:  # the target dragged along the tool's path between the two
-        T = arm.fk((1 - share) * start + share * goal)
-        snapshot = state.move_target(T)
+    for share, T, snapshot in dragged_along(arm, start, goal):
         assert snapshot.reachable, f"at {share:.3f} of the way: {snapshot.reason}"
         assert arm.within_limits(snapshot.q) and arm.pose_error(snapshot.q, T) < 1e-9
 
@@ -746,18 +753,13 @@ def test_a_typed_redundant_chain_stalled_at_a_stop_moves_its_joints_off_their_st
     until its last slide met its stop at 0, and from there 30 of the 40 steps of the drag were refused (until
     2026-12-06), though the joints the targets were made from reach each within the limits. Stalled so, it now tries
     once more from its joints moved along J's null space towards the middle of their travel."""
-    from ur10teach.state import ArmState
-
     rows = [(0.0, 0.0, 0.344, 0.0), (0.487, -1.571, 0.0, 0.0), (0.178, 0.0, 0.307, 0.0), (0.0, 1.571, 0.0, 0.0),
             (0.0, 0.0, 0.0, 0.0)]
     arm = Arm.from_dh(rows, joint_types="RRPRP",
                       limits=[(-2.628, 2.628), (-2.6, 2.6), (0.0, 0.831), (-2.374, 2.374), (0.0, 0.794)])
     start, goal = np.array([1.8492, 2.0014, 0.6363, -2.2211, 0.0399]), np.array([-0.8966, 1.9552, 0.7902, 0.1548, 0.6234])
-    state = ArmState(arm, start)
     refused = []
-    for share in np.linspace(0.0, 1.0, 41)[1:]:
-        T = arm.fk((1 - share) * start + share * goal)
-        snapshot = state.move_target(T)
+    for share, T, snapshot in dragged_along(arm, start, goal):
         if not snapshot.reachable:
             refused.append(f"{share:.3f}: {snapshot.reason}")
         else:
