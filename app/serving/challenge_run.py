@@ -106,7 +106,7 @@ class ChallengeRun:
         #: its results file's name, after the challenge and the wall-clock time it started (one file per run)
         self.file_name = time.strftime(f"challenge-{challenge.key}-%Y-%m-%d-%H%M%S.csv")
         self.saved = False  #: its results file is on the server's disk (``ClassChallenges.keep_results``)
-        self.saved_at: float | None = None  #: when it was last written (by ``clock``)
+        self.saved_at: float | None = None  #: when it was last written, or tried (by ``clock``): the checks' pace
         self.time_limit = time_limit if time_limit is not None else challenge.time_limit
         self.ended = False
         self.solution_words = ""  #: what the class is shown at the end
