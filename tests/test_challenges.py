@@ -794,6 +794,16 @@ def test_a_teachers_file_is_read_in_its_units():
     assert singular.time_limit == 120 and singular.factor == "wrist" and singular.text == "Stroke"
 
 
+def test_titles_in_any_script_are_told_apart_and_name_their_results_files():
+    # every title with no letter a-z or digit had the same key, "": a second challenge in Chinese was refused as
+    # "two challenges titled" the same, and Greek or Russian titles all named their results file "challenge--<date>"
+    titles = ("到达目标", "奇异位形", "Ταχύτητα", "Скорость", "Übung 2: Reichweite")
+    text = "".join(f'[[challenge]]\ntitle = "{t}"\nkind = "velocity"\nvelocity_mm_s = [0, 0, 100]\n' for t in titles)
+    assert [c.key for c in C.parse(text)] == ["到达目标", "奇异位形", "ταχύτητα", "скорость", "übung-2-reichweite"]
+    with pytest.raises(ValueError, match="line 6: two challenges titled 'Reach: it' and 'Reach it!', the same but for"):
+        C.parse(text.replace(titles[0], "Reach: it").replace(titles[1], "Reach it!"))
+
+
 @pytest.mark.parametrize("change, line, words", [
     (("arm = \"kr210\"", "arm = \"kr2100\""), 5, "arm must be one of"),
     (("joints = [10, 20, -30, 40, 50, 60]", "joints = [10, 20, -30, 40, 50]"), 6, "list of 6 numbers"),

@@ -100,7 +100,13 @@ class Challenge:
 
     @property
     def key(self) -> str:
-        return re.sub(r"[^a-z0-9]+", "-", self.title.lower()).strip("-")[:60]
+        """The title as it names the results file: its letters and digits in any script, each run of others a dash.
+
+        >>> retitled = [dataclasses.replace(builtin()[0], title=t) for t in ("Übung 2: Reichweite", "到达目标")]
+        >>> [c.key for c in retitled]
+        ['übung-2-reichweite', '到达目标']
+        """
+        return re.sub(r"[\W_]+", "-", self.title.lower()).strip("-")[:60]
 
     @property
     def is_pose(self) -> bool:
@@ -345,7 +351,9 @@ def parse(text: str, source: str = "challenges") -> tuple[Challenge, ...]:
     keys = [c.key for c in challenges]
     for index, key in enumerate(keys):
         if keys.index(key) != index:
-            raise ValueError(f"{source}, line {_line(text, index, 'title')}: two challenges titled {challenges[index].title!r}")
+            first, title = challenges[keys.index(key)].title, challenges[index].title
+            titled = repr(title) if first == title else f"{first!r} and {title!r}, the same but for signs and spaces"
+            raise ValueError(f"{source}, line {_line(text, index, 'title')}: two challenges titled {titled}")
         if challenges[index].title in POSE_QUESTIONS:  # (the presenter's desk would offer one of the two)
             raise ValueError(f"{source}, line {_line(text, index, 'title')}: {challenges[index].title!r} is the desk's own "
                              "question about the pose shown: give yours another title")
