@@ -9,8 +9,9 @@ import signal
 import time
 from pathlib import Path
 
-#: Where class challenges' results files are saved unless ``--results`` says otherwise.
-RESULTS_FOLDER = Path.home() / "ur10-teach-results"
+#: Where class challenges' results files are saved unless ``--results`` says otherwise (``~``: the home folder, found
+#: only in shared mode, since an account may have none).
+RESULTS_FOLDER = Path("~", "ur10-teach-results")
 #: Buffers from this size up get pages of their own, handed back to the system once freed.
 MMAP_THRESHOLD = 1 << 20
 
@@ -75,7 +76,11 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
     args = parser.parse_args(argv)
     if args.results is not None and not args.shared:
         parser.error("--results needs --shared (the results are a class challenge's)")
-    args.results = (args.results or RESULTS_FOLDER).expanduser().absolute()
+    if args.shared:
+        try:
+            args.results = (args.results or RESULTS_FOLDER).expanduser().absolute()
+        except (RuntimeError, KeyError):  # (no home folder: Python 3.12 raises where it guessed one before)
+            parser.error(f"no home folder for {RESULTS_FOLDER}: name the folder for the results with --results FOLDER")
     args.challenge_list = builtin()
     if args.challenges is not None:
         if not args.shared:

@@ -33,12 +33,24 @@ def test_defaults_are_loopback_8080_course():
 def test_challenge_results_are_saved_in_the_users_home_unless_told_where(capsys, tmp_path, monkeypatch):
     from ur10teach.__main__ import RESULTS_FOLDER
 
-    assert RESULTS_FOLDER == Path.home() / "ur10-teach-results" and parse_args(["--shared"]).results == RESULTS_FOLDER
+    assert parse_args(["--shared"]).results == Path.home() / "ur10-teach-results" == RESULTS_FOLDER.expanduser()
     monkeypatch.chdir(tmp_path)
     assert parse_args(["--shared", "--results", "lesson 3"]).results == tmp_path / "lesson 3"
     with pytest.raises(SystemExit):
         parse_args(["--results", "lesson 3"])
     assert "--results needs --shared" in capsys.readouterr().err
+
+
+def test_an_account_without_a_home_folder_starts_and_is_asked_for_a_results_folder_in_shared_mode(capsys, monkeypatch):
+    def no_home(path):  # as Python 3.12 and later do where neither $HOME nor the user database gives one
+        raise RuntimeError("Could not determine home directory.")
+
+    monkeypatch.setattr(Path, "home", classmethod(no_home))
+    monkeypatch.setattr(Path, "expanduser", no_home)
+    assert parse_args([]).results is None  # (the module's import raised here before: the app did not start at all)
+    with pytest.raises(SystemExit):
+        parse_args(["--shared"])
+    assert "no home folder for ~/ur10-teach-results: name the folder for the results with --results" in capsys.readouterr().err
 
 
 def test_the_arm_to_open_on_is_one_of_the_picker(capsys):
