@@ -1290,6 +1290,35 @@ def test_a_page_that_puts_its_camera_back_at_the_start_is_framed_again(request, 
     asyncio.run(scenario())
 
 
+@pytest.mark.parametrize("server", ["app", "classroom"])
+def test_a_students_orbit_stays_when_viser_draws_fewer_pixels_and_a_new_shape_of_canvas_is_framed(request, server):
+    """viser draws the canvas at 0.875 and then 0.75 of the screen's pixel ratio while its frame rate is low, and
+    reports the camera with that canvas's pixels. On a laptop without a graphics driver this comes mid-orbit (at
+    3.8 s and 12.4 s of a 15 s orbit in headless Chromium: 946 × 800, 827 × 700, then 709 × 600), and each new size
+    was framed again: the view the student was turning to jumped back to the course's (until 2026-12-06)."""
+    app = request.getfixturevalue(server)
+
+    async def scenario():
+        client = await ViserClient(url(app)).connect()
+        controls = (next(iter(app.classroom.members.values())).camera if app.classroom is not None
+                    else session_of(app, client).camera)
+        await until(lambda: controls._framed_at is not None and controls._where_framed(), what="the first framing")
+        reports = []
+        controls.on_moved.append(lambda: reports.append(1))
+        orbit = dataclasses.replace(CAMERA, position=(2.5, -0.4, 1.7), look_at=(0.1, 0.2, 0.3))
+        for width, height in [(1280, 800), (1120, 700), (961, 601), (1280, 800)]:
+            heard = len(reports)
+            await client.send(dataclasses.replace(orbit, image_width=width, image_height=height))
+            await until(lambda: len(reports) > heard, what="the camera's report handled")
+            assert not controls._where_framed() and np.allclose(controls._client.camera.position, orbit.position)
+        await client.send(dataclasses.replace(orbit, image_width=1000, image_height=800))  # a window of a new shape
+        await until(lambda: controls._framed_size == (1000, 800) and controls._where_framed(),
+                    what="the arm framed for the new shape")
+        await client.close()
+
+    asyncio.run(scenario())
+
+
 @pytest.mark.parametrize("first_arm, shared", [("scara", False), ("three_dof", False), ("kr210", True), ("three_dof", True)])
 def test_a_teacher_can_open_every_browser_on_another_arm(first_arm, shared):
     """``--arm``: a lecture on the SCARA opens every browser on it (in shared mode, the class sees it first and a

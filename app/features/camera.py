@@ -55,9 +55,23 @@ EDGE_MARGIN = 0.08
 #: viser's own before that has arrived. A phone's page mounts it late, at times after the first framing has arrived,
 #: which it then undid; no orbit of a student's lands on one exactly, so a camera found there is framed again.
 RESET_POSES = ((DEFAULT_VIEW.position, DEFAULT_VIEW.look_at), ((3.0, 3.0, 3.0), (0.0, 0.0, 0.0)))
+#: Canvas sizes whose shapes (width / height) differ by less than this share frame alike. viser draws fewer pixels
+#: while its frame rate is low (its adaptive DPR: 1, 0.875 or 0.75 of the screen's), each side rounded: the same
+#: canvas then reports another size, mid-orbit on a laptop without a graphics driver, and a framing depends on the
+#: shape alone.
+SAME_SHAPE = 0.01
 #: The share of a phone's upright canvas its panel leaves uncovered: in a window narrower than 576 px (a phone held
 #: upright) viser shows the panel as a sheet over the canvas's lower part, up to 60 % of its height.
 PHONE_UNCOVERED = 0.4
+
+
+def same_shape(size: tuple[int, int], other: tuple[int, int] | None) -> bool:
+    """Canvases of ``size`` and ``other`` (width, height) px frame alike (:data:`SAME_SHAPE`).
+
+    >>> same_shape((946, 800), (709, 600)), same_shape((1280, 800), (1000, 700)), same_shape((946, 800), None)
+    (True, False, False)
+    """
+    return other is not None and abs(size[0] * other[1] - other[0] * size[1]) <= SAME_SHAPE * other[0] * size[1]
 
 
 def framing(points: np.ndarray, direction, fov: float, aspect: float, margin: float = EDGE_MARGIN,
@@ -225,8 +239,8 @@ class CameraControls(View):
             reset = self._framed_at is not None and not self._where_framed() and any(
                 np.allclose(camera.position, position, atol=1e-3) and np.allclose(camera.look_at, look_at, atol=1e-3)
                 for position, look_at in RESET_POSES)
-            if (size == self._framed_size and not reset) or 0 in size:
-                return  # an orbit or zoom of the student's own: leave it
+            if (same_shape(size, self._framed_size) and not reset) or 0 in size:
+                return  # an orbit or zoom of the student's own (a size of the same shape is viser's DPR): leave it
             self._framed_size = size
         self._guard(lambda _: self.frame())(None)
 
@@ -305,12 +319,12 @@ class CameraControls(View):
         # one framing at a time (a worker's map and a redraw may frame at once): two interleaved left the camera
         # at one's position and the other's look-at, which no framing had chosen, taken for a view the user chose
         with self._lock, self._client.atomic():
-            if (camera.image_width, camera.image_height) != size:
+            if not same_shape((camera.image_width, camera.image_height), size):
                 return  # the canvas changed meanwhile: the framing its report asks for is the one to show
             camera.up_direction = (0.0, 0.0, 1.0)
             camera.position = position
             camera.look_at = look_at  # after the position: viser moves both together otherwise
             self._framed_at = (position, look_at)
-            self._framed_size = size  # a later report of this size is the student's own move
+            self._framed_size = size  # a later report of this shape is the student's own move
         for moved in self.on_moved:  # placed for where the camera is going (the browser reports only a change)
             moved()
