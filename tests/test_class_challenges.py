@@ -27,6 +27,7 @@ from ur10teach.serving.gate import address_of
 from ur10teach.serving.challenge_run import ChallengeRun, clean_nickname, spreadsheet_safe, summary_markdown
 from ur10teach.view import HELD_BACK
 from ur10dev.viser_client import ViserClient, messages
+from ur10dev.waiting import HANG_TIMEOUT
 
 from .server_support import become_presenter, drag_a_little, until, url
 from .test_faults import without_failures
@@ -313,6 +314,60 @@ def test_each_challenges_results_are_kept_on_the_servers_computer_as_students_ch
     classroom.stop()  # with the second challenge still running, and no check made in it
     assert sorted(path.name for path in folder.iterdir()) == sorted([first.file_name, second.file_name])
     assert first.file_name != second.file_name and (folder / second.file_name).read_bytes() == second.results_csv()
+
+
+def test_a_challenge_started_while_the_last_one_is_still_ending_waits_for_its_end_and_its_results_file(tmp_path, caplog):
+    """viser runs each click's callback on a thread of its own. The end shows every arm its solution, one after
+    another, and a start pressed meanwhile (its button is back as soon as the run is marked ended) took the run
+    from under it: the end then wrote the new run's results file, and the ended run's file kept only what the
+    checks had written, at most every 30 s; the end went on showing solutions on cards the start had taken away
+    (until 2026-12-06). A start now waits for the end to finish."""
+    import threading
+
+    from ur10teach.serving.server import TeachingServer
+
+    folder = tmp_path / "results"
+    classroom = TeachingServer(port=0, shared=True, results=folder)
+    room = classroom.classroom
+    now = [1000.0]
+    room.challenges.clock = lambda: now[0]
+    starts, ending, go_on = [], threading.Event(), threading.Event()
+
+    async def scenario():
+        teacher, student, member = await a_student_in(classroom, "Where is the flange?", "127.0.0.9")
+        first = room.challenges.run
+        for attempt, typed in enumerate(("1 2 3", "4 5 6"), 1):  # the second within 30 s: not written as it is made
+            await student.set_gui("Your numbers (x, y, z)", typed)
+            await until(lambda: member.card.typed().get("numbers") == typed, what="the typing on the server")
+            await student.set_gui("Check my answer", True)
+            await until(lambda: member.student.attempts == attempt, what=f"check {attempt}")
+            now[0] += 5.0  # (one check a second)
+        card, shown = member.card, member.card.ended
+
+        def slow_to_show(words):  # the end, showing this student the solution, takes a while
+            ending.set()
+            go_on.wait(HANG_TIMEOUT)
+            shown(words)
+
+        card.ended = slow_to_show
+        start = room.challenges.start
+        room.challenges.start = lambda *args: (starts.append(1), start(*args))
+        await teacher.set_gui("End and show the solution", True)
+        await until(ending.is_set, what="the end under way")
+        await teacher.set_gui("Challenge", "Reach it elbow down")
+        await teacher.set_gui("Start the challenge", True)
+        await until(lambda: starts, what="the start pressed")
+        go_on.set()
+        await until(lambda: room.challenges.running and room.challenges.run is not first, what="the second challenge")
+        assert (folder / first.file_name).read_bytes() == first.results_csv()
+        assert "1,,2,no,,4 5 6" in first.results_csv().decode("utf-8-sig")
+        assert not any("Not accepted" in title for title, _ in teacher.received.notifications)
+        assert member.card is not None and member.card is not card  # the new task's
+        for client in (teacher, student):
+            await client.close()
+
+    without_failures(scenario, caplog)
+    classroom.stop()
 
 
 def test_the_reach_targets_name_hangs_towards_the_middle_of_each_browsers_canvas(classroom):
@@ -1154,6 +1209,8 @@ def test_the_presenter_asks_the_class_about_the_pose_it_is_shown(classroom):
         await student.set_gui("Check my answer", True)
         await until(lambda: member.student.solved_after is not None, what="solved")
         await teacher.set_gui("End and show the solution", True)
+        # (viser runs each click on a thread of its own: a start sent at once could come first, and be refused)
+        await until(lambda: room.challenges.run.ended, what="the challenge over")
 
         await teacher.set_gui("Challenge", "Pose shown: reach it")
         await teacher.set_gui("Start the challenge", True)

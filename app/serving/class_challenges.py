@@ -6,6 +6,7 @@ projector's scene, ``ur10teach.features.challenge``. Why it is built so: docs/ar
 
 from __future__ import annotations
 
+import functools
 import logging
 import threading
 import time
@@ -37,6 +38,18 @@ log = logging.getLogger(__name__)
 SAVE_EVERY = 30.0
 
 
+def _one_turnover_at_a_time(method):
+    """A start or an end, from first to last, with no other start or end between: viser runs each click's
+    callback on a thread of its own, and a start pressed while an end still showed the class its solution took
+    the run from under it (the ended run's last answers went unsaved, and the new run's file was written instead)."""
+    @functools.wraps(method)
+    def one_at_a_time(self: ClassChallenges, *args, **kwargs):
+        with self._turnover:
+            return method(self, *args, **kwargs)
+
+    return one_at_a_time
+
+
 class ClassChallenges:
     """The challenges the presenter can set (``offered``), the one started last (``run``), and the board.
 
@@ -56,6 +69,7 @@ class ClassChallenges:
         self.boards = PanelRefresher(room.app.server.get_event_loop(), interval=ChallengeDesk.panel_interval, duty=0.5)
         self.clock = time.monotonic  #: what a challenge's times and check pacing are kept by (a test sets its own)
         self._saving = threading.Lock()  #: one writer of a results file at a time (a check, the end, the stop)
+        self._turnover = threading.Lock()  #: held by a start or an end throughout (:func:`_one_turnover_at_a_time`)
         self.nicknames = True  #: the projector names each student's tool by their nickname (else by their number)
 
     @property
@@ -82,6 +96,7 @@ class ClassChallenges:
         state = self.room.state
         return about_the_pose(question, state.arm, state.q)
 
+    @_one_turnover_at_a_time
     def start(self, member: Member, challenge: Challenge, time_limit: float | None) -> None:
         """The presenter starts ``challenge``: the class is shown its arm, and every other browser gets its own copy and the task."""
         with self.room._lock:
@@ -250,6 +265,7 @@ class ClassChallenges:
         if run.saved_at is None or self.clock() - run.saved_at >= SAVE_EVERY:
             self.keep_results(quiet=True)
 
+    @_one_turnover_at_a_time
     def end(self, member: Member) -> None:
         """The presenter ends the challenge: everyone is shown the solution (a pose: every arm moves to it)."""
         with self.room._lock:
