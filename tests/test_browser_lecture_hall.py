@@ -285,3 +285,32 @@ def test_the_panel_at_1024_by_768_holds_the_first_lesson(open_page, light_app):
     assert width <= 0.33 * 1024, f"the panel takes {width / 1024:.0%} of the width"
     for title in ("Singularities", "Workspace", "Motion", "View"):  # folded, one click away
         assert page.get_by_text(title, exact=True).first.is_visible()
+
+
+def test_the_qr_code_to_join_reads_off_the_teachers_screen_at_an_eighth_of_its_size(open_page, monkeypatch):
+    """A phone at the back of a lecture hall sees the projector small. The QR code *Show a QR code to join* puts
+    over the teacher's page reads back to the address students open (zxing-cpp, an independent reader), off a
+    screenshot of the whole page and off that screenshot shrunk to an eighth of its width and height."""
+    import io
+
+    import zxingcpp
+    from PIL import Image
+
+    from ur10teach.serving import server as serving
+    from ur10teach.serving.server import TeachingServer
+
+    monkeypatch.setattr(serving, "lan_addresses", lambda: ["192.0.2.7"])
+    app = TeachingServer(port=0, host="0.0.0.0", light=True)
+    try:
+        page, _ = open_page(server=app, drawn=False)
+        click(page, page.get_by_role("button", name="Show a QR code to join"),
+              lambda: page.locator(".mantine-Modal-content img").count() > 0, "the window of QR codes")
+        code = page.locator(".mantine-Modal-content img").first
+        wait_for(lambda: code.evaluate("image => image.complete && image.naturalWidth > 0"), what="the QR code drawn")
+        picture = Image.open(io.BytesIO(page.screenshot())).convert("L")
+        for scale in (1, 8):
+            small = picture.resize((picture.width // scale, picture.height // scale), Image.BILINEAR)
+            assert [found.text for found in zxingcpp.read_barcodes(np.asarray(small))] == app.join_urls, scale
+        assert page.get_by_text(app.join_urls[0].removeprefix("http://"), exact=True).count() == 1  # typed off it
+    finally:
+        app.stop()

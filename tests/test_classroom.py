@@ -72,6 +72,58 @@ def test_the_address_students_type_is_on_the_projector(classroom, monkeypatch):
             app.stop()
 
 
+def test_the_teachers_screen_shows_each_join_address_as_a_qr_code_that_a_phone_reads(monkeypatch):
+    """In a lecture hall most students join from their phones, and typed the address off the projector. The teacher's
+    screen (the presenter's, and any on the teacher's own computer) now has *Show a QR code to join*: a window over
+    the page with each address and its QR code, which an independent reader (zxing-cpp) reads back to it. A
+    student's panel has no such button; a double click opens one window, not two."""
+    import io
+
+    import zxingcpp
+    from PIL import Image
+
+    from ur10teach.serving import server as serving
+
+    monkeypatch.setattr(serving, "lan_addresses", lambda: ["192.0.2.7", "198.51.100.3"])
+    shared = TeachingServer(port=0, shared=True, host="0.0.0.0", gate=Gate(trust_loopback=False))  # loopback: laptops
+    independent = TeachingServer(port=0, host="0.0.0.0")  # its loopback browser: the teacher's own screen
+
+    def read(data: bytes) -> list[str]:
+        return [code.text for code in zxingcpp.read_barcodes(np.asarray(Image.open(io.BytesIO(data)).convert("L")))]
+
+    async def codes_shown(teacher: ViserClient, server: TeachingServer) -> None:
+        await teacher.set_gui("Show a QR code to join", True)
+        window = await until(lambda: next(iter(teacher.received.modals), None), what="the window of QR codes")
+        assert teacher.received.modals[window] == "Join the class"
+        images = await until(lambda: (lambda codes: codes if len(codes) == 2 and all(codes) else None)(
+            [data for holder, data in teacher.received.images.values() if holder == window]), what="the QR codes")
+        assert [read(data) for data in images] == [[url] for url in server.join_urls]
+        if server.classroom is not None:  # a double click: its second press comes before the window has arrived
+            await asyncio.to_thread(server.classroom.presenter.join_help.show)
+        await teacher.set_gui("Close", True)
+        await until(lambda: not teacher.received.modals, what="the window closed")
+        assert teacher.received.modals_opened == 1  # (a second window would have arrived before the close)
+
+    async def scenario():
+        teacher = await ViserClient(f"http://127.0.0.1:{shared.port}").connect()
+        student = await ViserClient(f"http://127.0.0.1:{shared.port}").connect()
+        await until(lambda: "Explore on my own" in student.gui and "Explore on my own" in teacher.gui, what="the class")
+        assert "Show a QR code to join" not in teacher.gui  # watching from a laptop, until it presents
+        await become_presenter(teacher, shared)
+        await codes_shown(teacher, shared)
+        assert "Show a QR code to join" not in student.gui and student.shown("Students open **http://192.0.2.7")
+        own = await ViserClient(f"http://127.0.0.1:{independent.port}").connect()
+        await codes_shown(own, independent)
+        for client in (teacher, student, own):
+            await client.close()
+
+    try:
+        asyncio.run(scenario())
+    finally:
+        for app in (shared, independent):
+            app.stop()
+
+
 def test_viewers_watch_and_the_code_makes_a_presenter(classroom):
     async def scenario():
         teacher = await ViserClient(f"http://127.0.0.1:{classroom.port}").connect()

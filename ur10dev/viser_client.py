@@ -96,6 +96,10 @@ class Received:
     positions: dict[str, tuple[float, float, float]] = dataclasses.field(default_factory=dict)
     visible: dict[str, bool] = dataclasses.field(default_factory=dict)
     removed_gui: set[str] = dataclasses.field(default_factory=set)
+    modals: dict[str, str] = dataclasses.field(default_factory=dict)  #: the windows open over the page: uuid -> title
+    modals_opened: int = 0
+    #: the panel's images: uuid -> (the uuid of what holds it, a folder or a window; its encoded bytes)
+    images: dict[str, tuple[str, bytes]] = dataclasses.field(default_factory=dict)
     panel_label: str | None = None  #: the panel's title, once the server has set it for this browser
     #: the 3D view's lighting as last set for this browser: shadows cast, an environment map's image sent
     shadows: bool | None = None
@@ -236,6 +240,7 @@ class ViserClient:
             self.received.visible[name] = message["visible"]
         elif kind == "GuiRemoveMessage":
             self.received.removed_gui.add(message["uuid"])
+            self.received.images.pop(message["uuid"], None)
             self.markdown.pop(message["uuid"], None)
             # a label now means the widget that replaced it (a rebuilt panel), not the removed one
             for label in [label for label, entry in self.gui.items() if entry["uuid"] == message["uuid"]]:
@@ -245,6 +250,17 @@ class ViserClient:
             self.received.node_owners[name] = message.get("owner", "")
             if "position" in message.get("props", {}):
                 self.received.positions[name] = tuple(message["props"]["position"])
+        if kind == "GuiModalMessage":
+            self.received.modals[message["uuid"]] = message["title"]
+            self.received.modals_opened += 1
+        elif kind == "GuiCloseModalMessage":
+            self.received.modals.pop(message["uuid"], None)
+        elif kind == "GuiImageMessage" or (kind == "GuiUpdateMessage" and message["uuid"] in self.received.images):
+            # (viser sends an image's bytes in an update after making it empty)
+            data = (message.get("props") or message.get("updates", {})).get("_data")
+            holder = message.get("container_uuid") or self.received.images[message["uuid"]][0]
+            self.received.images[message["uuid"]] = (holder, b"" if data is None else bytes(
+                buffers[data["__binary_index"]] if isinstance(data, dict) else data))
         if kind == "FileTransferStartDownload":
             self.received.downloads[message["transfer_uuid"]] = (message["filename"], bytearray())
         elif kind == "FileTransferPart" and message["transfer_uuid"] in self.received.downloads:

@@ -43,6 +43,7 @@ from ..view import HELD_BACK
 from ..viser_internals import after_broadcast
 from .class_challenges import ClassChallenges
 from .gate import RETURN_WINDOW, address_of, on_a_phone
+from .joining import JoinHelp
 
 if TYPE_CHECKING:
     from .server import TeachingServer
@@ -149,6 +150,7 @@ class Member:
         self.picker: ArmPicker | None = None  #: the presenter's: which arm the class sees
         self.camera: CameraControls | None = None
         self.join_code: viser.GuiInputHandle | None = None  #: a viewer's box for the presenter's code
+        self.join_help: JoinHelp | None = None  #: the addresses to join at, and the teacher's QR codes of them
         self.desk: ChallengeDesk | None = None  #: the presenter's "Challenge" folder
         self.tools: ClassTools | None = None  #: the presenter's view of every student's tool
         self.student = None  #: a student's attempt at the running challenge (``challenge_run.Student``)
@@ -164,11 +166,6 @@ class Member:
         """The challenge target's name where this browser shows it (``GoalMarker.name``), for placed labels to keep clear of."""
         goal = self.goal
         return [] if goal is None else [goal.name(frame)]
-
-
-def join_markdown(urls: list[str]) -> str:
-    """What students type to join, for the teacher's screen: ``Students open **http://192.0.2.7:8080**``."""
-    return "Students open " + " or ".join(f"**{url}**" for url in urls)
 
 
 class Classroom:
@@ -524,8 +521,9 @@ class Classroom:
             member.desk = self.challenges.desk(member)
         member.folder, member.picker = gui.add_folder("Classroom", order=0.0), None
         with member.folder:
-            if self.app.join_urls:  # on the projector, where the class reads it
-                gui.add_markdown(join_markdown(self.app.join_urls))
+            if self.app.join_urls:  # on the projector, where the class reads it; its QR code on the teacher's screen
+                member.join_help = JoinHelp(member.client, self.app.join_urls, guard=action,
+                                            teacher=member.role == PRESENTER or self.app.gate.trusted(address_of(member.client)))
             if member.role == PRESENTER:
                 gui.add_markdown("You are **presenting**: everyone sees your arm, target and overlays.")
                 stop = gui.add_button("Stop presenting", icon=viser.Icon.PLAYER_STOP)

@@ -40,8 +40,9 @@ from ..meshes import load_models
 from ..session import ArmSession
 from ..style import BRAND_BLUE
 from ..viser_internals import fast_updates, shared_frames, value_fits
-from .classroom import Classroom, join_markdown
+from .classroom import Classroom
 from .gate import RETURN_WINDOW, Gate, TokenBucket, address_of, budget_of, gated_serve, hang_up_silent, on_a_phone
+from .joining import JoinHelp
 from .workers import APART, JOINS, Cancelled, DragQueue, PanelRefresher, refuse_in_worker_process
 
 log = logging.getLogger(__name__)
@@ -390,7 +391,7 @@ class TeachingServer:
         session.arm_picker = ArmPicker(client.gui, choice, lambda label: self._switch(client, label), session.guard)
         if self.join_urls and self.gate.trusted(address_of(client)):  # the teacher's own screen
             with session.arm_picker.folder:
-                client.gui.add_markdown(join_markdown(self.join_urls))
+                JoinHelp(client, self.join_urls, teacher=True, guard=session.guard)
         self.janitor.settle()
         with self._sessions_lock:
             self._sessions[client.client_id] = session
