@@ -15,6 +15,7 @@ from ur10core import Arm, paths
 
 from .server_support import session_of, until, url
 from ur10dev.viser_client import ViserClient
+from ur10dev.waiting import HANG_TIMEOUT
 
 pytestmark = pytest.mark.server
 
@@ -93,6 +94,46 @@ def test_the_force_points_where_its_handle_is_dragged(app):
         # another direction hides the handle
         await client.set_gui("Force direction", "+x")
         await until(lambda: client.received.visible.get(handle) is False, what="the handle hidden")
+        await client.close()
+
+    asyncio.run(scenario())
+
+
+def test_a_drags_start_or_update_run_after_its_end_is_dropped_and_the_handle_rides_with_the_tool(app):
+    """viser's thread pool runs the handle's events side by side. A drag's "start" or last "update", run after its
+    "end", held the handle where it had been let go (it stayed there as the arm moved, until the next drag: a run on
+    a loaded machine, 2026-12-06), and a "start" put the force back the way it pointed before the drag. An event
+    older than one taken is now dropped."""
+    from ur10teach.features.statics import DRAGGED, HANDLE_DISTANCE
+
+    async def scenario():
+        client = await ViserClient(url(app)).connect()
+        session = session_of(app, client)
+        statics = session.statics
+        handle = "/statics/force_handle"
+        await client.set_gui("Show the torques", True)
+        await client.set_gui("Force direction", DRAGGED)
+        await until(lambda: client.received.visible.get(handle) is True, what="the handle")
+        tip = session.state.last.flange[:3, 3]
+        moved, ended = statics._handle_moved, threading.Event()
+
+        def late_update(position, released, number):  # the start and the update wait until the end has been taken
+            if not released:
+                ended.wait(HANG_TIMEOUT)
+            moved(position, released, number)
+            if released:
+                ended.set()
+
+        statics._handle_moved = late_update
+        direction = np.array([0.0, 0.8, 0.6])
+        for phase in ("start", "update", "end"):
+            await client.drag_target(tip + 0.5 * direction, (1.0, 0, 0, 0), phase, name=handle)
+        await until(lambda: ended.is_set() and np.allclose(statics.dragged, direction, atol=1e-6), what="the drag taken")
+        await client.set_gui("θ1 base (°)", float(np.degrees(session.state.last.q[0]) + 20.0))
+        await until(lambda: not np.allclose(session.state.last.flange[:3, 3], tip), what="the arm moved")
+        new_tip = session.state.last.flange[:3, 3]
+        await until(lambda: np.allclose(client.received.positions[handle], new_tip + HANDLE_DISTANCE * session.drawing.size * direction,
+                                        atol=1e-5), what="the handle riding with the tool")
         await client.close()
 
     asyncio.run(scenario())

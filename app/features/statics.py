@@ -156,6 +156,9 @@ class StaticsView(View):
         stop_echo(self.handle)
         self.dragged = -np.asarray(arm.up, dtype=float)  #: the unit direction the handle was last dragged to (base frame)
         self._holding = False
+        #: the handle's events as they arrived, and the newest one taken: viser's pool runs them side by side
+        self._handle_events = self._handle_taken = 0
+        self._handle_lock = threading.Lock()
         self.handle.on_update(self._handle_dragged)
         self._scene = scene
         self._map: viser.PointCloudHandle | None = None
@@ -189,19 +192,27 @@ class StaticsView(View):
         it, before a redraw on another thread puts the handle back beside the tool (read later, on the
         thread pool, it was sometimes that one, and the drag was lost)."""
         position, released = np.array(self.handle.position, dtype=float), event.phase == "end"
+        self._handle_events += 1
+        number = self._handle_events
         asyncio.get_running_loop().run_in_executor(
-            None, self._session.guard(lambda _: self._handle_moved(position, released)), None)
+            None, self._session.guard(lambda _: self._handle_moved(position, released, number)), None)
 
-    def _handle_moved(self, position: np.ndarray, released: bool) -> None:
-        """The student dragged the handle to ``position``: the force points from the tool towards it."""
-        self._holding = not released
+    def _handle_moved(self, position: np.ndarray, released: bool, number: int) -> None:
+        """The student dragged the handle to ``position`` (the ``number``-th event): the force points from the tool
+        towards it. An event older than one taken already is dropped: a drag's last "update", run after its "end",
+        held the handle where it was let go, and it no longer rode with the tool."""
         offset = position - self._session.state.last.flange[:3, 3]
         if not np.isfinite(offset).all():
             raise ValueError("force direction: the handle's position must be finite")
-        scale = float(np.abs(offset).max())  # divided out first: a handle 1e300 m out overflowed the norm's squares
-        if scale > 1e-3:  # on the tool itself it names no direction: keep the last one
-            along = offset / scale
-            self.dragged = along / np.linalg.norm(along)
+        with self._handle_lock:
+            if number < self._handle_taken:
+                return
+            self._handle_taken = number
+            self._holding = not released
+            scale = float(np.abs(offset).max())  # divided out first: a handle 1e300 m out overflowed the norm's squares
+            if scale > 1e-3:  # on the tool itself it names no direction: keep the last one
+                along = offset / scale
+                self.dragged = along / np.linalg.norm(along)
         self._session.redraw()
         if not self._holding:
             self._map_again()
