@@ -370,6 +370,51 @@ def test_a_challenge_started_while_the_last_one_is_still_ending_waits_for_its_en
     classroom.stop()
 
 
+def test_a_double_click_on_start_or_end_is_one_press(classroom, monkeypatch):
+    """A teacher who double-clicked *Start the challenge* saw "a challenge is running: end it first" on the
+    projector as the challenge started, and a double click on *End and show the solution*, "no challenge is
+    running" (each click is a press to viser). The second press of a double click is now let go."""
+    from ur10teach.serving import class_challenges
+
+    room = classroom.classroom
+    outcomes = {"start": [], "end": []}
+
+    def counted(name):
+        method = getattr(room.challenges, name)
+
+        def press(*args):
+            try:
+                method(*args)
+                outcomes[name].append("taken")
+            except ValueError as why:
+                outcomes[name].append(str(why))
+                raise
+
+        setattr(room.challenges, name, press)
+
+    async def scenario():
+        teacher = await ViserClient(url(classroom)).connect()
+        await become_presenter(teacher, classroom)
+        counted("start"), counted("end")
+        await teacher.set_gui("Challenge", "Where is the flange?")
+        for button in ("Start the challenge", "End and show the solution"):
+            name = "start" if button.startswith("Start") else "end"
+            await until(lambda: teacher.gui.get(button, {}).get("visible"), what=f"{button!r} shown")
+            await teacher.set_gui(button, True)
+            await teacher.set_gui(button, True)  # within the same fraction of a second
+            await until(lambda: len(outcomes[name]) == 2, what=f"both presses of {button!r} handled")
+            assert outcomes[name] == ["taken", "taken"], outcomes[name]
+        run = room.challenges.run
+        assert run.ended and not teacher.shown("end it first") and not teacher.shown("no challenge is running")
+        monkeypatch.setattr(class_challenges, "DOUBLE_PRESS", -1.0)  # a press long after: the teacher's next
+        await teacher.set_gui("End and show the solution", True)
+        await until(lambda: len(outcomes["end"]) == 3, what="a press of End on its own")
+        assert outcomes["end"][-1] == "no challenge is running"
+        await teacher.close()
+
+    asyncio.run(scenario())
+
+
 def test_the_reach_targets_name_hangs_towards_the_middle_of_each_browsers_canvas(classroom):
     """The target's name hung to its right: with the target in the right half of a browser's canvas (the presenter's
     in lecture mode, a narrow window), "challenge target" ran under the panel, cut off (until 2026-12-06). It now

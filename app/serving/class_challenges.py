@@ -36,14 +36,24 @@ log = logging.getLogger(__name__)
 #: While a challenge runs, its results file is written again as students check, at most this often (s): a teacher's
 #: laptop that dies mid-lesson loses no more of the class's answers than this.
 SAVE_EVERY = 30.0
+#: Seconds within which a second press of *Start the challenge* or *End and show the solution* is a double click's.
+DOUBLE_PRESS = 0.5
 
 
 def _one_turnover_at_a_time(method):
     """A start or an end, from first to last, with no other start or end between: viser runs each click's
     callback on a thread of its own, and a start pressed while an end still showed the class its solution took
-    the run from under it (the ended run's last answers went unsaved, and the new run's file was written instead)."""
+    the run from under it (the ended run's last answers went unsaved, and the new run's file was written instead).
+
+    A press of the button pressed last, :data:`DOUBLE_PRESS` s or less after it, is a double click's second, and is
+    let go: it told the projector "a challenge is running: end it first" as the challenge started."""
     @functools.wraps(method)
     def one_at_a_time(self: ClassChallenges, *args, **kwargs):
+        press = (method.__name__, time.monotonic())  # (the time a person clicks in, not a test's ``clock``)
+        with self._pressing:
+            last, self._last_press = self._last_press, press
+        if last is not None and last[0] == press[0] and press[1] - last[1] <= DOUBLE_PRESS:
+            return None
         with self._turnover:
             return method(self, *args, **kwargs)
 
@@ -70,6 +80,8 @@ class ClassChallenges:
         self.clock = time.monotonic  #: what a challenge's times and check pacing are kept by (a test sets its own)
         self._saving = threading.Lock()  #: one writer of a results file at a time (a check, the end, the stop)
         self._turnover = threading.Lock()  #: held by a start or an end throughout (:func:`_one_turnover_at_a_time`)
+        self._last_press: tuple[str, float] | None = None  #: ("start" or "end", its time.monotonic())
+        self._pressing = threading.Lock()
         self.nicknames = True  #: the projector names each student's tool by their nickname (else by their number)
 
     @property
