@@ -9,8 +9,8 @@ import numpy as np
 import segno
 import viser
 
-#: Pixels a module (a QR code's square) in the image sent: sharp-edged at the size the page draws it (about
-#: 400 px wide), which a phone reads from a lecture hall's last row off a projector's screen.
+#: Pixels a module (a QR code's square) in the image sent: more than the page draws (360 to 530 px for the whole
+#: code), so it is scaled down, its edges sharp.
 MODULE_PX = 16
 #: The blank border round a QR code, in modules, that a reader needs to find it (ISO/IEC 18004).
 QUIET_ZONE = 4
