@@ -1172,6 +1172,18 @@ def test_an_arm_the_browser_has_left_is_freed_and_its_camera_moves_reach_the_arm
     asyncio.run(scenario())
 
 
+def camera_of(app, client: ViserClient):
+    """The camera controls of ``client``'s browser: its classroom member's (the only one), or its session's."""
+    return next(iter(app.classroom.members.values())).camera if app.classroom is not None else session_of(app, client).camera
+
+
+async def first_framed(app, client: ViserClient):
+    """:func:`camera_of` ``client``, once the server has framed the arm in it."""
+    controls = camera_of(app, client)
+    await until(lambda: controls._framed_at is not None and controls._where_framed(), what="the first framing")
+    return controls
+
+
 @pytest.mark.parametrize("server", ["app", "classroom"])
 @pytest.mark.parametrize("phone", [True, False])
 def test_on_a_phone_held_upright_the_arm_is_framed_above_the_panel(request, server, phone):
@@ -1188,8 +1200,7 @@ def test_on_a_phone_held_upright_the_arm_is_framed_above_the_panel(request, serv
 
     async def scenario():
         client = await ViserClient(url(app), user_agent=PHONE["user_agent"] if phone else None).connect()
-        controls = (next(iter(app.classroom.members.values())).camera if app.classroom is not None
-                    else session_of(app, client).camera)
+        controls = camera_of(app, client)
 
         def rows(size):
             """(highest, lowest) of the arm's points, as shares of the canvas's height from its top, once framed
@@ -1232,8 +1243,7 @@ def test_a_framing_for_a_canvas_the_browser_has_since_resized_is_not_shown(app, 
 
     async def scenario():
         client = await ViserClient(url(app)).connect()
-        controls = session_of(app, client).camera
-        await until(lambda: controls._framed_at is not None and controls._where_framed(), what="the first framing")
+        controls = await first_framed(app, client)
         loop = asyncio.get_running_loop()
         first = []
 
@@ -1269,9 +1279,7 @@ def test_a_page_that_puts_its_camera_back_at_the_start_is_framed_again(request, 
 
     async def scenario():
         client = await ViserClient(url(app)).connect()
-        controls = (next(iter(app.classroom.members.values())).camera if app.classroom is not None
-                    else session_of(app, client).camera)
-        await until(lambda: controls._framed_at is not None and controls._where_framed(), what="the first framing")
+        controls = await first_framed(app, client)
         framed = controls._framed_at[0].copy()
         reports = []
         controls.on_moved.append(lambda: reports.append(1))
@@ -1300,9 +1308,7 @@ def test_a_students_orbit_stays_when_viser_draws_fewer_pixels_and_a_new_shape_of
 
     async def scenario():
         client = await ViserClient(url(app)).connect()
-        controls = (next(iter(app.classroom.members.values())).camera if app.classroom is not None
-                    else session_of(app, client).camera)
-        await until(lambda: controls._framed_at is not None and controls._where_framed(), what="the first framing")
+        controls = await first_framed(app, client)
         reports = []
         controls.on_moved.append(lambda: reports.append(1))
         orbit = dataclasses.replace(CAMERA, position=(2.5, -0.4, 1.7), look_at=(0.1, 0.2, 0.3))

@@ -53,26 +53,35 @@ def test_the_torque_bars_add_the_force_and_the_weight(app):
     asyncio.run(scenario())
 
 
+HANDLE = "/statics/force_handle"
+
+
+async def with_the_handle(app) -> tuple[ViserClient, object]:
+    """A browser and its session, its force set to point where its handle (:data:`HANDLE`) is dragged, the handle shown."""
+    from ur10teach.features.statics import DRAGGED
+
+    client = await ViserClient(url(app)).connect()
+    await client.set_gui("Show the torques", True)
+    await client.set_gui("Force direction", DRAGGED)
+    await until(lambda: client.received.visible.get(HANDLE) is True, what="the handle")
+    return client, session_of(app, client)
+
+
 def test_the_force_points_where_its_handle_is_dragged(app):
     """"Drag the handle": the force points from the flange to the handle, the arrow and the bars follow,
     and the handle rides with the flange when the arm moves."""
     async def scenario():
-        from ur10teach.features.statics import DRAGGED, HANDLE_DISTANCE
+        from ur10teach.features.statics import HANDLE_DISTANCE
 
-        client = await ViserClient(url(app)).connect()
-        session = session_of(app, client)
+        client, session = await with_the_handle(app)
         statics = session.statics
-        handle = "/statics/force_handle"
-        await client.set_gui("Show the torques", True)
-        await client.set_gui("Force direction", DRAGGED)
-        await until(lambda: client.received.visible.get(handle) is True, what="the handle")
         snapshot = session.state.last
         tip = snapshot.flange[:3, 3]
-        np.testing.assert_allclose(client.received.positions[handle], tip + HANDLE_DISTANCE * session.drawing.size * np.array([0, 0, -1.0]), atol=1e-6)
+        np.testing.assert_allclose(client.received.positions[HANDLE], tip + HANDLE_DISTANCE * session.drawing.size * np.array([0, 0, -1.0]), atol=1e-6)
         # dragged out along +y and a little up: 50 N that way
         direction = np.array([0.0, 0.8, 0.6])
         for phase in ("start", "update", "end"):
-            await client.drag_target(tip + 0.5 * direction, (1.0, 0, 0, 0), phase, name=handle)
+            await client.drag_target(tip + 0.5 * direction, (1.0, 0, 0, 0), phase, name=HANDLE)
         await until(lambda: np.allclose(statics.dragged, direction, atol=1e-6), what="the dragged direction")
         arm = snapshot.arm
         expected = bars_html(arm.static_torques(snapshot.q, 50.0 * direction), arm.gravity_torques(snapshot.q), arm.specs.torque_ratings, arm.joint_names, arm.joint_types)
@@ -82,18 +91,18 @@ def test_the_force_points_where_its_handle_is_dragged(app):
         await client.set_gui("θ1 base (°)", float(np.degrees(snapshot.q[0]) + 20.0))
         await until(lambda: abs(session.state.last.q[0] - snapshot.q[0] - np.radians(20.0)) < 1e-6, what="the arm moved")
         new_tip = session.state.last.flange[:3, 3]
-        await until(lambda: np.allclose(client.received.positions[handle], new_tip + HANDLE_DISTANCE * session.drawing.size * direction, atol=1e-5),
+        await until(lambda: np.allclose(client.received.positions[HANDLE], new_tip + HANDLE_DISTANCE * session.drawing.size * direction, atol=1e-5),
                     what="the handle at the new flange")
         await until(lambda: np.allclose(client.received.positions["/statics/force"], new_tip, atol=1e-5),
                     what="the arrow at the new flange")
         # a handle 1e300 m out (no browser drags it there) still names a direction: the norm's squares overflowed
         with warnings.catch_warnings():
             warnings.simplefilter("error")  # numpy's "overflow encountered in dot"
-            await client.drag_target(new_tip + 1e300 * np.array([0.0, -0.6, 0.8]), (1.0, 0, 0, 0), "end", name=handle)
+            await client.drag_target(new_tip + 1e300 * np.array([0.0, -0.6, 0.8]), (1.0, 0, 0, 0), "end", name=HANDLE)
             await until(lambda: np.allclose(statics.dragged, (0.0, -0.6, 0.8), atol=1e-9), what="the far handle's direction")
         # another direction hides the handle
         await client.set_gui("Force direction", "+x")
-        await until(lambda: client.received.visible.get(handle) is False, what="the handle hidden")
+        await until(lambda: client.received.visible.get(HANDLE) is False, what="the handle hidden")
         await client.close()
 
     asyncio.run(scenario())
@@ -104,16 +113,11 @@ def test_a_drags_start_or_update_run_after_its_end_is_dropped_and_the_handle_rid
     "end", held the handle where it had been let go (it stayed there as the arm moved, until the next drag: a run on
     a loaded machine, 2026-12-06), and a "start" put the force back the way it pointed before the drag. An event
     older than one taken is now dropped."""
-    from ur10teach.features.statics import DRAGGED, HANDLE_DISTANCE
+    from ur10teach.features.statics import HANDLE_DISTANCE
 
     async def scenario():
-        client = await ViserClient(url(app)).connect()
-        session = session_of(app, client)
+        client, session = await with_the_handle(app)
         statics = session.statics
-        handle = "/statics/force_handle"
-        await client.set_gui("Show the torques", True)
-        await client.set_gui("Force direction", DRAGGED)
-        await until(lambda: client.received.visible.get(handle) is True, what="the handle")
         tip = session.state.last.flange[:3, 3]
         moved, ended = statics._handle_moved, threading.Event()
 
@@ -127,12 +131,12 @@ def test_a_drags_start_or_update_run_after_its_end_is_dropped_and_the_handle_rid
         statics._handle_moved = late_update
         direction = np.array([0.0, 0.8, 0.6])
         for phase in ("start", "update", "end"):
-            await client.drag_target(tip + 0.5 * direction, (1.0, 0, 0, 0), phase, name=handle)
+            await client.drag_target(tip + 0.5 * direction, (1.0, 0, 0, 0), phase, name=HANDLE)
         await until(lambda: ended.is_set() and np.allclose(statics.dragged, direction, atol=1e-6), what="the drag taken")
         await client.set_gui("θ1 base (°)", float(np.degrees(session.state.last.q[0]) + 20.0))
         await until(lambda: not np.allclose(session.state.last.flange[:3, 3], tip), what="the arm moved")
         new_tip = session.state.last.flange[:3, 3]
-        await until(lambda: np.allclose(client.received.positions[handle], new_tip + HANDLE_DISTANCE * session.drawing.size * direction,
+        await until(lambda: np.allclose(client.received.positions[HANDLE], new_tip + HANDLE_DISTANCE * session.drawing.size * direction,
                                         atol=1e-5), what="the handle riding with the tool")
         await client.close()
 
