@@ -370,14 +370,16 @@ def test_a_challenge_started_while_the_last_one_is_still_ending_waits_for_its_en
     classroom.stop()
 
 
-def test_a_double_click_on_start_or_end_is_one_press(classroom, monkeypatch):
+def test_a_double_click_on_start_end_or_check_is_one_press(classroom, monkeypatch):
     """A teacher who double-clicked *Start the challenge* saw "a challenge is running: end it first" on the
     projector as the challenge started, and a double click on *End and show the solution*, "no challenge is
-    running" (each click is a press to viser). The second press of a double click is now let go."""
+    running"; a student who double-clicked *Check my answer*, "one check a second, please" under the verdict
+    (each click is a press to viser). The second press of a double click is now let go."""
     from ur10teach.serving import class_challenges
 
     room = classroom.classroom
-    outcomes = {"start": [], "end": []}
+    room.challenges.clock = itertools.count(0.0, 10.0).__next__  # (a check's pace is not what is tested here)
+    outcomes = {"start": [], "end": [], "check": []}
 
     def counted(name):
         method = getattr(room.challenges, name)
@@ -392,25 +394,34 @@ def test_a_double_click_on_start_or_end_is_one_press(classroom, monkeypatch):
 
         setattr(room.challenges, name, press)
 
+    async def double_click(client: ViserClient, button: str, name: str) -> None:
+        await until(lambda: client.gui.get(button, {}).get("visible"), what=f"{button!r} shown")
+        await client.set_gui(button, True)
+        await client.set_gui(button, True)  # within the same fraction of a second
+        await until(lambda: len(outcomes[name]) == 2, what=f"both presses of {button!r} handled")
+        assert outcomes[name] == ["taken", "taken"], outcomes[name]
+
     async def scenario():
         teacher = await ViserClient(url(classroom)).connect()
         await become_presenter(teacher, classroom)
-        counted("start"), counted("end")
+        student = await ViserClient(url(classroom), local_address="127.0.0.9").connect()
+        counted("start"), counted("end"), counted("check")
         await teacher.set_gui("Challenge", "Where is the flange?")
-        for button in ("Start the challenge", "End and show the solution"):
-            name = "start" if button.startswith("Start") else "end"
-            await until(lambda: teacher.gui.get(button, {}).get("visible"), what=f"{button!r} shown")
-            await teacher.set_gui(button, True)
-            await teacher.set_gui(button, True)  # within the same fraction of a second
-            await until(lambda: len(outcomes[name]) == 2, what=f"both presses of {button!r} handled")
-            assert outcomes[name] == ["taken", "taken"], outcomes[name]
+        await double_click(teacher, "Start the challenge", "start")
+        member = await until(lambda: next((m for m in room.members.values() if m.card is not None), None), what="the card")
+        await student.set_gui("Your numbers (x, y, z)", "1 2 3")
+        await until(lambda: member.card.typed().get("numbers") == "1 2 3", what="the typing on the server")
+        await double_click(student, "Check my answer", "check")
+        assert member.student.attempts == 1 and not student.shown("one check a second")
+        await double_click(teacher, "End and show the solution", "end")
         run = room.challenges.run
         assert run.ended and not teacher.shown("end it first") and not teacher.shown("no challenge is running")
         monkeypatch.setattr(class_challenges, "DOUBLE_PRESS", -1.0)  # a press long after: the teacher's next
         await teacher.set_gui("End and show the solution", True)
         await until(lambda: len(outcomes["end"]) == 3, what="a press of End on its own")
         assert outcomes["end"][-1] == "no challenge is running"
-        await teacher.close()
+        for client in (teacher, student):
+            await client.close()
 
     asyncio.run(scenario())
 

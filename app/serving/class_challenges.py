@@ -36,7 +36,8 @@ log = logging.getLogger(__name__)
 #: While a challenge runs, its results file is written again as students check, at most this often (s): a teacher's
 #: laptop that dies mid-lesson loses no more of the class's answers than this.
 SAVE_EVERY = 30.0
-#: Seconds within which a second press of *Start the challenge* or *End and show the solution* is a double click's.
+#: Seconds within which a second press of *Start the challenge*, *End and show the solution* or *Check my answer* is a
+#: double click's.
 DOUBLE_PRESS = 0.5
 
 
@@ -45,17 +46,14 @@ def _one_turnover_at_a_time(method):
     callback on a thread of its own, and a start pressed while an end still showed the class its solution took
     the run from under it (the ended run's last answers went unsaved, and the new run's file was written instead).
 
-    A press of the button pressed last, :data:`DOUBLE_PRESS` s or less after it, is a double click's second, and is
-    let go: it told the projector "a challenge is running: end it first" as the challenge started."""
+    A double click's second press is let go (:meth:`ClassChallenges.double_press`): it told the projector "a
+    challenge is running: end it first" as the challenge started."""
     @functools.wraps(method)
-    def one_at_a_time(self: ClassChallenges, *args, **kwargs):
-        press = (method.__name__, time.monotonic())  # (the time a person clicks in, not a test's ``clock``)
-        with self._pressing:
-            last, self._last_press = self._last_press, press
-        if last is not None and last[0] == press[0] and press[1] - last[1] <= DOUBLE_PRESS:
+    def one_at_a_time(self: ClassChallenges, member: Member, *args, **kwargs):
+        if self.double_press(member, method.__name__):
             return None
         with self._turnover:
-            return method(self, *args, **kwargs)
+            return method(self, member, *args, **kwargs)
 
     return one_at_a_time
 
@@ -80,7 +78,8 @@ class ClassChallenges:
         self.clock = time.monotonic  #: what a challenge's times and check pacing are kept by (a test sets its own)
         self._saving = threading.Lock()  #: one writer of a results file at a time (a check, the end, the stop)
         self._turnover = threading.Lock()  #: held by a start or an end throughout (:func:`_one_turnover_at_a_time`)
-        self._last_press: tuple[str, float] | None = None  #: ("start" or "end", its time.monotonic())
+        #: each browser's last press of *Start*, *End* or *Check my answer*: (which, its time.monotonic())
+        self._presses: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
         self._pressing = threading.Lock()
         self.nicknames = True  #: the projector names each student's tool by their nickname (else by their number)
 
@@ -256,8 +255,20 @@ class ClassChallenges:
         if self.run is not None and self.run.challenge.kind == "velocity":
             self._moved(member)
 
+    def double_press(self, member: Member, button: str) -> bool:
+        """Whether this press of ``button`` by ``member`` is a double click's second: the button it pressed last,
+        :data:`DOUBLE_PRESS` s or less before (by the time a person clicks in, not a test's ``clock``)."""
+        now = time.monotonic()
+        with self._pressing:
+            last = self._presses.get(member)
+            self._presses[member] = (button, now)
+        return last is not None and last[0] == button and now - last[1] <= DOUBLE_PRESS
+
     def check(self, member: Member) -> None:
-        """Check what ``member`` has on the server (their joints, target, rates, typed answer): never what a browser claims."""
+        """Check what ``member`` has on the server (their joints, target, rates, typed answer): never what a browser
+        claims. A double click checks once: its second press said "one check a second, please" under the verdict."""
+        if self.double_press(member, "check"):
+            return
         run, student, session, card = self.run, member.student, member.session, member.card
         if run is None or student is None or card is None:
             raise ValueError("there is no challenge to answer")
