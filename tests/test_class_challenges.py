@@ -553,7 +553,10 @@ def test_a_client_cannot_claim_solved_and_checks_are_paced(classroom):
         await student.set_gui("Check my answer", True)
         await until(lambda: member.student.attempts == 1, what="the first check")
         assert member.student.solved_after is None and member.student.nickname == "<b>Bo</b> and a very l"[:20]
-        # a second check within the second is refused beside the button, and not counted
+        # a second check within the second is refused beside the button, and not counted (another answer typed
+        # first: pressed again at once, with nothing changed, it is a double click's second press, let go)
+        await student.set_gui("Your numbers (x, y, z)", "1 2 4")
+        await until(lambda: member.card.typed().get("numbers") == "1 2 4", what="the typing on the server")
         await student.set_gui("Check my answer", True)
         await until(lambda: student.shown("One check a second"), what="the refusal")
         assert member.student.attempts == 1 and room.challenges.run.summary().solved == 0

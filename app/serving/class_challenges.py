@@ -255,19 +255,24 @@ class ClassChallenges:
         if self.run is not None and self.run.challenge.kind == "velocity":
             self._moved(member)
 
-    def double_press(self, member: Member, button: str) -> bool:
+    def double_press(self, member: Member, button: str, answer=None) -> bool:
         """Whether this press of ``button`` by ``member`` is a double click's second: the button it pressed last,
-        :data:`DOUBLE_PRESS` s or less before (by the time a person clicks in, not a test's ``clock``)."""
+        :data:`DOUBLE_PRESS` s or less before (by the time a person clicks in, not a test's ``clock``), with the
+        same ``answer`` (what the press acts on: changed, the press is a new one, however soon)."""
         now = time.monotonic()
         with self._pressing:
             last = self._presses.get(member)
-            self._presses[member] = (button, now)
-        return last is not None and last[0] == button and now - last[1] <= DOUBLE_PRESS
+            self._presses[member] = (button, answer, now)
+        return last is not None and last[:2] == (button, answer) and now - last[2] <= DOUBLE_PRESS
 
     def check(self, member: Member) -> None:
         """Check what ``member`` has on the server (their joints, target, rates, typed answer): never what a browser
         claims. A double click checks once: its second press said "one check a second, please" under the verdict."""
-        if self.double_press(member, "check"):
+        session, card = member.session, member.card
+        answer = (tuple(card.typed().items()) if card is not None else (), None if session is None else (
+            session.state.last.q.tobytes(), session.state.last.target.tobytes(),
+            tuple(float(slider.value) for slider in session.velocity.sliders)))
+        if self.double_press(member, "check", answer):
             return
         run, student, session, card = self.run, member.student, member.session, member.card
         if run is None or student is None or card is None:
