@@ -352,7 +352,7 @@ def parse(text: str, source: str = "challenges") -> tuple[Challenge, ...]:
     for index, key in enumerate(keys):
         if keys.index(key) != index:
             first, title = challenges[keys.index(key)].title, challenges[index].title
-            titled = repr(title) if first == title else f"{first!r} and {title!r}, the same but for signs and spaces"
+            titled = repr(title) if first == title else f"{first!r} and {title!r}, the same but for case, signs and spaces"
             raise ValueError(f"{source}, line {_line(text, index, 'title')}: two challenges titled {titled}")
         if challenges[index].title in POSE_QUESTIONS:  # (the presenter's desk would offer one of the two)
             raise ValueError(f"{source}, line {_line(text, index, 'title')}: {challenges[index].title!r} is the desk's own "

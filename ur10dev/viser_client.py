@@ -255,9 +255,10 @@ class ViserClient:
             self.received.modals_opened += 1
         elif kind == "GuiCloseModalMessage":
             self.received.modals.pop(message["uuid"], None)
-        elif kind == "GuiImageMessage" or (kind == "GuiUpdateMessage" and message["uuid"] in self.received.images):
+        elif kind == "GuiImageMessage" or (kind == "GuiUpdateMessage" and message["uuid"] in self.received.images
+                                           and "_data" in message.get("updates", {})):
             # (viser sends an image's bytes in an update after making it empty)
-            data = (message.get("props") or message.get("updates", {})).get("_data")
+            data = (message.get("props") or message["updates"]).get("_data")
             holder = message.get("container_uuid") or self.received.images[message["uuid"]][0]
             self.received.images[message["uuid"]] = (holder, b"" if data is None else bytes(
                 buffers[data["__binary_index"]] if isinstance(data, dict) else data))

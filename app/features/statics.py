@@ -199,8 +199,8 @@ class StaticsView(View):
 
     def _handle_moved(self, position: np.ndarray, released: bool, number: int) -> None:
         """The student dragged the handle to ``position`` (the ``number``-th event): the force points from the tool
-        towards it. An event older than one taken already is dropped: a drag's last "update", run after its "end",
-        held the handle where it was let go, and it no longer rode with the tool."""
+        towards it. An event older than one taken already is dropped: a drag's "start" or last "update", run after
+        its "end", held the handle where it was let go (it no longer rode with the tool), or turned the force back."""
         offset = position - self._session.state.last.flange[:3, 3]
         if not np.isfinite(offset).all():
             raise ValueError("force direction: the handle's position must be finite")

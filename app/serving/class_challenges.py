@@ -78,7 +78,7 @@ class ClassChallenges:
         self.clock = time.monotonic  #: what a challenge's times and check pacing are kept by (a test sets its own)
         self._saving = threading.Lock()  #: one writer of a results file at a time (a check, the end, the stop)
         self._turnover = threading.Lock()  #: held by a start or an end throughout (:func:`_one_turnover_at_a_time`)
-        #: each browser's last press of *Start*, *End* or *Check my answer*: (which, its time.monotonic())
+        #: each browser's last press of *Start*, *End* or *Check my answer*: (which, what it acted on, its time.monotonic())
         self._presses: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
         self._pressing = threading.Lock()
         self.nicknames = True  #: the projector names each student's tool by their nickname (else by their number)
