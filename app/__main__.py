@@ -6,6 +6,7 @@ import argparse
 import ctypes
 import os
 import signal
+import sys
 import time
 from pathlib import Path
 
@@ -105,6 +106,11 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
 
 def main(argv: list[str] | None = None, started=None) -> None:
     """Serve until Ctrl+C. ``started(app)`` is called once it serves (``ur10dev.metered_app`` measures it)."""
+    # a console that cannot show a letter of the results folder's name (a Windows one written to a file, in its
+    # code page) shows it escaped, and the app starts
+    for stream in (sys.stdout, sys.stderr):
+        if hasattr(stream, "reconfigure"):
+            stream.reconfigure(errors="backslashreplace")
     args = parse_args(argv)
     logs.install()
     from .serving.server import TeachingServer

@@ -39,8 +39,14 @@ class LinkMesh:
         return self.ghost_mesh if self.ghost_mesh is not None else self.merged
 
 
+#: a link without a part (the UR10's link 3 has no joint cap)
+_EMPTY = (np.zeros((0, 3), np.float32), np.zeros((0, 3), np.uint32))
+
+
 def _read(path: Path) -> tuple[np.ndarray, np.ndarray]:
     mesh = trimesh.load(path, process=False, force="mesh")
+    if not isinstance(mesh, trimesh.Trimesh):  # a file of no faces: trimesh 4.0 reads it as an empty list
+        return _EMPTY
     return np.asarray(mesh.vertices, np.float32), np.asarray(mesh.faces, np.uint32).reshape(-1, 3)
 
 
@@ -53,9 +59,7 @@ def load_links(preset: str, mesh_dir: Path = MESH_DIR) -> tuple[LinkMesh, ...]:
     links = []
     for i in range(7):
         body = _read(folder / f"link{i}_body.ply")
-        cap_path = folder / f"link{i}_cap.ply"
-        cap = _read(cap_path) if cap_path.stat().st_size > 0 else (np.zeros((0, 3), np.float32), np.zeros((0, 3), np.uint32))
-        links.append(LinkMesh(i, *body, *cap))
+        links.append(LinkMesh(i, *body, *_read(folder / f"link{i}_cap.ply")))
     return tuple(links)
 
 
@@ -65,7 +69,6 @@ SCHEMATIC = "Schematic"
 SKELETON = "Skeleton"
 #: presets drawn with UR's UR10 meshes: the course's DH table rounds the UR10's to within 1 mm
 REAL_MESHES = {"course": "ur10", "ur10": "ur10"}
-_EMPTY = (np.zeros((0, 3), np.float32), np.zeros((0, 3), np.uint32))
 
 
 def _parts(path: Path) -> dict[str, tuple[np.ndarray, np.ndarray]]:

@@ -804,6 +804,21 @@ def test_titles_in_any_script_are_told_apart_and_name_their_results_files():
         C.parse(text.replace(titles[0], "Reach: it").replace(titles[1], "Reach it!"))
 
 
+def test_long_titles_that_differ_only_at_their_end_are_two_challenges_and_each_names_a_file(tmp_path):
+    # the key was cut to 60 characters: "... from the pose given: part A" and "... part B" were refused as "the same but
+    # for case, signs and spaces"; and 60 letters of four bytes each made a file's name of 272 bytes, which most
+    # systems refuse, so the results were not saved
+    stem = "Find the wrist singularity of the UR10 arm from the pose given: part"
+    text = "".join(f'[[challenge]]\ntitle = "{t}"\nkind = "velocity"\nvelocity_mm_s = [0, 0, 100]\n'
+                   for t in (f"{stem} A", f"{stem} B", "𝐀" * 80, "到" * 80))
+    challenges = C.parse(text)
+    assert len(challenges) == 4 and challenges[0].key != challenges[1].key
+    for challenge in challenges:
+        longest = f"challenge-{challenge.key}-2026-12-06-113500-99.part"  # serving/challenge_run.py's, renumbered
+        assert len(longest.encode()) <= 255
+        (tmp_path / longest).write_bytes(b"")
+
+
 @pytest.mark.parametrize("change, line, words", [
     (("arm = \"kr210\"", "arm = \"kr2100\""), 5, "arm must be one of"),
     (("joints = [10, 20, -30, 40, 50, 60]", "joints = [10, 20, -30, 40, 50]"), 6, "list of 6 numbers"),
@@ -834,7 +849,7 @@ def test_titles_in_any_script_are_told_apart_and_name_their_results_files():
     (("kind = \"singularity\"", "kind = [\"singularity\"]"), 12, "kind must be one of"),
     (("factor = \"wrist\"", "factor = [\"wrist\"]"), 14, "factors are stroke, shoulder, wrist"),
     # a key written twice on the file's last line: TOML's "(at end of document)" is that line
-    (("time_limit_s = 120\n", "time_limit_s = 120\ntime_limit_s = 60"), 16, "Cannot overwrite a value"),
+    (("time_limit_s = 120\n", "time_limit_s = 120\ntime_limit_s = 60"), 16, "overwrite a value"),  # the parser's words: tomli 2.0 writes "Can not"
 ])
 def test_a_bad_file_is_refused_naming_the_line(change, line, words):
     text = GOOD.replace(*change)

@@ -113,6 +113,15 @@ def test_lan_address_and_join_code_in_shared_mode(tmp_path):
         assert f"http://{address}:" in text
 
 
+def test_a_console_that_cannot_show_the_results_folders_name_still_starts_the_app(tmp_path):
+    # printing "their results are saved in /…/résultats 结果" to a console in another code page (here ASCII; a
+    # Windows console written to a file is in the system's code page) raised UnicodeEncodeError: the app stopped
+    folder = tmp_path / "résultats 结果"
+    with running_app("--shared", "--results", str(folder), env={"PYTHONIOENCODING": "ascii"}) as app:
+        text = "".join(app.output)
+    assert "their results are saved in " + str(folder).encode("ascii", "backslashreplace").decode() in text
+
+
 def _children(pid: int) -> list[int]:
     """Every process the app started (Linux: /proc/PID/task/*/children)."""
     found = []

@@ -64,6 +64,8 @@ RATE_LIMITS = {"R": 180.0, "P": 500.0}
 MAX_CHALLENGES = 100
 MAX_FILE_BYTES = 100_000
 MAX_TEXT = 1000
+#: a results file's name is "challenge-<key>-<date and time>-<n>.part" at most: 200 bytes of key keep it within 255
+KEY_BYTES = 200
 #: Joint values a "dh_table" answer is compared at (with the arm's home and zero joints).
 DH_SAMPLES = 24
 
@@ -100,13 +102,14 @@ class Challenge:
 
     @property
     def key(self) -> str:
-        """The title as it names the results file: its letters and digits in any script, each run of others a dash.
+        """The title as it names the results file: its letters and digits in any script, each run of others a dash,
+        cut to :data:`KEY_BYTES` bytes of UTF-8 (a file's name holds 255 on most systems).
 
-        >>> retitled = [dataclasses.replace(builtin()[0], title=t) for t in ("Übung 2: Reichweite", "到达目标")]
-        >>> [c.key for c in retitled]
-        ['übung-2-reichweite', '到达目标']
+        >>> retitled = [dataclasses.replace(builtin()[0], title=t) for t in ("Übung 2: Reichweite", "到达目标", "到" * 80)]
+        >>> [c.key for c in retitled[:2]], len(retitled[2].key), len(retitled[2].key.encode())
+        (['übung-2-reichweite', '到达目标'], 66, 198)
         """
-        return re.sub(r"[\W_]+", "-", self.title.lower()).strip("-")[:60]
+        return _plain(self.title).encode()[:KEY_BYTES].decode(errors="ignore").rstrip("-")
 
     @property
     def is_pose(self) -> bool:
@@ -348,7 +351,7 @@ def parse(text: str, source: str = "challenges") -> tuple[Challenge, ...]:
             challenges.append(_from_table(table))
         except _FieldError as error:
             raise ValueError(f"{source}, line {_line(text, index, error.field)}: {error}") from None
-    keys = [c.key for c in challenges]
+    keys = [_plain(c.title) for c in challenges]  # whole: titles may differ only past the results file's cut
     for index, key in enumerate(keys):
         if keys.index(key) != index:
             first, title = challenges[keys.index(key)].title, challenges[index].title
@@ -364,6 +367,11 @@ class _FieldError(ValueError):
     def __init__(self, field: str, message: str) -> None:
         super().__init__(message)
         self.field = field
+
+
+def _plain(title: str) -> str:
+    """``title`` in lower case, each run of other than letters and digits (any script's) one dash."""
+    return re.sub(r"[\W_]+", "-", title.lower()).strip("-")
 
 
 def _line(text: str, index: int, field: str | None) -> int:
