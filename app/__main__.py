@@ -126,8 +126,11 @@ def main(argv: list[str] | None = None, started=None) -> None:
         print(f"    {url}", flush=True)
     if args.arm != "ur10":
         print(f"Browsers open on the {app.first_choice}; every arm stays in the picker.", flush=True)
-    if args.host in ("0.0.0.0", ""):
+    if args.host in ("0.0.0.0", "") and app.join_urls:
         print("Students on the same network use one of the addresses above.", flush=True)
+    elif args.host in ("0.0.0.0", ""):
+        print("This computer has no network address that students could reach: connect it to the class's network "
+              "(or start its hotspot), then start the app again.", flush=True)
     if app.classroom is not None:
         print(f"Join code for the presenter: {app.classroom.code}", flush=True)
         print(f"Class challenges: {len(args.challenge_list)} (the presenter's Challenge folder); their results are "

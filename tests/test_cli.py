@@ -6,8 +6,12 @@ import asyncio
 import contextlib
 import ipaddress
 import re
+import os
+import shutil
 import signal
 import socket
+import subprocess
+import sys
 from pathlib import Path
 
 import pytest
@@ -15,7 +19,7 @@ from viser import _messages as messages
 
 from ur10teach.__main__ import parse_args
 from ur10teach.serving.server import lan_addresses
-from ur10dev.app_process import running_app
+from ur10dev.app_process import ROOT, running_app, serving
 from ur10dev.viser_client import ViserClient
 from ur10dev.waiting import HANG_TIMEOUT, until
 
@@ -88,6 +92,30 @@ def test_a_challenge_on_the_app_s_ur10_must_fit_the_preset_it_runs(tmp_path, cap
 def test_lan_addresses_are_real_ipv4_addresses():
     for address in lan_addresses():
         assert not ipaddress.IPv4Address(address).is_loopback
+
+
+#: a network of this machine's own, as a laptop has that makes a hotspot for its class and is on no other network:
+#: an interface at NetworkManager's hotspot address, and no default route
+HOTSPOT = ("ip link set lo up && ip link add wlan0 type veth peer name phone && ip addr add 10.42.0.1/24 dev wlan0 && "
+           "ip link set wlan0 up && ip link set phone up")
+#: a network namespace and veth pairs to make one in (root, or a user namespace, and iproute2)
+NAMESPACES = shutil.which("unshare") is not None and shutil.which("ip") is not None and subprocess.run(
+    ["unshare", "-n", "sh", "-c", HOTSPOT], capture_output=True).returncode == 0
+
+
+@pytest.mark.skipif(not NAMESPACES, reason="no network namespaces here (unshare -n and ip)")
+def test_a_laptop_whose_only_network_is_its_hotspot_gives_the_students_its_address(tmp_path):
+    # no default route, and the host name stands for 127.0.0.1: students were given no address at all
+    code = "from ur10teach.serving.server import lan_addresses; print(lan_addresses())"
+    done = subprocess.run(["unshare", "-n", "sh", "-c", f'{HOTSPOT} && exec "{sys.executable}" -c "{code}"'],
+                          cwd=ROOT, capture_output=True, text=True, timeout=HANG_TIMEOUT)
+    assert done.returncode == 0, done.stderr
+    assert done.stdout.split() == ["['10.42.0.1']"]
+    # on no network at all, the teacher is told so, not to give the students "one of the addresses above"
+    command = ["unshare", "-n", "sh", "-c", f'ip link set lo up && exec "{sys.executable}" -m ur10teach --port 0 --host 0.0.0.0']
+    with serving(command, ROOT, dict(os.environ), timeout=HANG_TIMEOUT) as (_, output):
+        text = "".join(output)
+    assert "no network address that students could reach" in text and "one of the addresses above" not in text
 
 
 def test_prints_the_real_port_when_the_asked_one_is_busy():
