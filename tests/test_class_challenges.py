@@ -316,6 +316,64 @@ def test_each_challenges_results_are_kept_on_the_servers_computer_as_students_ch
     assert first.file_name != second.file_name and (folder / second.file_name).read_bytes() == second.results_csv()
 
 
+def test_a_results_file_the_teacher_has_open_in_a_spreadsheet_is_saved_beside_it(tmp_path, caplog, monkeypatch):
+    """A spreadsheet on Windows locks the file it shows: replacing it raises PermissionError. The later saves all
+    failed, the board still said "Results saved ... as" that file, and it held the results of when it was opened.
+    They now go to a file beside it, which the board and the console name. (Linux has no such lock: the test
+    raises the error Windows raises.)"""
+    import pathlib
+
+    from ur10teach.serving.class_challenges import SAVE_EVERY
+    from ur10teach.serving.server import TeachingServer
+
+    folder = tmp_path / "results"
+    classroom = TeachingServer(port=0, shared=True, results=folder)
+    room = classroom.classroom
+    now = [1000.0]
+    room.challenges.clock = lambda: now[0]
+    locked, replace = [], pathlib.Path.replace
+
+    def replace_unless_locked(self, target):
+        if pathlib.Path(target) in locked:
+            raise PermissionError(13, "The process cannot access the file because it is being used by another process")
+        return replace(self, target)
+
+    monkeypatch.setattr(pathlib.Path, "replace", replace_unless_locked)
+
+    async def answer(student, member, typed: str, attempts: int) -> None:
+        await student.set_gui("Your numbers (x, y, z)", typed)
+        await until(lambda: member.card.typed().get("numbers") == typed, what="the typing on the server")
+        await student.set_gui("Check my answer", True)
+        await until(lambda: member.student.attempts == attempts, what=f"check {attempts}")
+
+    async def scenario():
+        teacher, student, member = await a_student_in(classroom, "Where is the flange?", "127.0.0.9")
+        run = room.challenges.run
+        opened = folder / run.file_name
+        await answer(student, member, "1 2 3", 1)
+        await until(lambda: opened.exists(), what="the results file")
+        locked.append(opened)  # the teacher opens it in a spreadsheet
+        now[0] += SAVE_EVERY
+        await answer(student, member, "4 5 6", 2)
+        beside = folder / f"{opened.stem}-2.csv"
+        await until(lambda: beside.exists() and "1,,2,no,,4 5 6" in beside.read_bytes().decode("utf-8-sig"),
+                    what="the results saved beside the open file")
+        await teacher.set_gui("End and show the solution", True)
+        await until(lambda: run.ended and beside.read_bytes() == run.results_csv(), what="the end's results beside it")
+        await until(lambda: teacher.shown(f"Results saved on the server's computer as *{beside.name}*"),
+                    what="the new name on the board")
+        for client in (teacher, student):
+            await client.close()
+        return opened, beside
+
+    opened, beside = asyncio.run(scenario())
+    classroom.stop()
+    assert "1,,1,no,,1 2 3" in opened.read_bytes().decode("utf-8-sig")  # as the spreadsheet has it
+    assert f"{opened.name} is open in another program: the results of 'Where is the flange?' are saved as " \
+           f"{beside.name} from now on" in caplog.text
+    assert sorted(path.name for path in folder.iterdir()) == sorted([opened.name, beside.name])  # no .part left
+
+
 def test_a_challenge_started_while_the_last_one_is_still_ending_waits_for_its_end_and_its_results_file(tmp_path, caplog):
     """viser runs each click's callback on a thread of its own. The end shows every arm its solution, one after
     another, and a start pressed meanwhile (its button is back as soon as the run is marked ended) took the run

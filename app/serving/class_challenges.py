@@ -349,10 +349,18 @@ class ClassChallenges:
                 stem, number = path.stem, 2
                 while not run.saved and path.exists():  # another run's file: two started within one second
                     path, number = folder / f"{stem}-{number}.csv", number + 1
-                run.file_name = path.name
                 written = path.with_suffix(".part")
                 written.write_bytes(run.results_csv())
-                written.replace(path)  # whole or not at all: the server may be stopping
+                try:
+                    written.replace(path)  # whole or not at all: the server may be stopping
+                except PermissionError:  # Windows: the teacher has the file open in a spreadsheet, which locks it
+                    locked = path
+                    while path.exists():
+                        path, number = folder / f"{stem}-{number}.csv", number + 1
+                    written.replace(path)
+                    log.warning("%s is open in another program: the results of %r are saved as %s from now on",
+                                locked.name, run.challenge.title, path.name)
+                run.file_name = path.name
             except OSError as error:
                 log.warning("could not save the results of %r in %s: %s", run.challenge.title, folder, error)
                 return
