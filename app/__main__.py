@@ -129,8 +129,8 @@ def main(argv: list[str] | None = None, started=None) -> None:
     if args.host in ("0.0.0.0", "") and app.join_urls:
         print("Students on the same network use one of the addresses above.", flush=True)
     elif args.host in ("0.0.0.0", ""):
-        print("This computer has no network address that students could reach: connect it to the class's network "
-              "(or start its hotspot), then start the app again.", flush=True)
+        print("This computer has no network address that students could reach yet: connect it to the class's network "
+              "(or start its hotspot). The console and the teacher's screen then show the address.", flush=True)
     if app.classroom is not None:
         print(f"Join code for the presenter: {app.classroom.code}", flush=True)
         print(f"Class challenges: {len(args.challenge_list)} (the presenter's Challenge folder); their results are "

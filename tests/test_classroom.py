@@ -72,6 +72,46 @@ def test_the_address_students_type_is_on_the_projector(classroom, monkeypatch):
             app.stop()
 
 
+def test_the_teachers_screens_follow_the_machines_address_to_another_network(monkeypatch):
+    """A laptop that slept between the office and the lecture hall wakes on another network, at another address, the
+    app still running: the projector went on showing the address the app started with, and a laptop started before
+    its hotspot showed none, until the app was started again. The teacher's screens (and the console) now follow
+    this machine's addresses, checked every ``ADDRESS_CHECK_S``; with none, they say so."""
+    from ur10teach.serving import server as serving
+
+    addresses: list[str] = []
+    monkeypatch.setattr(serving, "lan_addresses", lambda: list(addresses))
+    monkeypatch.setattr(serving, "ADDRESS_CHECK_S", 0.05)
+    shared = TeachingServer(port=0, shared=True, host="0.0.0.0")
+    independent = TeachingServer(port=0, host="0.0.0.0")  # its loopback browser: the teacher's own screen
+
+    async def scenario():
+        teacher = await ViserClient(f"http://127.0.0.1:{shared.port}").connect()
+        await become_presenter(teacher, shared)
+        student = await ViserClient(f"http://127.0.0.1:{shared.port}").connect()
+        own = await ViserClient(f"http://127.0.0.1:{independent.port}").connect()
+        screens = ((teacher, shared.port), (student, shared.port), (own, independent.port))
+        await until(lambda: all(client.shown("No network address yet") for client, _ in screens), what="no address yet")
+        for network in (["192.0.2.7"], ["198.51.100.3", "192.0.2.7"]):
+            addresses[:] = network
+            await until(lambda: all(client.shown("Students open " + " or ".join(f"**http://{a}:{port}**" for a in network))
+                                    for client, port in screens), what=f"{network} on every screen")
+        assert not own.shown("No network address yet")
+        await own.set_gui("Show a QR code to join", True)
+        window = await until(lambda: next(iter(own.received.modals), None), what="the window of QR codes")
+        await until(lambda: len([1 for holder, _ in own.received.images.values() if holder == window]) == 2,
+                    what="a QR code of each address")
+        for client in (teacher, student, own):
+            await client.close()
+
+    try:
+        asyncio.run(scenario())
+        assert shared.join_urls == [f"http://198.51.100.3:{shared.port}", f"http://192.0.2.7:{shared.port}"]
+    finally:
+        for app in (shared, independent):
+            app.stop()
+
+
 def test_the_teachers_screen_shows_each_join_address_as_a_qr_code_that_a_phone_reads(monkeypatch):
     """In a lecture hall most students join from their phones, and typed the address off the projector. The teacher's
     screen (the presenter's, and any on the teacher's own computer) now has *Show a QR code to join*: a window over

@@ -276,6 +276,11 @@ class Classroom:
         with self._lock:
             return [member for member in self.members.values() if member.address == address]
 
+    def join_helps(self) -> list[JoinHelp]:
+        """The addresses to join at, as each browser in the class shows them."""
+        with self._lock:
+            return [member.join_help for member in self.members.values() if member.join_help is not None]
+
     @property
     def sessions(self) -> dict[int, ArmSession]:
         """The sessions of the presenter and the explorers."""
@@ -521,7 +526,8 @@ class Classroom:
             member.desk = self.challenges.desk(member)
         member.folder, member.picker = gui.add_folder("Classroom", order=0.0), None
         with member.folder:
-            if self.app.join_urls:  # on the projector, where the class reads it; its QR code on the teacher's screen
+            member.join_help = None
+            if self.app.open_to_network:  # on the projector, where the class reads it; its QR code on the teacher's screen
                 member.join_help = JoinHelp(member.client, self.app.join_urls, guard=action,
                                             teacher=member.role == PRESENTER or self.app.gate.trusted(address_of(member.client)))
             if member.role == PRESENTER:

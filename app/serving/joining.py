@@ -18,7 +18,14 @@ QUIET_ZONE = 4
 
 def join_markdown(urls: list[str]) -> str:
     """What students type to join, for the teacher's screen: ``Students open **http://192.0.2.7:8080**``."""
+    if not urls:
+        return NO_ADDRESS
     return "Students open " + " or ".join(f"**{url}**" for url in urls)
+
+
+#: In place of the addresses while this machine has none that students could reach.
+NO_ADDRESS = ("**No network address yet**: connect this computer to the class's network (or start its hotspot). "
+              "The address to open shows here then.")
 
 
 def qr_image(url: str) -> np.ndarray:
@@ -61,6 +68,8 @@ class JoinHelp:
                 return
             gui = self._client.gui
             with gui.add_modal("Join the class") as window:
+                if not self._urls:
+                    gui.add_markdown(NO_ADDRESS)
                 for url in self._urls:
                     # what to type, large: a browser's address bar takes it without "http://" (which viser's page
                     # would turn into a link, in small type)
@@ -68,6 +77,14 @@ class JoinHelp:
                     gui.add_image(qr_image(url), format="png")  # (lossless: a JPEG's blur costs readers their edges)
                 gui.add_button("Close", icon=viser.Icon.X).on_click(lambda _: self.close())
             self._window = window
+
+    def update(self, urls: list[str]) -> None:
+        """Show ``urls`` from here on, if they are not the ones shown (this machine is on another network)."""
+        with self._lock:
+            if urls == self._urls:
+                return
+            self._urls = list(urls)
+        self.markdown.content = join_markdown(urls)
 
     def close(self) -> None:
         with self._lock:

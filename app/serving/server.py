@@ -100,6 +100,9 @@ _SIOCGIFFLAGS, _SIOCGIFADDR = 0x8913, 0x8915  # <linux/sockios.h>
 _IFF_UP, _IFF_LOOPBACK, _IFF_RUNNING = 0x1, 0x8, 0x40  # <net/if.h>
 
 
+#: How often (s) a server open to the network looks at this machine's addresses again: a laptop that slept between
+#: the office and the lecture hall wakes on another network, at another address.
+ADDRESS_CHECK_S = 10.0
 #: Addresses whose arm changes are remembered (all forgotten beyond it).
 MAX_SWITCH_BUDGETS = 10_000
 #: Addresses whose browsers' arms are kept for their return (``gate.RETURN_WINDOW``; the oldest forgotten first).
@@ -287,7 +290,12 @@ class TeachingServer:
         #: shared demo mode (``--shared``): everyone watches the presenter (``ur10teach.serving.classroom``)
         #: what students type to join: the addresses of this machine the server listens on beyond itself (none
         #: when it serves this machine only), shown on the teacher's screen (:func:`join_markdown`)
-        self.join_urls = [url for url in self.urls if not url.startswith(("http://127.", "http://localhost"))]
+        self.join_urls = self._reachable_urls()
+        #: students can join from other machines: the teacher's screen shows how (with no address yet, that it has none)
+        self.open_to_network = bool(self.join_urls) or host in ("0.0.0.0", "")
+        self._stopping = threading.Event()
+        if host in ("0.0.0.0", ""):
+            threading.Thread(target=self._follow_addresses, name="addresses", daemon=True).start()
         self.classroom = Classroom(self) if shared else None
         self.server.on_client_connect(self._connected)
         self.server.on_client_disconnect(self._disconnected)
@@ -298,6 +306,23 @@ class TeachingServer:
     @property
     def port(self) -> int:
         return self.server.get_port()
+
+    def _reachable_urls(self) -> list[str]:
+        return [url for url in self.urls if not url.startswith(("http://127.", "http://localhost"))]
+
+    def _follow_addresses(self) -> None:
+        """Keep :attr:`join_urls`, and every teacher's screen, to this machine's addresses as they change."""
+        while not self._stopping.wait(ADDRESS_CHECK_S):
+            urls = self._reachable_urls()
+            if urls != self.join_urls:
+                self.join_urls = urls
+                log.info("this computer's network changed: students now open %s", " or ".join(urls) or "nothing yet")
+            if self.classroom is not None:
+                helps = self.classroom.join_helps()
+            else:
+                helps = [session.join_help for session in self.sessions.values() if hasattr(session, "join_help")]
+            for join_help in helps:  # (one built as the addresses changed, too)
+                join_help.update(urls)
 
     @property
     def urls(self) -> list[str]:
@@ -419,9 +444,9 @@ class TeachingServer:
             if client.client_id in self._last_switch:  # a change of arm: the interval starts before its picker shows
                 self._last_switch[client.client_id] = time.monotonic()
         session.arm_picker = ArmPicker(client.gui, choice, lambda label: self._switch(client, label), session.guard)
-        if self.join_urls and self.gate.trusted(address_of(client)):  # the teacher's own screen
+        if self.open_to_network and self.gate.trusted(address_of(client)):  # the teacher's own screen
             with session.arm_picker.folder:
-                JoinHelp(client, self.join_urls, teacher=True, guard=session.guard)
+                session.join_help = JoinHelp(client, self.join_urls, teacher=True, guard=session.guard)
         self.janitor.settle()
         with self._sessions_lock:
             self._sessions[client.client_id] = session
@@ -499,6 +524,7 @@ class TeachingServer:
         left[session.choice] = (session.state, session.typed, session.display_choices())
 
     def stop(self) -> None:
+        self._stopping.set()
         self.refresher.stop()
         if self.classroom is not None:
             self.classroom.challenges.keep_results()  # a challenge still running as the teacher stops the server
