@@ -44,7 +44,8 @@ def serving(command: list[str], cwd: Path, env: dict[str, str], timeout: float =
                 ready.set()
         ready.set()
 
-    threading.Thread(target=drain, daemon=True).start()
+    reader = threading.Thread(target=drain, daemon=True)
+    reader.start()
     try:
         if not ready.wait(timeout) or process.poll() is not None:
             raise RuntimeError("the app did not start:\n" + "".join(output))
@@ -55,6 +56,10 @@ def serving(command: list[str], cwd: Path, env: dict[str, str], timeout: float =
             process.wait(timeout=10)
         except subprocess.TimeoutExpired:
             process.kill()
+            process.wait()
+        reader.join(timeout=10)  # to the pipe's end: a helper the app left would still hold it open
+        if not reader.is_alive():
+            process.stdout.close()
 
 
 @contextlib.contextmanager
