@@ -316,6 +316,49 @@ def test_each_challenges_results_are_kept_on_the_servers_computer_as_students_ch
     assert first.file_name != second.file_name and (folder / second.file_name).read_bytes() == second.results_csv()
 
 
+def test_results_that_cannot_be_saved_are_said_so_on_the_teachers_board(tmp_path):
+    """A results folder the server cannot write in (a USB stick pulled out, a file of that name, a folder the
+    teacher may not write in) was told of on the console only, which the class's projector does not show: the
+    teacher found no file after the lesson. The board says so, and why, until a save succeeds."""
+    from ur10teach.serving.class_challenges import SAVE_EVERY
+    from ur10teach.serving.server import TeachingServer
+
+    folder = tmp_path / "results"
+    folder.write_text("a file where the folder should be")
+    classroom = TeachingServer(port=0, shared=True, results=folder)
+    room = classroom.classroom
+    now = [1000.0]
+    room.challenges.clock = lambda: now[0]
+
+    async def answer(student, member, typed: str, attempts: int) -> None:
+        await student.set_gui("Your numbers (x, y, z)", typed)
+        await until(lambda: member.card.typed().get("numbers") == typed, what="the typing on the server")
+        await student.set_gui("Check my answer", True)
+        await until(lambda: member.student.attempts == attempts, what=f"check {attempts}")
+
+    async def scenario():
+        teacher, student, member = await a_student_in(classroom, "Where is the flange?", "127.0.0.9")
+        run = room.challenges.run
+        await answer(student, member, "1 2 3", 1)
+        said = await until(lambda: teacher.shown("**The results could not be saved**"), what="the board to say so")
+        assert f"File exists: {folder}" in said[0] and "*Download results (CSV)* still gives them" in said[0]
+        folder.unlink()  # the teacher mends it
+        now[0] += SAVE_EVERY
+        await answer(student, member, "4 5 6", 2)
+        await until(lambda: (folder / run.file_name).exists() and not teacher.shown("could not be saved"),
+                    what="the results saved, and the board's warning gone")
+        await teacher.set_gui("End and show the solution", True)
+        await until(lambda: teacher.shown(f"Results saved on the server's computer as *{run.file_name}*"),
+                    what="the file's name on the board")
+        for client in (teacher, student):
+            await client.close()
+
+    try:
+        asyncio.run(scenario())
+    finally:
+        classroom.stop()
+
+
 def test_a_results_file_the_teacher_has_open_in_a_spreadsheet_is_saved_beside_it(tmp_path, caplog, monkeypatch):
     """A spreadsheet on Windows locks the file it shows: replacing it raises PermissionError. The later saves all
     failed, the board still said "Results saved ... as" that file, and it held the results of when it was opened.

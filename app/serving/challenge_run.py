@@ -106,6 +106,8 @@ class ChallengeRun:
         #: its results file's name, after the challenge and the wall-clock time it started (one file per run)
         self.file_name = time.strftime(f"challenge-{challenge.key}-%Y-%m-%d-%H%M%S.csv")
         self.saved = False  #: its results file is on the server's disk (``ClassChallenges.keep_results``)
+        #: why its results file could not be written the last time it was tried (None: it was, or was not tried)
+        self.unsaved: str | None = None
         self.saved_at: float | None = None  #: when it was last written, or tried (by ``clock``): the checks' pace
         self.time_limit = time_limit if time_limit is not None else challenge.time_limit
         self.ended = False
@@ -233,8 +235,11 @@ def summary_markdown(run: ChallengeRun) -> str:
         lines.append(f"Time to solve: fastest {_duration(s.fastest)}, median {_duration(s.median)}")
     if s.ended:
         lines.append(f"**Ended**: the solution is on every screen. {html.escape(run.solution_words)}")
-        if run.saved:
+        if run.saved and run.unsaved is None:
             lines.append(f"Results saved on the server's computer as *{run.file_name}*.")
+    if run.unsaved is not None:
+        lines.append(f"**The results could not be saved**: {html.escape(run.unsaved, quote=False)}. "
+                     "*Download results (CSV)* still gives them; they are saved again at the next check and at the end.")
     elif s.seconds_left is not None:
         lines.append("**Time is up.**" if s.seconds_left == 0 else f"Time left: {_duration(s.seconds_left)} (as of this update)")
     if s.groups:

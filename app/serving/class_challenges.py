@@ -363,8 +363,13 @@ class ClassChallenges:
                 run.file_name = path.name
             except OSError as error:
                 log.warning("could not save the results of %r in %s: %s", run.challenge.title, folder, error)
+                told, run.unsaved = run.unsaved, f"{error.strerror or error}: {error.filename or folder}"
+                if told is None:  # the teacher's board says so (the console is not on the projector)
+                    self._board_changed()
                 return
-            run.saved = True
+            told, run.saved, run.unsaved = run.unsaved, True, None
+            if told is not None:
+                self._board_changed()
         if not quiet:
             log.info("results of %r saved: %s", run.challenge.title, path)
 
