@@ -84,7 +84,10 @@ class JoinHelp:
             if urls == self._urls:
                 return
             self._urls = list(urls)
-        self.markdown.content = join_markdown(urls)
+        try:
+            self.markdown.content = join_markdown(urls)
+        except RuntimeError:  # viser's word for a removed widget: its folder went meanwhile (a new role or arm)
+            pass
 
     def close(self) -> None:
         with self._lock:

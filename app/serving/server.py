@@ -287,16 +287,16 @@ class TeachingServer:
         self.clock = time.monotonic  #: the time the arm changes of an address are paced by (a test sets its own)
         self._sessions_lock = threading.Lock()
         self.janitor = Janitor(forget=(CLOUDS.forget_unheld,))
-        #: shared demo mode (``--shared``): everyone watches the presenter (``ur10teach.serving.classroom``)
         #: what students type to join: the addresses of this machine the server listens on beyond itself (none
         #: when it serves this machine only), shown on the teacher's screen (:func:`join_markdown`)
         self.join_urls = self._reachable_urls()
         #: students can join from other machines: the teacher's screen shows how (with no address yet, that it has none)
         self.open_to_network = bool(self.join_urls) or host in ("0.0.0.0", "")
         self._stopping = threading.Event()
+        #: shared demo mode (``--shared``): everyone watches the presenter (``ur10teach.serving.classroom``)
+        self.classroom = Classroom(self) if shared else None
         if host in ("0.0.0.0", ""):
             threading.Thread(target=self._follow_addresses, name="addresses", daemon=True).start()
-        self.classroom = Classroom(self) if shared else None
         self.server.on_client_connect(self._connected)
         self.server.on_client_disconnect(self._disconnected)
         # everything loaded so far (numpy, sympy, viser, the meshes) lives as long as the server
@@ -322,7 +322,10 @@ class TeachingServer:
             else:
                 helps = [session.join_help for session in self.sessions.values() if hasattr(session, "join_help")]
             for join_help in helps:  # (one built as the addresses changed, too)
-                join_help.update(urls)
+                try:
+                    join_help.update(urls)
+                except Exception:  # one screen's trouble: the others, and the next change, still get theirs
+                    log.exception("could not show a browser the new addresses")
 
     @property
     def urls(self) -> list[str]:
