@@ -253,6 +253,23 @@ def test_a_student_back_before_the_server_noticed_they_had_gone_keeps_their_numb
     classroom.stop()
 
 
+def saving_class(folder):
+    """A class whose challenges' results are saved in ``folder``, and its clock, which the test moves (``now[0]``)."""
+    from ur10teach.serving.server import TeachingServer
+
+    classroom, now = TeachingServer(port=0, shared=True, results=folder), [1000.0]
+    classroom.classroom.challenges.clock = lambda: now[0]
+    return classroom, now
+
+
+async def answer(student, member, typed: str, attempts: int) -> None:
+    """``student`` types ``typed`` for a numbers challenge and checks it: their ``attempts``-th check."""
+    await student.set_gui("Your numbers (x, y, z)", typed)
+    await until(lambda: member.card.typed().get("numbers") == typed, what="the typing on the server")
+    await student.set_gui("Check my answer", True)
+    await until(lambda: member.student.attempts == attempts, what=f"check {attempts}")
+
+
 def test_each_challenges_results_are_kept_on_the_servers_computer_as_students_check_as_it_ends_and_as_the_server_stops(
         tmp_path, caplog):
     """A teacher who had not pressed *Download results* lost the class's results when the next challenge started or
@@ -261,20 +278,11 @@ def test_each_challenges_results_are_kept_on_the_servers_computer_as_students_ch
     mid-lesson loses no more), as it ends, and as the server stops with it still running. The console names it
     the first time and at the end. *Download results* gives the same file under the same name."""
     from ur10teach.serving.class_challenges import SAVE_EVERY
-    from ur10teach.serving.server import TeachingServer
 
     caplog.set_level("INFO", logger="ur10teach.serving.class_challenges")
     folder = tmp_path / "results"
-    classroom = TeachingServer(port=0, shared=True, results=folder)
+    classroom, now = saving_class(folder)
     room = classroom.classroom
-    now = [1000.0]
-    room.challenges.clock = lambda: now[0]
-
-    async def answer(student, member, typed: str, attempts: int) -> None:
-        await student.set_gui("Your numbers (x, y, z)", typed)
-        await until(lambda: member.card.typed().get("numbers") == typed, what="the typing on the server")
-        await student.set_gui("Check my answer", True)
-        await until(lambda: member.student.attempts == attempts, what=f"check {attempts}")
 
     async def scenario():
         teacher, student, member = await a_student_in(classroom, "Where is the flange?", "127.0.0.9")
@@ -321,20 +329,11 @@ def test_results_that_cannot_be_saved_are_said_so_on_the_teachers_board(tmp_path
     teacher may not write in) was told of on the console only, which the class's projector does not show: the
     teacher found no file after the lesson. The board says so, and why, until a save succeeds."""
     from ur10teach.serving.class_challenges import SAVE_EVERY
-    from ur10teach.serving.server import TeachingServer
 
     folder = tmp_path / "results"
     folder.write_text("a file where the folder should be")
-    classroom = TeachingServer(port=0, shared=True, results=folder)
+    classroom, now = saving_class(folder)
     room = classroom.classroom
-    now = [1000.0]
-    room.challenges.clock = lambda: now[0]
-
-    async def answer(student, member, typed: str, attempts: int) -> None:
-        await student.set_gui("Your numbers (x, y, z)", typed)
-        await until(lambda: member.card.typed().get("numbers") == typed, what="the typing on the server")
-        await student.set_gui("Check my answer", True)
-        await until(lambda: member.student.attempts == attempts, what=f"check {attempts}")
 
     async def scenario():
         teacher, student, member = await a_student_in(classroom, "Where is the flange?", "127.0.0.9")
@@ -367,13 +366,10 @@ def test_a_results_file_the_teacher_has_open_in_a_spreadsheet_is_saved_beside_it
     import pathlib
 
     from ur10teach.serving.class_challenges import SAVE_EVERY
-    from ur10teach.serving.server import TeachingServer
 
     folder = tmp_path / "results"
-    classroom = TeachingServer(port=0, shared=True, results=folder)
+    classroom, now = saving_class(folder)
     room = classroom.classroom
-    now = [1000.0]
-    room.challenges.clock = lambda: now[0]
     locked, replace = [], pathlib.Path.replace
 
     def replace_unless_locked(self, target):
@@ -382,12 +378,6 @@ def test_a_results_file_the_teacher_has_open_in_a_spreadsheet_is_saved_beside_it
         return replace(self, target)
 
     monkeypatch.setattr(pathlib.Path, "replace", replace_unless_locked)
-
-    async def answer(student, member, typed: str, attempts: int) -> None:
-        await student.set_gui("Your numbers (x, y, z)", typed)
-        await until(lambda: member.card.typed().get("numbers") == typed, what="the typing on the server")
-        await student.set_gui("Check my answer", True)
-        await until(lambda: member.student.attempts == attempts, what=f"check {attempts}")
 
     async def scenario():
         teacher, student, member = await a_student_in(classroom, "Where is the flange?", "127.0.0.9")
@@ -425,13 +415,10 @@ def test_a_challenge_started_while_the_last_one_is_still_ending_waits_for_its_en
     (until 2026-12-06). A start now waits for the end to finish."""
     import threading
 
-    from ur10teach.serving.server import TeachingServer
 
     folder = tmp_path / "results"
-    classroom = TeachingServer(port=0, shared=True, results=folder)
+    classroom, now = saving_class(folder)
     room = classroom.classroom
-    now = [1000.0]
-    room.challenges.clock = lambda: now[0]
     starts, ending, go_on = [], threading.Event(), threading.Event()
 
     async def scenario():
