@@ -743,6 +743,14 @@ def test_run_bookkeeping_bounds_and_time_limit():
     with pytest.raises(ValueError, match="time is up"):
         run.check(ada, right)
     assert run.summary().seconds_left == 0.0 and run.summary().solved == 1
+    # the board: the time while it runs, not once it has ended; a results file not saved, either way
+    assert "**Time is up.**" in summary_markdown(run)
+    run.unsaved = "No space left on device: /media/usb/results"
+    assert "**Time is up.**" in summary_markdown(run) and "could not be saved**: No space left" in summary_markdown(run)
+    run.ended = True
+    assert "**Ended**" in summary_markdown(run) and "Time is up" not in summary_markdown(run)
+    assert "could not be saved" in summary_markdown(run)
+    run.unsaved = None
     assert clean_nickname("a\nb\tc\u200bd") == "a b cd" and len(clean_nickname("x" * 100)) == 20
     assert spreadsheet_safe("=HYPERLINK(1)") == "'=HYPERLINK(1)" and spreadsheet_safe("Ada") == "Ada"
     # the results file opens in Excel with "Zoë" as typed: UTF-8 marked as such (Excel reads unmarked files as ANSI)

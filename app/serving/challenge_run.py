@@ -237,11 +237,11 @@ def summary_markdown(run: ChallengeRun) -> str:
         lines.append(f"**Ended**: the solution is on every screen. {html.escape(run.solution_words)}")
         if run.saved and run.unsaved is None:
             lines.append(f"Results saved on the server's computer as *{run.file_name}*.")
+    elif s.seconds_left is not None:
+        lines.append("**Time is up.**" if s.seconds_left == 0 else f"Time left: {_duration(s.seconds_left)} (as of this update)")
     if run.unsaved is not None:
         lines.append(f"**The results could not be saved**: {html.escape(run.unsaved, quote=False)}. "
                      "*Download results (CSV)* still gives them; they are saved again at the next check and at the end.")
-    elif s.seconds_left is not None:
-        lines.append("**Time is up.**" if s.seconds_left == 0 else f"Time left: {_duration(s.seconds_left)} (as of this update)")
     if s.groups:
         lines.append("\n".join(["| students | last wrong answer |", "|:---:|---|", *(f"| {n} | {html.escape(g)} |" for g, n in s.groups)]))
     elif s.checked:
