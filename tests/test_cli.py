@@ -5,8 +5,8 @@ from __future__ import annotations
 import asyncio
 import contextlib
 import ipaddress
-import re
 import os
+import re
 import shutil
 import signal
 import socket
