@@ -83,8 +83,12 @@ def _linux_interface_addresses() -> list[str]:
     import fcntl
 
     found = []
+    try:
+        names = [name for _, name in socket.if_nameindex()]
+    except OSError:  # a sandbox that lists no interfaces: the other two ways still name some
+        return []
     with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as probe:
-        for _, name in socket.if_nameindex():
+        for name in names:
             request = struct.pack("256s", name.encode()[:15])
             try:
                 flags = struct.unpack_from("H", fcntl.ioctl(probe.fileno(), _SIOCGIFFLAGS, request), 16)[0]
