@@ -7,6 +7,7 @@ projector's scene, ``ur10teach.features.challenge``. Why it is built so: docs/ar
 from __future__ import annotations
 
 import functools
+import itertools
 import logging
 import threading
 import time
@@ -346,17 +347,22 @@ class ClassChallenges:
             path = folder / run.file_name
             try:
                 folder.mkdir(parents=True, exist_ok=True)
-                stem, number = path.stem, 2
-                while not run.saved and path.exists():  # another run's file: two started within one second
-                    path, number = folder / f"{stem}-{number}.csv", number + 1
+                stem = path.stem
+                numbered = (folder / f"{stem}-{number}.csv" for number in itertools.count(2))
+
+                def free(path):  # the path, or the next numbered one that no file has
+                    while path.exists():
+                        path = next(numbered)
+                    return path
+
+                if not run.saved:  # another run's file may have the name: two started within one second
+                    path = free(path)
                 written = path.with_suffix(".part")
                 written.write_bytes(run.results_csv())
                 try:
                     written.replace(path)  # whole or not at all: the server may be stopping
                 except PermissionError:  # Windows: the teacher has the file open in a spreadsheet, which locks it
-                    locked = path
-                    while path.exists():
-                        path, number = folder / f"{stem}-{number}.csv", number + 1
+                    locked, path = path, free(path)
                     written.replace(path)
                     log.warning("%s is open in another program: the results of %r are saved as %s from now on",
                                 locked.name, run.challenge.title, path.name)

@@ -295,11 +295,12 @@ class TeachingServer:
         #: when it serves this machine only), shown on the teacher's screen (:func:`join_markdown`)
         self.join_urls = self._reachable_urls()
         #: students can join from other machines: the teacher's screen shows how (with no address yet, that it has none)
-        self.open_to_network = bool(self.join_urls) or host in ("0.0.0.0", "")
+        everywhere = host in ("0.0.0.0", "")  # every interface of this machine, whichever they are now
+        self.open_to_network = bool(self.join_urls) or everywhere
         self._stopping = threading.Event()
         #: shared demo mode (``--shared``): everyone watches the presenter (``ur10teach.serving.classroom``)
         self.classroom = Classroom(self) if shared else None
-        if host in ("0.0.0.0", ""):
+        if everywhere:
             threading.Thread(target=self._follow_addresses, name="addresses", daemon=True).start()
         self.server.on_client_connect(self._connected)
         self.server.on_client_disconnect(self._disconnected)
