@@ -736,6 +736,7 @@ def test_run_bookkeeping_bounds_and_time_limit():
     run = ChallengeRun(challenge, arm, time_limit=60, clock=lambda: now[0])
     ada = run.join("10.0.0.1")
     right = C.Answer(numbers=C.expected_numbers(challenge, arm))
+    now[0] = 12.46
     assert run.check(ada, right).solved
     with pytest.raises(ValueError, match="one check a second"):
         run.check(ada, right)
@@ -753,10 +754,11 @@ def test_run_bookkeeping_bounds_and_time_limit():
     run.unsaved = None
     assert clean_nickname("a\nb\tc\u200bd") == "a b cd" and len(clean_nickname("x" * 100)) == 20
     assert spreadsheet_safe("=HYPERLINK(1)") == "'=HYPERLINK(1)" and spreadsheet_safe("Ada") == "Ada"
-    # the results file opens in Excel with "Zoë" as typed: UTF-8 marked as such (Excel reads unmarked files as ANSI)
+    # the results file opens in Excel with "Zoë" as typed: UTF-8 marked as such (Excel reads unmarked files as ANSI);
+    # the seconds to solve are whole, which no decimal mark of any country turns into another number or a date
     run.rename(ada, "Zoë")
     results = run.results_csv()
-    assert results.startswith(codecs.BOM_UTF8) and "\r\n1,Zoë,1,yes," in results.decode("utf-8-sig")
+    assert results.startswith(codecs.BOM_UTF8) and "\r\n1,Zoë,1,yes,12," in results.decode("utf-8-sig")
     # one computer's departed attempt goes back to it, and only to it
     run.leave(ada, {"numbers": "1 2 3"})
     bo = run.join("10.0.0.2")

@@ -207,7 +207,8 @@ class ChallengeRun:
         """The results file: anonymous id, nickname, attempts, solved, seconds to solve, final answer.
 
         UTF-8 with a byte-order mark: without it, Excel on Windows reads the file in the system's code page, and a
-        nickname "Zoë" or an answer "90°" arrives as "ZoÃ«" and "90Â°"."""
+        nickname "Zoë" or an answer "90°" arrives as "ZoÃ«" and "90Â°". The seconds are whole: where the decimal
+        mark is a comma (most of Europe), Excel reads "12.5" as a date or as 125."""
         out = io.StringIO()
         writer = csv.writer(out)
         writer.writerow(["student", "nickname", "attempts", "solved", "seconds_to_solve", "final_answer"])
@@ -215,7 +216,7 @@ class ChallengeRun:
             students = sorted(self.students.values(), key=lambda s: s.number)
         for s in students:
             writer.writerow([s.number, spreadsheet_safe(s.nickname), s.attempts, "yes" if s.solved_after is not None else "no",
-                             "" if s.solved_after is None else f"{s.solved_after:.1f}",
+                             "" if s.solved_after is None else f"{s.solved_after:.0f}",
                              spreadsheet_safe(s.verdict.answer if s.verdict else "")])
         return out.getvalue().encode("utf-8-sig")
 
