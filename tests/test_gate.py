@@ -237,6 +237,24 @@ def test_pages_from_elsewhere_cannot_connect():
         app.stop()
 
 
+def test_a_page_opened_by_a_name_of_the_machine_it_does_not_know_says_on_the_console_what_to_do(caplog):
+    """Students told to open lab-pc-12.school.example:8080 (the lab's DNS name for the teacher's machine) got the page,
+    which never connected; the console said only "unknown host"."""
+    name = "lab-pc-12.school.example"
+    app = TeachingServer(port=0)
+    try:
+        with caplog.at_level(logging.WARNING):
+            assert asyncio.run(_handshake(app.port, {"Origin": f"http://{name}:{app.port}"}, host=name)) == 403
+        assert f"start it with --allow-origin http://{name}:{app.port}" in caplog.text
+    finally:
+        app.stop()
+    app = TeachingServer(port=0, allowed_origins=[f"http://{name}:8080"])  # the name makes it this machine's, at any port
+    try:
+        assert asyncio.run(_handshake(app.port, {"Origin": f"http://{name}:{app.port}"}, host=name)) is None
+    finally:
+        app.stop()
+
+
 def test_one_address_cannot_open_sessions_without_end():
     """146 connections/s that each built a full session pushed others' drag p95 to 968 ms."""
     app = TeachingServer(port=0, gate=Gate(trust_loopback=False))  # loopback stands in for a laptop on the LAN

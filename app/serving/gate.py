@@ -230,7 +230,11 @@ class Gate:
             return self._refuse(connection, http.HTTPStatus.BAD_REQUEST, "host", "a request with several Host or Origin headers")
         host, origin = hosts[0], (origins[0] if origins else None)
         if not self._is_our_host(host):
-            return self._refuse(connection, http.HTTPStatus.FORBIDDEN, "host", f"unknown host {host!r}")
+            # a DNS name of this machine it does not know as its own (a school's, say): say what to do
+            return self._refuse(connection, http.HTTPStatus.FORBIDDEN, "host",
+                                f"unknown host {host!r}: a page opened by a name this machine does not know as its "
+                                f"own never connects. Open the app by an address shown above, or start it with "
+                                f"--allow-origin http://{host:.200}")
         if origin is not None and not self._is_allowed_origin(origin, host):
             return self._refuse(connection, http.HTTPStatus.FORBIDDEN, "origin", f"websocket from the page {origin!r}")
         address = _address(connection)
