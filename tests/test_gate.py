@@ -245,7 +245,7 @@ def test_a_page_opened_by_a_name_of_the_machine_it_does_not_know_says_on_the_con
     try:
         with caplog.at_level(logging.WARNING):
             assert asyncio.run(_handshake(app.port, {"Origin": f"http://{name}:{app.port}"}, host=name)) == 403
-        assert f"start it with --allow-origin http://{name}:{app.port}" in caplog.text
+        assert f"start the app with --allow-origin http://{name}:{app.port}" in caplog.text
     finally:
         app.stop()
     app = TeachingServer(port=0, allowed_origins=[f"http://{name}:8080"])  # the name makes it this machine's, at any port

@@ -230,11 +230,12 @@ class Gate:
             return self._refuse(connection, http.HTTPStatus.BAD_REQUEST, "host", "a request with several Host or Origin headers")
         host, origin = hosts[0], (origins[0] if origins else None)
         if not self._is_our_host(host):
-            # a DNS name of this machine it does not know as its own (a school's, say): say what to do
+            # the teacher reads this when students opened the app by a name the network gives this machine
+            # (a school's DNS name), which the app cannot tell from an attacker's: the teacher can
             return self._refuse(connection, http.HTTPStatus.FORBIDDEN, "host",
-                                f"unknown host {host!r}: a page opened by a name this machine does not know as its "
-                                f"own never connects. Open the app by an address shown above, or start it with "
-                                f"--allow-origin http://{host:.200}")
+                                f"unknown host {host!r}. If students opened the app by that name (this machine's "
+                                f"name on a school's network, say), their page never connects: give them an address "
+                                f"shown above, or start the app with --allow-origin http://{host:.200}")
         if origin is not None and not self._is_allowed_origin(origin, host):
             return self._refuse(connection, http.HTTPStatus.FORBIDDEN, "origin", f"websocket from the page {origin!r}")
         address = _address(connection)
