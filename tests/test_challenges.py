@@ -804,6 +804,24 @@ def test_titles_in_any_script_are_told_apart_and_name_their_results_files():
         C.parse(text.replace(titles[0], "Reach: it").replace(titles[1], "Reach it!"))
 
 
+@pytest.mark.parametrize("turn", [0, 50, 90, 120, -150])
+def test_a_branch_at_a_singular_target_is_told_by_the_branch_not_by_how_the_free_joints_are_split(turn):
+    """The teacher's target has θ5 = 0, where only θ4 + θ6 is fixed. A student on the asked branch with θ4 turned by
+    90° and θ6 back by as much (the same pose) was told "That is the shoulder front, elbow down, wrist flipped branch":
+    the check compared their joints with slots that split θ4 + θ6 as the IK chose without a hint."""
+    challenge = C.parse('[[challenge]]\ntitle = "KR210 wrist"\nkind = "reach"\narm = "kr210"\n'
+                        'joints = [10, 0, -30, 40, 0, 60]\nbranch = "elbow up, wrist not flipped"\n')[0]
+    arm = Arm.preset("kr210")
+    q = np.radians([10, 0, -30, 40 + turn, 0, 60 - turn])
+    assert arm.within_limits(q) and np.allclose(arm.fk(q), arm.fk(np.array(challenge.joints)))
+    verdict = C.check(challenge, arm, C.Answer(q=q, target=arm.fk(q)))
+    assert verdict.solved, verdict.message
+    # (at θ5 = 0 the wrist flipped or not is one pose: either is the asked branch); on the target elbow down, not solved
+    elbow_down = arm.ik(arm.fk(np.array(challenge.joints))).q[2]
+    verdict = C.check(challenge, arm, C.Answer(q=elbow_down, target=arm.fk(elbow_down)))
+    assert not verdict.solved and "shoulder front, elbow down, wrist not flipped branch" in verdict.message, verdict.message
+
+
 def test_long_titles_that_differ_only_at_their_end_are_two_challenges_and_each_names_a_file(tmp_path):
     # the key was cut to 60 characters: "... from the pose given: part A" and "... part B" were refused as "the same but
     # for case, signs and spaces"; and 60 letters of four bytes each made a file's name of 272 bytes, which most

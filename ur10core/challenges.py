@@ -762,7 +762,9 @@ def _check_reach(challenge: Challenge, arm: Arm, answer: Answer) -> Verdict:
                        "tool turned", text)
     if challenge.branch is None:
         return Verdict(True, "Solved: your tool is on the target.", "", text)
-    solution = arm.ik(goal)
+    # where the goal leaves joints free (θ5 = 0: only θ4 + θ6 is fixed), each slot takes the student's values of them,
+    # so that their branch is the slot nearest their joints
+    solution = arm.ik(goal, hint=q)
     wanted = _wanted_slots(challenge, arm)
     on = _slot_of(arm, solution, q)
     labels = solution.labels
