@@ -816,10 +816,23 @@ def test_a_branch_at_a_singular_target_is_told_by_the_branch_not_by_how_the_free
     assert arm.within_limits(q) and np.allclose(arm.fk(q), arm.fk(np.array(challenge.joints)))
     verdict = C.check(challenge, arm, C.Answer(q=q, target=arm.fk(q)))
     assert verdict.solved, verdict.message
-    # (at θ5 = 0 the wrist flipped or not is one pose: either is the asked branch); on the target elbow down, not solved
-    elbow_down = arm.ik(arm.fk(np.array(challenge.joints))).q[2]
+    elbow_down = arm.ik(arm.fk(np.array(challenge.joints))).q[2]  # on the target too, but not on the asked branch
     verdict = C.check(challenge, arm, C.Answer(q=elbow_down, target=arm.fk(elbow_down)))
     assert not verdict.solved and "shoulder front, elbow down, wrist not flipped branch" in verdict.message, verdict.message
+
+
+@pytest.mark.parametrize("branch", ['"elbow up, wrist not flipped"', '"elbow up, wrist flipped"', "1", "2"])
+def test_at_a_singular_target_the_two_branches_that_are_one_pose_are_each_the_asked_one(branch):
+    """At θ5 = 0 the wrist flipped and not flipped are one pose. A challenge asking for "wrist flipped" there judged
+    the teacher's own joints, its solution, "the wrist not flipped branch (branch 1)": nobody could solve it."""
+    challenge = C.parse('[[challenge]]\ntitle = "KR210 wrist"\nkind = "reach"\narm = "kr210"\n'
+                        f'joints = [10, 0, -30, 40, 0, 60]\nbranch = {branch}\n')[0]
+    arm = Arm.preset("kr210")
+    q = np.array(challenge.joints)
+    verdict = C.check(challenge, arm, C.Answer(q=q, target=arm.fk(q)))
+    assert verdict.solved, verdict.message
+    solution, _ = C.solution(challenge, arm)
+    assert C.check(challenge, arm, C.Answer(q=solution, target=arm.fk(solution))).solved
 
 
 def test_long_titles_that_differ_only_at_their_end_are_two_challenges_and_each_names_a_file(tmp_path):

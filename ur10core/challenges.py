@@ -27,7 +27,7 @@ from .solvers.spherical_wrist import spherical_wrist, wrist_split
 from .solvers.ur import separation_steps, shoulder_angles
 from .specs import GRID_JOINTS, WorstPose, largest_torque
 from .three_dof import course_path
-from .tolerances import LIMIT_TOLERANCE
+from .tolerances import LIMIT_TOLERANCE, TIE_TOLERANCE
 from .workspace import heights_above_floor
 
 if sys.version_info >= (3, 11):
@@ -766,7 +766,7 @@ def _check_reach(challenge: Challenge, arm: Arm, answer: Answer) -> Verdict:
     # so that their branch is the slot nearest their joints
     solution = arm.ik(goal, hint=q)
     wanted = _wanted_slots(challenge, arm)
-    on = _slot_of(arm, solution, q)
+    on = _slot_of(arm, solution, q, prefer=wanted)
     labels = solution.labels
     if on in wanted:
         return Verdict(True, f"Solved: on the target on branch {on + 1} ({labels[on]}).", "", text)
@@ -785,11 +785,14 @@ def _wanted_slots(challenge: Challenge, arm: Arm) -> list[int]:
     return _slots_named(challenge.branch, arm.slot_labels)
 
 
-def _slot_of(arm: Arm, solution, q: np.ndarray) -> int:
-    """The valid slot of ``solution`` whose joints are ``q`` (whole turns apart for a revolute joint)."""
+def _slot_of(arm: Arm, solution, q: np.ndarray, prefer=()) -> int:
+    """The valid slot of ``solution`` whose joints are ``q`` (whole turns apart for a revolute joint); where slots
+    tie (at a singular target two are one: the wrist flipped or not at θ5 = 0), the first of ``prefer`` among them."""
     difference = np.where(arm.revolute, np.remainder(solution.q - q + math.pi, math.tau) - math.pi, solution.q - q)
     distance = np.where(solution.valid, np.abs(difference).max(axis=-1), np.inf)
-    return int(np.argmin(distance))
+    nearest = int(np.argmin(distance))
+    tied = [k for k in prefer if distance[k] <= distance[nearest] + TIE_TOLERANCE]
+    return tied[0] if tied else nearest
 
 
 def _check_singularity(challenge: Challenge, arm: Arm, answer: Answer) -> Verdict:
