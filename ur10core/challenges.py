@@ -768,6 +768,13 @@ def _check_reach(challenge: Challenge, arm: Arm, answer: Answer) -> Verdict:
     wanted = _wanted_slots(challenge, arm)
     on = _slot_of(arm, solution, q, prefer=wanted)
     labels = solution.labels
+    if on not in wanted and arm.revolute[0]:
+        # a goal on the base's axis leaves θ1 free, and the branches on the base's other side are the same poses
+        # with θ1 half a turn on: the student may be on one of those with their θ1 as it is
+        turned = q.copy()
+        turned[0] += math.pi
+        other_side = _slot_of(arm, arm.ik(goal, hint=turned), q, prefer=wanted)
+        on = other_side if other_side in wanted else on
     if on in wanted:
         return Verdict(True, f"Solved: on the target on branch {on + 1} ({labels[on]}).", "", text)
     if isinstance(challenge.branch, int):
