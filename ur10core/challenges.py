@@ -491,7 +491,7 @@ def _validated(challenge: Challenge, arm: Arm) -> Challenge:
                                       f"{', '.join(sorted(MASSES))}, not for {arm_name!r:.40}")
     if challenge.velocity is not None and not any(challenge.velocity):
         raise _FieldError("velocity_mm_s", "the asked velocity must not be zero")
-    if kind == "velocity" and not _velocity_pose(challenge, arm):  # nor is a velocity no joint rates give
+    if kind == "velocity" and _velocity_pose(challenge, arm) is None:  # nor is a velocity no joint rates give
         limits = ", ".join(f"±{RATE_LIMITS[k]:g} {'°/s' if k == 'R' else 'mm/s'}" for k in sorted(set(arm.joint_types)))
         raise _FieldError("velocity_mm_s", f"no pose of the {arm_name} arm within its limits moves the tool so with joint "
                                            f"rates a student can set ({limits})")
@@ -1079,15 +1079,22 @@ def _check_velocity(challenge: Challenge, arm: Arm, answer: Answer) -> Verdict:
     return Verdict(True, f"Solved: your tool moves at ({shown}) mm/s.", "", text)
 
 
-def _velocity_pose(challenge: Challenge, arm: Arm, samples: int = 2000) -> bool:
-    """Whether some pose (the home pose, or one of ``samples`` random ones) has joint rates a student can set that
-    solve a velocity challenge."""
-    q = np.concatenate([[arm.specs.home], arm.sample_joints(samples, seed=8)])
+def _rates_solve(challenge: Challenge, arm: Arm, q: np.ndarray) -> np.ndarray:
+    """(...) bool: whether :func:`_velocity_rates` at joints ``q`` (..., n) are rates a student can set that move the
+    tool at the asked velocity (within half its tolerance)."""
     qdot = _velocity_rates(challenge, arm, q)
     limits = np.array([RATE_LIMITS[k] for k in arm.joint_types]) * np.where(arm.revolute, math.pi / 180, 1e-3)
-    moves = np.linalg.norm(arm.tool_twist(q, qdot)[:, :3] - challenge.velocity, axis=-1) <= challenge.velocity_tolerance / 2
-    settable = (np.abs(qdot) <= limits).all(axis=-1)
-    return bool((moves & settable).any())
+    moves = np.linalg.norm(arm.tool_twist(q, qdot)[..., :3] - challenge.velocity, axis=-1) <= challenge.velocity_tolerance / 2
+    return moves & (np.abs(qdot) <= limits).all(axis=-1)
+
+
+@functools.lru_cache(maxsize=16)
+def _velocity_pose(challenge: Challenge, arm: Arm, samples: int = 2000) -> tuple[float, ...] | None:
+    """A pose (the home pose, else the first of ``samples`` random ones) whose joint rates a student can set solve a
+    velocity challenge; None where none does."""
+    q = np.concatenate([[arm.specs.home], arm.sample_joints(samples, seed=8)])
+    found = np.flatnonzero(_rates_solve(challenge, arm, q))
+    return tuple(q[found[0]].tolist()) if len(found) else None
 
 
 def _velocity_rates(challenge: Challenge, arm: Arm, q: np.ndarray) -> np.ndarray:
@@ -1141,7 +1148,8 @@ _CHECKS = {"reach": _check_reach, "singularity": _check_singularity, "branch_cou
 def solution(challenge: Challenge, arm: Arm, q_current=None) -> tuple[np.ndarray | None, str]:
     """What the class is shown when the challenge ends: joints to move the arm to (None for a typed answer), and words.
 
-    ``q_current``: where a velocity task's arm is (its rates depend on it; the arm's home otherwise).
+    ``q_current``: where a velocity task's arm is (its rates depend on it; the arm's home otherwise). Where no joint
+    rates a student can set give the velocity there, the arm goes to a pose where some do, and the words say so.
     """
     if challenge.kind == "reach":
         goal = arm.fk(np.array(challenge.joints))
@@ -1168,8 +1176,14 @@ def solution(challenge: Challenge, arm: Arm, q_current=None) -> tuple[np.ndarray
         values = expected_numbers(challenge, arm)
         return None, "The answer: " + ", ".join(f"{name} = {value:.6g}" for name, value in zip(number_names(challenge, arm), values))
     q = np.asarray(arm.specs.home if q_current is None else q_current, dtype=float)
-    rates = _velocity_rates(challenge, arm, q)
-    return None, f"At your pose, one answer: q̇ = ({_joints_text(arm, rates, '+.1f')}) °/s (mm/s)."
+    at = "your pose" if q_current is not None else "the arm's home pose"
+    if _rates_solve(challenge, arm, q):
+        return None, f"At {at}, one answer: q̇ = ({_joints_text(arm, _velocity_rates(challenge, arm, q), '+.1f')}) °/s (mm/s)."
+    # at or near a singularity for this velocity (or needing rates beyond the sliders'): the arm goes where some do
+    q = np.array(_velocity_pose(challenge, arm))
+    return q, (f"At {at} no joint rates you can set move the tool so (it is at or near a singularity for this "
+               f"velocity). At joints {_joints_text(arm, q)}, one answer: q̇ = "
+               f"({_joints_text(arm, _velocity_rates(challenge, arm, q), '+.1f')}) °/s (mm/s).")
 
 
 def singular_pose(arm: Arm, factor: str, min_tool_height: float | None = None, seed: int = 5) -> np.ndarray:
