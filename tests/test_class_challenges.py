@@ -1102,6 +1102,12 @@ def test_a_question_about_the_pose_shown_is_answered_on_no_screen(classroom, lab
             await until(lambda: room.choice == label and room.presenter.session is not None
                         and room.presenter.session.built, what="the class shown the arm")
         arm = room.state.arm
+        # the new arm's box and button on the teacher's screen, not the last arm's of the same names (the server has
+        # built them; their messages may still be on the way, and what is sent to a removed widget is lost)
+        joints = room.presenter.session.joints
+        await until(lambda: all(teacher.gui.get(name, {}).get("uuid") == widget._impl.uuid for name, widget in
+                                ((typed_label(arm), joints.typed), ("Set these values", joints.apply_typed))),
+                    what="the new arm's joint panel on the teacher's screen")
         await teacher.set_gui(typed_label(arm), " ".join(str(v) for v in POSE_SHOWN[label]))
         await teacher.set_gui("Set these values", True)
         q = arm.joints([np.radians(v) if kind == "R" else v / 1000 for v, kind in zip(POSE_SHOWN[label], arm.joint_types)])
