@@ -1079,10 +1079,9 @@ def _check_velocity(challenge: Challenge, arm: Arm, answer: Answer) -> Verdict:
     return Verdict(True, f"Solved: your tool moves at ({shown}) mm/s.", "", text)
 
 
-def _rates_solve(challenge: Challenge, arm: Arm, q: np.ndarray) -> np.ndarray:
-    """(...) bool: whether :func:`_velocity_rates` at joints ``q`` (..., n) are rates a student can set that move the
-    tool at the asked velocity (within half its tolerance)."""
-    qdot = _velocity_rates(challenge, arm, q)
+def _rates_solve(challenge: Challenge, arm: Arm, q: np.ndarray, qdot: np.ndarray) -> np.ndarray:
+    """(...) bool: whether joint rates ``qdot`` (..., n) at joints ``q`` (..., n) are rates a student can set that move
+    the tool at the asked velocity (within half its tolerance)."""
     limits = np.array([RATE_LIMITS[k] for k in arm.joint_types]) * np.where(arm.revolute, math.pi / 180, 1e-3)
     moves = np.linalg.norm(arm.tool_twist(q, qdot)[..., :3] - challenge.velocity, axis=-1) <= challenge.velocity_tolerance / 2
     return moves & (np.abs(qdot) <= limits).all(axis=-1)
@@ -1093,7 +1092,7 @@ def _velocity_pose(challenge: Challenge, arm: Arm, samples: int = 2000) -> tuple
     """A pose (the home pose, else the first of ``samples`` random ones) whose joint rates a student can set solve a
     velocity challenge; None where none does."""
     q = np.concatenate([[arm.specs.home], arm.sample_joints(samples, seed=8)])
-    found = np.flatnonzero(_rates_solve(challenge, arm, q))
+    found = np.flatnonzero(_rates_solve(challenge, arm, q, _velocity_rates(challenge, arm, q)))
     return tuple(q[found[0]].tolist()) if len(found) else None
 
 
@@ -1177,13 +1176,14 @@ def solution(challenge: Challenge, arm: Arm, q_current=None) -> tuple[np.ndarray
         return None, "The answer: " + ", ".join(f"{name} = {value:.6g}" for name, value in zip(number_names(challenge, arm), values))
     q = np.asarray(arm.specs.home if q_current is None else q_current, dtype=float)
     at = "your pose" if q_current is not None else "the arm's home pose"
-    if _rates_solve(challenge, arm, q):
-        return None, f"At {at}, one answer: q̇ = ({_joints_text(arm, _velocity_rates(challenge, arm, q), '+.1f')}) °/s (mm/s)."
+    rates = _velocity_rates(challenge, arm, q)
+    if _rates_solve(challenge, arm, q, rates):
+        return None, f"At {at}, one answer: q̇ = ({_joints_text(arm, rates, '+.1f')}) °/s (mm/s)."
     # at or near a singularity for this velocity (or needing rates beyond the sliders'): the arm goes where some do
     q = np.array(_velocity_pose(challenge, arm))
+    rates = _velocity_rates(challenge, arm, q)
     return q, (f"At {at} no joint rates you can set move the tool so (it is at or near a singularity for this "
-               f"velocity). At joints {_joints_text(arm, q)}, one answer: q̇ = "
-               f"({_joints_text(arm, _velocity_rates(challenge, arm, q), '+.1f')}) °/s (mm/s).")
+               f"velocity). At joints {_joints_text(arm, q)}, one answer: q̇ = ({_joints_text(arm, rates, '+.1f')}) °/s (mm/s).")
 
 
 def singular_pose(arm: Arm, factor: str, min_tool_height: float | None = None, seed: int = 5) -> np.ndarray:
