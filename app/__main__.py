@@ -7,7 +7,9 @@ import ctypes
 import os
 import signal
 import sys
+import threading
 import time
+import webbrowser
 from pathlib import Path
 
 #: Where class challenges' results files are saved unless ``--results`` says otherwise (``~``: the home folder, found
@@ -65,6 +67,9 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
                         help="the light view in every browser, for laptops without a graphics driver (software "
                              "WebGL): the schematic arm, toon-shaded, no shadows, no environment lighting; drawn several times "
                              "faster (each browser can switch it in its View folder)")
+    parser.add_argument("--no-browser", action="store_true",
+                        help="do not open the page in this computer's browser (it opens when the app is started in a "
+                             "terminal on a desktop)")
     parser.add_argument("--allow-origin", action="append", default=[], metavar="URL",
                         help="a web page besides the app's own that may connect, e.g. http://course-site:8000 "
                              "(repeat for more; by default only the app's own page can)")
@@ -137,6 +142,8 @@ def main(argv: list[str] | None = None, started=None) -> None:
     if started is not None:
         started(app)
     print("Press Ctrl+C to stop.", flush=True)
+    if not args.no_browser and sys.stdout.isatty():  # a person at a terminal, not a script reading the output
+        open_page(app.urls[0])
     signal.signal(signal.SIGTERM, _interrupt)  # stop as on Ctrl+C
     try:
         while True:
@@ -145,6 +152,17 @@ def main(argv: list[str] | None = None, started=None) -> None:
         pass
     finally:
         app.stop()
+
+
+def open_page(url: str) -> threading.Thread | None:
+    """Open ``url`` in this computer's browser, as a student who typed the command expects, where a window can
+    open: on Linux only in a desktop session (over SSH, Python's fallback is a text browser that takes the terminal
+    over). On a thread of its own (returned): a browser that starts slowly, or never, does not hold the server up."""
+    if sys.platform not in ("win32", "darwin") and not (os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY")):
+        return None
+    opening = threading.Thread(target=webbrowser.open, args=(url,), name="open the page", daemon=True)
+    opening.start()
+    return opening
 
 
 def _interrupt(signum, frame) -> None:  # noqa: ANN001

@@ -12,6 +12,7 @@ import signal
 import socket
 import subprocess
 import sys
+import threading
 from pathlib import Path
 
 import pytest
@@ -21,7 +22,7 @@ from ur10teach.__main__ import parse_args
 from ur10teach.serving.server import lan_addresses
 from ur10dev.app_process import ROOT, running_app, serving
 from ur10dev.viser_client import ViserClient
-from ur10dev.waiting import HANG_TIMEOUT, until
+from ur10dev.waiting import HANG_TIMEOUT, until, wait_for
 
 pytestmark = pytest.mark.server
 
@@ -208,3 +209,83 @@ def test_a_launcher_without_the_main_guard_gets_one_server_and_its_slow_jobs_sti
     assert done.returncode == 0, done.stderr
     assert done.stdout.count("a server started") == 1 and "jobs 6 9 1" in done.stdout
     assert 'start the app under `if __name__ == "__main__":`' in done.stderr
+
+
+def test_started_at_a_terminal_on_a_desktop_the_app_opens_its_page_in_the_browser(tmp_path):
+    """A student who types the quick start's command expects the page to open, as Jupyter's does. Here the
+    "browser" is the one ``$BROWSER`` names (Python's webbrowser tries it first): a script that writes down
+    the address it is asked to open."""
+    import pty
+
+    opened = tmp_path / "opened.txt"
+    browser = tmp_path / "browser"
+    browser.write_text(f'#!/bin/sh\necho "$1" >> "{opened}"\n')
+    browser.chmod(0o755)
+    env = dict(os.environ, DISPLAY=":99", BROWSER=str(browser), PYTHONUNBUFFERED="1")
+    terminal, its_end = pty.openpty()
+    process = subprocess.Popen([sys.executable, "-m", "ur10teach", "--port", "0"], cwd=ROOT, env=env,
+                               stdin=subprocess.DEVNULL, stdout=its_end, stderr=its_end)
+    os.close(its_end)
+    output = bytearray()
+
+    def read() -> None:  # (a terminal whose output nobody reads fills up and stops the app)
+        with contextlib.suppress(OSError):
+            while chunk := os.read(terminal, 4096):
+                output.extend(chunk)
+
+    reader = threading.Thread(target=read, daemon=True)
+    reader.start()
+    try:
+        wait_for(lambda: opened.exists() and opened.read_text().strip() or None, what="the page opened")
+        url = re.search(rb"http://127\.0\.0\.1:\d+", bytes(output)).group().decode()
+        assert opened.read_text().split() == [url]  # once, at the address it serves
+    finally:
+        process.terminate()
+        process.wait(timeout=HANG_TIMEOUT)
+        os.close(terminal)
+
+
+@pytest.mark.parametrize("flags, at_a_terminal, opens", [((), True, True), (("--no-browser",), True, False),
+                                                          ((), False, False)])
+def test_the_page_is_opened_for_a_person_at_a_terminal_unless_told_not_to(monkeypatch, capsys, flags, at_a_terminal, opens):
+    """Not for a script that reads the app's output (the tests, the benchmarks, a teacher's launcher), nor with
+    ``--no-browser``."""
+    import types
+
+    import ur10teach.__main__ as entry
+
+    asked = []
+    monkeypatch.setattr(entry, "open_page", asked.append)
+    monkeypatch.setattr(sys.stdout, "isatty", lambda: at_a_terminal)
+
+    def interrupt(seconds: float) -> None:  # the app's wait for Ctrl+C: pressed at once
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(entry, "time", types.SimpleNamespace(sleep=interrupt))
+    monkeypatch.setattr(signal, "signal", lambda *args: None)
+    monkeypatch.setattr(entry.logs, "install", lambda: None)  # (the test process's logging stays pytest's)
+    entry.main(["--port", "0", *flags])
+    assert len(asked) == opens and all(url.startswith("http://127.0.0.1:") for url in asked)
+
+
+def test_a_page_opens_only_where_a_browser_window_can(monkeypatch):
+    """On Linux over SSH (no display) Python's webbrowser falls back to a text browser in the terminal the app
+    prints to: nothing opens there."""
+    import webbrowser
+
+    import ur10teach.__main__ as entry
+
+    asked = []
+    monkeypatch.setattr(webbrowser, "open", asked.append)
+    for name in ("DISPLAY", "WAYLAND_DISPLAY"):
+        monkeypatch.delenv(name, raising=False)
+    monkeypatch.setattr(sys, "platform", "linux")
+    assert entry.open_page("http://127.0.0.1:8080") is None
+    for platform, display in (("linux", ":0"), ("win32", None), ("darwin", None)):
+        monkeypatch.setattr(sys, "platform", platform)
+        if display:
+            monkeypatch.setenv("DISPLAY", display)
+        else:
+            monkeypatch.delenv("DISPLAY", raising=False)
+        entry.open_page(f"http://127.0.0.1:{len(asked)}").join(HANG_TIMEOUT)
+    assert asked == ["http://127.0.0.1:0", "http://127.0.0.1:1", "http://127.0.0.1:2"]
