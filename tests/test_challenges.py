@@ -418,6 +418,42 @@ def test_det_j_as_numbers_on_every_arm_is_its_square_jacobians(name):
     assert C.terms(challenge).startswith("Given: q = (") and C.solution(challenge, arm)[1].startswith("The answer: det J = ")
 
 
+@pytest.mark.parametrize("name", C.PRESETS)
+def test_det_j_on_a_singularity_is_answered_by_zero(name):
+    """A teacher puts the class's arm on a singularity with its button and asks *Pose shown: det J*. There det J is
+    zero to rounding (1e-20 to 1e-15 m³), and the right answer, 0, was "det J is off" on 17 of the 23 (until
+    2026-12-06): a number was judged within 1 % of itself. A number near zero is judged against its usual size.
+    Worked from the joints as written (two decimals), the answer is right too; the home pose's det J is not."""
+    arm = Arm.preset(name)
+    home = arm.det_jacobian(arm.specs.home)
+    for factor in arm.factor_names:
+        try:
+            challenge = C.about_the_pose("Pose shown: det J", arm, arm.singular_configuration(factor, arm.specs.home))
+        except ValueError:  # the cylindrical arms' reach: no such pose within the limits
+            continue
+        assert abs(C.expected_numbers(challenge, arm)[0]) < 1e-14
+        written = np.where(arm.revolute, np.radians(np.round(np.degrees(challenge.joints), 2)),
+                           np.round(1000 * np.array(challenge.joints), 2) / 1000)
+        for typed in (0.0, arm.det_jacobian(written)):
+            assert C.check(challenge, arm, C.Answer(numbers=[typed])).solved, (factor, typed)
+        assert not C.check(challenge, arm, C.Answer(numbers=[home])).solved and abs(home) > 0.01
+
+
+def test_numbers_that_are_zero_to_rounding_are_answered_by_zeros():
+    """The same for the other quantities: wrist 3 alone moves the tool at 0 mm/s, and a force straight down on the
+    UR10 held straight up passes through every joint's axis (τ = 0 to rounding, 6e-15 N·m); 0.1 N·m is still off."""
+    still = C.Challenge("v", "numbers", "ur10", "", joints=tuple(np.radians([30, 45, 26, 50, 60, 80])),
+                        quantity="tool_velocity", rates=(0.0, 0.0, 0.0, 0.0, 0.0, 0.5))
+    assert np.abs(C.expected_numbers(still, COURSE)).max() < 1e-12
+    assert C.check(still, COURSE, C.Answer(numbers=[0.0, 0.0, 0.0])).solved
+    upright = C.Challenge("t", "numbers", "ur10", "", joints=tuple(np.radians([0, 90, 0, 90, 0, 0])), quantity="torque",
+                          force=(0.0, 0.0, -100.0))
+    assert 0 < np.abs(C.expected_numbers(upright, COURSE)).max() < 1e-12
+    assert C.check(upright, COURSE, C.Answer(numbers=np.zeros(6))).solved
+    for k in range(6):
+        assert not C.check(upright, COURSE, C.Answer(numbers=0.1 * (np.arange(6) == k))).solved
+
+
 def test_both_shoulders_theta1_are_the_iks_and_their_mistakes_are_named():
     """IK step 1 as numbers (docs §4.1): both θ1 against the IK's own slots (left: 1–4, right: 5–8) on the UR family;
     angles equal a turn apart; the shoulders swapped, a sign and radians are named; another arm is refused in a file."""

@@ -1012,8 +1012,9 @@ def _check_numbers(challenge: Challenge, arm: Arm, answer: Answer) -> Verdict:
     angles = challenge.quantity in ANGLES
     if angles:  # a turn more or less is the same angle; the tolerance is a share of a half-turn
         allowed = np.full(expected.shape, 180.0 * challenge.relative_tolerance)
-    else:  # relative to each number, with a floor of the tolerance times the largest (a zero torque is within reach)
-        allowed = challenge.relative_tolerance * np.maximum(np.abs(expected), np.abs(expected).max() * 0.01)
+    else:  # relative to each number, with a floor of 1 % of the largest, or of their usual size (a zero is within reach)
+        largest = max(float(np.abs(expected).max()), _usual_size(challenge, arm))
+        allowed = challenge.relative_tolerance * np.maximum(np.abs(expected), 0.01 * largest)
 
     def gap(a, b):
         return abs((a - b + 180.0) % 360.0 - 180.0) if angles else abs(a - b)
@@ -1051,6 +1052,24 @@ def _check_numbers(challenge: Challenge, arm: Arm, answer: Answer) -> Verdict:
     # a quantity's name keeps its case at the start (X or Τ1 would be another quantity)
     within = f"{180 * challenge.relative_tolerance:g}°" if angles else f"{100 * challenge.relative_tolerance:g} %"
     return Verdict(False, f"{details} (each within {within}).", group, text)
+
+
+@functools.lru_cache(maxsize=64)
+def _usual_size(challenge: Challenge, arm: Arm) -> float:
+    """How large a numbers challenge's answers can be on ``arm``, in the units typed: a bound from its reach and the
+    given rates, force or payload, and for det J the 99th percentile of |det J| over its joint range. A number near
+    zero is judged against it: on a singularity det J is zero to rounding (5e-18 m³ at the UR10's elbow folded
+    back), and an exact 0 was "off" by more than 1 % of that."""
+    reach = arm.reach_bound
+    if challenge.quantity == "det_j":
+        return float(np.percentile(np.abs(arm.det_jacobian(arm.sample_joints(2000, seed=3))), 99))
+    if challenge.quantity == "tool_velocity":
+        return 1000 * reach * float(np.abs(challenge.rates).sum())
+    if challenge.quantity == "torque":
+        return reach * float(np.linalg.norm(challenge.force)) + float(np.linalg.norm(challenge.moment))
+    if challenge.quantity == "gravity_torque":
+        return GRAVITY * (float(np.sum(MASSES[arm.name].masses)) + challenge.payload) * reach
+    return 1000 * reach  # a point's coordinates
 
 
 def _check_velocity(challenge: Challenge, arm: Arm, answer: Answer) -> Verdict:
