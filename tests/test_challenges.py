@@ -423,7 +423,8 @@ def test_det_j_on_a_singularity_is_answered_by_zero(name):
     """A teacher puts the class's arm on a singularity with its button and asks *Pose shown: det J*. There det J is
     zero to rounding (1e-20 to 1e-15 m³), and the right answer, 0, was "det J is off" on 17 of the 23 (until
     2026-12-06): a number was judged within 1 % of itself. A number near zero is judged against its usual size.
-    Worked from the joints as written (two decimals), the answer is right too; the home pose's det J is not."""
+    Worked from the joints as written (two decimals), the answer is right too; the home pose's det J is not. The
+    class is shown 0 at the end, not the rounding (5.49852e-18)."""
     arm = Arm.preset(name)
     home = arm.det_jacobian(arm.specs.home)
     for factor in arm.factor_names:
@@ -436,6 +437,7 @@ def test_det_j_on_a_singularity_is_answered_by_zero(name):
                            np.round(1000 * np.array(challenge.joints), 2) / 1000)
         for typed in (0.0, arm.det_jacobian(written)):
             assert C.check(challenge, arm, C.Answer(numbers=[typed])).solved, (factor, typed)
+        assert C.solution(challenge, arm)[1] == "The answer: det J = 0"  # the class is shown 0, not 5.49852e-18
         assert not C.check(challenge, arm, C.Answer(numbers=[home])).solved and abs(home) > 0.01
 
 
@@ -450,6 +452,7 @@ def test_numbers_that_are_zero_to_rounding_are_answered_by_zeros():
                           force=(0.0, 0.0, -100.0))
     assert 0 < np.abs(C.expected_numbers(upright, COURSE)).max() < 1e-12
     assert C.check(upright, COURSE, C.Answer(numbers=np.zeros(6))).solved
+    assert C.solution(upright, COURSE)[1] == "The answer: " + ", ".join(f"τ{k} = 0" for k in range(1, 7))
     for k in range(6):
         assert not C.check(upright, COURSE, C.Answer(numbers=0.1 * (np.arange(6) == k))).solved
 

@@ -645,6 +645,24 @@ def test_singularity_gauges_empty_and_turn_red_at_each_factors_singularity():
     assert "smallest singular value" in factors_html(typed, np.array([0.2, 0.4]))
 
 
+@pytest.mark.parametrize("name", Arm.PRESETS)
+def test_on_each_singularity_button_the_panel_reads_manipulability_and_sigma_min_zero(name):
+    """As the factor's gauge reads +0.0000 and the ellipsoids' axis 0: "manipulability 3.197e-18, smallest singular
+    value 7.048e-18" (rounding) was what the UR10's shoulder button showed until 2026-12-06. Off it, they read as
+    before, to four digits."""
+    from ur10teach.features.singularity import factors_html
+
+    arm = Arm.preset(name)
+    for factor in arm.factor_names:
+        try:
+            q = arm.singular_configuration(factor, arm.specs.home)
+        except ValueError:  # the cylindrical arms' reach: no such pose within the limits
+            continue
+        assert "manipulability 0, smallest singular value 0<" in factors_html(arm, q), factor
+    away = factors_html(arm, arm.specs.home)
+    assert f"smallest singular value {float(arm.smallest_singular_value(arm.specs.home)):.4g}<" in away
+
+
 def test_any_table_a_student_types_can_be_built_driven_and_searched():
     """Random tables (1–10 rows, R/P/F, odd twists, zero lengths, both conventions): every view's
     text builds, a small drag follows, and every branch the search reports reaches the target."""

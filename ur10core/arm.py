@@ -25,7 +25,7 @@ import numpy as np
 
 from .branches import IKSolution, keep_free_values_within_limits
 from .dh import PRISMATIC, REVOLUTE, STANDARD, DHTable
-from .differential import TASK_ROWS, JacobianUses, task_gap
+from .differential import FLAT, TASK_ROWS, JacobianUses, task_gap
 from .specs import HasSpecs
 from .solvers.numerical import NumericalIK, reach_bound, sampling_range, within_limits
 from .serial import PRESETS as COURSE_ARMS
@@ -508,9 +508,12 @@ class Arm(JacobianUses, HasSpecs):
         return np.linalg.det(self.jacobian(q)[..., rows, :])
 
     def smallest_singular_value(self, q) -> np.ndarray:
-        """σ_min of the rows of J the arm controls, shape (...): how close to losing a direction."""
+        """σ_min of the rows of J the arm controls, shape (...): how close to losing a direction. 0 where it is
+        rounding, at most :data:`~ur10core.differential.FLAT` of the largest (7e-18 on the UR10's shoulder
+        singularity), as the ellipsoids count an axis (docs/kinematics.md §8.4)."""
         J = self.jacobian(q)[..., TASK_ROWS[self.task], :]
-        return np.linalg.svd(J, compute_uv=False)[..., -1]
+        sigma = np.linalg.svd(J, compute_uv=False)
+        return np.where(sigma[..., -1] <= FLAT * sigma[..., 0], 0.0, sigma[..., -1])
 
     # ------------------------------------------------------------------ workspace
 

@@ -1192,6 +1192,8 @@ def solution(challenge: Challenge, arm: Arm, q_current=None) -> tuple[np.ndarray
         return None, f"The arm's table ({arm.dh.convention} convention, a α d θ type):{line_break}{_rows_text(arm.dh, line_break)}"
     if challenge.kind == "numbers":
         values = expected_numbers(challenge, arm)
+        if challenge.quantity not in ANGLES:  # what rounding leaves of a zero (det J on a singularity: 5e-18 m³) is 0
+            values = np.where(np.abs(values) < 1e-9 * _usual_size(challenge, arm), 0.0, values) + 0.0  # (no "-0")
         return None, "The answer: " + ", ".join(f"{name} = {value:.6g}" for name, value in zip(number_names(challenge, arm), values))
     q = np.asarray(arm.specs.home if q_current is None else q_current, dtype=float)
     at = "your pose" if q_current is not None else "the arm's home pose"

@@ -87,8 +87,9 @@ def factor_words(arm: Arm) -> tuple[str, list[tuple[str, str, str]]] | None:
 
 def factors_html(arm: Arm, q: np.ndarray) -> str:
     """det J's factors as gauges, green far from their singularity and red at it, with what each means."""
-    measures = (f"manipulability {number(float(arm.manipulability(q)), '.4g')}, smallest singular value "
-                f"{number(float(arm.smallest_singular_value(q)), '.4g')}")
+    smallest = float(arm.smallest_singular_value(q))
+    manipulability = float(arm.manipulability(q)) if smallest else 0.0  # (on a singularity, rounding's 3e-18 is 0)
+    measures = f"manipulability {number(manipulability, '.4g')}, smallest singular value {number(smallest, '.4g')}"
     described = factor_words(arm)
     if described is None:  # a typed table has no derivation: the numbers that vanish at a singularity
         return f"<div>A typed table's det J is not derived; these go to zero at a singularity: {measures}</div>"
