@@ -7,6 +7,7 @@ import codecs
 import dataclasses
 import functools
 import itertools
+import logging
 import math
 import re
 import types
@@ -803,6 +804,40 @@ def test_a_student_who_goes_back_to_watching_keeps_the_target_and_is_told_the_en
             await client.close()
 
     asyncio.run(scenario())
+
+
+def test_a_student_who_goes_back_to_watching_as_the_challenge_starts_is_given_it(classroom, monkeypatch, caplog):
+    """The start gives each watching student their own arm, then the task. A student's "Back to the presenter's
+    arm", handled on its own thread, can land in between: the start then read the arm just taken away, and the
+    teacher's console showed "could not give browser 4 the challenge" and an AttributeError's traceback, the
+    student was never shown the target nor counted on the projector (a protocol-level monkey found it,
+    2026-12-06). Here the press lands there every time."""
+    room = classroom.classroom
+    explore = room.explore
+
+    def explored_then_back(member) -> None:
+        explore(member)
+        room.rejoin(member)  # the student's press, between the two
+
+    async def scenario():
+        teacher = await ViserClient(url(classroom)).connect()
+        await become_presenter(teacher, classroom)
+        student = await ViserClient(url(classroom), local_address="127.0.0.20").connect()
+        await until(lambda: "Explore on my own" in student.gui, what="the student watching")
+        monkeypatch.setattr(room, "explore", explored_then_back)
+        reach = next(c for c in room.challenges.offered if c.kind == "reach")
+        await teacher.set_gui("Challenge", reach.title)
+        await teacher.set_gui("Start the challenge", True)
+        await until(lambda: GOAL_ROOT in student.received.nodes and student.shown(reach.text[:30]),
+                    what="the target and the task on the watching student's screen")
+        await until(lambda: any((board_numbers(t) or {}).get("joined") == 1 for t in teacher.shown(f"### {reach.title}")),
+                    what="the student counted on the projector")
+        for client in (teacher, student):
+            await client.close()
+
+    with caplog.at_level(logging.ERROR):
+        asyncio.run(scenario())
+    assert not [r for r in caplog.records if r.levelno >= logging.ERROR], caplog.text
 
 
 def test_a_student_works_on_the_challenge_arm_whatever_the_class_is_shown(classroom):

@@ -160,7 +160,7 @@ class ClassChallenges:
         self.watch(member)
         member.card = ChallengeCard(member.client.gui, run, student, lambda handler, beside=None: self._guard(member, handler, beside),
                                     check=lambda: self.check(member), working=lambda: self._moved(member))
-        if run.challenge.is_pose:
+        if run.challenge.is_pose and session is not None:  # (None: they went back to watching meanwhile)
             student.flange = session.state.last.flange  # drawn on the projector from the start; not yet working
         self.show_goal(member)
         self._board_changed()
