@@ -233,10 +233,14 @@ class ArmSession:
     def hold_back(self, asked: str | None) -> None:
         """A class challenge asking ``asked`` (``Challenge.asks``) runs on this arm, or none does (None): each view
         takes away what would answer it, or gives it back (``View.hold_back``), and the scene and panel follow."""
-        before = [view.held for view in self.panel_views]
-        for view in self.panel_views:
-            view.hold_back(asked)
-        if [view.held for view in self.panel_views] != before:  # a reach holds nothing: a hundred arms not redrawn
+        with self.state.lock:  # not while the panel is being taken away (``_leave``: a hand-over, on another thread)
+            if self.closed:
+                return
+            before = [view.held for view in self.panel_views]
+            for view in self.panel_views:
+                view.hold_back(asked)
+            changed = [view.held for view in self.panel_views] != before
+        if changed:  # a reach holds nothing: a hundred arms not redrawn
             self.redraw()
 
     def redraw(self) -> None:

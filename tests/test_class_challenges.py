@@ -696,6 +696,40 @@ def test_the_teacher_takes_the_nicknames_off_the_projector(classroom):
     asyncio.run(scenario())
 
 
+def test_the_projectors_tools_taken_away_while_the_board_is_drawn_are_drawn_again_next_time(classroom, monkeypatch, caplog):
+    """The board is drawn on the panel refresher's thread; a new challenge's start (or a hand-over) takes the
+    projector's dots and names away on another. Taken between the board's look at them and its drawing, the drawing
+    raised viser's "Cannot assign to 'points' on a removed PointCloudHandle": an error and its traceback on the
+    teacher's console (a monkey starting and ending challenges found it, 2026-12-06). Here they are taken away there
+    every time, once; the next drawing makes them anew."""
+    from ur10teach.features import challenge as feature
+
+    room = classroom.classroom
+    show = feature.ClassTools.show
+    taken: list = []
+
+    def taken_first(tools, *args, **kwargs):
+        if not taken:
+            taken.append(tools)
+            room.challenges.step_out(room.presenter, keep=False)  # as a start on another thread does
+        return show(tools, *args, **kwargs)
+
+    async def scenario():
+        teacher, student, member = await a_student_in(classroom, "Reach the target", "127.0.0.13")
+        monkeypatch.setattr(feature.ClassTools, "show", taken_first)
+        await drag_a_little(student, member.session)
+        await until(lambda: taken, what="the board drawn")
+        await drag_a_little(student, member.session)
+        await until(lambda: room.presenter.tools is not None and room.presenter.tools is not taken[0]
+                    and room.presenter.tools.working.visible, what="the student's dot drawn anew")
+        for client in (teacher, student):
+            await client.close()
+
+    with caplog.at_level(logging.ERROR):
+        asyncio.run(scenario())
+    assert not [r for r in caplog.records if r.levelno >= logging.ERROR], caplog.text
+
+
 def test_on_the_ur10e_the_holding_challenge_gives_and_checks_the_ur10es_masses():
     """The ur10e had no link masses until 2026-12-04 (no holding challenge there); the task's terms gave the
     CB3 UR10's masses on any preset, where the check took the preset's. The preview, the student's task and the
@@ -838,6 +872,29 @@ def test_a_student_who_goes_back_to_watching_as_the_challenge_starts_is_given_it
     with caplog.at_level(logging.ERROR):
         asyncio.run(scenario())
     assert not [r for r in caplog.records if r.levelno >= logging.ERROR], caplog.text
+
+
+def test_a_presenters_panel_taken_away_by_a_hand_over_holds_nothing_back(classroom):
+    """A start holds back what of the presenter's panel would answer the task once the classroom's lock is let go,
+    and a hand-over on another thread may take that panel away first: holding back on it raised viser's "Cannot
+    assign to 'visible' on a removed GuiMarkdownHandle", the teacher read "Something went wrong" and no student was
+    given the task (a monkey handing over and starting challenges found it, 2026-12-06). A panel taken away holds
+    nothing back; one being taken away is, under the arm's lock, once the holding back is done."""
+    room = classroom.classroom
+
+    async def scenario():
+        first = await ViserClient(url(classroom)).connect()
+        await become_presenter(first, classroom)
+        taken = room.presenter.session
+        second = await ViserClient(url(classroom)).connect()
+        await become_presenter(second, classroom)
+        await until(lambda: taken.closed and room.presenter.session is not taken, what="the hand-over")
+        taken.hold_back("det_j")  # the start's, landing after the hand-over
+        assert all(view.held is None for view in taken.panel_views)
+        for client in (first, second):
+            await client.close()
+
+    asyncio.run(scenario())
 
 
 def test_a_student_works_on_the_challenge_arm_whatever_the_class_is_shown(classroom):

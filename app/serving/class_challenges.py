@@ -128,9 +128,10 @@ class ClassChallenges:
                 self.step_out(other, keep=False)
             self.run = ChallengeRun(challenge, state.arm, time_limit, clock=lambda: self.clock())
             members = [m for m in self.room.members.values() if m is not member]
+            session = member.session  # (the presenter's, which a hand-over from here on takes away: closed, not None)
         if on_answer:  # so the class's arm goes home
-            member.session.apply(lambda arm_state: arm_state.set_joints(home, cause="typed"))
-        self.hold_back(member.session)
+            session.apply(lambda arm_state: arm_state.set_joints(home, cause="typed"))
+        self.hold_back(session)
         self.hold_back_live()
         self.show_goal(member)
         for other in members:
@@ -420,8 +421,13 @@ class ClassChallenges:
                                       fixed=lambda: [*in_world(drawing.label_sets), *member.goal_name(np.eye(4))],
                                       keep_in_view=lambda points: member.camera.keep_in_view("class", points), size=drawing.size)
             member.camera.on_moved.append(member.tools.place)
-        if member.tools is not None and self.run is not None:
-            member.tools.show(self.run, self.nicknames)
+        tools = member.tools
+        if tools is not None and self.run is not None:
+            try:
+                tools.show(self.run, self.nicknames)
+            except RuntimeError:  # viser's word for a removed node: a start or a hand-over took these tools meanwhile
+                if member.tools is tools:  # (the next drawing makes new ones)
+                    raise
 
     def _guard(self, member: Member, handler, beside=None):
         return guard(member.client, handler, is_closed=lambda: member.closed, beside=beside)
