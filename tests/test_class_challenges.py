@@ -10,6 +10,7 @@ import itertools
 import logging
 import math
 import re
+import time
 import types
 
 import numpy as np
@@ -698,30 +699,40 @@ def test_the_teacher_takes_the_nicknames_off_the_projector(classroom):
 
 def test_the_projectors_tools_taken_away_while_the_board_is_drawn_are_drawn_again_next_time(classroom, monkeypatch, caplog):
     """The board is drawn on the panel refresher's thread; a new challenge's start (or a hand-over) takes the
-    projector's dots and names away on another. Taken between the board's look at them and its drawing, the drawing
-    raised viser's "Cannot assign to 'points' on a removed PointCloudHandle": an error and its traceback on the
-    teacher's console (a monkey starting and ending challenges found it, 2026-12-06). Here they are taken away there
-    every time, once; the next drawing makes them anew."""
-    from ur10teach.features import challenge as feature
-
+    projector's dots and names away on another: it removes them, then lets go of them. Removed between the board's
+    look at them and its drawing, the drawing raised viser's "Cannot assign to 'points' on a removed
+    PointCloudHandle": an error and its traceback on the teacher's console (a monkey starting and ending challenges
+    found it, 2026-12-06). Here that happens once, mid-drawing; the drawing after the start has let go makes them anew."""
     room = classroom.classroom
-    show = feature.ClassTools.show
+    flanges, render = ChallengeRun.flanges, room.challenges._render_board
     taken: list = []
 
-    def taken_first(tools, *args, **kwargs):
-        if not taken:
-            taken.append(tools)
-            room.challenges.step_out(room.presenter, keep=False)  # as a start on another thread does
-        return show(tools, *args, **kwargs)
+    def removed_mid_drawing(run, *args, **kwargs):  # (called by the drawing alone)
+        found = flanges(run, *args, **kwargs)
+        if not taken and len(found[0]):  # a student's dot to draw
+            taken.append(room.presenter.tools)
+            taken[0].remove()  # the start's step_out, on its own thread
+        return found
+
+    def drawn_then_let_go(member) -> None:
+        try:
+            render(member)
+        finally:
+            if taken and member.tools is taken[0]:
+                member.tools = None  # the start's step_out, done
+
+    def drawn_anew() -> bool:
+        tools = room.presenter.tools
+        return bool(taken) and tools is not None and tools is not taken[0] and tools.working.visible
 
     async def scenario():
         teacher, student, member = await a_student_in(classroom, "Reach the target", "127.0.0.13")
-        monkeypatch.setattr(feature.ClassTools, "show", taken_first)
-        await drag_a_little(student, member.session)
-        await until(lambda: taken, what="the board drawn")
-        await drag_a_little(student, member.session)
-        await until(lambda: room.presenter.tools is not None and room.presenter.tools is not taken[0]
-                    and room.presenter.tools.working.visible, what="the student's dot drawn anew")
+        monkeypatch.setattr(ChallengeRun, "flanges", removed_mid_drawing)
+        monkeypatch.setattr(room.challenges, "_render_board", drawn_then_let_go)
+        deadline = time.monotonic() + HANG_TIMEOUT
+        while not drawn_anew():  # each drag asks for a drawing: the one it is taken in, and the next
+            assert time.monotonic() < deadline, "the student's dot was not drawn anew"
+            await drag_a_little(student, member.session)
         for client in (teacher, student):
             await client.close()
 

@@ -249,6 +249,7 @@ class ClassTools:
                                   point_shape="circle", visible=False)
             for name, colour, dot in (("working", WORKING_COLOR, WORKING_DOT), ("solved", SOLVED_COLOR, SOLVED_DOT)))
         self.names: BranchLabels | None = None
+        self.removed = False  #: taken off the projector (a new challenge, a hand-over): a drawing under way stops
 
     def _pool(self, count: int) -> BranchLabels:
         """Labels for ``count`` names: the pool grows (to :data:`MAX_NAMES`) as the class does."""
@@ -260,6 +261,8 @@ class ClassTools:
         return self.names
 
     def show(self, run: ChallengeRun, nicknames: bool = True) -> None:
+        if self.removed:  # (no new names' pool in a scene these have left)
+            return
         names, poses, solved = run.flanges(nicknames)
         points = from_frame(self._world, poses[:, :3, 3])
         for dots, which, colour in ((self.working, ~solved, WORKING_COLOR), (self.solved, solved, SOLVED_COLOR)):
@@ -289,6 +292,7 @@ class ClassTools:
             self.names = None
 
     def remove(self) -> None:
+        self.removed = True  # first: a drawing on another thread that meets a removed node knows why
         self._keep_in_view(None)
         self.working.remove()
         self.solved.remove()

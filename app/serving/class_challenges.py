@@ -426,7 +426,7 @@ class ClassChallenges:
             try:
                 tools.show(self.run, self.nicknames)
             except RuntimeError:  # viser's word for a removed node: a start or a hand-over took these tools meanwhile
-                if member.tools is tools:  # (the next drawing makes new ones)
+                if not tools.removed:  # (the next drawing makes new ones)
                     raise
 
     def _guard(self, member: Member, handler, beside=None):
