@@ -814,3 +814,20 @@ def test_a_browsers_arm_stays_out_of_full_collections_and_goes_when_it_leaves(ap
         assert gone() is None, "the departed browser's arm is still in memory"
 
     asyncio.run(scenario())
+
+
+def test_a_label_another_thread_removes_while_labels_are_sized_is_left_alone(app, monkeypatch):
+    """Lecture mode sizes every 3D label of a browser's scene at each panel redraw, from a list of them taken first.
+    Another thread (a challenge's start, a hand-over) may remove one of them meanwhile: sizing it raised viser's
+    "Cannot assign to 'font_screen_scale' on a removed LabelHandle", and that browser's panel redraw failed with an
+    error on the teacher's console (a monkey starting challenges and handing over found it, 2026-12-06)."""
+    from ur10teach.features import lecture
+    from ur10teach.style import label_scale
+
+    scene = app.server.scene
+    gone, kept = scene.add_label("/gone", "gone"), scene.add_label("/kept", "kept")
+    listed = lecture.labels_of(scene)
+    gone.remove()
+    monkeypatch.setattr(lecture, "labels_of", lambda _: listed)  # the list, as taken before the removal
+    lecture.size_labels(scene, True)
+    assert kept.font_screen_scale == pytest.approx(label_scale(kept._base_scale, True)) != kept._base_scale

@@ -9,6 +9,7 @@ window to the arm (a click on the strip brings it back).
 
 from __future__ import annotations
 
+import contextlib
 from typing import Callable
 
 import viser
@@ -97,4 +98,5 @@ def size_labels(scene: viser.SceneApi, lecture: bool) -> None:
             base = label._base_scale = label.font_screen_scale
         wanted = label_scale(base, lecture)
         if label.font_screen_scale != wanted:
-            label.font_screen_scale = wanted
+            with contextlib.suppress(RuntimeError):  # viser's word for a label another thread removed meanwhile
+                label.font_screen_scale = wanted
