@@ -237,8 +237,8 @@ def test_started_at_a_terminal_on_a_desktop_the_app_opens_its_page_in_the_browse
     reader.start()
     try:
         wait_for(lambda: opened.exists() and opened.read_text().strip() or None, what="the page opened")
-        url = re.search(rb"http://127\.0\.0\.1:\d+", bytes(output)).group().decode()
-        assert opened.read_text().split() == [url]  # once, at the address it serves
+        served = wait_for(lambda: re.search(rb"http://127\.0\.0\.1:\d+", bytes(output)), what="the address printed")
+        assert opened.read_text().split() == [served.group().decode()]  # once, at the address it serves
     finally:
         process.terminate()
         process.wait(timeout=HANG_TIMEOUT)
