@@ -7,7 +7,6 @@ import codecs
 import dataclasses
 import functools
 import itertools
-import logging
 import math
 import re
 import time
@@ -736,9 +735,7 @@ def test_the_projectors_tools_taken_away_while_the_board_is_drawn_are_drawn_agai
         for client in (teacher, student):
             await client.close()
 
-    with caplog.at_level(logging.ERROR):
-        asyncio.run(scenario())
-    assert not [r for r in caplog.records if r.levelno >= logging.ERROR], caplog.text
+    without_failures(scenario, caplog)
 
 
 def test_on_the_ur10e_the_holding_challenge_gives_and_checks_the_ur10es_masses():
@@ -880,9 +877,7 @@ def test_a_student_who_goes_back_to_watching_as_the_challenge_starts_is_given_it
         for client in (teacher, student):
             await client.close()
 
-    with caplog.at_level(logging.ERROR):
-        asyncio.run(scenario())
-    assert not [r for r in caplog.records if r.levelno >= logging.ERROR], caplog.text
+    without_failures(scenario, caplog)
 
 
 def test_a_presenters_panel_taken_away_by_a_hand_over_holds_nothing_back(classroom):
