@@ -11,6 +11,7 @@ from __future__ import annotations
 import contextlib
 import io
 import os
+import sys
 import time
 from typing import Iterator
 from urllib.parse import urlparse
@@ -33,6 +34,9 @@ CONNECTED = "svg.tabler-icon-cloud-check"
 HANG_TIMEOUT_MS = int(1000 * HANG_TIMEOUT)
 #: Seconds after which a key press that has not shown on a slider is taken as lost.
 LOST_PRESS = 10.0
+#: Seconds a browser may show a change the server does not hold before it is taken as lost on its way (a message
+#: takes milliseconds; undoing and redoing a change that was only late does no harm: the last one sent stands).
+LOST_CHANGE = 3.0
 #: Below this share of changed pixels two pictures of the 3D view are the same picture.
 SAME_PICTURE = 0.0005
 #: Frames a second a test page draws while nothing asks for more. viser redraws the 3D view every
@@ -114,6 +118,42 @@ def dom_id(handle) -> str:
     return f"[id='{handle._impl.uuid}']"
 
 
+class LostOnItsWay:
+    """Whether the browser has shown a value the server does not hold for :data:`LOST_CHANGE` s: a change the server
+    never received (the browser holds it already, so doing it again sends nothing; it must be undone and redone).
+    Call it with whether they disagree at each look; it says so once, then starts counting again."""
+
+    def __init__(self) -> None:
+        self.since: float | None = None
+
+    def __call__(self, disagree: bool) -> bool:
+        if not disagree:
+            self.since = None
+        elif self.since is None:
+            self.since = time.monotonic()
+        elif time.monotonic() - self.since > LOST_CHANGE:
+            self.since = None
+            return True
+        return False
+
+
+def lose_the_next_value(client, handle) -> None:
+    """The next value ``handle``'s widget sends from the browser is lost on its way (to test the helpers below):
+    viser's handler looks the widget of each value up by its uuid in the client's table, and ignores a value whose
+    widget it does not find (the gate looks it up too, before, to check the value's type)."""
+
+    class LosesOne(dict):
+        lost = False
+
+        def get(self, uuid, default=None):
+            if uuid == handle._impl.uuid and not self.lost and sys._getframe(1).f_code.co_name == "_handle_gui_updates":
+                self.lost = True
+                return default
+            return super().get(uuid, default)
+
+    client.gui._gui_input_handle_from_uuid = LosesOne(client.gui._gui_input_handle_from_uuid)
+
+
 def step_slider(page, handle, key: str, target: float, limit: int = 200) -> None:
     """Press arrow keys on a viser slider's thumb until the browser shows ``target``, then wait for the server.
 
@@ -124,11 +164,17 @@ def step_slider(page, handle, key: str, target: float, limit: int = 200) -> None
     thumb = page.locator(f"{dom_id(handle)} [role=slider]")
     opposite = {"ArrowRight": "ArrowLeft", "ArrowLeft": "ArrowRight"}
     increases = key == "ArrowRight"
+    lost = LostOnItsWay()
     for _ in range(limit):
         value = float(thumb.get_attribute("aria-valuenow"))
         if abs(value - target) < 1e-9:
-            wait_for(lambda: abs(handle.value - target) < 1e-9, what=f"the server to hold {target} for {handle.label!r}")
-            return
+            held = lambda: abs(handle.value - target) < 1e-9  # noqa: E731
+            if wait_for(lambda: held() or lost(True), what=f"the server to hold {target} for {handle.label!r}") and held():
+                return
+            top = abs(float(thumb.get_attribute("aria-valuemax")) - target) < 1e-9
+            thumb.focus()  # the last press never reached the server: a step away, and back on the next round
+            thumb.press("ArrowLeft" if top else "ArrowRight")
+            continue
         thumb.focus()
         thumb.press(key if (value < target) == increases else opposite[key])
         with contextlib.suppress(AssertionError):  # not shown: the press was lost, and is made again
@@ -145,11 +191,13 @@ def set_checkbox(page, handle, value: bool) -> None:
     counts is the value the server received, not the box's look.
     """
     box = page.locator(dom_id(handle))
+    lost = LostOnItsWay()
 
     def clicked_through() -> bool:
         if handle.value == value:
             return True
-        if box.is_checked() != value:
+        shown = box.is_checked() == value
+        if not shown or lost(shown):  # (a click the server never received is undone, then made again)
             box.click()
         with contextlib.suppress(AssertionError):
             wait_for(lambda: handle.value == value, timeout=1.0)
@@ -166,11 +214,10 @@ def choose(page, dropdown, option: str) -> None:
     filled). So the list is opened and the option clicked again until the server holds it.
 
     A pick the server never received leaves the browser's box showing ``option``, and clicking
-    it again sends nothing (the browser holds it already): once the box has shown it for
-    :data:`LOST_PRESS` s with the server holding another, the server's choice is picked back first,
-    as a student would. (A CI run waited two minutes on such a box, 2026-12-06.)
+    it again sends nothing: the server's choice is picked back first (:class:`LostOnItsWay`), as a
+    student would. (A CI run waited two minutes on such a box, 2026-12-06.)
     """
-    shown_since: list[float] = []
+    lost = LostOnItsWay()
 
     def in_the_list(label: str) -> bool:
         """Open the list if it is closed and click ``label``; whether the click landed."""
@@ -188,14 +235,8 @@ def choose(page, dropdown, option: str) -> None:
         if dropdown.value == option:
             return True
         held = dropdown.value
-        if _box_text(page, dropdown) != option:
-            shown_since.clear()
-        elif not shown_since:
-            shown_since.append(time.monotonic())
-        elif time.monotonic() - shown_since[0] > LOST_PRESS:  # lost on its way: the box and the server disagree
-            if in_the_list(held):
-                wait_for(lambda: _box_text(page, dropdown) == held, what=f"the box back on {held!r}")
-            shown_since.clear()
+        if lost(_box_text(page, dropdown) == option) and in_the_list(held):
+            wait_for(lambda: _box_text(page, dropdown) == held, what=f"the box back on {held!r}")
         if _box_text(page, dropdown) != option:
             in_the_list(option)
         with contextlib.suppress(AssertionError):
