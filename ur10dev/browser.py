@@ -159,7 +159,8 @@ def step_slider(page, handle, key: str, target: float, limit: int = 200) -> None
 
     ``key`` is the direction to start in. Each press is waited for before the next; a press
     that has not shown after :data:`LOST_PRESS` s was lost (the thumb lost focus while the
-    panel re-rendered) and is made again; an overshoot is walked back.
+    panel re-rendered) and is made again; an overshoot is walked back. A last press the server
+    never received (:class:`LostOnItsWay`) is undone and made again.
     """
     thumb = page.locator(f"{dom_id(handle)} [role=slider]")
     opposite = {"ArrowRight": "ArrowLeft", "ArrowLeft": "ArrowRight"}
@@ -187,8 +188,9 @@ def set_checkbox(page, handle, value: bool) -> None:
 
     A click can land while the panel is still moving (sliding back from its folded strip, a
     folder unfolding) and miss the box. So a box the browser still shows unchanged a moment
-    later is clicked again; a box that shows the new value is never clicked twice. What
-    counts is the value the server received, not the box's look.
+    later is clicked again; a box that shows the new value is clicked twice more (off, on) only
+    once the server has not received it (:class:`LostOnItsWay`). What counts is the value the
+    server received, not the box's look.
     """
     box = page.locator(dom_id(handle))
     lost = LostOnItsWay()
@@ -264,7 +266,8 @@ def type_text(page, handle, text: str) -> None:
     """Type ``text`` into a text field, as a student does, and wait until the server holds it.
 
     (viser's panel sends one message per 50 ms and keeps only the newest: a button pressed
-    at once after typing could carry the typing away.)
+    at once after typing could carry the typing away.) Typing the server never received
+    (:class:`LostOnItsWay`) is typed again.
     """
     field = text_field(page, handle)
     lost = LostOnItsWay()
