@@ -48,6 +48,7 @@ def test_velocity_and_forces_on_every_arm_match_finite_differences(app, label):
         session = await pick(app, client, label)
         arm, snapshot = session.arm, session.state.last
         q, tool = snapshot.q, snapshot.flange[:3, 3]
+        assert client.shown("mm drawn per rad/s (57.3°/s)"), "the turning rate's scale, in the sliders' °/s too"
         # a base rate of 10°/s: the arrow is the tool's velocity
         await client.set_gui(rate_label(arm, 0), 10.0)
         expected = tool + METRES_PER_SPEED * math.radians(10.0) * position_rate(arm, q, 0)

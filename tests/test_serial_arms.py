@@ -4,6 +4,7 @@ and every analytic IK against FK on random and near-singular joints."""
 from __future__ import annotations
 
 import math
+import re
 
 import numpy as np
 import pytest
@@ -140,6 +141,17 @@ def test_both_conventions_give_the_same_tool_pose(name):
     np.testing.assert_allclose(back.fk(q), table.fk(q), atol=1e-12)
     np.testing.assert_allclose(other.jacobian(q), table.jacobian(q), atol=1e-12)
     assert other.joint_types == table.joint_types
+
+
+@pytest.mark.parametrize("name", Arm.PRESETS)
+def test_each_description_gives_its_lengths_in_millimetres_as_the_panel_does(name):
+    """The panel shows an arm's description above its DH table, which is in mm: "links 0.5 m and 0.4 m" sat
+    above a table of 500 and 400 (until 2026-12-06). Every length a description gives is the table's, in mm."""
+    arm = Arm.preset(name)
+    assert not re.search(r"\d\s*m\b", arm.description), arm.description
+    given = {float(v) for v in re.findall(r"(\d+(?:\.\d+)?)\s*mm\b", arm.description)}
+    if given:  # (the desktop arm's description gives none: it has no DH table)
+        assert given <= {round(1000 * abs(v), 6) for row in arm.dh.rows for v in (row.a, row.d)}, arm.description
 
 
 def test_course_numbers():

@@ -65,17 +65,17 @@ PRESETS: dict[str, _Preset] = {
         STANDARD, _degrees((-105, 105), (-157.5, 157.5)) + ((0.0, 0.21),) + _degrees((-360, 360)),
         Scara, ("θ1", "θ2", "d3", "θ4")),
     "planar_elbow": _Preset(
-        "Two-link planar elbow (RR), links 0.5 m and 0.4 m",
+        "Two-link planar elbow (RR), links 500 mm and 400 mm",
         ((0.5, 0, 0, 0, "R"), (0.4, 0, 0, 0, "R")),
         STANDARD, _degrees((-180, 180), (-180, 180)),
         PlanarElbow, ("θ1", "θ2")),
     "cylindrical": _Preset(
-        "Three-link cylindrical arm (RPP): base column 0.3 m, lift d2, reach d3",
+        "Three-link cylindrical arm (RPP): base column 300 mm, lift d2, reach d3",
         ((0, 0, 0.3, 0, "R"), (0, -_PI / 2, 0, 0, "P"), (0, 0, 0, 0, "P")),
         STANDARD, _degrees((-180, 180)) + ((0.0, 0.7), (0.1, 0.6)),
         Cylindrical, ("θ1", "d2", "d3")),
     "cylindrical_wrist": _Preset(
-        "Cylindrical arm (RPP) with a spherical wrist, as in the DH lecture notes: d6 = 0.1 m",
+        "Cylindrical arm (RPP) with a spherical wrist, as in the DH lecture notes: d6 = 100 mm",
         ((0, 0, 0.3, 0, "R"), (0, -_PI / 2, 0, 0, "P"), (0, 0, 0, 0, "P"),
          (0, -_PI / 2, 0, 0, "R"), (0, _PI / 2, 0, 0, "R"), (0, 0, 0.1, 0, "R")),
         STANDARD, _degrees((-180, 180)) + ((0.0, 0.7), (0.1, 0.6)) + _degrees((-180, 180), (-120, 120), (-180, 180)),

@@ -126,7 +126,7 @@ class VelocityView(View):
                              f"rate, [v; ω] = J q̇.  \n{swatch(LINEAR_COLOR)} **v**: velocity, "
                              f"{number(1000 * METRES_PER_SPEED, '.0f')} mm drawn per m/s  \n{swatch(ANGULAR_COLOR)} **ω**: "
                              f"turning rate (about the arrow, right hand), {number(1000 * METRES_PER_TURN_RATE, '.0f')} "
-                             "mm drawn per rad/s")
+                             "mm drawn per rad/s (57.3°/s)")
             self.sliders = [gui.add_slider(rate_label(self._arm, i), min=-RATE_LIMITS[kind], max=RATE_LIMITS[kind], step=0.1,
                                            initial_value=0.0)
                             for i, kind in enumerate(self._kinds)]
