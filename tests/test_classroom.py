@@ -6,11 +6,12 @@ import asyncio
 import collections
 import threading
 import time
+from types import SimpleNamespace
 
 import numpy as np
 import pytest
 
-from ur10teach.serving.classroom import EXPLORER, LOCKOUT_SECONDS, MAX_WRONG_CODES, PRESENTER, VIEWER, make_join_code, normalise_code
+from ur10teach.serving.classroom import EXPLORER, Classroom, LOCKOUT_SECONDS, MAX_WRONG_CODES, PRESENTER, VIEWER, make_join_code, normalise_code
 from ur10teach.serving.gate import RETURN_WINDOW, Gate
 from ur10teach.serving.server import TeachingServer
 
@@ -916,3 +917,24 @@ def test_an_arm_that_cannot_be_drawn_leaves_the_class_on_the_arm_it_had(classroo
         await teacher.close()
 
     asyncio.run(scenario())
+
+
+def test_the_arm_a_member_looks_at_is_read_once():
+    """The camera's framing asks which arm a member looks at, on the refresher's thread, while a hand-over on another
+    takes a student's own arm away: reading ``member.session`` three times, the second read met None (an
+    AttributeError, until 2026-12-06). The arm read first is framed."""
+
+    class HandedOverMeanwhile:
+        def __init__(self, session) -> None:
+            self._session, self.reads = session, 0
+
+        @property
+        def session(self):
+            self.reads += 1
+            return self._session if self.reads == 1 else None
+
+    def arm(name: str) -> SimpleNamespace:
+        return SimpleNamespace(drawing=SimpleNamespace(framed=lambda snapshot: (name, snapshot)), state=SimpleNamespace(last=f"{name}'s pose"))
+
+    assert Classroom._watched(arm("the class"), HandedOverMeanwhile(arm("own"))) == ("own", "own's pose")
+    assert Classroom._watched(arm("the class"), SimpleNamespace(session=None)) == ("the class", "the class's pose")

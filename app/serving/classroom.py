@@ -244,8 +244,9 @@ class Classroom:
 
     def _watched(self, member: Member):
         """The newest snapshot of the arm ``member`` looks at: its own, or the class's."""
-        if member.session is not None:
-            return member.session.drawing.framed(member.session.state.last)
+        session = member.session  # read once: a hand-over on another thread may take it away meanwhile
+        if session is not None:
+            return session.drawing.framed(session.state.last)
         return self.drawing.framed(self.state.last)
 
     def _body_radius(self) -> float:
