@@ -820,6 +820,12 @@ def test_the_class_is_shown_the_desktop_arm_played_and_explored(classroom):
         # its views are named in its own axes (y up), for everyone watching, the view each chose kept
         await until(lambda: watcher.camera.direction.value == "Top (x–z plane)"
                     and "Front (x–y plane)" in presenter.camera.direction.options, what="the views renamed")
+        # a view picked in the list as it was renamed is that view in the new names (it was refused until 2026-12-06)
+        await student.set_gui("Look from", "Side (y–z plane)")
+        await until(lambda: watcher.camera.direction.value == "Side (y–z plane)", what="the student's side view")
+        await student.set_gui("Look from", "Top (x–y plane)")
+        await until(lambda: watcher.camera.direction.value == "Top (x–z plane)", what="the old top view taken as the top")
+        assert not [notice for notice in student.received.notifications if notice[0] == "Not accepted"]
         assert presenter.session.state is room.state and presenter.session.drawing is room.drawing
         for client in (teacher, student):
             await until(lambda: client.received.node_owners.get(f"{ROOT}/base_frame/links") == "", what="the shared desktop arm")

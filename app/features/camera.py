@@ -36,6 +36,9 @@ VIEWS = {
 #: The views' names for an arm whose vertical is its y axis (the desktop arm, drawn with its y turned to the world's
 #: z): the planes they show in the arm's own axes, which its frame's names in 3D give (they named the world's).
 Y_UP_NAMES = {"Front (x–z plane)": "Front (x–y plane)", "Top (x–y plane)": "Top (x–z plane)"}
+#: Each renamed view's name in the other naming: a view picked as the arm shown turned its vertical (a class's
+#: presenter switched to or from the desktop arm) is that view in the new names.
+RENAMED = {**Y_UP_NAMES, **{y_up: z_up for z_up, y_up in Y_UP_NAMES.items()}}
 
 
 def views_for(up) -> dict[str, tuple[float, float, float]]:
@@ -246,6 +249,9 @@ class CameraControls(View):
 
     def frame(self) -> None:
         """Point this browser's camera at the arm and its target, from the chosen direction."""
+        if self.direction.value not in self._views and RENAMED.get(self.direction.value) in self._views:
+            self.direction.value = RENAMED[self.direction.value]  # (which frames it, from this callback again)
+            return
         self.look_from(self._views[chosen(self.direction, "look from")])
 
     def show_arm(self, body_radius: float, up) -> None:
