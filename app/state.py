@@ -190,9 +190,9 @@ class ArmState:
             try:
                 value = float(part)
             except ValueError:
-                raise ValueError(f"{what}: {part!r} is not a number; type the numbers alone") from None
+                raise ValueError(f"{what}: {part!r:.40} is not a number; type the numbers alone") from None
             if not math.isfinite(value):
-                raise ValueError(f"{what}: {part!r} is not a finite number")
+                raise ValueError(f"{what}: {part!r:.40} is not a finite number")
             values.append(value)
         if len(values) != count:
             raise ValueError(f"{what}: expected {numbers}, got {len(parts)} in {text!r:.60}")

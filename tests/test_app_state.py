@@ -84,6 +84,11 @@ def test_parse_typed_degrees():
         ArmState.parse_numbers("  ", 3, "target")
     with pytest.raises(ValueError, match="'inf' is not a finite number"):
         ArmState.parse_numbers("1 2 3 4 5 inf", 6)
+    # a long word pasted in is quoted in part: the refusal is a line beside the box (it quoted all 900 characters)
+    for pasted in ("x" * 900, "1e999" + "9" * 900):
+        with pytest.raises(ValueError) as refusal:
+            ArmState.parse_numbers(f"1 2 {pasted}", 3, "target")
+        assert len(str(refusal.value)) < 120, str(refusal.value)[:200]
 
 
 @pytest.mark.parametrize("text, count, refusal", [
