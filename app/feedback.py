@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import contextlib
 import functools
+import html
 import logging
 import math
 import threading
@@ -106,7 +107,8 @@ class Beside:
         """Show ``message``; False where the line has gone with its panel, which another browser's action (a
         challenge ended, the presenter's role taken) can rebuild while this input's value is being checked."""
         self.said += 1
-        text = f"<span style='color:{hex_color(DANGER_RED)}'>**Not accepted.** {sentence(message)}</span>"
+        # the message quotes what was typed, and viser renders raw HTML in markdown: "<b>" typed made the rest bold
+        text = f"<span style='color:{hex_color(DANGER_RED)}'>**Not accepted.** {html.escape(sentence(message), quote=False)}</span>"
         try:
             self.line.content = text
             self.line.visible = True

@@ -205,6 +205,18 @@ def test_a_refusal_said_by_the_run_an_input_started_stays_below_it():
         server.stop()
 
 
+def test_a_refusal_shows_what_was_typed_as_text():
+    """viser's markdown renders raw HTML: a student's "<b>" (or "<p/style=position:fixed;inset:0>"), quoted in the
+    refusal below the box, was taken as a tag (until 2026-12-06). It is shown as typed."""
+    server = viser.ViserServer(host="127.0.0.1", port=0, verbose=False)
+    try:
+        beside = feedback.Beside(server.gui)
+        beside.say("target: '<b>' is not a number; type the numbers alone")
+        assert "&lt;b&gt;" in beside.line.content and "<b>" not in beside.line.content
+    finally:
+        server.stop()
+
+
 def test_a_refusal_line_gone_with_its_panel_meanwhile_is_no_error(caplog):
     """A classroom monkey (2026-12-05): a presenter's input with a refusal shown below it was accepted while another
     browser's action rebuilt that panel. Clearing the line, removed with it, raised: "Something went wrong" in the
