@@ -217,7 +217,7 @@ def choose(page, dropdown, option: str) -> None:
 
     A pick the server never received leaves the browser's box showing ``option``, and clicking
     it again sends nothing: the server's choice is picked back first (:class:`LostOnItsWay`), as a
-    student would. (A CI run waited two minutes on such a box, 2026-12-06.)
+    student would. (A CI run most likely waited two minutes on such a box, 2026-12-06.)
     """
     lost = LostOnItsWay()
 
