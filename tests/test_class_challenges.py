@@ -796,6 +796,11 @@ def test_run_bookkeeping_bounds_and_time_limit():
     assert "could not be saved" in summary_markdown(run)
     run.unsaved = None
     assert clean_nickname("a\nb\tc\u200bd") == "a b cd" and len(clean_nickname("x" * 100)) == 20
+    # a name's own marks are kept (Thai's vowel and tone, Tibetan's stack, an accent typed apart from its letter);
+    # a pile of them on one letter, which a 3D label draws as a blot over its neighbour, is cut to three
+    for name in ("ญิ่ง", "བསྒྲུབས", "Nguyễn", "क्षितिज"):
+        assert clean_nickname(name) == name
+    assert clean_nickname("Zoe\u0308") == "Zoë" and clean_nickname("B" + "\u0301" * 19 + "o") == "B" + "\u0301" * 3 + "o"
     assert spreadsheet_safe("=HYPERLINK(1)") == "'=HYPERLINK(1)" and spreadsheet_safe("Ada") == "Ada"
     # the results file opens in Excel with "Zoë" as typed: UTF-8 marked as such (Excel reads unmarked files as ANSI);
     # the seconds to solve are whole, which no decimal mark of any country turns into another number or a date

@@ -29,23 +29,35 @@ CHECKS_PER_SECOND = 1.0
 #: Students one run keeps (a bound on its memory, whatever joins).
 MAX_STUDENTS = 1000
 MAX_NICKNAME = 20
+#: Combining marks kept on one letter: a Tibetan stack or a Thai vowel and tone need up to three. A letter with
+#: nineteen ("zalgo" text) was drawn, in a projector's 3D label, with a blot of ink over the name above it.
+MAX_MARKS = 3
 #: The longest final answer kept per student (for the results file).
 MAX_ANSWER = 300
 
 
 def clean_nickname(text: str) -> str:
-    """What a student typed as their name, made safe to show: no control characters, at most 20 characters.
+    """What a student typed as their name, made safe to show: no control characters, at most
+    :data:`MAX_MARKS` combining marks on a letter, at most 20 characters.
 
     The projector shows it as a 3D label's text (never as HTML or markdown).
 
     >>> clean_nickname("  Ada\\x00\\u202e  Lovelace and a very long tail")
     'Ada Lovelace and a v'
+    >>> clean_nickname("Zoe\\u0308") == "Zo\\u00eb", len(clean_nickname("B" + "\\u0301" * 19))
+    (True, 4)
     """
     if not isinstance(text, str):
         raise ValueError("a nickname is text")
-    spaced = "".join(" " if ch.isspace() else ch for ch in text)
-    kept = "".join(ch for ch in spaced if not unicodedata.category(ch).startswith("C"))  # controls, bidi overrides, ...
-    return " ".join(kept.split())[:MAX_NICKNAME]
+    kept, marks = [], 0
+    for ch in unicodedata.normalize("NFC", text):  # (a letter and its accent typed apart become the one letter)
+        kind = "Zs" if ch.isspace() else unicodedata.category(ch)  # (a line break or tab parts words)
+        if kind.startswith("C"):  # controls, bidi overrides, ...
+            continue
+        marks = marks + 1 if kind.startswith("M") else 0
+        if marks <= MAX_MARKS:
+            kept.append(" " if kind == "Zs" else ch)
+    return " ".join("".join(kept).split())[:MAX_NICKNAME]
 
 
 def spreadsheet_safe(text: str) -> str:
