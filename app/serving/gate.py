@@ -249,7 +249,11 @@ class Gate:
                 reason = f"{address} is opening connections too fast"
             else:
                 return None
-        return self._refuse(connection, http.HTTPStatus.TOO_MANY_REQUESTS, "address", reason)
+        # (the teacher reads this when a class reaches this machine through one address: a router's NAT)
+        return self._refuse(connection, http.HTTPStatus.TOO_MANY_REQUESTS, "address",
+                            f"{reason}. If every student's browser comes from that address (through a router or proxy "
+                            f"between their network and this machine's), {CONNECTIONS_PER_ADDRESS} at most can join, "
+                            f"one every {1 / NEW_CONNECTIONS_PER_SECOND:g} s: put this machine on their network")
 
     def _refuse(self, connection, status: http.HTTPStatus, kind: str, reason: str):
         with self._lock:
