@@ -897,6 +897,26 @@ def test_on_the_base_axis_a_branch_behind_is_the_one_in_front_turned_half_a_turn
         C.parse('[[challenge]]\ntitle = "Up"\nkind = "reach"\narm = "three_dof"\njoints = [30, -90, 90]\nbranch = 4\n')
 
 
+@pytest.mark.parametrize("arm_name, joints", [("scara", "[-100, 136, 9, 6]"), ("planar_elbow", "[-120, 28]")])
+def test_a_branch_named_by_its_whole_label_is_that_branch(arm_name, joints):
+    """The SCARA's and the planar elbow's labels say which sign of θ2 each elbow is: "elbow right (θ2 ≥ 0)". A file
+    that named a branch so, as the panel shows it, was refused as not "words of a branch's name ('elbow right (θ2 ≥
+    0)', ...)", its own words; its check told a student on that branch that the task asked for it."""
+    arm = Arm.preset(arm_name)
+    q = np.array(C.parse(f'[[challenge]]\ntitle = "t"\nkind = "reach"\narm = "{arm_name}"\njoints = {joints}\n')[0].joints)
+    solution = arm.ik(arm.fk(q), hint=q)
+    slots = np.flatnonzero(solution.valid & arm.within_limits(solution.q))
+    assert slots.tolist() == [0, 1]
+    for slot in slots:
+        label = arm.slot_labels[slot]
+        challenge = C.parse(f'[[challenge]]\ntitle = "t"\nkind = "reach"\narm = "{arm_name}"\njoints = {joints}\n'
+                            f'branch = "{label}"\n')[0]
+        assert C.check(challenge, arm, C.Answer(q=solution.q[slot])).solved, label
+        other = solution.q[1 - slot]
+        verdict = C.check(challenge, arm, C.Answer(q=other))
+        assert not verdict.solved and verdict.group == f"{arm.slot_labels[1 - slot].split(' (')[0]} instead of {label}"
+
+
 def test_long_titles_that_differ_only_at_their_end_are_two_challenges_and_each_names_a_file(tmp_path):
     # the key was cut to 60 characters: "... from the pose given: part A" and "... part B" were refused as "the same but
     # for case, signs and spaces"; and 60 letters of four bytes each made a file's name of 272 bytes, which most
