@@ -853,6 +853,37 @@ def test_a_student_who_goes_back_to_watching_keeps_the_target_and_is_told_the_en
     asyncio.run(scenario())
 
 
+def test_a_student_back_from_watching_finds_their_target_where_they_left_it_out_of_reach(classroom):
+    """A student who left their target beyond the arm's reach, went back to watching and explored again found the
+    arm as they left it and their target there too (not on the tool, where a target in reach goes with the arm)."""
+    room = classroom.classroom
+
+    async def scenario():
+        teacher = await presenting_a_reach_challenge(classroom)
+        student = await ViserClient(url(classroom)).connect()
+        await until(lambda: any(m.student is not None and m.session is not None for m in room.members.values()),
+                    what="the student's own arm")
+        member = next(m for m in room.members.values() if m.student is not None)
+        session = member.session
+        far = session.state.last.target.copy()
+        far[:3, 3] = (2.5, 0.4, 0.9)  # 2.6 m from the base: beyond the UR10's 1.3 m
+        session.apply(lambda state: state.move_target(far, cause="typed"))
+        left = session.state.last
+        assert not left.reachable
+        for button, then in (("Back to the presenter's arm", "Explore on my own"),
+                             ("Explore on my own", "Back to the presenter's arm")):
+            await student.set_gui(button, True)
+            await until(lambda: then in student.gui, what=then)
+        back = member.session.state.last
+        assert member.session is not session and np.array_equal(back.q, left.q)
+        np.testing.assert_allclose(back.target, far, atol=1e-12)
+        assert not back.reachable
+        for client in (teacher, student):
+            await client.close()
+
+    asyncio.run(scenario())
+
+
 def test_a_student_who_goes_back_to_watching_as_the_challenge_starts_is_given_it(classroom, monkeypatch, caplog):
     """The start gives each watching student their own arm, then the task. A student's "Back to the presenter's
     arm", handled on its own thread, can land in between: the start then read the arm just taken away, and the
