@@ -897,6 +897,24 @@ def test_on_the_base_axis_a_branch_behind_is_the_one_in_front_turned_half_a_turn
         C.parse('[[challenge]]\ntitle = "Up"\nkind = "reach"\narm = "three_dof"\njoints = [30, -90, 90]\nbranch = 4\n')
 
 
+@pytest.mark.parametrize("arm_name", ["course", "three_dof"])
+def test_a_tool_off_the_target_is_too_high_along_the_arms_own_vertical(arm_name):
+    """The desktop arm stands with its y axis up: a student 50 mm above its target was told "too far towards +y", and
+    one 50 mm beside it, along z, "50 mm too high"."""
+    arm = Arm.preset(arm_name)
+    joints = "[10, -30, 60]" if arm_name == "three_dof" else "[10, -60, 80, -30, 60, 20]"
+    challenge = C.parse(f'[[challenge]]\ntitle = "t"\nkind = "reach"\narm = "{arm_name}"\njoints = {joints}\n')[0]
+    q = np.array(challenge.joints)
+    up = int(np.argmax(np.abs(arm.up)))
+    for axis in range(3):
+        shift = np.zeros(3)
+        shift[axis] = 0.05 * (1 if axis == up else -1)
+        moved = q + np.linalg.lstsq(arm.jacobian(q)[:3, :], shift, rcond=None)[0]
+        verdict = C.check(challenge, arm, C.Answer(q=moved))
+        words = "too high" if axis == up else f"too far towards −{'xyz'[axis]}"
+        assert verdict.group == f"tool {words}" and re.search(rf"\b(49|50|51) mm {words}\.", verdict.message), verdict.message
+
+
 @pytest.mark.parametrize("arm_name, joints", [("scara", "[-100, 136, 9, 6]"), ("planar_elbow", "[-120, 28]")])
 def test_a_branch_named_by_its_whole_label_is_that_branch(arm_name, joints):
     """The SCARA's and the planar elbow's labels say which sign of θ2 each elbow is: "elbow right (θ2 ≥ 0)". A file

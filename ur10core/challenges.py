@@ -710,21 +710,19 @@ def _needs(value, what: str):
     return value
 
 
-def _direction(offset: np.ndarray) -> str:
-    """"1181 mm from the target: 1180 mm too high, 40 mm too far towards −x": the parts of ``offset`` (m) that matter."""
-    words = []
+def _direction(offset: np.ndarray, up) -> str:
+    """"1181 mm from the target: 1180 mm too high, 40 mm too far towards −x": the parts of ``offset`` (m) that matter,
+    ``up`` (3,) the arm's vertical (the desktop arm's is y)."""
     largest = np.abs(offset).max()
-    for axis, value in zip("xyz", offset):
-        if abs(value) >= 0.3 * largest and abs(value) >= 5e-4:
-            side = ("too high" if value > 0 else "too low") if axis == "z" else f"too far towards {'+' if value > 0 else '−'}{axis}"
-            words.append(f"{1000 * abs(value):.0f} mm {side}")
+    words = [f"{1000 * abs(offset[k]):.0f} mm {_side(offset, k, up)}" for k in range(3)
+             if abs(offset[k]) >= 0.3 * largest and abs(offset[k]) >= 5e-4]
     return f"{1000 * np.linalg.norm(offset):.0f} mm from the target: {', '.join(words)}"
 
 
-def _main_axis(offset: np.ndarray) -> str:
-    axis = int(np.argmax(np.abs(offset)))
-    if axis == 2:
-        return "too high" if offset[2] > 0 else "too low"
+def _side(offset: np.ndarray, axis: int, up) -> str:
+    """Which way ``offset`` (3,) goes along base axis ``axis``: too high or low along ``up``, else towards ±x, ±y or ±z."""
+    if up[axis]:
+        return "too high" if offset[axis] * up[axis] > 0 else "too low"
     return f"too far towards {'+' if offset[axis] > 0 else '−'}{'xyz'[axis]}"
 
 
@@ -756,7 +754,8 @@ def _check_reach(challenge: Challenge, arm: Arm, answer: Answer) -> Verdict:
     text = _joints_text(arm, q)
     offset = T[:3, 3] - goal[:3, 3]
     if np.linalg.norm(offset) > challenge.position_tolerance:
-        return Verdict(False, f"Your tool is {_direction(offset)}.", f"tool {_main_axis(offset)}", text)
+        return Verdict(False, f"Your tool is {_direction(offset, arm.up)}.",
+                       f"tool {_side(offset, int(np.argmax(np.abs(offset))), arm.up)}", text)
     turn = _turn_between(arm, T[:3, :3], goal[:3, :3])
     if turn > challenge.orientation_tolerance:
         return Verdict(False, f"The tool is on the target but turned {math.degrees(turn):.0f}° from its orientation.",
