@@ -897,6 +897,28 @@ def test_on_the_base_axis_a_branch_behind_is_the_one_in_front_turned_half_a_turn
         C.parse('[[challenge]]\ntitle = "Up"\nkind = "reach"\narm = "three_dof"\njoints = [30, -90, 90]\nbranch = 4\n')
 
 
+def test_a_tool_that_must_not_turn_is_held_to_what_the_arm_controls_of_its_turn():
+    """``still = true`` was checked on an arm that controls its tool's whole orientation only: a SCARA's tool could
+    spin about its axis (the one turn it controls) and be told "Solved", and the terms did not say it must not
+    turn; on an arm that places its tool's position only, it was taken and ignored. That one is refused now."""
+    text = '[[challenge]]\ntitle = "t"\nkind = "velocity"\narm = "{}"\nvelocity_mm_s = [100, 0, 0]\nstill = true\n'
+    arm = Arm.preset("scara")
+    challenge, = C.parse(text.format("scara"))
+    assert C.terms(challenge, arm).endswith("without turning about its axis (under 1 °/s).")
+    q = np.array(arm.specs.home)
+    rates = C._velocity_rates(challenge, arm, q)
+    assert C.check(challenge, arm, C.Answer(q=q, rates=rates)).solved
+    np.testing.assert_allclose(arm.tool_twist(q, rates)[5], 0.0, atol=1e-9)
+    spinning = rates + np.radians([0, 0, 0, 10])  # its tool's own joint: v is the same, the yaw is not
+    verdict = C.check(challenge, arm, C.Answer(q=q, rates=spinning))
+    assert not verdict.solved and verdict.group == "tool turns" and "10.0 °/s" in verdict.message
+    solution, words = C.solution(challenge, arm)
+    assert solution is None and "one answer" in words
+    for name in ("three_dof", "cylindrical"):
+        with pytest.raises(ValueError, match=f"line 6: the {name} arm places its tool's position only"):
+            C.parse(text.format(name))
+
+
 @pytest.mark.parametrize("arm_name", ["course", "three_dof"])
 def test_a_tool_off_the_target_is_too_high_along_the_arms_own_vertical(arm_name):
     """The desktop arm stands with its y axis up: a student 50 mm above its target was told "too far towards +y", and

@@ -21,7 +21,7 @@ import numpy as np
 
 from .arm import PRESETS, Arm, factor_scales
 from .dh import DHTable
-from .differential import damped_inverse
+from .differential import TASK_ROWS, damped_inverse
 from .dynamics import GRAVITY, MASSES, centres_of_mass
 from .solvers.spherical_wrist import spherical_wrist, wrist_split
 from .solvers.ur import separation_steps, shoulder_angles
@@ -491,6 +491,9 @@ def _validated(challenge: Challenge, arm: Arm) -> Challenge:
                                       f"{', '.join(sorted(MASSES))}, not for {arm_name!r:.40}")
     if challenge.velocity is not None and not any(challenge.velocity):
         raise _FieldError("velocity_mm_s", "the asked velocity must not be zero")
+    if challenge.still and arm.task == "position":  # (it was taken and never checked)
+        raise _FieldError("still", f"the {arm_name} arm places its tool's position only, not its orientation: "
+                                   "its tool cannot be asked not to turn")
     if kind == "velocity" and _velocity_pose(challenge, arm) is None:  # nor is a velocity no joint rates give
         limits = ", ".join(f"±{RATE_LIMITS[k]:g} {'°/s' if k == 'R' else 'mm/s'}" for k in sorted(set(arm.joint_types)))
         raise _FieldError("velocity_mm_s", f"no pose of the {arm_name} arm within its limits moves the tool so with joint "
@@ -641,7 +644,8 @@ def terms(challenge: Challenge, arm: Arm | None = None) -> str:
         return (f"Checked: your table's forward kinematics against the arm's at zero joints, its home and {DH_SAMPLES} "
                 f"random joint values: the tool frame within {100 * challenge.position_tolerance:.3g} mm.")
     if challenge.kind == "velocity":
-        still = ", without turning (under 1 °/s)" if challenge.still and arm.task == "pose" else ""
+        still = "" if not challenge.still else ", without turning (under 1 °/s)" if arm.task == "pose" else \
+            ", without turning about its axis (under 1 °/s)"
         return (f"Checked: your joint rates, at your pose, move the tool at v = {_vector(1000 * np.array(challenge.velocity))} mm/s, "
                 f"in the base frame, within {1000 * challenge.velocity_tolerance:.3g} mm/s{still}.")
     force = f"F = {_vector(challenge.force)} N" + (f" and M = {_vector(challenge.moment)} N·m" if any(challenge.moment) else "")
@@ -1080,7 +1084,7 @@ def _check_velocity(challenge: Challenge, arm: Arm, answer: Answer) -> Verdict:
     text = "q̇ " + _joints_text(arm, rates)
     shown = ", ".join(f"{1000 * c:+.0f}" for c in v)
     miss = float(np.linalg.norm(v - asked))
-    turning = float(np.linalg.norm(twist[3:])) if challenge.still and arm.task == "pose" else 0.0
+    turning = float(np.linalg.norm(twist[[r for r in TASK_ROWS[arm.task] if r >= 3]])) if challenge.still else 0.0
     if miss > challenge.velocity_tolerance:
         speed, asked_speed = float(np.linalg.norm(v)), float(np.linalg.norm(asked))
         if speed < challenge.velocity_tolerance:
@@ -1117,9 +1121,9 @@ def _velocity_pose(challenge: Challenge, arm: Arm, samples: int = 2000) -> tuple
 
 def _velocity_rates(challenge: Challenge, arm: Arm, q: np.ndarray) -> np.ndarray:
     """Joint rates (..., n) that move the tool at the asked velocity from joints ``q`` (..., n), as the check
-    weighs them: without turning (all six rows of J) where it must not turn, else from J_v's rows alone
-    (the least-squares rates of all six would trade the asked v for an ω nobody asked about)."""
-    if challenge.still and arm.task == "pose":
+    weighs them: without turning where it must not turn (the rows of J the arm controls: a SCARA's yaw with v), else
+    from J_v's rows alone (the least-squares rates of all six would trade the asked v for an ω nobody asked about)."""
+    if challenge.still:
         return arm.joint_rates(q, np.concatenate([challenge.velocity, np.zeros(3)])).qdot
     return damped_inverse(arm.jacobian(q)[..., :3, :], np.broadcast_to(challenge.velocity, np.shape(q)[:-1] + (3,)))[0]
 
