@@ -106,6 +106,11 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
     for origin in args.allow_origin:
         if not origin.startswith(("http://", "https://")) or "/" in origin.split("://", 1)[1].rstrip("/"):
             parser.error(f"--allow-origin takes a page's origin such as http://host:8000, got {origin!r}")
+    from .serving.server import listening_problem
+
+    problem = listening_problem(args.host, args.port)
+    if problem:
+        parser.error(f"--host {args.host} --port {args.port}: {problem}")
     return args
 
 

@@ -19,7 +19,7 @@ import pytest
 from viser import _messages as messages
 
 from ur10teach.__main__ import parse_args
-from ur10teach.serving.server import lan_addresses
+from ur10teach.serving.server import TeachingServer, lan_addresses, listening_problem
 from ur10dev.app_process import ROOT, running_app, serving
 from ur10dev.viser_client import ViserClient
 from ur10dev.waiting import HANG_TIMEOUT, until, wait_for
@@ -62,6 +62,35 @@ def test_the_arm_to_open_on_is_one_of_the_picker(capsys):
     with pytest.raises(SystemExit):
         parse_args(["--arm", "ur10e"])  # the UR10's numbers are --preset's
     assert "argument --arm: invalid choice: 'ur10e'" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("flags, words", [
+    (["--port", "70000"], "the port is from 1 to 65535"),
+    (["--port", "-1"], "the port is from 1 to 65535"),
+    (["--host", "nosuchhost.invalid"], "the host is an address of this computer"),
+    (["--host", "999.1.1.1"], "the host is an address of this computer"),
+    (["--host", "192.0.2.1"], "this computer has no address 192.0.2.1"),  # (TEST-NET-1: nobody's)
+])
+def test_a_host_or_port_this_computer_cannot_serve_at_is_refused_at_once(flags, words, capsys):
+    """viser tried a thousand ports at an address that is not this computer's (a typo, or the one it had on
+    yesterday's network), then waited for ever without a word; at a name it looked each up in a DNS a classroom
+    without internet may never answer; a port beyond 65535 printed a traceback and hung."""
+    with pytest.raises(SystemExit):
+        parse_args(flags)
+    assert words in capsys.readouterr().err
+    with pytest.raises(ValueError, match=words):
+        TeachingServer(host=flags[1] if flags[0] == "--host" else "127.0.0.1",
+                       port=int(flags[1]) if flags[0] == "--port" else 0)
+
+
+def test_an_ipv6_host_is_given_as_an_address_a_browser_takes():
+    if listening_problem("::1", 0):
+        pytest.skip("this machine has no IPv6 loopback")
+    app = TeachingServer(host="::1", port=0)
+    try:
+        assert app.urls == [f"http://[::1]:{app.port}"]  # ("http://::1:8080" is no address)
+    finally:
+        app.stop()
 
 
 def test_a_challenge_on_the_app_s_ur10_must_fit_the_preset_it_runs(tmp_path, capsys, monkeypatch):

@@ -6,6 +6,7 @@ import asyncio
 import ctypes
 import functools
 import gc
+import ipaddress
 import logging
 import math
 import socket
@@ -98,6 +99,32 @@ def _linux_interface_addresses() -> list[str]:
             except OSError:  # no IPv4 address, or gone meanwhile
                 pass
     return found
+
+
+def listening_problem(host: str, port: int) -> str:
+    """Why this computer cannot serve at ``host``:``port`` ("" if it can): a port out of range, a name, or an
+    address that is not this computer's (a typo, or the network it was on yesterday). viser tried a thousand ports
+    there, then waited for ever without a word (a port beyond 65535: after a traceback).
+
+    >>> listening_problem("127.0.0.1", 0), listening_problem("0.0.0.0", 70000)[:24]
+    ('', 'the port is from 1 to 65')
+    """
+    if isinstance(port, bool) or not isinstance(port, int) or not 0 <= port <= 65535:
+        return f"the port is from 1 to 65535 (0: any free one), got {port!r:.20}"
+    if host in ("", "localhost"):
+        return ""
+    try:
+        address = ipaddress.ip_address(host)
+    except ValueError:
+        return (f"the host is an address of this computer: 127.0.0.1 (this computer alone) or 0.0.0.0 (students on "
+                f"the network too), got {host!r:.60}")
+    try:
+        with socket.socket(socket.AF_INET6 if address.version == 6 else socket.AF_INET, socket.SOCK_STREAM) as probe:
+            probe.bind((host, 0))
+    except OSError as error:
+        return (f"this computer has no address {host} ({error.strerror or error}); its network may have changed. "
+                "0.0.0.0 lets students on the network join at whatever address it has")
+    return ""
 
 
 _SIOCGIFFLAGS, _SIOCGIFADDR = 0x8913, 0x8915  # <linux/sockios.h>
@@ -242,6 +269,9 @@ class TeachingServer:
                  allowed_origins=(), gate: Gate | None = None, lecture: bool = False, light: bool = False,
                  challenges: tuple[Challenge, ...] | None = None, results: Path | None = None) -> None:
         refuse_in_worker_process()
+        problem = listening_problem(host, port)
+        if problem:
+            raise ValueError(problem)
         self.arm = Arm.preset(preset)
         if first_arm not in FIRST_ARMS:
             raise ValueError(f"first_arm: {first_arm!r} is not an arm of the picker")
@@ -337,7 +367,7 @@ class TeachingServer:
         """Where browsers can reach the app."""
         if self.host in ("0.0.0.0", ""):
             return [f"http://127.0.0.1:{self.port}"] + [f"http://{a}:{self.port}" for a in lan_addresses()]
-        return [f"http://{self.host}:{self.port}"]
+        return [f"http://[{self.host}]:{self.port}" if ":" in self.host else f"http://{self.host}:{self.port}"]  # (an IPv6 address in brackets)
 
     @property
     def sessions(self) -> dict[int, ArmSession]:
