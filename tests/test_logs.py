@@ -3,7 +3,7 @@
 import io
 import logging
 
-from ur10teach.serving.logs import RepeatLimiter
+from ur10teach.serving.logs import RepeatLimiter, install
 
 
 def _logger(stream: io.StringIO, limiter: RepeatLimiter) -> logging.Logger:
@@ -72,3 +72,21 @@ def test_each_kind_of_dropped_message_is_shown():
     assert text.count("a wrong join code from 10.0.0.9") == 4  # three, and the note that more are counted
     # the note is the message as it reads, not its template (issue 30, bug 2)
     assert "%s" not in text and "%d" not in text and "from 10.0.0.9 (3 since its last lock-out) (repeating" in text
+
+
+def test_the_console_shows_the_websocket_librarys_problems_not_its_news():
+    """The teacher's console began with websockets' "server listening on 127.0.0.1:8080" (above the address the app
+    prints, which differs when the port was busy) and said "connection open" as students joined."""
+    root, library = logging.getLogger(), logging.getLogger("websockets")
+    levels, filters = (root.level, library.level), {handler: list(handler.filters) for handler in root.handlers}
+    try:
+        root.setLevel(logging.INFO)  # (as install() sets it where pytest's own handlers are not there before it)
+        install()
+        assert logging.getLogger("ur10teach.serving.classroom").isEnabledFor(logging.INFO)
+        assert not logging.getLogger("websockets.server").isEnabledFor(logging.INFO)
+        assert logging.getLogger("websockets.server").isEnabledFor(logging.WARNING)
+    finally:  # (pytest's own handlers lose the limiter install() gave them: it would hide other tests' records)
+        root.setLevel(levels[0])
+        library.setLevel(levels[1])
+        for handler in root.handlers:
+            handler.filters[:] = filters.get(handler, [])

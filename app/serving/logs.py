@@ -77,6 +77,8 @@ class RepeatLimiter(logging.Filter):
 def install(level: int = logging.INFO) -> None:
     """The app's logging: one line per record, each handler behind a :class:`RepeatLimiter`."""
     logging.basicConfig(level=level, format="%(levelname)s %(name)s: %(message)s")
+    # ("server listening on 127.0.0.1:8080" above the app's own address, then "connection open" as students joined)
+    logging.getLogger("websockets").setLevel(max(level, logging.WARNING))
     limiter = RepeatLimiter()
     for handler in logging.getLogger().handlers:
         handler.addFilter(limiter)
