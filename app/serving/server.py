@@ -367,7 +367,8 @@ class TeachingServer:
         """Where browsers can reach the app."""
         if self.host in ("0.0.0.0", ""):
             return [f"http://127.0.0.1:{self.port}"] + [f"http://{a}:{self.port}" for a in lan_addresses()]
-        return [f"http://[{self.host}]:{self.port}" if ":" in self.host else f"http://{self.host}:{self.port}"]  # (an IPv6 address in brackets)
+        host = f"[{self.host}]" if ":" in self.host else self.host  # (an IPv6 address goes in brackets)
+        return [f"http://{host}:{self.port}"]
 
     @property
     def sessions(self) -> dict[int, ArmSession]:
