@@ -797,6 +797,33 @@ def test_the_shared_ur10_lives_under_the_roots_an_explorer_hides(classroom):
     assert names and all(name.split("/")[1] in {root.strip("/") for root in roots} for name in names)
 
 
+def test_a_view_a_browser_sent_that_is_not_among_the_choices_stops_no_framing(classroom):
+    """viser holds the value a browser sent before the widget's callback has refused it and put the last one back.
+    A student's set-up that framed their camera in that moment failed ("could not set up client 9", after a crafted
+    "Look from" value: found by the classroom monkey), and a cloud or a path framed then raised in its worker."""
+    from ur10teach.features.camera import VIEWS
+
+    async def scenario():
+        student = await ViserClient(f"http://127.0.0.1:{classroom.port}").connect()
+        await until(lambda: classroom.classroom.members and member_of(classroom, 0).camera is not None, what="the camera")
+        camera, framed = member_of(classroom, 0).camera, []
+        camera.look_from = framed.append
+        await student.set_gui("Look from", "Top (x–y plane)")
+        await until(lambda: VIEWS["Top (x–y plane)"] in framed, what="the top view framed")
+        camera.direction._impl.value = "not an option"  # held so by viser before the widget's callback runs
+        camera.frame()
+        assert framed[-1] == VIEWS["Top (x–y plane)"]
+        camera.direction._impl.value = "Top (x–y plane)"
+        del camera.look_from
+        await student.set_gui("Look from", "not an option")  # the callback: refused, and the top view put back
+        await until(lambda: any("not one of the choices" in body for _, body in student.received.notifications),
+                    what="the refusal")
+        await until(lambda: camera.direction.value == "Top (x–y plane)", what="the top view put back")
+        await student.close()
+
+    asyncio.run(scenario())
+
+
 def test_the_class_is_shown_the_desktop_arm_played_and_explored(classroom):
     """The presenter shows the 3-DOF desktop arm: the class sees it move along the course's path
     with its live panel; an explorer drives a copy of it and the class's stays hidden for them."""

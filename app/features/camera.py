@@ -203,6 +203,7 @@ class CameraControls(View):
         self._client = client
         self.phone = phone
         self._views = views_for(up)  #: the "Look from" choices, named in the axes of the arm shown
+        self._view = "Course figure"  #: the view last picked in "Look from", which :meth:`frame` looks from
         self.body_radius = body_radius  #: the arm shown's (:meth:`show_arm`)
         self._snapshot = snapshot
         self._guard = guard
@@ -219,12 +220,12 @@ class CameraControls(View):
         folder = gui.add_folder("View", order=0.5, expand_by_default=False)  # near the top: a teacher wants it first
         self.folders = (folder,)
         with folder:
-            self.direction = gui.add_dropdown("Look from", tuple(self._views), initial_value="Course figure")
+            self.direction = gui.add_dropdown("Look from", tuple(self._views), initial_value=self._view)
             self.frame_button = gui.add_button("Frame the arm", icon=viser.Icon.FOCUS_CENTERED,
                                                hint="The arm, its ghosts, its target and what else is shown")
         self.lecture = LectureMode(gui, folder, lecture, guard, hide=self._hide_panel)
         self.light = LightView(client, folder, light, guard)
-        self.direction.on_update(guard(lambda _: self.frame()))
+        self.direction.on_update(guard(lambda _: self._picked()))
         self.frame_button.on_click(guard(lambda _: self.frame()))
         if follow:
             client.camera.on_update(self.camera_moved)
@@ -247,12 +248,20 @@ class CameraControls(View):
             self._framed_size = size
         self._guard(lambda _: self.frame())(None)
 
-    def frame(self) -> None:
-        """Point this browser's camera at the arm and its target, from the chosen direction."""
-        if self.direction.value not in self._views and RENAMED.get(self.direction.value) in self._views:
-            self.direction.value = RENAMED[self.direction.value]  # (which frames it, from this callback again)
+    def _picked(self) -> None:
+        """A view picked in "Look from" is framed, and from then on. One picked in the list as the arm shown turned
+        its vertical is that view in the new names; one not among the choices is refused, and put back."""
+        name = self.direction.value
+        if name not in self._views and RENAMED.get(name) in self._views:
+            self.direction.value = RENAMED[name]  # (which frames it, from this callback again)
             return
-        self.look_from(self._views[chosen(self.direction, "look from")])
+        self._view = chosen(self.direction, "look from")
+        self.frame()
+
+    def frame(self) -> None:
+        """Point this browser's camera at the arm and its target, from the view last picked. (viser holds what a
+        browser sent before its callback has refused it: a student's set-up that framed their camera then failed.)"""
+        self.look_from(self._views.get(self._view, VIEWS["Course figure"]))
 
     def show_arm(self, body_radius: float, up) -> None:
         """Look at another arm (a classroom's camera outlives its arms): frame it with ``body_radius`` of room about
@@ -262,10 +271,10 @@ class CameraControls(View):
         views = views_for(up)
         if tuple(views) == tuple(self._views):
             return
-        chosen_at = list(self._views).index(self.direction.value) if self.direction.value in self._views else 0
-        self._views = views
+        view = list(views)[list(self._views).index(self._view)]
+        self._views, self._view = views, view
         self.direction.options = tuple(views)  # (a value no longer among them goes to the first, and is framed)
-        self.direction.value = list(views)[chosen_at]
+        self.direction.value = view
 
     def show_also(self, name: str, points: np.ndarray | None, world: np.ndarray | None = None, now: bool = True) -> None:
         """Keep ``points`` (n, 3; None: no more) in view with the arm from now on, and (``now``) frame them now.
