@@ -939,6 +939,27 @@ def test_a_presenters_panel_taken_away_by_a_hand_over_holds_nothing_back(classro
     asyncio.run(scenario())
 
 
+def test_a_challenge_picked_as_a_hand_over_takes_the_folder_away_is_not_an_error(classroom):
+    """The presenter picked a challenge as another browser took over presenting: the preview was written into the
+    folder the hand-over had just removed, and the teacher's console showed "callback failed" and viser's "Cannot
+    assign to 'content' on a removed GuiMarkdownHandle" (a monkey with eight students handing over found it)."""
+    room = classroom.classroom
+
+    async def scenario():
+        first = await ViserClient(url(classroom)).connect()
+        await become_presenter(first, classroom)
+        await until(lambda: room.presenter.desk is not None, what="the presenter's Challenge folder")
+        desk = room.presenter.desk
+        second = await ViserClient(url(classroom)).connect()
+        await become_presenter(second, classroom)
+        await until(lambda: desk.closed and room.presenter.desk is not desk, what="the hand-over")
+        desk._preview()  # the pick's callback, run after the hand-over
+        for client in (first, second):
+            await client.close()
+
+    asyncio.run(scenario())
+
+
 def test_a_student_works_on_the_challenge_arm_whatever_the_class_is_shown(classroom):
     """The teacher shows the class another arm while a UR10 challenge runs: a student who comes late, or explores
     again after watching, gets the challenge's arm, not the one on the projector, and as they left it."""

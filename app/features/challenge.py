@@ -114,13 +114,21 @@ class ChallengeDesk:
         try:
             challenge = self.chosen()
         except ValueError as why:  # a question about the pose shown that the arm shown cannot be asked
-            self.preview.content = f"Not about the arm shown: {html.escape(str(why), quote=False)}."
+            self._show_preview(f"Not about the arm shown: {html.escape(str(why), quote=False)}.")
             return
         shown = "; asked of the class's arm as it stands when you start" if challenge.title in POSE_QUESTIONS else ""
-        self.preview.content = (f"{challenge_markdown(challenge, arm=self._arm_of(challenge))}\n\n"
-                                f"*{challenge.kind.replace('_', ' ')}, on {choice_of(challenge.arm)}{shown}*")
-        if challenge.time_limit and not self.minutes.value:
-            self.minutes.value = round(challenge.time_limit / 60)
+        self._show_preview(f"{challenge_markdown(challenge, arm=self._arm_of(challenge))}\n\n"
+                           f"*{challenge.kind.replace('_', ' ')}, on {choice_of(challenge.arm)}{shown}*",
+                           round(challenge.time_limit / 60) if challenge.time_limit else 0)
+
+    def _show_preview(self, text: str, minutes: int = 0) -> None:
+        try:
+            self.preview.content = text
+            if minutes and not self.minutes.value:
+                self.minutes.value = minutes
+        except RuntimeError:  # viser's word for a removed widget: a hand-over took this folder as the pick came
+            if not self.closed:
+                raise
 
     def render_panel(self) -> None:
         self._on_render()  # first: a change from here on asks for the next redraw
