@@ -271,7 +271,8 @@ class CameraControls(View):
         views = views_for(up)
         if tuple(views) == tuple(self._views):
             return
-        view = list(views)[list(self._views).index(self._view)]
+        names = list(self._views)
+        view = list(views)[names.index(self._view) if self._view in names else 0]
         self._views, self._view = views, view
         self.direction.options = tuple(views)  # (a value no longer among them goes to the first, and is framed)
         self.direction.value = view
