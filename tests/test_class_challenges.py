@@ -314,7 +314,9 @@ def test_each_challenges_results_are_kept_on_the_servers_computer_as_students_ch
         assert [(name, bytes(data)) for name, data in teacher.received.downloads.values()] == [(first.file_name, first.results_csv())]
         await teacher.set_gui("Challenge", "Reach it elbow down")
         await teacher.set_gui("Start the challenge", True)
-        await until(lambda: room.challenges.running and room.challenges.run is not first, what="the second challenge")
+        # the run is made before its students are enlisted, each in turn: the student is in it once their card is
+        await until(lambda: room.challenges.running and room.challenges.run is not first
+                    and member.student in room.challenges.run.students.values(), what="the student in the second challenge")
         for client in (teacher, student):
             await client.close()
         return first, room.challenges.run
@@ -447,11 +449,11 @@ def test_a_challenge_started_while_the_last_one_is_still_ending_waits_for_its_en
         await teacher.set_gui("Start the challenge", True)
         await until(lambda: starts, what="the start pressed")
         go_on.set()
-        await until(lambda: room.challenges.running and room.challenges.run is not first, what="the second challenge")
+        await until(lambda: room.challenges.running and room.challenges.run is not first
+                    and member.card is not None and member.card is not card, what="the second challenge, with its card")
         assert (folder / first.file_name).read_bytes() == first.results_csv()
         assert "1,,2,no,,4 5 6" in first.results_csv().decode("utf-8-sig")
         assert not any("Not accepted" in title for title, _ in teacher.received.notifications)
-        assert member.card is not None and member.card is not card  # the new task's
         for client in (teacher, student):
             await client.close()
 
