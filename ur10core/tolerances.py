@@ -58,8 +58,10 @@ STRETCHED_TOLERANCE = 1e-9
 
 #: Metres or radians. A joint value this far beyond a limit is at the limit: IK at a pose on a
 #: limit (the desktop arm's forearm level, θ3 = 0) gives it to rounding, either side of it,
-#: and a slider's value is compared to it as closely.
-LIMIT_TOLERANCE = 1e-9
+#: and a slider's value is compared to it as closely. On a stretched or folded elbow the
+#: elbow's angle, and the joints that follow from it, are fixed only to √rounding (3e-8 rad
+#: measured on the KR210, with θ2 and θ5 on their limits): a few times that.
+LIMIT_TOLERANCE = 1e-7
 
 #: A pose's rotation part may deviate from orthonormal by this much (max |Rᵀ R − I|).
 ROTATION_TOLERANCE = 1e-6
