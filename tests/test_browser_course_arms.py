@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from ur10teach.serving.gate import browser_of
 from ur10dev.browser import (
     HANG_TIMEOUT_MS, canvas_changed, choose, click, dom_id, lose_the_next_value, set_checkbox, settled_canvas, step_slider, unfold,
 )
@@ -104,6 +105,8 @@ def test_the_course_arms_in_the_picker(open_page, light_app):
     wait_for(lambda: any(k != client_id and s.built and s.choice == "Elbow arm + spherical wrist"
                          for k, s in app.sessions.items()), what="the elbow arm back after the reload")
     client_id = next(k for k, s in app.sessions.items() if s.choice == "Elbow arm + spherical wrist")
+    # known by the cookie its page was given, which Chromium's websocket sent back: not by its address alone
+    assert browser_of(app.sessions[client_id].client).startswith("127.0.0.1 ")
     wait_for(lambda: page.get_by_text("Your arms are as this computer left them.", exact=True).count() > 0, what="the welcome back")
     page.wait_for_selector(dom_id(app.sessions[client_id].joints.sliders[0]), timeout=HANG_TIMEOUT_MS)
     typed_back = pick(page, app, client_id, "Your own DH table")

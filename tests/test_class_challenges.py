@@ -26,6 +26,7 @@ from ur10teach.features.course_arms.editor import CONVENTIONS
 from ur10teach.features.joint_panel import display_text, rate_label, typed_label
 from ur10teach.serving.gate import address_of
 from ur10teach.serving.challenge_run import ChallengeRun, clean_nickname, spreadsheet_safe, summary_markdown
+from ur10teach.serving.classroom import PRESENTER
 from ur10teach.view import HELD_BACK
 from ur10dev.viser_client import ViserClient, messages
 from ur10dev.waiting import HANG_TIMEOUT
@@ -249,6 +250,57 @@ def test_a_student_back_before_the_server_noticed_they_had_gone_keeps_their_numb
         for client in (teacher, again):
             await client.close()
         student.abort()
+
+    asyncio.run(scenario())
+    classroom.stop()
+
+
+def test_students_behind_one_address_each_keep_their_own_attempt_and_none_takes_the_presenters_role(monkeypatch):
+    """A class behind a router's NAT reaches the server from one address. Known by it alone, a student whose Wi-Fi
+    dropped came back to the attempt of whoever else had left from there (their answer typed, their checks, their
+    "Solved"), a new student joined as one who had left, and the first browser there after the presenter's had gone
+    became the presenter, without the join code (until 2026-12-06). Each browser now has its own cookie."""
+    from ur10teach.serving import gate
+    from ur10teach.serving.server import TeachingServer
+
+    monkeypatch.setattr(gate, "NEW_CONNECTION_BURST", 10)  # (the pace of one address's arrivals is not tested here)
+    classroom = TeachingServer(port=0, shared=True, gate=gate.Gate(trust_loopback=False))  # loopback addresses stand for laptops
+    room, nat = classroom.classroom, "127.0.0.9"
+    cookie = {name: f"ur10teach_browser={name * 22}" for name in "apsb"}
+
+    def member_with(client):
+        return next((m for m in list(room.members.values()) if m.client.client_id == int(client.gizmo_owner or -1)), None)
+
+    async def scenario():
+        teacher = await ViserClient(url(classroom), local_address=nat, cookie=cookie["p"]).connect()
+        await become_presenter(teacher, classroom)
+        ada = await ViserClient(url(classroom), local_address=nat, cookie=cookie["a"]).connect()
+        await teacher.set_gui("Challenge", "Where is the flange?")
+        await teacher.set_gui("Start the challenge", True)
+        await until(lambda: (member_with(ada) or types.SimpleNamespace(card=None)).card is not None, what="Ada's card")
+        attempt = member_with(ada).student
+        await answer(ada, member_with(ada), "1 2 3", 1)
+        await ada.close()
+        await until(lambda: not attempt.connected, what="Ada away")
+        bo = await ViserClient(url(classroom), local_address=nat, cookie=cookie["b"]).connect()
+        await until(lambda: (member_with(bo) or types.SimpleNamespace(card=None)).card is not None, what="Bo's card")
+        assert member_with(bo).student is not attempt and member_with(bo).student.attempts == 0
+        await until(lambda: "Your numbers (x, y, z)" in bo.gui, what="Bo's answer box")
+        assert not bo.gui["Your numbers (x, y, z)"].get("value")  # not Ada's "1 2 3"
+        again = await ViserClient(url(classroom), local_address=nat, cookie=cookie["a"]).connect()
+        await until(lambda: (member_with(again) or types.SimpleNamespace(student=None)).student is attempt, what="Ada's attempt back")
+        await until(lambda: (again.gui.get("Your numbers (x, y, z)") or {}).get("value") == "1 2 3", what="Ada's typing back")
+        # the presenter's browser leaves: another browser from there watches; the presenter's own presents again
+        await teacher.close()
+        await until(lambda: room.presenter is None, what="the presenter gone")
+        other = await ViserClient(url(classroom), local_address=nat, cookie=cookie["s"]).connect()
+        await until(lambda: (member_with(other) or types.SimpleNamespace(card=None)).card is not None,
+                    what="the other browser set up, a student of the challenge")
+        assert room.presenter is None and member_with(other).role != PRESENTER
+        back = await ViserClient(url(classroom), local_address=nat, cookie=cookie["p"]).connect()
+        await until(lambda: room.presenter is not None and room.presenter is member_with(back), what="the presenter back")
+        for client in (bo, again, other, back):
+            await client.close()
 
     asyncio.run(scenario())
     classroom.stop()
@@ -815,6 +867,20 @@ def test_run_bookkeeping_bounds_and_time_limit():
     assert bo is not ada and run.join("10.0.0.1") is ada and ada.kept == {"numbers": "1 2 3"}
     from ur10teach.serving import challenge_run
 
+    # browsers behind one address (a router's NAT) are told apart by their cookies: each finds its own attempt
+    ada_here, cy = run.join("10.0.0.1 " + "a" * 22), run.join("10.0.0.1 " + "c" * 22)
+    assert ada_here is not ada and cy is not ada_here
+    run.leave(ada_here, {"numbers": "4 5 6"})
+    assert run.join("10.0.0.1 " + "d" * 22) is not ada_here and run.join("10.0.0.1 " + "a" * 22) is ada_here
+    # one address holds at most eight attempts: a page sending new cookies does not fill the board, it takes over
+    # the attempt away longest, as any browser from that address did before
+    crowd = ChallengeRun(challenge, arm, clock=lambda: now[0])
+    browsers = [crowd.join(f"10.2.0.1 {str(k) * 22}") for k in range(challenge_run.CONNECTIONS_PER_ADDRESS)]
+    for k, student in enumerate(browsers):
+        now[0] = 100.0 + k
+        crowd.leave(student, {})
+    assert crowd.join("10.2.0.1 " + "x" * 22) is browsers[0] and crowd.join("10.2.0.1 " + "y" * 22) is browsers[1]
+    assert len(crowd.students) == challenge_run.CONNECTIONS_PER_ADDRESS and crowd.join("10.2.0.2") not in browsers
     small = ChallengeRun(challenge, arm)
     for k in range(challenge_run.MAX_STUDENTS):
         small.join(f"10.1.{k // 250}.{k % 250}")

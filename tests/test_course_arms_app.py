@@ -916,6 +916,59 @@ def test_a_browser_back_from_its_computer_finds_its_arms_as_it_left_them(app):
     asyncio.run(scenario())
 
 
+def test_browsers_on_one_computer_or_behind_one_address_each_find_their_own_arms(app):
+    """A page's browser gets a cookie, which its websocket sends back: a browser back finds its own arms, not those of
+    another browser that left from the same address (students behind a router's NAT, two accounts on one computer),
+    which it was given (until 2026-12-06)."""
+    import urllib.request
+
+    from ur10teach.serving.gate import BROWSER_COOKIE, CONNECTIONS_PER_ADDRESS, address_in
+
+    with urllib.request.urlopen(url(app), timeout=HANG_TIMEOUT) as page:
+        given = page.headers["Set-Cookie"]
+    name, token = given.split(";")[0].split("=")
+    assert name == BROWSER_COOKIE and len(token) == 22
+    assert {"Path=/", "SameSite=Strict", "HttpOnly"} <= {part.strip() for part in given.split(";")}
+    asked = urllib.request.Request(url(app), headers={"Cookie": f"theme=dark; {BROWSER_COOKIE}={token}"})
+    with urllib.request.urlopen(asked, timeout=HANG_TIMEOUT) as page:
+        assert page.headers["Set-Cookie"] is None  # a browser keeps the one it has
+    ada, bo = (f"{BROWSER_COOKIE}={name * 22}" for name in "ab")
+
+    async def connect(cookie: str | None) -> tuple[ViserClient, ArmSession]:
+        client = await ViserClient(url(app), local_address="127.0.0.2", cookie=cookie).connect()
+        session = session_of(app, client)
+        await arrived(client, session)
+        return client, session
+
+    async def scenario():
+        laptop, _ = await connect(ada)
+        await pick(app, laptop, CUSTOM)
+        await laptop.close()
+        await until(lambda: not app.sessions, what="Ada's browser gone")
+        other, fresh = await connect(bo)  # behind the same address: nothing of Ada's
+        assert fresh.choice == UR10 and not other.received.notifications
+        again, back = await connect(ada)
+        assert back.choice == CUSTOM
+        await until(lambda: ("Welcome back", "Your arms are as this computer left them.") in again.received.notifications,
+                    what="the welcome back")
+        await other.close()
+        await until(lambda: len(app.sessions) == 1, what="Bo's browser gone")
+        # one that sends none is known by its address alone (the test above): none of the arms Bo's browser left
+        no_cookie, first = await connect(None)
+        assert first.choice == UR10 and not no_cookie.received.notifications
+        for client in (again, no_cookie):
+            await client.close()
+        # a page that sends a new cookie each time keeps no more arms than its address may have browsers open
+        for k in range(CONNECTIONS_PER_ADDRESS + 2):
+            client, _ = await connect(f"{BROWSER_COOKIE}={k:022d}")
+            await client.close()
+            await until(lambda: not app.sessions, what="the page gone")
+        kept = [browser for browser in app._departed if address_in(browser) == "127.0.0.2"]
+        assert len(kept) == CONNECTIONS_PER_ADDRESS and f"127.0.0.2 {CONNECTIONS_PER_ADDRESS + 1:022d}" in kept
+
+    asyncio.run(scenario())
+
+
 def test_the_light_view_is_one_browsers_and_goes_with_it(app):
     """A laptop without a graphics driver draws the real UR10 at about 4 frames a second, and only a server started
     with ``--light`` helped it (until 2026-12-06): a class started without it had nothing for the few such laptops.

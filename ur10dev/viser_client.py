@@ -138,8 +138,10 @@ class DragStep(NamedTuple):
 class ViserClient:
     """One headless student. Use ``await client.connect()`` then the actions below."""
 
-    def __init__(self, url: str, read: bool = True, local_address: str | None = None, user_agent: str | None = None) -> None:
+    def __init__(self, url: str, read: bool = True, local_address: str | None = None, user_agent: str | None = None,
+                 cookie: str | None = None) -> None:
         self.url = url
+        self.cookie = cookie  #: the Cookie header its websocket sends (None: none, as a browser that blocks cookies)
         self.read = read  # False: a client that never reads its socket (a frozen laptop)
         #: where it connects from: another loopback address (127.0.0.2, ...) stands in for another laptop
         self.local_address = local_address
@@ -161,6 +163,7 @@ class ViserClient:
             max_size=None, compression=None, open_timeout=timeout, create_connection=StampedConnection,
             **({"local_addr": (self.local_address, 0)} if self.local_address else {}),
             **({"user_agent_header": self.user_agent} if self.user_agent else {}),
+            **({"additional_headers": {"Cookie": self.cookie}} if self.cookie else {}),
         )
         await self.send(CAMERA)  # the server counts a client as connected from its first camera
         if self.read:

@@ -22,7 +22,7 @@ import numpy as np
 from ur10core import Arm
 from ur10core.challenges import Answer, Challenge, Verdict, check, terms
 
-from .gate import TokenBucket
+from .gate import CONNECTIONS_PER_ADDRESS, TokenBucket, address_in
 
 #: Checks a student may ask for: one a second (a burst of one).
 CHECKS_PER_SECOND = 1.0
@@ -67,10 +67,10 @@ def spreadsheet_safe(text: str) -> str:
 
 @dataclasses.dataclass
 class Student:
-    """One student's attempt. Kept when their browser leaves: coming back from the same computer finds it."""
+    """One student's attempt. Kept when their browser leaves: coming back from the same browser finds it."""
 
     number: int  #: 1, 2, ... in order of joining: the anonymous id the projector shows
-    address: str
+    browser: str  #: which browser (``gate.browser_of``: its address, and its cookie's token where it has one)
     nickname: str = ""
     connected: bool = True
     acted: bool = False  #: moved their arm, typed or checked since the start
@@ -79,6 +79,7 @@ class Student:
     verdict: Verdict | None = None  #: the last check's
     flange: np.ndarray | None = None  #: (4, 4) where their tool is (pose tasks)
     kept: dict = dataclasses.field(default_factory=dict)  #: their session's state while they are away
+    away_since: float = 0.0  #: (the run's clock) when their browser left
     bucket: TokenBucket | None = None
 
     @property
@@ -129,17 +130,28 @@ class ChallengeRun:
 
     # ------------------------------------------------------------------ students
 
-    def join(self, address: str) -> Student:
-        """A browser joins: the attempt its computer left (if one is away), else a new one."""
+    def join(self, browser: str) -> Student:
+        """A browser joins (``gate.browser_of``): the attempt it left (if it is away), else a new one.
+
+        One address holds at most :data:`~ur10teach.serving.gate.CONNECTIONS_PER_ADDRESS` attempts (a page that sends
+        a new cookie each time must not fill the board): beyond, a new browser there takes the attempt away longest,
+        as any browser from an address did before browsers were told apart."""
         with self._lock:
             for student in self.students.values():
-                if not student.connected and student.address == address:
+                if not student.connected and student.browser == browser:
                     student.connected = True
                     return student
+            address = address_in(browser)
+            there = [s for s in self.students.values() if address_in(s.browser) == address]
+            away = [s for s in there if not s.connected]
+            if len(there) >= CONNECTIONS_PER_ADDRESS and away:
+                student = min(away, key=lambda s: s.away_since)
+                student.connected, student.browser = True, browser
+                return student
             if len(self.students) >= MAX_STUDENTS:
                 raise ValueError(f"this challenge already has {MAX_STUDENTS} students")
             number = len(self.students) + 1
-            student = self.students[number] = Student(number, address, bucket=TokenBucket(CHECKS_PER_SECOND, 1.0, clock=self.clock))
+            student = self.students[number] = Student(number, browser, bucket=TokenBucket(CHECKS_PER_SECOND, 1.0, clock=self.clock))
             return student
 
     def leave(self, student: Student, kept: dict) -> None:
@@ -147,6 +159,7 @@ class ChallengeRun:
         with self._lock:
             student.connected = False
             student.kept = kept
+            student.away_since = self.clock()
 
     def rename(self, student: Student, text: str) -> str:
         name = clean_nickname(text)

@@ -26,7 +26,6 @@ from ..features.course_arms.editor import parse_table
 from ..feedback import guard
 from ..state import ArmState
 from .challenge_run import ChallengeRun
-from .gate import address_of
 from .workers import PanelRefresher
 
 if TYPE_CHECKING:
@@ -149,7 +148,7 @@ class ClassChallenges:
             run = self.run
             if member.closed or member is self.room.presenter or run is None or run.ended or member.student is not None:
                 return
-            student = member.student = run.join(address_of(member.client))
+            student = member.student = run.join(member.browser)
         if member.session is not None and member.session.arm != run.arm:
             self.room.rejoin(member)
         if member.session is not None:  # exploring the challenge's arm already

@@ -42,7 +42,7 @@ from ..state import ArmState
 from ..view import HELD_BACK
 from ..viser_internals import after_broadcast
 from .class_challenges import ClassChallenges
-from .gate import RETURN_WINDOW, address_of, on_a_phone
+from .gate import RETURN_WINDOW, address_of, browser_of, on_a_phone
 from .joining import JoinHelp
 
 if TYPE_CHECKING:
@@ -144,6 +144,7 @@ class Member:
     def __init__(self, client: viser.ClientHandle) -> None:
         self.client = client
         self.address = address_of(client)  #: where it connected from
+        self.browser = browser_of(client)  #: which browser it is, as its return is known
         self.role = VIEWER
         self.session: ArmSession | None = None
         self.folder: viser.GuiFolderHandle | None = None
@@ -223,7 +224,7 @@ class Classroom:
         with self._lock:
             self.members[client.client_id] = member
             left = self.presenter_left
-            back = (left is not None and self.presenter is None and left[0] == member.address
+            back = (left is not None and self.presenter is None and left[0] == member.browser
                     and self.app.clock() - left[1] <= RETURN_WINDOW)
             if back:  # once: a second tab from there is a viewer
                 self.presenter_left = None
@@ -269,7 +270,7 @@ class Classroom:
             if self.presenter is member:
                 self.presenter = None
                 self.live.presenter_here = False
-                self.presenter_left = (member.address, self.app.clock())
+                self.presenter_left = (member.browser, self.app.clock())
         self.app.refresher.request(self.live)
 
     def members_from(self, address: str) -> list[Member]:

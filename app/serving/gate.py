@@ -13,6 +13,8 @@ import ipaddress
 import logging
 import math
 import os
+import re
+import secrets
 import socket
 import threading
 import time
@@ -358,10 +360,16 @@ def _address(connection) -> str:
     return str(remote[0]) if remote else "?"
 
 
-#: How long (s) a browser that left is known again by its address: viser makes one that reconnects (a reload, a
-#: laptop woken, the Wi-Fi back) a new client, and the server gives the next browser from that address what the
-#: last one left (its arms; the presenter's role).
+#: How long (s) a browser that left is known again (:func:`browser_of`): viser makes one that reconnects (a reload,
+#: a laptop woken, the Wi-Fi back) a new client, and the server gives the next page of that browser what the last one
+#: left (its arms; its attempt at a challenge; the presenter's role).
 RETURN_WINDOW = 7200.0
+#: The cookie that tells browsers behind one address apart (a class behind a router's NAT, the accounts of one
+#: computer): a random token the page is given, HttpOnly and this site's alone, which its websocket sends back.
+BROWSER_COOKIE = "ur10teach_browser"
+_BROWSER_TOKEN = re.compile(r"[A-Za-z0-9_-]{22}")
+#: How long (s) a browser keeps its cookie: the week's lessons, not only the return window.
+COOKIE_SECONDS = 7 * 24 * 3600
 #: How long (s) a browser has to answer a ping when another connects from its address. A browser that reconnects
 #: (its page retries every second) often comes back before the server notices its old connection has died: its
 #: websocket is pinged every 20 s and given 20 s more. A pong follows what was sent before the ping: a live page
@@ -373,6 +381,41 @@ def address_of(client) -> str:  # noqa: ANN001
     """The address ``client`` (a ``viser.ClientHandle``) connected from, or "?" once it has gone."""
     connection = _connection_of(client)
     return _address(connection) if connection is not None else "?"
+
+
+def browser_token(request) -> str | None:  # noqa: ANN001
+    """The token of :data:`BROWSER_COOKIE` a request (``websockets.http11.Request``) carries, if it is one the gate
+    could have given."""
+    for header in request.headers.get_all("Cookie"):
+        for pair in header.split(";"):
+            name, _, value = pair.strip().partition("=")
+            if name == BROWSER_COOKIE and _BROWSER_TOKEN.fullmatch(value):
+                return value
+    return None
+
+
+def give_browser_cookie(request, response) -> None:  # noqa: ANN001
+    """A page sent without the browser's cookie gets one (``response``: what viser answers ``request`` with)."""
+    if (response is not None and response.status_code == http.HTTPStatus.OK and browser_token(request) is None
+            and response.headers.get("Content-Type", "").startswith("text/html")):
+        response.headers["Set-Cookie"] = (f"{BROWSER_COOKIE}={secrets.token_urlsafe(16)}; Path=/; "
+                                          f"Max-Age={COOKIE_SECONDS}; SameSite=Strict; HttpOnly")
+
+
+def browser_of(client) -> str:  # noqa: ANN001
+    """Which browser ``client`` (a ``viser.ClientHandle``) is, as its return is known: its address, and its cookie's
+    token where its page has one (students behind one address are then each their own; a browser that sends no
+    cookie is known by its address alone). "?" once it has gone."""
+    connection = _connection_of(client)
+    if connection is None:
+        return "?"
+    token = browser_token(connection.request)
+    return _address(connection) if token is None else f"{_address(connection)} {token}"
+
+
+def address_in(browser: str) -> str:
+    """The address part of a :func:`browser_of`."""
+    return browser.split(" ", 1)[0]
 
 
 def on_a_phone(client) -> bool:  # noqa: ANN001
@@ -497,8 +540,9 @@ def gated_serve(gate: Gate) -> Iterator[None]:
     viser hands ``websockets.asyncio.server.serve`` its handler, a 50 MB message limit
     and its HTTP handler; for the moment the server starts (``viser.ViserServer()``
     returns once it is listening) the call gets the gate's limit, a request check in
-    front of viser's HTTP handler, and a handler that sees the connection through
-    :class:`GatedConnection`. ``tests/test_gate.py`` fails if viser stops calling it so.
+    front of viser's HTTP handler (and the browser's cookie on its page), and a handler
+    that sees the connection through :class:`GatedConnection`. ``tests/test_gate.py``
+    fails if viser stops calling it so.
     """
     _STARTING.acquire()  # one server starting at a time: the patch is the whole process's
     original = websockets.asyncio.server.serve
@@ -535,7 +579,9 @@ def gated_serve(gate: Gate) -> Iterator[None]:
                 refusal = gate.check_request(connection, request)
                 if refusal is not None:
                     return refusal
-                return process_request(connection, request) if process_request is not None else None
+                response = process_request(connection, request) if process_request is not None else None
+                give_browser_cookie(request, response)
+                return response
 
             kwargs["max_size"] = MAX_MESSAGE_BYTES
             kwargs["open_timeout"] = OPEN_TIMEOUT

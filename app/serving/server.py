@@ -44,7 +44,10 @@ from ..session import ArmSession
 from ..style import BRAND_BLUE
 from ..viser_internals import fast_updates, shared_frames, value_fits
 from .classroom import Classroom
-from .gate import RETURN_WINDOW, Gate, TokenBucket, address_of, budget_of, gated_serve, hang_up_silent, on_a_phone
+from .gate import (
+    CONNECTIONS_PER_ADDRESS, RETURN_WINDOW, Gate, TokenBucket, address_in, address_of, browser_of, budget_of, gated_serve,
+    hang_up_silent, on_a_phone,
+)
 from .joining import JoinHelp
 from .workers import APART, JOINS, Cancelled, DragQueue, PanelRefresher, refuse_in_worker_process
 
@@ -136,7 +139,7 @@ _IFF_UP, _IFF_LOOPBACK, _IFF_RUNNING = 0x1, 0x8, 0x40  # <net/if.h>
 ADDRESS_CHECK_S = 10.0
 #: Addresses whose arm changes are remembered (all forgotten beyond it).
 MAX_SWITCH_BUDGETS = 10_000
-#: Addresses whose browsers' arms are kept for their return (``gate.RETURN_WINDOW``; the oldest forgotten first).
+#: Browsers whose arms are kept for their return (``gate.RETURN_WINDOW``; the oldest forgotten first).
 MAX_RETURNING = 256
 #: Open files the server asks for at start: a connection is one, and 1 024 (a common default) ran out
 #: when one address held a thousand half-open requests.
@@ -312,10 +315,9 @@ class TeachingServer:
         #: client id → picker choice → (state, typed table, display choices) of each arm the browser has
         #: left: going back to one finds its pose, target, typed table and what it showed as they were
         self._left_arms: dict[int, dict[str, tuple]] = {}
-        #: client id → (the address it connected from, the client)
-        self._addresses: dict[int, tuple[str, viser.ClientHandle]] = {}
-        #: address → (when, choice shown, its left arms, (lecture mode, light view)) of the browser that left from
-        #: there last
+        #: client id → (the address it connected from, which browser it is (``gate.browser_of``), the client)
+        self._addresses: dict[int, tuple[str, str, viser.ClientHandle]] = {}
+        #: browser → (when, choice shown, its left arms, (lecture mode, light view)) as its page left last
         self._departed: dict[str, tuple[float, str, dict[str, tuple], tuple[bool, bool]]] = {}
         self._switches: dict[str, TokenBucket] = {}  # budget (an address) → its arm changes
         self.clock = time.monotonic  #: the time the arm changes of an address are paced by (a test sets its own)
@@ -408,7 +410,7 @@ class TeachingServer:
             let_go = [member.client for member in self.classroom.members_from(address)]
         else:
             with self._sessions_lock:
-                let_go = [other for at, other in self._addresses.values() if at == address]
+                let_go = [other for at, _, other in self._addresses.values() if at == address]
         current = self.server.get_clients()  # (after: each of those was listed before it was kept)
         for gone in let_go:
             if gone.client_id not in current:
@@ -427,10 +429,10 @@ class TeachingServer:
             self.classroom.connect(client)
         else:
             relay_camera_moves(client, lambda: getattr(self._sessions.get(client.client_id), "camera", None))
-            choice, view, address = self.first_choice, self._view_of(None), address_of(client)
+            choice, view, browser = self.first_choice, self._view_of(None), browser_of(client)
             with self._sessions_lock:
-                self._addresses[client.client_id] = (address, client)
-                when, *left = self._departed.pop(address, (-math.inf, None, {}, view))
+                self._addresses[client.client_id] = (address_in(browser), browser, client)
+                when, *left = self._departed.pop(browser, (-math.inf, None, {}, view))
                 back = self.clock() - when <= RETURN_WINDOW  # from where a browser left: its arms as it left them
                 if back:
                     choice, self._left_arms[client.client_id], view = left
@@ -540,12 +542,15 @@ class TeachingServer:
                 if session is not None:
                     self._leave(client.client_id, session)
                 left = self._left_arms.pop(client.client_id, {})
-                address, _ = self._addresses.pop(client.client_id, (None, None))
-                if address is not None and left:  # kept for its return (one that left mid-change: the arm it changed from)
-                    self._departed.pop(address, None)
-                    self._departed[address] = (self.clock(), next(reversed(left)), left, self._view_of(session))
-                    if len(self._departed) > MAX_RETURNING:
-                        del self._departed[next(iter(self._departed))]
+                address, browser, _ = self._addresses.pop(client.client_id, (None, None, None))
+                if browser is not None and left:  # kept for its return (one that left mid-change: the arm it changed from)
+                    self._departed.pop(browser, None)
+                    self._departed[browser] = (self.clock(), next(reversed(left)), left, self._view_of(session))
+                    # (oldest first) one address keeps as many as it may have browsers open, and all keep MAX_RETURNING:
+                    # a page that sends a new cookie each time must not push the others' arms out
+                    there = [kept for kept in self._departed if address_in(kept) == address]
+                    for kept in there[:-CONNECTIONS_PER_ADDRESS] + list(self._departed)[:-MAX_RETURNING]:
+                        self._departed.pop(kept, None)
             if session is not None:
                 session.close()
         self.janitor.soon()
