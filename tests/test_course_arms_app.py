@@ -1078,13 +1078,15 @@ def test_the_light_flag_starts_every_browser_in_the_light_view(shared):
         app.stop()
 
 
-def test_a_browser_back_before_the_server_noticed_it_had_gone_finds_its_arms():
+def test_a_browser_back_before_the_server_noticed_it_had_gone_finds_its_arms(monkeypatch):
     """A page whose websocket dropped retries every second, and is often back before the server notices its old
     connection has died (viser's websockets ping every 20 s and wait 20 s more): it started afresh, and its arms
     were kept for a later return. A live tab of the same computer is left alone."""
-    from ur10teach.serving.gate import Gate
+    from ur10teach.serving import gate
+    from ur10teach.serving.gate import BROWSER_COOKIE, Gate
     from ur10teach.serving.server import TeachingServer
 
+    monkeypatch.setattr(gate, "NEW_CONNECTION_BURST", 10)  # (the pace of one address's arrivals is not tested here)
     app = TeachingServer(port=0, gate=Gate(trust_loopback=False))  # loopback addresses stand for laptops
 
     async def scenario():
@@ -1102,6 +1104,20 @@ def test_a_browser_back_before_the_server_noticed_it_had_gone_finds_its_arms():
         for client in (again, tab):
             await client.close()
         laptop.abort()
+        # behind one address, only the arriving browser's own pages are pinged: another student's, busy reading its
+        # scene over a slow Wi-Fi (here: not reading at all), is not hung up as a classmate joins (until 2026-12-06)
+        busy = await ViserClient(url(app), local_address="127.0.0.2", cookie=f"{BROWSER_COOKIE}={'b' * 22}").connect()
+        busy_session = session_of(app, busy)
+        busy.freeze()
+        classmate = await ViserClient(url(app), local_address="127.0.0.2", cookie=f"{BROWSER_COOKIE}={'c' * 22}").connect()
+        session_of(app, classmate)
+        assert not busy_session.closed and int(busy.gizmo_owner) in app.server.get_clients()
+        back = await ViserClient(url(app), local_address="127.0.0.2", cookie=f"{BROWSER_COOKIE}={'b' * 22}").connect()
+        assert session_of(app, back).state.last is busy_session.state.last  # its own page back: the silent one has left
+        assert int(busy.gizmo_owner) not in app.server.get_clients()
+        for client in (classmate, back):
+            await client.close()
+        busy.abort()
 
     asyncio.run(scenario())
     app.stop()

@@ -401,11 +401,13 @@ class TeachingServer:
             self._disconnected(client)
 
     def _drop_dead_twins(self, client: viser.ClientHandle) -> None:
-        """Let the browsers of this address that no longer answer leave now (``gate.hang_up_silent``): the browser
-        connecting may be one of them back, before the server has noticed it had gone. Those viser has let go
-        already leave now too: viser lists a client gone, then runs its disconnect callback on its thread pool,
-        where thirty students' arrivals may hold it up, and a reloaded projector would come back as a viewer."""
-        address = address_of(client)
+        """Let this browser's other pages that no longer answer leave now (``gate.hang_up_silent``): the page
+        connecting may be one of them back, before the server has noticed it had gone. Other students' browsers
+        behind the same address are not pinged: one still reading its scene over a slow Wi-Fi would be hung up. The
+        pages of this address viser has let go already leave now too: viser lists a client gone, then runs its
+        disconnect callback on its thread pool, where thirty students' arrivals may hold it up, and a reloaded
+        projector would come back as a viewer."""
+        address, browser = address_of(client), browser_of(client)
         if self.classroom is not None:
             let_go = [member.client for member in self.classroom.members_from(address)]
         else:
@@ -418,7 +420,7 @@ class TeachingServer:
         if self.gate.trusted(address):  # this machine's own tabs do not drop off the network (nor its load tests)
             return
         twins = [other for other_id, other in self.server.get_clients().items()
-                 if other_id != client.client_id and address_of(other) == address]
+                 if other_id != client.client_id and browser_of(other) == browser]
         if twins:
             for twin in asyncio.run_coroutine_threadsafe(hang_up_silent(twins), self.server.get_event_loop()).result():
                 log.info("browser %s from %s no longer answers: it has left", twin.client_id, address)
