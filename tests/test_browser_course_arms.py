@@ -107,7 +107,7 @@ def test_the_course_arms_in_the_picker(open_page, light_app):
     client_id = next(k for k, s in app.sessions.items() if s.choice == "Elbow arm + spherical wrist")
     # known by the cookie its page was given, which Chromium's websocket sent back: not by its address alone
     assert browser_of(app.sessions[client_id].client).startswith("127.0.0.1 ")
-    wait_for(lambda: page.get_by_text("Your arms are as this computer left them.", exact=True).count() > 0, what="the welcome back")
+    wait_for(lambda: page.get_by_text("Your arms are as this browser left them.", exact=True).count() > 0, what="the welcome back")
     page.wait_for_selector(dom_id(app.sessions[client_id].joints.sliders[0]), timeout=HANG_TIMEOUT_MS)
     typed_back = pick(page, app, client_id, "Your own DH table")
     assert typed_back.arm.joint_types == "RRP" and typed_back.editor.rows.value == typed_rows

@@ -901,7 +901,7 @@ def test_a_browser_back_from_its_computer_finds_its_arms_as_it_left_them(app):
         assert back.choice == CUSTOM and back.state.last is typed_left and not back.drawing.show_ghosts
         assert back.editor.rows.value.startswith("500 0 0 0 R\n400")
         await until(lambda: again.received.panel_label == CUSTOM, what="the title naming the typed arm")
-        await until(lambda: ("Welcome back", "Your arms are as this computer left them.") in again.received.notifications,
+        await until(lambda: ("Welcome back", "Your arms are as this browser left them.") in again.received.notifications,
                     what="the welcome back")
         assert (await pick(app, again, UR10)).state.last is ur10_left
         await again.close()
@@ -949,7 +949,7 @@ def test_browsers_on_one_computer_or_behind_one_address_each_find_their_own_arms
         assert fresh.choice == UR10 and not other.received.notifications
         again, back = await connect(ada)
         assert back.choice == CUSTOM
-        await until(lambda: ("Welcome back", "Your arms are as this computer left them.") in again.received.notifications,
+        await until(lambda: ("Welcome back", "Your arms are as this browser left them.") in again.received.notifications,
                     what="the welcome back")
         await other.close()
         await until(lambda: len(app.sessions) == 1, what="Bo's browser gone")

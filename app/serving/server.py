@@ -452,7 +452,7 @@ class TeachingServer:
                 self._start_session(client, self.first_choice, self._view_of(None))
                 return
             if back:
-                notify(client, "Welcome back", "Your arms are as this computer left them.", color="blue")
+                notify(client, "Welcome back", "Your arms are as this browser left them.", color="blue")
 
     def _start_session(self, client: viser.ClientHandle, choice: str, view: tuple[bool, bool], typed=None) -> None:
         """Build the arm ``choice`` (an ``ARM_CHOICES`` label) in this browser, with the picker above it.
