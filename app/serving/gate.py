@@ -407,10 +407,7 @@ def browser_of(client) -> str:  # noqa: ANN001
     token where its page has one (students behind one address are then each their own; a browser that sends no
     cookie is known by its address alone). "?" once it has gone."""
     connection = _connection_of(client)
-    if connection is None:
-        return "?"
-    token = browser_token(connection.request)
-    return _address(connection) if token is None else f"{_address(connection)} {token}"
+    return "?" if connection is None else connection.browser
 
 
 def address_in(browser: str) -> str:
@@ -468,6 +465,9 @@ class GatedConnection:
         self._connection = connection
         self._gate = gate
         self.trusted = gate.trusted(_address(connection))  #: this machine's: no per-address limits
+        token = browser_token(connection.request)  # (read once: its headers may be long, and every arrival asks)
+        #: which browser it is (:func:`browser_of`)
+        self.browser = _address(connection) if token is None else f"{_address(connection)} {token}"
         self._address_rate = address_rate  #: shared by every connection of its address
         self._waiting: dict[tuple, bytes] = {}
         self._arrived = asyncio.Event()
