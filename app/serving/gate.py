@@ -399,7 +399,7 @@ def give_browser_cookie(request, response) -> None:  # noqa: ANN001
     if (response is not None and response.status_code == http.HTTPStatus.OK and browser_token(request) is None
             and response.headers.get("Content-Type", "").startswith("text/html")):
         response.headers["Set-Cookie"] = (f"{BROWSER_COOKIE}={secrets.token_urlsafe(16)}; Path=/; "
-                                          f"Max-Age={COOKIE_SECONDS}; SameSite=Strict; HttpOnly")
+                                          f"Max-Age={COOKIE_SECONDS}; SameSite=Lax; HttpOnly")
 
 
 def browser_of(client) -> str:  # noqa: ANN001
