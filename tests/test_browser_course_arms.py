@@ -4,9 +4,9 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from ur10teach.serving.gate import browser_of
+from ur10teach.serving.gate import BROWSER_COOKIE, browser_of
 from ur10dev.browser import (
-    HANG_TIMEOUT_MS, canvas_changed, choose, click, dom_id, lose_the_next_value, set_checkbox, settled_canvas, step_slider, unfold,
+    HANG_TIMEOUT_MS, a_site_linking_to, canvas_changed, choose, click, dom_id, lose_the_next_value, set_checkbox, settled_canvas, step_slider, unfold,
 )
 from ur10dev.waiting import wait_for
 
@@ -111,6 +111,16 @@ def test_the_course_arms_in_the_picker(open_page, light_app):
     page.wait_for_selector(dom_id(app.sessions[client_id].joints.sliders[0]), timeout=HANG_TIMEOUT_MS)
     typed_back = pick(page, app, client_id, "Your own DH table")
     assert typed_back.arm.joint_types == "RRP" and typed_back.editor.rows.value == typed_rows
+
+    # the app opened again from a link on another site (a course's page): the page still sends its cookie, and is
+    # not given a new one (with SameSite=Strict it was, and the browser lost its arms)
+    cookie = [c["value"] for c in page.context.cookies() if c["name"] == BROWSER_COOKIE]
+    with a_site_linking_to(page.url) as course_page:
+        page.goto(course_page)
+        page.click("#app")
+        page.wait_for_load_state()
+    page.requests[:] = [request for request in page.requests if not request.startswith(course_page)]  # (the test's, not the app's)
+    assert len(cookie) == 1 and [c["value"] for c in page.context.cookies() if c["name"] == BROWSER_COOKIE] == cookie
 
 
 def test_a_click_on_a_ghost_puts_the_arm_on_its_branch(open_page, light_app):

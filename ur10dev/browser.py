@@ -509,3 +509,33 @@ def ask_to_present(page, member, code: str, done, what: str) -> None:
     """Type the join code and press "Become presenter", as a teacher does, until ``done()`` holds."""
     type_text(page, member.join_code, code)
     click(page, page.get_by_role("button", name="Become presenter"), done, what)
+
+
+@contextlib.contextmanager
+def a_site_linking_to(url: str) -> Iterator[str]:
+    """The address of a page on another site ("localhost", not 127.0.0.1: another host is another site to a browser)
+    with one link, ``#app``, to ``url``: a course's page a student follows the app's link from."""
+    import http.server
+    import threading
+
+    body = f'<a id="app" href="{url}">the app</a>'.encode()
+
+    class Page(http.server.BaseHTTPRequestHandler):
+        def do_GET(self) -> None:  # noqa: N802
+            self.send_response(200)
+            self.send_header("Content-Type", "text/html")
+            self.send_header("Content-Length", str(len(body)))
+            self.end_headers()
+            self.wfile.write(body)
+
+        def log_message(self, *args) -> None:
+            pass
+
+    server = http.server.ThreadingHTTPServer(("127.0.0.1", 0), Page)
+    thread = threading.Thread(target=server.serve_forever, daemon=True)
+    thread.start()
+    try:
+        yield f"http://localhost:{server.server_address[1]}/"
+    finally:
+        server.shutdown()
+        server.server_close()
