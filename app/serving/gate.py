@@ -370,7 +370,7 @@ BROWSER_COOKIE = "ur10teach_browser"
 _BROWSER_TOKEN = re.compile(r"[A-Za-z0-9_-]{22}")
 #: How long (s) a browser keeps its cookie: the week's lessons, not only the return window.
 COOKIE_SECONDS = 7 * 24 * 3600
-#: How long (s) a browser has to answer a ping when another connects from its address. A browser that reconnects
+#: How long (s) a page has to answer a ping when another page of its browser connects. A browser that reconnects
 #: (its page retries every second) often comes back before the server notices its old connection has died: its
 #: websocket is pinged every 20 s and given 20 s more. A pong follows what was sent before the ping: a live page
 #: still reading a large scene over a slow Wi-Fi takes seconds.
