@@ -397,7 +397,7 @@ def test_a_pose_on_a_stretched_or_folded_elbow_with_joints_on_their_limits_has_a
     """On a stretched or folded elbow the IK gives the elbow's angle, and the joints that follow from it, to
     √rounding only (up to 3e-8 rad measured): a joint on its limit came out beyond it by more than the 1e-9 the
     limits allowed, and a pose the arm reaches within its limits (a slider at its end, the elbow stretched) had no
-    branch within them (until 2026-12-06: 73 of 300 of these KR210 poses)."""
+    branch within them (until 2026-12-06: 73 of 300 such KR210 poses, in a probe)."""
     arm = Arm.preset(name)
     rng = np.random.default_rng(5)
     poses = []
@@ -416,6 +416,7 @@ def test_a_pose_on_a_stretched_or_folded_elbow_with_joints_on_their_limits_has_a
     sol = arm.ik(T)
     assert (sol.valid & sol.within_limits).any(axis=-1).all()
     assert arm.pose_error(np.where(sol.valid[..., None], sol.q, 0.0), T[:, None])[sol.valid].max() < 1e-9
+
 
 def test_wrist_centre_on_axis_one_keeps_the_hints_theta1():
     arm = Arm.preset("kr210")
