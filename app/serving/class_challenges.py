@@ -171,7 +171,7 @@ class ClassChallenges:
         return run.arm if run is not None and not run.ended and member.student is not None else None
 
     def resume(self, member: Member) -> None:
-        """A student's own arm, just made: as they left it (back from watching, or from the same computer), else where
+        """A student's own arm, just made: as they left it (back from watching, or in the same browser), else where
         the task starts."""
         run, student, session = self.run, member.student, member.session
         if run is None or run.ended or student is None or session is None or session.arm != run.arm:

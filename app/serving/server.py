@@ -443,7 +443,7 @@ class TeachingServer:
             except Exception:
                 if not back:
                     raise
-                # what was kept must not stop this computer's every return: it starts afresh
+                # what was kept must not stop this browser's every return: it starts afresh
                 log.exception("could not bring back the arms browser %s's computer left; it starts afresh", client.client_id)
                 with self._sessions_lock:
                     self._left_arms.pop(client.client_id, None)
