@@ -594,14 +594,16 @@ def _branch(value, arm: Arm) -> str | int:
 
 
 def _label_parts(label: str) -> list[str]:
-    """"elbow up (θ2 ≤ 0), wrist flipped" → ["elbow up", "wrist flipped"]: the words a student names a branch by."""
-    return [re.sub(r"\(.*?\)", "", part).strip().lower() for part in label.split(",")]
+    """"elbow up (θ2 ≤ 0), wrist flipped" → ["elbow up", "wrist flipped"]: the words a student names a branch by
+    (none for an empty part)."""
+    parts = (re.sub(r"\(.*?\)", "", part).strip().lower() for part in label.split(","))
+    return [part for part in parts if part]
 
 
 def _slots_named(words: str, labels: tuple[str, ...]) -> list[int]:
     """The slots whose label has every comma-separated part of ``words`` ("elbow down, wrist flipped"; a label copied
     whole, "elbow right (θ2 ≥ 0)", is its words)."""
-    parts = [p for p in _label_parts(words) if p]
+    parts = _label_parts(words)
     named = [k for k, label in enumerate(labels) if all(p in _label_parts(label) for p in parts)]
     return named if parts else []
 
@@ -784,7 +786,7 @@ def _check_reach(challenge: Challenge, arm: Arm, answer: Answer) -> Verdict:
     if isinstance(challenge.branch, int):
         return Verdict(False, f"That is branch {on + 1} ({labels[on]}); the task asks for branch {challenge.branch}.",
                        f"branch {on + 1} instead of {challenge.branch}", text)
-    asked = [p for p in _label_parts(challenge.branch) if p]
+    asked = _label_parts(challenge.branch)
     differ = [part for part in _label_parts(labels[on]) if part not in asked and any(part.split()[0] == a.split()[0] for a in asked)]
     return Verdict(False, f"That is the {labels[on]} branch (branch {on + 1}); the task asks for {challenge.branch}.",
                    f"{', '.join(differ) or labels[on]} instead of {challenge.branch}", text)
