@@ -315,8 +315,8 @@ class TeachingServer:
         #: client id → picker choice → (state, typed table, display choices) of each arm the browser has
         #: left: going back to one finds its pose, target, typed table and what it showed as they were
         self._left_arms: dict[int, dict[str, tuple]] = {}
-        #: client id → (the address it connected from, which browser it is (``gate.browser_of``), the client)
-        self._addresses: dict[int, tuple[str, str, viser.ClientHandle]] = {}
+        #: client id → (which browser it is (``gate.browser_of``: its address first), the client)
+        self._browsers: dict[int, tuple[str, viser.ClientHandle]] = {}
         #: browser → (when, choice shown, its left arms, (lecture mode, light view)) as its page left last
         self._departed: dict[str, tuple[float, str, dict[str, tuple], tuple[bool, bool]]] = {}
         self._switches: dict[str, TokenBucket] = {}  # budget (an address) → its arm changes
@@ -412,7 +412,7 @@ class TeachingServer:
             let_go = [member.client for member in self.classroom.members_from(address)]
         else:
             with self._sessions_lock:
-                let_go = [other for at, _, other in self._addresses.values() if at == address]
+                let_go = [other for known, other in self._browsers.values() if address_in(known) == address]
         current = self.server.get_clients()  # (after: each of those was listed before it was kept)
         for gone in let_go:
             if gone.client_id not in current:
@@ -433,7 +433,7 @@ class TeachingServer:
             relay_camera_moves(client, lambda: getattr(self._sessions.get(client.client_id), "camera", None))
             choice, view, browser = self.first_choice, self._view_of(None), browser_of(client)
             with self._sessions_lock:
-                self._addresses[client.client_id] = (address_in(browser), browser, client)
+                self._browsers[client.client_id] = (browser, client)
                 when, *left = self._departed.pop(browser, (-math.inf, None, {}, view))
                 back = self.clock() - when <= RETURN_WINDOW  # from where a browser left: its arms as it left them
                 if back:
@@ -544,13 +544,13 @@ class TeachingServer:
                 if session is not None:
                     self._leave(client.client_id, session)
                 left = self._left_arms.pop(client.client_id, {})
-                address, browser, _ = self._addresses.pop(client.client_id, (None, None, None))
+                browser, _ = self._browsers.pop(client.client_id, (None, None))
                 if browser is not None and left:  # kept for its return (one that left mid-change: the arm it changed from)
                     self._departed.pop(browser, None)
                     self._departed[browser] = (self.clock(), next(reversed(left)), left, self._view_of(session))
                     # (oldest first) one address keeps as many as it may have browsers open, and all keep MAX_RETURNING:
                     # a page that sends a new cookie each time must not push the others' arms out
-                    there = [kept for kept in self._departed if address_in(kept) == address]
+                    there = [kept for kept in self._departed if address_in(kept) == address_in(browser)]
                     for kept in there[:-CONNECTIONS_PER_ADDRESS] + list(self._departed)[:-MAX_RETURNING]:
                         self._departed.pop(kept, None)
             if session is not None:
