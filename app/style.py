@@ -91,18 +91,20 @@ def number(value: float, spec: str) -> str:
     return text
 
 
-#: Dashes a student may type for a minus, or copy from a task's text (the course writes −, U+2212), and the
-#: degree sign a student may type after an angle.
-_TYPED_SIGNS = str.maketrans({"\u2212": "-", "\u2013": "-", "°": ""})
+#: Dashes a student may type for a minus, or copy from a task's text (the course writes −, U+2212), the
+#: degree sign a student may type after an angle, and the brackets of a vector written (x, y, z), as the panel shows one.
+_TYPED_SIGNS = str.maketrans({"\u2212": "-", "\u2013": "-", "°": "", "(": " ", ")": " ", "[": " ", "]": " "})
 
 
 def typed_fields(text: str, what: str) -> list[str]:
-    """The entries a student typed, split at commas, semicolons and spaces, each minus sign one ``float``
-    reads and no degree signs. A comma between digits, where numbers are also parted without one, is
+    """The entries a student typed, split at commas, semicolons, spaces and brackets, each minus sign one
+    ``float`` reads and no degree signs. A comma between digits, where numbers are also parted without one, is
     read as a decimal comma (as much of Europe writes 1,5) and refused: read as a list it gave wrong numbers.
 
     >>> typed_fields("−30°, 45;26  0.5", "joint values")
     ['-30', '45', '26', '0.5']
+    >>> typed_fields("(+100, −20.5, 0) [1 2]", "target")
+    ['+100', '-20.5', '0', '1', '2']
     >>> typed_fields("1,5 2,5 3,5", "target")
     Traceback (most recent call last):
     ...

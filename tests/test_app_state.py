@@ -71,6 +71,9 @@ def test_parse_typed_degrees():
     np.testing.assert_array_equal(ArmState.parse_numbers("30 45;26,  50 60° 80", 6), [30, 45, 26, 50, 60, 80])
     # the minus the course's texts write (−, U+2212), as a student copies it, or an en dash
     np.testing.assert_array_equal(ArmState.parse_numbers("\u221230, 0, 0, \u201390, 5.1, -0.5", 6), [-30, 0, 0, -90, 5.1, -0.5])
+    # a vector as the panel writes one, v = (+100, +0, +0) mm/s, or in a list's brackets: not "'(+100' is not a number"
+    np.testing.assert_array_equal(ArmState.parse_numbers("(+100, −20, 0)", 3), [100, -20, 0])
+    np.testing.assert_array_equal(ArmState.parse_numbers("[1.5, 2] (3)", 3), [1.5, 2, 3])
     with pytest.raises(ValueError, match="'abc' is not a number"):
         ArmState.parse_numbers("30, 45, abc, 50, 60, 80", 6)
     with pytest.raises(ValueError, match="expected 6 numbers, got 3"):

@@ -642,11 +642,15 @@ def spherical_wrist(arm) -> tuple[Wrist, np.ndarray]:
     Traceback (most recent call last):
     ...
     ValueError: no spherical wrist: the last three axes do not meet in one point (at the zero pose, axes 4 and 6 pass 116 mm apart)
+    >>> spherical_wrist(Arm.from_dh([(0.5, 0.0, 0.0, 0.0)], joint_types="R"))
+    Traceback (most recent call last):
+    ...
+    ValueError: no spherical wrist: this arm has 1 joint, and a spherical wrist is three more after the three that place it
     """
     if hasattr(arm.solver, "wrist"):
         return arm.solver.wrist, arm.solver.centre_in_tool
     if arm.n_joints < 6 or arm.dh is None:
-        raise ValueError(f"no spherical wrist: this arm has {arm.n_joints} joints, and a spherical wrist is three more "
+        raise ValueError(f"no spherical wrist: this arm has {arm.n_joints} joint{'s' * (arm.n_joints != 1)}, and a spherical wrist is three more "
                          "after the three that place it")
     try:
         wrist = Wrist(arm.dh)
