@@ -387,4 +387,55 @@ def keep_free_values_within_limits(solution: IKSolution, solve, T, hint) -> None
         if gap[k, nearest, slot] < best[pose[k], slot]:
             best[pose[k], slot] = gap[k, nearest, slot]
             q[pose[k], slot] = found.q[k, nearest, slot]
+    # a slot within the limits for one value of the free joint alone, between two of the grid's (the elbow arm's θ5
+    # on its limit where it is least over the free θ1): that value, from the grid's value nearest to within them
+    missed = searched[search, joint] & ~np.isfinite(best[pose])  # (search, slot)
+    if missed.any():
+        k, slot = np.nonzero(missed)
+        beyond_by = _beyond_limits_by(found.q[k, :, slot], arm)  # (missed, value)
+        closest = np.argmin(beyond_by, axis=-1)
+        step = (high[joint[k]] - low[joint[k]]) / (FREE_VALUES - 1)
+        centre = values[k, closest]
+        tries = hint[pose[k]].copy()
+
+        def solved(value: np.ndarray) -> np.ndarray:
+            tries[np.arange(len(k)), joint[k]] = value
+            return solve(T[pose[k]], tries).q[np.arange(len(k)), slot]
+
+        value = _golden_minimum(lambda value: _beyond_limits_by(solved(value), arm),
+                                np.maximum(centre - step, low[joint[k]]), np.minimum(centre + step, high[joint[k]]))
+        refined = solved(value)
+        for m in np.flatnonzero(arm.within_limits(refined)):
+            turn = np.abs(wrap_revolute(refined[m] - hint[pose[k[m]]], arm.revolute)).max()
+            if turn < best[pose[k[m]], slot[m]]:
+                best[pose[k[m]], slot[m]] = turn
+                q[pose[k[m]], slot[m]] = refined[m]
     solution.q, solution._within_limits = q.reshape(solution.q.shape), None
+
+
+def _beyond_limits_by(q: np.ndarray, arm: Arm) -> np.ndarray:
+    """(...) how far (rad or m) the joint farthest beyond its limits is from them, 0 within (a revolute joint also one
+    turn either way, as :meth:`Arm.within_limits` counts it)."""
+    low, high = arm.limits[:, 0], arm.limits[:, 1]
+    beyond = np.maximum(np.maximum(low - q, q - high), 0.0)
+    for turn in (_TAU, -_TAU):
+        beyond = np.where(arm.revolute, np.minimum(beyond, np.maximum(np.maximum(low - q - turn, q + turn - high), 0.0)),
+                          beyond)
+    return np.where(np.isfinite(q), beyond, np.inf).max(axis=-1)
+
+
+def _golden_minimum(f, low: np.ndarray, high: np.ndarray, iterations: int = 60) -> np.ndarray:
+    """(m,) where each of ``f``'s m functions, evaluated together (``f((m,)) -> (m,)``), is least on [low, high]
+    (a minimum, where there are several), by golden-section search: to 1e-12 of the bracket's width."""
+    ratio = (math.sqrt(5.0) - 1.0) / 2.0
+    a, b = np.asarray(low, dtype=float), np.asarray(high, dtype=float)
+    c, d = b - ratio * (b - a), a + ratio * (b - a)
+    fc, fd = f(c), f(d)
+    for _ in range(iterations):
+        left = fc <= fd  # the least is in [a, d]: d goes to c, a new c is tried; else in [c, b]
+        a, b = np.where(left, a, c), np.where(left, d, b)
+        tried = np.where(left, b - ratio * (b - a), a + ratio * (b - a))
+        f_tried = f(tried)
+        c, d = np.where(left, tried, d), np.where(left, c, tried)
+        fc, fd = np.where(left, f_tried, fd), np.where(left, fc, f_tried)
+    return np.where(fc <= fd, c, d)
