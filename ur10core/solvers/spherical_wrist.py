@@ -650,8 +650,9 @@ def spherical_wrist(arm) -> tuple[Wrist, np.ndarray]:
     if hasattr(arm.solver, "wrist"):
         return arm.solver.wrist, arm.solver.centre_in_tool
     if arm.n_joints < 6 or arm.dh is None:
-        raise ValueError(f"no spherical wrist: this arm has {arm.n_joints} joint{'s' * (arm.n_joints != 1)}, and a spherical wrist is three more "
-                         "after the three that place it")
+        joints = f"{arm.n_joints} joint{'s' * (arm.n_joints != 1)}"
+        raise ValueError(f"no spherical wrist: this arm has {joints}, and a spherical wrist is three more after the "
+                         "three that place it")
     try:
         wrist = Wrist(arm.dh)
         return wrist, _wrist_offset(arm.dh, wrist)
