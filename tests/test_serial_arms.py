@@ -419,9 +419,10 @@ def test_a_pose_on_a_stretched_or_folded_elbow_with_joints_on_their_limits_has_a
 
 
 def test_a_pose_with_the_wrist_centre_on_axis_one_and_two_wrist_joints_on_their_limits_has_a_branch_within_them():
-    """The elbow arm with WC on axis 1 leaves θ1 free. As θ1 turns, |θ5| is least where θ4 is 0° or 180°: with θ4 at
-    180° and θ5 on its limit, any other θ1 takes θ5 beyond it. That one θ1 lies between two of the free joint's 73
-    values: without a hint, 101 of these 300 poses had no branch within the limits (until 2026-12-07)."""
+    """The elbow arm with WC on axis 1 leaves θ1 free. As θ1 turns, |θ5| turns back where θ4 is 0° or 180°; where it
+    is least there (104 of these 300 poses) and on its limit, any other θ1 takes θ5 beyond it. That one θ1 lies
+    between two of the free joint's 73 values: without a hint, 101 of the 300 had no branch within the limits
+    (until 2026-12-07)."""
     arm = Arm.preset("elbow")
     rng = np.random.default_rng(3)
     q = np.repeat([arm.singular_configuration("shoulder", start) for start in arm.sample_joints(20, seed=8)], 15, axis=0)
