@@ -333,7 +333,8 @@ _UNMOVED = 1e-9
 
 def keep_free_values_within_limits(solution: IKSolution, solve, T, hint) -> None:
     """Where a singular pose left a joint free and the hint's value of it put a slot beyond a joint limit, the value
-    nearest the hint that keeps the slot within them, of :data:`FREE_VALUES` over the joint's range (in place).
+    nearest the hint that keeps the slot within them, of :data:`FREE_VALUES` over the joint's range (in place); where
+    none of those does, the one value between two of them that does, if there is one (a golden-section search).
 
     A closed form keeps the hint's value of a joint the pose leaves free (docs/kinematics.md §7.3): the Stanford
     arm's θ4 at θ5 = 0, where only θ4 + θ6 is fixed. With its wrist's ±170°, the hint's θ4 can leave θ6 at 175°
