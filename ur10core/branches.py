@@ -415,14 +415,13 @@ def keep_free_values_within_limits(solution: IKSolution, solve, T, hint) -> None
 
 
 def _beyond_limits_by(q: np.ndarray, arm: Arm) -> np.ndarray:
-    """(...) how far (rad or m) the joint farthest beyond its limits is from them, 0 within (a revolute joint also one
-    turn either way, as :meth:`Arm.within_limits` counts it)."""
-    low, high = arm.limits[:, 0], arm.limits[:, 1]
-    beyond = np.maximum(np.maximum(low - q, q - high), 0.0)
-    for turn in (_TAU, -_TAU):
-        beyond = np.where(arm.revolute, np.minimum(beyond, np.maximum(np.maximum(low - q - turn, q + turn - high), 0.0)),
-                          beyond)
-    return np.where(np.isfinite(q), beyond, np.inf).max(axis=-1)
+    """(...) how far (rad or m) the joint of ``q`` (..., n) farthest beyond its limits is from them: 0 within, ∞ for
+    an empty slot."""
+    from .solvers.numerical import into_limits  # (that module builds on this one)
+
+    finite = np.where(np.isfinite(q), q, 0.0)
+    beyond = np.abs(wrap_revolute(finite - into_limits(finite, arm.limits, arm.revolute), arm.revolute)).max(axis=-1)
+    return np.where(np.isfinite(q).all(axis=-1), beyond, np.inf)
 
 
 def _golden_minimum(f, low: np.ndarray, high: np.ndarray, iterations: int = 60) -> np.ndarray:
