@@ -42,7 +42,7 @@ from ..state import ArmState
 from ..view import HELD_BACK
 from ..viser_internals import after_broadcast
 from .class_challenges import ClassChallenges
-from .gate import RETURN_WINDOW, address_of, browser_of, on_a_phone
+from .gate import RETURN_WINDOW, address_in, browser_of, on_a_phone
 from .joining import JoinHelp
 
 if TYPE_CHECKING:
@@ -143,7 +143,6 @@ class Member:
 
     def __init__(self, client: viser.ClientHandle) -> None:
         self.client = client
-        self.address = address_of(client)  #: where it connected from
         self.browser = browser_of(client)  #: which browser it is, as its return is known
         self.role = VIEWER
         self.session: ArmSession | None = None
@@ -162,6 +161,11 @@ class Member:
         #: what the student's own arm showed and its folders were set to, by arm: it comes back so next time they explore
         self.displays: dict[Arm, dict] = {}
         self.closed = False
+
+    @property
+    def address(self) -> str:
+        """Where it connected from (its browser's address)."""
+        return address_in(self.browser)
 
     def goal_name(self, frame: np.ndarray) -> list[tuple]:
         """The challenge target's name where this browser shows it (``GoalMarker.name``), for placed labels to keep clear of."""
@@ -531,7 +535,7 @@ class Classroom:
             member.join_help = None
             if self.app.open_to_network:  # on the projector, where the class reads it; its QR code on the teacher's screen
                 member.join_help = JoinHelp(member.client, self.app.join_urls, guard=action,
-                                            teacher=member.role == PRESENTER or self.app.gate.trusted(address_of(member.client)))
+                                            teacher=member.role == PRESENTER or self.app.gate.trusted(member.address))
             if member.role == PRESENTER:
                 gui.add_markdown("You are **presenting**: everyone sees your arm, target and overlays.")
                 stop = gui.add_button("Stop presenting", icon=viser.Icon.PLAYER_STOP)
