@@ -31,6 +31,8 @@ GRID_STEPS = 31
 WORST_LABEL_RISE = 0.8
 #: What the camera keeps in view with the arm while the course's path plays, and while the torque search's map shows.
 PATH_VIEW, SEARCH_VIEW = "the course's path", "the torque search"
+#: Said under the search's numbers where its map has made way for the workspace's other colouring.
+MAP_HIDDEN = "  \n*Its map is hidden, for the workspace's other colouring: find it again to show it.*"
 
 
 class DesktopAbout(View):
@@ -144,6 +146,7 @@ class StaticsExercise(View):
             self.refusal = Beside(gui)  # a search asked for with no force set
             self.result = gui.add_markdown("")
         self._map: tuple[viser.SceneNodeHandle, ...] = ()
+        self._map_wanted = False  # no other colouring asked for since the last search began
         self._map_lock = threading.Lock()
         self._searches = FoldedRuns(self._search)
         self.search.on_click(session.guard(
@@ -165,6 +168,7 @@ class StaticsExercise(View):
         arm, force = session.arm, session.statics.fixed_force()
         if not force.any():
             raise ValueError("set a force first: with none, no pose needs any torque")
+        self._map_wanted = True
         session.colouring_shown(self)
 
         def search():
@@ -173,37 +177,41 @@ class StaticsExercise(View):
 
         (q, norms), worst = HEAVY.run(session.client, search, cancelled=lambda: session.closed)
         points, worst_at = arm.fk(q)[:, :3, 3], arm.fk(worst.q)[:3, 3]
+        found = (f"Largest ‖τ‖ = **{worst.norm:.2f} N·m** for {np.linalg.norm(force):.0f} N, at θ = ("
+                 + ", ".join(number(v, ".1f") for v in np.degrees(worst.q)) + f")° (red ball), from {len(q):,} poses "
+                 "coloured from 0 (purple) to it (yellow), and a finer search around the largest.")
+        if not force[[0, 2]].any():  # vertical: the course's closed form to check the search against
+            found += (" For a vertical force the parallelogram decouples the links: joint 2 holds F l5 cos θ2 and "
+                      "joint 3 F l1 cos θ3, so the worst pose has both links level, "
+                      f"‖τ‖ = F √(l5² + l1²) = {np.linalg.norm(force) * math.hypot(arm.upper_arm, arm.forearm):.2f} N·m.")
         with self._map_lock:
             if session.closed or self.held:  # gone, or a class challenge began meanwhile
                 return
             self._clear()
-            top = worst.norm or 1.0
-            cloud = self._scene.add_point_cloud(f"{self._root}/torque_map", points.astype(np.float32), colormap(norms, top),
-                                                point_size=0.025, point_shape="circle")
-            marker = self._scene.add_icosphere(f"{self._root}/worst", radius=0.08, color=DANGER_RED,
-                                               position=worst_at)
-            # raised on a red stalk: at the ball it sat on the base frame's and the joints' labels
-            rise = np.array([[[0.0, 0.0, 0.0], [0.0, WORST_LABEL_RISE, 0.0]]], np.float32)
-            self._scene.add_line_segments(f"{self._root}/worst/stalk", rise, DANGER_RED, thickness=0.015)
-            label = self._scene.add_label(f"{self._root}/worst/label", f"largest ‖τ‖ = {top:.1f} N·m", font_screen_scale=1.4,
-                                          anchor="bottom-center", position=(0.0, WORST_LABEL_RISE, 0.0))
-            self._map = (cloud, marker, label)
-        if session.camera is not None:  # the map and its red ball in view with the arm
-            session.camera.show_also(SEARCH_VIEW, np.vstack([points[:: max(1, len(points) // 2000)],
-                                                             worst_at + (0.0, WORST_LABEL_RISE, 0.0)]),
-                                     session.drawing.world)
+            self.result.content = found
+            if self._map_wanted:
+                self._map = self._draw_map(points, norms, worst.norm or 1.0, worst_at)
+            else:  # the workspace's other colouring was asked for while this searched: the numbers, and the arm there
+                self.result.content += MAP_HIDDEN
         session.refresher.request(session)  # its label sized for lecture mode, and kept clear of
-        self.result.content = (
-            f"Largest ‖τ‖ = **{worst.norm:.2f} N·m** for {np.linalg.norm(force):.0f} N, at θ = ("
-            + ", ".join(number(v, ".1f") for v in np.degrees(worst.q)) + f")° (red ball), from {len(q):,} poses "
-            "coloured from 0 (purple) to it (yellow), and a finer search around the largest.")
-        if not force[[0, 2]].any():  # vertical: the course's closed form to check the search against
-            self.result.content += (
-                " For a vertical force the parallelogram decouples the links: joint 2 holds F l5 cos θ2 and "
-                "joint 3 F l1 cos θ3, so the worst pose has both links level, "
-                f"‖τ‖ = F √(l5² + l1²) = {np.linalg.norm(force) * math.hypot(arm.upper_arm, arm.forearm):.2f} N·m.")
         session.stop_lessons()
         session.apply(lambda state: state.set_joints(worst.q))
+
+    def _draw_map(self, points: np.ndarray, norms: np.ndarray, top: float, worst_at: np.ndarray) -> tuple:
+        """The grid's tool positions (n, 3) coloured by their ‖τ‖ (n,) up to ``top``, and a red ball at the largest."""
+        cloud = self._scene.add_point_cloud(f"{self._root}/torque_map", points.astype(np.float32), colormap(norms, top),
+                                            point_size=0.025, point_shape="circle")
+        marker = self._scene.add_icosphere(f"{self._root}/worst", radius=0.08, color=DANGER_RED, position=worst_at)
+        # raised on a red stalk: at the ball it sat on the base frame's and the joints' labels
+        rise = np.array([[[0.0, 0.0, 0.0], [0.0, WORST_LABEL_RISE, 0.0]]], np.float32)
+        self._scene.add_line_segments(f"{self._root}/worst/stalk", rise, DANGER_RED, thickness=0.015)
+        label = self._scene.add_label(f"{self._root}/worst/label", f"largest ‖τ‖ = {top:.1f} N·m", font_screen_scale=1.4,
+                                      anchor="bottom-center", position=(0.0, WORST_LABEL_RISE, 0.0))
+        if self._session.camera is not None:  # the map and its red ball in view with the arm
+            self._session.camera.show_also(SEARCH_VIEW, np.vstack([points[:: max(1, len(points) // 2000)],
+                                                                   worst_at + (0.0, WORST_LABEL_RISE, 0.0)]),
+                                           self._session.drawing.world)
+        return cloud, marker, label
 
     def obstacles(self) -> list[tuple]:
         """The largest ‖τ‖'s label, on its stalk over the red ball."""
@@ -214,9 +222,10 @@ class StaticsExercise(View):
 
     def hide_colouring(self) -> None:
         with self._map_lock:
+            self._map_wanted = False
             if self._map:  # its numbers stay; the red ball they point to goes
                 self._clear()
-                self.result.content += "  \n*Its map is hidden, for the workspace's other colouring: find it again to show it.*"
+                self.result.content += MAP_HIDDEN
 
     def _clear(self) -> None:
         for node in self._map[:2]:
