@@ -513,26 +513,43 @@ def test_the_workspace_is_coloured_one_way_at_a_time(app, label, monkeypatch):
             await client.set_gui(map_box, True)
             await until(lambda: statics._map is not None and not search._map and not search.obstacles()
                         and "map is hidden" in search.result.content, what="the search's map gone, its ball and label too")
-            # the torque map asked for just as a search publishes its map (here: as it is brought into view): the note
-            # says it is hidden (until 2026-12-07 the search's result, written last, wrote over the note)
+            # the torque map asked for just as a search publishes its map (here: as the panel is asked to follow): the
+            # note says it is hidden (until 2026-12-07 the search's result, written last, wrote over the note)
             refresher = session.refresher
 
-            class RacedByTheMap:
+            class ThenOnce:  # the session's panel refresher, which first does ``meanwhile``, once
+                def __init__(self, meanwhile):
+                    self.meanwhile = meanwhile
+
                 def __getattr__(self, name):
                     return getattr(refresher, name)
 
                 def request(self, asking):
                     session.refresher = refresher
-                    search.hide_colouring()
+                    self.meanwhile()
                     refresher.request(asking)
 
-            session.refresher = RacedByTheMap()
+            session.refresher = ThenOnce(search.hide_colouring)
             await client.set_gui("Find the pose that needs the largest ‖τ‖", True)
             await until(lambda: session.refresher is refresher and not search._map and SEARCH_VIEW not in session.camera.extra
                         and "Largest ‖τ‖" in search.result.content and "map is hidden" in search.result.content,
                         what="the note after the result, the map out of view")
+            # a class challenge on the largest ‖τ‖ begins at that moment: the result is held back, and the arm is not
+            # put on the answer (until 2026-12-07 the result was written over the hold, and the arm went there)
+            from ur10teach.view import HELD_BACK
+
+            q = session.state.q.copy()
+            await client.set_gui("θ1 base (°)", 30.0)
+            await until(lambda: not np.allclose(session.state.q, q), what="the arm moved off the answer")
+            q = session.state.q.copy()
+            session.refresher = ThenOnce(lambda: session.hold_back("largest_torque"))
+            await client.set_gui("Find the pose that needs the largest ‖τ‖", True)
+            await until(lambda: session.refresher is refresher and search.held, what="the challenge begun")
+            await until(lambda: not search._searches.busy, what="the search ended")
+            assert search.result.content == HELD_BACK and not search._map and np.allclose(session.state.q, q)
+            session.hold_back(None)
             # the torque map ticked while a search runs: the newer choice shows, the search gives its numbers alone
-            # (until 2026-12-07 its map was drawn too, over the other's nodes, and the two stood under one legend)
+            # (until 2026-12-07 its map was drawn too, and the two stood under one legend)
             from ur10teach.features.course_arms import desktop_lessons
 
             class TickedMeanwhile:
@@ -544,7 +561,6 @@ def test_the_workspace_is_coloured_one_way_at_a_time(app, label, monkeypatch):
             monkeypatch.setattr(desktop_lessons, "HEAVY", TickedMeanwhile())
             await client.set_gui(map_box, False)
             await until(lambda: statics._map is None, what="no colouring")
-            search.result.content = ""
             await client.set_gui("Find the pose that needs the largest ‖τ‖", True)
             await until(lambda: "Largest ‖τ‖" in search.result.content and "map is hidden" in search.result.content,
                         what="the search's numbers, its map hidden")

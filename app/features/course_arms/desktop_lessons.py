@@ -156,9 +156,9 @@ class StaticsExercise(View):
     def hold_back(self, asked: str | None) -> None:
         super().hold_back(asked)
         self.search.visible = self.held is None
-        self.result.content = HELD_BACK if self.held else ""
-        if self.held:
-            with self._map_lock:
+        with self._map_lock:  # after a search's result, or before it (which then sees ``held``), not between
+            self.result.content = HELD_BACK if self.held else ""
+            if self.held:
                 self._clear()
 
     def _search(self) -> None:
@@ -193,9 +193,12 @@ class StaticsExercise(View):
                 self._map = self._draw_map(points, norms, worst.norm or 1.0, worst_at)
             else:  # the workspace's other colouring was asked for while this searched: the numbers, and the arm there
                 self.result.content += MAP_HIDDEN
+        if self._map and session.camera is not None:  # framed outside the lock: the camera places every label
+            session.camera.frame()
         session.refresher.request(session)  # its label sized for lecture mode, and kept clear of
         session.stop_lessons()
-        session.apply(lambda state: state.set_joints(worst.q))
+        # checked under the arm's lock, as a challenge holds the views back: the arm is not put on its answer
+        session.apply(lambda state: state.last if self.held else state.set_joints(worst.q))
 
     def _draw_map(self, points: np.ndarray, norms: np.ndarray, top: float, worst_at: np.ndarray) -> tuple:
         """The grid's tool positions (n, 3) coloured by their ‖τ‖ (n,) up to ``top``, and a red ball at the largest."""
@@ -207,10 +210,10 @@ class StaticsExercise(View):
         self._scene.add_line_segments(f"{self._root}/worst/stalk", rise, DANGER_RED, thickness=0.015)
         label = self._scene.add_label(f"{self._root}/worst/label", f"largest ‖τ‖ = {top:.1f} N·m", font_screen_scale=1.4,
                                       anchor="bottom-center", position=(0.0, WORST_LABEL_RISE, 0.0))
-        if self._session.camera is not None:  # the map and its red ball in view with the arm
+        if self._session.camera is not None:  # the map and its red ball in view with the arm, from its next framing
             self._session.camera.show_also(SEARCH_VIEW, np.vstack([points[:: max(1, len(points) // 2000)],
                                                                    worst_at + (0.0, WORST_LABEL_RISE, 0.0)]),
-                                           self._session.drawing.world)
+                                           self._session.drawing.world, now=False)
         return cloud, marker, label
 
     def obstacles(self) -> list[tuple]:
