@@ -182,6 +182,32 @@ def test_every_arm_is_put_on_each_of_its_singularities_by_its_buttons(app, label
     asyncio.run(scenario())
 
 
+def test_a_singularity_challenge_begun_while_the_arm_searched_for_one_keeps_it_off(app, monkeypatch):
+    """The KR210's singularities are searched for, a slow job. A singularity challenge begun meanwhile: the arm stays
+    where it was, and the browser is told why (until 2026-12-07 the search's pose was put, the answer given)."""
+    from ur10teach.features import singularity
+    from ur10teach.view import HELD_BACK
+
+    async def scenario():
+        client = await ViserClient(url(app)).connect()
+        session = await pick(app, client, next(label for label, name in ARM_CHOICES.items() if name == "kr210"))
+        heavy, q = singularity.HEAVY, session.state.q
+
+        class ChallengeMeanwhile:
+            def run(self, *args, **kwargs):
+                session.hold_back("singularity")
+                return heavy.run(*args, **kwargs)
+
+        monkeypatch.setattr(singularity, "HEAVY", ChallengeMeanwhile())
+        await client.set_gui("Put the arm on the", session.arm.factor_names[0])
+        line = session.singularities.refusal.line
+        await until(lambda: line.visible and HELD_BACK[:40] in line.content, what="the refusal")
+        assert np.array_equal(session.state.q, q) and session.state.last.cause != "singularity"
+        await client.close()
+
+    asyncio.run(scenario())
+
+
 @pytest.mark.parametrize("label", EVERY_ARM)
 def test_each_branch_of_every_arm_has_a_number_of_its_own_where_it_parts_from_the_others(app, label):
     """At the arm's first pose, each pose of its branches carries its own number ("3 = 4" where two coincide), by
