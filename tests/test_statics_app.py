@@ -517,7 +517,7 @@ def test_the_workspace_is_coloured_one_way_at_a_time(app, label, monkeypatch):
             # note says it is hidden (until 2026-12-07 the search's result, written last, wrote over the note)
             refresher = session.refresher
 
-            class ThenOnce:  # the session's panel refresher, which first does ``meanwhile``, once
+            class ThenOnce:  # the session's panel refresher, which first does ``meanwhile``, once the search's map is drawn
                 def __init__(self, meanwhile):
                     self.meanwhile = meanwhile
 
@@ -525,8 +525,9 @@ def test_the_workspace_is_coloured_one_way_at_a_time(app, label, monkeypatch):
                     return getattr(refresher, name)
 
                 def request(self, asking):
-                    session.refresher = refresher
-                    self.meanwhile()
+                    if search._map:
+                        session.refresher = refresher
+                        self.meanwhile()
                     refresher.request(asking)
 
             session.refresher = ThenOnce(search.hide_colouring)
