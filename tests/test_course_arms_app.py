@@ -1573,8 +1573,9 @@ def test_the_ur10_walks_through_its_dh_frames(app):
         for step in (1, 2):
             await client.set_gui("Step", "Next ▶")
             await until(lambda s=step: session.walkthrough.step == s, what=f"step {step + 1}")
-        await until(lambda: frames.highlight_row == 1 and getattr(frames.parameter_labels.get("d"), "text", "") == "d1 = 128.0 mm",
-                    what="row 1: d1 drawn with its value")
+        # (the text is written after the row is chosen: waited for too, as a redraw by another thread may come between)
+        await until(lambda: frames.highlight_row == 1 and getattr(frames.parameter_labels.get("d"), "text", "") == "d1 = 128.0 mm"
+                    and "*Step 3 of" in session.walkthrough.text.content, what="row 1: d1 drawn with its value")
         assert "a<sub>0</sub>" in session.walkthrough.text.content  # modified DH: row 1 holds a0, α0
         await client.set_gui("Step", "Stop")
         await until(lambda: session.walkthrough.step == -1 and not frames.z_axes.visible and not frames.parameters["d"].visible,
