@@ -305,7 +305,7 @@ def test_garbage_and_out_of_range_input_is_refused(app):
         await until(lambda: abs(np.degrees(bad_session.state.q[1]) - 51.0) < 1e-9, what="a good value after the garbage")
         target = await drag_a_little(good, good_session, steps=3)
         await until(lambda: np.allclose(good_session.state.last.target, target, atol=1e-9), what="the other student, still")
-        await good.close()
+        await asyncio.gather(bad.close(), good.close())  # (left open, the server's stop waited 6 s for its close)
 
     asyncio.run(scenario())
 
