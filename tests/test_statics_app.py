@@ -546,7 +546,9 @@ def test_the_workspace_is_coloured_one_way_at_a_time(app, label, monkeypatch):
             session.refresher = ThenOnce(lambda: session.hold_back("largest_torque"))
             await client.set_gui("Find the pose that needs the largest ‖τ‖", True)
             await until(lambda: session.refresher is refresher and search.held, what="the challenge begun")
-            await until(lambda: not search._searches.busy, what="the search ended")
+            line = search.refusal.line  # and why, below its button: said once the search has ended
+            await until(lambda: line.visible and HELD_BACK[:40] in line.content and not search._searches.busy,
+                        what="the search ended, refused")
             assert search.result.content == HELD_BACK and not search._map and np.allclose(session.state.q, q)
             session.hold_back(None)
             # the torque map ticked while a search runs: the newer choice shows, the search gives its numbers alone
