@@ -182,9 +182,10 @@ def test_every_arm_is_put_on_each_of_its_singularities_by_its_buttons(app, label
     asyncio.run(scenario())
 
 
-def test_a_singularity_challenge_begun_while_the_arm_searched_for_one_keeps_it_off(app, monkeypatch):
+def test_a_challenge_begun_between_a_press_and_its_move_keeps_the_arm_off_its_answer(app, monkeypatch):
     """The KR210's singularities are searched for, a slow job. A singularity challenge begun meanwhile: the arm stays
-    where it was, and the browser is told why (until 2026-12-07 the search's pose was put, the answer given)."""
+    where it was, and the browser is told why (until 2026-12-07 the search's pose was put, the answer given). So with
+    a branch chosen as a challenge asking θ1 begins: the press is refused, not the branch's θ1 shown."""
     from ur10teach.features import singularity
     from ur10teach.view import HELD_BACK
 
@@ -203,6 +204,21 @@ def test_a_singularity_challenge_begun_while_the_arm_searched_for_one_keeps_it_o
         line = session.singularities.refusal.line
         await until(lambda: line.visible and HELD_BACK[:40] in line.content, what="the refusal")
         assert np.array_equal(session.state.q, q) and session.state.last.cause != "singularity"
+        session.hold_back(None)
+        await until(lambda: session.ik_target.branch_buttons.visible, what="the branch buttons back")
+        slot = next(k for k in np.flatnonzero(session.state.last.solution.valid) if k != session.state.last.slot)
+        apply = session.apply
+
+        def challenge_then_apply(change, *args, **kwargs):
+            session.apply = apply
+            session.hold_back("theta1")
+            return apply(change, *args, **kwargs)
+
+        session.apply = challenge_then_apply
+        await client.set_gui("Use branch", str(slot + 1))
+        line = session.ik_target.branch_refusal.line
+        await until(lambda: line.visible and HELD_BACK[:40] in line.content, what="the branch refused")
+        assert np.array_equal(session.state.q, q) and session.apply == apply
         await client.close()
 
     asyncio.run(scenario())
