@@ -71,6 +71,18 @@ class View:
         it is given back; ``render_panel``, called next, writes its readouts."""
         self.held = asked if asked in self.answers else None
 
+    def unless_held(self, change: Callable[[ArmState], Snapshot],
+                    asked: str | None = None) -> Callable[[ArmState], Snapshot]:
+        """``change`` for ``ArmSession.apply``, refused with :data:`HELD_BACK` while a challenge asks what this view
+        would answer (``asked``: only that). Asked under the arm's lock, which a challenge beginning holds as it holds
+        the views back: a slow job pressed for before it began does not put the arm on its answer."""
+        def unless(state: ArmState) -> Snapshot:
+            if (self.held is not None) if asked is None else (self.held == asked):
+                raise ValueError(HELD_BACK)
+            return change(state)
+
+        return unless
+
     def render(self, snapshot: Snapshot) -> None:
         pass
 

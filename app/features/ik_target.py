@@ -577,12 +577,8 @@ class IKTarget(View):
         self._select(int(chosen(self.branch_buttons, "branch")) - 1)
 
     def _select(self, slot: int) -> None:
-        def onto_branch(state):
-            if self.held:  # the joint panel would show the other branch's joints: asked under the arm's lock, which
-                raise ValueError(HELD_BACK)  # a challenge beginning holds as it holds views back
-            return state.select_branch(slot)
-
-        self._session.apply(onto_branch)
+        # (held: the joint panel would show the other branch's joints)
+        self._session.apply(self.unless_held(lambda state: state.select_branch(slot)))
         self.branch_refusal.clear()  # (a ghost clicked, too: the branch refused before no longer stands below)
 
     def _toggle_ghosts(self, _: viser.GuiEvent) -> None:

@@ -374,13 +374,8 @@ class Singularities(View):
         behind other browsers' clouds."""
         session, kind = self._session, self._pressed
 
-        def onto_singularity(state):
-            if self.held == "singularity":  # a challenge begun since the press: under the arm's lock, as it holds views back
-                raise ValueError(HELD_BACK)
-            return state.place_in_singularity(kind)
-
         def place() -> None:
-            session.apply(onto_singularity)
+            session.apply(self.unless_held(lambda state: state.place_in_singularity(kind), "singularity"))
 
         if self._arm.singularities_in_closed_form:
             place()

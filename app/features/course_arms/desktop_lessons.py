@@ -197,12 +197,7 @@ class StaticsExercise(View):
             session.camera.frame()
         session.refresher.request(session)  # its label sized for lecture mode, and kept clear of
         session.stop_lessons()
-        def onto_worst(state):
-            if self.held:  # a challenge begun since: under the arm's lock, as it holds views back, so not put on its answer
-                raise ValueError(HELD_BACK)
-            return state.set_joints(worst.q)
-
-        session.apply(onto_worst)
+        session.apply(self.unless_held(lambda state: state.set_joints(worst.q)))
 
     def _draw_map(self, points: np.ndarray, norms: np.ndarray, top: float, worst_at: np.ndarray) -> tuple:
         """The grid's tool positions (n, 3) coloured by their ‖τ‖ (n,) up to ``top``, and a red ball at the largest."""
