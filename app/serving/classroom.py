@@ -401,6 +401,7 @@ class Classroom:
             member.session = session  # shown as left before anyone finds it
             self._last_switch = time.monotonic()
             members = list(self.members.values())
+        self.app.janitor.soon()  # the arm shown before, its drawing and the presenter's panel for it hold cycles
         self._draw_controls(member)
         for other in members:
             if other.role == EXPLORER:
