@@ -816,6 +816,52 @@ def test_an_arm_the_class_was_shown_before_is_freed(classroom):
     asyncio.run(scenario())
 
 
+def test_the_presenter_shows_the_class_a_dh_table_they_type(classroom):
+    """The board's table, typed by the presenter: the class sees its arm, a student explores a copy of it, and it
+    comes back as it was typed after another arm (until 2026-12-07 a typed table was for one's own browser only)."""
+    from ur10teach.features.arm_picker import CLASS_TYPED_TITLE, CUSTOM, choice_of
+
+    rows = "500 0 0 0 R\n400 0 0 0 R"
+
+    async def scenario():
+        teacher = await ViserClient(f"http://127.0.0.1:{classroom.port}").connect()
+        student = await ViserClient(f"http://127.0.0.1:{classroom.port}").connect()
+        await become_presenter(teacher, classroom)
+        room, presenter = classroom.classroom, member_of(classroom, 0)
+
+        async def show(label: str, done) -> None:
+            await until(room.can_switch, what="the class's arm to be ready for a change")
+            await teacher.set_gui("Which arm", label)
+            await until(lambda: room.choice == label and presenter.session is not None and done(), what=label)
+
+        await show(CUSTOM, lambda: presenter.session.editor is not None)
+        assert room.state.arm.joint_types == "RRR"  # the editor's own first table, as in a browser of its own
+        await until(lambda: student.received.panel_label == CLASS_TYPED_TITLE, what="the viewer's title naming the table")
+        await until(room.can_switch, what="the class's arm to be ready for a change")
+        await teacher.set_gui("Rows", rows)
+        await teacher.set_gui("Build this arm", True)
+        await until(lambda: room.state.arm.joint_types == "RR" and presenter.session is not None
+                    and presenter.session.editor is not None, what="the class's typed arm")
+        typed = room.state.arm
+        assert [row.a for row in typed.dh.rows] == [0.5, 0.4] and presenter.session.editor.rows.value == rows
+        assert room.drawing is presenter.session.drawing  # drawn in the shared scene, for everyone
+        with pytest.raises(ValueError, match="typed table"):  # a question about the pose needs one of the course's arms
+            room.challenges.about_the_pose("Pose shown: reach it")
+
+        await student.set_gui("Explore on my own", True)
+        explorer = member_of(classroom, 1)
+        await until(lambda: explorer.role == EXPLORER and explorer.session is not None, what="the student's own copy")
+        assert explorer.session.arm == typed and explorer.session.editor is None  # a copy of the class's arm
+
+        await show(choice_of("kr210"), lambda: True)
+        await show(CUSTOM, lambda: presenter.session.editor is not None)
+        assert room.state.arm is typed and presenter.session.editor.rows.value == rows  # as the presenter left it
+        await teacher.close()
+        await student.close()
+
+    asyncio.run(scenario())
+
+
 def test_the_shared_ur10_lives_under_the_roots_an_explorer_hides(classroom):
     names = [name for name in classroom.server.scene._handle_from_node_name if name not in ("/floor", "/WorldAxes")]
     roots = classroom.classroom.drawing.roots

@@ -55,8 +55,8 @@ def choice_of(preset: str) -> str:
 #: ``Arm.preset`` name of one of the course's other arms; a typed table is each browser's own.
 FIRST_ARMS = ("ur10", *(name for name in ARM_CHOICES.values() if name not in (None, "custom")))
 
-#: What the classroom's presenter can show the class: a typed table is for one's own browser.
-CLASS_CHOICES = tuple(label for label in ARM_CHOICES if label != CUSTOM)
+#: The panel's title while the class is shown a table the presenter typed (their picker still says CUSTOM).
+CLASS_TYPED_TITLE = "The presenter's DH table"
 
 
 class ArmPicker:

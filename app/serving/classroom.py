@@ -20,7 +20,8 @@ from ur10core import Arm
 
 from ..features.arm_picker import (
     ARM_CHOICES,
-    CLASS_CHOICES,
+    CLASS_TYPED_TITLE,
+    CUSTOM,
     SWITCH_INTERVAL,
     ArmPicker,
     panel_title,
@@ -28,6 +29,7 @@ from ..features.arm_picker import (
 from ..features.camera import CameraControls, ClassView
 from ..features.challenge import ChallengeCard, ChallengeDesk, ClassTools, GoalMarker  # a member's parts
 from ..features.course_arms.desktop_arm import EXPLORER_ROOT as DESKTOP_EXPLORER_ROOT
+from ..features.course_arms.editor import starting_table
 from ..features.course_arms.scene import EXPLORER_ROOT
 from ..features.drawings import arm_drawing
 from ..features.floor import add_floor_grid
@@ -181,6 +183,7 @@ class Classroom:
         #: each arm the class has been shown, by label: it comes back where the presenter left it
         self.states: dict[str, ArmState] = {}
         self.displays: dict[str, dict] = {}  #: and what the presenter had shown on it (overlay, cloud, ...)
+        self.typed: tuple[Arm, str, str] | None = None  #: (arm, text, convention) of the table the presenter built last
         self.state = self._state_of(self.choice)
         self.drawing = self._draw()
         self.live = self._live_panel(self.choice)
@@ -198,8 +201,10 @@ class Classroom:
     def _state_of(self, label: str) -> ArmState:
         if label not in self.states:
             name, app = ARM_CHOICES[label], self.app
+            if name == "custom":
+                self.typed = self.typed or starting_table()
             self.states[label] = (ArmState(app.arm, body_points=app.models.outline) if name is None
-                                  else ArmState(Arm.preset(name)))
+                                  else ArmState(self.typed[0]) if name == "custom" else ArmState(Arm.preset(name)))
         return self.states[label]
 
     def _models(self, arm: Arm):
@@ -336,8 +341,12 @@ class Classroom:
     def _presenter_session(self, member: Member) -> ArmSession:
         """The presenter's panel and gizmo, driving the class's arm in the shared scene."""
         app, arm = self.app, self.state.arm
+        editor = {} if self.choice != CUSTOM else dict(  # a table built shows the class its arm
+            text=self.typed[1], convention=self.typed[2],
+            rebuild=lambda new, text, convention: self.show_arm(member, CUSTOM, typed=(new, text, convention)))
         session = ArmSession(member.client, arm, app.refresher, app.drags, models=self._models(arm), state=self.state,
-                             server=app.server, drawing=self.drawing, own_camera=False, asks=self.challenges.asked_of(arm))
+                             server=app.server, drawing=self.drawing, own_camera=False, asks=self.challenges.asked_of(arm),
+                             **editor)
         session.follow_lecture_mode(member.camera.lecture)
         session.names_elsewhere = member.goal_name
         session.observers.append(lambda _: app.refresher.request(self.live))
@@ -369,25 +378,31 @@ class Classroom:
         """Whether the class's arm may change now (:data:`SWITCH_INTERVAL` after the last change)."""
         return time.monotonic() - self._last_switch >= SWITCH_INTERVAL
 
-    def show_arm(self, member: Member, label: str, paced: bool = True) -> None:
-        """The presenter shows the class another arm (``CLASS_CHOICES``): everyone's scene and live panel follow.
+    def show_arm(self, member: Member, label: str, paced: bool = True, typed: tuple[Arm, str, str] | None = None) -> None:
+        """The presenter shows the class another arm (``ARM_CHOICES``): everyone's scene and live panel follow.
 
-        Each arm comes back where the presenter left it; a new one starts at its home pose.
+        Each arm comes back where the presenter left it; a new one starts at its home pose, as does a table
+        ``typed`` in the presenter's DH editor, (arm, text, convention), shown as ``CUSTOM``.
         ``ValueError`` for anyone but the presenter, or (``paced``) sooner than
         :data:`SWITCH_INTERVAL` after the last change.
         """
-        if label not in CLASS_CHOICES:
+        if label not in ARM_CHOICES:
             raise ValueError(f"arm: {label!r:.40} is not one of the choices")
         failed = None
         with self._lock:
             if member.closed or self.presenter is not member:
                 raise ValueError("only the presenter chooses the class's arm")
-            if label == self.choice:
+            if label == self.choice and typed is None:
                 return
             if paced and not self.can_switch():
                 raise ValueError(f"one change of arm every {SWITCH_INTERVAL:g} s, please: try again in a moment")
             previous = self.choice
             self.displays[previous] = member.session.display_choices()
+            kept = self.typed, dict(self.states), dict(self.displays)
+            if typed is not None:
+                self.typed = typed
+                self.states.pop(CUSTOM, None)
+                self.displays.pop(CUSTOM, None)
             member.session.remove()
             member.session = None
             self.live.remove()
@@ -395,6 +410,7 @@ class Classroom:
                 self._draw_class(label)
             except Exception as error:  # the shared scene is cleared by then: the class sees the arm it had, not nothing
                 failed = error
+                self.typed, self.states, self.displays = kept
                 self._draw_class(previous)
             session = self._presenter_session(member)
             session.show_choices(self.displays.get(self.choice, {}))
@@ -422,8 +438,9 @@ class Classroom:
         self.choice = label
         self.state = self._state_of(label)
         self.drawing = self._draw()
-        self.live = self._live_panel(label, presenter_here=True)
-        app.server.gui.set_panel_label(panel_title(label, app.arm.name))
+        title = CLASS_TYPED_TITLE if label == CUSTOM else label
+        self.live = self._live_panel(title, presenter_here=True)
+        app.server.gui.set_panel_label(panel_title(title, app.arm.name))
 
     def stop_presenting(self, member: Member) -> None:
         with self._lock:
@@ -542,7 +559,7 @@ class Classroom:
                 stop = gui.add_button("Stop presenting", icon=viser.Icon.PLAYER_STOP)
                 stop.on_click(action(lambda _: self.stop_presenting(member)))
                 member.picker = ArmPicker(gui, self.choice, lambda label: self.show_arm(member, label), action,
-                                          CLASS_CHOICES, hint="The arm the whole class sees: its branches, singularities and DH frames")
+                                          hint="The arm the whole class sees: its branches, singularities and DH frames")
             elif member.role == EXPLORER:
                 gui.add_markdown("You are **exploring on your own**: nobody else sees this arm.")
                 back = gui.add_button("Back to the presenter's arm", icon=viser.Icon.ARROW_BACK_UP)

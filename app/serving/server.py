@@ -35,7 +35,7 @@ from ..features.arm_picker import (
 )
 from ..features.branch_labels import CAMERA_FOV_DEGREES, CAMERA_LOOK_AT, CAMERA_POSITION
 from ..features.camera import relay_camera_moves
-from ..features.course_arms.editor import STARTING_TABLE, parse_table
+from ..features.course_arms.editor import starting_table
 from ..features.floor import add_floor_grid
 from ..features.workspace import CLOUDS
 from ..feedback import notify
@@ -471,7 +471,7 @@ class TeachingServer:
             session = ArmSession(client, self.arm, self.refresher, self.drags, models=self.models, lecture=lecture,
                                  light=light, phone=phone, state=state)
         elif name == "custom":
-            typed = typed or (parse_table(STARTING_TABLE, "standard"), STARTING_TABLE, "standard")
+            typed = typed or starting_table()
             arm, text, convention = typed
             session = ArmSession(
                 client, arm, self.refresher, self.drags, lecture=lecture, light=light, phone=phone, text=text,

@@ -33,6 +33,11 @@ DEFAULT_LIMITS = {"R": (-180.0, 180.0), "P": (0.0, 1000.0)}
 CONVENTIONS = {"standard (Spong: Rz Tz Tx Rx)": "standard", "modified (Craig: Rx Tx Rz Tz)": "modified"}
 
 
+def starting_table() -> tuple[Arm, str, str]:
+    """(arm, text, convention) of the table the DH editor opens with, before anything is typed in it."""
+    return parse_table(STARTING_TABLE, "standard"), STARTING_TABLE, "standard"
+
+
 def parse_table(text: str, convention: str, name: str = "custom") -> Arm:
     """The arm a typed table describes; ``ValueError`` naming the row and what is wrong.
 
