@@ -852,6 +852,8 @@ def test_the_presenter_shows_the_class_a_dh_table_they_type(classroom):
         explorer = member_of(classroom, 1)
         await until(lambda: explorer.role == EXPLORER and explorer.session is not None, what="the student's own copy")
         assert explorer.session.arm == typed and explorer.session.editor is None  # a copy of the class's arm
+        await student.set_gui("Back to the presenter's arm", True)
+        await until(lambda: explorer.role == VIEWER and explorer.session is None, what="the student back with the class")
 
         await show(choice_of("kr210"), lambda: True)
         await show(CUSTOM, lambda: presenter.session.editor is not None)
