@@ -52,7 +52,7 @@ def choice_of(preset: str) -> str:
 
 
 #: What a server may open every browser on (``--arm``): the app's own UR10 (its numbers are ``--preset``'s) or the
-#: ``Arm.preset`` name of one of the course's other arms; a typed table is each browser's own.
+#: ``Arm.preset`` name of one of the course's other arms; a typed table is built in a browser, from its DH editor.
 FIRST_ARMS = ("ur10", *(name for name in ARM_CHOICES.values() if name not in (None, "custom")))
 
 #: The panel's title while the class is shown a table the presenter typed (their picker still says CUSTOM).

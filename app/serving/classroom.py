@@ -203,8 +203,8 @@ class Classroom:
             name, app = ARM_CHOICES[label], self.app
             if name == "custom":
                 self.typed = self.typed or starting_table()
-            self.states[label] = (ArmState(app.arm, body_points=app.models.outline) if name is None
-                                  else ArmState(self.typed[0]) if name == "custom" else ArmState(Arm.preset(name)))
+            arm = app.arm if name is None else self.typed[0] if name == "custom" else Arm.preset(name)
+            self.states[label] = ArmState(arm, body_points=app.models.outline if name is None else None)
         return self.states[label]
 
     def _models(self, arm: Arm):
