@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 
 from ur10core import Arm, from_controller, to_controller
+from ur10core.paths import joint_interpolation
 
 from .conftest import random_joints
 
@@ -33,6 +34,14 @@ def pose(course):
 def test_bad_joint_vectors(course, method, q, message):
     with pytest.raises(ValueError, match=message):
         getattr(course, method)(q)
+
+
+def test_a_one_joint_arm_asks_for_one_joint_value():
+    arm = Arm.from_dh([(0.5, 0, 0, 0)], joint_types="R")
+    with pytest.raises(ValueError, match=r"q must have shape \(\.\.\., 1\) \(1 joint value, R\), got shape \(2,\)"):
+        arm.fk([0.0, 0.0])
+    with pytest.raises(ValueError, match=r"q_start must be 1 joint value, got shape \(2,\)"):
+        joint_interpolation(arm, [0.0, 0.0], [0.1])
 
 
 def test_bad_pose_shape_and_values(course, pose):

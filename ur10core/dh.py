@@ -162,8 +162,8 @@ class DHTable:
         """``q`` validated as joint values of shape (..., n): radians for R joints, metres for P."""
         q = as_float_array(q, name)
         if q.ndim == 0 or q.shape[-1] != self.n_joints:
-            raise ValueError(f"{name} must have shape (..., {self.n_joints}) ({self.n_joints} joint values, "
-                             f"{self.joint_types}), got shape {q.shape}")
+            raise ValueError(f"{name} must have shape (..., {self.n_joints}) ({self.n_joints} joint "
+                             f"value{'s' * (self.n_joints != 1)}, {self.joint_types}), got shape {q.shape}")
         check_finite(q, name)
         return q
 

@@ -58,7 +58,7 @@ def _time_scaling(duration: float, steps: int) -> tuple[np.ndarray, np.ndarray, 
 def _joints(arm, q, name: str) -> np.ndarray:
     q = as_float_array(q, name)
     if q.shape != (arm.n_joints,):
-        raise ValueError(f"{name} must be {arm.n_joints} joint values, got shape {q.shape}")
+        raise ValueError(f"{name} must be {arm.n_joints} joint value{'s' * (arm.n_joints != 1)}, got shape {q.shape}")
     check_finite(q, name)
     return q
 
