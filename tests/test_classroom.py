@@ -829,15 +829,19 @@ def test_the_presenter_shows_the_class_a_dh_table_they_type(classroom):
         await become_presenter(teacher, classroom)
         room, presenter = classroom.classroom, member_of(classroom, 0)
 
+        def picker_in() -> bool:  # the presenter's picker is built anew with each arm: the page holds this one
+            picker = presenter.picker
+            return picker is not None and teacher.gui.get("Which arm", {}).get("uuid") == picker.dropdown._impl.uuid
+
         async def show(label: str, done) -> None:
-            await until(room.can_switch, what="the class's arm to be ready for a change")
+            await until(lambda: room.can_switch() and picker_in(), what="the class's arm to be ready for a change")
             await teacher.set_gui("Which arm", label)
             await until(lambda: room.choice == label and presenter.session is not None and done(), what=label)
 
         await show(CUSTOM, lambda: presenter.session.editor is not None)
         assert room.state.arm.joint_types == "RRR"  # the editor's own first table, as in a browser of its own
         await until(lambda: student.received.panel_label == CLASS_TYPED_TITLE, what="the viewer's title naming the table")
-        await until(room.can_switch, what="the class's arm to be ready for a change")
+        await until(lambda: room.can_switch() and "Rows" in teacher.gui, what="the class's arm to be ready for a change")
         await teacher.set_gui("Rows", rows)
         await teacher.set_gui("Build this arm", True)
         await until(lambda: room.state.arm.joint_types == "RR" and presenter.session is not None
