@@ -849,6 +849,9 @@ def test_the_presenter_shows_the_class_a_dh_table_they_type(classroom):
         typed = room.state.arm
         assert [row.a for row in typed.dh.rows] == [0.5, 0.4] and presenter.session.editor.rows.value == rows
         assert room.drawing is presenter.session.drawing  # drawn in the shared scene, for everyone
+        # the live panel names the branch search as someone's who has the button (a viewer has none)
+        await until(lambda: "The presenter's **Find every branch** (yours, after *Explore on my own*)"
+                    in room.live.branches.content, what="the live panel naming the presenter's search")
         with pytest.raises(ValueError, match="typed table"):  # a question about the pose needs one of the course's arms
             room.challenges.about_the_pose("Pose shown: reach it")
 

@@ -269,8 +269,9 @@ def reach_count(solution) -> str:
     return f"**{within} of {slots} branches** reach this target within the joint limits{beyond}"
 
 
-def status_markdown(snapshot: Snapshot) -> str:
-    """How many branches reach the target and which the arm is on, or why none does."""
+def status_markdown(snapshot: Snapshot, search: str = "**Find every branch**") -> str:
+    """How many branches reach the target and which the arm is on, or why none does; ``search`` names the button
+    that searches a typed table's branches for whoever reads it."""
     solution = snapshot.solution
     if not snapshot.reachable:
         reason = snapshot.reason.removeprefix("unreachable: ")
@@ -280,7 +281,7 @@ def status_markdown(snapshot: Snapshot) -> str:
         return f"<span style='color:{hex_color(DANGER_RED)}'>**{verdict}.**</span> {sentence(reason)}."
     if solution is None:  # a typed table, not searched yet
         return ("The arm follows the target from its own joints (damped least squares). "
-                "**Find every branch** searches from many starts for the others.")
+                f"{search} searches from many starts for the others.")
     notes = [f"{reach_count(solution)} ({solution.method}; the arm places its {solution.task}); the arm is on "
              f"**{snapshot.slot + 1}: {solution.labels[snapshot.slot]}**."]
     if has_flips(snapshot.arm):  # the UR family names which of its choices a singularity merges
@@ -311,11 +312,11 @@ def drawn_as_one(snapshot: Snapshot) -> list[tuple[int, ...]]:
             if np.ptp([solution.take(k, snapshot.q) for k in group], axis=0).max() > SAME_POSE]
 
 
-def branches_markdown(snapshot: Snapshot) -> str:
-    """The status line above the branch table."""
+def branches_markdown(snapshot: Snapshot, search: str = "**Find every branch**") -> str:
+    """The status line (:func:`status_markdown`) above the branch table."""
     if snapshot.solution is None:
-        return status_markdown(snapshot)
-    return status_markdown(snapshot) + "\n\n" + branch_table(snapshot)
+        return status_markdown(snapshot, search)
+    return status_markdown(snapshot, search) + "\n\n" + branch_table(snapshot)
 
 
 def add_unreachable_halo(scene: viser.SceneApi, parent: str, size: float) -> viser.IcosphereHandle:

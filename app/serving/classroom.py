@@ -63,6 +63,9 @@ MAX_LOCKOUT_SECONDS = 600.0
 #: Addresses whose guesses are remembered (the oldest forgotten beyond it).
 MAX_GUESSERS = 10_000
 VIEWER, PRESENTER, EXPLORER = "viewer", "presenter", "explorer"
+EXPLORE = "Explore on my own"
+#: The live panel's name for a typed table's branch search: a viewer has no such button of their own
+CLASS_SEARCH = f"The presenter's **Find every branch** (yours, after *{EXPLORE}*)"
 
 
 def make_join_code() -> str:
@@ -132,7 +135,7 @@ class LivePanel:
         self.status.content = self._status()
         self.joints.content = joints_markdown(arm, snapshot.q)
         # the branches give both θ1, the tool pose p, the gauges det J's factors (as the sessions' own folders do)
-        self.branches.content = HELD_BACK if self.asked == "theta1" else branches_markdown(snapshot)
+        self.branches.content = HELD_BACK if self.asked == "theta1" else branches_markdown(snapshot, CLASS_SEARCH)
         self.flange.content = HELD_BACK if self.asked == "position" else flange_markdown(snapshot)
         # a shared widget's update is sent to every browser: the gauges only while the presenter shows the overlay
         self.gauges.visible = self._overlay is None or self._overlay.enabled
@@ -566,7 +569,7 @@ class Classroom:
                 back.on_click(action(lambda _: self.rejoin(member)))
             else:
                 gui.add_markdown("You are **watching** the presenter's arm.")
-                explore = gui.add_button("Explore on my own", icon=viser.Icon.ROBOT)
+                explore = gui.add_button(EXPLORE, icon=viser.Icon.ROBOT)
                 explore.on_click(action(lambda _: self.explore(member)))
                 code = member.join_code = gui.add_text("Join code", "", hint="The code on the teacher's screen makes this browser the presenter")
                 claim = gui.add_button("Become presenter", icon=viser.Icon.PRESENTATION)
