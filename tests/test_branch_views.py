@@ -203,6 +203,30 @@ def test_a_long_label_near_the_canvas_edge_is_drawn_whole_on_it_and_first():
     assert not overlapping(b, box(*cloud[:2], cloud[3]), gap=0.0)
 
 
+def test_a_crowd_of_names_at_one_spot_is_read_whole_on_the_projectors_canvas():
+    """A class's tools on the target of a reach challenge are one spot on the projector, and their names one label.
+    Until 2026-12-07 it was one line: twelve students' names in lecture mode ran off both sides of the canvas
+    (1280 px window, the panel beside it), and thirty would have been 3,000 px wide. It now comes in lines that
+    fit the canvas, every name whole, in the order they stand on the screen."""
+    from ur10teach.features.branch_labels import JOIN, ScreenView, boxes, place
+    from ur10teach.style import NAME_SCALE, label_scale
+
+    view = ScreenView((0.0, -3.0, 0.0), (0.0, 0.0, 0.0), up=(0.0, 0.0, 1.0), height=720.0, width=736.0)
+    scale = label_scale(NAME_SCALE, lecture=True)
+    names = [f"{'✓ ' if k % 3 == 0 else ''}student {k + 1}" for k in range(30)]
+    target = np.array([0.1, 0.0, -0.2])
+    tools = target + np.linspace(0.0, 1e-4, len(names))[:, None] * [1.0, 0.0, 0.0]  # left to right, within a pixel
+    (members, text, position, point), = place(tools, names, view, scale)
+    assert members == tuple(range(len(names))) and np.allclose(point, tools.mean(axis=0))
+    lines = text.split("\n")
+    assert [name for line in lines for name in line.split(JOIN)] == names and len(lines) > 1
+    box = boxes(view.to_screen(position[None])[0], [text], scale)[0]
+    assert -view.width / 2 <= box[0] < box[2] <= view.width / 2 and -view.height / 2 <= box[1] < box[3] <= view.height / 2
+    # a few names, or the branch numbers, stay one line
+    (_, few, _, _), = place(tools[:3], names[:3], view, scale)
+    assert few == JOIN.join(names[:3])
+
+
 @pytest.mark.parametrize("name", ["stanford", "elbow", "three_dof"])
 def test_a_ghost_the_arm_cannot_be_put_on_reads_limit_and_one_it_can_does_not(name):
     """Half a Stanford arm's branches need d3 < 0: their ghosts looked like the others, and a click on one was

@@ -176,7 +176,7 @@ def test_thirty_students_every_kind_and_the_projector_counts_exactly(classroom):
                 def named() -> set[str]:  # what the server has drawn in the presenter's scene
                     tools = room.presenter.tools
                     return set() if tools is None or tools.names is None else {
-                        name for label in tools.names.labels if label.visible for name in label.text.split(JOIN)}
+                        name for label in tools.names.labels if label.visible for name in label.text.replace("\n", JOIN).split(JOIN)}
 
                 solved_names = {SOLVED_MARK + member_of(k).student.name for k, plan in enumerate(PLAN) if plan == "right"}
                 await until(lambda: named() == (here - {name.removeprefix(SOLVED_MARK) for name in solved_names}) | solved_names,
@@ -731,7 +731,7 @@ def test_the_teacher_takes_the_nicknames_off_the_projector(classroom):
         def projected() -> set[str]:
             tools = room.presenter.tools
             return set() if tools is None or tools.names is None else {
-                name for label in tools.names.labels if label.visible for name in label.text.split(JOIN)}
+                name for label in tools.names.labels if label.visible for name in label.text.replace("\n", JOIN).split(JOIN)}
 
         numbered = f"student {member.student.number}"
         await until(lambda: projected() == {"Not for the class"}, what="the nickname on the projector")

@@ -439,7 +439,7 @@ def test_no_two_3d_labels_overlap_with_velocities_forces_and_ellipsoids_shown(ap
         wanted = {"v velocity", "ω turning rate", "F = 50 N", "velocity", "force"}
 
         def named() -> set[str]:
-            return {name for _, text, _ in session.names.placed for name in text.split(JOIN)}
+            return {name for _, text, _ in session.names.placed for name in text.replace("\n", JOIN).split(JOIN)}
 
         await until(lambda: wanted <= named(), what="the names at the tool placed")
         placed, clashes = await overlapping_labels(session)

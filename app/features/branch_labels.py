@@ -111,6 +111,23 @@ def boxes(pixels: np.ndarray, texts: list[str], scale: float, anchor: str = "bot
     return np.column_stack([left, bottom, left + sizes[:, 0], bottom + sizes[:, 1]])
 
 
+def joined(parts: list[str], scale: float, width: float) -> str:
+    r"""``parts`` joined by :data:`JOIN`, in lines no wider than ``width`` px where one line would be wider: a
+    crowd of students' names at one spot on the projector (in one line, thirty ran off both sides of the canvas).
+
+    >>> joined(["Ada", "Bo", "Dee"], 1.0, 900.0), joined(["Ada", "Bo", "Dee"], 1.0, 80.0)
+    ('Ada · Bo · Dee', 'Ada · Bo\nDee')
+    """
+    lines = [parts[0]]
+    for part in parts[1:]:
+        longer = lines[-1] + JOIN + part
+        if label_size(longer, scale)[0] <= width:
+            lines[-1] = longer
+        else:
+            lines.append(part)
+    return "\n".join(lines)
+
+
 def overlapping(a: np.ndarray, b: np.ndarray, gap: float = GAP_PX) -> bool:
     return bool(a[0] < b[2] + gap and b[0] < a[2] + gap and a[1] < b[3] + gap and b[1] < a[3] + gap)
 
@@ -122,7 +139,7 @@ def place(anchors: np.ndarray, texts: list[str], view: ScreenView, scale: float,
 
     ``anchors`` (n, 3) and ``texts`` (n,) are each label's point and text ("" for none). Labels
     whose points lie within ``merge_px`` of each other on the screen read as one ("1 · 8"), left
-    to right; a label that would overlap another, or one of ``fixed`` ((position, text, scale,
+    to right, in lines that fit the canvas (:func:`joined`); a label that would overlap another, or one of ``fixed`` ((position, text, scale,
     anchor): labels drawn by something else), moves to the nearest free spot on the canvas
     (:data:`OFFSETS`; a leader line then joins it to its point). A label whose box would stand
     over the canvas's edge is pulled onto it first (centred, on a canvas narrower than it), and
@@ -154,9 +171,10 @@ def place(anchors: np.ndarray, texts: list[str], view: ScreenView, scale: float,
     right, up, _ = view.axes()
     canvas = np.array([-view.width / 2, -view.height / 2, view.width / 2, view.height / 2])
     placed: list[tuple[tuple[int, ...], str, np.ndarray, np.ndarray, np.ndarray]] = []  # with each one's box
+    labels = [(group, joined([texts[k] for k in group], scale, view.width - 2 * GAP_PX)) for group in groups]
     # a label of several lines (a map's legend among the names) first: the fewest spots are free for it
-    for group in sorted(groups, key=lambda group: -max(texts[k].count("\n") for k in group)):
-        text, point = JOIN.join(texts[k] for k in group), anchors[group].mean(axis=0)
+    for group, text in sorted(labels, key=lambda label: -label[1].count("\n")):
+        point = anchors[group].mean(axis=0)
         pixel, depth = view.to_screen(point[None])
         own = boxes(pixel, [text], scale)[0]
         room, pulled = canvas, np.zeros(2)
