@@ -207,7 +207,8 @@ def test_a_crowd_of_names_at_one_spot_is_read_whole_on_the_projectors_canvas():
     """A class's tools on the target of a reach challenge are one spot on the projector, and their names one label.
     Until 2026-12-07 it was one line: twelve students' names in lecture mode ran off both sides of the canvas
     (1280 px window, the panel beside it), and thirty would have been 3,000 px wide. It now comes in lines that
-    fit the canvas, every name whole, in the order they stand on the screen."""
+    fit the canvas, every name whole, in the order they stand on the screen; a lecture hall's hundred would have
+    covered the canvas: as many lines as fill half of it are shown, and how many more there are."""
     from ur10teach.features.branch_labels import JOIN, ScreenView, boxes, place
     from ur10teach.style import NAME_SCALE, label_scale
 
@@ -225,6 +226,15 @@ def test_a_crowd_of_names_at_one_spot_is_read_whole_on_the_projectors_canvas():
     # a few names, or the branch numbers, stay one line
     (_, few, _, _), = place(tools[:3], names[:3], view, scale)
     assert few == JOIN.join(names[:3])
+    # a lecture hall's hundred: as many lines as half the canvas holds, then how many more there are
+    hall = [f"student {k + 1}" for k in range(100)]
+    crowd = target + np.linspace(0.0, 1e-4, len(hall))[:, None] * [1.0, 0.0, 0.0]
+    (_, text, position, _), = place(crowd, hall, view, scale)
+    *lines, more = text.split("\n")
+    shown = [name for line in lines for name in line.split(JOIN)]
+    assert shown == hall[:len(shown)] and more == f"… and {len(hall) - len(shown)} more" and len(shown) >= 20
+    box = boxes(view.to_screen(position[None])[0], [text], scale)[0]
+    assert box[3] - box[1] <= view.height / 2 and -view.width / 2 <= box[0] < box[2] <= view.width / 2
 
 
 @pytest.mark.parametrize("name", ["stanford", "elbow", "three_dof"])

@@ -111,21 +111,29 @@ def boxes(pixels: np.ndarray, texts: list[str], scale: float, anchor: str = "bot
     return np.column_stack([left, bottom, left + sizes[:, 0], bottom + sizes[:, 1]])
 
 
-def joined(parts: list[str], scale: float, width: float) -> str:
-    r"""``parts`` joined by :data:`JOIN`, in lines no wider than ``width`` px where one line would be wider: a
-    crowd of students' names at one spot on the projector (in one line, thirty ran off both sides of the canvas).
+def joined(parts: list[str], scale: float, width: float, height: float = math.inf) -> str:
+    r"""``parts`` joined by :data:`JOIN`, in lines no wider than ``width`` px where one line would be wider, and
+    as many lines as fit ``height`` px, the last saying how many more there are: a crowd of students' names at one
+    spot on the projector (in one line, thirty ran off both sides of the canvas; a lecture hall's hundred in lines
+    would have covered it).
 
     >>> joined(["Ada", "Bo", "Dee"], 1.0, 900.0), joined(["Ada", "Bo", "Dee"], 1.0, 80.0)
     ('Ada · Bo · Dee', 'Ada · Bo\nDee')
+    >>> joined(["Ada", "Bo", "Dee", "Eve", "Flo"], 1.0, 80.0, height=35.0)
+    'Ada · Bo\n… and 3 more'
     """
-    lines = [parts[0]]
+    lines = [[parts[0]]]
     for part in parts[1:]:
-        longer = lines[-1] + JOIN + part
-        if label_size(longer, scale)[0] <= width:
-            lines[-1] = longer
+        if label_size(JOIN.join([*lines[-1], part]), scale)[0] <= width:
+            lines[-1].append(part)
         else:
-            lines.append(part)
-    return "\n".join(lines)
+            lines.append([part])
+    text = "\n".join(JOIN.join(line) for line in lines)
+    while len(lines) > 1 and label_size(text, scale)[1] > height:
+        lines.pop()
+        more = len(parts) - sum(map(len, lines))
+        text = "\n".join([*(JOIN.join(line) for line in lines), f"… and {more} more"])
+    return text
 
 
 def overlapping(a: np.ndarray, b: np.ndarray, gap: float = GAP_PX) -> bool:
@@ -139,7 +147,7 @@ def place(anchors: np.ndarray, texts: list[str], view: ScreenView, scale: float,
 
     ``anchors`` (n, 3) and ``texts`` (n,) are each label's point and text ("" for none). Labels
     whose points lie within ``merge_px`` of each other on the screen read as one ("1 · 8"), left
-    to right, in lines that fit the canvas (:func:`joined`); a label that would overlap another, or one of ``fixed`` ((position, text, scale,
+    to right, in lines that fit the canvas, up to half its height (:func:`joined`); a label that would overlap another, or one of ``fixed`` ((position, text, scale,
     anchor): labels drawn by something else), moves to the nearest free spot on the canvas
     (:data:`OFFSETS`; a leader line then joins it to its point). A label whose box would stand
     over the canvas's edge is pulled onto it first (centred, on a canvas narrower than it), and
@@ -171,7 +179,8 @@ def place(anchors: np.ndarray, texts: list[str], view: ScreenView, scale: float,
     right, up, _ = view.axes()
     canvas = np.array([-view.width / 2, -view.height / 2, view.width / 2, view.height / 2])
     placed: list[tuple[tuple[int, ...], str, np.ndarray, np.ndarray, np.ndarray]] = []  # with each one's box
-    labels = [(group, joined([texts[k] for k in group], scale, view.width - 2 * GAP_PX)) for group in groups]
+    labels = [(group, joined([texts[k] for k in group], scale, view.width - 2 * GAP_PX, view.height / 2))
+              for group in groups]
     # a label of several lines (a map's legend among the names) first: the fewest spots are free for it
     for group, text in sorted(labels, key=lambda label: -label[1].count("\n")):
         point = anchors[group].mean(axis=0)
