@@ -237,6 +237,19 @@ def test_a_crowd_of_names_at_one_spot_is_read_whole_on_the_projectors_canvas():
     assert box[3] - box[1] <= view.height / 2 and -view.width / 2 <= box[0] < box[2] <= view.width / 2
 
 
+@pytest.mark.parametrize("nickname", ["王小明同学", "さくら先生", "김민준", "😀😀😀", "Ｒｏｂｏｔ"])
+def test_a_nickname_in_wide_characters_is_measured_whole(nickname):
+    """A CJK character, a full-width letter or an emoji takes a whole em (its font's advance), not the 0.62 em of
+    a Latin one that every character was measured at until 2026-12-07: a Chinese nickname's label was taken
+    for 2/3 of its width, and the placing let it overlap its neighbours on the projector."""
+    from ur10teach.features.branch_labels import EM_PX, label_size
+
+    for scale in (1.0, 2.56):
+        width, _ = label_size(nickname, scale)
+        assert width >= EM_PX * scale * len(nickname)
+        assert label_size(f"✓ {nickname}\nab", scale)[0] > width  # the longest line counts
+
+
 @pytest.mark.parametrize("name", ["stanford", "elbow", "three_dof"])
 def test_a_ghost_the_arm_cannot_be_put_on_reads_limit_and_one_it_can_does_not(name):
     """Half a Stanford arm's branches need d3 < 0: their ghosts looked like the others, and a click on one was

@@ -11,6 +11,7 @@ from __future__ import annotations
 import functools
 import math
 import threading
+import unicodedata
 from dataclasses import dataclass
 from typing import Callable
 
@@ -92,14 +93,21 @@ DEFAULT_VIEW = ScreenView(CAMERA_POSITION, CAMERA_LOOK_AT)
 
 def label_size(text: str, scale: float) -> tuple[float, float]:
     r"""(width, height) px of a label's box: its background quad, a little generous (viser stacks the lines
-    of a text with newlines, 1.2 em apart).
+    of a text with newlines, 1.2 em apart). A character is 0.62 em wide, or a whole em where East Asian
+    scripts (and emoji) write it wide: a student's nickname in Chinese, Japanese or Korean.
 
-    >>> [round(px, 2) for px in (*label_size("x1", 1.0), *label_size("x1\nz", 1.0))]
-    [23.28, 17.4, 23.28, 31.8]
+    >>> [round(px, 2) for px in (*label_size("x1", 1.0), *label_size("x1\nz", 1.0), label_size("李明", 1.0)[0])]
+    [23.28, 17.4, 23.28, 31.8, 32.4]
     """
     em = EM_PX * scale
     lines = text.split("\n")
-    return em * (0.62 * max(map(len, lines)) + 0.7), em * (1.45 + 1.2 * (len(lines) - 1))
+    return em * (max(map(_ems, lines)) + 0.7), em * (1.45 + 1.2 * (len(lines) - 1))
+
+
+def _ems(line: str) -> float:
+    if line.isascii():
+        return 0.62 * len(line)
+    return sum(1.0 if unicodedata.east_asian_width(ch) in "WF" else 0.62 for ch in line)
 
 
 def boxes(pixels: np.ndarray, texts: list[str], scale: float, anchor: str = "bottom-center") -> np.ndarray:
