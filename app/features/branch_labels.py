@@ -155,8 +155,9 @@ def place(anchors: np.ndarray, texts: list[str], view: ScreenView, scale: float,
 
     ``anchors`` (n, 3) and ``texts`` (n,) are each label's point and text ("" for none). Labels
     whose points lie within ``merge_px`` of each other on the screen read as one ("1 · 8"), left
-    to right, in lines that fit the canvas, up to half its height (:func:`joined`); a label that would overlap another, or one of ``fixed`` ((position, text, scale,
-    anchor): labels drawn by something else), moves to the nearest free spot on the canvas
+    to right, in lines that fit the canvas, up to half its height (:func:`joined`); a label that
+    would overlap another, or one of ``fixed`` ((position, text, scale, anchor): labels drawn by
+    something else), moves to the nearest free spot on the canvas
     (:data:`OFFSETS`; a leader line then joins it to its point). A label whose box would stand
     over the canvas's edge is pulled onto it first (centred, on a canvas narrower than it), and
     labels of several lines (legends) are placed before the others.

@@ -48,6 +48,8 @@ ALL_BRANCHES = "All branches"
 #: How a mesh arm's ghosts are drawn: skeletons (the default: the solid arm stands out) or its meshes.
 GHOST_STYLES = ("Skeletons", "Meshes")
 FLIPS = {"Flip the shoulder": "shoulder", "Flip the elbow": "elbow", "Flip the wrist": "wrist"}
+#: The status line's name for a typed table's branch search, in a panel that has the button (features/branch_search.py)
+OWN_SEARCH = "**Find every branch**"
 #: Branches whose frame origins all lie this close (m) are drawn as one, labelled "3 = 4".
 SAME_POSE = 1e-3
 #: The gizmo's size as a share of the arm's reach: small enough to leave the wrist's
@@ -269,7 +271,7 @@ def reach_count(solution) -> str:
     return f"**{within} of {slots} branches** reach this target within the joint limits{beyond}"
 
 
-def status_markdown(snapshot: Snapshot, search: str = "**Find every branch**") -> str:
+def status_markdown(snapshot: Snapshot, search: str = OWN_SEARCH) -> str:
     """How many branches reach the target and which the arm is on, or why none does; ``search`` names the button
     that searches a typed table's branches for whoever reads it."""
     solution = snapshot.solution
@@ -312,7 +314,7 @@ def drawn_as_one(snapshot: Snapshot) -> list[tuple[int, ...]]:
             if np.ptp([solution.take(k, snapshot.q) for k in group], axis=0).max() > SAME_POSE]
 
 
-def branches_markdown(snapshot: Snapshot, search: str = "**Find every branch**") -> str:
+def branches_markdown(snapshot: Snapshot, search: str = OWN_SEARCH) -> str:
     """The status line (:func:`status_markdown`) above the branch table."""
     if snapshot.solution is None:
         return status_markdown(snapshot, search)
