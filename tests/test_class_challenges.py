@@ -899,6 +899,52 @@ async def presenting_a_reach_challenge(classroom) -> ViserClient:
     return teacher
 
 
+def test_the_target_and_the_students_tools_show_with_the_challenges_arm_only(classroom):
+    """A teacher who showed the class the KR210 during a UR10 reach challenge had the UR10's target and the students'
+    tools drawn over it, where its world put them: the target by the KR210's base, the tools a third of its size.
+    The projector's names also kept clear of the labels of the drawing they were made with, gone after the change.
+    They now show over the challenge's arm only, made again for its drawing, and the board says where they went; a
+    student working on their own UR10 keeps the target (until 2026-12-07)."""
+    from ur10teach.features.arm_picker import UR10, choice_of
+    from ur10teach.features.challenge import goal_pose
+
+    room = classroom.classroom
+    kr210 = choice_of("kr210")
+
+    async def scenario():
+        teacher = await presenting_a_reach_challenge(classroom)
+        student = await ViserClient(url(classroom)).connect()
+        member = next(m for m in list(room.members.values()) if m is not room.presenter)
+        await until(lambda: member.card is not None and member.session is not None and member.session.built,
+                    what="the student's card")
+        await drag_a_little(student, member.session)
+        presenter, run = room.presenter, room.challenges.run
+
+        def over_the_ur10() -> bool:
+            tools = presenter.tools
+            return (room.choice == UR10 and presenter.goal is not None and GOAL_ROOT in teacher.received.nodes
+                    and tools is not None and tools.working.visible and not teacher.shown("The class is shown"))
+
+        await until(over_the_ur10, what="the target and the student's tool on the projector")
+        before = presenter.tools
+        for label in (kr210, UR10):
+            await until(room.can_switch, what="the class's arm ready for a change")
+            await teacher.set_gui("Which arm", label)
+            if label == kr210:
+                await until(lambda: room.choice == kr210 and presenter.goal is None and presenter.tools is None
+                            and GOAL_ROOT not in teacher.received.nodes and teacher.shown(
+                                f"The class is shown the {kr210}: the students' tools and the target show with the {UR10}"),
+                            what="the projector without the UR10's target and tools, and the board saying so")
+                assert member.goal is not None and GOAL_ROOT in student.received.nodes  # the student's own UR10 keeps it
+        await until(over_the_ur10, what="the target and the tools back over the UR10")
+        assert presenter.tools is not before  # made for the drawing shown now
+        assert np.allclose(presenter.goal.pose, goal_pose(run.challenge, run.arm, room.drawing.world))
+        for client in (teacher, student):
+            await client.close()
+
+    asyncio.run(scenario())
+
+
 def test_a_student_who_goes_back_to_watching_keeps_the_target_and_is_told_the_end(classroom):
     """Going back to the presenter's arm clears the student's own scene: the reach target is drawn again. A student
     watching when the teacher ends the challenge is shown the end and the solution, as one exploring is."""

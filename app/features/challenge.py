@@ -67,8 +67,10 @@ class ChallengeDesk:
                  run: Callable[[], ChallengeRun | None], on_render: Callable[[], None] = lambda: None,
                  about_pose: Callable[[str], Challenge] | None = None,
                  arm_of: Callable[[Challenge], Arm | None] = lambda challenge: None,
-                 nicknames: bool = True, show_nicknames: Callable[[bool], None] = lambda shown: None) -> None:
+                 nicknames: bool = True, show_nicknames: Callable[[bool], None] = lambda shown: None,
+                 note: Callable[[], str] = lambda: "") -> None:
         self.closed = False
+        self._note = note  #: a line the board adds about the projector (the class shown another arm)
         self._arm_of = arm_of  #: the arm a challenge would be checked on (None: its ``Arm.preset``)
         self._on_render = on_render  #: the scene's part of the board (every student's tool)
         self._challenges = {c.title: c for c in challenges}
@@ -140,7 +142,8 @@ class ChallengeDesk:
                              (self.preview, not running), (self.end, running), (self.download, run is not None)):
             if handle.visible != show:
                 handle.visible = show
-        self.board.content = summary_markdown(run) if run is not None else "No challenge running."
+        note = self._note()
+        self.board.content = (summary_markdown(run) + (f"\n\n{note}" if note else "")) if run is not None else "No challenge running."
 
     def remove(self) -> None:
         self.closed = True

@@ -96,7 +96,7 @@ class ClassChallenges:
                              end=lambda: self.end(member), download=lambda: self.download(member),
                              run=lambda: self.run, on_render=lambda: self._render_board(member), about_pose=self.about_the_pose,
                              arm_of=lambda challenge: self.room.app.arm if challenge.arm == "ur10" else None,
-                             nicknames=self.nicknames, show_nicknames=self.show_nicknames)
+                             nicknames=self.nicknames, show_nicknames=self.show_nicknames, note=self.shown_elsewhere)
 
     def show_nicknames(self, shown: bool) -> None:
         self.nicknames = shown
@@ -227,7 +227,10 @@ class ClassChallenges:
     def show_goal(self, member: Member) -> None:
         """The reach target, in ``member``'s own scene (once: a scene reset takes it, and the classroom draws it again)."""
         session = member.session  # a student's own arm is the challenge's; the class may be shown another
-        drawing = session.drawing if session is not None and session.arm == self.run.arm else self.room.drawing
+        own = session is not None and session.arm == self.run.arm
+        if not (own or self._on_class_arm()):  # over another arm it is not where it is asked for
+            return
+        drawing = session.drawing if own else self.room.drawing
         pose = goal_pose(self.run.challenge, self.run.arm, drawing.world)
         if pose is not None and member.goal is None:
             member.goal = GoalMarker(member.client.scene, pose, self.room.app.lecture, drawing.size)
@@ -388,14 +391,48 @@ class ClassChallenges:
             self._board_changed()
         if member.session is not None and member.observer in member.session.observers:
             member.session.observers.remove(member.observer)
-        if member.tools is not None and member.camera is not None and member.tools.place in member.camera.on_moved:
-            member.camera.on_moved.remove(member.tools.place)
         for part in ("card", "goal", "tools"):
-            shown = getattr(member, part)
-            if shown is not None and not member.closed:
-                shown.remove()
-            setattr(member, part, None)
+            self._take_off(member, part)
         member.student = member.observer = None
+
+    @staticmethod
+    def _take_off(member: Member, part: str) -> None:
+        """``member``'s ``card``, ``goal`` or ``tools`` off their screen."""
+        shown = getattr(member, part)
+        if part == "tools" and shown is not None and member.camera is not None and shown.place in member.camera.on_moved:
+            member.camera.on_moved.remove(shown.place)
+        if shown is not None and not member.closed:
+            shown.remove()
+        setattr(member, part, None)
+
+    def _on_class_arm(self) -> bool:
+        """Whether the class is shown the challenge's arm, in whose world its target and the students' tools are."""
+        return self.run is not None and self.room.state.arm == self.run.arm
+
+    def class_arm_shown(self) -> None:
+        """The class is shown another arm: its live panel holds back what the challenge asks of it, and the target
+        and the students' tools show over the class's arm only while it is the challenge's (over another arm they
+        stood where its world put them: the UR10's target by the KR210's base, its tools a third of its size)."""
+        self.hold_back_live()
+        if self.run is None:
+            return
+        with self.room._lock:
+            # the presenter and the viewers (an explorer's target is over their own arm, the challenge's)
+            watching = [m for m in self.room.members.values() if m is self.room.presenter or m.session is None]
+        for member in watching:
+            self._take_off(member, "goal")
+            self._take_off(member, "tools")  # (made again for the class's drawing of the moment: its labels kept clear of)
+            self.show_goal(member)
+        self._board_changed()
+
+    def shown_elsewhere(self) -> str:
+        """What the board says while the class is shown another arm than a pose challenge's ("" otherwise)."""
+        run = self.run
+        if run is None or not run.challenge.is_pose or self._on_class_arm():
+            return ""
+        return (f"*The class is shown the {self.room.choice}: the students' tools"
+                f"{' and the target' if run.challenge.kind == 'reach' else ''} show with the "
+                f"{choice_of(run.challenge.arm)}.*")
 
     def class_arm_moved(self) -> None:
         """The class's arm moved: a question about the pose shown, previewed, is previewed at its new joints."""
@@ -414,7 +451,7 @@ class ClassChallenges:
 
     def _render_board(self, member: Member) -> None:
         self._board_due = False
-        if self.run is not None and member.tools is None and self.run.challenge.is_pose:
+        if self.run is not None and member.tools is None and self.run.challenge.is_pose and self._on_class_arm():
             drawing = self.room.drawing
             member.tools = ClassTools(member.client.scene, drawing.world, lambda: screen_view(member.client), self.room.app.lecture,
                                       fixed=lambda: [*in_world(drawing.label_sets), *member.goal_name(np.eye(4))],

@@ -428,7 +428,7 @@ class Classroom:
             elif other.camera is not None:  # the presenter and the viewers look at the new arm
                 other.camera.show_arm(self._body_radius(), self.state.arm.up)
                 other.camera.frame()
-        self.challenges.hold_back_live()  # (redraws it)
+        self.challenges.class_arm_shown()  # (redraws the live panel)
         if failed is not None:  # a challenge must not start on the arm the class had
             raise RuntimeError(f"the {label} could not be drawn; the class still sees the {previous}") from failed
         log.info("the class is shown the %s", label)
