@@ -789,6 +789,7 @@ def test_a_cloud_goes_from_memory_once_its_browsers_have_left(app):
         await staying.set_gui("Show workspace cloud", True)
         await until(lambda: sessions[0].workspace._cloud is not None, what="the staying browser's cloud")
         both = CLOUDS.nbytes
+        app.janitor.DELAY = 0.2  # (a few seconds after a browser leaves, in the app)
         sweeps = app.janitor.sweeps
         await leaving.close()
         await until(lambda: app.janitor.sweeps > sweeps, what="the janitor's sweep")
@@ -808,6 +809,7 @@ def test_a_browsers_arm_stays_out_of_full_collections_and_goes_when_it_leaves(ap
         assert not any(o is session for o in gc.get_objects()), "the arm is scanned by every full collection"
         gone = weakref.ref(session)
         del session
+        app.janitor.DELAY = 0.2  # (a few seconds after a browser leaves, in the app)
         sweeps = app.janitor.sweeps
         await client.close()
         await until(lambda: app.janitor.sweeps > sweeps, what="the janitor's sweep")
