@@ -945,6 +945,32 @@ def test_the_target_and_the_students_tools_show_with_the_challenges_arm_only(cla
     asyncio.run(scenario())
 
 
+def test_a_velocity_challenge_ended_while_the_class_sees_another_arm_is_solved_on_its_own(classroom):
+    """The joint rates a velocity challenge's end shows depend on the arm's pose: the class's, if it is the
+    challenge's arm. Shown the KR210, its joints were read as the UR10's (until 2026-12-07); now the UR10's home."""
+    from ur10teach.features.arm_picker import choice_of
+
+    room = classroom.classroom
+    velocity = next(c for c in room.challenges.offered if c.kind == "velocity" and c.arm == "ur10")
+
+    async def scenario():
+        teacher = await ViserClient(url(classroom)).connect()
+        await become_presenter(teacher, classroom)
+        await teacher.set_gui("Challenge", velocity.title)
+        await teacher.set_gui("Start the challenge", True)
+        await until(lambda: room.challenges.running, what="the velocity challenge")
+        run = room.challenges.run
+        await until(room.can_switch, what="the class's arm ready for a change")
+        await teacher.set_gui("Which arm", choice_of("kr210"))
+        await until(lambda: room.choice == choice_of("kr210") and room.presenter.desk is not None, what="the KR210 shown")
+        await teacher.set_gui("End and show the solution", True)
+        await until(lambda: run.ended and run.solution_words, what="the end")
+        assert run.solution_words == C.solution(velocity, run.arm)[1]
+        await teacher.close()
+
+    asyncio.run(scenario())
+
+
 def test_a_student_who_goes_back_to_watching_keeps_the_target_and_is_told_the_end(classroom):
     """Going back to the presenter's arm clears the student's own scene: the reach target is drawn again. A student
     watching when the teacher ends the challenge is shown the end and the solution, as one exploring is."""

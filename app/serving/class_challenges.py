@@ -310,7 +310,7 @@ class ClassChallenges:
             members = list(self.room.members.values())
         self.hold_back_live()
         challenge, arm = run.challenge, run.arm
-        common = solution(challenge, arm, self.room.state.q)
+        common = solution(challenge, arm, self.room.state.q if self._on_class_arm() else None)  # (the class's, if it is the arm)
         run.solution_words = common[1]
         for other in members:
             session = other.session
