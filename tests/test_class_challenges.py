@@ -927,8 +927,9 @@ def test_the_target_and_the_students_tools_show_with_the_challenges_arm_only(cla
 
         await until(over_the_ur10, what="the target and the student's tool on the projector")
         before = presenter.tools
-        for label in (kr210, UR10):
-            await until(room.can_switch, what="the class's arm ready for a change")
+        for label in (kr210, UR10):  # (the picker is made anew for each arm: the one pressed is the one the page holds)
+            await until(lambda: room.can_switch() and presenter.picker is not None and teacher.gui.get(
+                "Which arm", {}).get("uuid") == presenter.picker.dropdown._impl.uuid, what="the class's arm ready for a change")
             await teacher.set_gui("Which arm", label)
             if label == kr210:
                 await until(lambda: room.choice == kr210 and presenter.goal is None and presenter.tools is None
@@ -962,7 +963,9 @@ def test_a_velocity_challenge_ended_while_the_class_sees_another_arm_is_solved_o
         run = room.challenges.run
         await until(room.can_switch, what="the class's arm ready for a change")
         await teacher.set_gui("Which arm", choice_of("kr210"))
-        await until(lambda: room.choice == choice_of("kr210") and room.presenter.desk is not None, what="the KR210 shown")
+        # (the presenter's folders are made anew for the arm shown: the button pressed is the one the page now holds)
+        await until(lambda: room.choice == choice_of("kr210") and room.presenter.desk is not None and teacher.gui.get(
+            "End and show the solution", {}).get("uuid") == room.presenter.desk.end._impl.uuid, what="the KR210 shown")
         await teacher.set_gui("End and show the solution", True)
         await until(lambda: run.ended and run.solution_words, what="the end")
         assert run.solution_words == C.solution(velocity, run.arm)[1]
