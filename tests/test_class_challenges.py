@@ -904,7 +904,8 @@ def test_the_target_and_the_students_tools_show_with_the_challenges_arm_only(cla
     tools drawn over it, where its world put them: the target by the KR210's base, the tools a third of its size.
     The projector's names also kept clear of the labels of the drawing they were made with, gone after the change.
     They now show over the challenge's arm only, made again for its drawing, and the board says where they went; a
-    student working on their own UR10 keeps the target (until 2026-12-07)."""
+    student working on their own UR10 keeps the target (until 2026-12-07). Once it has ended, the target is drawn
+    again for those who had it only: not for a browser that came after the end."""
     from ur10teach.features.arm_picker import UR10, choice_of
     from ur10teach.features.challenge import goal_pose
 
@@ -940,7 +941,18 @@ def test_the_target_and_the_students_tools_show_with_the_challenges_arm_only(cla
         await until(over_the_ur10, what="the target and the tools back over the UR10")
         assert presenter.tools is not before  # made for the drawing shown now
         assert np.allclose(presenter.goal.pose, goal_pose(run.challenge, run.arm, room.drawing.world))
-        for client in (teacher, student):
+        # ended, its target stays with those who had it; a browser that comes after the end is not given it
+        await teacher.set_gui("End and show the solution", True)
+        await until(lambda: run.ended, what="the end")
+        late = await ViserClient(url(classroom)).connect()
+        newcomer = next(m for m in list(room.members.values()) if m is not room.presenter and m is not member)
+        for label, shown in ((kr210, lambda: presenter.goal is None), (UR10, lambda: presenter.goal is not None)):
+            await until(lambda: presenter.picker is not None and teacher.gui.get("Which arm", {}).get("uuid")
+                        == presenter.picker.dropdown._impl.uuid and room.can_switch(), what="the class's arm ready for a change")
+            await teacher.set_gui("Which arm", label)
+            await until(lambda: room.choice == label and shown(), what=f"the {label} shown")
+        assert newcomer.goal is None and member.goal is not None
+        for client in (teacher, student, late):
             await client.close()
 
     asyncio.run(scenario())

@@ -422,7 +422,8 @@ class ClassChallenges:
         for member in watching:
             self._take_off(member, "goal")
             self._take_off(member, "tools")  # (made again for the class's drawing of the moment: its labels kept clear of)
-            self.show_goal(member)
+            if member is self.room.presenter or member.student is not None:  # (not a browser that came after the end)
+                self.show_goal(member)
         self._board_changed()
 
     def shown_elsewhere(self) -> str:
