@@ -906,7 +906,7 @@ def test_the_target_and_the_students_tools_show_with_the_challenges_arm_only(cla
     They now show over the challenge's arm only, made again for its drawing, and the board says where they went; a
     student working on their own UR10 keeps the target (until 2026-12-07). Once it has ended, the target is drawn
     again for those who had it only: not for a browser that came after the end."""
-    from ur10teach.features.arm_picker import UR10, choice_of
+    from ur10teach.features.arm_picker import CUSTOM, UR10, choice_of
     from ur10teach.features.challenge import goal_pose
 
     room = classroom.classroom
@@ -928,14 +928,15 @@ def test_the_target_and_the_students_tools_show_with_the_challenges_arm_only(cla
 
         await until(over_the_ur10, what="the target and the student's tool on the projector")
         before = presenter.tools
-        for label in (kr210, UR10):  # (the picker is made anew for each arm: the one pressed is the one the page holds)
+        elsewhere = {kr210: f"the {kr210}", CUSTOM: "the presenter's DH table"}  # (a typed table, as the board names it)
+        for label in (kr210, CUSTOM, UR10):  # (the picker is made anew for each arm: the one pressed is the one the page holds)
             await until(lambda: room.can_switch() and presenter.picker is not None and teacher.gui.get(
                 "Which arm", {}).get("uuid") == presenter.picker.dropdown._impl.uuid, what="the class's arm ready for a change")
             await teacher.set_gui("Which arm", label)
-            if label == kr210:
-                await until(lambda: room.choice == kr210 and presenter.goal is None and presenter.tools is None
+            if label in elsewhere:
+                await until(lambda: room.choice == label and presenter.goal is None and presenter.tools is None
                             and GOAL_ROOT not in teacher.received.nodes and teacher.shown(
-                                f"The class is shown the {kr210}: the students' tools and the target show with the {UR10}"),
+                                f"The class is shown {elsewhere[label]}: the students' tools and the target show with the {UR10}"),
                             what="the projector without the UR10's target and tools, and the board saying so")
                 assert member.goal is not None and GOAL_ROOT in student.received.nodes  # the student's own UR10 keeps it
         await until(over_the_ur10, what="the target and the tools back over the UR10")
