@@ -10,6 +10,9 @@ from ur10core.solvers.numerical import STARTS
 from ..serving.workers import APART, HEAVY, FoldedRuns
 from ..view import Session, View
 
+#: The button's label, as the status lines name it
+SEARCH_BUTTON = "Find every branch"
+
 
 class BranchSearch(View):
     """The "Numerical IK" folder: damped least squares from many starts, its branches shown as the closed forms' are."""
@@ -21,7 +24,7 @@ class BranchSearch(View):
         folder = gui.add_folder("Numerical IK", order=0.3)
         self.folders = (folder,)
         with folder:
-            self.button = gui.add_button("Find every branch", icon=viser.Icon.SEARCH,
+            self.button = gui.add_button(SEARCH_BUTTON, icon=viser.Icon.SEARCH,
                                          hint=f"Damped least squares from {STARTS} starts: every distinct solution it finds")
         self.button.on_click(session.guard(lambda _: self._runs.start("branch-search", session.guard)))
 

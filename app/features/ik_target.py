@@ -38,6 +38,7 @@ from ..style import (
 from ..view import HELD_BACK, Session, View
 from ..viser_internals.fast_updates import set_instances, stop_echo
 from .branch_labels import BranchLabels
+from .branch_search import SEARCH_BUTTON
 from .robot import model_slug
 
 log = logging.getLogger(__name__)
@@ -49,7 +50,7 @@ ALL_BRANCHES = "All branches"
 GHOST_STYLES = ("Skeletons", "Meshes")
 FLIPS = {"Flip the shoulder": "shoulder", "Flip the elbow": "elbow", "Flip the wrist": "wrist"}
 #: The status line's name for a typed table's branch search, in a panel that has the button (features/branch_search.py)
-OWN_SEARCH = "**Find every branch**"
+OWN_SEARCH = f"**{SEARCH_BUTTON}**"
 #: Branches whose frame origins all lie this close (m) are drawn as one, labelled "3 = 4".
 SAME_POSE = 1e-3
 #: The gizmo's size as a share of the arm's reach: small enough to leave the wrist's

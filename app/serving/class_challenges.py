@@ -19,7 +19,7 @@ import numpy as np
 from ur10core import Arm
 from ur10core.challenges import POSE_QUESTIONS, Answer, Challenge, about_the_pose, check, number_names, solution
 
-from ..features.arm_picker import CUSTOM, choice_of
+from ..features.arm_picker import CLASS_TYPED_TITLE, CUSTOM, choice_of
 from ..features.branch_labels import in_world, screen_view
 from ..features.challenge import ChallengeCard, ChallengeDesk, ClassTools, GoalMarker, goal_pose
 from ..features.course_arms.editor import parse_table
@@ -431,7 +431,8 @@ class ClassChallenges:
         run = self.run
         if run is None or not run.challenge.is_pose or self._on_class_arm():
             return ""
-        shown = "the presenter's DH table" if self.room.choice == CUSTOM else f"the {self.room.choice}"
+        choice = self.room.choice  # (a typed table by its title, mid-sentence)
+        shown = CLASS_TYPED_TITLE[:1].lower() + CLASS_TYPED_TITLE[1:] if choice == CUSTOM else f"the {choice}"
         return (f"*The class is shown {shown}: the students' tools"
                 f"{' and the target' if run.challenge.kind == 'reach' else ''} show with the "
                 f"{choice_of(run.challenge.arm)}.*")

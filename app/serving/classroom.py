@@ -33,7 +33,7 @@ from ..features.course_arms.editor import starting_table
 from ..features.course_arms.scene import EXPLORER_ROOT
 from ..features.drawings import arm_drawing
 from ..features.floor import add_floor_grid
-from ..features.ik_target import branches_markdown
+from ..features.ik_target import OWN_SEARCH, branches_markdown
 from ..features.joint_panel import joints_markdown
 from ..features.lecture import size_labels
 from ..features.readouts import flange_markdown
@@ -65,7 +65,7 @@ MAX_GUESSERS = 10_000
 VIEWER, PRESENTER, EXPLORER = "viewer", "presenter", "explorer"
 EXPLORE = "Explore on my own"
 #: The live panel's name for a typed table's branch search: a viewer has no such button of their own
-CLASS_SEARCH = f"The presenter's **Find every branch** (yours, after *{EXPLORE}*)"
+CLASS_SEARCH = f"The presenter's {OWN_SEARCH} (yours, after *{EXPLORE}*)"
 
 
 def make_join_code() -> str:
