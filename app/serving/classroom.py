@@ -204,10 +204,13 @@ class Classroom:
     def _state_of(self, label: str) -> ArmState:
         if label not in self.states:
             name, app = ARM_CHOICES[label], self.app
-            if name == "custom":
+            if name is None:
+                self.states[label] = ArmState(app.arm, body_points=app.models.outline)
+            elif name == "custom":
                 self.typed = self.typed or starting_table()
-            arm = app.arm if name is None else self.typed[0] if name == "custom" else Arm.preset(name)
-            self.states[label] = ArmState(arm, body_points=app.models.outline if name is None else None)
+                self.states[label] = ArmState(self.typed[0])
+            else:
+                self.states[label] = ArmState(Arm.preset(name))
         return self.states[label]
 
     def _models(self, arm: Arm):
