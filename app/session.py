@@ -364,7 +364,7 @@ class ArmSession:
 
     def _screen_view(self) -> ScreenView:
         """This browser's camera, to place the branch numbers for (the default one until it reports)."""
-        return screen_view(self.client)
+        return self.camera.view() if self.camera is not None else screen_view(self.client)
 
     def notify(self, title: str, body: str, color: str = "yellow") -> None:
         if not self.closed:

@@ -3,15 +3,18 @@
 from __future__ import annotations
 
 import asyncio
+import re
+import urllib.error
+import urllib.request
 
 import numpy as np
 
 from ur10teach.serving.server import TeachingServer
 from ur10dev.viser_client import BROWSER_SEND_INTERVAL, ViserClient, wxyz_of
-from ur10dev.waiting import until, wait_for
+from ur10dev.waiting import HANG_TIMEOUT, until, wait_for
 
-__all__ = ["a_ghost_to_take", "become_presenter", "drag_a_little", "member_of", "scene_pose", "session_of", "until", "url",
-           "wait_for"]
+__all__ = ["a_ghost_to_take", "become_presenter", "drag_a_little", "get", "member_of", "pixel_ratio_addresses", "scene_pose",
+           "session_of", "until", "url", "wait_for"]
 
 
 def a_ghost_to_take(arm, seed: int = 2) -> tuple[np.ndarray, int]:
@@ -31,6 +34,23 @@ def a_ghost_to_take(arm, seed: int = 2) -> tuple[np.ndarray, int]:
 
 def url(server: TeachingServer) -> str:
     return f"http://127.0.0.1:{server.port}"
+
+
+def get(server: TeachingServer, path: str) -> int:
+    """The HTTP status ``server`` answers a plain request for ``path`` with (as a page's picture is asked for)."""
+    try:
+        with urllib.request.urlopen(url(server) + path, timeout=HANG_TIMEOUT) as answer:
+            return answer.status
+    except urllib.error.HTTPError as refusal:  # viser's own answer to an address it has no file at
+        return refusal.code
+
+
+def pixel_ratio_addresses(client: ViserClient) -> dict[str, str]:
+    """Ratio -> the address the page's pixel-ratio element asks for at it (``serving.pixel_ratio``), once it has one
+    element (none while one replaces another)."""
+    probes = [content for content in client.html.values() if "pixel-ratio" in content]
+    found = re.findall(r"url\((/pixel-ratio/[\w-]+/(\d\.\d\d))\)", probes[0]) if len(probes) == 1 else []
+    return {ratio: path for path, ratio in found}
 
 
 def scene_pose(scene, handle) -> np.ndarray:

@@ -315,3 +315,23 @@ def test_the_qr_code_to_join_reads_off_the_teachers_screen_at_a_fifth_of_its_siz
         assert page.get_by_text(app.join_urls[0].removeprefix("http://"), exact=True).count() == 1  # typed off it
     finally:
         app.stop()
+
+
+def test_labels_stay_apart_on_a_high_density_screen_and_through_a_zoom(open_page, light_app):
+    """A laptop's screen draws two canvas pixels per CSS pixel (a MacBook; Windows at 200 %). The camera reports its
+    canvas in the first, viser sizes the labels in the second: until 2026-12-07 the labels were placed for half their
+    size, and overlapped there ("4" behind "7", "2" over "5" by the UR10's wrist singularity, in lecture mode). A zoom
+    mid-lesson changes the ratio again (to 125 % here, then back to 200 %, an address the page has asked for before)."""
+    from ur10dev.browser import SMALL_VIEWPORT
+
+    width, height = 2 * SMALL_VIEWPORT["width"], 2 * SMALL_VIEWPORT["height"]
+    page, session = open_page(viewport={"width": width, "height": height}, zoom=2.0)
+    session.camera.lecture.enabled.value = True
+    session.apply(lambda state: state.set_joints(np.radians([30, -100, 80, -60, 3, 0])))
+    zoom = page.context.new_cdp_session(page)
+    for ratio in (2.0, 1.25, 2.0):
+        zoom.send("Emulation.setDeviceMetricsOverride", {"width": round(width / ratio), "height": round(height / ratio),
+                                                         "deviceScaleFactor": ratio, "mobile": False})
+        wait_for(lambda: session.camera.pixel_ratio == ratio, what=f"the server to know the page's ratio {ratio}")
+        boxes = steady_boxes(page, session)
+        assert len(boxes) >= 6 and not overlaps(boxes), (ratio, overlaps(boxes))

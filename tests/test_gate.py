@@ -23,10 +23,11 @@ from viser import _messages as messages
 
 from ur10teach.serving import gate as gate_module
 from ur10teach.serving.gate import MAX_MESSAGE_BYTES, MESSAGE_BURST, Gate, TokenBucket, gated_serve, message_key
+from ur10teach.serving.pixel_ratio import CHANGE_BURST
 from ur10teach.serving.server import TeachingServer
 from ur10teach.viser_internals import connection_of
 
-from .server_support import drag_a_little, session_of, until, url
+from .server_support import drag_a_little, get, pixel_ratio_addresses, session_of, until, url
 from ur10dev.viser_client import ViserClient, encode
 from ur10dev.waiting import HANG_TIMEOUT, wait_for
 
@@ -594,3 +595,45 @@ def test_a_twin_whose_socket_is_backed_up_is_hung_up_in_time(monkeypatch):
     laptop = object()
     gone = asyncio.run(asyncio.wait_for(gate_module.hang_up_silent([laptop], timeout=0.05), HANG_TIMEOUT))
     assert gone == [laptop] and connection.aborted
+
+
+def test_a_page_says_its_pixel_ratio_and_no_other_page_can(app):
+    """A browser's camera reports its canvas in device pixels, and viser sizes the 3D labels in CSS pixels: on a
+    laptop's screen at 2 per CSS pixel the labels were placed for half their size. The page's style asks for a
+    picture at its ratio's address; the gate answers it (204, kept nowhere), and the labels are placed in CSS pixels.
+    An address of the page's last element, a made-up token, or a ratio no page reports, changes nothing; another
+    page's addresses are in its own panel only."""
+    async def scenario():
+        client = await ViserClient(url(app)).connect()
+        other = await ViserClient(url(app)).connect()
+        session = session_of(app, client)
+        await client.send(camera_message(image_height=1260, image_width=1654))
+        await until(lambda: session.client.camera.image_height == 1260, what="the camera")
+        first = await until(lambda: pixel_ratio_addresses(client), what="the page's element")
+        assert sorted(first) == [f"{1 + k / 20:.2f}" for k in range(21)]
+        assert await asyncio.to_thread(get, app, first["2.00"]) == 204
+        await until(lambda: session.camera.pixel_ratio == 2.0, what="the ratio heard")
+        assert (session._screen_view().height, session._screen_view().width) == (630, 827)
+        # the element is replaced by one at new addresses (the page would take one it asked for before from its cache)
+        def replaced() -> dict | None:
+            now = pixel_ratio_addresses(client)
+            return now if now and now != first else None
+
+        second = await until(replaced, what="a new element")
+        for path in (first["1.00"], "/pixel-ratio/" + "A" * 16 + "/1.00"):
+            assert await asyncio.to_thread(get, app, path) == 204
+        for path in (second["1.00"].replace("1.00", "3.00"), second["1.00"].replace("1.00", "1.5"), second["1.00"] + "/x"):
+            assert await asyncio.to_thread(get, app, path) == 404
+        assert session.camera.pixel_ratio == 2.0
+        assert await asyncio.to_thread(get, app, second["1.25"]) == 204
+        await until(lambda: session.camera.pixel_ratio == 1.25, what="the newest element's ratio")
+        other_id = next(k for k, s in app.sessions.items() if s is not session)
+        # a page that reports without end (each heard report replaces its element) leaves the others' as they were
+        for k in range(3 * CHANGE_BURST):
+            paths = await until(lambda: pixel_ratio_addresses(client), what="the page's element")
+            await asyncio.to_thread(get, app, paths["1.00" if k % 2 else "2.00"])
+        assert session.camera.pixel_ratio in (1.0, 2.0) and app.pixel_ratios.of(other_id) == 1.0
+        await client.close()
+        await other.close()
+
+    asyncio.run(scenario())

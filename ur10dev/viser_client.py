@@ -149,6 +149,7 @@ class ViserClient:
         self.received = Received()
         self.gui: dict[str, dict[str, Any]] = {}  # label -> {"uuid", "type", "value"}
         self.markdown: dict[str, str] = {}  # uuid -> the content of each markdown widget shown
+        self.html: dict[str, str] = {}  # uuid -> the content of each HTML element shown
         self.gizmo_owner: str | None = None
         self.owners_seen: set[str] = set()  # scene scopes this client was sent messages for
         self.ready = asyncio.Event()
@@ -245,6 +246,7 @@ class ViserClient:
             self.received.removed_gui.add(message["uuid"])
             self.received.images.pop(message["uuid"], None)
             self.markdown.pop(message["uuid"], None)
+            self.html.pop(message["uuid"], None)
             # a label now means the widget that replaced it (a rebuilt panel), not the removed one
             for label in [label for label, entry in self.gui.items() if entry["uuid"] == message["uuid"]]:
                 del self.gui[label]
@@ -276,6 +278,8 @@ class ViserClient:
                 self.received.ghost_flanges_read.append(self._read_at)
         if kind == "TransformControlsMessage" and message.get("owner"):  # a gizmo of this browser's own
             self.gizmo_owner = message["owner"]
+        if kind == "GuiHtmlMessage":
+            self.html[message["uuid"]] = message.get("props", {}).get("content", "")
         if kind == "GuiMarkdownMessage":
             self.markdown[message["uuid"]] = message.get("props", {}).get("_markdown", "")
         elif kind == "GuiUpdateMessage" and "_markdown" in message.get("updates", {}) and message["uuid"] in self.markdown:

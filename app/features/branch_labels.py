@@ -47,7 +47,7 @@ OFFSETS = np.array([(0.0, 0.0)] + [(radius * dx, radius * dy) for radius in rang
 
 @dataclass(frozen=True)
 class ScreenView:
-    """A perspective camera as viser has it: vertical field of view ``fov`` (rad), canvas ``height`` (px)."""
+    """A perspective camera as viser has it: vertical field of view ``fov`` (rad), canvas ``height`` (CSS px)."""
 
     position: tuple[float, float, float]
     look_at: tuple[float, float, float]
@@ -57,9 +57,10 @@ class ScreenView:
     width: float = 900.0
 
     @classmethod
-    def of(cls, camera: viser.CameraHandle) -> ScreenView:
+    def of(cls, camera: viser.CameraHandle, pixel_ratio: float = 1.0) -> ScreenView:
+        """``camera``'s view in CSS pixels, the labels' unit: it reports its canvas in ``pixel_ratio`` times as many."""
         return cls(tuple(camera.position), tuple(camera.look_at), tuple(camera.up_direction), float(camera.fov),
-                   float(camera.image_height or 700.0), float(camera.image_width or 900.0))
+                   float(camera.image_height or 700.0) / pixel_ratio, float(camera.image_width or 900.0) / pixel_ratio)
 
     @functools.cached_property
     def _axes(self) -> np.ndarray:
@@ -227,10 +228,10 @@ def _free_spot(spots: np.ndarray, taken: list[np.ndarray], canvas: np.ndarray) -
     return int(np.argmin(np.where(inside, covered, np.inf))) if inside.any() else 0
 
 
-def screen_view(client) -> ScreenView:
+def screen_view(client, pixel_ratio: float = 1.0) -> ScreenView:
     """``client``'s camera, to place labels for (the default one until it reports, or once it has gone)."""
     try:
-        return ScreenView.of(client.camera)
+        return ScreenView.of(client.camera, pixel_ratio)
     except Exception:  # no camera message yet, or the browser has gone
         return DEFAULT_VIEW
 

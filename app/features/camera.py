@@ -22,7 +22,7 @@ from ur10core.orientation import from_frame
 from ..feedback import chosen, notify
 from ..state import Snapshot
 from ..view import View
-from .branch_labels import DEFAULT_VIEW, ScreenView
+from .branch_labels import DEFAULT_VIEW, ScreenView, screen_view
 from .lecture import LectureMode
 from .light_view import LightView
 
@@ -210,6 +210,8 @@ class CameraControls(View):
         self.closed = False
         self._framed_size: tuple[int, int] | None = None
         self._framed_at: tuple[np.ndarray, np.ndarray] | None = None  #: (position, look_at) this framed the camera at
+        #: canvas pixels per CSS pixel: the camera reports its canvas in the first, the 3D labels are sized in the second
+        self.pixel_ratio = 1.0
         #: called whenever the camera moves (the branch numbers are placed for it)
         self.on_moved: list[Callable[[], None]] = []
         #: what else is drawn and framed with the arm, by what draws it: a cloud, a path
@@ -232,6 +234,18 @@ class CameraControls(View):
 
     def close(self) -> None:
         self.closed = True
+
+    def view(self) -> ScreenView:
+        """The browser's camera in CSS pixels, to place labels for (the default one until it reports)."""
+        return screen_view(self._client, self.pixel_ratio)
+
+    def show_pixel_ratio(self, ratio: float) -> None:
+        """The browser draws ``ratio`` canvas pixels per CSS pixel (a zoom, a laptop's screen): its labels are
+        placed anew."""
+        if ratio != self.pixel_ratio and not self.closed:
+            self.pixel_ratio = ratio
+            for moved in self.on_moved:
+                moved()
 
     def camera_moved(self, camera: viser.CameraHandle) -> None:
         if self.closed:
@@ -297,7 +311,7 @@ class CameraControls(View):
         self.show_also(name, points, now=False)
         if points is None or self.closed or not self._where_framed():
             return
-        view = ScreenView.of(self._client.camera)
+        view = self.view()
         pixels, depth = view.to_screen(self.extra[name])
         bottom = view.height / 2 - self._uncovered(view.width / view.height) * view.height
         if (depth <= 0).any() or (np.abs(pixels[:, 0]) > view.width / 2).any() or \

@@ -20,7 +20,7 @@ from ur10core import Arm
 from ur10core.challenges import POSE_QUESTIONS, Answer, Challenge, about_the_pose, check, number_names, solution
 
 from ..features.arm_picker import CLASS_TYPED_TITLE, CUSTOM, choice_of
-from ..features.branch_labels import in_world, screen_view
+from ..features.branch_labels import in_world
 from ..features.challenge import ChallengeCard, ChallengeDesk, ClassTools, GoalMarker, goal_pose
 from ..features.course_arms.editor import parse_table
 from ..feedback import guard
@@ -243,7 +243,7 @@ class ClassChallenges:
         """The reach target's name turned towards the middle of ``member``'s canvas, for its camera as it is now."""
         goal = member.goal
         if goal is not None:
-            goal.face(screen_view(member.client))
+            goal.face(member.camera.view())
 
     def _moved(self, member: Member, snapshot=None) -> None:
         """A student's arm changed (``snapshot``), or they typed at their answer: they are working; the projector
@@ -456,7 +456,7 @@ class ClassChallenges:
         self._board_due = False
         if self.run is not None and member.tools is None and self.run.challenge.is_pose and self._on_class_arm():
             drawing = self.room.drawing
-            member.tools = ClassTools(member.client.scene, drawing.world, lambda: screen_view(member.client), self.room.app.lecture,
+            member.tools = ClassTools(member.client.scene, drawing.world, member.camera.view, self.room.app.lecture,
                                       fixed=lambda: [*in_world(drawing.label_sets), *member.goal_name(np.eye(4))],
                                       keep_in_view=lambda points: member.camera.keep_in_view("class", points), size=drawing.size)
             member.camera.on_moved.append(member.tools.place)

@@ -220,12 +220,19 @@ class Gate:
         self._lock = threading.Lock()
         #: ``(uuid, value)`` -> whether a widget's value converts to the widget's type (the server sets it)
         self.value_fits: Callable[[Any, Any], bool] = lambda uuid, value: True
+        #: a page's request path -> whether it was a report the server heard, answered with nothing (the server sets
+        #: it: ``ur10teach.serving.pixel_ratio``)
+        self.heard: Callable[[str], bool] = lambda path: False
 
     # ------------------------------------------------------------------ connections
 
     def check_request(self, connection, request) -> Any:
-        """``process_request`` for websocket upgrades: None to go on, or the refusal to send."""
+        """``process_request``: None to go on, or the answer to send (a refused websocket, a page's report)."""
         if request.headers.get("Upgrade", "").lower() != "websocket":
+            if self.heard(request.path):
+                answer = connection.respond(http.HTTPStatus.NO_CONTENT, "")
+                answer.headers["Cache-Control"] = "no-store"
+                return answer
             return None  # the page and its files: nothing to guard
         hosts, origins = request.headers.get_all("Host"), request.headers.get_all("Origin")
         if len(hosts) != 1 or len(origins) > 1:
