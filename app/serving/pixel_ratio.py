@@ -1,5 +1,5 @@
 """How many canvas pixels each browser draws per CSS pixel: its camera reports its canvas in the first, and viser
-sizes the 3D labels in the second (a 12 px em), so placing labels apart needs the ratio (2 on most laptops' screens).
+sizes the 3D labels in the second (a 12 px em), so placing labels apart needs the ratio (1.25 to 2 on most laptops).
 
 The page says it without a script: a style in its panel asks for a picture at its ratio's address, chosen by the
 browser's own media queries (again when a zoom changes it), and the gate answers that request (204).
