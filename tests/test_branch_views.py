@@ -237,6 +237,31 @@ def test_a_crowd_of_names_at_one_spot_is_read_whole_on_the_projectors_canvas():
     assert box[3] - box[1] <= view.height / 2 and -view.width / 2 <= box[0] < box[2] <= view.width / 2
 
 
+def test_on_a_phone_held_upright_labels_are_placed_above_the_panel():
+    """A phone held upright shows the panel over the lower 60 % of its canvas, and frames the arm above it; the
+    labels were placed on the whole canvas, and those a crowd pushed down went under the panel (the UR10's "arm: 5"
+    and "7" by its wrist singularity, 2026-12-07). They are placed in the band above it, apart: when none of the
+    spots around a label's point is free there, at the nearest free one in the band."""
+    from ur10teach.features.branch_labels import ScreenView, boxes, overlapping, place
+    from ur10teach.features.camera import PHONE_UNCOVERED
+
+    view = ScreenView((0.0, -3.0, 0.0), (0.0, 0.0, 0.0), up=(0.0, 0.0, 1.0), height=664.0, width=390.0,
+                      covered=1.0 - PHONE_UNCOVERED)
+    per_px = 2 * np.tan(view.fov / 2) * 3.0 / view.height
+    band = view.height / 2 - PHONE_UNCOVERED * view.height  # the panel's top edge, px from the canvas's centre
+    texts = [f"{k + 1} ⚠ floor" for k in range(8)]
+    for seed in range(20):  # eight elbows in the band's lower half, as a crowd by a singularity
+        rng = np.random.default_rng(seed)
+        pixels = np.column_stack([rng.uniform(-100.0, 100.0, 8), rng.uniform(band + 10.0, band + 150.0, 8)])
+        points = np.column_stack([pixels[:, 0] * per_px, np.zeros(8), pixels[:, 1] * per_px])
+        placed = place(points, texts, view, 1.6, merge_px=0.0)
+        drawn = [boxes(view.to_screen(position[None])[0], [text], 1.6)[0] for _, text, position, _ in placed]
+        assert len(drawn) == 8
+        for k, box in enumerate(drawn):
+            assert box[1] >= band - 1e-6 and box[3] <= view.height / 2 + 1e-6 and abs(box[0]) <= view.width / 2, (seed, box)
+            assert not any(overlapping(box, other, gap=0.0) for other in drawn[k + 1:]), seed
+
+
 @pytest.mark.parametrize("nickname", ["王小明同学", "さくら先生", "김민준", "😀😀😀", "Ｒｏｂｏｔ"])
 def test_a_nickname_in_wide_characters_is_measured_whole(nickname):
     """A CJK character, a full-width letter or an emoji takes a whole em (its font's advance), not the 0.62 em of

@@ -55,6 +55,8 @@ class ScreenView:
     fov: float = math.radians(CAMERA_FOV_DEGREES)
     height: float = 700.0  #: the smallest canvas a class looks at: apart there, apart on larger ones
     width: float = 900.0
+    #: the share of the canvas's height, from its bottom, that the panel lies over (a phone held upright's)
+    covered: float = 0.0
 
     @classmethod
     def of(cls, camera: viser.CameraHandle, pixel_ratio: float = 1.0) -> ScreenView:
@@ -158,7 +160,7 @@ def place(anchors: np.ndarray, texts: list[str], view: ScreenView, scale: float,
     whose points lie within ``merge_px`` of each other on the screen read as one ("1 · 8"), left
     to right, in lines that fit the canvas, up to half its height (:func:`joined`); a label that
     would overlap another, or one of ``fixed`` ((position, text, scale, anchor): labels drawn by
-    something else), moves to the nearest free spot on the canvas
+    something else), moves to the nearest free spot on the canvas (above the panel, where it lies over the canvas)
     (:data:`OFFSETS`; a leader line then joins it to its point). A label whose box would stand
     over the canvas's edge is pulled onto it first (centred, on a canvas narrower than it), and
     labels of several lines (legends) are placed before the others.
@@ -187,9 +189,9 @@ def place(anchors: np.ndarray, texts: list[str], view: ScreenView, scale: float,
     else:
         obstacles = []
     right, up, _ = view.axes()
-    canvas = np.array([-view.width / 2, -view.height / 2, view.width / 2, view.height / 2])
+    canvas = np.array([-view.width / 2, view.height * (view.covered - 0.5), view.width / 2, view.height / 2])
     placed: list[tuple[tuple[int, ...], str, np.ndarray, np.ndarray, np.ndarray]] = []  # with each one's box
-    labels = [(group, joined([texts[k] for k in group], scale, view.width - 2 * GAP_PX, view.height / 2))
+    labels = [(group, joined([texts[k] for k in group], scale, view.width - 2 * GAP_PX, (canvas[3] - canvas[1]) / 2))
               for group in groups]
     # a label of several lines (a map's legend among the names) first: the fewest spots are free for it
     for group, text in sorted(labels, key=lambda label: -label[1].count("\n")):
@@ -198,34 +200,52 @@ def place(anchors: np.ndarray, texts: list[str], view: ScreenView, scale: float,
         own = boxes(pixel, [text], scale)[0]
         room, pulled = canvas, np.zeros(2)
         if not ((own[:2] >= canvas[:2]).all() and (own[2:] <= canvas[2:]).all()) and depth[0] > 0 \
-                and (np.abs(pixel[0]) <= canvas[2:]).all():  # a long one near an edge: pulled onto the canvas
-            half = np.maximum(canvas[2:], (own[2:] - own[:2]) / 2)  # or centred, if wider than a small one
-            room = np.concatenate([-half, half])
+                and ((pixel[0] >= canvas[:2]) & (pixel[0] <= canvas[2:])).all():  # a long one near an edge: pulled on
+            middle = (canvas[:2] + canvas[2:]) / 2
+            half = np.maximum((canvas[2:] - canvas[:2]) / 2, (own[2:] - own[:2]) / 2)  # or centred, if wider
+            room = np.concatenate([middle - half, middle + half])
             pulled = np.clip(0.0, room[:2] - own[:2], room[2:] - own[2:])
             own = own + np.tile(pulled, 2)
-        step = own[3] - own[1] + GAP_PX
-        dx, dy = OFFSETS[_free_spot(own + step * OFFSETS[:, [0, 1, 0, 1]], obstacles + [entry[4] for entry in placed], room)]
+        shift = _shift(own, obstacles + [entry[4] for entry in placed], room)
         world_per_px = 2 * math.tan(view.fov / 2) * depth[0] / view.height
-        moved = pulled + step * np.array([dx, dy])  # px, right and up
+        moved = pulled + shift  # px, right and up
         position = point + (right * moved[0] + up * moved[1]) * world_per_px
-        placed.append((tuple(sorted(group)), text, position, point, own + step * np.array([dx, dy, dx, dy])))
+        placed.append((tuple(sorted(group)), text, position, point, own + np.tile(shift, 2)))
     return [entry[:4] for entry in sorted(placed, key=lambda entry: entry[0])]
 
 
-def _free_spot(spots: np.ndarray, taken: list[np.ndarray], canvas: np.ndarray) -> int:
-    """The first of ``spots`` (k, 4) boxes on the ``canvas`` that overlaps none of ``taken``; if there is none,
-    the one on the canvas overlapping them least (else the first)."""
+def _shift(own: np.ndarray, taken: list[np.ndarray], room: np.ndarray) -> np.ndarray:
+    """How far (px, right and up) the box ``own`` (4,) moves to keep clear of ``taken`` in ``room``: to the first
+    free spot of :data:`OFFSETS`, else to the nearest free one on a grid over the room (a crowd on a small canvas, a
+    phone's band above its panel: the rings' spots lie in eight directions only), else to the spot of
+    :data:`OFFSETS` overlapping the others least."""
+    step = own[3] - own[1] + GAP_PX
+    rings = step * OFFSETS
+    k, free = _free_spot(own + rings[:, [0, 1, 0, 1]], taken, room)
+    if free:
+        return rings[k]
+    lefts, bottoms = np.meshgrid(np.arange(room[0], room[2] - (own[2] - own[0]), step / 2),
+                                 np.arange(room[1], room[3] - (own[3] - own[1]), step / 2))
+    shifts = np.column_stack([lefts.ravel() - own[0], bottoms.ravel() - own[1]])
+    shifts = shifts[np.argsort(np.hypot(shifts[:, 0], shifts[:, 1]), kind="stable")]
+    j, free = _free_spot(own + shifts[:, [0, 1, 0, 1]], taken, room)
+    return shifts[j] if free else rings[k]
+
+
+def _free_spot(spots: np.ndarray, taken: list[np.ndarray], canvas: np.ndarray) -> tuple[int, bool]:
+    """The first of ``spots`` (k, 4) boxes on the ``canvas`` that overlaps none of ``taken``, and True; if there is
+    none, the one on the canvas overlapping them least (else the first), and False."""
     inside = (spots[:, :2] >= canvas[:2]).all(axis=1) & (spots[:, 2:] <= canvas[2:]).all(axis=1)
     if not taken:
-        return int(np.argmax(inside))
+        return int(np.argmax(inside)), bool(inside.any())
     others = np.array(taken)[None]
     wide = np.minimum(spots[:, None, 2], others[..., 2] + GAP_PX) - np.maximum(spots[:, None, 0], others[..., 0] - GAP_PX)
     high = np.minimum(spots[:, None, 3], others[..., 3] + GAP_PX) - np.maximum(spots[:, None, 1], others[..., 1] - GAP_PX)
     covered = (np.clip(wide, 0.0, None) * np.clip(high, 0.0, None)).sum(axis=1)
     free = inside & (covered == 0.0)
     if free.any():
-        return int(np.argmax(free))
-    return int(np.argmin(np.where(inside, covered, np.inf))) if inside.any() else 0
+        return int(np.argmax(free)), True
+    return (int(np.argmin(np.where(inside, covered, np.inf))) if inside.any() else 0), False
 
 
 def screen_view(client, pixel_ratio: float = 1.0) -> ScreenView:

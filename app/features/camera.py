@@ -11,6 +11,7 @@ On a phone held upright viser lays the panel over the canvas instead: the arm is
 
 from __future__ import annotations
 
+import dataclasses
 import threading
 from typing import Callable
 
@@ -236,8 +237,10 @@ class CameraControls(View):
         self.closed = True
 
     def view(self) -> ScreenView:
-        """The browser's camera in CSS pixels, to place labels for (the default one until it reports)."""
-        return screen_view(self._client, self.pixel_ratio)
+        """The browser's camera in CSS pixels, and the share of its canvas the panel covers, to place labels for (the
+        default one until it reports)."""
+        view = screen_view(self._client, self.pixel_ratio)
+        return dataclasses.replace(view, covered=1.0 - self._uncovered(view.width / view.height))
 
     def show_pixel_ratio(self, ratio: float) -> None:
         """The browser draws ``ratio`` canvas pixels per CSS pixel (a zoom, a laptop's screen): its labels are
@@ -313,7 +316,7 @@ class CameraControls(View):
             return
         view = self.view()
         pixels, depth = view.to_screen(self.extra[name])
-        bottom = view.height / 2 - self._uncovered(view.width / view.height) * view.height
+        bottom = view.height * (view.covered - 0.5)
         if (depth <= 0).any() or (np.abs(pixels[:, 0]) > view.width / 2).any() or \
                 ((pixels[:, 1] > view.height / 2) | (pixels[:, 1] < bottom)).any():
             self.frame()
