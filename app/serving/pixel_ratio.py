@@ -29,12 +29,13 @@ CHANGES_PER_SECOND, CHANGE_BURST = 5.0, 10
 
 def probe_html(token: str) -> str:
     """The panel's invisible element whose background picture is at ``PATH/token/<ratio>``: the largest of
-    :data:`RATIOS` the browser's resolution reaches (the last rule that applies wins)."""
-    name = f"pixel-ratio-{token}"
+    :data:`RATIOS` the browser's resolution reaches (the last rule that applies wins). The address is relative to the
+    page's, as viser's websocket's is: a proxy that serves the app under a path of its own passes it on too."""
+    name, where = f"pixel-ratio-{token}", f"{PATH.lstrip('/')}{token}"
     rules = "".join(f"@media (min-resolution: {ratio}dppx), (-webkit-min-device-pixel-ratio: {ratio}) "
-                    f"{{ .{name} {{ background-image: url({PATH}{token}/{ratio}) }} }}" for ratio in RATIOS[1:])
+                    f"{{ .{name} {{ background-image: url({where}/{ratio}) }} }}" for ratio in RATIOS[1:])
     return (f'<div class="{name}" style="position: absolute; width: 1px; height: 1px; opacity: 0; '
-            f'pointer-events: none"></div><style>.{name} {{ background-image: url({PATH}{token}/{RATIOS[0]}) }} '
+            f'pointer-events: none"></div><style>.{name} {{ background-image: url({where}/{RATIOS[0]}) }} '
             f'{rules}</style>')
 
 
