@@ -262,6 +262,23 @@ def test_on_a_phone_held_upright_labels_are_placed_above_the_panel():
             assert not any(overlapping(box, other, gap=0.0) for other in drawn[k + 1:]), seed
 
 
+def test_labels_are_placed_on_any_canvas_whatever_their_points_and_sizes():
+    """Placing never fails: a label wider or taller than the canvas, its point off the canvas or behind the camera, a
+    phone's band, crowds (a grid search over the canvas once raised on a label with no spot on it)."""
+    from ur10teach.features.branch_labels import ScreenView, place
+
+    rng = np.random.default_rng(11)
+    for _ in range(300):
+        view = ScreenView((0.0, -3.0, 0.0), (0.0, 0.0, 0.0), height=float(rng.uniform(80, 900)),
+                          width=float(rng.uniform(80, 1400)), covered=float(rng.choice([0.0, 0.6])))
+        count = int(rng.integers(1, 12))
+        points = rng.normal(0.0, 1.5, (count, 3)) + [0.0, rng.choice([0.0, -4.0]), 0.0]  # some behind the camera
+        texts = ["x" * int(rng.integers(0, 90)) + "\nline" * int(rng.integers(0, 3)) for _ in range(count)]
+        placed = place(points, texts, view, float(rng.uniform(1.0, 3.0)))
+        assert sorted(k for members, *_ in placed for k in members) == [k for k, text in enumerate(texts) if text]
+        assert all(np.isfinite(position).all() for _, _, position, _ in placed)
+
+
 @pytest.mark.parametrize("nickname", ["王小明同学", "さくら先生", "김민준", "😀😀😀", "Ｒｏｂｏｔ"])
 def test_a_nickname_in_wide_characters_is_measured_whole(nickname):
     """A CJK character, a full-width letter or an emoji takes a whole em (its font's advance), not the 0.62 em of

@@ -227,6 +227,8 @@ def _shift(own: np.ndarray, taken: list[np.ndarray], room: np.ndarray) -> np.nda
     lefts, bottoms = np.meshgrid(np.arange(room[0], room[2] - (own[2] - own[0]), step / 2),
                                  np.arange(room[1], room[3] - (own[3] - own[1]), step / 2))
     shifts = np.column_stack([lefts.ravel() - own[0], bottoms.ravel() - own[1]])
+    if not len(shifts):  # wider or taller than the room: no spot on it
+        return rings[k]
     shifts = shifts[np.argsort(np.hypot(shifts[:, 0], shifts[:, 1]), kind="stable")]
     j, free = _free_spot(own + shifts[:, [0, 1, 0, 1]], taken, room)
     return shifts[j] if free else rings[k]
