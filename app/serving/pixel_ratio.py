@@ -8,6 +8,7 @@ browser's own media queries (again when a zoom changes it), and the gate answers
 from __future__ import annotations
 
 import asyncio
+import logging
 import re
 import secrets
 import threading
@@ -17,6 +18,8 @@ from typing import Callable
 import viser
 
 from .gate import TokenBucket
+
+log = logging.getLogger(__name__)
 
 #: The ratios told apart: viser's canvas draws at the browser's device pixel ratio held to 1…2 (a phone's 3 at 2).
 RATIOS = tuple(f"{1 + step / 20:.2f}" for step in range(21))
@@ -102,6 +105,9 @@ class PixelRatios:
         return True
 
     def _changed(self, page: _Page) -> None:
-        if self._pages.get(page.client.client_id) is page:
-            self.probe(page.client)
-            self._told(page.client.client_id)
+        try:
+            if self._pages.get(page.client.client_id) is page:
+                self.probe(page.client)
+                self._told(page.client.client_id)
+        except Exception:  # (on the pool's thread: nobody else would read it)
+            log.exception("could not take browser %s's new pixel ratio", page.client.client_id)

@@ -543,11 +543,8 @@ class TeachingServer:
         """A browser's pixel ratio changed: its labels are placed anew for it."""
         held = self.classroom.members if self.classroom is not None else self.sessions
         camera = getattr(held.get(client_id), "camera", None)
-        try:
-            if camera is not None:
-                camera.show_pixel_ratio(self.pixel_ratios.of(client_id))
-        except Exception:
-            log.exception("could not place browser %s's labels for its pixel ratio", client_id)
+        if camera is not None:
+            camera.show_pixel_ratio(self.pixel_ratios.of(client_id))
 
     def _disconnected(self, client: viser.ClientHandle) -> None:
         self.pixel_ratios.forget(client.client_id)
