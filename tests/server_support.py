@@ -48,8 +48,8 @@ def get(server: TeachingServer, path: str) -> int:
 def pixel_ratio_addresses(client: ViserClient) -> dict[str, str]:
     """Ratio -> the address the page's pixel-ratio element asks for at it (``serving.pixel_ratio``), once it has one
     element (none while one replaces another)."""
-    probes = [content for content in client.html.values() if "pixel-ratio" in content]
-    found = re.findall(r"url\((pixel-ratio/[\w-]+/(\d\.\d\d))\)", probes[0]) if len(probes) == 1 else []
+    probes = [content for content in client.html.values() if "url(dppx/" in content]
+    found = re.findall(r"url\((dppx/[\w-]+/(\d\.\d\d))\)", probes[0]) if len(probes) == 1 else []
     return {ratio: "/" + path for path, ratio in found}  # (relative to the page's address, the root here)
 
 

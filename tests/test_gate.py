@@ -620,7 +620,7 @@ def test_a_page_says_its_pixel_ratio_and_no_other_page_can(app):
             return now if now and now != first else None
 
         second = await until(replaced, what="a new element")
-        for path in (first["1.00"], "/pixel-ratio/" + "A" * 16 + "/1.00"):
+        for path in (first["1.00"], "/dppx/" + "A" * 16 + "/1.00"):
             assert await asyncio.to_thread(get, app, path) == 204
         for path in (second["1.00"].replace("1.00", "3.00"), second["1.00"].replace("1.00", "1.5"), second["1.00"] + "/x"):
             assert await asyncio.to_thread(get, app, path) == 404

@@ -23,8 +23,9 @@ log = logging.getLogger(__name__)
 
 #: The ratios told apart: viser's canvas draws at the browser's device pixel ratio held to 1…2 (a phone's 3 at 2).
 RATIOS = tuple(f"{1 + step / 20:.2f}" for step in range(21))
-#: Where a page's style asks for its ratio's picture: ``/pixel-ratio/<token>/<ratio>``.
-PATH = "/pixel-ratio/"
+#: Where a page's style asks for its ratio's picture: ``/dppx/<token>/<ratio>`` (named for the CSS unit: a content
+#: blocker's rules for tracking pixels would match "pixel" in an address or a class, and stop the request).
+PATH = "/dppx/"
 _REPORT = re.compile(rf"{PATH}([A-Za-z0-9_-]{{16}})/(\d\.\d\d)")
 #: Changes of ratio one page is heard at (a second), after a burst: a few at a zoom; each is a placing of its labels.
 CHANGES_PER_SECOND, CHANGE_BURST = 5.0, 10
@@ -34,7 +35,7 @@ def probe_html(token: str) -> str:
     """The panel's invisible element whose background picture is at ``PATH/token/<ratio>``: the largest of
     :data:`RATIOS` the browser's resolution reaches (the last rule that applies wins). The address is relative to the
     page's, as viser's websocket's is: a proxy that serves the app under a path of its own passes it on too."""
-    name, where = f"pixel-ratio-{token}", f"{PATH.lstrip('/')}{token}"
+    name, where = f"dppx-{token}", f"{PATH.lstrip('/')}{token}"
     rules = "".join(f"@media (min-resolution: {ratio}dppx), (-webkit-min-device-pixel-ratio: {ratio}) "
                     f"{{ .{name} {{ background-image: url({where}/{ratio}) }} }}" for ratio in RATIOS[1:])
     return (f'<div class="{name}" style="position: absolute; width: 1px; height: 1px; opacity: 0; '
