@@ -226,6 +226,36 @@ def test_viewers_watch_and_the_code_makes_a_presenter(classroom):
     asyncio.run(scenario())
 
 
+@pytest.mark.parametrize("first_arm", ["ur10", "scara", "three_dof"])
+def test_a_class_that_joins_before_the_presenter_sees_the_arms_branches(first_arm):
+    """Students join while the teacher sets up the projector. Their live panel listed the class arm's branches, each
+    with its ghost's colour, but the shared scene held the arm alone: no ghost, no branch number, no target, until a
+    presenter took the arm (a screenshot, 2026-12-07)."""
+    server = TeachingServer(port=0, shared=True, first_arm=first_arm)
+
+    async def scenario():
+        student = await ViserClient(f"http://127.0.0.1:{server.port}").connect()
+        room = server.classroom
+        await until(lambda: member_of(server, 0).camera is not None, what="the student's browser set up")
+        drawing, last = room.drawing, room.state.last
+        assert room.presenter is None and int(last.solution.valid.sum()) > 1
+        numbers = drawing.branches.numbers if hasattr(drawing, "branches") else drawing.numbers
+        texts = [text for _, text, _ in numbers.placed]
+        assert any(text.startswith("arm") for text in texts) and len(texts) > 1, texts
+        target = "/target" if first_arm == "ur10" else f"{drawing.root}/target_marker"  # (in the arm's base frame)
+        await until(lambda: np.allclose(student.received.positions.get(target, np.nan), last.target[:3, 3], atol=1e-6),
+                    what="the class's target marker on the target")
+        if first_arm == "ur10":  # the mesh ghosts, one per valid branch other than the arm's
+            await until(lambda: student.received.ghost_flanges, what="the ghosts drawn")
+            assert np.allclose(student.received.ghost_flanges[-1][1], last.target[:3, 3], atol=1e-6)
+        await student.close()
+
+    try:
+        asyncio.run(scenario())
+    finally:
+        server.stop()
+
+
 def test_a_viewer_gets_each_presenter_update_whole(classroom, monkeypatch):
     """The shared scene's redraw was not batched: a viewer could get the arm in one frame and its ghosts in the next.
 

@@ -189,6 +189,10 @@ class Classroom:
         self.typed: tuple[Arm, str, str] | None = None  #: (arm, text, convention) of the table the presenter built last
         self.state = self._state_of(self.choice)
         self.drawing = self._draw()
+        # drawn whole for those who join before a presenter (the live panel lists the branches by their ghosts' colours);
+        # from then on the presenter's session draws it
+        self.drawing.render(self.state.last)
+        self.drawing.render_panel(self.state.last)
         self.live = self._live_panel(self.choice)
         self._last_switch = -math.inf
         self.members: dict[int, Member] = {}
