@@ -13,7 +13,7 @@ from ur10teach.serving.server import TeachingServer
 from ur10dev.viser_client import BROWSER_SEND_INTERVAL, ViserClient, wxyz_of
 from ur10dev.waiting import HANG_TIMEOUT, until, wait_for
 
-__all__ = ["a_ghost_to_take", "become_presenter", "drag_a_little", "get", "member_of", "pixel_ratio_addresses", "scene_pose",
+__all__ = ["a_ghost_to_take", "become_presenter", "drag_a_little", "get", "member_of", "screen_addresses", "scene_pose",
            "session_of", "until", "url", "wait_for"]
 
 
@@ -45,12 +45,12 @@ def get(server: TeachingServer, path: str) -> int:
         return refusal.code
 
 
-def pixel_ratio_addresses(client: ViserClient) -> dict[str, str]:
-    """Ratio -> the address the page's pixel-ratio element asks for at it (``serving.pixel_ratio``), once it has one
-    element (none while one replaces another)."""
+def screen_addresses(client: ViserClient) -> dict[str, str]:
+    """What a page may say of its screen (a pixel ratio, "narrow", "wide") -> the address the page's element asks for
+    to say it (``serving.screens``), once it has one element (none while one replaces another)."""
     probes = [content for content in client.html.values() if "url(dppx/" in content]
-    found = re.findall(r"url\((dppx/[\w-]+/(\d\.\d\d))\)", probes[0]) if len(probes) == 1 else []
-    return {ratio: "/" + path for path, ratio in found}  # (relative to the page's address, the root here)
+    found = re.findall(r"url\((dppx/[\w-]+/(\d\.\d\d|narrow|wide))\)", probes[0]) if len(probes) == 1 else []
+    return {said: "/" + path for path, said in found}  # (relative to the page's address, the root here)
 
 
 def scene_pose(scene, handle) -> np.ndarray:

@@ -243,12 +243,12 @@ def test_on_a_phone_held_upright_labels_are_placed_above_the_panel():
     and "7" by its wrist singularity, 2026-12-07). They are placed in the band above it, apart: when none of the
     spots around a label's point is free there, at the nearest free one in the band."""
     from ur10teach.features.branch_labels import ScreenView, boxes, overlapping, place
-    from ur10teach.features.camera import PHONE_UNCOVERED
+    from ur10teach.features.camera import SHEET_UNCOVERED
 
     view = ScreenView((0.0, -3.0, 0.0), (0.0, 0.0, 0.0), up=(0.0, 0.0, 1.0), height=664.0, width=390.0,
-                      covered=1.0 - PHONE_UNCOVERED)
+                      covered=1.0 - SHEET_UNCOVERED)
     per_px = 2 * np.tan(view.fov / 2) * 3.0 / view.height
-    band = view.height / 2 - PHONE_UNCOVERED * view.height  # the panel's top edge, px from the canvas's centre
+    band = view.height / 2 - SHEET_UNCOVERED * view.height  # the panel's top edge, px from the canvas's centre
     texts = [f"{k + 1} ⚠ floor" for k in range(8)]
     for seed in range(20):  # eight elbows in the band's lower half, as a crowd by a singularity
         rng = np.random.default_rng(seed)

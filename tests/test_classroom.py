@@ -15,7 +15,7 @@ from ur10teach.serving.classroom import EXPLORER, Classroom, LOCKOUT_SECONDS, MA
 from ur10teach.serving.gate import RETURN_WINDOW, Gate
 from ur10teach.serving.server import TeachingServer
 
-from .server_support import become_presenter, get, member_of, pixel_ratio_addresses, until
+from .server_support import become_presenter, get, member_of, screen_addresses, until
 from ur10dev.viser_client import ViserClient
 from ur10dev.waiting import HANG_TIMEOUT
 
@@ -1089,7 +1089,7 @@ def test_each_browser_of_a_class_places_its_labels_for_its_own_pixel_ratio(class
     async def scenario():
         projector = await ViserClient(f"http://127.0.0.1:{classroom.port}").connect()
         laptop = await ViserClient(f"http://127.0.0.1:{classroom.port}").connect()
-        addresses = await until(lambda: pixel_ratio_addresses(laptop), what="the laptop's element")
+        addresses = await until(lambda: screen_addresses(laptop), what="the laptop's element")
         assert await asyncio.to_thread(get, classroom, addresses["2.00"]) == 204
         await until(lambda: member_of(classroom, 1).camera.pixel_ratio == 2.0, what="the laptop's ratio")
         assert member_of(classroom, 0).camera.pixel_ratio == 1.0

@@ -20,7 +20,7 @@ from ur10teach.features.velocity import METRES_PER_SPEED
 from ur10teach.session import ArmSession
 from ur10core import Arm
 
-from .server_support import a_ghost_to_take, become_presenter, session_of, until, url
+from .server_support import a_ghost_to_take, become_presenter, get, screen_addresses, session_of, until, url
 from ur10dev.viser_client import CAMERA, ViserClient, wxyz_of
 from ur10dev.waiting import HANG_TIMEOUT
 
@@ -1277,10 +1277,11 @@ def test_on_a_phone_held_upright_the_arm_is_framed_above_the_panel(request, serv
     """In a window narrower than 576 px viser shows the panel as a sheet over the lower 60 % of the canvas. On a
     phone held upright, the arm was framed in the whole canvas, its lower half under the sliders that move it. A
     phone's browser (its User-Agent says so) now frames it in the band above; held sideways the panel docks beside
-    the canvas, and the arm fills it. A laptop's canvas taller than wide keeps it whole (its panel docks). viser's
-    ``minimize`` does not fold the sheet: "Hide the panel" did nothing on an upright phone."""
+    the canvas, and the arm fills it. A laptop's canvas taller than wide keeps it whole (its panel docks), unless its
+    page says its window is narrow, where viser lays the sheet over it too. viser's ``minimize`` does not fold the
+    sheet: "Hide the panel" did nothing on an upright phone."""
     from ur10dev.browser import PHONE
-    from ur10teach.features.camera import PHONE_UNCOVERED, arm_points
+    from ur10teach.features.camera import SHEET_UNCOVERED, arm_points
     from ur10teach.features.branch_labels import ScreenView
 
     app = request.getfixturevalue(server)
@@ -1306,11 +1307,22 @@ def test_on_a_phone_held_upright_the_arm_is_framed_above_the_panel(request, serv
             highest, lowest = await until(lambda: rows(size), what=f"the arm framed for a {size} canvas")
             assert highest >= 0
             upright_phone = phone and size[0] < size[1]
-            assert lowest <= PHONE_UNCOVERED if upright_phone else lowest > 0.8, lowest
+            assert lowest <= SHEET_UNCOVERED if upright_phone else lowest > 0.8, lowest
             if upright_phone:  # "Hide the panel" cannot fold viser's sheet: the student is told what does
                 await client.set_gui("Hide the panel", True)
-                await until(lambda: any("Tap the panel's title" in body for _, body in client.received.notifications),
+                await until(lambda: any("Tap or click the panel's title" in body for _, body in client.received.notifications),
                             what="what folds the panel on a phone")
+        if not phone:
+            # a laptop's window beside another, 540 px wide: narrower than viser's 36 em, and its panel a sheet too,
+            # whatever the User-Agent. Its page says so (serving.screens), and the arm is framed above the sheet; a
+            # window widened again gets the whole canvas back
+            size = (540, 760)
+            await client.send(dataclasses.replace(CAMERA, image_width=size[0], image_height=size[1]))
+            assert (await until(lambda: rows(size), what="the arm framed for the narrow window"))[1] > 0.8
+            for said, framed in (("narrow", lambda lowest: lowest <= SHEET_UNCOVERED), ("wide", lambda lowest: lowest > 0.8)):
+                addresses = await until(lambda: screen_addresses(client), what="the page's element")
+                assert await asyncio.to_thread(get, app, addresses[said]) == 204
+                await until(lambda: (found := rows(size)) is not None and framed(found[1]), what=f"the arm framed in a {said} window")
         await client.close()
 
     asyncio.run(scenario())

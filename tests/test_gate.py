@@ -23,11 +23,11 @@ from viser import _messages as messages
 
 from ur10teach.serving import gate as gate_module
 from ur10teach.serving.gate import MAX_MESSAGE_BYTES, MESSAGE_BURST, Gate, TokenBucket, gated_serve, message_key
-from ur10teach.serving.pixel_ratio import CHANGE_BURST
+from ur10teach.serving.screens import CHANGE_BURST
 from ur10teach.serving.server import TeachingServer
 from ur10teach.viser_internals import connection_of
 
-from .server_support import drag_a_little, get, pixel_ratio_addresses, session_of, until, url
+from .server_support import drag_a_little, get, screen_addresses, session_of, until, url
 from ur10dev.viser_client import ViserClient, encode
 from ur10dev.waiting import HANG_TIMEOUT, wait_for
 
@@ -597,42 +597,56 @@ def test_a_twin_whose_socket_is_backed_up_is_hung_up_in_time(monkeypatch):
     assert gone == [laptop] and connection.aborted
 
 
-def test_a_page_says_its_pixel_ratio_and_no_other_page_can(app):
+def test_a_page_says_its_pixel_ratio_and_window_width_and_no_other_page_can(app):
     """A browser's camera reports its canvas in device pixels, and viser sizes the 3D labels in CSS pixels: on a
     laptop's screen at 2 per CSS pixel the labels were placed for half their size. The page's style asks for a
-    picture at its ratio's address; the gate answers it (204, kept nowhere), and the labels are placed in CSS pixels.
-    An address of the page's last element, a made-up token, or a ratio no page reports, changes nothing; another
-    page's addresses are in its own panel only."""
+    picture at its ratio's address, and another at "narrow" or "wide"; the gate answers them (204, kept nowhere),
+    and the labels are placed in CSS pixels, above the panel in a narrow window. An address of the page's last
+    element, a made-up token, or a ratio or width no page reports, changes nothing; another page's addresses are in
+    its own panel only."""
     async def scenario():
         client = await ViserClient(url(app)).connect()
         other = await ViserClient(url(app)).connect()
         session = session_of(app, client)
         await client.send(camera_message(image_height=1260, image_width=1654))
         await until(lambda: session.client.camera.image_height == 1260, what="the camera")
-        first = await until(lambda: pixel_ratio_addresses(client), what="the page's element")
-        assert sorted(first) == [f"{1 + k / 20:.2f}" for k in range(21)]
+        first = await until(lambda: screen_addresses(client), what="the page's element")
+        assert sorted(first) == [f"{1 + k / 20:.2f}" for k in range(21)] + ["narrow", "wide"]
         assert await asyncio.to_thread(get, app, first["2.00"]) == 204
         await until(lambda: session.camera.pixel_ratio == 2.0, what="the ratio heard")
+        assert session.camera.narrow is None and session.camera.view().covered == 0
         assert (session._screen_view().height, session._screen_view().width) == (630, 827)
-        # the element is replaced by one at new addresses (the page would take one it asked for before from its cache)
-        def replaced() -> dict | None:
-            now = pixel_ratio_addresses(client)
-            return now if now and now != first else None
+        assert await asyncio.to_thread(get, app, first["wide"]) == 204
+        await until(lambda: session.camera.narrow is False, what="the wide window heard")
 
-        second = await until(replaced, what="a new element")
-        for path in (first["1.00"], "/dppx/" + "A" * 16 + "/1.00"):
+        def replaced(before: dict) -> dict | None:
+            now = screen_addresses(client)
+            return now if now and now != before else None
+
+        # a zoom: a second ratio through one element, which is then replaced by one at new addresses (the page
+        # would take the first ratio's from its cache, and a zoom back would not be heard)
+        assert await asyncio.to_thread(get, app, first["1.25"]) == 204
+        await until(lambda: session.camera.pixel_ratio == 1.25, what="the zoom heard")
+        second = await until(lambda: replaced(first), what="a new element")
+        for path in (first["1.00"], "/dppx/" + "A" * 16 + "/1.00", first["narrow"]):
             assert await asyncio.to_thread(get, app, path) == 204
-        for path in (second["1.00"].replace("1.00", "3.00"), second["1.00"].replace("1.00", "1.5"), second["1.00"] + "/x"):
+        for path in (second["1.00"].replace("1.00", "3.00"), second["1.00"].replace("1.00", "1.5"), second["1.00"] + "/x",
+                     second["narrow"] + "ish", second["wide"].replace("wide", "Wide")):
             assert await asyncio.to_thread(get, app, path) == 404
-        assert session.camera.pixel_ratio == 2.0
-        assert await asyncio.to_thread(get, app, second["1.25"]) == 204
-        await until(lambda: session.camera.pixel_ratio == 1.25, what="the newest element's ratio")
+        assert (session.camera.pixel_ratio, session.camera.narrow) == (1.25, False)
+        # the window narrowed past viser's 36 em: the panel lies over the canvas's lower part (the new element asks
+        # for what the page is, then for what it has become)
+        for path in (second["1.25"], second["wide"], second["narrow"]):
+            assert await asyncio.to_thread(get, app, path) == 204
+        await until(lambda: session.camera.narrow is True, what="the narrow window heard")
+        assert session.camera.view().covered > 0.5 and session.camera.pixel_ratio == 1.25
+        await until(lambda: replaced(second), what="a new element")
         other_id = next(k for k, s in app.sessions.items() if s is not session)
-        # a page that reports without end (each heard report replaces its element) leaves the others' as they were
+        # a page that reports without end (each heard change back replaces its element) leaves the others' as they were
         for k in range(3 * CHANGE_BURST):
-            paths = await until(lambda: pixel_ratio_addresses(client), what="the page's element")
+            paths = await until(lambda: screen_addresses(client), what="the page's element")
             await asyncio.to_thread(get, app, paths["1.00" if k % 2 else "2.00"])
-        assert session.camera.pixel_ratio in (1.0, 2.0) and app.pixel_ratios.of(other_id) == 1.0
+        assert session.camera.pixel_ratio in (1.0, 2.0) and app.screens.of(other_id) == (1.0, None)
         await client.close()
         await other.close()
 

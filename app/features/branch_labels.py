@@ -55,7 +55,7 @@ class ScreenView:
     fov: float = math.radians(CAMERA_FOV_DEGREES)
     height: float = 700.0  #: the smallest canvas a class looks at: apart there, apart on larger ones
     width: float = 900.0
-    #: the share of the canvas's height, from its bottom, that the panel lies over (a phone held upright's)
+    #: the share of the canvas's height, from its bottom, that the panel lies over (viser's sheet, in a narrow window)
     covered: float = 0.0
 
     @classmethod

@@ -6,7 +6,8 @@ the window minus the panel and nothing of the arm hides under it. The camera fra
 arm, its ghosts, its target and whatever else is shown (a cloud, a path) in that canvas,
 from the direction the student chose: when the canvas changes size, on "Frame the arm",
 and after a change that moves the arm far (a singularity button, a typed target, a path).
-On a phone held upright viser lays the panel over the canvas instead: the arm is framed above it.
+In a window narrower than 36 em (a phone held upright, a laptop's window beside another) viser lays the panel over
+the canvas's lower part instead: the arm is framed above it.
 """
 
 from __future__ import annotations
@@ -64,9 +65,9 @@ RESET_POSES = ((DEFAULT_VIEW.position, DEFAULT_VIEW.look_at), ((3.0, 3.0, 3.0), 
 #: canvas then reports another size, mid-orbit on a laptop without a graphics driver, and a framing depends on the
 #: shape alone.
 SAME_SHAPE = 0.01
-#: The share of a phone's upright canvas its panel leaves uncovered: in a window narrower than 576 px (a phone held
-#: upright) viser shows the panel as a sheet over the canvas's lower part, up to 60 % of its height.
-PHONE_UNCOVERED = 0.4
+#: The share of a narrow window's canvas its panel leaves uncovered: in a window narrower than 36 em (576 px: a phone
+#: held upright) viser shows the panel as a sheet over the canvas's lower part, up to 60 % of its height.
+SHEET_UNCOVERED = 0.4
 
 
 def same_shape(size: tuple[int, int], other: tuple[int, int] | None) -> bool:
@@ -194,8 +195,8 @@ class CameraControls(View):
         Follow the browser's camera itself, for the browser's whole visit (a classroom's member has one for all
         its arms); otherwise it is handed the moves (:func:`relay_camera_moves`).
     phone : bool
-        The browser is a phone's: held upright (a canvas taller than wide), its panel covers the canvas's lower
-        part, and the arm is framed above it (:data:`PHONE_UNCOVERED`).
+        The browser is a phone's: until its page says how wide its window is (:meth:`show_screen`), a canvas taller
+        than wide is taken for one under viser's sheet, and the arm is framed above it (:data:`SHEET_UNCOVERED`).
     """
 
     def __init__(self, client: viser.ClientHandle, snapshot: Callable[[], Snapshot],
@@ -213,6 +214,8 @@ class CameraControls(View):
         self._framed_at: tuple[np.ndarray, np.ndarray] | None = None  #: (position, look_at) this framed the camera at
         #: canvas pixels per CSS pixel: the camera reports its canvas in the first, the 3D labels are sized in the second
         self.pixel_ratio = 1.0
+        #: whether the window is narrower than viser's breakpoint, the panel a sheet over the canvas (None: not known)
+        self.narrow: bool | None = None
         #: called whenever the camera moves (the branch numbers are placed for it)
         self.on_moved: list[Callable[[], None]] = []
         #: what else is drawn and framed with the arm, by what draws it: a cloud, a path
@@ -242,13 +245,20 @@ class CameraControls(View):
         view = screen_view(self._client, self.pixel_ratio)
         return dataclasses.replace(view, covered=1.0 - self._uncovered(view.width / view.height))
 
-    def show_pixel_ratio(self, ratio: float) -> None:
-        """The browser draws ``ratio`` canvas pixels per CSS pixel (a zoom, a laptop's screen): its labels are
-        placed anew."""
-        if ratio != self.pixel_ratio and not self.closed:
-            self.pixel_ratio = ratio
-            for moved in self.on_moved:
-                moved()
+    def show_screen(self, ratio: float, narrow: bool | None) -> None:
+        """The browser draws ``ratio`` canvas pixels per CSS pixel (a zoom, a laptop's screen), in a window that is
+        ``narrow`` or not (None: not known): its labels are placed anew, and where the panel now lies over another
+        part of the canvas, its arm is framed anew, unless the student has moved the camera since it was framed."""
+        if self.closed or (ratio, narrow) == (self.pixel_ratio, self.narrow):
+            return
+        aspect = self._client.camera.aspect
+        uncovered = self._uncovered(aspect)
+        self.pixel_ratio, self.narrow = ratio, narrow
+        if self._uncovered(aspect) != uncovered and self._where_framed():
+            self.frame()  # (which places the labels)
+            return
+        for moved in self.on_moved:
+            moved()
 
     def camera_moved(self, camera: viser.CameraHandle) -> None:
         if self.closed:
@@ -322,17 +332,20 @@ class CameraControls(View):
             self.frame()
 
     def _hide_panel(self) -> None:
-        """Fold the panel to a strip at the edge; a phone held upright has none, and is told what does fold it."""
+        """Fold the panel to a strip at the edge; a narrow window's sheet has none, and the student is told what does
+        fold it."""
         if self._uncovered(self._client.camera.aspect) < 1:
-            notify(self._client, "On a phone held upright",
-                   "Tap the panel's title to fold the panel away, and again to bring it back.", color="blue")
+            notify(self._client, "In a window this narrow",
+                   "Tap or click the panel's title to fold the panel away, and again to bring it back.", color="blue")
         else:
             self._client.gui.main_panel.minimize()
 
     def _uncovered(self, aspect: float) -> float:
         """The share of the canvas's height, from its top, that the panel leaves uncovered, for a canvas of
-        ``aspect`` (width / height)."""
-        return PHONE_UNCOVERED if self.phone and aspect < 1 else 1.0
+        ``aspect`` (width / height): a sheet's where the page says its window is narrow, or where it has not said, on a
+        phone's canvas taller than wide."""
+        narrow = (self.phone and aspect < 1) if self.narrow is None else self.narrow
+        return SHEET_UNCOVERED if narrow else 1.0
 
     def _where_framed(self) -> bool:
         """The camera is where this last framed it."""

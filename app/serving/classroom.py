@@ -254,7 +254,7 @@ class Classroom:
             body_radius=self._body_radius(), up=self.state.arm.up, light=self.app.light, phone=on_a_phone(client),
         )
         member.camera.on_moved.append(lambda: self.challenges.face_goal(member))
-        self.app.pixel_ratios.probe(client)  # (its labels are placed with the ratio its page reports)
+        self.app.screens.probe(client)  # (its labels are placed for the screen its page reports)
         if back:
             self._present(member)
             notify(client, "Welcome back", "You are presenting again.", color="blue")

@@ -221,7 +221,7 @@ class Gate:
         #: ``(uuid, value)`` -> whether a widget's value converts to the widget's type (the server sets it)
         self.value_fits: Callable[[Any, Any], bool] = lambda uuid, value: True
         #: a page's request path -> whether it was a report the server heard, answered with nothing (the server sets
-        #: it: ``ur10teach.serving.pixel_ratio``)
+        #: it: ``ur10teach.serving.screens``)
         self.heard: Callable[[str], bool] = lambda path: False
 
     # ------------------------------------------------------------------ connections

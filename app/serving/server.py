@@ -49,7 +49,7 @@ from .gate import (
     hang_up_silent, on_a_phone,
 )
 from .joining import JoinHelp
-from .pixel_ratio import PixelRatios
+from .screens import Screens
 from .workers import APART, JOINS, Cancelled, DragQueue, PanelRefresher, refuse_in_worker_process
 
 log = logging.getLogger(__name__)
@@ -302,8 +302,8 @@ class TeachingServer:
         with gated_serve(self.gate):
             self.server = viser.ViserServer(host=host, port=port, label=label, verbose=False)
         self.gate.value_fits = functools.partial(value_fits, self.server)
-        self.pixel_ratios = PixelRatios(self._pixel_ratio_told)
-        self.gate.heard = self.pixel_ratios.heard
+        self.screens = Screens(self._screen_told)
+        self.gate.heard = self.screens.heard
         self.server.gui.configure_theme(show_share_button=False, brand_color=BRAND_BLUE, control_width="large")
         self.server.initial_camera.position = CAMERA_POSITION
         self.server.initial_camera.look_at = CAMERA_LOOK_AT
@@ -496,8 +496,8 @@ class TeachingServer:
         self.janitor.settle()
         with self._sessions_lock:
             self._sessions[client.client_id] = session
-        self.pixel_ratios.probe(client, reset=True)  # (a new arm's panel: the last was reset with the old arm)
-        session.camera.show_pixel_ratio(self.pixel_ratios.of(client.client_id))
+        self.screens.probe(client, reset=True)  # (a new arm's panel: the last was reset with the old arm)
+        session.camera.show_screen(*self.screens.of(client.client_id))
 
     def _switch(self, client: viser.ClientHandle, choice: str, typed=None) -> None:
         """Take this browser's arm out (panel and scene) and build ``choice`` in its place.
@@ -539,15 +539,15 @@ class TeachingServer:
         """Whether this browser may change its arm now (:data:`SWITCH_INTERVAL` after its last change was ready)."""
         return time.monotonic() - self._last_switch.get(client_id, -math.inf) >= SWITCH_INTERVAL
 
-    def _pixel_ratio_told(self, client_id: int) -> None:
-        """A browser's pixel ratio changed: its labels are placed anew for it."""
+    def _screen_told(self, client_id: int) -> None:
+        """A browser's pixel ratio or window width changed: its labels are placed anew for it, its arm framed anew."""
         held = self.classroom.members if self.classroom is not None else self.sessions
         camera = getattr(held.get(client_id), "camera", None)
         if camera is not None:
-            camera.show_pixel_ratio(self.pixel_ratios.of(client_id))
+            camera.show_screen(*self.screens.of(client_id))
 
     def _disconnected(self, client: viser.ClientHandle) -> None:
-        self.pixel_ratios.forget(client.client_id)
+        self.screens.forget(client.client_id)
         if self.classroom is not None:
             self.classroom.disconnect(client)
         else:
