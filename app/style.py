@@ -127,9 +127,15 @@ def sentence(text: str) -> str:
     return text[:1].upper() + text[1:]
 
 
+#: The style of a panel element whose colour is what it says (a swatch, a gauge, a legend): kept where the system
+#: forces its own colours (Windows' contrast themes drop every background, and the gauges went blank). Inherited.
+COLOUR_IS_CONTENT = "forced-color-adjust:none"
+
+
 def swatch(rgb: tuple[int, int, int]) -> str:
     """A small coloured square for markdown tables."""
-    return f'<span style="display:inline-block;width:0.9em;height:0.9em;border-radius:2px;background:{hex_color(rgb)}"></span>'
+    return (f'<span style="display:inline-block;width:0.9em;height:0.9em;border-radius:2px;background:{hex_color(rgb)};'
+            f'{COLOUR_IS_CONTENT}"></span>')
 
 
 def turning_and_sliding(joint_types: str) -> bool:

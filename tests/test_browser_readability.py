@@ -137,6 +137,22 @@ def test_in_a_narrow_window_the_arm_is_seen_above_the_panel(open_page, light_app
     assert session.state.last.reachable and np.abs(session.state.q - before).max() > 1e-3
 
 
+def test_colours_that_say_something_keep_them_in_a_contrast_theme(open_page):
+    """Windows' contrast themes (forced colours, an accessibility setting some students use) drop every background
+    the page sets: the branch table's swatches, det J's gauges, the torque bars and the maps' legends went blank
+    (2026-12-07). An element whose colour is what it says keeps it (``style.COLOUR_IS_CONTENT``)."""
+    page, session = open_page(device={"forced_colors": "active"})
+    swatches = page.locator('span[style*="width: 0.9em"]')  # the branch table's, one per branch
+    wait_for(lambda: swatches.count() >= 8, what="the branch table's swatches")
+    unfold(page, "Singularities", session.singularities.enabled)
+    gauges = page.locator('[class^="gauge-"]')
+    wait_for(lambda: gauges.count() == 3, what="det J's three gauges")
+    shown = [(locator.nth(k).evaluate("e => e.style.backgroundColor"),
+              locator.nth(k).evaluate("e => getComputedStyle(e).backgroundColor"))
+             for locator in (swatches, gauges) for k in range(locator.count())]
+    assert all(specified == drawn for specified, drawn in shown), shown
+
+
 def test_lecture_mode_for_the_presenter_and_the_class(open_page, playwright):
     """``--lecture``: 20 px type and thick gizmo lines in the teacher's browser, the panel folds away
     and comes back, each browser can switch it off; the class's browsers get it too, and a phone's panel fits."""

@@ -19,7 +19,7 @@ from ur10core.workspace import BranchCountMap, branch_count_map
 from ..feedback import chosen, put_back
 from ..serving.workers import MAPS, FoldedRuns
 from ..state import Snapshot
-from ..style import REACH_COLORS, hex_color
+from ..style import COLOUR_IS_CONTENT, REACH_COLORS, hex_color
 from ..view import HELD_BACK, Session, View, say_held_back
 from .branch_labels import LEADER_GREY
 from .workspace import FROM_ABOVE
@@ -106,7 +106,7 @@ def legend_html(slots: int = 8, task: str = "pose") -> str:
     entries = [("none", REACH_COLORS[0][0]), *((str(count), colour_of(count, slots)) for count in legend_counts(slots))]
     swatches = "".join(
         f"<span style='display:inline-block;margin-right:10px'><span style='display:inline-block;width:14px;height:14px;"
-        f"border-radius:3px;vertical-align:middle;background:{hex_color(rgb)}'></span> {label}</span>"
+        f"border-radius:3px;vertical-align:middle;background:{hex_color(rgb)};{COLOUR_IS_CONTENT}'></span> {label}</span>"
         for label, rgb in entries
     )
     kept = KEPT.get(task, "")

@@ -23,6 +23,7 @@ from ..feedback import Beside, chosen
 from ..serving.workers import HEAVY, FoldedRuns
 from ..state import Snapshot
 from ..style import (
+    COLOUR_IS_CONTENT,
     DANGER_RED,
     ELBOW_COLOR,
     SAFE_GREEN,
@@ -100,7 +101,7 @@ def factors_html(arm: Arm, q: np.ndarray) -> str:
         colour = hex_color(blend(SAFE_GREEN, DANGER_RED, alarm(level)))
         parts.append(
             f"<div style='margin:4px 0'><b>{name}</b> {expression} = {number(value, '+.4f')}"
-            "<div style='height:8px;background:#e9ecef;border-radius:4px'>"
+            f"<div style='height:8px;background:#e9ecef;border-radius:4px;{COLOUR_IS_CONTENT}'>"
             f"<div class='gauge-{name}' style='height:8px;width:{100 * level:.1f}%;border-radius:4px;"
             f"background:{colour}'></div></div><div style='font-size:0.85em'>zero when {meaning}</div></div>")
     parts.append(f"<div>{measures}</div>")

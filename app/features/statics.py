@@ -23,7 +23,7 @@ from ur10core.specs import torque_map
 from ..feedback import Beside, chosen, put_back, within
 from ..serving.workers import HEAVY, FoldedRuns
 from ..state import Snapshot
-from ..style import DANGER_RED, SAFE_GREEN, UR10_SIZE, blend, hex_color, joint_units, number, turning_and_sliding
+from ..style import COLOUR_IS_CONTENT, DANGER_RED, SAFE_GREEN, UR10_SIZE, blend, hex_color, joint_units, number, turning_and_sliding
 from ..view import HELD_BACK, Session, View, say_held_back
 from ..viser_internals.fast_updates import set_positions, stop_echo
 from .branch_labels import obstacle
@@ -91,7 +91,7 @@ def bars_html(force_torques: np.ndarray, gravity: np.ndarray, capacity: np.ndarr
         rows.append(
             f"<div style='margin:4px 0'><b>{label}</b> {number(total, '+.1f')} {unit} "
             f"<span style='font-size:0.85em'>(force {number(f, '+.1f')}, gravity {number(g, '+.1f')}{rated}){over}</span>"
-            "<div style='height:10px;background:#e9ecef;border-radius:4px'>"
+            f"<div style='height:10px;background:#e9ecef;border-radius:4px;{COLOUR_IS_CONTENT}'>"
             f"<div class='torque-bar' style='height:10px;width:{100 * share:.1f}%;border-radius:4px;background:{colour}'>"
             "</div></div></div>")
     units = "N·m" if "P" not in kinds else "N·m and N"

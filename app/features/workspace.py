@@ -18,7 +18,7 @@ from ur10core.workspace import base_turn, revolved_boundary, turnable_into, vert
 
 from ..feedback import Beside, chosen, within
 from ..serving.workers import HEAVY, FoldedRuns
-from ..style import UR10_SIZE, hex_color
+from ..style import COLOUR_IS_CONTENT, UR10_SIZE, hex_color
 from ..view import Session, View
 from .camera import VIEWS
 
@@ -192,7 +192,8 @@ def legend_html(top: float, unit: str = " m³") -> str:
     stops = ", ".join(hex_color(tuple(int(c) for c in rgb)) for rgb in VIRIDIS)
     return (
         "<div style='font-size:0.85em'>Colour = manipulability |det J|"
-        f"<div style='height:12px;border-radius:3px;margin:4px 0;background:linear-gradient(to right, {stops})'></div>"
+        f"<div style='height:12px;border-radius:3px;margin:4px 0;background:linear-gradient(to right, {stops});"
+        f"{COLOUR_IS_CONTENT}'></div>"
         "<div style='display:flex;justify-content:space-between'><span>0 (singular)</span>"
         f"<span>≥ {top:.4f}{unit}</span></div></div>"
     )
