@@ -63,7 +63,7 @@ class _Page:
     token: str = ""  #: its element's, the one it may report with
     element: viser.GuiHtmlHandle | None = None
     #: what its element has asked for, by field: the page takes that address from its cache if it is wanted again
-    asked: dict = field(default_factory=dict)
+    asked: dict[str, float | bool] = field(default_factory=dict)
 
 
 class Screens:
