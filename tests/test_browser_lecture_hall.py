@@ -34,7 +34,14 @@ def shown(scene, handle) -> bool:
 
 
 def shown_labels(*scenes) -> list:
-    return [(scene, label) for scene in scenes for label in labels_of(scene) if label.text and shown(scene, label)]
+    """The labels ``scenes`` show, a browser's own first: a label of a later scene (the shared one) whose name one of
+    an earlier has is not shown, as viser shows a browser's own node of a name in place of the shared one."""
+    taken, out = set(), []
+    for scene in scenes:
+        labels = labels_of(scene)
+        out += [(scene, label) for label in labels if label.text and shown(scene, label) and label.name not in taken]
+        taken |= {label.name for label in labels}
+    return out
 
 
 def world_position(scene, handle) -> np.ndarray:

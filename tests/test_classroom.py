@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import asyncio
+import dataclasses
 import collections
 import threading
 import time
@@ -254,6 +255,75 @@ def test_a_class_that_joins_before_the_presenter_sees_the_arms_branches(first_ar
         asyncio.run(scenario())
     finally:
         server.stop()
+
+
+def test_a_phone_watching_the_class_has_the_labels_placed_for_its_own_camera(classroom):
+    """The class's 3D labels are placed once, for the class's larger screens. On a phone held upright, whose canvas is
+    small and partly under the panel's sheet, they crowded and some lay under the sheet (a screenshot, 2026-12-07).
+    A viewer there gets its own copies, under the shared labels' names in its own scope (where viser shows them in
+    place of the shared ones), placed for its camera; they follow the presenter's arm, go when the student explores or
+    the browser leaves, and come again with the class's next arm. A laptop keeps the shared labels."""
+    from ur10dev.browser import PHONE
+    from ur10dev.viser_client import CAMERA
+    from ur10teach.features.arm_picker import ARM_CHOICES
+    from ur10teach.features.branch_labels import boxes, overlapping
+
+    room = classroom.classroom
+
+    async def scenario():
+        teacher = await ViserClient(f"http://127.0.0.1:{classroom.port}").connect()
+        laptop = await ViserClient(f"http://127.0.0.1:{classroom.port}").connect()
+        phone = await ViserClient(f"http://127.0.0.1:{classroom.port}", user_agent=PHONE["user_agent"]).connect()
+        await become_presenter(teacher, classroom)
+        await phone.send(dataclasses.replace(CAMERA, image_width=390, image_height=664))
+        watching, on_laptop = member_of(classroom, 2), member_of(classroom, 1)
+        await until(lambda: watching.own_labels is not None, what="the phone's own labels")
+        assert on_laptop.own_labels is None
+        number = room.drawing.branches.numbers.labels[0].name  # a shared label's name, in each browser's own scope or not
+        await until(lambda: phone.received.node_owners.get(number) == str(watching.client.client_id), what="the phone's own number")
+        assert laptop.received.node_owners.get(number) == ""
+
+        def apart_on_the_phone() -> list:
+            """What the phone's copies show, placed apart above its sheet for its camera (else nothing)."""
+            view, shown = watching.camera.view(), []
+            for copy in watching.own_labels.copies:
+                if copy.placed:
+                    R, t = copy.world[:3, :3], copy.world[:3, 3]
+                    points = np.array([position for _, _, position in copy.placed]) @ R.T + t
+                    texts = [text for _, text, _ in copy.placed]
+                    shown += zip(texts, boxes(view.to_screen(points)[0], texts, copy.labels[0].font_screen_scale))
+            sheet = view.height * (view.covered - 0.5)  # its top edge, px above the canvas's centre (y up)
+            apart = not any(overlapping(a, b, 0.0) for k, (_, a) in enumerate(shown) for _, b in shown[k + 1:])
+            return shown if apart and all(box[1] >= sheet for _, box in shown) else []
+
+        # the presenter puts the arm by its wrist singularity: a crowd of numbers, apart on the phone, as the class's
+        await teacher.set_gui("Put the arm on the", "wrist")
+        await until(lambda: room.state.last.solution.valid.sum() == 8 and abs(np.sin(room.state.last.q[4])) < 1e-6,
+                    what="the class's arm on the wrist singularity")
+        shared = room.drawing.branches.numbers
+        await until(lambda: [t for _, t, _ in watching.own_labels.copies[-1].placed] == [t for _, t, _ in shared.placed],
+                    what="the phone's numbers as the class's")
+        assert len(await until(apart_on_the_phone, what="the phone's labels apart above its sheet")) >= 4
+        # exploring: the student's own arm takes those names; back, the copies again
+        await phone.set_gui("Explore on my own", True)
+        await until(lambda: watching.role == EXPLORER, what="the phone exploring")
+        assert watching.own_labels is None and not shared.copies
+        await phone.set_gui("Back to the presenter's arm", True)
+        await until(lambda: watching.role == VIEWER and watching.own_labels is not None, what="the phone watching again")
+        # another arm for the class: copies of its labels
+        await until(room.can_switch, what="the class's arm to be ready for a change")
+        label = next(label for label in ARM_CHOICES if label.startswith("SCARA"))
+        await teacher.set_gui("Which arm", label)
+        await until(lambda: room.choice == label and watching.own_labels is not None
+                    and watching.own_labels.of is room.drawing.label_sets, what="the phone's copies of the SCARA's labels")
+        pools = room.drawing.label_sets
+        await phone.close()
+        await until(lambda: watching.closed, what="the phone gone")
+        assert not any(pool.copies for pool in pools)
+        for client in (teacher, laptop):
+            await client.close()
+
+    asyncio.run(scenario())
 
 
 def test_a_viewer_gets_each_presenter_update_whole(classroom, monkeypatch):

@@ -8,6 +8,7 @@ for the camera a browser frames the classroom's shared scene with (docs/architec
 
 from __future__ import annotations
 
+import contextlib
 import functools
 import math
 import threading
@@ -283,6 +284,7 @@ class BranchLabels:
         self.outside: Callable[[], list] = lambda: []  #: what :func:`chain` keeps these clear of besides other pools
         self.world = np.eye(4)
         self.placed: list[tuple[tuple[int, ...], str, np.ndarray]] = []  #: what the labels show now
+        self.copies: list[BranchLabels] = []  #: browsers' own copies of these, shown what these show (:class:`OwnLabels`)
         self._wanted: tuple[np.ndarray, list[str]] = (np.zeros((0, 3)), [])
         self._leaders: list[bytes] = [b""] * count
         self._positions = b""
@@ -309,6 +311,16 @@ class BranchLabels:
         with self._lock:
             self._wanted = (np.asarray(anchors, dtype=float), list(texts))
         self.place()
+        for copy in tuple(self.copies):
+            copy.size_as(self)
+            copy.show(anchors, texts)
+
+    def size_as(self, other: BranchLabels) -> None:
+        """Its labels at ``other``'s size (lecture mode's, say)."""
+        scale = other.labels[0].font_screen_scale
+        for label in self.labels:
+            if label.font_screen_scale != scale:
+                label.font_screen_scale = scale
 
     def place(self) -> None:
         """Place the labels again (the camera moved, or lecture mode changed their size)."""
@@ -345,6 +357,40 @@ class BranchLabels:
                         leader.points, leader.colors = segment, colour
                 if leader.visible != moved:
                     leader.visible = moved
+
+
+class OwnLabels:
+    """One browser's own copies of a shared scene's label ``pools``, placed for its own camera ``view``: a phone's,
+    say, whose canvas, small and half under the panel's sheet, the shared placing (for the class's larger screens)
+    crowds. They carry the shared labels' names in the browser's own scope, where viser shows a browser's node in
+    place of the shared one of its name; removed, the shared ones show again."""
+
+    def __init__(self, scene: viser.SceneApi, pools: tuple[BranchLabels, ...], view: Callable[[], ScreenView]) -> None:
+        self.of = pools  #: the shared scene's pools these copy
+        self.pools = pools = tuple(pool for pool in pools if pool.labels)
+        self.copies = chain(tuple(
+            BranchLabels(scene, pool.labels[0].name.rsplit("/", 1)[0], len(pool.labels), pool.labels[0].font_screen_scale,
+                         pool.colours, pool.merge_px) for pool in pools), pools[0].outside if pools else list)
+        for pool, copy in zip(pools, self.copies):
+            copy.view, copy.world, copy._wanted = view, pool.world, pool._wanted
+            pool.copies.append(copy)
+        self.place()
+
+    def place(self) -> None:
+        if self.copies:
+            place_in_order(self.copies)
+
+    def remove(self) -> None:
+        """Take the copies out of the browser's scene: the shared labels show again."""
+        self.forget()
+        for copy in self.copies:
+            copy.remove()
+
+    def forget(self) -> None:
+        """Stop copying the shared labels (the browser has gone)."""
+        for pool, copy in zip(self.pools, self.copies):
+            with contextlib.suppress(ValueError):
+                pool.copies.remove(copy)
 
 
 def obstacle(label, under=(0.0, 0.0, 0.0)) -> tuple | None:

@@ -26,6 +26,7 @@ from ..features.arm_picker import (
     ArmPicker,
     panel_title,
 )
+from ..features.branch_labels import OwnLabels
 from ..features.camera import CameraControls, ClassView
 from ..features.challenge import ChallengeCard, ChallengeDesk, ClassTools, GoalMarker  # a member's parts
 from ..features.course_arms.desktop_arm import EXPLORER_ROOT as DESKTOP_EXPLORER_ROOT
@@ -163,6 +164,9 @@ class Member:
         self.goal: GoalMarker | None = None
         self.observer = None  #: what the student's session calls after each change
         self.controls_lock = threading.Lock()  #: held while its "Classroom" folder is drawn
+        #: a viewer's own copies of the class's labels, placed for its camera where the shared placing does not fit
+        self.own_labels: OwnLabels | None = None
+        self.labels_lock = threading.Lock()
         #: what the student's own arm showed and its folders were set to, by arm: it comes back so next time they explore
         self.displays: dict[Arm, dict] = {}
         self.closed = False
@@ -254,6 +258,7 @@ class Classroom:
             body_radius=self._body_radius(), up=self.state.arm.up, light=self.app.light, phone=on_a_phone(client),
         )
         member.camera.on_moved.append(lambda: self.challenges.face_goal(member))
+        member.camera.on_moved.append(lambda: self._fit_labels(member))
         self.app.screens.probe(client)  # (its labels are placed for the screen its page reports)
         if back:
             self._present(member)
@@ -281,6 +286,8 @@ class Classroom:
             member.closed = True
             if member.camera is not None:
                 member.camera.close()
+            if member.own_labels is not None:
+                member.own_labels.forget()
             self.challenges.step_out(member)
             if member.desk is not None:
                 member.desk.closed = True
@@ -472,6 +479,7 @@ class Classroom:
                 self.stop_presenting(member)
             arm = self.challenges.arm_for(member) or self.state.arm
             models = self._models(arm)
+            self._fit_labels(member, keep=False)  # (its own arm's labels take the same names)
             member.session = ArmSession(
                 member.client, arm, app.refresher, app.drags, models=models, own_camera=False,
                 state=ArmState(arm, self.state.q if arm == self.state.arm else None,
@@ -542,6 +550,23 @@ class Classroom:
         time: a claim from another browser redraws a presenter's controls while they may still be being drawn."""
         with member.controls_lock:
             self._draw_controls_now(member)
+        self._fit_labels(member)  # (a new role)
+
+    def _fit_labels(self, member: Member, keep: bool = True) -> None:
+        """A viewer whose canvas lies partly under the panel's sheet (a phone's, held upright) gets the class's
+        labels placed for its own camera, which the shared placing, for the class's larger screens, crowds; any other
+        browser, and one that left (``keep``) or whose class arm has changed since, the shared ones."""
+        with member.labels_lock:
+            own, pools = member.own_labels, self.drawing.label_sets
+            fits = keep and not member.closed and member.role == VIEWER and member.camera is not None and (
+                member.camera.view().covered > 0)
+            if own is not None and (not fits or own.of is not pools):
+                member.own_labels = None
+                own.remove()
+            if fits and member.own_labels is None:
+                member.own_labels = OwnLabels(member.client.scene, pools, member.camera.view)
+            elif fits:
+                own.place()
 
     def _draw_controls_now(self, member: Member) -> None:
         if member.closed:
