@@ -257,7 +257,7 @@ def test_a_class_that_joins_before_the_presenter_sees_the_arms_branches(first_ar
         server.stop()
 
 
-def test_a_phone_watching_the_class_has_the_labels_placed_for_its_own_camera(classroom):
+def test_a_phone_watching_the_class_has_the_labels_placed_for_its_own_camera(classroom, monkeypatch):
     """The class's 3D labels are placed once, for the class's larger screens. On a phone held upright, whose canvas is
     small and partly under the panel's sheet, they crowded and some lay under the sheet (a screenshot, 2026-12-07).
     A viewer there gets its own copies, under the shared labels' names in its own scope (where viser shows them in
@@ -266,7 +266,9 @@ def test_a_phone_watching_the_class_has_the_labels_placed_for_its_own_camera(cla
     from ur10dev.browser import PHONE
     from ur10dev.viser_client import CAMERA
     from ur10teach.features.arm_picker import ARM_CHOICES
-    from ur10teach.features.branch_labels import boxes, overlapping
+    from ur10teach.features.branch_labels import OwnLabels, boxes, overlapping
+    from ur10teach.serving import classroom as classroom_module
+    from ur10teach.session import ArmSession
 
     room = classroom.classroom
 
@@ -304,10 +306,16 @@ def test_a_phone_watching_the_class_has_the_labels_placed_for_its_own_camera(cla
         await until(lambda: [t for _, t, _ in watching.own_labels.copies[-1].placed] == [t for _, t, _ in shared.placed],
                     what="the phone's numbers as the class's")
         assert len(await until(apart_on_the_phone, what="the phone's labels apart above its sheet")) >= 4
-        # exploring: the student's own arm takes those names; back, the copies again
+        # exploring: the student's own arm takes those names, and no copies are made while it is built (a camera
+        # move then, as a view renamed for the arm frames it, made some, whose removal took the arm's labels away)
+        made = []
+        monkeypatch.setattr(classroom_module, "OwnLabels", lambda *args: made.append(OwnLabels(*args)) or made[-1])
+        built = ArmSession.watch_camera
+        monkeypatch.setattr(ArmSession, "watch_camera", lambda session, camera: (camera.frame(), built(session, camera)))
         await phone.set_gui("Explore on my own", True)
         await until(lambda: watching.role == EXPLORER, what="the phone exploring")
-        assert watching.own_labels is None and not shared.copies
+        assert watching.own_labels is None and not shared.copies and not made
+        monkeypatch.undo()
         await phone.set_gui("Back to the presenter's arm", True)
         await until(lambda: watching.role == VIEWER and watching.own_labels is not None, what="the phone watching again")
         # another arm for the class: copies of its labels

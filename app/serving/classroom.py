@@ -166,6 +166,7 @@ class Member:
         self.controls_lock = threading.Lock()  #: held while its "Classroom" folder is drawn
         #: a viewer's own copies of the class's labels, placed for its camera where the shared placing does not fit
         self.own_labels: OwnLabels | None = None
+        self.labels_held = False  #: none made for it now (it is on its way to exploring)
         self.labels_lock = threading.Lock()
         #: what the student's own arm showed and its folders were set to, by arm: it comes back so next time they explore
         self.displays: dict[Arm, dict] = {}
@@ -286,8 +287,9 @@ class Classroom:
             member.closed = True
             if member.camera is not None:
                 member.camera.close()
-            if member.own_labels is not None:
-                member.own_labels.forget()
+            with member.labels_lock:  # (after which none are made for it)
+                if member.own_labels is not None:
+                    member.own_labels.forget()
             self.challenges.step_out(member)
             if member.desk is not None:
                 member.desk.closed = True
@@ -479,7 +481,7 @@ class Classroom:
                 self.stop_presenting(member)
             arm = self.challenges.arm_for(member) or self.state.arm
             models = self._models(arm)
-            self._fit_labels(member, keep=False)  # (its own arm's labels take the same names)
+            self._fit_labels(member, hold=True)  # (its own arm's labels take the same names)
             member.session = ArmSession(
                 member.client, arm, app.refresher, app.drags, models=models, own_camera=False,
                 state=ArmState(arm, self.state.q if arm == self.state.arm else None,
@@ -542,6 +544,8 @@ class Classroom:
         if member.camera is not None:  # framed with the class's arm's room again, its views named in its axes
             member.camera.show_arm(self._body_radius(), self.state.arm.up)
         member.role = VIEWER
+        with member.labels_lock:
+            member.labels_held = False  # (its own arm's labels are gone)
 
     # ------------------------------------------------------------------ the Classroom folder
 
@@ -552,13 +556,15 @@ class Classroom:
             self._draw_controls_now(member)
         self._fit_labels(member)  # (a new role)
 
-    def _fit_labels(self, member: Member, keep: bool = True) -> None:
+    def _fit_labels(self, member: Member, hold: bool = False) -> None:
         """A viewer whose canvas lies partly under the panel's sheet (a phone's, held upright) gets the class's
         labels placed for its own camera, which the shared placing, for the class's larger screens, crowds; any other
-        browser, and one that left (``keep``) or whose class arm has changed since, the shared ones."""
+        browser the shared ones, and so does one on its way to exploring (``hold``, until it watches again: its own
+        arm's labels take the same names, and a camera move while its arm is being built must not make copies)."""
         with member.labels_lock:
+            member.labels_held |= hold
             own, pools = member.own_labels, self.drawing.label_sets
-            fits = keep and not member.closed and member.role == VIEWER and member.camera is not None and (
+            fits = not (member.closed or member.labels_held) and member.role == VIEWER and member.camera is not None and (
                 member.camera.view().covered > 0)
             if own is not None and (not fits or own.of is not pools):
                 member.own_labels = None
