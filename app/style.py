@@ -127,6 +127,9 @@ def sentence(text: str) -> str:
     return text[:1].upper() + text[1:]
 
 
+#: The media query of viser's layout breakpoint (Mantine's xs): in a window it matches, a phone's held upright or a
+#: laptop's beside another, the panel is a sheet over the canvas's lower part, not docked beside it.
+NARROW_WINDOW = "(max-width: 36em)"
 #: The style of a panel element whose colour is what it says (a swatch, a gauge, a legend): kept where the system
 #: forces its own colours (Windows' contrast themes drop every background, and the gauges went blank). Inherited.
 COLOUR_IS_CONTENT = "forced-color-adjust:none"

@@ -14,7 +14,7 @@ from typing import Callable
 
 import viser
 
-from ..style import label_scale
+from ..style import NARROW_WINDOW, label_scale
 from ..viser_internals import labels_of
 
 #: The page's root size: viser's panel text is 0.8125 rem, so this makes it 20.8 px.
@@ -23,7 +23,7 @@ PANEL_WIDTH_PX = {False: 330, True: 540}  #: a third of a 1024 px window at most
 STYLE = (
     # not in a window as narrow as a phone's (viser's 36 em breakpoint): there the panel is a sheet 20 em wide,
     # which at this size was wider than the phone, and cut off the joints' names; a phone is held close anyway
-    "<style>@media not all and (max-width: 36em) {"
+    f"<style>@media not all and {NARROW_WINDOW} {{"
     f"html {{ font-size: {ROOT_FONT_PX}px !important; }}"
     # the sliders' tick labels and the inputs size themselves in px: bring them up too
     ".mantine-Slider-markLabel, .mantine-Input-input, .mantine-Button-label {"

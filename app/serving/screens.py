@@ -21,6 +21,7 @@ from typing import Callable
 
 import viser
 
+from ..style import NARROW_WINDOW
 from .gate import TokenBucket
 
 log = logging.getLogger(__name__)
@@ -48,7 +49,7 @@ def probe_html(token: str) -> str:
                     f"{{ .{name} {{ background-image: url({where}/{ratio}) }} }}" for ratio in RATIOS[1:])
     width = (f".{name}::after {{ content: ''; display: block; width: 1px; height: 1px; "
              f"background-image: url({where}/{WIDE}) }} "
-             f"@media (max-width: 36em) {{ .{name}::after {{ background-image: url({where}/{NARROW}) }} }}")
+             f"@media {NARROW_WINDOW} {{ .{name}::after {{ background-image: url({where}/{NARROW}) }} }}")
     return (f'<div class="{name}" style="position: absolute; width: 1px; height: 1px; opacity: 0; '
             f'pointer-events: none"></div><style>.{name} {{ background-image: url({where}/{RATIOS[0]}) }} '
             f'{rules} {width}</style>')
@@ -86,8 +87,8 @@ class Screens:
 
     def probe(self, client: viser.ClientHandle, reset: bool = False) -> None:
         """Put the element that reports the screen in ``client``'s panel, in place of the last (unless the panel was
-        ``reset``, and with it the last), and again after a report of a change back to something it said before: at
-        new addresses, since a page takes one it asked for before from its cache."""
+        ``reset``, and with it the last), and again after a change that is the second value of one kind it has
+        asked for: at new addresses, since a page takes one it asked for before from its cache."""
         token = secrets.token_urlsafe(12)
         with self._probing:
             with self._lock:
