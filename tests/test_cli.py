@@ -93,6 +93,29 @@ def test_an_ipv6_host_is_given_as_an_address_a_browser_takes():
         app.stop()
 
 
+def test_the_ipv6_any_address_listens_on_every_interface_as_0_0_0_0_does():
+    """``--host ::`` is how some write "every interface". asyncio listens on IPv6 alone there: this machine's own
+    127.0.0.1 was refused, and the teacher was told to give students http://[::]:port, which no browser opens."""
+    if listening_problem("::", 0):
+        pytest.skip("this machine has no IPv6")
+    with socket.socket(socket.AF_INET6) as probe:  # a port free in both families: at port 0 each would get its own
+        probe.setsockopt(socket.IPPROTO_IPV6, socket.IPV6_V6ONLY, 0)
+        probe.bind(("::", 0))
+        port = probe.getsockname()[1]
+    app = TeachingServer(host="::", port=port)  # (were it taken meanwhile, the next free one)
+    try:
+        assert app.host == "" and app.urls[0] == f"http://127.0.0.1:{app.port}" and "[::]" not in " ".join(app.urls)
+        assert app.open_to_network
+        for family, address in ((socket.AF_INET, "127.0.0.1"), (socket.AF_INET6, "::1")):
+            if family == socket.AF_INET6 and listening_problem("::1", 0):
+                continue
+            with socket.create_connection((address, app.port), timeout=HANG_TIMEOUT) as connection:
+                connection.sendall(b"GET / HTTP/1.1\r\nHost: x\r\nConnection: close\r\n\r\n")
+                assert connection.recv(12).startswith(b"HTTP/1.1 ")
+    finally:
+        app.stop()
+
+
 def test_a_challenge_on_the_app_s_ur10_must_fit_the_preset_it_runs(tmp_path, capsys, monkeypatch):
     """A file's challenge on "ur10" is checked again on the preset the server runs, and refused at start where
     that preset cannot be asked it; a built-in one is not offered there. The ur10e had no link masses until

@@ -293,6 +293,8 @@ class TeachingServer:
                     symbolic_arms.load(name)
                 factor_scales(Arm.preset(name))  # the gauges' scales: a few hundred ms in all, never in a callback
         factor_scales(self.arm)
+        if host not in ("", "localhost") and ipaddress.ip_address(host) == ipaddress.IPv6Address("::"):
+            host = ""  # every interface, as a teacher means: at "::" asyncio listens on IPv6 alone (IPV6_V6ONLY)
         self.host = host
         label = panel_title(self.first_choice, preset)
         self.gate = gate or Gate(allowed_origins)
