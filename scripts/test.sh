@@ -34,6 +34,18 @@ if [ -z "${UR10_TEACH_CHROMIUM:-}" ]; then
     export UR10_TEACH_CHROMIUM
 fi
 
+# Safari's engine for its browser test: Debian's WebKitGTK, its WebDriver and a virtual screen (it has no headless
+# mode); where there is no apt-get, that one test is skipped
+if ! command -v WebKitWebDriver >/dev/null 2>&1 || ! command -v Xvfb >/dev/null 2>&1; then
+    if command -v apt-get >/dev/null 2>&1; then
+        stage "installing Debian's WebKitGTK WebDriver and Xvfb for the WebKit browser test"
+        SUDO=""
+        if [ "$(id -u)" != "0" ]; then SUDO="sudo"; fi
+        $SUDO apt-get update -qq
+        $SUDO env DEBIAN_FRONTEND=noninteractive apt-get install -y -qq webkit2gtk-driver xvfb
+    fi
+fi
+
 stage "installing ur10-teach with its test dependencies into $VENV"
 python3 -m venv "$VENV"
 PYTHON="$VENV/bin/python"
