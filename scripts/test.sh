@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Install what the tests need, then run every test once, and the core's tests on its other backend.
 #   - a Chromium for the browser tests (playwright drives it; it never downloads one): $UR10_TEACH_CHROMIUM,
-#     a chromium on the PATH, or Debian's, installed with apt-get
+#     a chromium on the PATH, or Debian's, installed with apt-get; and Debian's WebKitGTK WebDriver and Xvfb
+#     for the one test in Safari's engine (Selenium drives it)
 #   - a virtual environment ($UR10_TEST_VENV, default .venv-test) with the project and its
 #     test extras; .ci/run points it at a new, empty folder every time
 # Two runs share the two cores: the browser and install tests (mostly Chromium's and pip's work),
@@ -15,34 +16,39 @@ stage() {  # stage NAME: a heading with the time since the start
     echo "== ($((SECONDS - STARTED)) s) $1"
 }
 
-# the browser tests' Chromium: $UR10_TEACH_CHROMIUM, else a chromium on the PATH, else Debian's, installed here
-if [ -z "${UR10_TEACH_CHROMIUM:-}" ]; then
-    if ! command -v chromium >/dev/null 2>&1; then
-        if ! command -v apt-get >/dev/null 2>&1; then
-            echo "no chromium here, and no apt-get to install Debian's: set UR10_TEACH_CHROMIUM to a Chromium" \
-                 "or Chrome binary for the browser tests (on macOS, for example," \
-                 "\"/Applications/Google Chrome.app/Contents/MacOS/Google Chrome\")" >&2
-            exit 1
-        fi
-        stage "installing Debian's chromium for the browser tests"
-        SUDO=""
-        if [ "$(id -u)" != "0" ]; then SUDO="sudo"; fi
-        $SUDO apt-get update -qq
-        $SUDO env DEBIAN_FRONTEND=noninteractive apt-get install -y -qq chromium
+# The browsers, from Debian where they are missing, in one apt-get run: the Chromium the browser tests drive
+# ($UR10_TEACH_CHROMIUM, else a chromium on the PATH), and Safari's engine for its one test, WebKitGTK's WebDriver
+# with a virtual screen (it has no headless mode; where there is no apt-get, that test is skipped)
+DEBIAN_PACKAGES=()
+if [ -z "${UR10_TEACH_CHROMIUM:-}" ] && ! command -v chromium >/dev/null 2>&1; then
+    if ! command -v apt-get >/dev/null 2>&1; then
+        echo "no chromium here, and no apt-get to install Debian's: set UR10_TEACH_CHROMIUM to a Chromium" \
+             "or Chrome binary for the browser tests (on macOS, for example," \
+             "\"/Applications/Google Chrome.app/Contents/MacOS/Google Chrome\")" >&2
+        exit 1
     fi
-    UR10_TEACH_CHROMIUM="$(command -v chromium)"
-    export UR10_TEACH_CHROMIUM
+    DEBIAN_PACKAGES+=(chromium)
 fi
-
-# Safari's engine for its browser test: Debian's WebKitGTK, its WebDriver and a virtual screen (it has no headless
-# mode); where there is no apt-get, that one test is skipped
-if ! command -v WebKitWebDriver >/dev/null 2>&1 || ! command -v Xvfb >/dev/null 2>&1; then
-    if command -v apt-get >/dev/null 2>&1; then
-        stage "installing Debian's WebKitGTK WebDriver and Xvfb for the WebKit browser test"
-        SUDO=""
-        if [ "$(id -u)" != "0" ]; then SUDO="sudo"; fi
+if command -v apt-get >/dev/null 2>&1; then
+    command -v WebKitWebDriver >/dev/null 2>&1 || DEBIAN_PACKAGES+=(webkit2gtk-driver)
+    command -v Xvfb >/dev/null 2>&1 || DEBIAN_PACKAGES+=(xvfb)
+fi
+APT_PID=""
+APT_LOG="$(mktemp)"
+if [ ${#DEBIAN_PACKAGES[@]} -gt 0 ]; then
+    debian_install() {
         $SUDO apt-get update -qq
-        $SUDO env DEBIAN_FRONTEND=noninteractive apt-get install -y -qq webkit2gtk-driver xvfb
+        $SUDO env DEBIAN_FRONTEND=noninteractive apt-get install -y -qq "${DEBIAN_PACKAGES[@]}"
+    }
+    if [ "$(id -u)" = "0" ]; then  # (as CI runs) beside the venv's install: it takes about as long
+        SUDO=""
+        stage "installing Debian's ${DEBIAN_PACKAGES[*]} for the browser tests, beside the venv"
+        debian_install > "$APT_LOG" 2>&1 &
+        APT_PID=$!
+    else  # sudo may ask for a password
+        SUDO="sudo"
+        stage "installing Debian's ${DEBIAN_PACKAGES[*]} for the browser tests"
+        debian_install
     fi
 fi
 
@@ -54,6 +60,15 @@ PYTHON="$VENV/bin/python"
 # (where PYTHONDONTWRITEBYTECODE is set, as on the CI machine, every process would compile them again)
 unset PYTHONDONTWRITEBYTECODE
 "$PYTHON" -m pip install --quiet --disable-pip-version-check --no-compile -e ".[test]"
+if [ -n "$APT_PID" ] && ! wait "$APT_PID"; then
+    cat "$APT_LOG" >&2
+    echo "apt-get could not install ${DEBIAN_PACKAGES[*]} (above)" >&2
+    exit 1
+fi
+if [ -z "${UR10_TEACH_CHROMIUM:-}" ]; then
+    UR10_TEACH_CHROMIUM="$(command -v chromium)"
+    export UR10_TEACH_CHROMIUM
+fi
 
 # CPython 3.11's tracebacks parse source lines to place their ^^^ markers; a traceback
 # formatted while the parser is busy in another frame trips a CPython bug
