@@ -17,6 +17,7 @@ from urllib.parse import urlparse
 import numpy as np
 import pytest
 
+from ur10teach.serving.gate import browser_of
 from ur10dev.browser import CONNECTED, LostOnItsWay, dom_id
 from ur10dev.waiting import HANG_TIMEOUT, wait_for
 
@@ -81,7 +82,8 @@ def canvas_pixels(driver) -> np.ndarray:
 @pytest.mark.skipif(not (WEBKIT_DRIVER and XVFB), reason="no WebKitWebDriver or Xvfb here (scripts/test.sh installs "
                                                          "Debian's webkit2gtk-driver and xvfb)")
 def test_in_safari_s_engine_a_student_sees_the_arm_and_moves_a_joint(light_app):
-    """The panel, the arm drawn, the page's screen reported, a joint moved with the keyboard and a value typed."""
+    """The panel, the arm drawn, the page's screen reported, a joint moved with the keyboard, joints typed, and the
+    page reloaded finding its arm (by the cookie the page was given)."""
     from selenium.webdriver.common.by import By
     from selenium.webdriver.common.keys import Keys
 
@@ -139,3 +141,9 @@ def test_in_safari_s_engine_a_student_sees_the_arm_and_moves_a_joint(light_app):
         wait_for(held, what="the typed joints to reach the server")
         driver.find_element(By.CSS_SELECTOR, dom_id(session.joints.apply_typed)).click()
         wait_for(lambda: np.allclose(np.degrees(session.state.q), [0, -90, 90, 0, 90, 0]), what="the typed joints set")
+
+        # the page reloaded: the server knows the browser again by the cookie it gave the page, and its arm is back
+        assert len(browser_of(session.client).split(" ")) == 2, "no cookie came back with WebKit's websocket"
+        driver.refresh()
+        wait_for(lambda: any(k != client_id and np.allclose(np.degrees(s.state.q), [0, -90, 90, 0, 90, 0])
+                             for k, s in app.sessions.items()), what="the arm as it was, after WebKit's reload")
