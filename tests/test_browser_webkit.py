@@ -142,6 +142,12 @@ def test_in_safari_s_engine_a_student_sees_the_arm_and_moves_a_joint(light_app):
         driver.find_element(By.CSS_SELECTOR, dom_id(session.joints.apply_typed)).click()
         wait_for(lambda: np.allclose(np.degrees(session.state.q), [0, -90, 90, 0, 90, 0]), what="the typed joints set")
 
+        # narrowed as a phone's (viser's sheet over the canvas): the page says so, and the camera is told (which then
+        # frames the arm above the sheet: in Chromium, test_in_a_narrow_window_the_arm_is_seen_above_the_panel)
+        driver.set_window_size(400, 800)
+        wait_for(lambda: app.screens.of(client_id) == (1.0, True), what="the narrow WebKit window reported")
+        wait_for(lambda: session.camera.narrow, what="the camera told the window is narrow")
+
         # the page reloaded: the server knows the browser again by the cookie it gave the page, and its arm is back
         assert len(browser_of(session.client).split(" ")) == 2, "no cookie came back with WebKit's websocket"
         driver.refresh()
