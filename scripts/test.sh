@@ -34,7 +34,6 @@ if command -v apt-get >/dev/null 2>&1; then
     command -v Xvfb >/dev/null 2>&1 || DEBIAN_PACKAGES+=(xvfb)
 fi
 APT_PID=""
-APT_LOG="$(mktemp)"
 if [ ${#DEBIAN_PACKAGES[@]} -gt 0 ]; then
     debian_install() {
         $SUDO apt-get update -qq
@@ -42,6 +41,7 @@ if [ ${#DEBIAN_PACKAGES[@]} -gt 0 ]; then
     }
     if [ "$(id -u)" = "0" ]; then  # (as CI runs) beside the venv's install: it takes about as long
         SUDO=""
+        APT_LOG="$(mktemp)"
         stage "installing Debian's ${DEBIAN_PACKAGES[*]} for the browser tests, beside the venv"
         debian_install > "$APT_LOG" 2>&1 &
         APT_PID=$!
