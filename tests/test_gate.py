@@ -551,6 +551,32 @@ def test_the_open_file_limit_is_raised_where_the_system_allows():
         resource.setrlimit(resource.RLIMIT_NOFILE, (soft, hard))
 
 
+def test_on_a_mac_the_open_file_limit_is_raised_as_far_as_macos_allows(monkeypatch):
+    """A Mac starts a process with 256 open files and an unlimited hard limit, and its setrlimit refuses a soft
+    limit above OPEN_MAX (10 240). Asked for 65 536, it refused, and the server kept 256: a lecture hall's
+    connections and their reconnections would run out of them."""
+    import resource
+
+    from ur10teach.serving import server
+    from ur10teach.serving.server import MACOS_OPEN_MAX, raise_open_file_limit
+
+    limits = {"soft": 256}
+
+    def setrlimit(kind, pair):  # macOS's: EINVAL (Python's ValueError) above OPEN_MAX
+        if pair[0] > MACOS_OPEN_MAX:
+            raise ValueError("current limit exceeds maximum limit")
+        limits["soft"] = pair[0]
+
+    monkeypatch.setattr(resource, "getrlimit", lambda kind: (limits["soft"], resource.RLIM_INFINITY))
+    monkeypatch.setattr(resource, "setrlimit", setrlimit)
+    assert raise_open_file_limit() == MACOS_OPEN_MAX == limits["soft"]
+    assert raise_open_file_limit() == MACOS_OPEN_MAX  # (raised once: asked again, nothing more to do)
+    assert raise_open_file_limit(wanted=1_000) == MACOS_OPEN_MAX  # never lowered
+    limits["soft"] = 20_000  # above OPEN_MAX already (a raised shell's): 65 536 refused, and 10 240 not asked
+    assert raise_open_file_limit() == 20_000 == limits["soft"]
+    assert server.OPEN_FILES > MACOS_OPEN_MAX
+
+
 def test_a_value_of_another_type_than_its_widgets_is_dropped_at_the_gate(app):
     """A string sent to a slider passed the gate, and viser's own conversion, ``float("x")``, raised inside its
     handler (an error logged for every such message). It is dropped at the gate; a text box still takes text,
