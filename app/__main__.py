@@ -136,7 +136,7 @@ def main(argv: list[str] | None = None, started=None) -> None:
         print(f"    {url}", flush=True)
     if args.arm != "ur10":
         print(f"Browsers open on the {app.first_choice}; every arm stays in the picker.", flush=True)
-    if app.host in ("0.0.0.0", ""):
+    if app.everywhere:
         print("Students on the same network use one of the addresses above." if app.join_urls else
               "This computer has no network address that students could reach yet: connect it to the class's network "
               "(or start its hotspot). The console and the teacher's screen then show the address.", flush=True)

@@ -302,6 +302,8 @@ class TeachingServer:
         if host not in ("", "localhost") and ipaddress.ip_address(host) == ipaddress.IPv6Address("::"):
             host = ""  # every interface, as a teacher means: at "::" asyncio listens on IPv6 alone (IPV6_V6ONLY)
         self.host = host
+        #: it listens on every interface of this machine, whichever they are now
+        self.everywhere = host in ("0.0.0.0", "")
         label = panel_title(self.first_choice, preset)
         self.gate = gate or Gate(allowed_origins)
         raise_open_file_limit()
@@ -338,12 +340,11 @@ class TeachingServer:
         #: when it serves this machine only), shown on the teacher's screen (:func:`join_markdown`)
         self.join_urls = self._reachable_urls()
         #: students can join from other machines: the teacher's screen shows how (with no address yet, that it has none)
-        everywhere = host in ("0.0.0.0", "")  # every interface of this machine, whichever they are now
-        self.open_to_network = bool(self.join_urls) or everywhere
+        self.open_to_network = bool(self.join_urls) or self.everywhere
         self._stopping = threading.Event()
         #: shared demo mode (``--shared``): everyone watches the presenter (``ur10teach.serving.classroom``)
         self.classroom = Classroom(self) if shared else None
-        if everywhere:
+        if self.everywhere:
             threading.Thread(target=self._follow_addresses, name="addresses", daemon=True).start()
         self.server.on_client_connect(self._connected)
         self.server.on_client_disconnect(self._disconnected)
@@ -378,7 +379,7 @@ class TeachingServer:
     @property
     def urls(self) -> list[str]:
         """Where browsers can reach the app."""
-        if self.host in ("0.0.0.0", ""):
+        if self.everywhere:
             return [f"http://127.0.0.1:{self.port}"] + [f"http://{a}:{self.port}" for a in lan_addresses()]
         host = f"[{self.host}]" if ":" in self.host else self.host  # (an IPv6 address goes in brackets)
         return [f"http://{host}:{self.port}"]
