@@ -25,7 +25,7 @@ from ur10core.serial import project_target
 from ur10core.tolerances import FLOOR_TOLERANCE, LIMIT_TOLERANCE
 from ur10core.workspace import heights_above_floor, lowest_points
 
-from .style import number, typed_fields
+from .style import half_width, number, typed_fields
 
 
 @dataclass(frozen=True)
@@ -176,6 +176,7 @@ class ArmState:
     @staticmethod
     def parse_numbers(text: str, count: int, what: str = "joint values") -> np.ndarray:
         """``"30, 45, 26, 50, 60, 80"`` (commas or spaces, a ° allowed) → floats, with a message a student understands."""
+        text = half_width(text)  # (the decimal-comma question below reads it too)
         parts = typed_fields(text, what)
         numbers = f"{count} number{'s' * (count != 1)}"
         if len(parts) != count:

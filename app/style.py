@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import re
+import unicodedata
 
 import numpy as np
 
@@ -96,9 +97,20 @@ def number(value: float, spec: str) -> str:
 _TYPED_SIGNS = str.maketrans({"\u2212": "-", "\u2013": "-", "°": "", "(": " ", ")": " ", "[": " ", "]": " "})
 
 
+def half_width(text: str) -> str:
+    """``text`` as an ASCII keyboard types it: the full-width forms a Chinese, Japanese or Korean keyboard's input mode
+    types (３０，４５；－２６．５) and its ideographic comma (、) as the ASCII they stand for. ``float`` reads ３０ as
+    30 already, but a full-width comma was no comma: the whole line was "not a number".
+
+    >>> half_width("３０，４５、－２６．５　（１）")
+    '30,45,-26.5 (1)'
+    """
+    return unicodedata.normalize("NFKC", text).replace("\u3001", ",")
+
+
 def typed_fields(text: str, what: str) -> list[str]:
-    """The entries a student typed, split at commas, semicolons, spaces and brackets, each minus sign one
-    ``float`` reads and no degree signs. A comma between digits, where numbers are also parted without one, is
+    """The entries a student typed (:func:`half_width`), split at commas, semicolons, spaces and brackets, each minus
+    sign one ``float`` reads and no degree signs. A comma between digits, where numbers are also parted without one, is
     read as a decimal comma (as much of Europe writes 1,5) and refused: read as a list it gave wrong numbers.
 
     >>> typed_fields("−30°, 45;26  0.5", "joint values")
@@ -110,7 +122,7 @@ def typed_fields(text: str, what: str) -> list[str]:
     ...
     ValueError: target: is '1,5' one number or two? Write decimals with a point (1.5) and a space after each comma
     """
-    text = text.translate(_TYPED_SIGNS).strip()
+    text = half_width(text).translate(_TYPED_SIGNS).strip()
     if re.search(r"\d,\d", text) and any("," not in gap for gap in re.findall(r"[\s;,]+", text)):
         group = next(g for g in re.split(r"[\s;]+", text) if re.search(r"\d,\d", g))
         raise ValueError(f"{what}: is {group!r:.20} one number or two? Write decimals with a point "

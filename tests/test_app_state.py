@@ -94,6 +94,19 @@ def test_parse_typed_degrees():
         assert len(str(refusal.value)) < 120, str(refusal.value)[:200]
 
 
+def test_numbers_typed_in_a_full_width_input_mode_are_read_as_typed_in_ascii():
+    """A Chinese, Japanese or Korean keyboard's input mode types full-width forms: ``float`` read ３０ as 30, but
+    "３０，４５，２６，５０，６０，８０" was refused whole as not a number, and the ideographic comma (、) too."""
+    for typed in ("３０，４５，２６，５０，６０，８０", "３０、４５、２６、５０、６０、８０", "３０　４５；２６ ５０, ６０° ８０"):
+        np.testing.assert_array_equal(ArmState.parse_numbers(typed, 6), [30, 45, 26, 50, 60, 80])
+    np.testing.assert_array_equal(ArmState.parse_numbers("（＋１００，　－２０．５，　０）", 3), [100, -20.5, 0])
+    # a decimal comma is asked about as in ASCII, in the ASCII a student can type back
+    with pytest.raises(ValueError, match=r"^target: is '1,5' one number or two\? Write decimals with a point \(1\.5\)"):
+        ArmState.parse_numbers("１，５　２，５　３，５", 3, "target")
+    with pytest.raises(ValueError, match="^target: 1 number here\\? Write decimals with a point: 0.0123$"):
+        ArmState.parse_numbers("０，０１２３", 1, "target")
+
+
 @pytest.mark.parametrize("text, count, refusal", [
     # numbers with a decimal comma, parted by spaces or semicolons, were read as twice as many: three values
     # typed as 1,5 2,5 3,5 for six joints were taken as (1, 5, 2, 5, 3, 5)

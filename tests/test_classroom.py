@@ -30,6 +30,8 @@ def test_join_codes():
         assert len(code) == 7 and code[3] == "-"
         assert not set(code.replace("-", "")) & set("0O1IL5S2Z8B6G")
     assert normalise_code(" abc-def ") == "ABCDEF"
+    # typed in a Japanese or Chinese keyboard's full-width mode (it was a wrong code, counted towards a lockout)
+    assert normalise_code("ＡＢＣ－ＤＥＦ") == normalise_code("ａｂｃ　ｄｅｆ") == "ABCDEF"
 
 
 def test_the_address_students_type_is_on_the_projector(classroom, monkeypatch):

@@ -352,6 +352,8 @@ def test_parse_table_refuses_what_is_not_a_table():
         "0 90 400 0 R -170 170\n400 -90 0 0 R", "standard")  # the minus the course writes, copied
     assert parse_table("0 90° 400 0° R -170° 170°\n400 0 0 0 R", "standard") == parse_table(
         "0 90 400 0 R -170 170\n400 0 0 0 R", "standard")  # degrees as the course writes them (refused until 2026-12-04)
+    assert parse_table("０　９０　４００　０　Ｒ　－１７０　１７０　＃ｂａｓｅ\n４００，０，０，０，ｒ", "standard") == parse_table(
+        "0 90 400 0 R -170 170\n400 0 0 0 R", "standard")  # a full-width input mode's (refused whole until 2026-12-07)
     np.testing.assert_allclose(limited.limits, [np.radians([-170, 170]), np.radians([-45, 135]), [0.05, 0.3]])
 
 

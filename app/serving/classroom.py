@@ -42,6 +42,7 @@ from ..features.singularity import factors_html
 from ..feedback import guard, notify
 from ..session import ArmSession
 from ..state import ArmState
+from ..style import half_width
 from ..view import HELD_BACK
 from ..viser_internals import after_broadcast
 from .class_challenges import ClassChallenges
@@ -76,7 +77,12 @@ def make_join_code() -> str:
 
 
 def normalise_code(text: str) -> str:
-    return "".join(ch for ch in text.upper() if ch.isalnum())
+    """A typed join code as :func:`make_join_code` makes one, without its dash: any case, spaces, full width.
+
+    >>> normalise_code(" abc-def "), normalise_code("ａｂｃ－ｄｅｆ")
+    ('ABCDEF', 'ABCDEF')
+    """
+    return "".join(ch for ch in half_width(text).upper() if ch.isalnum())
 
 
 @dataclasses.dataclass

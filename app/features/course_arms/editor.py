@@ -16,7 +16,7 @@ import viser
 from ur10core import Arm
 
 from ...feedback import Beside, chosen
-from ...style import typed_fields
+from ...style import half_width, typed_fields
 from ...view import Session, View
 
 #: What the editor starts with: the lecture notes' articulated arm without its wrist.
@@ -48,7 +48,7 @@ def parse_table(text: str, convention: str, name: str = "custom") -> Arm:
     if len(text) > MAX_TEXT:  # the gate (ur10teach.serving.gate) lets no longer text through from a browser
         raise ValueError(f"the table is too long (at most {MAX_TEXT} characters)")
     rows, limits = [], []
-    for number, line in enumerate(text.splitlines(), start=1):
+    for number, line in enumerate(half_width(text).splitlines(), start=1):  # (a full-width ＃ begins a comment too)
         fields = typed_fields(line.split("#", 1)[0], f"line {number}")
         if not fields:
             continue
