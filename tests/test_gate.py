@@ -536,6 +536,36 @@ def test_one_address_cannot_hold_the_servers_sockets_with_half_sent_requests():
         app.stop()
 
 
+def test_a_browser_on_a_slow_link_gets_the_whole_page(monkeypatch):
+    """websockets timed a connection's whole opening, the page's sending included, with the gate's 5 s for a
+    request: viser's page (0.67 MB) was cut short below about 0.6 Mbit/s (checked with tc, 2026-12-07), as when a
+    lecture hall opens it at once over one Wi-Fi, and the student saw a blank page. Here the request's time is
+    shortened and the page is read slowly, through a small receive window, over several times that: it comes whole.
+    A request still has its time to be sent whole (the test above)."""
+    monkeypatch.setattr(gate_module, "OPEN_TIMEOUT", 0.3)
+    app = TeachingServer(port=0, gate=Gate(trust_loopback=False))
+    try:
+        with socket.socket() as sock:
+            sock.setsockopt(socket.SOL_SOCKET, socket.SO_RCVBUF, 4096)  # (before connecting: the window offered)
+            if hasattr(socket, "TCP_MAXSEG"):  # an Ethernet's or a Wi-Fi's segments, not loopback's 64 kB: the server's
+                sock.setsockopt(socket.IPPROTO_TCP, socket.TCP_MAXSEG, 1448)  # kernel then takes ~0.1 MB, not all
+            sock.bind(("127.0.0.2", 0))
+            sock.connect(("127.0.0.1", app.port))
+            sock.sendall(b"GET / HTTP/1.1\r\nHost: 127.0.0.1\r\nAccept-Encoding: gzip\r\n\r\n")
+            received, started = bytearray(), time.monotonic()
+            while chunk := sock.recv(4096):
+                received += chunk
+                if time.monotonic() - started < 4 * gate_module.OPEN_TIMEOUT:
+                    time.sleep(0.01)  # a slow link (about 0.4 MB/s) for the first part: the page takes longer than that
+        head, _, body = bytes(received).partition(b"\r\n\r\n")
+        length = int(next(line.split(b":")[1] for line in head.split(b"\r\n") if line.lower().startswith(b"content-length")))
+        assert head.startswith(b"HTTP/1.1 200") and length > 500_000
+        assert len(body) == length, f"{len(body)} of the page's {length} bytes arrived"
+        assert length * 8 / 128_000 < gate_module.DOWNLOAD_TIMEOUT  # (a link of 128 kbit/s gets it in time)
+    finally:
+        app.stop()
+
+
 def test_the_open_file_limit_is_raised_where_the_system_allows():
     """Review 2, finding 6: a common default of 1 024 open files ran out under half-open connections."""
     import resource

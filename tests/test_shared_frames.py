@@ -28,9 +28,38 @@ class Recorder:
 
     def __init__(self) -> None:
         self.sent: list[bytes] = []
+        self.transport = self
+        self.remote_address = ("127.0.0.2", 50000)
+        self.aborted = False
 
     async def send(self, data: bytes) -> None:
         self.sent.append(data)
+
+    def get_write_buffer_size(self) -> int:
+        return 0
+
+    def abort(self) -> None:
+        self.aborted = True
+
+
+class Link(Recorder):
+    """A websocket over a link whose frame waits in the sender's buffer and leaves a little each time the sender
+    looks (a crowded Wi-Fi: slow, but read), or never (``reads=False``: a laptop whose lid has closed)."""
+
+    def __init__(self, reads: bool, looks: int = 0) -> None:
+        super().__init__()
+        self.reads, self.looks, self.left, self.step = reads, looks, 0, 0
+
+    async def send(self, data: bytes) -> None:
+        self.left, self.step = len(data), -(-len(data) // max(self.looks, 1))  # (it leaves in ``looks`` looks)
+        await until(lambda: self.left == 0, what="the frame to leave")
+        self.sent.append(data)
+
+    def get_write_buffer_size(self) -> int:
+        left = self.left
+        if self.reads:
+            self.left = max(0, self.left - self.step)
+        return left
 
 
 def a_window() -> list[_messages.Message]:
@@ -106,6 +135,30 @@ def test_only_recent_windows_are_kept():
     kept.frame(windows[-1])
     kept.frame(windows[0])  # pushed out by the newer ones
     assert kept.reused == 1 and kept.encoded == len(windows) + 1
+
+
+def test_a_browser_that_reads_slowly_is_sent_its_frame_and_one_that_reads_nothing_is_dropped(monkeypatch):
+    """A frame's whole sending was given 15 s: a student whose share of a crowded Wi-Fi was slow was dropped for asking
+    for a workspace cloud (1.8 MB), and the page it came back to asked again. Now only a browser that has read nothing
+    for that long is dropped. Here the slow link's frame takes four times that patience, and is sent; the laptop whose
+    lid has closed (nothing read) is dropped, and its send ended."""
+    monkeypatch.setattr(shared_frames, "SEND_TIMEOUT", 0.2)
+    monkeypatch.setattr(shared_frames, "SEND_POLL", 0.02)
+
+    async def run(socket: Link) -> bool:
+        buffer = AsyncMessageBuffer(asyncio.get_running_loop(), persistent_messages=True)
+        for message in a_window():
+            buffer.push(message)
+        producer = asyncio.create_task(shared_frames.shared_message_producer(socket, buffer, 0))
+        await until(lambda: socket.sent or socket.aborted, what="the frame sent, or the browser dropped")
+        buffer.set_done()
+        await asyncio.wait_for(producer, HANG_TIMEOUT)
+        return bool(socket.sent)
+
+    slow = Link(reads=True, looks=round(4 * shared_frames.SEND_TIMEOUT / shared_frames.SEND_POLL))
+    assert asyncio.run(run(slow)) and not slow.aborted
+    frozen = Link(reads=False)
+    assert not asyncio.run(run(frozen)) and frozen.aborted and frozen.left > 0
 
 
 def test_viser_producer_is_the_one_copied():

@@ -56,6 +56,12 @@ NEW_CONNECTION_BURST = 3
 TCP_CONNECTIONS_PER_ADDRESS = 32
 #: Seconds a new connection has to send its request (websockets' default is 10).
 OPEN_TIMEOUT = 5.0
+#: Seconds a page may take to reach a browser once asked for. websockets gives a connection's whole opening, its
+#: answer's sending included, one timeout, and cuts the answer short where it runs out: with 5 s, viser's page
+#: (0.67 MB) reached a browser whole only at about 0.6 Mbit/s or more. When a lecture hall opens the page at once,
+#: its Wi-Fi gives each laptop less, and the students saw blank pages. At the slowest link served
+#: (``ur10teach.viser_internals.shared_frames.SLOWEST_LINK``) the page takes 42 s.
+DOWNLOAD_TIMEOUT = 60.0
 
 #: The messages the app uses, and what makes two of them the same (the newer replaces the older).
 ALLOWED = {
@@ -555,7 +561,8 @@ def gated_serve(gate: Gate) -> Iterator[None]:
     original = websockets.asyncio.server.serve
 
     class CountedConnection(websockets.asyncio.server.ServerConnection):
-        """A TCP connection counted against its address from its first byte, handshake or not."""
+        """A TCP connection counted against its address from its first byte, handshake or not, and closed if its
+        request is not whole within :data:`OPEN_TIMEOUT`."""
 
         def connection_made(self, transport) -> None:  # noqa: ANN001
             peer = transport.get_extra_info("peername")
@@ -564,9 +571,16 @@ def gated_serve(gate: Gate) -> Iterator[None]:
             super().connection_made(transport)
             if not self._counted:
                 transport.abort()
+            else:  # (websockets' own timeout is the download's: DOWNLOAD_TIMEOUT)
+                self._unasked = self.loop.call_later(OPEN_TIMEOUT, self._abort_unless_asked)
+
+        def _abort_unless_asked(self) -> None:
+            if self.request is None:
+                self.transport.abort()
 
         def connection_lost(self, exc) -> None:  # noqa: ANN001
             if self._counted:
+                self._unasked.cancel()
                 gate.tcp_closed(self._peer)
                 self._counted = False
             super().connection_lost(exc)
@@ -591,7 +605,7 @@ def gated_serve(gate: Gate) -> Iterator[None]:
                 return response
 
             kwargs["max_size"] = MAX_MESSAGE_BYTES
-            kwargs["open_timeout"] = OPEN_TIMEOUT
+            kwargs["open_timeout"] = DOWNLOAD_TIMEOUT
             kwargs["create_connection"] = CountedConnection
             serve_through_gate.used = True
             super().__init__(gated_handler, *args, process_request=check_then_serve, **kwargs)

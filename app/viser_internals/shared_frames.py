@@ -9,6 +9,7 @@ import asyncio
 import collections
 import contextlib
 import logging
+import math
 import os
 import threading
 import time
@@ -22,9 +23,12 @@ from viser.infra._messages import Message
 
 log = logging.getLogger(__name__)
 
-#: Seconds one frame may take to leave for a browser before that browser is dropped: far longer
-#: than a point cloud takes on a slow school network, far shorter than the class would wait.
+#: Seconds a browser may read nothing of a frame sent to it before it is dropped (a laptop whose lid has closed).
+#: A browser that reads, however slowly, is not: a frame's whole time was limited once, and a student on a
+#: crowded Wi-Fi was dropped for asking for a workspace cloud (1.8 MB).
 SEND_TIMEOUT = 15.0
+#: How often (s) a frame that has not left yet is looked at again.
+SEND_POLL = 1.0
 #: Frames larger than this (a newcomer's backlog, a point cloud) are encoded per browser, not kept.
 MAX_KEPT_BYTES = 256 * 1024
 #: Recent windows kept: a hundred viewers drain the same redraw within a few windows of each other.
@@ -114,10 +118,29 @@ class WakeOnLoop(asyncio.Event):
         super().set()
 
 
+async def send_while_read(websocket, frame: bytes) -> bool:  # noqa: ANN001
+    """Send ``frame`` on ``websocket``; False (the send given up) once the browser has read nothing of what waits
+    for it, in this process's buffer, for :data:`SEND_TIMEOUT`."""
+    sending = asyncio.ensure_future(websocket.send(frame))
+    loop, transport = asyncio.get_running_loop(), websocket.transport
+    waiting, since = math.inf, loop.time()  # (what waits is known once the send has written its frame)
+    try:
+        while not (await asyncio.wait({sending}, timeout=SEND_POLL))[0]:
+            left = transport.get_write_buffer_size()
+            if left < waiting:
+                waiting, since = left, loop.time()
+            elif loop.time() - since >= SEND_TIMEOUT:
+                return False
+    finally:  # (given up, or this producer cancelled as its browser leaves)
+        sending.cancel()
+    sending.result()  # (a connection closed meanwhile raises, as the send alone did)
+    return True
+
+
 async def shared_message_producer(websocket, buffer: AsyncMessageBuffer, client_id: int,
                                   backlog_done_message: Message | None = None) -> None:
     """viser's ``_message_producer``, with the broadcast queue's frames encoded once for everyone,
-    a browser that takes longer than :data:`SEND_TIMEOUT` over a frame dropped, and the queue's
+    a browser that has read nothing for :data:`SEND_TIMEOUT` dropped, and the queue's
     event made safe to set from a callback's thread (:class:`WakeOnLoop`)."""
     if not isinstance(buffer.message_event, WakeOnLoop):  # before anyone waits on it (the broadcast queue's: once)
         buffer.message_event = WakeOnLoop(buffer.event_loop)
@@ -130,9 +153,7 @@ async def shared_message_producer(websocket, buffer: AsyncMessageBuffer, client_
                 window = await window_generator.__anext__()
             except StopAsyncIteration:
                 break
-            try:
-                await asyncio.wait_for(websocket.send(KEPT.frame(window) if shared else encode(window, zstd)), SEND_TIMEOUT)
-            except asyncio.TimeoutError:  # TimeoutError itself from Python 3.11
+            if not await send_while_read(websocket, KEPT.frame(window) if shared else encode(window, zstd)):
                 remote = websocket.remote_address
                 log.warning("dropped browser %s at %s: it has not read what was sent to it for %.0f s",
                             client_id, remote[0] if remote else "?", SEND_TIMEOUT)
