@@ -566,6 +566,27 @@ def test_a_browser_on_a_slow_link_gets_the_whole_page(monkeypatch):
         app.stop()
 
 
+def test_a_slow_link_brings_the_workspace_cloud_before_the_keepalive_gives_up(app):
+    """The server's keepalive ping is answered only once what was sent before it has arrived. websockets gave the
+    answer 20 s: the workspace cloud, 113 s at 128 kbit/s, cut a student on a crowded Wi-Fi off, and again each time
+    the page came back with the cloud shown. The cloud the app sends reaches the slowest link served in the time the
+    server's connections give the answer."""
+
+    async def scenario():
+        client = await ViserClient(url(app)).connect()
+        session = session_of(app, client)
+        sent = len(client.received.byte_log)
+        await client.set_gui("Show workspace cloud", True)
+        await until(lambda: any(n > 1_000_000 for _, n in client.received.byte_log[sent:]), what="the cloud's frame")
+        cloud = max(n for _, n in client.received.byte_log[sent:])
+        connection = connection_of(session.client)
+        assert connection.ping_timeout == gate_module.PONG_TIMEOUT
+        assert cloud / gate_module.SLOWEST_LINK < gate_module.PONG_TIMEOUT, f"a {cloud}-byte cloud"
+        await client.close()
+
+    asyncio.run(scenario())
+
+
 def test_the_open_file_limit_is_raised_where_the_system_allows():
     """Review 2, finding 6: a common default of 1 024 open files ran out under half-open connections."""
     import resource

@@ -56,12 +56,19 @@ NEW_CONNECTION_BURST = 3
 TCP_CONNECTIONS_PER_ADDRESS = 32
 #: Seconds a new connection has to send its request (websockets' default is 10).
 OPEN_TIMEOUT = 5.0
+#: The slowest link a browser is served on (bytes/s): 128 kbit/s, each laptop's share of a lecture hall's Wi-Fi as a
+#: hundred students open the page at once.
+SLOWEST_LINK = 16 * 1024
 #: Seconds a page may take to reach a browser once asked for. websockets gives a connection's whole opening, its
 #: answer's sending included, one timeout, and cuts the answer short where it runs out: with 5 s, viser's page
-#: (0.67 MB) reached a browser whole only at about 0.6 Mbit/s or more. When a lecture hall opens the page at once,
-#: its Wi-Fi gives each laptop less, and the students saw blank pages. At the slowest link served
-#: (``ur10teach.viser_internals.shared_frames.SLOWEST_LINK``) the page takes 42 s.
+#: (0.67 MB) reached a browser whole only at about 0.6 Mbit/s or more, and a class opening it at once saw blank
+#: pages. At :data:`SLOWEST_LINK` the page takes 42 s.
 DOWNLOAD_TIMEOUT = 60.0
+#: Seconds a browser has to answer the server's keepalive ping (websockets' default is 20). The answer waits behind
+#: what was sent before the ping: the workspace cloud (1.8 MB) takes 113 s at :data:`SLOWEST_LINK`, and a student was
+#: cut off for asking for it, and again each time the page came back with it shown. A browser that reads nothing is
+#: dropped sooner whenever anything waits for it (``ur10teach.viser_internals.shared_frames.SEND_TIMEOUT``).
+PONG_TIMEOUT = 120.0
 
 #: The messages the app uses, and what makes two of them the same (the newer replaces the older).
 ALLOWED = {
@@ -552,7 +559,7 @@ def gated_serve(gate: Gate) -> Iterator[None]:
 
     viser hands ``websockets.asyncio.server.serve`` its handler, a 50 MB message limit
     and its HTTP handler; for the moment the server starts (``viser.ViserServer()``
-    returns once it is listening) the call gets the gate's limit, a request check in
+    returns once it is listening) the call gets the gate's limit and timeouts, a request check in
     front of viser's HTTP handler (and the browser's cookie on its page), and a handler
     that sees the connection through :class:`GatedConnection`. ``tests/test_gate.py``
     fails if viser stops calling it so.
@@ -606,6 +613,7 @@ def gated_serve(gate: Gate) -> Iterator[None]:
 
             kwargs["max_size"] = MAX_MESSAGE_BYTES
             kwargs["open_timeout"] = DOWNLOAD_TIMEOUT
+            kwargs["ping_timeout"] = PONG_TIMEOUT
             kwargs["create_connection"] = CountedConnection
             serve_through_gate.used = True
             super().__init__(gated_handler, *args, process_request=check_then_serve, **kwargs)
