@@ -59,6 +59,11 @@ OPEN_TIMEOUT = 5.0
 #: The slowest link a browser is served on (bytes/s): 128 kbit/s, each laptop's share of a lecture hall's Wi-Fi as a
 #: hundred students open the page at once.
 SLOWEST_LINK = 16 * 1024
+#: Bytes the system may hold for a browser beyond the server's own buffer (the system doubles it on Linux): left to
+#: itself it took megabytes, and a viewer on a slow link fell further and further behind the presenter's arm, shown
+#: what the system held (a minute's worth at 128 kbit/s), until it was dropped. What waits in the server instead
+#: is replaced by newer state (viser keeps the newest message of each kind).
+SEND_BUFFER = 32 * 1024
 #: Seconds a page may take to reach a browser once asked for. websockets gives a connection's whole opening, its
 #: answer's sending included, one timeout, and cuts the answer short where it runs out: with 5 s, viser's page
 #: (0.67 MB) reached a browser whole only at about 0.6 Mbit/s or more, and a class opening it at once saw blank
@@ -580,6 +585,8 @@ def gated_serve(gate: Gate) -> Iterator[None]:
                 transport.abort()
             else:  # (websockets' own timeout is the download's: DOWNLOAD_TIMEOUT)
                 self._unasked = self.loop.call_later(OPEN_TIMEOUT, self._abort_unless_asked)
+                with contextlib.suppress(OSError, AttributeError):
+                    transport.get_extra_info("socket").setsockopt(socket.SOL_SOCKET, socket.SO_SNDBUF, SEND_BUFFER)
 
         def _abort_unless_asked(self) -> None:
             if self.request is None:
