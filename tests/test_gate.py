@@ -517,6 +517,7 @@ def test_one_address_cannot_hold_the_servers_sockets_with_half_sent_requests():
         for _ in range(gate_module.TCP_CONNECTIONS_PER_ADDRESS + extra):
             sock = socket.socket()
             sock.bind(("127.0.0.2", 0))
+            sock.settimeout(HANG_TIMEOUT)  # (a hang fails, as the server closes the connection once the page is sent)
             sock.connect(("127.0.0.1", app.port))
             sock.sendall(b"GET / HTTP/1.1\r\nHost: 127.0.0.1\r\n")  # and never the blank line that ends it
             held.append(sock)
