@@ -149,6 +149,7 @@ def test_no_two_3d_labels_overlap_for_any_arm_at_home_or_at_a_singularity(open_p
         title = panel_title(choice, light_app.arm.name)
         if title_cut(page, title):
             failures.append(f"{choice}: the title {title!r} is cut short")
+        wait_for(lambda: page.title() == title, what=f"the tab named {title!r}")  # (until 2026-12-07 "Viser")
         kinds = session.singularities.demo.options if session.singularities.demo is not None else ()
         for kind in (None, *kinds):
             if kind is not None:

@@ -833,6 +833,7 @@ def test_the_presenter_shows_the_class_another_arm(classroom):
         student = await ViserClient(f"http://127.0.0.1:{classroom.port}").connect()
         room = classroom.classroom
         assert "Which arm" not in student.gui  # a viewer does not choose the class's arm
+        await until(lambda: student.tab_title == "UR10 kinematics (course)", what="the tab naming the class's arm")
         await become_presenter(teacher, classroom)
         presenter = member_of(classroom, 0)
         ur10_q = room.state.q.copy()
@@ -851,6 +852,8 @@ def test_the_presenter_shows_the_class_another_arm(classroom):
             assert f"{room.drawing.root}/ik_target" not in client.received.nodes or client is teacher  # the gizmo is the presenter's own
             assert "/arm/link0" in client.received.removed_nodes
         await until(lambda: room.live.title.content == f"**{stanford}**", what="the Stanford arm's live panel")
+        for client in (teacher, student):  # the page's tab names it too
+            await until(lambda: client.received.panel_label == client.tab_title == stanford, what="the Stanford arm's titles")
         # the presenter drags; the class's arm and the live panel follow
         q = np.array([0.4, 1.2, 0.3, 0.2, 0.5, -0.3])
         T = room.state.arm.fk(q)

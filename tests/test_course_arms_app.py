@@ -852,10 +852,11 @@ def test_going_back_to_an_arm_finds_its_pose_target_typed_table_and_display_as_l
         typed = await pick(app, client, CUSTOM)
         await build_table(app, client, "500 0 0 0 R\n400 0 0 0 R", "RR", typed)
 
-        await until(lambda: client.received.panel_label == CUSTOM, what="the title naming the arm")
+        # the panel's title and the tab's name the arm (until 2026-12-07 every tab was named "Viser")
+        await until(lambda: client.received.panel_label == CUSTOM and client.tab_title == CUSTOM, what="the titles naming the arm")
         back = await pick(app, client, UR10)
         assert back.state.last is ur10_left  # the pose, target and branches as left
-        await until(lambda: client.received.panel_label == "UR10 kinematics (course)", what="the UR10's title")
+        await until(lambda: client.received.panel_label == client.tab_title == "UR10 kinematics (course)", what="the UR10's titles")
         await until(lambda: abs(back.joints.sliders[1].value + 70.0) < 1e-6, what="the shoulder slider at −70°")
         back = await pick(app, client, "Stanford arm (RRP + wrist)")
         assert back.state.last is stanford_left

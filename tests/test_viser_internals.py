@@ -11,6 +11,7 @@ import asyncio
 import functools
 import importlib.metadata
 import inspect
+import json
 import pathlib
 import re
 
@@ -148,3 +149,12 @@ def test_a_value_or_a_pose_is_sent_again_the_way_viser_sends_a_changed_one():
         assert sent[1].wxyz == (0.0, 1.0, 0.0, 0.0) and sent[2].position == (1.0, 2.0, 3.0)
     finally:
         server.stop()
+
+
+def test_a_markdowns_title_reaches_the_tab_as_name_tab_relies_on():
+    """``name_tab``: viser's page renders a markdown's HTML as React elements, and React 19 lifts a ``<title>``
+    among them into the page's head (the lecture hall's browser test reads the tab's title)."""
+    client = pathlib.Path(viser.__file__).parent / "client"
+    assert json.loads((client / "package.json").read_text())["dependencies"]["react"].startswith("^19")
+    assert "rehypePlugins = [rehypeRawDom," in (client / "src" / "Markdown.tsx").read_text()
+    assert "<title>Viser</title>" in (client / "index.html").read_text()  # what the tab reads with the panel folded

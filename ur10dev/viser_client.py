@@ -16,6 +16,7 @@ from __future__ import annotations
 import asyncio
 import collections
 import dataclasses
+import html
 import re
 import time
 from typing import Any, NamedTuple
@@ -34,6 +35,7 @@ from .waiting import HANG_TIMEOUT, until
 
 FLANGE_MM = re.compile(r"\*\*([+-]?[0-9]+\.[0-9])\*\*")
 GHOST_FLANGE = re.compile(r"/ghosts/\w+/link6")
+TAB_TITLE = re.compile(r"<title>(.*)</title>")
 #: How a readout a class challenge holds back begins (``ur10teach.view.HELD_BACK``): the tool pose's, while p is asked.
 HELD_BACK_START = "Off while the class challenge"
 #: A browser sends a gizmo's or a panel's updates at most this often (viser throttles them to 50 ms):
@@ -330,6 +332,12 @@ class ViserClient:
     def shown(self, words: str) -> list[str]:
         """The markdown widgets of the panel that contain ``words``."""
         return [text for text in list(self.markdown.values()) if words in text]
+
+    @property
+    def tab_title(self) -> str | None:
+        """The browser tab's title the panel sets (``ur10teach.viser_internals.name_tab``), or None while it sets none."""
+        titles = [TAB_TITLE.fullmatch(text) for text in list(self.markdown.values())]
+        return next((html.unescape(found[1]) for found in titles if found), None)
 
     async def set_gui(self, label: str, value: Any, timeout: float = HANG_TIMEOUT) -> None:
         """What the browser sends when a student changes a widget (or clicks a button: value True).

@@ -15,6 +15,7 @@ from ur10core import Arm
 from ur10core.serial import PRESETS
 
 from ..feedback import put_back
+from ..viser_internals import name_tab
 
 #: Seconds between two rebuilds of one browser's arm (the picker, the DH editor's "Build"), or of
 #: the classroom's: building an arm costs tens of milliseconds, and a flicked picker must not load the server.
@@ -44,6 +45,13 @@ def panel_title(choice: str, preset: str) -> str:
     """The panel's title: the arm it shows (``choice``, an :data:`ARM_CHOICES` label; ``preset``, the UR10's numbers),
     short enough to be read whole in lecture mode on a projector (no ": kinematics" after the arm's name)."""
     return f"UR10 kinematics ({preset})" if choice == UR10 else choice
+
+
+def show_title(gui: viser.GuiApi, title: str, tab: viser.GuiMarkdownHandle | None = None) -> viser.GuiMarkdownHandle:
+    """Name the arm shown in ``gui``'s panel title and its browser tab's (a tab named "Viser" among a student's
+    others was one to hunt for). Returns the tab title's element: pass it back as ``tab`` to rename it."""
+    gui.set_panel_label(title)
+    return name_tab(gui, title, tab)
 
 
 def choice_of(preset: str) -> str:

@@ -25,6 +25,7 @@ from ..features.arm_picker import (
     SWITCH_INTERVAL,
     ArmPicker,
     panel_title,
+    show_title,
 )
 from ..features.branch_labels import OwnLabels
 from ..features.camera import CameraControls, ClassView
@@ -205,6 +206,7 @@ class Classroom:
         self.drawing.render(self.state.last)
         self.drawing.render_panel(self.state.last)
         self.live = self._live_panel(self.choice)
+        self.tab_title = show_title(app.server.gui, panel_title(self.choice, app.arm.name))
         self._last_switch = -math.inf
         self.members: dict[int, Member] = {}
         self.presenter: Member | None = None
@@ -466,7 +468,7 @@ class Classroom:
         self.drawing = self._draw()
         title = CLASS_TYPED_TITLE if label == CUSTOM else label
         self.live = self._live_panel(title, presenter_here=True)
-        app.server.gui.set_panel_label(panel_title(title, app.arm.name))
+        self.tab_title = show_title(app.server.gui, panel_title(title, app.arm.name), self.tab_title)
 
     def stop_presenting(self, member: Member) -> None:
         with self._lock:

@@ -32,6 +32,7 @@ from ..features.arm_picker import (
     ArmPicker,
     choice_of,
     panel_title,
+    show_title,
 )
 from ..features.branch_labels import CAMERA_FOV_DEGREES, CAMERA_LOOK_AT, CAMERA_POSITION
 from ..features.camera import relay_camera_moves
@@ -494,7 +495,7 @@ class TeachingServer:
                                  lecture=lecture, light=light, phone=phone, state=state)
         session.choice, session.typed = choice, typed
         session.show_choices(display)
-        client.gui.set_panel_label(panel_title(choice, self.arm.name))
+        show_title(client.gui, panel_title(choice, self.arm.name))
         with self._sessions_lock:
             if client.client_id in self._last_switch:  # a change of arm: the interval starts before its picker shows
                 self._last_switch[client.client_id] = time.monotonic()

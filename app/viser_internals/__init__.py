@@ -12,7 +12,8 @@
 * :func:`labels_of` — every 3D label of a scene (lecture mode sizes them all);
 * :func:`value_fits` — whether a browser's value converts to its widget's type as viser converts it
   (the gate drops one that would raise inside viser's handler);
-* :func:`send_again` — a widget's value or a node's pose sent to its browser again, though viser holds it unchanged.
+* :func:`send_again` — a widget's value or a node's pose sent to its browser again, though viser holds it unchanged;
+* :func:`name_tab` — the browser tab's title, which viser's page fixes as "Viser".
 
 ``tests/test_viser_internals.py`` checks that each of these is still where and what it was:
 a viser upgrade that moves one fails there, not in a classroom.
@@ -21,6 +22,7 @@ a viser upgrade that moves one fails there, not in a classroom.
 from __future__ import annotations
 
 import asyncio
+import html
 import logging
 from typing import Callable
 
@@ -28,7 +30,7 @@ from viser import _messages as messages
 
 from .shared_frames import SEND_TIMEOUT
 
-__all__ = ["after_broadcast", "connection_of", "labels_of", "messages", "send_again", "value_fits"]
+__all__ = ["after_broadcast", "connection_of", "labels_of", "messages", "name_tab", "send_again", "value_fits"]
 
 log = logging.getLogger(__name__)
 
@@ -37,6 +39,8 @@ BROADCAST_POLL = 0.005
 #: A broadcast window is written on its producer's next step after it leaves the queue: this much
 #: later, what the browser's own queue sends (itself a window of 1/60 s later) follows it.
 WINDOW_WRITTEN = 0.02
+#: The tab title's place in a panel: last, where the few pixels viser gives any element show nothing.
+TAB_TITLE_ORDER = 1e9
 
 
 def connection_of(client):  # noqa: ANN001, ANN201
@@ -114,3 +118,18 @@ def after_broadcast(client, action: Callable[[], None]) -> None:  # noqa: ANN001
             log.exception("an action after the broadcast for browser %s failed", client.client_id)
 
     asyncio.run_coroutine_threadsafe(when_sent(), loop)
+
+
+def name_tab(gui, title: str, element=None):  # noqa: ANN001, ANN201
+    """Name the browser's tab ``title``, from ``gui``'s panel (a ``viser.GuiApi``); viser's page names it "Viser".
+
+    viser renders a markdown's HTML with React 19, which puts a ``<title>`` into the page's head ahead of
+    viser's own while the panel shows it (folded away to its strip, the tab reads "Viser" again).
+    ``tests/test_browser_lecture_hall.py`` reads the tab's title. Returns the element that holds it: pass it
+    back as ``element`` to rename the tab.
+    """
+    text = f"<title>{html.escape(title)}</title>"
+    if element is None:
+        return gui.add_markdown(text, order=TAB_TITLE_ORDER)
+    element.content = text
+    return element
