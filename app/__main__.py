@@ -58,8 +58,8 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
                         help="the arm every browser opens on: the app's UR10 (default) or one of the course's other "
                              "arms; every arm stays in the picker (in shared mode, the arm the class sees first)")
     parser.add_argument("--shared", action="store_true",
-                        help="shared demo mode: everyone watches the presenter's arm; the browser that enters "
-                             "the printed join code presents")
+                        help="shared demo mode: everyone watches the presenter's arm; this computer's own "
+                             "browser presents, or the one that enters the printed join code")
     parser.add_argument("--lecture", action="store_true",
                         help="lecture mode in every browser: type of 20 px and more, thick lines (each browser "
                              "can switch it in its View folder)")
@@ -141,7 +141,8 @@ def main(argv: list[str] | None = None, started=None) -> None:
               "This computer has no network address that students could reach yet: connect it to the class's network "
               "(or start its hotspot). The console and the teacher's screen then show the address.", flush=True)
     if app.classroom is not None:
-        print(f"Join code for the presenter: {app.classroom.code}", flush=True)
+        print(f"Join code for the presenter: {app.classroom.code} (a page at 127.0.0.1 on this computer presents "
+              "without it)", flush=True)
         print(f"Class challenges: {len(args.challenge_list)} (the presenter's Challenge folder); their results are "
               f"saved in {args.results}", flush=True)
     if started is not None:

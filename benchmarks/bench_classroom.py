@@ -183,9 +183,7 @@ async def _drive(app: AppProcess, name: str, seconds: float, idle: tuple) -> dic
     else:
         code = next(JOIN_CODE.search(line).group(1) for line in app.output if JOIN_CODE.search(line))
         presenter = clients[0]
-        await presenter.set_gui("Join code", code)
-        await asyncio.sleep(0.2)
-        await presenter.set_gui("Become presenter", True)
+        await presenter.present(code)
         explorers = clients[1:16] if name == "shared + explorers" else []
         for explorer in explorers:
             await explorer.set_gui("Explore on my own", True)

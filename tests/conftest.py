@@ -88,6 +88,18 @@ def classroom():
     server.stop()
 
 
+@pytest.fixture
+def laptop_classroom():
+    """:func:`classroom`, its browsers standing for students' laptops (loopback is not the server's own computer, whose
+    page would present as it opened): a page presents only once it enters the join code."""
+    from ur10teach.serving.gate import Gate
+    from ur10teach.serving.server import TeachingServer
+
+    server = TeachingServer(port=0, shared=True, gate=Gate(trust_loopback=False))
+    yield server
+    server.stop()
+
+
 @pytest.fixture(autouse=True)
 def collect_garbage_after_server_tests(request):
     """Finalise what a test's servers left behind (asyncio tasks whose errors nobody read) now.

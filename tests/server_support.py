@@ -97,9 +97,9 @@ async def drag_a_little(client: ViserClient, session, steps: int = 10, offset=(0
 
 
 async def become_presenter(client: ViserClient, server: TeachingServer) -> None:
-    """Enter the join code and press "Become presenter", as the teacher does; returns once it has the gizmo."""
-    await client.set_gui("Join code", server.classroom.code)
-    await client.set_gui("Become presenter", True)  # one connection's messages are handled in order
+    """Enter the join code and press "Become presenter", as the teacher does (a page on the teacher's own computer that
+    found nobody presenting presents already); returns once it has the gizmo."""
+    await client.present(server.classroom.code)
     await until(lambda: client.gizmo_owner is not None and server.classroom.presenter is not None
                 and server.classroom.presenter.session is not None and server.classroom.presenter.session.built,
                 what="the presenter's gizmo and panel")

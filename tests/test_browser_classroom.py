@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 
 from ur10teach.serving.classroom import EXPLORER, PRESENTER, VIEWER
+from ur10teach.serving.gate import Gate
 from ur10dev.browser import (
     HANG_TIMEOUT_MS, PHONE, ask_to_present, changed, choose, class_browsers, click, dom_id, settled_canvas, step_slider,
     teacher_and_student, where_changed,
@@ -25,7 +26,7 @@ def test_a_class_follows_the_presenter_and_a_student_explores(tmp_path):
     from ur10teach.features.arm_picker import UR10
     from ur10teach.serving.server import TeachingServer
 
-    app = TeachingServer(port=0, shared=True, light=True)
+    app = TeachingServer(port=0, shared=True, light=True, gate=Gate(trust_loopback=False))  # the projector types the code
     try:
         with teacher_and_student(app) as (teacher, student, teacher_member, student_member):
             # a wrong code is refused in the browser; the right one makes a presenter
@@ -94,7 +95,7 @@ def test_a_phone_watching_the_class_sees_the_arm_above_the_panel():
     the server test of it is ``test_a_page_that_puts_its_camera_back_at_the_start_is_framed_again``."""
     from ur10teach.serving.server import TeachingServer
 
-    app = TeachingServer(port=0, shared=True, light=True)
+    app = TeachingServer(port=0, shared=True, light=True, gate=Gate(trust_loopback=False))  # a student's phone
     try:
         with class_browsers(app, 1, {"width": 390, "height": 664}, PHONE) as ([page], [member]):
             assert member.camera.phone

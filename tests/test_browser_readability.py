@@ -10,6 +10,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from ur10teach.serving.gate import Gate
 from ur10teach.serving.server import TeachingServer
 from ur10teach.style import DANGER_RED, GHOST_OPACITY
 from ur10dev.browser import (
@@ -190,7 +191,7 @@ def test_lecture_mode_for_the_presenter_and_the_class(open_page, playwright):
         assert on_phone.camera.lecture.on  # the switch is on: the 3D labels and the gizmo are lecture-sized
     finally:
         server.stop()
-    server = TeachingServer(port=0, shared=True, lecture=True, light=True)
+    server = TeachingServer(port=0, shared=True, lecture=True, light=True, gate=Gate(trust_loopback=False))  # watching first
     browser = launch(playwright)
     try:
         page = open_app(browser, f"http://127.0.0.1:{server.port}", SMALL_VIEWPORT)

@@ -52,7 +52,7 @@ def test_the_address_students_type_is_on_the_projector(classroom, monkeypatch):
         student = await ViserClient(f"http://127.0.0.1:{port}").connect()
         await until(lambda: teacher.shown(wanted) and student.shown(wanted), what="the address on both screens")
         alone = await ViserClient(f"http://127.0.0.1:{classroom.port}").connect()
-        await until(lambda: "Explore on my own" in alone.gui, what="the loopback classroom's controls")
+        await until(lambda: alone.showing("Stop presenting"), what="the loopback classroom's controls (this machine's: presenting)")
         assert not alone.shown("Students open")
         own_port = independent.port
         teachers_own = await ViserClient(f"http://127.0.0.1:{own_port}").connect()
@@ -178,7 +178,8 @@ def test_the_teachers_screen_shows_each_join_address_as_a_qr_code_that_a_phone_r
             app.stop()
 
 
-def test_viewers_watch_and_the_code_makes_a_presenter(classroom):
+def test_viewers_watch_and_the_code_makes_a_presenter(laptop_classroom):
+    classroom = laptop_classroom
     async def scenario():
         teacher = await ViserClient(f"http://127.0.0.1:{classroom.port}").connect()
         student = await ViserClient(f"http://127.0.0.1:{classroom.port}").connect()
@@ -234,7 +235,7 @@ def test_a_class_that_joins_before_the_presenter_sees_the_arms_branches(first_ar
     """Students join while the teacher sets up the projector. Their live panel listed the class arm's branches, each
     with its ghost's colour, but the shared scene held the arm alone: no ghost, no branch number, no target, until a
     presenter took the arm (a screenshot, 2026-12-07)."""
-    server = TeachingServer(port=0, shared=True, first_arm=first_arm)
+    server = TeachingServer(port=0, shared=True, first_arm=first_arm, gate=Gate(trust_loopback=False))  # a laptop
 
     async def scenario():
         student = await ViserClient(f"http://127.0.0.1:{server.port}").connect()
@@ -468,10 +469,11 @@ def test_a_viewers_light_view_lights_its_own_browser_and_draws_its_own_arm(class
 
 
 @pytest.mark.parametrize("shown", ["cloud", "reach map"])
-def test_a_cloud_or_map_framed_as_its_arm_goes_leaves_the_browsers_camera(classroom, monkeypatch, shown):
+def test_a_cloud_or_map_framed_as_its_arm_goes_leaves_the_browsers_camera(laptop_classroom, monkeypatch, shown):
     """A classroom's camera outlives an explorer's arm. A cloud (or branch-count map) made as the arm went was framed
     after its view had taken it out of the camera's framing: the class's arm was framed with it from then on (seen
     once in CI, 2026-12-05)."""
+    classroom = laptop_classroom
     from ur10teach.features.reach_map import ReachMapView
     from ur10teach.features.workspace import WorkspaceView
 
@@ -520,7 +522,8 @@ def test_the_live_panel_shows_det_js_gauges_as_the_presenter_shows_the_overlay(c
     asyncio.run(scenario())
 
 
-def test_handing_over_and_leaving(classroom):
+def test_handing_over_and_leaving(laptop_classroom):
+    classroom = laptop_classroom
     async def scenario():
         first = await ViserClient(f"http://127.0.0.1:{classroom.port}").connect()
         second = await ViserClient(f"http://127.0.0.1:{classroom.port}").connect()
@@ -595,6 +598,51 @@ def test_a_presenter_back_from_their_computer_presents_again_unless_the_role_was
     app.stop()
 
 
+def test_the_teachers_own_screen_presents_without_the_code_when_nobody_presents():
+    """The page the app opens on the teacher's computer watched, with no presenter, until the teacher found the
+    code in the console and typed it there (until 2026-12-07). It presents; a student's laptop still needs the code,
+    and a projector that has just dropped out keeps its claim on the role."""
+
+    class ThisMachine(Gate):  # 127.0.0.1 is the teacher's computer; other loopback addresses stand for laptops
+        def trusted(self, address: str) -> bool:
+            return address == "127.0.0.1"
+
+    app = TeachingServer(port=0, shared=True, gate=ThisMachine())
+    url, room = f"http://127.0.0.1:{app.port}", app.classroom
+
+    async def scenario():
+        student = await ViserClient(url, local_address="127.0.0.3").connect()
+        await until(lambda: "Become presenter" in student.gui, what="the student's classroom folder")
+        assert room.presenter is None
+        teacher = await ViserClient(url, local_address="127.0.0.1").connect()
+        await until(lambda: "Stop presenting" in teacher.gui and teacher.gizmo_owner is not None, what="the teacher presenting")
+        assert room.presenter is member_of(app, 1) and room.claims == 0  # no code typed
+        second_tab = await ViserClient(url, local_address="127.0.0.1").connect()
+        assert member_of(app, 2).role == VIEWER and room.presenter is member_of(app, 1)  # the role is taken
+        await second_tab.close()
+        await teacher.close()
+        await until(lambda: room.presenter is None, what="the teacher's tab gone")
+        third_tab = await ViserClient(url, local_address="127.0.0.1").connect()
+        await until(lambda: "Stop presenting" in third_tab.gui, what="the teacher's next tab presenting")
+        await become_presenter(student, app)  # the code hands the role over, as before
+        assert member_of(app, 1).role == VIEWER
+        await student.close()
+        await until(lambda: room.presenter is None, what="the student gone")
+        waiting = await ViserClient(url, local_address="127.0.0.1").connect()  # the student's laptop may come back
+        await until(lambda: "Become presenter" in waiting.gui, what="the waiting tab's classroom folder")
+        assert room.presenter is None
+        app.clock = lambda: time.monotonic() + RETURN_WINDOW + 1.0
+        late = await ViserClient(url, local_address="127.0.0.1").connect()
+        await until(lambda: "Stop presenting" in late.gui, what="the teacher's screen presenting after the window")
+        for client in (third_tab, waiting, late):
+            await client.close()
+
+    try:
+        asyncio.run(scenario())
+    finally:
+        app.stop()
+
+
 def test_a_projector_back_before_the_server_noticed_it_had_gone_presents_again():
     """A page whose websocket dropped retries every second, and is often back before the server notices its old
     connection has died (viser's websockets ping every 20 s and wait 20 s more): the projector came back a viewer, the
@@ -617,10 +665,11 @@ def test_a_projector_back_before_the_server_noticed_it_had_gone_presents_again()
     app.stop()
 
 
-def test_a_claim_while_the_presenters_controls_are_drawn_leaves_them_one_folder(classroom, monkeypatch):
+def test_a_claim_while_the_presenters_controls_are_drawn_leaves_them_one_folder(laptop_classroom, monkeypatch):
     """A second browser took the presenter's role over while the first one's controls were still being drawn
     (a classroom test's warning, 2026-12-03): both drew the first browser's "Classroom" folder at once, which
     left it two, and the presenter's "Challenge" folder in a viewer's panel."""
+    classroom = laptop_classroom
     room = classroom.classroom
     drawing_desk, go, handed_over = threading.Event(), threading.Event(), threading.Event()
     desk, leave_role = room.challenges.desk, room._leave_role
@@ -775,13 +824,16 @@ def test_the_machine_the_server_runs_on_is_never_locked_out(classroom):
 
     async def scenario():
         url = f"http://127.0.0.1:{classroom.port}"
+        first = await ViserClient(url).connect()  # presents: nobody did
+        await until(lambda: first.showing("Stop presenting"), what="the teacher's first tab presenting")
         tab = await ViserClient(url).connect()
         for _ in range(3 * MAX_WRONG_CODES):
             await guess(classroom, tab, "WRONG")
         assert not classroom.classroom.guesses
         await guess(classroom, tab, classroom.classroom.code)
-        await until(lambda: classroom.classroom.presenter is not None, what="the teacher to present")
+        await until(lambda: classroom.classroom.presenter is member_of(classroom, 1), what="the teacher's other tab to present")
         await tab.close()
+        await first.close()
 
     asyncio.run(scenario())
 

@@ -1431,10 +1431,11 @@ def test_a_students_orbit_stays_when_viser_draws_fewer_pixels_and_a_new_shape_of
 def test_a_teacher_can_open_every_browser_on_another_arm(first_arm, shared):
     """``--arm``: a lecture on the SCARA opens every browser on it (in shared mode, the class sees it first and a
     student explores it), where each student had to find it in the picker; the UR10 stays a pick away."""
+    from ur10teach.serving.gate import Gate
     from ur10teach.serving.server import TeachingServer
 
     label = next(choice for choice, name in ARM_CHOICES.items() if name == first_arm)
-    app = TeachingServer(port=0, shared=shared, first_arm=first_arm)
+    app = TeachingServer(port=0, shared=shared, first_arm=first_arm, gate=Gate(trust_loopback=False))  # a student's laptop
 
     async def scenario():
         client = await ViserClient(url(app)).connect()

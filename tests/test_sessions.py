@@ -51,8 +51,9 @@ def test_a_typed_target_moves_the_gizmo_and_the_red_halo_there(app):
     asyncio.run(scenario())
 
 
-def test_explore_and_back_leaves_nothing_behind(classroom):
+def test_explore_and_back_leaves_nothing_behind(laptop_classroom):
     """Every "Explore on my own" → "Back" left a dead Workspace folder and kept the closed session alive."""
+    classroom = laptop_classroom
 
     async def scenario():
         student = await ViserClient(url(classroom)).connect()

@@ -478,7 +478,8 @@ def class_browsers(app, count: int = 2, viewport: dict = SMALL_VIEWPORT, device:
     :data:`PHONE`'s, say).
 
     Yields (pages, members) in the order they joined, the members being ``ur10teach.serving.classroom``'s,
-    all still watching; closes the browsers after, and fails if any page asked anything of another host.
+    all still watching (on a server whose gate trusts loopback the first would present: the teacher's own
+    computer's); closes the browsers after, and fails if any page asked anything of another host.
     """
     from playwright.sync_api import sync_playwright
 
@@ -506,7 +507,14 @@ def teacher_and_student(app) -> Iterator[tuple]:
 
 
 def ask_to_present(page, member, code: str, done, what: str) -> None:
-    """Type the join code and press "Become presenter", as a teacher does, until ``done()`` holds."""
+    """Type the join code and press "Become presenter", as a teacher does, until ``done()`` holds; a page on the
+    server's own computer that found nobody presenting presents already, and only waits for it."""
+    from ur10teach.serving.classroom import PRESENTER
+
+    wait_for(lambda: member.role == PRESENTER or member.join_code is not None, what="the page's role")
+    if member.role == PRESENTER:
+        wait_for(done, what=what)
+        return
     type_text(page, member.join_code, code)
     click(page, page.get_by_role("button", name="Become presenter"), done, what)
 

@@ -339,6 +339,19 @@ class ViserClient:
         titles = [TAB_TITLE.fullmatch(text) for text in list(self.markdown.values())]
         return next((html.unescape(found[1]) for found in titles if found), None)
 
+    def showing(self, label: str) -> bool:
+        """Whether the panel shows a widget labelled ``label`` now (not one since removed)."""
+        entry = self.gui.get(label)
+        return entry is not None and entry["uuid"] not in self.received.removed_gui
+
+    async def present(self, code: str) -> None:
+        """Take the classroom's presenter role as the teacher does: enter the join code and press "Become presenter",
+        unless this page presents already (one on the server's own computer that found nobody presenting)."""
+        await until(lambda: self.showing("Stop presenting") or self.showing("Become presenter"), what="the page's role")
+        if not self.showing("Stop presenting"):
+            await self.set_gui("Join code", code)
+            await self.set_gui("Become presenter", True)  # one connection's messages are handled in order
+
     async def set_gui(self, label: str, value: Any, timeout: float = HANG_TIMEOUT) -> None:
         """What the browser sends when a student changes a widget (or clicks a button: value True).
 

@@ -130,7 +130,7 @@ class LivePanel:
     def _status(self) -> str:
         if self.presenter_here:
             return "The presenter is moving this arm; you can turn the view as you like."
-        return "No presenter yet: the teacher enters the join code to take the arm."
+        return "No presenter yet: the teacher takes the arm from their own computer, or with the join code."
 
     def remove(self) -> None:
         self.closed = True
@@ -260,6 +260,9 @@ class Classroom:
                     and self.app.clock() - left[1] <= RETURN_WINDOW)
             if back:  # once: a second tab from there is a viewer
                 self.presenter_left = None
+            # the teacher's own screen, where the console shows the code anyway, takes a role nobody has or awaits
+            own_screen = (self.presenter is None and self.app.gate.trusted(member.address) and (
+                left is None or self.app.clock() - left[1] > RETURN_WINDOW))
         # one camera per browser, whatever its role: it frames the arm this browser is watching
         member.camera = CameraControls(
             client, lambda: self._watched(member),
@@ -272,6 +275,8 @@ class Classroom:
         if back:
             self._present(member)
             notify(client, "Welcome back", "You are presenting again.", color="blue")
+        elif own_screen:
+            self._present(member)
         self._draw_controls(member)
         if self.challenges.running:
             self.challenges.enlist(member)

@@ -40,7 +40,7 @@ BROADCAST_POLL = 0.005
 #: later, what the browser's own queue sends (itself a window of 1/60 s later) follows it.
 WINDOW_WRITTEN = 0.02
 #: The tab title's place in a panel: last, where the few pixels viser gives any element show nothing.
-TAB_TITLE_ORDER = 1e9
+TAB_TITLE_ORDER = 1e12
 
 
 def connection_of(client):  # noqa: ANN001, ANN201
