@@ -255,14 +255,13 @@ class Classroom:
         member = Member(client)
         with self._lock:
             self.members[client.client_id] = member
-            left = self.presenter_left
-            back = (left is not None and self.presenter is None and left[0] == member.browser
-                    and self.app.clock() - left[1] <= RETURN_WINDOW)
+            left, free = self.presenter_left, self.presenter is None
+            due_back = left is not None and self.app.clock() - left[1] <= RETURN_WINDOW  # a presenter's page may return
+            back = free and due_back and left[0] == member.browser
             if back:  # once: a second tab from there is a viewer
                 self.presenter_left = None
             # the teacher's own screen, where the console shows the code anyway, takes a role nobody has or awaits
-            own_screen = (self.presenter is None and self.app.gate.trusted(member.address) and (
-                left is None or self.app.clock() - left[1] > RETURN_WINDOW))
+            own_screen = free and not due_back and self.app.gate.trusted(member.address)
         # one camera per browser, whatever its role: it frames the arm this browser is watching
         member.camera = CameraControls(
             client, lambda: self._watched(member),
