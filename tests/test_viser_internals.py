@@ -16,6 +16,7 @@ import pathlib
 import re
 
 import numpy as np
+import pytest
 import viser
 from viser import _assignable_props_api
 from viser.infra import _infra
@@ -33,8 +34,10 @@ def test_viser_is_the_version_pinned():
 
 
 def test_nothing_else_in_the_app_reaches_into_viser():
-    """Only ``app/viser_internals/`` imports viser's private modules or reads a handle's private parts."""
-    private = re.compile(r"from viser(\.infra)? import _|viser\.infra\._|\._impl\b|\._impl_aux\b|\._viser_server\b|_queue_scene_message")
+    """Only ``app/viser_internals/`` imports viser's private modules, reads a handle's private parts or swaps the
+    call that starts viser's websocket server."""
+    private = re.compile(r"from viser(\.infra)? import _|viser\.infra\._|\._impl\b|\._impl_aux\b|\._viser_server\b|_queue_scene_message"
+                         r"|server\.serve = ")
     offenders = [str(path.relative_to(ROOT)) for path in (ROOT / "app").rglob("*.py")
                  if "viser_internals" not in path.parts and private.search(path.read_text())]
     assert not offenders, offenders
@@ -52,6 +55,29 @@ def test_a_client_connection_is_found_where_it_was():
         assert isinstance(server._websock_server._live_connections, dict)
     finally:
         server.stop()
+
+
+def test_a_starting_server_makes_its_websocket_server_through_serving_through():
+    """``serving_through``: viser starts its websocket server with one call of ``websockets.asyncio.server.serve``,
+    handing it its handler, its HTTP request handler and its 50 MB limit, and reads each connection with ``recv``
+    (what the gate's connection provides). Nothing started, it fails loudly: the gate would not apply."""
+    handed = []
+
+    def adapt(handler, process_request, keywords):
+        handed.append((handler, process_request, dict(keywords)))
+        return handler, process_request, {**keywords, "max_size": 1234}
+
+    with viser_internals.serving_through(adapt):
+        server = viser.ViserServer(port=0, verbose=False)
+    try:
+        [(handler, process_request, keywords)] = handed
+        assert callable(handler) and callable(process_request) and keywords["max_size"] == 50 * 1024 * 1024
+        assert "await websocket.recv()" in inspect.getsource(_infra)
+    finally:
+        server.stop()
+    with pytest.raises(RuntimeError, match="the gate would not apply"):
+        with viser_internals.serving_through(adapt):
+            pass  # nothing started a server
 
 
 def test_the_broadcast_queue_is_where_after_broadcast_reads_it():

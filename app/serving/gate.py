@@ -26,6 +26,7 @@ import websockets.asyncio.server
 
 from ..viser_internals import connection_of as _connection_of
 from ..viser_internals import messages as viser_messages
+from ..viser_internals import serving_through
 
 log = logging.getLogger(__name__)
 
@@ -555,22 +556,14 @@ class GatedConnection:
         self._reader.cancel()
 
 
-_STARTING = threading.Lock()
-
-
 @contextlib.contextmanager
 def gated_serve(gate: Gate) -> Iterator[None]:
     """While active, a viser server that starts serves through ``gate``.
 
-    viser hands ``websockets.asyncio.server.serve`` its handler, a 50 MB message limit
-    and its HTTP handler; for the moment the server starts (``viser.ViserServer()``
-    returns once it is listening) the call gets the gate's limit and timeouts, a request check in
-    front of viser's HTTP handler (and the browser's cookie on its page), and a handler
-    that sees the connection through :class:`GatedConnection`. ``tests/test_gate.py``
-    fails if viser stops calling it so.
+    Its websocket server (``viser_internals.serving_through``) gets the gate's limit and timeouts, a request
+    check in front of viser's HTTP handler (and the browser's cookie on its page), TCP connections counted by
+    address, and a handler that sees each connection through :class:`GatedConnection`.
     """
-    _STARTING.acquire()  # one server starting at a time: the patch is the whole process's
-    original = websockets.asyncio.server.serve
 
     class CountedConnection(websockets.asyncio.server.ServerConnection):
         """A TCP connection counted against its address from its first byte, handshake or not, and closed if its
@@ -599,39 +592,26 @@ def gated_serve(gate: Gate) -> Iterator[None]:
                 self._counted = False
             super().connection_lost(exc)
 
-    class serve_through_gate(original):  # type: ignore[misc, valid-type]
-        def __init__(self, handler, *args, process_request=None, **kwargs) -> None:  # noqa: ANN001
-            async def gated_handler(connection) -> None:  # noqa: ANN001
-                address = _address(connection)
-                gated = GatedConnection(connection, gate, gate.opened(address))
-                try:
-                    await handler(gated)
-                finally:
-                    gated.close_reader()
-                    gate.closed(address)
+    def through_gate(handler, process_request, keywords: dict):  # noqa: ANN001, ANN202
+        async def gated_handler(connection) -> None:  # noqa: ANN001
+            address = _address(connection)
+            gated = GatedConnection(connection, gate, gate.opened(address))
+            try:
+                await handler(gated)
+            finally:
+                gated.close_reader()
+                gate.closed(address)
 
-            def check_then_serve(connection, request):  # noqa: ANN001
-                refusal = gate.check_request(connection, request)
-                if refusal is not None:
-                    return refusal
-                response = process_request(connection, request) if process_request is not None else None
-                give_browser_cookie(request, response)
-                return response
+        def check_then_serve(connection, request):  # noqa: ANN001
+            refusal = gate.check_request(connection, request)
+            if refusal is not None:
+                return refusal
+            response = process_request(connection, request) if process_request is not None else None
+            give_browser_cookie(request, response)
+            return response
 
-            kwargs["max_size"] = MAX_MESSAGE_BYTES
-            kwargs["open_timeout"] = DOWNLOAD_TIMEOUT
-            kwargs["ping_timeout"] = PONG_TIMEOUT
-            kwargs["create_connection"] = CountedConnection
-            serve_through_gate.used = True
-            super().__init__(gated_handler, *args, process_request=check_then_serve, **kwargs)
+        return gated_handler, check_then_serve, {**keywords, "max_size": MAX_MESSAGE_BYTES, "open_timeout": DOWNLOAD_TIMEOUT,
+                                                 "ping_timeout": PONG_TIMEOUT, "create_connection": CountedConnection}
 
-    serve_through_gate.used = False
-    websockets.asyncio.server.serve = serve_through_gate
-    try:
+    with serving_through(through_gate):
         yield
-    finally:
-        websockets.asyncio.server.serve = original
-        _STARTING.release()
-        if not serve_through_gate.used:
-            raise RuntimeError("viser did not start its websocket server through websockets.asyncio.server.serve: "
-                               "the gate would not apply (has viser changed?)")

@@ -13,7 +13,9 @@
 * :func:`value_fits` — whether a browser's value converts to its widget's type as viser converts it
   (the gate drops one that would raise inside viser's handler);
 * :func:`send_again` — a widget's value or a node's pose sent to its browser again, though viser holds it unchanged;
-* :func:`name_tab` — the browser tab's title, which viser's page fixes as "Viser".
+* :func:`name_tab` — the browser tab's title, which viser's page fixes as "Viser";
+* :func:`serving_through` — the websocket server viser starts, made with the gate's handler, request check
+  and limits (the gate's connection stands in for websockets' own: viser reads it with ``recv``).
 
 ``tests/test_viser_internals.py`` checks that each of these is still where and what it was:
 a viser upgrade that moves one fails there, not in a classroom.
@@ -22,15 +24,20 @@ a viser upgrade that moves one fails there, not in a classroom.
 from __future__ import annotations
 
 import asyncio
+import contextlib
 import html
 import logging
-from typing import Callable
+import threading
+from typing import Any, Callable, Iterator
+
+import websockets.asyncio.server
 
 from viser import _messages as messages
 
 from .shared_frames import SEND_TIMEOUT
 
-__all__ = ["after_broadcast", "connection_of", "labels_of", "messages", "name_tab", "send_again", "value_fits"]
+__all__ = ["after_broadcast", "connection_of", "labels_of", "messages", "name_tab", "send_again", "serving_through",
+           "value_fits"]
 
 log = logging.getLogger(__name__)
 
@@ -133,3 +140,41 @@ def name_tab(gui, title: str, element=None):  # noqa: ANN001, ANN201
         return gui.add_markdown(text, order=TAB_TITLE_ORDER)
     element.content = text
     return element
+
+
+#: One viser server starting at a time: :func:`serving_through` swaps a name of the whole process's.
+_STARTING = threading.Lock()
+
+#: What :func:`serving_through` is handed: viser's handler, its HTTP request handler and the other keywords it
+#: passes ``websockets.asyncio.server.serve``, to return as they are to be passed.
+Adapt = Callable[[Callable, Any, dict], tuple[Callable, Any, dict]]
+
+
+@contextlib.contextmanager
+def serving_through(adapt: Adapt) -> Iterator[None]:
+    """While active, a viser server that starts makes its websocket server with what ``adapt(handler,
+    process_request, keywords)`` returns in place of its own handler, HTTP request handler and keywords.
+
+    viser calls ``websockets.asyncio.server.serve`` once, as it starts (``viser.ViserServer()`` returns once
+    it is listening), and reads each connection its handler is given with ``recv``. Raises RuntimeError as it
+    ends if no server called it: what ``adapt`` puts in would not apply (has viser changed?).
+    """
+    with _STARTING:
+        original = websockets.asyncio.server.serve
+        used = False
+
+        class adapted_serve(original):  # type: ignore[misc, valid-type]
+            def __init__(self, handler, *args, process_request=None, **kwargs) -> None:  # noqa: ANN001
+                nonlocal used
+                used = True
+                handler, process_request, kwargs = adapt(handler, process_request, kwargs)
+                super().__init__(handler, *args, process_request=process_request, **kwargs)
+
+        websockets.asyncio.server.serve = adapted_serve
+        try:
+            yield
+        finally:
+            websockets.asyncio.server.serve = original
+    if not used:
+        raise RuntimeError("viser did not start its websocket server through websockets.asyncio.server.serve: "
+                           "the gate would not apply (has viser changed?)")
