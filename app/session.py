@@ -149,7 +149,7 @@ class ArmSession:
         self.lessons = LESSONS[arm.name](scene, gui, self) if arm.name in LESSONS else ()
         # its camera's moves are handed to it (``camera.relay_camera_moves``): viser would keep a callback of its own
         self.camera = (CameraControls(client, lambda: drawn.framed(self.state.last), self.guard, lecture,
-                                      body_radius=drawn.body_radius, up=arm.up, follow=False, light=light,
+                                      arm=arm, body_radius=drawn.body_radius, follow=False, light=light,
                                       phone=phone)
                        if own_camera else None)
         #: the scene whose 3D labels this browser's lecture mode sizes: its own (a shared one follows the server's)
@@ -334,7 +334,7 @@ class ArmSession:
         """Use this browser's camera (a classroom's member has one for all its sessions): frame with it,
         and place the branch numbers of this session's own drawing for it as it moves."""
         self.camera = camera
-        camera.show_arm(self.drawing.body_radius, self.arm.up)
+        camera.show_arm(self.drawing.body_radius, self.arm)
         if self._label_scene is not None:
             camera.on_moved.append(self._place_numbers)
 

@@ -267,6 +267,33 @@ def test_each_view_is_named_for_the_plane_it_shows_in_the_arms_own_axes(app, lab
     asyncio.run(scenario())
 
 
+@pytest.mark.parametrize("label", EVERY_ARM)
+def test_the_course_figure_sees_an_arm_in_one_plane_from_high_above_it(app, label):
+    """From the course figure's three-quarter view, 18° above the floor, the planar elbow, flat in it, was seen
+    nearly edge-on: its joints spread 66 px high by 499 px wide on a class's smallest canvas. An arm that moves in
+    one horizontal plane is now seen from 45° above it, in the browser's own camera and in the view a class's
+    labels are placed for; every other arm keeps the figure's view."""
+    from ur10teach.features.camera import ClassView
+
+    def elevation(position, look_at) -> float:  # the view's angle above the floor, in degrees
+        along = np.asarray(position, dtype=float) - np.asarray(look_at, dtype=float)
+        return math.degrees(math.asin(along[2] / np.linalg.norm(along)))
+
+    async def scenario():
+        client = await ViserClient(url(app)).connect()
+        session = await pick(app, client, label)
+        camera = session.camera
+        await until(lambda: camera._framed_at is not None, what="the arm framed")
+        seen, shared = elevation(*camera._framed_at), ClassView(session.drawing, session.state)()
+        if session.arm.planar:
+            assert seen > 40.0 and elevation(shared.position, shared.look_at) > 40.0
+        else:
+            assert 15.0 < seen < 25.0, seen
+        await client.close()
+
+    asyncio.run(scenario())
+
+
 #: The IK target's longest arrow on the smallest canvas a class looks at, at the arm's home pose (px): a student
 #: grabs it with a mouse, and a class sees it from the back of the room.
 GIZMO_MIN_PX = 45
@@ -276,14 +303,14 @@ GIZMO_MIN_PX = 45
 def test_every_arms_gizmo_is_big_enough_to_grab_on_the_canvas(app, label):
     """Sized by the arm's reach, the desktop arm's gizmo was 20–25 px long (the others' 50–100): its camera frames
     the reach on every side of the shoulder, about twice what frames another arm. So was its force's handle."""
-    from ur10teach.features.camera import arm_points, framed_view
+    from ur10teach.features.camera import arm_points, framed_view, views_for
     from ur10teach.features.statics import HANDLE_SCALE
 
     async def scenario():
         client = await ViserClient(url(app)).connect()
         session = await pick(app, client, label)
         drawing, snapshot, gizmo = session.drawing, session.state.last, session.ik_target.gizmo
-        view = framed_view(arm_points(drawing.framed(snapshot), drawing.body_radius))
+        view = framed_view(arm_points(drawing.framed(snapshot), drawing.body_radius), views_for(session.arm)["Course figure"])
         arrows = np.asarray(gizmo.position) + gizmo.scale * np.eye(4)[:, :3] * [[1], [1], [1], [0]]  # tips, then the centre
         pixels, _ = view.to_screen(arrows @ drawing.world[:3, :3].T + drawing.world[:3, 3])
         longest = np.linalg.norm(pixels[:3] - pixels[3], axis=1).max()

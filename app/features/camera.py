@@ -19,6 +19,7 @@ from typing import Callable
 import numpy as np
 import viser
 
+from ur10core import Arm
 from ur10core.orientation import from_frame
 
 from ..feedback import chosen, notify
@@ -43,14 +44,27 @@ Y_UP_NAMES = {"Front (x–z plane)": "Front (x–y plane)", "Top (x–y plane)":
 RENAMED = {**Y_UP_NAMES, **{y_up: z_up for z_up, y_up in Y_UP_NAMES.items()}}
 
 
-def views_for(up) -> dict[str, tuple[float, float, float]]:
-    """:data:`VIEWS` named for an arm whose vertical is ``up`` (``Arm.up``) in its own frame.
+#: The course figure's view of an arm that moves in one horizontal plane (``Arm.planar``): 45° above it. From the
+#: three-quarter view, 18° above its plane, a student saw its links nearly edge-on; from straight above, its joints'
+#: z axes, which its DH frames are about, point at the camera.
+PLANAR_FIGURE = (1.2, -1.2, 1.7)
 
-    >>> list(views_for((0.0, 1.0, 0.0)))[1:]
+
+def views_for(arm) -> dict[str, tuple[float, float, float]]:
+    """:data:`VIEWS` for ``arm``: named in its own axes (its vertical is ``Arm.up``), and the course figure
+    seen from higher up for an arm that moves in one horizontal plane (:data:`PLANAR_FIGURE`).
+
+    >>> from ur10core import Arm
+    >>> list(views_for(Arm.preset("three_dof")))[1:]
     ['Front (x–y plane)', 'Side (y–z plane)', 'Top (x–z plane)']
+    >>> views_for(Arm.preset("planar_elbow"))["Course figure"] == PLANAR_FIGURE
+    True
     """
-    names = Y_UP_NAMES if tuple(up) == (0.0, 1.0, 0.0) else {}
-    return {names.get(name, name): direction for name, direction in VIEWS.items()}
+    names = Y_UP_NAMES if tuple(arm.up) == (0.0, 1.0, 0.0) else {}
+    views = {names.get(name, name): direction for name, direction in VIEWS.items()}
+    if arm.planar:
+        views["Course figure"] = PLANAR_FIGURE
+    return views
 
 
 #: Room kept around each joint (the link bodies are up to ~9 cm thick) and at the canvas edges.
@@ -143,7 +157,8 @@ class ClassView:
         snapshot, view = self._for
         if snapshot is not self._state.last:
             snapshot = self._state.last
-            view = framed_view(arm_points(self._drawing.framed(snapshot), self._drawing.body_radius))
+            view = framed_view(arm_points(self._drawing.framed(snapshot), self._drawing.body_radius),
+                               views_for(self._state.arm)["Course figure"])
             self._for = (snapshot, view)
         return view
 
@@ -186,11 +201,12 @@ class CameraControls(View):
     lecture, light : bool
         Start in lecture mode (:mod:`ur10teach.features.lecture`) or in the light view
         (:mod:`ur10teach.features.light_view`), whose switches are in this folder too.
+    arm : Arm
+        The arm shown first: the views are named in its axes, and look at it as it is best seen (:func:`views_for`,
+        :meth:`show_arm`).
     body_radius : float
         Room kept around each joint (m): the UR10's link bodies by default; a course arm's
         rods and gizmo scale with its reach.
-    up : tuple
-        The arm's vertical in its own frame (``Arm.up``): the views are named in its axes (:meth:`show_arm`).
     follow : bool
         Follow the browser's camera itself, for the browser's whole visit (a classroom's member has one for all
         its arms); otherwise it is handed the moves (:func:`relay_camera_moves`).
@@ -200,11 +216,11 @@ class CameraControls(View):
     """
 
     def __init__(self, client: viser.ClientHandle, snapshot: Callable[[], Snapshot],
-                 guard: Callable[[Callable], Callable], lecture: bool = False, body_radius: float = BODY_RADIUS,
-                 up=(0.0, 0.0, 1.0), follow: bool = True, light: bool = False, phone: bool = False) -> None:
+                 guard: Callable[[Callable], Callable], lecture: bool = False, *, arm: Arm,
+                 body_radius: float = BODY_RADIUS, follow: bool = True, light: bool = False, phone: bool = False) -> None:
         self._client = client
         self.phone = phone
-        self._views = views_for(up)  #: the "Look from" choices, named in the axes of the arm shown
+        self._views = views_for(arm)  #: the "Look from" choices, for the arm shown
         self._view = "Course figure"  #: the view last picked in "Look from", which :meth:`frame` looks from
         self.body_radius = body_radius  #: the arm shown's (:meth:`show_arm`)
         self._snapshot = snapshot
@@ -290,13 +306,14 @@ class CameraControls(View):
         browser sent before its callback has refused it: a student's set-up that framed their camera then failed.)"""
         self.look_from(self._views.get(self._view, VIEWS["Course figure"]))
 
-    def show_arm(self, body_radius: float, up) -> None:
+    def show_arm(self, body_radius: float, arm: Arm) -> None:
         """Look at another arm (a classroom's camera outlives its arms): frame it with ``body_radius`` of room about
-        each joint from now on, and name the views in its axes, its vertical being ``up`` (the view chosen stays
-        chosen; a renamed one is framed again)."""
+        each joint from now on, and take its views (:func:`views_for`: the view chosen stays chosen; a renamed one
+        is framed again)."""
         self.body_radius = body_radius
-        views = views_for(up)
+        views = views_for(arm)
         if tuple(views) == tuple(self._views):
+            self._views = views  # (the same names: the course figure may look from elsewhere)
             return
         names = list(self._views)
         view = list(views)[names.index(self._view) if self._view in names else 0]

@@ -20,7 +20,7 @@ from ..feedback import Beside, chosen, within
 from ..serving.workers import HEAVY, FoldedRuns
 from ..style import COLOUR_IS_CONTENT, UR10_SIZE, hex_color
 from ..view import Session, View
-from .camera import VIEWS
+from .camera import views_for
 
 SAMPLE_COUNTS = {"10 k": 10_000, "50 k": 50_000, "100 k": 100_000, "200 k": 200_000, "500 k": 500_000, "1 M": 1_000_000}
 DEFAULT_COUNT = "200 k"
@@ -408,7 +408,7 @@ class WorkspaceView(View):
             camera.frame()
             return
         if section == HULL:  # the whole of it in view, from the course's three-quarter angle
-            direction = VIEWS["Course figure"]
+            direction = views_for(self._session.arm)["Course figure"]
         elif section == SECTIONS[1]:
             direction = -self._plane_normal()
         elif section == SECTIONS[3]:

@@ -266,7 +266,7 @@ class Classroom:
         member.camera = CameraControls(
             client, lambda: self._watched(member),
             lambda handler: guard(client, handler, is_closed=lambda: member.closed), lecture=self.app.lecture,
-            body_radius=self._body_radius(), up=self.state.arm.up, light=self.app.light, phone=on_a_phone(client),
+            arm=self.state.arm, body_radius=self._body_radius(), light=self.app.light, phone=on_a_phone(client),
         )
         member.camera.on_moved.append(lambda: self.challenges.face_goal(member))
         member.camera.on_moved.append(lambda: self._fit_labels(member))
@@ -455,7 +455,7 @@ class Classroom:
             if other.role == EXPLORER:
                 self._hide_class_arm(other)
             elif other.camera is not None:  # the presenter and the viewers look at the new arm
-                other.camera.show_arm(self._body_radius(), self.state.arm.up)
+                other.camera.show_arm(self._body_radius(), self.state.arm)
                 other.camera.frame()
         self.challenges.class_arm_shown()  # (redraws the live panel)
         if failed is not None:  # a challenge must not start on the arm the class had
@@ -554,7 +554,7 @@ class Classroom:
                 member.goal = None
                 self.challenges.show_goal(member)
         if member.camera is not None:  # framed with the class's arm's room again, its views named in its axes
-            member.camera.show_arm(self._body_radius(), self.state.arm.up)
+            member.camera.show_arm(self._body_radius(), self.state.arm)
         member.role = VIEWER
         with member.labels_lock:
             member.labels_held = False  # (its own arm's labels are gone)
