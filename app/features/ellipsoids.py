@@ -5,7 +5,7 @@ norm that keep the tool's orientation; the force ellipsoid (vermilion) the force
 hold with torques of unit norm. Same axes, reciprocal lengths: near a singularity that costs
 the flange a direction of travel, the first flattens and the second stretches along it.
 Both follow the drag, each named in 3D; their axis lengths and the scales they are drawn at are in
-the panel, and the force ellipsoid is drawn smaller where it would leave the screen.
+the panel, the force ellipsoid's scaled with the arm's reach, and smaller where it would leave the screen.
 """
 
 from __future__ import annotations
@@ -19,12 +19,14 @@ from ur10core.orientation import quaternion
 
 from ..feedback import chosen
 from ..state import Snapshot
-from ..style import joint_units, number, swatch, turning_and_sliding
+from ..style import UR10_SIZE, joint_units, number, swatch, turning_and_sliding
 from ..view import HELD_BACK, Session, View
 from ..viser_internals.fast_updates import set_orientations, set_positions, set_scales
 
 VELOCITY_COLOR, FORCE_COLOR = (86, 180, 233), (213, 94, 0)
-#: Drawn size: metres per unit of σ (m/s per rad/s) and, at most, of 1/σ (N per N·m).
+#: Drawn size: metres per unit of σ (m/s per rad/s) and, at most, of 1/σ (N per N·m) on the UR10. σ grows with an
+#: arm's lengths and 1/σ shrinks with them, so another arm's force ellipsoid is drawn at FORCE_METRES times the square
+#: of its reach over the UR10's: at 0.05 the KR210's (1.8 N per N·m at its home) was a 9 cm speck beside a 3.9 m arm.
 VELOCITY_METRES, FORCE_METRES = 0.3, 0.05
 #: The force ellipsoid's longest drawn semi-axis, as a share of the arm's reach: it grows without bound
 #: near a singularity, so it is drawn smaller there (at a scale the panel prints) and stays on screen.
@@ -33,13 +35,17 @@ SHOWN = {"velocity": (True, False), "force": (False, True), "both": (True, True)
 
 
 def force_scale(force: np.ndarray, reach: float) -> float:
-    """Metres drawn per N per N·m: :data:`FORCE_METRES`, or less, so that the longest semi-axis fits.
+    """Metres drawn per N per N·m for an arm of ``reach`` (m): :data:`FORCE_METRES` · (reach / UR10_SIZE)², or less,
+    so that the longest semi-axis fits.
 
-    >>> force_scale(np.array([1.0, 2.0, 4.0]), 1.0), force_scale(np.array([1.0, 2.0, 70.0]), 1.0)
-    (0.05, 0.005)
+    >>> force_scale(np.array([1.0, 2.0, 4.0]), UR10_SIZE), force_scale(np.array([1.0, 2.0, 4.0]), 2 * UR10_SIZE)
+    (0.05, 0.2)
+    >>> round(force_scale(np.array([1.0, 2.0, 70.0]), UR10_SIZE), 4)  # 70 × 0.05 m would not fit: 0.35 × 1.3 m does
+    0.0065
     """
+    largest = FORCE_METRES * (reach / UR10_SIZE) ** 2
     longest = float(np.max(np.where(np.isfinite(force), force, 0.0), initial=0.0))
-    return FORCE_METRES if longest * FORCE_METRES <= LONGEST_SHARE * reach else LONGEST_SHARE * reach / longest
+    return largest if longest * largest <= LONGEST_SHARE * reach else LONGEST_SHARE * reach / longest
 
 
 def drawn_force_axes(force: np.ndarray, reach: float) -> np.ndarray:
@@ -47,8 +53,8 @@ def drawn_force_axes(force: np.ndarray, reach: float) -> np.ndarray:
     with no torque: the planar elbow's vertical) as long as the longest may be drawn. It was drawn as zero, flat
     where it is endless, and at an exact singularity the axis that grew as the arm neared it vanished.
 
-    >>> drawn_force_axes(np.array([1.0, 2.0, np.inf]), 1.0).tolist()
-    [0.05, 0.1, 0.35]
+    >>> drawn_force_axes(np.array([1.0, 2.0, np.inf]), UR10_SIZE).round(3).tolist()
+    [0.05, 0.1, 0.455]
     """
     finite = np.isfinite(force)
     return np.where(finite, force_scale(force, reach) * np.where(finite, force, 0.0), LONGEST_SHARE * reach)
@@ -103,7 +109,7 @@ class EllipsoidsView(View):
 
     def __init__(self, scene: viser.SceneApi, gui: viser.GuiApi, session: Session, root: str = "/ellipsoids",
                  tool: Callable[[Any], np.ndarray] = lambda snapshot: snapshot.flange, place: str = "tool",
-                 reach: float = 1.3) -> None:
+                 reach: float = UR10_SIZE) -> None:
         self._arm = session.arm
         self._reach = reach
         self._tool = tool
