@@ -11,7 +11,7 @@ import pytest
 from ur10core.orientation import from_frame
 from ur10teach.features.arm_picker import DESKTOP, UR10
 from ur10teach.features.course_arms.desktop_lessons import PATH_VIEW, SEARCH_VIEW
-from ur10teach.features.course_arms.scene import COURSE_TO_WORLD, world_placement
+from ur10teach.features.course_arms.scene import world_placement
 from ur10teach.features.readouts import pose_markdown
 from ur10teach.features.ik_target import lead, same_pose_groups
 from ur10teach.features.singularity import factors_html
@@ -37,9 +37,12 @@ def test_the_readout_names_each_factor_and_flags_the_one_near_zero():
         state.set_joints(np.radians([0.0, 0.0, 200.0]))
 
 
+UPRIGHT = Arm.preset("three_dof").upright  # the desktop arm's base frame, y up, turned into the world's (z up)
+
+
 def test_the_world_stands_the_courses_y_up():
-    np.testing.assert_allclose(COURSE_TO_WORLD @ (0.0, 1.0, 0.0), (0.0, 0.0, 1.0))
-    assert np.linalg.det(COURSE_TO_WORLD) == pytest.approx(1.0)
+    np.testing.assert_allclose(UPRIGHT @ (0.0, 1.0, 0.0), (0.0, 0.0, 1.0))
+    assert np.linalg.det(UPRIGHT) == pytest.approx(1.0)
     # the lowest the tool gets in the joint ranges stays above the floor
     arm = Arm.preset("three_dof")
     grid = np.stack(np.meshgrid(*(np.linspace(lo, hi, 19) for lo, hi in arm.limits), indexing="ij"), -1).reshape(-1, 3)
@@ -184,9 +187,51 @@ def test_the_desktop_arm_has_its_branch_count_map_standing_the_right_way_up(app)
         # back 1.5 m too high, out of sight (this test read the image's own pose, in its parent's frame)
         drawn = scene_pose(session.client.scene, view.image)
         np.testing.assert_allclose(drawn[:3, 1], [0.0, 0.0, 1.0], atol=1e-9)
-        np.testing.assert_allclose(drawn[:3, 3], COURSE_TO_WORLD @ expected.centre + (0.0, 0.0, session.arm.base_height),
+        np.testing.assert_allclose(drawn[:3, 3], UPRIGHT @ expected.centre + (0.0, 0.0, session.arm.base_height),
                                    atol=1e-6)
-        np.testing.assert_allclose(COURSE_TO_WORLD @ expected.v, [0.0, 0.0, 1.0], atol=1e-12)
+        np.testing.assert_allclose(UPRIGHT @ expected.v, [0.0, 0.0, 1.0], atol=1e-12)
+        await client.close()
+
+    asyncio.run(scenario())
+
+
+@pytest.mark.server
+def test_the_desktop_arms_side_view_and_cut_away_are_cut_about_its_vertical(app):
+    """Its folder offered the whole cloud only, "the sections are cut about a vertical base axis z, and this arm's
+    vertical is its y axis": they are cut about its y now. The side view lies in the vertical plane the arm moves in,
+    each point at its height, seen square-on; the cut-away keeps the half behind that plane, seen from the open side."""
+    from ur10teach.features.workspace import SECTIONS
+
+    async def scenario():
+        client = await ViserClient(url(app)).connect()
+        session = await pick(app, client, DESKTOP)
+        view, up = session.workspace, np.asarray(session.arm.up)
+        assert SECTIONS[1] in view.section.options and SECTIONS[3] in view.section.options
+        await client.set_gui("θ1 base (°)", 30.0)
+        await until(lambda: abs(session.state.last.q[0] - math.radians(30.0)) < 1e-9, what="θ1 at 30°")
+        await client.set_gui("Show workspace cloud", True)
+        await until(lambda: view._cloud is not None, what="the cloud")
+        whole = np.asarray(view._cloud.points, dtype=float)
+        # the plane the arm moves in, turned by θ1 about y: the tool is at (c1·r, h, −s1·r) (docs §7.4), so it reaches
+        # along (c1, 0, −s1) for r > 0; "behind" it is against up × that, as on the UR10 (z × (c1, s1, 0))
+        normal = np.cross(up, [math.cos(math.radians(30.0)), 0.0, -math.sin(math.radians(30.0))])
+
+        async def section(name: str) -> np.ndarray:
+            before = view._cloud
+            await client.set_gui("Section", name)
+            await until(lambda: view._cloud is not before and view._cloud is not None, what=name)
+            position, look_at = session.camera._framed_at
+            return np.asarray(view._cloud.points, dtype=float), (position - look_at) / np.linalg.norm(position - look_at)
+
+        side, looking = await section(SECTIONS[1])  # (viser sends a cloud's points as float16: 2 mm steps at 2 m)
+        assert 0 < len(side) < len(whole) and np.abs(side @ normal).max() < 5e-3
+        assert np.ptp(side @ up) > 0.9 * np.ptp(whole @ up)  # turned about its vertical, not flattened onto the floor
+        world = session.drawing.world[:3, :3]
+        assert abs(looking @ (world @ normal)) > 0.99  # square-on
+        cut, looking = await section(SECTIONS[3])
+        beside = whole @ normal
+        assert (beside < -5e-3).sum() <= len(cut) <= (beside < 5e-3).sum()  # (those within a float16 step either way)
+        assert (cut @ normal < 5e-3).all() and looking @ (world @ normal) > 0.99
         await client.close()
 
     asyncio.run(scenario())

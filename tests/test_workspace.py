@@ -209,7 +209,8 @@ def test_the_hull_mesh_is_closed_and_turned_from_the_profile(course):
 
 
 @pytest.mark.parametrize("name, turn", [("ur10", None), ("kr210", None), ("planar_elbow", None), ("cylindrical", None),
-                                        ("scara", (-105, 105)), ("stanford", (-170, 170)), ("elbow", (-170, 170))])
+                                        ("scara", (-105, 105)), ("stanford", (-170, 170)), ("elbow", (-170, 170)),
+                                        ("three_dof", (-90, 90))])  # (about its vertical, its y)
 def test_base_turn_is_the_first_joints_range_short_of_a_full_turn(name, turn):
     got = base_turn(Arm.preset(name))
     assert got == turn if turn is None else np.allclose(np.degrees(got), turn)
@@ -223,36 +224,38 @@ def test_base_turn_is_the_first_joints_range_short_of_a_full_turn(name, turn):
 def test_base_turn_says_why_a_first_joint_does_not_turn_the_arm_about_z(rows, convention, types, why):
     with pytest.raises(ValueError, match=why):
         base_turn(Arm.from_dh(rows, convention, types))
-    with pytest.raises(ValueError, match="vertical is its y axis"):
-        base_turn(Arm.preset("three_dof"))
 
 
-def test_a_side_view_keeps_only_what_theta1_turns_into_its_plane():
+@pytest.mark.parametrize("name", ["scara", "three_dof"])
+def test_a_side_view_keeps_only_what_theta1_turns_into_its_plane(name):
     """The SCARA's θ1 turns ±105°: each point kept in its side view is the tool of the same joints with θ1 alone
     changed within its range (found by a search over θ1, not by the angle sum), and each point dropped is not.
-    (The side view used every point, and showed a full ring behind the SCARA where it reaches nothing.)"""
-    scara = Arm.preset("scara")
-    low, high = base_turn(scara)
-    points, _, q = scara.sample_workspace(3000, seed=2, return_joints=True)
+    (The side view used every point, and showed a full ring behind the SCARA where it reaches nothing.) The desktop
+    arm's θ1 turns ±90° about its y, its vertical: its points are cut in its upright frame (``Arm.upright``)."""
+    arm = Arm.preset(name)
+    low, high = base_turn(arm)
+    points, _, q = arm.sample_workspace(3000, seed=2, return_joints=True)
+    upright = arm.upright
     azimuth = 0.3
-    section = vertical_section(points, azimuth)
-    kept = turnable_into(points, azimuth, q[:, 0], (low, high))
+    section = vertical_section(points @ upright.T, azimuth) @ upright  # back in the arm's base frame
+    kept = turnable_into(points @ upright.T, azimuth, q[:, 0], (low, high))
     assert 0.2 < kept.mean() < 0.95
-    grid = np.linspace(low, low + 2 * np.pi, 14401)  # a full turn, 0.025° apart: 0.26 mm at the SCARA's 0.6 m reach
+    np.testing.assert_allclose(section @ arm.up, points @ arm.up)  # turned about the vertical: no point rises or falls
+    grid = np.linspace(low, low + 2 * np.pi, 14401)  # a full turn, 0.025° apart: 1.2 mm at the desktop arm's 2.6 m reach
     for k in list(np.flatnonzero(kept)[:60]) + list(np.flatnonzero(~kept)[:60]):
         turned = np.tile(q[k], (len(grid), 1))
         turned[:, 0] = grid
-        gaps = np.linalg.norm(scara.fk(turned)[:, :3, 3] - section[k], axis=1)
+        gaps = np.linalg.norm(arm.fk(turned)[:, :3, 3] - section[k], axis=1)
         needed = grid[gaps.argmin()]  # the θ1 that puts the tool there
-        assert gaps.min() < 2e-4
+        assert gaps.min() < 1e-3 * arm.reach_bound
         assert needed <= high + 1e-3 if kept[k] else needed > high - 1e-3, (k, np.degrees(needed))
-    assert turnable_into(points, azimuth, q[:, 0], (-np.pi, np.pi)).all()  # a full turn keeps every point
+    assert turnable_into(points @ upright.T, azimuth, q[:, 0], (-np.pi, np.pi)).all()  # a full turn keeps every point
 
 
 @pytest.mark.parametrize("name, lacks", [
     ("ur10", set()), ("kr210", {"horizontal"}), ("cylindrical_wrist", {"horizontal"}),
     ("scara", {"horizontal", "translucent"}), ("stanford", {"horizontal", "translucent"}), ("elbow", {"horizontal", "translucent"}),
-    ("planar_elbow", {"horizontal", "translucent"}), ("three_dof", {"vertical", "horizontal", "cut-away", "translucent"}),
+    ("planar_elbow", {"horizontal", "translucent"}), ("three_dof", {"horizontal", "translucent"}),
 ])
 def test_each_arm_offers_the_sections_true_of_it_and_says_why_not_the_others(name, lacks):
     """A hull turns the outline a full turn about z: offered where θ1 turns a full turn and the workspace has height
@@ -262,7 +265,7 @@ def test_each_arm_offers_the_sections_true_of_it_and_says_why_not_the_others(nam
     offered, why = sections_of(Arm.preset(name))
     assert {s.split(" ")[0] for s in SECTIONS if s not in offered} == lacks
     assert bool(why) == bool(lacks)
-    if "translucent" in lacks and name != "three_dof":
+    if "translucent" in lacks:
         assert ("no height to bound" if name == "planar_elbow" else "only, so it would take in places") in why
 
 

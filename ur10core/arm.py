@@ -245,6 +245,20 @@ class Arm(JacobianUses, HasSpecs):
         """Its vertical in the base frame: z, or y for the course's desktop arm."""
         return getattr(self.solver, "up", (0.0, 0.0, 1.0))
 
+    @property
+    def upright(self) -> np.ndarray:
+        """(3, 3) the rotation from its base frame to one whose z is its vertical (:attr:`up`): the identity, or
+        for the desktop arm the turn of +90° about x that takes its y to z (and its z to −y).
+
+        >>> Arm.preset("three_dof").upright @ Arm.preset("three_dof").up
+        array([0., 0., 1.])
+        """
+        if tuple(self.up) == (0.0, 0.0, 1.0):
+            return np.eye(3)
+        if tuple(self.up) == (0.0, 1.0, 0.0):
+            return np.array([[1.0, 0.0, 0.0], [0.0, 0.0, -1.0], [0.0, 1.0, 0.0]])
+        raise ValueError(f"no upright frame for an arm whose vertical is {self.up}")  # (no arm has another)
+
     @functools.cached_property
     def reach_bound(self) -> float:
         """An upper bound on the tool's distance from the base (m), whatever the joints: the table's lengths laid end

@@ -29,24 +29,30 @@ def _points(points) -> np.ndarray:
 
 
 def base_turn(arm) -> tuple[float, float] | None:
-    """The range (θ1 min, θ1 max) in rad through which ``arm``'s first joint turns the whole arm about the base's z
-    axis, or None where it turns a full turn or more (the workspace is then a solid of revolution about z,
-    docs/kinematics.md §3).
+    """The range (θ1 min, θ1 max) in rad through which ``arm``'s first joint turns the whole arm about its vertical
+    axis through the base's origin (z, or the desktop arm's y: ``Arm.up``), or None where it turns a full turn or
+    more (the workspace is then a solid of revolution about that axis, docs/kinematics.md §3).
 
     ``ValueError`` saying why where the first joint does not turn the arm about that axis: it slides, or its
-    axis is tilted or off the base's origin (a typed modified table's a0 or α0), or the arm's vertical is not z.
+    axis is tilted or off the base's origin (a typed modified table's a0 or α0).
+
+    The points of :func:`vertical_section` and :func:`turnable_into` are in the frame ``Arm.upright`` turns the
+    base frame to, whose z is that axis. The desktop arm's θ1 turns it about its y (its tool at
+    (c1·r, h, −s1·r), docs/kinematics.md §7.4): there, by θ1 about z.
 
     >>> from ur10core import Arm
     >>> base_turn(Arm.preset("ur10")) is None, [round(math.degrees(v)) for v in base_turn(Arm.preset("scara"))]
     (True, [-105, 105])
+    >>> [round(math.degrees(v)) for v in base_turn(Arm.preset("three_dof"))]
+    [-90, 90]
     """
-    if arm.dh is None or tuple(arm.up) != (0.0, 0.0, 1.0):
-        raise ValueError("its vertical is its y axis, not the z axis its base turns about")
     if arm.joint_types[0] != "R":
         raise ValueError("its first joint slides: no joint turns the whole arm about the base axis")
-    axes, on_axes = arm.dh.joint_axes(arm.dh.frames(arm.limits.mean(axis=1)))  # (the first axis is the same at any q)
-    if axes[0, 2] < 1.0 - 1e-9 or np.hypot(*on_axes[0, :2]) > 1e-9:
-        raise ValueError("its first joint's axis is not the base's z axis")
+    if arm.dh is not None:
+        axes, on_axes = arm.dh.joint_axes(arm.dh.frames(arm.limits.mean(axis=1)))  # (the first axis is the same at any q)
+        axis, off = axes[0] @ arm.upright.T, on_axes[0] @ arm.upright.T
+        if axis[2] < 1.0 - 1e-9 or np.hypot(*off[:2]) > 1e-9:
+            raise ValueError("its first joint's axis is not the base's z axis")
     low, high = (float(v) for v in arm.limits[0])
     return None if high - low >= 2.0 * math.pi - LIMIT_TOLERANCE else (low, high)
 

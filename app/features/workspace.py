@@ -215,7 +215,7 @@ def above(points: np.ndarray, up) -> np.ndarray:
 
 
 def _turn_range(arm: Arm) -> tuple[float, float] | None:
-    """``ur10core.workspace.base_turn``, None also where θ1 does not turn the arm about z (no side view then)."""
+    """``ur10core.workspace.base_turn``, None also where θ1 does not turn the arm about its vertical (no side view then)."""
     try:
         return base_turn(arm)
     except ValueError:
@@ -228,11 +228,9 @@ def sections_of(arm: Arm) -> tuple[tuple[str, ...], str]:
     A horizontal section is sampled in its plane, from the flange height's closed form in θ2,
     which only the UR family has (docs/kinematics.md §3); a slab cut from any cloud would hold
     a few hundred points. The side view and the hull turn the cloud about the base axis by θ1: the hull
-    a full turn, so it needs a workspace that is a solid of revolution, and some height.
+    a full turn, so it needs a workspace that is a solid of revolution, and some height. The axis is the arm's
+    vertical (``Arm.up``: the desktop arm's y).
     """
-    if tuple(arm.up) != (0.0, 0.0, 1.0):
-        return SECTIONS[:1], ("Only the whole cloud for this arm: the sections are cut about a vertical base axis z, "
-                              "and this arm's vertical is its y axis.")
     sections, missing = list(SECTIONS), []
     if not hasattr(arm.solver, "sample_horizontal_section"):
         sections.remove(SECTIONS[2])
@@ -377,23 +375,26 @@ class WorkspaceView(View):
                  turns: np.ndarray | None) -> tuple[np.ndarray, np.ndarray]:
         if section == SECTIONS[1]:
             azimuth = float(self._session.state.last.q[0])  # the plane the arm moves in
-            turned = vertical_section(points, azimuth).astype(np.float32)
+            upright = self._session.arm.upright  # (the section turns points about the arm's vertical, there its z)
+            standing = points @ upright.T
+            turned = (vertical_section(standing, azimuth) @ upright).astype(np.float32)
             if turns is None:
                 return turned, colors
-            kept = turnable_into(points, azimuth, turns, _turn_range(self._session.arm))
+            kept = turnable_into(standing, azimuth, turns, _turn_range(self._session.arm))
             return turned[kept], colors[kept]
         if section == SECTIONS[2]:  # sampled in the plane itself: a slab of the cloud holds only a few hundred
             return coloured_horizontal_section(self._session.arm, within(self.height, "section height (mm)") / 1000.0,
                                                min(SECTION_POINTS, len(points)), top, self._slow_job, holder=self)
         if section == SECTIONS[3]:  # the cut face shows the inside: the hole about the base axis, the dexterous core
-            behind = points[:, :2] @ self._plane_normal()[:2] < 0
+            behind = points @ self._plane_normal() < 0
             return points[behind], colors[behind]
         return points, colors
 
     def _plane_normal(self) -> np.ndarray:
-        """The horizontal normal of the vertical plane the arm moves in (through the base axis, at θ1)."""
+        """The horizontal normal of the vertical plane the arm moves in (through the base axis, at θ1), in the arm's
+        base frame."""
         azimuth = float(self._session.state.last.q[0])
-        return np.array([-math.sin(azimuth), math.cos(azimuth), 0.0])
+        return self._session.arm.upright.T @ np.array([-math.sin(azimuth), math.cos(azimuth), 0.0])
 
     def _look_square_on(self, section: str, points: np.ndarray, legend_at: np.ndarray) -> None:
         """The cloud is framed with the arm and its legend; a section is seen square-on (the camera turns to face its plane)."""
@@ -410,9 +411,9 @@ class WorkspaceView(View):
         if section == HULL:  # the whole of it in view, from the course's three-quarter angle
             direction = views_for(self._session.arm)["Course figure"]
         elif section == SECTIONS[1]:
-            direction = -self._plane_normal()
+            direction = -self._session.drawing.world[:3, :3] @ self._plane_normal()
         elif section == SECTIONS[3]:
-            direction = self._plane_normal()  # from the open side, onto the cut face
+            direction = self._session.drawing.world[:3, :3] @ self._plane_normal()  # from the open side, onto the cut face
         else:
             direction = FROM_ABOVE
         camera.look_from(direction)

@@ -28,8 +28,6 @@ from ..ik_target import ALL_BRANCHES, SAME_POSE, add_unreachable_halo, focused, 
 from ..singularity import SingularityOverlay, has_overlay
 
 ROOT = "/course_arm"
-#: A base frame with y up (the course's desktop arm) turned into the app's world (z up): Rx(90°), so x stays, y → z, z → −y.
-COURSE_TO_WORLD = np.array([[1.0, 0.0, 0.0], [0.0, 0.0, -1.0], [0.0, 1.0, 0.0]])
 #: An explorer's own arm in a classroom, apart from the class's (which it hides in that one browser).
 EXPLORER_ROOT = "/explored_arm"
 SKELETON_GREY = (60, 62, 68)
@@ -47,8 +45,7 @@ def world_placement(arm: Arm) -> np.ndarray:
     """(4, 4) the arm's base frame in the app's world (z up, the floor z = 0): turned so that its vertical
     (``arm.up``) is z, and raised ``arm.base_height`` (a table that starts at the shoulder: a pedestal under it)."""
     world = np.eye(4)
-    if tuple(arm.up) != (0.0, 0.0, 1.0):
-        world[:3, :3] = COURSE_TO_WORLD
+    world[:3, :3] = arm.upright
     world[2, 3] = arm.base_height
     return world
 
