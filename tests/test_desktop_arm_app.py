@@ -212,7 +212,7 @@ def test_the_desktop_arms_side_view_and_cut_away_are_cut_about_its_vertical(app)
         await client.set_gui("Show workspace cloud", True)
         await until(lambda: view._cloud is not None, what="the cloud")
         whole = np.asarray(view._cloud.points, dtype=float)
-        # the plane the arm moves in, turned by θ1 about y: the tool is at (c1·r, h, −s1·r) (docs §7.4), so it reaches
+        # the plane the arm moves in, turned by θ1 about y: the tool is at (c1·r, h, −s1·r) (docs §8.6), so it reaches
         # along (c1, 0, −s1) for r > 0; "behind" it is against up × that, as on the UR10 (z × (c1, s1, 0))
         normal = np.cross(up, [math.cos(math.radians(30.0)), 0.0, -math.sin(math.radians(30.0))])
 

@@ -263,7 +263,7 @@ class Arm(JacobianUses, HasSpecs):
     def reach_bound(self) -> float:
         """An upper bound on the tool's distance from the base (m), whatever the joints: the table's lengths laid end
         to end (each row's |a| and |d|, a sliding joint's with the end of its stroke farthest from 0), or the desktop
-        arm's two links (docs/kinematics.md §7.4).
+        arm's two links (docs/kinematics.md §8.6).
 
         >>> round(Arm.preset("course").reach_bound * 1000, 1)   # 128 + 612.9 + 571.6 + 163.9 + 115.7 + 92.2 mm
         1684.3

@@ -38,7 +38,7 @@ def base_turn(arm) -> tuple[float, float] | None:
 
     The points of :func:`vertical_section` and :func:`turnable_into` are in the frame ``Arm.upright`` turns the
     base frame to, whose z is that axis. The desktop arm's θ1 turns it about its y (its tool at
-    (c1·r, h, −s1·r), docs/kinematics.md §7.4): there, by θ1 about z.
+    (c1·r, h, −s1·r), docs/kinematics.md §8.6): there, by θ1 about z.
 
     >>> from ur10core import Arm
     >>> base_turn(Arm.preset("ur10")) is None, [round(math.degrees(v)) for v in base_turn(Arm.preset("scara"))]
