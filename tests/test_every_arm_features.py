@@ -19,7 +19,7 @@ from ur10teach.features.arm_picker import ARM_CHOICES
 from ur10teach.features.ik_target import GIZMO_SHARE, HALO_SHARE
 from ur10teach.features.joint_panel import rate_label
 from ur10teach.features.statics import bars_html
-from ur10teach.features.velocity import METRES_PER_SPEED, parse_twist
+from ur10teach.features.velocity import METRES_PER_SPEED, METRES_PER_TURN_RATE, parse_twist
 from ur10teach.features.workspace import POINT_SIZE
 from ur10teach.style import UR10_SIZE
 
@@ -54,6 +54,10 @@ def test_velocity_and_forces_on_every_arm_match_finite_differences(app, label):
         expected = tool + METRES_PER_SPEED * math.radians(10.0) * position_rate(arm, q, 0)
         await until(lambda: session.velocity.linear.visible
                     and np.allclose(session.velocity.linear.points[0], [tool, expected], atol=1e-5), what="the velocity arrow")
+        # the base turning at 10°/s turns the tool at 10°/s, drawn as long for the arm's reach as on the UR10 (0.15 m
+        # per rad/s there): the KR210's was 8 cm long at 30°/s beside its 3.9 m
+        turning = np.linalg.norm(np.diff(session.velocity.angular.points[0], axis=0))
+        assert turning / session.drawing.size == pytest.approx(METRES_PER_TURN_RATE * math.radians(10.0) / UR10_SIZE, rel=1e-5)
         # as thick for the arm's size as the force's arrow is: a UR10's 8 mm shaft was a hair beside a 3.9 m KR210
         for arrow in (session.velocity.linear, session.velocity.angular):
             assert arrow.shaft_radius / arrow.head_radius == pytest.approx(0.4)

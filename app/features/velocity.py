@@ -21,13 +21,15 @@ from ur10core.differential import TASK_ROWS
 
 from ..feedback import Beside, within
 from ..state import Snapshot
-from ..style import number, swatch, typed_fields
+from ..style import UR10_SIZE, number, swatch, typed_fields
 from ..view import HELD_BACK, Session, View, say_held_back
 from .joint_panel import rate_label
 
 LINEAR_COLOR, ANGULAR_COLOR = (0, 114, 178), (204, 121, 167)
 NAMES = ("v velocity", "ω turning rate")  #: the arrows' names in 3D
-#: Drawn length: metres per m/s of the flange, and per rad/s of its turning.
+#: Drawn length: metres per m/s of the flange, and per rad/s of its turning on the UR10. A tool's speed grows with
+#: its arm's lengths and its turning rate does not, so another arm's ω is drawn at METRES_PER_TURN_RATE times its
+#: reach over the UR10's: at 0.15 the KR210's turning at 30°/s was 8 cm long beside a 3.9 m arm.
 METRES_PER_SPEED, METRES_PER_TURN_RATE = 0.5, 0.15
 MAX_TYPED = (2000.0, 360.0)  #: the largest typed speed (mm/s) and turning rate (°/s)
 
@@ -105,18 +107,20 @@ class VelocityView(View):
     ``root``: where its nodes hang; ``tool(snapshot)``: the (4, 4) pose the arrows start at
     (the arm's tool by default). The arrows' names are the session's to place (:meth:`names`). The
     kinds of joints and their speed limits (``arm.specs``, where the maker publishes them) come
-    from ``session.arm``; ``size`` (the arm's reach, m) scales the arrows' thickness (for an arm 1 m across).
+    from ``session.arm``; ``size`` (the arm's reach, m) scales the arrows' thickness and the turning rate's
+    length (:data:`METRES_PER_TURN_RATE`).
     """
 
     answers = ("velocity", "tool_velocity")  # "Find the joint rates" gives q̇ for a v; the readout gives v
 
     def __init__(self, scene: viser.SceneApi, gui: viser.GuiApi, session: Session, root: str = "/velocity",
                  tool: Callable[[Any], np.ndarray] = lambda snapshot: snapshot.flange, place: str = "tool",
-                 size: float = 1.0) -> None:
+                 size: float = UR10_SIZE) -> None:
         self._session = session
         self._arm = session.arm
         self._tool = tool
         self._kinds = "".join(self._arm.joint_types)
+        self._turn_scale = METRES_PER_TURN_RATE * size / UR10_SIZE  #: metres drawn per rad/s of ω
         limits = self._arm.specs.speed_limits
         self._labels, self._limits = self._arm.joint_names, None if limits is None else shown_rates(limits, self._kinds)
         folder = gui.add_folder("Velocities", expand_by_default=False)
@@ -125,7 +129,7 @@ class VelocityView(View):
             gui.add_markdown(f"Turn the joints at these rates: the arrows are the {place}'s velocity and turning "
                              f"rate, [v; ω] = J q̇.  \n{swatch(LINEAR_COLOR)} **v**: velocity, "
                              f"{number(1000 * METRES_PER_SPEED, '.0f')} mm drawn per m/s  \n{swatch(ANGULAR_COLOR)} **ω**: "
-                             f"turning rate (about the arrow, right hand), {number(1000 * METRES_PER_TURN_RATE, '.0f')} "
+                             f"turning rate (about the arrow, right hand), {number(1000 * self._turn_scale, '.0f')} "
                              "mm drawn per rad/s (57.3°/s)")
             self.sliders = [gui.add_slider(rate_label(self._arm, i), min=-RATE_LIMITS[kind], max=RATE_LIMITS[kind], step=0.1,
                                            initial_value=0.0)
@@ -188,7 +192,7 @@ class VelocityView(View):
             qdot = snapshot.rates if playing else self.joint_rates()
             twist = self._arm.tool_twist(snapshot.q, qdot)
             tip = self._tool(snapshot)[:3, 3]
-            ends = (tip + METRES_PER_SPEED * twist[:3], tip + METRES_PER_TURN_RATE * twist[3:])
+            ends = (tip + METRES_PER_SPEED * twist[:3], tip + self._turn_scale * twist[3:])
             for arrow, end in zip((self.linear, self.angular), ends):
                 arrow.points = np.array([[tip, end]])
         self._ends = ends
