@@ -936,6 +936,8 @@ def test_the_presenter_shows_the_class_another_arm(classroom):
         assert np.abs(room.state.arm.fk(room.state.last.q) - T).max() < 1e-9  # the class's did not
         # back to the UR10: where the presenter left it; the explorer now hides the shared UR10
         await until(room.can_switch, what="the class's arm to be ready for a change")
+        stopped = classroom.clock()  # time stands still from here: the change after this one comes "at once" (a slow
+        classroom.clock = lambda: stopped  # CI run took longer than the 0.5 s between them to see this one through)
         await teacher.set_gui("Which arm", UR10)
         await until(lambda: room.choice == UR10 and presenter.session is not None, what="the UR10 back")
         await until(lambda: "Front (x–z plane)" in presenter.camera.direction.options, what="the UR10's views")

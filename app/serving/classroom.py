@@ -408,7 +408,7 @@ class Classroom:
 
     def can_switch(self) -> bool:
         """Whether the class's arm may change now (:data:`SWITCH_INTERVAL` after the last change)."""
-        return time.monotonic() - self._last_switch >= SWITCH_INTERVAL
+        return self.app.clock() - self._last_switch >= SWITCH_INTERVAL
 
     def show_arm(self, member: Member, label: str, paced: bool = True, typed: tuple[Arm, str, str] | None = None) -> None:
         """The presenter shows the class another arm (``ARM_CHOICES``): everyone's scene and live panel follow.
@@ -447,7 +447,7 @@ class Classroom:
             session = self._presenter_session(member)
             session.show_choices(self.displays.get(self.choice, {}))
             member.session = session  # shown as left before anyone finds it
-            self._last_switch = time.monotonic()
+            self._last_switch = self.app.clock()
             members = list(self.members.values())
         self.app.janitor.soon()  # the arm shown before, its drawing and the presenter's panel for it hold cycles
         self._draw_controls(member)

@@ -334,7 +334,9 @@ class TeachingServer:
         #: browser → (when, choice shown, its left arms, (lecture mode, light view)) as its page left last
         self._departed: dict[str, tuple[float, str, dict[str, tuple], tuple[bool, bool]]] = {}
         self._switches: dict[str, TokenBucket] = {}  # budget (an address) → its arm changes
-        self.clock = time.monotonic  #: the time the arm changes of an address are paced by (a test sets its own)
+        #: the time arm changes are paced by (an address's, and a class's) and a browser's return is timed by (a test
+        #: sets its own)
+        self.clock = time.monotonic
         self._sessions_lock = threading.Lock()
         self.janitor = Janitor(forget=(CLOUDS.forget_unheld,))
         #: what students type to join: the addresses of this machine the server listens on beyond itself (none
