@@ -1,4 +1,5 @@
-"""A course arm's singularities in 3D: each factor's drawing degenerates exactly where the factor vanishes."""
+"""A course arm's singularities in 3D: each factor's drawing degenerates exactly where the factor vanishes
+(the desktop arm's too: it had no overlay until 2026-12-07)."""
 
 from __future__ import annotations
 
@@ -17,7 +18,7 @@ def _unit(v: np.ndarray) -> np.ndarray:
 #: Drawings that close a distance (the last segment's length goes to zero); the others show two
 #: lines that become parallel (wrist axes 4 and 6; the Stanford arm's boom and axis 1) or in line (the links).
 DISTANCES = {("kr210", "shoulder"), ("elbow", "shoulder"), ("stanford", "stroke"), ("cylindrical", "reach"),
-             ("cylindrical_wrist", "reach")}
+             ("cylindrical_wrist", "reach"), ("three_dof", "reach")}
 
 
 def degeneracy(arm: str, factor: str, segments: np.ndarray) -> float:
@@ -58,7 +59,7 @@ def singular_joints(arm: Arm, factor: int, q0: np.ndarray) -> np.ndarray:
     raise AssertionError(f"no joint makes factor {factor} of {arm.name} vanish")
 
 
-@pytest.mark.parametrize("name", sorted(PRESETS))
+@pytest.mark.parametrize("name", [*sorted(PRESETS), "three_dof"])
 def test_each_drawing_degenerates_where_its_factor_vanishes(name):
     arm = Arm.preset(name)
     home = arm.specs.home

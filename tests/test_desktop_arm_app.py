@@ -119,7 +119,7 @@ def test_the_desktop_arm_is_picked_driven_played_and_searched(app):
         label = {"text": worst.text, "font_screen_scale": worst.font_screen_scale, "anchor": worst.anchor}
         # on its stalk over the red ball, which is at the tool: the arm is put in the worst pose
         worst_at = (session.state.last.flange[:3, 3] + (0.0, WORST_LABEL_RISE, 0.0)) @ world[:3, :3].T + world[:3, 3]
-        await until(lambda: session.drawing.label_sets[0].placed, what="the captions placed")
+        await until(lambda: session.drawing.captions.placed, what="the captions placed")
         over = []
         for pool in session.drawing.label_sets:
             pool.place()

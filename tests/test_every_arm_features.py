@@ -163,8 +163,10 @@ def test_every_arm_is_put_on_each_of_its_singularities_by_its_buttons(app, label
         session = await pick(app, client, label)
         arm = session.arm
         assert session.singularities.demo.options == arm.factor_names
-        if session.singularities.enabled is not None:
-            await client.set_gui("Show singularity overlay", True)
+        # every arm draws its factors (the desktop arm had gauges only until 2026-12-07)
+        assert session.singularities.enabled is not None and session.drawing.overlay is not None
+        await client.set_gui("Show singularity overlay", True)
+        await until(lambda: session.drawing.overlay.enabled, what="the overlay")
         rows = {"pose": slice(0, 6), "position and yaw": [0, 1, 2, 5]}.get(arm.task, slice(0, 3))
         start_q = session.state.q
         before = np.linalg.svd(jacobian_by_differences(arm, start_q)[rows], compute_uv=False)[-1]

@@ -49,7 +49,7 @@ AXIS_HALF_LENGTH = 0.25
 #: Each factor's colour (Okabe-Ito): shoulder orange (and the Stanford arm's stroke, the cylindrical
 #: arm's reach), elbow bluish green, wrist reddish purple.
 FACTOR_COLORS = {"shoulder": SHOULDER_COLOR, "stroke": SHOULDER_COLOR, "reach": SHOULDER_COLOR,
-                 "elbow": ELBOW_COLOR, "wrist": WRIST_COLOR}
+                 "elbow": ELBOW_COLOR, "fold": ELBOW_COLOR, "wrist": WRIST_COLOR}
 
 
 def alarm(level: float) -> float:
@@ -174,7 +174,10 @@ def factor_geometry(arm: Arm, q: np.ndarray, frames: np.ndarray, size: float) ->
     anchored = anchored_geometry(arm, frames)
     if anchored is not None:
         return {name: _placed(frames, parts) for name, parts in anchored.items()}
-    z, o = arm.dh.joint_axes(frames)
+    if arm.dh is not None:
+        z, o = arm.dh.joint_axes(frames)
+    else:  # the desktop arm's frames: the shoulder, the elbow, the tool; its base turns about its vertical
+        z, o = np.asarray([arm.up], dtype=float), frames[:1, :3, 3]
     tool = frames[-1, :3, 3]
     centre = arm.wrist_centre(q) if arm.n_joints == 6 else tool
     axis_line = [o[0] - 0.1 * size * z[0], o[0] + 0.9 * size * z[0]]
@@ -193,6 +196,8 @@ def factor_geometry(arm: Arm, q: np.ndarray, frames: np.ndarray, size: float) ->
             out["wrist"] = np.array([[centre - half * z[3], centre + half * z[3]], [centre - half * z[5], centre + half * z[5]]])
         elif name == "elbow" and arm.n_joints == 6:  # upper arm and forearm, up to the wrist centre
             out["elbow"] = np.array([[o[1], o[2]], [o[2], centre]])
+        elif name == "fold":  # the desktop arm's upper arm and forearm, in one line at the singularity
+            out["fold"] = np.array([[o[0], frames[1, :3, 3]], [frames[1, :3, 3], tool]])
         elif name == "elbow":  # SCARA, planar: the links seen along axis 1, at the elbow's height
             flat = [p - np.dot(p - o[1], z[0]) * z[0] for p in (_foot(o[1], o[0], z[0]), o[1], tool)]
             out["elbow"] = np.array([[flat[0], flat[1]], [flat[1], flat[2]]])
@@ -279,8 +284,8 @@ class SingularityOverlay(View):
 
 
 def has_overlay(arm: Arm) -> bool:
-    """The model factors det J and the geometry of each factor is written (not a typed table's, nor the desktop arm's)."""
-    return factor_words(arm) is not None and arm.dh is not None
+    """The model factors det J, and :func:`factor_geometry` draws each factor (not a typed table's: not derived)."""
+    return factor_words(arm) is not None
 
 
 def held_levels(history, now: float, seconds: float = PLOT_SECONDS) -> np.ndarray:
@@ -324,8 +329,8 @@ class Singularities(View):
                                              hint="The geometry each factor measures, red as it nears zero")
                             if overlay is not None else None)
             if overlay is None:
-                gui.add_markdown("No overlay on this arm: its factors' geometry is drawn for the arms of the course "
-                                 "that have a DH table and a factored det J; the gauges below are what there is.")
+                gui.add_markdown("No overlay on this arm: it draws what each factor of det J measures, and a typed "
+                                 "table's det J is not derived into factors; the gauges below are what there is.")
             if arm.name in arm.UR_PRESETS:
                 gui.add_html("<div style='font-size:1.05em'>" + symbolic.det_j_mathml() + "</div>")
             self.gauges = gui.add_html("")  # (filled by the first render_panel, held back if a challenge asks det J)

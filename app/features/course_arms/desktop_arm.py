@@ -18,6 +18,8 @@ from ur10core.orientation import quaternion
 from ...state import Snapshot
 from ...style import JOINT_CAP_GREY, SHOULDER_COLOR
 from ..branch_labels import BranchLabels
+from ..singularity import SingularityOverlay
+from ..ik_target import numbered
 from .scene import LineDrawing
 
 ROOT = "/desktop_arm"
@@ -37,7 +39,6 @@ class DesktopArmScene(LineDrawing):
     The course arms' scene for an arm without a DH table (the tool's v and ω while a path plays are the
     velocities folder's arrows)."""
 
-    overlay = None  #: det J_v's factors are in the panel (the singularities folder), not drawn on this arm
     dh_frames = None  #: no DH frames to show (the DH folders say why)
 
     def __init__(self, scene: viser.SceneApi, arm: Arm, first: Snapshot, size: float, top: str = ROOT,
@@ -57,7 +58,10 @@ class DesktopArmScene(LineDrawing):
         self.captions = BranchLabels(scene, f"{root}/names", len(NAMES), scale=1.3, merge_px=4.0)
         self._name_points = np.zeros((len(NAMES), 3))
         self._add_ghosts(scene, arm, first.frames, 0.03, 0.05 * size)
-        self.label_sets = self._label_sets((self.captions, self.numbers))  # the numbers keep clear of the captions
+        #: det J_v's two factors in 3D: the tool's distance from the vertical axis, the upper arm and forearm
+        self.overlay = SingularityOverlay(scene, arm, first, size, root)
+        # the captions keep clear of the factors' names, and the numbers of both
+        self.label_sets = self._label_sets((self.overlay.names, self.captions, self.numbers))
         if target_marker:
             self._add_target_marker(scene)
         self.render(first)
@@ -95,11 +99,14 @@ class DesktopArmScene(LineDrawing):
         self.tool.wxyz = quaternion(snapshot.flange[:3, :3], check=False)
         self.tool.position = points[3]
         self._name_points = np.vstack([AXIS_TIPS, points[1], drive[0, 1], points[3]])
+        self.overlay.render(snapshot)
         self._render_ghosts(snapshot)
 
     def render_panel(self, snapshot: Snapshot) -> None:
-        self.captions.show(self._name_points, list(NAMES))  # before the numbers, which keep clear of them
-        super().render_panel(snapshot)
+        """The factors' names, the captions and the branch numbers, each placed clear of those before it."""
+        self.overlay.render_panel(snapshot)
+        self.captions.show(self._name_points, list(NAMES))
+        self.numbers.show(self._ghost_labels(snapshot), numbered(snapshot, self.show_ghosts, self.focus))
 
     def _ghost_lines(self, frames: np.ndarray) -> np.ndarray:
         return self._links(self._points(frames))[1:]
