@@ -96,3 +96,26 @@ def test_the_ur_familys_drawing_degenerates_where_its_factor_vanishes(kind):
     assert degeneracy(home) > 1e-2
     singular = arm.singular_configuration(kind, home)
     assert degeneracy(singular) < 1e-9
+
+
+@pytest.mark.parametrize("name", [*sorted(set(PRESETS) - {"ur10", "ur10e", "course"}), "three_dof"])
+def test_each_overlay_fits_the_screen_the_arm_is_framed_on(name):
+    """Axis 1 was drawn 0.9 of the reach up from the shoulder: on the KR210, 3.5 m, off the top of the screen the
+    arm is framed on (the Stanford arm's and the desktop arm's too). It now ends above the wrist centre's height."""
+    import viser
+
+    from ur10teach.features.camera import arm_points, framed_view, views_for
+    from ur10teach.features.drawings import arm_drawing
+    from ur10teach.state import ArmState
+
+    arm = Arm.preset(name)
+    snapshot = ArmState(arm).last
+    server = viser.ViserServer(port=0, verbose=False)
+    try:
+        drawing = arm_drawing(server.scene, arm, snapshot)
+    finally:
+        server.stop()
+    view = framed_view(arm_points(drawing.framed(snapshot), drawing.body_radius), views_for(arm)["Course figure"])
+    ends = np.concatenate(list(factor_geometry(arm, snapshot.q, snapshot.frames, drawing.size).values())).reshape(-1, 3)
+    pixels, _ = view.to_screen(ends @ drawing.world[:3, :3].T + drawing.world[:3, 3])  # from the canvas's centre
+    assert (np.abs(pixels) <= [view.width / 2, view.height / 2]).all(), np.abs(pixels).max(axis=0)

@@ -180,7 +180,10 @@ def factor_geometry(arm: Arm, q: np.ndarray, frames: np.ndarray, size: float) ->
         z, o = np.asarray([arm.up], dtype=float), frames[:1, :3, 3]
     tool = frames[-1, :3, 3]
     centre = arm.wrist_centre(q) if arm.n_joints == 6 else tool
-    axis_line = [o[0] - 0.1 * size * z[0], o[0] + 0.9 * size * z[0]]
+    # axis 1 from below the shoulder to above the wrist centre's height: drawn 0.9 of the reach up, the KR210's
+    # went 3.5 m up, off the top of the screen
+    along = float(np.dot(centre - o[0], z[0]))
+    axis_line = [o[0] + (min(along, 0.0) - 0.1 * size) * z[0], o[0] + (max(along, 0.2 * size) + 0.2 * size) * z[0]]
     out: dict[str, np.ndarray] = {}
     for name in factor_names(arm):
         if name == "shoulder" and arm.joint_types[2] == "P":  # Stanford: the boom parallel to axis 1
