@@ -18,8 +18,8 @@ from ur10core.orientation import quaternion
 from ...state import Snapshot
 from ...style import JOINT_CAP_GREY, SHOULDER_COLOR
 from ..branch_labels import BranchLabels
-from ..singularity import SingularityOverlay
 from ..ik_target import numbered
+from ..singularity import SingularityOverlay
 from .scene import LineDrawing
 
 ROOT = "/desktop_arm"
