@@ -199,7 +199,8 @@ def test_the_desktop_arm_has_its_branch_count_map_standing_the_right_way_up(app)
 def test_the_desktop_arms_side_view_and_cut_away_are_cut_about_its_vertical(app):
     """Its folder offered the whole cloud only, "the sections are cut about a vertical base axis z, and this arm's
     vertical is its y axis": they are cut about its y now. The side view lies in the vertical plane the arm moves in,
-    each point at its height, seen square-on; the cut-away keeps the half behind that plane, seen from the open side."""
+    seen square-on (each point at its own height: tests/test_workspace.py); the cut-away keeps the half behind that
+    plane, seen from the open side."""
     from ur10teach.features.workspace import SECTIONS
 
     async def scenario():
@@ -216,7 +217,7 @@ def test_the_desktop_arms_side_view_and_cut_away_are_cut_about_its_vertical(app)
         # along (c1, 0, −s1) for r > 0; "behind" it is against up × that, as on the UR10 (z × (c1, s1, 0))
         normal = np.cross(up, [math.cos(math.radians(30.0)), 0.0, -math.sin(math.radians(30.0))])
 
-        async def section(name: str) -> np.ndarray:
+        async def section(name: str) -> tuple[np.ndarray, np.ndarray]:  # its points, and where the camera looks from
             before = view._cloud
             await client.set_gui("Section", name)
             await until(lambda: view._cloud is not before and view._cloud is not None, what=name)
