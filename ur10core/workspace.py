@@ -48,10 +48,9 @@ def base_turn(arm) -> tuple[float, float] | None:
     """
     if arm.joint_types[0] != "R":
         raise ValueError("its first joint slides: no joint turns the whole arm about the base axis")
-    if arm.dh is not None:
+    if arm.dh is not None:  # (a DH table's vertical is its z)
         axes, on_axes = arm.dh.joint_axes(arm.dh.frames(arm.limits.mean(axis=1)))  # (the first axis is the same at any q)
-        axis, off = axes[0] @ arm.upright.T, on_axes[0] @ arm.upright.T
-        if axis[2] < 1.0 - 1e-9 or np.hypot(*off[:2]) > 1e-9:
+        if axes[0, 2] < 1.0 - 1e-9 or np.hypot(*on_axes[0, :2]) > 1e-9:
             raise ValueError("its first joint's axis is not the base's z axis")
     low, high = (float(v) for v in arm.limits[0])
     return None if high - low >= 2.0 * math.pi - LIMIT_TOLERANCE else (low, high)

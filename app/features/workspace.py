@@ -408,12 +408,13 @@ class WorkspaceView(View):
         if section == SECTIONS[0]:
             camera.frame()
             return
+        facing = self._session.drawing.world[:3, :3] @ self._plane_normal()  # the arm's plane's normal, in the world
         if section == HULL:  # the whole of it in view, from the course's three-quarter angle
             direction = views_for(self._session.arm)["Course figure"]
         elif section == SECTIONS[1]:
-            direction = -self._session.drawing.world[:3, :3] @ self._plane_normal()
+            direction = -facing
         elif section == SECTIONS[3]:
-            direction = self._session.drawing.world[:3, :3] @ self._plane_normal()  # from the open side, onto the cut face
+            direction = facing  # from the open side, onto the cut face
         else:
             direction = FROM_ABOVE
         camera.look_from(direction)
