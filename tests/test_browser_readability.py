@@ -367,7 +367,7 @@ def test_the_workspace_seen_square_on_through_its_sections_and_the_branch_count_
     wait_for(lambda: workspace._cloud is not None, what="the cloud")
     choose(page, workspace.section, "horizontal section (top view)")
     wait_for(lambda: workspace._cloud is not None and len(workspace._cloud.points) == 40_000, what="a section sampled in its plane")
-    np.testing.assert_allclose(workspace._cloud.points[:, 2].astype(float), 0.6, atol=2e-4)  # sent as float16
+    np.testing.assert_allclose(workspace._cloud.points[:, 2].astype(float), workspace.height.value / 1000.0, atol=2e-4)  # float16
     assert "manipulability" in workspace.legend_label.text  # beside the cloud in 3D, for viewers too
     wait_for(lambda: forward(session)[2] < -0.95, what="the camera looking down on the section")
     choose(page, workspace.section, "vertical section (side view)")

@@ -428,7 +428,7 @@ def test_a_course_arms_workspace_cloud(app):
 
         hint = session.workspace.section.hint
         assert session.workspace.sections_missing.visible and session.workspace.sections_missing.content == hint
-        assert SECTIONS[2] not in session.workspace.section.options and "No horizontal section" in hint
+        assert SECTIONS[2] in session.workspace.section.options and "horizontal" not in hint
         # θ1 turns ±105°: no hull, which would turn the outline a full turn; the side view keeps what θ1 turns into it
         assert HULL not in session.workspace.section.options and "θ1 turns from -105° to 105° only" in hint
         whole = np.asarray(points, dtype=float)
@@ -438,7 +438,7 @@ def test_a_course_arms_workspace_cloud(app):
         kept = turnable_into(whole, q1, turns, (-np.radians(105), np.radians(105)))
         assert 0 < kept.sum() < len(whole)
         await until(lambda: len(session.workspace._cloud.points) == kept.sum(), what="the side view")
-        await client.set_gui("Section", SECTIONS[2])  # a browser never sends a choice it was not given: refused
+        await client.set_gui("Section", HULL)  # a browser never sends a choice it was not given: refused
         line = session.workspace.refusal.line
         await until(lambda: line.visible and "is not one of the choices" in line.content, what="the refusal")
         await client.set_gui("Show workspace cloud", False)

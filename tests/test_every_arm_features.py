@@ -20,7 +20,7 @@ from ur10teach.features.ik_target import GIZMO_SHARE, HALO_SHARE
 from ur10teach.features.joint_panel import rate_label
 from ur10teach.features.statics import bars_html
 from ur10teach.features.velocity import METRES_PER_SPEED, METRES_PER_TURN_RATE, parse_twist
-from ur10teach.features.workspace import POINT_SIZE
+from ur10teach.features.workspace import FROM_ABOVE, POINT_SIZE, SECTIONS, section_heights
 from ur10teach.style import UR10_SIZE
 
 from .server_support import scene_pose, until, url
@@ -352,6 +352,26 @@ def test_the_workspace_cloud_of_every_arm_is_its_own(app, label):
         note, hint = session.workspace.sections_missing, session.workspace.section.hint
         assert note.visible == (len(session.workspace.section.options) < 5) and note.content == (hint or "")
         await until(lambda: f"{session.drawing.root}/workspace" in client.received.nodes, what="the cloud on screen")
+        # its top view, at the middle of the heights its tool reaches: the points of its own section, in the plane at
+        # that height above its floor (the desktop arm's along its y), seen from above. Until 2026-12-07 the UR
+        # family's alone, from its closed form, on a slider of the UR10's heights
+        view, up = session.workspace, np.asarray(session.arm.up)
+        if SECTIONS[2] not in view.section.options:
+            assert session.arm.planar and "the whole cloud is already its top view" in note.content
+        else:
+            assert (view.height.min, view.height.max) == section_heights(session.arm)
+            height = view.height.value
+            assert view.height.min < height < view.height.max
+            whole = view._cloud
+            await client.set_gui("Section", SECTIONS[2])
+            await until(lambda: view._cloud is not whole and view._cloud is not None and not view._clouds.busy,
+                        what="the section")
+            section = np.asarray(view._cloud.points, dtype=float)
+            np.testing.assert_allclose(section @ up + session.arm.base_height, height / 1000.0, atol=4e-3)  # float16
+            expected, _ = session.arm.sample_horizontal_section(height / 1000.0, 10_000, seed=0)
+            np.testing.assert_allclose(section, expected, atol=4e-3)
+            position, look_at = session.camera._framed_at
+            assert (position - look_at) @ np.asarray(FROM_ABOVE) / np.linalg.norm(position - look_at) > 0.99
         await client.close()
 
     asyncio.run(scenario())

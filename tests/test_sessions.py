@@ -389,8 +389,8 @@ def test_a_section_slider_flood_costs_one_cloud_in_the_making_and_one_waiting(ap
 
     def held_update(self):
         computed.append(self.height.value)
-        if self.height.value != 600.0:  # the flood has begun: this cloud takes until the test lets it go
-            held.wait(HANG_TIMEOUT)
+        if self.height.value != computed[0]:  # the flood has begun (the first ran at the slider's first value): this
+            held.wait(HANG_TIMEOUT)  # cloud takes until the test lets it go
         original(self)
 
     monkeypatch.setattr(WorkspaceView, "_update", held_update)
@@ -418,23 +418,26 @@ def test_a_section_slider_flood_costs_one_cloud_in_the_making_and_one_waiting(ap
     assert len(flood) == 2 and flood[-1] == 990.0, flood  # the newest height: -500 + 10 × 149
 
 
-def test_a_section_height_the_flange_never_reaches_is_refused_in_the_folder(app):
-    """1600 mm is on the slider but above the UR10's reach (d1 + a2 + a3 + d5 + d6 = 1520 mm): the refusal stands in
-    the Workspace folder (until 2026-12-05 a notice in the window's corner), and goes once a height is drawn."""
+def test_every_height_on_the_section_slider_has_a_section(app):
+    """The slider spans the heights the UR10's tool reaches (until 2026-12-07 −600 to 1600 mm, above its reach of
+    1520 mm): its two ends and its first value each draw a section in that plane."""
+    from ur10teach.features.workspace import section_heights
 
     async def scenario():
         client = await ViserClient(url(app)).connect()
         session = session_of(app, client)
-        line = session.workspace.refusal.line
+        view, line = session.workspace, session.workspace.refusal.line
+        low, high = section_heights(session.arm)
+        assert (view.height.min, view.height.max) == (low, high) and -1270 < low < -1100 and 1400 < high < 1520
+        assert low < view.height.value < high
         await client.set_gui("Samples", "10 k")
         await client.set_gui("Section", "horizontal section (top view)")
-        await client.set_gui("Section height (mm)", 1600.0)
         await client.set_gui("Show workspace cloud", True)
-        await until(lambda: line.visible and "Height 1.600 m is outside the workspace" in line.content, what="the refusal")
-        assert session.workspace._cloud is None and not client.received.notifications
-        await client.set_gui("Section height (mm)", 600.0)
-        await until(lambda: session.workspace._cloud is not None and not line.visible, what="the section drawn")
-        np.testing.assert_allclose(session.workspace._cloud.points[:, 2], 0.6, atol=1e-3)
+        for height in (view.height.value, high, low):
+            await client.set_gui("Section height (mm)", height)
+            await until(lambda: view._cloud is not None and not view._clouds.busy and np.allclose(
+                view._cloud.points[:, 2], height / 1000.0, atol=1e-3), what=f"the section at {height} mm")
+            assert not line.visible and not client.received.notifications
         await client.close()
 
     asyncio.run(scenario())
@@ -443,6 +446,7 @@ def test_a_section_height_the_flange_never_reaches_is_refused_in_the_folder(app)
 def test_a_refused_height_stays_said_while_the_section_is_drawn_again(app):
     """99999 mm typed in the height's box is refused and the slider put back; putting it back draws the section
     again on a thread of its own, and that run, done, cleared the refusal it had not seen (2026-12-05)."""
+    from ur10teach.features.workspace import section_heights
 
     async def scenario():
         client = await ViserClient(url(app)).connect()
@@ -454,7 +458,8 @@ def test_a_refused_height_stays_said_while_the_section_is_drawn_again(app):
         await until(lambda: view._cloud is not None and not view._clouds.busy, what="the section")
         drawn = view._cloud
         await client.set_gui("Section height (mm)", 99999.0)
-        await until(lambda: line.visible and "from -600 to 1600, got 99999" in line.content, what="the refusal")
+        low, high = section_heights(session.arm)
+        await until(lambda: line.visible and f"from {low:g} to {high:g}, got 99999" in line.content, what="the refusal")
         await until(lambda: view._cloud is not drawn and not view._clouds.busy, what="the section drawn again")
         assert line.visible and "got 99999" in line.content
         await client.close()

@@ -67,29 +67,84 @@ def test_lowest_points_is_the_lowest_of_every_body_point_moved_in_full(course):
     np.testing.assert_allclose(lowest_points(frames, points, up), expected, atol=1e-12)
 
 
-def test_a_horizontal_section_is_sampled_in_its_plane(course):
-    points, manipulability, q = course.sample_horizontal_section(0.6, 5000, seed=1, return_joints=True)
-    assert (points[:, 2] == 0.6).all()
-    np.testing.assert_allclose(course.fk(q)[:, :3, 3], points, atol=1e-12)
-    np.testing.assert_allclose(manipulability, np.abs(np.linalg.det(course.jacobian(q))), atol=1e-12)
-    assert (q[:, :5] > -np.pi).all() and (q[:, :5] <= np.pi).all() and (q[:, 5] == 0).all()
-    again, _ = course.sample_horizontal_section(0.6, 5000, seed=1)
+SECTIONED = [name for name in Arm.PRESETS if name != "planar_elbow"]  # (its tool moves in one horizontal plane)
+
+
+@pytest.mark.parametrize("name", SECTIONED)
+def test_a_horizontal_section_is_sampled_in_its_plane_on_every_arm(name):
+    """At five heights across what the tool reaches: each point is where FK puts the tool at its joints, within the
+    limits, exactly at the height above the arm's floor (the desktop arm's along its y), with its manipulability."""
+    arm = Arm.preset(name)
+    up = np.asarray(arm.up)
+    lowest, highest = arm.tool_heights
+    for height in np.linspace(lowest, highest, 7)[1:-1]:
+        points, manipulability, q = arm.sample_horizontal_section(height, 3000, seed=1, return_joints=True)
+        assert len(points) == 3000, height
+        np.testing.assert_allclose(arm.fk(q)[:, :3, 3], points, atol=1e-9)
+        assert (points @ up + arm.base_height == height).all()
+        assert arm.within_limits(q).all()
+        np.testing.assert_allclose(manipulability, arm.manipulability(q), rtol=1e-12, atol=1e-15)
+    again, _ = arm.sample_horizontal_section(height, 3000, seed=1)
     np.testing.assert_array_equal(points, again)
 
 
-def test_a_horizontal_section_covers_what_a_slab_of_the_cloud_covers(course):
-    """The same ring of radii as the points of a big cloud within 5 mm of the plane, and far more of them."""
+def test_the_desktop_arm_section_holds_its_closed_form_height():
+    """docs/kinematics.md §8.6: the tool is l1 s3 − l5 s2 above the shoulder, which stands 1.5 m above the floor."""
+    arm = Arm.preset("three_dof")
+    _, _, q = arm.sample_horizontal_section(1.2, 2000, seed=3, return_joints=True)
+    height = arm.forearm * np.sin(q[:, 2]) - arm.upper_arm * np.sin(q[:, 1]) + 1.5
+    np.testing.assert_allclose(height, 1.2, atol=1e-12)
+
+
+@pytest.mark.parametrize("name", SECTIONED)
+def test_a_horizontal_section_covers_what_a_slab_of_the_cloud_covers(name):
+    """Every point of a big cloud within a thin slab about the plane has a point of the section (the app's 40 000)
+    near it, and the section holds far more points than the slab: sampled in the plane, it misses no part of it."""
+    arm = Arm.preset(name)
+    lowest, highest = arm.tool_heights
+    height = lowest + 0.4 * (highest - lowest)
+    cloud, _ = arm.sample_workspace(200_000, seed=2)
+    standing = cloud @ arm.upright.T  # (z up: the desktop arm's y)
+    slab = standing[np.abs(standing[:, 2] + arm.base_height - height) < 0.002 * arm.reach_bound]
+    section, _ = arm.sample_horizontal_section(height, 40_000, seed=2)
+    assert 20 < len(slab) < len(section)
+    # the section's points in a grid of cells 1.5 % of the reach wide: a slab point's cell or one beside it holds one
+    cell = 0.015 * arm.reach_bound
+    filled = {tuple(c) for c in np.floor((section @ arm.upright.T)[:, :2] / cell).astype(int)}
+    near = [any((i + di, j + dj) in filled for di in (-1, 0, 1) for dj in (-1, 0, 1))
+            for i, j in np.floor(slab[:, :2] / cell).astype(int)]
+    assert all(near), slab[~np.array(near)][:5]
+
+
+def test_the_ur10s_section_is_a_ring_as_wide_as_the_slab():
+    """The UR10's top view: the same ring of radii as the points of a big cloud within 5 mm of the plane, every
+    radius in between filled."""
+    course = Arm.preset("course")
     cloud, _ = course.sample_workspace(1_000_000, seed=2)
     slab = cloud[np.abs(cloud[:, 2] - 0.6) < 0.005]
     section, _ = course.sample_horizontal_section(0.6, 20000, seed=2)
     r_slab, r_section = np.hypot(*slab[:, :2].T), np.hypot(*section[:, :2].T)
     assert len(slab) < 5000 < len(section)
     assert abs(r_slab.min() - r_section.min()) < 0.03 and abs(r_slab.max() - r_section.max()) < 0.03
-    # and the radii in between are all filled: no ring of the slab is missing from the section
     bins = np.linspace(r_slab.min(), r_slab.max(), 30)
     slab_hist, _ = np.histogram(r_slab, bins)
     section_hist, _ = np.histogram(r_section, bins)
     assert (section_hist[slab_hist > 5] > 0).all()
+
+
+@pytest.mark.parametrize("name", Arm.PRESETS)
+def test_the_tool_heights_are_those_of_the_cloud(name):
+    """The heights the tool reaches among 20 000 draws: within 2 % of its reach of a bigger cloud's extremes, and on
+    the UR family within its exact reach up and down, d1 ± (a2 + a3 + d5 + d6); one height on the planar elbow."""
+    arm = Arm.preset(name)
+    lowest, highest = arm.tool_heights
+    cloud, _ = arm.sample_workspace(200_000, seed=5)
+    heights = cloud @ np.asarray(arm.up) + arm.base_height
+    assert abs(lowest - heights.min()) < 0.02 * arm.reach_bound and abs(highest - heights.max()) < 0.02 * arm.reach_bound
+    assert (highest - lowest < 1e-9) == (name == "planar_elbow")
+    if name in Arm.UR_PRESETS:
+        stretched = arm.a2 + arm.a3 + arm.d5 + arm.d6
+        assert arm.d1 - stretched < lowest < arm.d1 - stretched + 0.1 and arm.d1 + stretched - 0.1 < highest < arm.d1 + stretched
 
 
 def test_a_section_nobody_reaches_is_refused(course):
@@ -99,6 +154,20 @@ def test_a_section_nobody_reaches_is_refused(course):
         course.sample_horizontal_section(float("nan"), 10)
     with pytest.raises(ValueError, match="positive integer"):
         course.sample_horizontal_section(0.5, 0)
+    with pytest.raises(ValueError, match="no tool position found at that height"):  # on reach_bound, beyond its top
+        course.sample_horizontal_section(1.6, 10)
+    with pytest.raises(ValueError, match="a tool that does not move up and down"):
+        Arm.preset("planar_elbow").sample_horizontal_section(0.0, 10)
+    with pytest.raises(ValueError, match="no tool position found"):  # the SCARA's stroke ends 10 mm higher
+        Arm.preset("scara").sample_horizontal_section(0.167, 10)
+
+
+def test_a_typed_arm_has_a_horizontal_section_too():
+    """A typed table's (numerical IK, no closed form of anything): its shoulder joint solved for the height."""
+    typed = Arm.from_dh([(0.0, np.pi / 2, 0.3, 0), (0.4, 0, 0, 0), (0.3, 0, 0, 0)], joint_types="RRR")
+    points, _, q = typed.sample_horizontal_section(0.5, 500, seed=0, return_joints=True)
+    np.testing.assert_allclose(typed.fk(q)[:, :3, 3], points, atol=1e-12)
+    assert (points[:, 2] == 0.5).all() and np.ptp(np.hypot(points[:, 0], points[:, 1])) > 0.2
 
 
 # ---------------------------------------------------------------- the branch-count map
@@ -253,9 +322,9 @@ def test_a_side_view_keeps_only_what_theta1_turns_into_its_plane(name):
 
 
 @pytest.mark.parametrize("name, lacks", [
-    ("ur10", set()), ("kr210", {"horizontal"}), ("cylindrical_wrist", {"horizontal"}),
-    ("scara", {"horizontal", "translucent"}), ("stanford", {"horizontal", "translucent"}), ("elbow", {"horizontal", "translucent"}),
-    ("planar_elbow", {"horizontal", "translucent"}), ("three_dof", {"horizontal", "translucent"}),
+    ("ur10", set()), ("kr210", set()), ("cylindrical_wrist", set()),
+    ("scara", {"translucent"}), ("stanford", {"translucent"}), ("elbow", {"translucent"}),
+    ("planar_elbow", {"horizontal", "translucent"}), ("three_dof", {"translucent"}),
 ])
 def test_each_arm_offers_the_sections_true_of_it_and_says_why_not_the_others(name, lacks):
     """A hull turns the outline a full turn about z: offered where θ1 turns a full turn and the workspace has height
@@ -267,13 +336,15 @@ def test_each_arm_offers_the_sections_true_of_it_and_says_why_not_the_others(nam
     assert bool(why) == bool(lacks)
     if "translucent" in lacks:
         assert ("no height to bound" if name == "planar_elbow" else "only, so it would take in places") in why
+    if "horizontal" in lacks:  # (until 2026-12-07 every arm but the UR family's lacked it: it had the closed form)
+        assert "No horizontal section: the tool stays 0 mm above the floor, so the whole cloud is already its top view" in why
 
 
 def test_a_typed_arm_whose_first_joint_slides_has_no_side_view_nor_hull_and_is_told_why():
     from ur10teach.features.workspace import SECTIONS, sections_of
 
     offered, why = sections_of(Arm.from_dh([(0, 0, 0.3, 0), (0.4, 0, 0, 0)], "standard", "PR"))
-    assert offered == (SECTIONS[0], SECTIONS[3])
+    assert offered == (SECTIONS[0], SECTIONS[2], SECTIONS[3])  # (its sliding joint moves the tool up and down)
     assert "No side view and no hull: they turn the cloud about the base axis by θ1, and its first joint slides" in why
 
 

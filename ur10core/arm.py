@@ -578,6 +578,33 @@ class Arm(JacobianUses, HasSpecs):
             return points, manipulability, q
         return points, manipulability
 
+    def sample_horizontal_section(self, height: float, n: int, seed: int = 0, return_joints: bool = False):
+        """Up to ``n`` tool positions exactly ``height`` (m) above the floor, their manipulability and, with
+        ``return_joints``, their joints (m, n_joints): a horizontal section of :meth:`sample_workspace` sampled in
+        its plane, one joint solved for the height (:func:`ur10core.workspace.sample_horizontal_section`).
+
+        >>> points, _ = Arm.preset("scara").sample_horizontal_section(0.3, 3)   # its sliding joint sets the height
+        >>> points[:, 2].round(12).tolist()
+        [0.3, 0.3, 0.3]
+        """
+        from .workspace import sample_horizontal_section
+
+        return sample_horizontal_section(self, height, n, seed, return_joints)
+
+    @property
+    def tool_heights(self) -> tuple[float, float]:
+        """(lowest, highest) height of the tool above the floor (m) among 20 000 draws, a little within its reach;
+        one height twice for an arm whose tool moves in one horizontal plane (:func:`ur10core.workspace.tool_heights`).
+
+        >>> [round(v, 2) for v in Arm.preset("ur10").tool_heights]   # within d1 ∓ (a2 + a3 + d5 + d6) = -1.26, 1.52
+        [-1.2, 1.45]
+        >>> [round(v, 3) for v in Arm.preset("planar_elbow").tool_heights]
+        [0.0, 0.0]
+        """
+        from .workspace import tool_heights
+
+        return tool_heights(self)
+
 
 #: Points along each joint's range where :func:`_onto_zero` looks for a factor's sign change or dip.
 _ZERO_GRID = 721

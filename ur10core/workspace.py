@@ -16,7 +16,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ._validate import as_float_array, check_finite
+from ._validate import as_float_array, check_finite, sample_size
 from .tolerances import FLOOR_TOLERANCE, LIMIT_TOLERANCE
 
 
@@ -111,6 +111,134 @@ def horizontal_section(points, height: float, thickness: float = 0.02) -> tuple[
     out = points[keep].copy()
     out[:, 2] = height
     return out, keep
+
+
+#: Draws each joint is tried on, to pick the joint that moves the tool onto a section's height.
+_TRIAL_DRAWS = 256
+
+
+def sample_horizontal_section(arm, height: float, n: int, seed: int = 0, return_joints: bool = False):
+    """Up to ``n`` tool positions exactly ``height`` (m) above ``arm``'s floor (:func:`heights_above_floor`), their
+    manipulability and, with ``return_joints``, their joints: :meth:`Arm.sample_horizontal_section`.
+
+    A horizontal section of the workspace sampled in the plane itself rather than filtered from a cloud (a thin
+    slab of a 200 k cloud holds a few hundred points). With the other joints held, one joint k moves the tool's
+    height h along a sinusoid (a revolute joint turns all after it rigidly about its axis) or a line (a prismatic
+    one slides them), docs/kinematics.md §3, "A horizontal section":
+
+        h(θk) = K + A cos θk + B sin θk,  K = (h(0) + h(π)) / 2,  A = (h(0) − h(π)) / 2,  B = h(π/2) − K
+        h(dk) = h(0) + dk (h(1) − h(0))
+
+    so with the others drawn as :meth:`Arm.sample_joints` does, θk = atan2(B, A) ± acos((height − K) / √(A² + B²))
+    (either sign at random, the other where that one is beyond the limits) or dk = (height − h(0)) / (h(1) − h(0))
+    puts the tool in the plane; a draw whose k reaches neither is drawn again, up to 20 rounds (fewer than ``n``
+    come back only near the top or bottom of the workspace). k is the joint that puts the tool at ``height``
+    from the most of 256 trial draws: θ2 on the UR10. FK checks every point, and the points are put in the
+    plane exactly. ``ValueError`` where no tool position is found at that height.
+
+    Returns points (m, 3) in the base frame, m ≤ n, manipulability (m,) and the joints (m, n_joints).
+
+    >>> from ur10core import Arm
+    >>> points, _ = sample_horizontal_section(Arm.preset("course"), 0.5, 4)
+    >>> points[:, 2].round(12).tolist()
+    [0.5, 0.5, 0.5, 0.5]
+    >>> points, _ = sample_horizontal_section(Arm.preset("three_dof"), 0.5, 2)   # y up, its shoulder 1.5 m up
+    >>> points[:, 1].round(12).tolist()
+    [-1.0, -1.0]
+    """
+    from .solvers.numerical import sampling_range
+
+    n, seed = sample_size(n, seed)
+    height = float(as_float_array(height, "height"))
+    up = np.asarray(arm.up, dtype=float)
+    level = height - arm.base_height  # along ``up`` from the base frame's origin
+    if not np.isfinite(height) or abs(level) >= arm.reach_bound:
+        raise ValueError(f"height {height:.3f} m is outside the workspace: the tool reaches heights within "
+                         f"{arm.reach_bound:.3f} m of its base's, {arm.base_height:.3f} m")
+    rng = np.random.default_rng(seed)
+    low, high = sampling_range(arm.limits, arm.revolute)
+
+    def draws(count: int) -> np.ndarray:
+        return rng.uniform(low, high, (count, arm.n_joints))
+
+    def onto(q: np.ndarray, k: int) -> np.ndarray:  # the draws whose joint k puts the tool at ``level``
+        K, A, B = height_curve(arm, q, k)
+        if arm.revolute[k]:
+            with np.errstate(divide="ignore", invalid="ignore"):
+                ratio = (level - K) / np.hypot(A, B)
+            sign = np.where(rng.random(len(q)) < 0.5, -1.0, 1.0)
+            first, second = (_into(np.arctan2(B, A) + s * np.arccos(np.clip(ratio, -1.0, 1.0)), low[k])
+                             for s in (sign, -sign))
+            value = np.where(first <= high[k], first, second)
+            reached = (np.abs(ratio) <= 1.0) & (value <= high[k])
+        else:
+            with np.errstate(divide="ignore", invalid="ignore"):
+                value = (level - K) / A
+            reached = (value >= low[k]) & (value <= high[k])  # (NaN, where it does not move the height, is neither)
+        q = q[reached]
+        q[:, k] = value[reached]
+        return q
+
+    trial = draws(_TRIAL_DRAWS)
+    k = int(np.argmax([len(onto(trial, j)) for j in range(arm.n_joints)]))
+    kept, count = [], 0
+    for _ in range(20):  # inside the workspace a round keeps a good share of its draws
+        q = onto(draws(max(2 * (n - count), 1024)), k)
+        kept.append(q)
+        count += len(q)
+        if count >= n:
+            break
+    q = np.concatenate(kept)[:n]
+    points = arm.fk(q)[:, :3, 3] if len(q) else np.empty((0, 3))
+    on_plane = np.abs(points @ up - level) <= 1e-9 * max(1.0, arm.reach_bound)  # (the sinusoid and the line hold)
+    q, points = q[on_plane], points[on_plane]
+    if not len(q):
+        raise ValueError(f"height {height:.3f} m: no tool position found at that height (beyond the top or bottom of "
+                         f"the workspace, or a tool that does not move up and down)")
+    points += (level - points @ up)[:, None] * up  # exact, not FK's last bit
+    manipulability = arm.manipulability(q)
+    return (points, manipulability, q) if return_joints else (points, manipulability)
+
+
+def height_curve(arm, q, k: int) -> tuple[np.ndarray, np.ndarray, np.ndarray | None]:
+    """How joint ``k`` moves the tool's height (along ``arm.up`` from the base frame's origin) from each of the joint
+    vectors ``q`` (m, n), the others held: (K, A, B) (m,) of h(θk) = K + A cos θk + B sin θk for a revolute joint,
+    (h(0), slope, None) of h(dk) = h(0) + slope · dk for a prismatic one (:func:`sample_horizontal_section`).
+
+    >>> from ur10core import Arm
+    >>> [v.round(4).tolist() for v in height_curve(Arm.preset("course"), np.zeros((1, 6)), 1)]   # §3: d1, Q, P
+    [[0.128], [0.1157], [1.1845]]
+    """
+    up = np.asarray(arm.up, dtype=float)
+
+    def along(value: float) -> np.ndarray:
+        moved = q.copy()
+        moved[:, k] = value
+        return arm.fk(moved)[:, :3, 3] @ up
+
+    if not arm.revolute[k]:
+        h0 = along(0.0)
+        return h0, along(1.0) - h0, None
+    h0, h90, h180 = along(0.0), along(math.pi / 2), along(math.pi)
+    return (h0 + h180) / 2, (h0 - h180) / 2, h90 - (h0 + h180) / 2
+
+
+def _into(angles: np.ndarray, low: float) -> np.ndarray:
+    """``angles`` turned by whole turns into [low, low + 2π)."""
+    return low + np.mod(angles - low, 2.0 * math.pi)
+
+
+@functools.lru_cache(maxsize=32)
+def tool_heights(arm) -> tuple[float, float]:
+    """(lowest, highest) height of ``arm``'s tool above its floor (m) among 20 000 joint vectors drawn within its
+    limits (:meth:`Arm.sample_joints`): :attr:`Arm.tool_heights`.
+
+    A sample misses the very top and bottom, where a section is a speck (the UR10's reach 60 mm more each way),
+    so a horizontal section is found at every height between the two. One height, twice, for an arm whose tool
+    moves in one horizontal plane.
+    """
+    heights = heights_above_floor(arm, arm.fk(arm.sample_joints(20_000))[:, :3, 3])
+    return float(heights.min()), float(heights.max())
 
 
 def through_floor(arm, q, body_points=None, tolerance: float = FLOOR_TOLERANCE) -> np.ndarray:

@@ -222,20 +222,27 @@ def _turn_range(arm: Arm) -> tuple[float, float] | None:
         return None
 
 
+def section_heights(arm: Arm) -> tuple[float, float]:
+    """The section height slider's range (mm above the floor): the heights the tool reaches (``Arm.tool_heights``), on
+    the slider's 10 mm steps within them, so that every height on it has a section."""
+    lowest, highest = (1000.0 * v for v in arm.tool_heights)
+    low = 10.0 * math.ceil(lowest / 10.0 - 1e-9)
+    return low, max(10.0 * math.floor(highest / 10.0 + 1e-9), low + 10.0)  # (a slider needs some range)
+
+
 def sections_of(arm: Arm) -> tuple[tuple[str, ...], str]:
     """The sections ``arm``'s cloud offers, and what the folder says of those it lacks ("" if none).
 
-    A horizontal section is sampled in its plane, from the flange height's closed form in θ2,
-    which only the UR family has (docs/kinematics.md §3); a slab cut from any cloud would hold
-    a few hundred points. The side view and the hull turn the cloud about the base axis by θ1: the hull
-    a full turn, so it needs a workspace that is a solid of revolution, and some height. The axis is the arm's
-    vertical (``Arm.up``: the desktop arm's y).
+    A horizontal section needs a tool that moves up and down (``Arm.tool_heights``). The side view and the hull turn
+    the cloud about the base axis by θ1: the hull a full turn, so it needs a workspace that is a solid of revolution,
+    and some height. The axis is the arm's vertical (``Arm.up``: the desktop arm's y).
     """
     sections, missing = list(SECTIONS), []
-    if not hasattr(arm.solver, "sample_horizontal_section"):
+    lowest, highest = arm.tool_heights
+    if highest - lowest < 1e-9:
         sections.remove(SECTIONS[2])
-        missing.append("No horizontal section for this arm: it is sampled in its plane from the UR family's closed form "
-                       "of the flange's height, which this arm does not have.")
+        missing.append(f"No horizontal section: the tool stays {1000 * lowest:.0f} mm above the floor, so the whole cloud "
+                       f"is already its top view.")
     try:
         turn = base_turn(arm)
     except ValueError as why:
@@ -285,8 +292,10 @@ class WorkspaceView(View):
             self.section = gui.add_dropdown("Section", sections, initial_value=SECTIONS[0], hint=missing or None)
             # (said in the folder too: a projector's audience cannot hover over a tooltip)
             self.sections_missing = gui.add_markdown(missing, visible=bool(missing))
-            self.height = gui.add_slider("Section height (mm)", min=-600.0, max=1600.0, step=10.0,
-                                         initial_value=600.0, visible=False)
+            low, high = section_heights(session.arm)
+            self.height = gui.add_slider("Section height (mm)", min=low, max=high, step=10.0,
+                                         initial_value=10.0 * round((low + high) / 20.0), visible=False,
+                                         hint=f"Above the floor: from {low:g} to {high:g} mm, the heights the tool reaches in a cloud of 20 000")
             within(self.height, "section height (mm)")  # accepted: a first value refused puts it back here, not at 0
             self.refusal = Beside(gui)  # a height beyond the slider's range or the flange's reach, an empty section
             self.progress = gui.add_progress_bar(0.0, animated=True, visible=False)
