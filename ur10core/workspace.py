@@ -131,10 +131,10 @@ def sample_horizontal_section(arm, height: float, n: int, seed: int = 0, return_
 
     so with the others drawn as :meth:`Arm.sample_joints` does, θk = atan2(B, A) ± acos((height − K) / √(A² + B²))
     (either sign at random, the other where that one is beyond the limits) or dk = (height − h(0)) / (h(1) − h(0))
-    puts the tool in the plane; a draw whose k reaches neither is drawn again, up to 20 rounds (fewer than ``n``
-    come back only near the top or bottom of the workspace). k is the joint that puts the tool at ``height``
-    from the most of 256 trial draws: θ2 on the UR10. FK checks every point, and the points are put in the
-    plane exactly. ``ValueError`` where no tool position is found at that height.
+    puts the tool in the plane. k is the joint that puts the tool at ``height`` from the most of 256 trial draws
+    (θ2 on the UR10); the others are drawn until ``n`` reach the plane or 20 ``n`` have been drawn (fewer than
+    ``n`` come back only near the top or bottom of the workspace). FK checks every point, and the points are put
+    in the plane exactly. ``ValueError`` where no tool position is found at that height.
 
     Returns points (m, 3) in the base frame, m ≤ n, manipulability (m,) and the joints (m, n_joints).
 
@@ -180,14 +180,15 @@ def sample_horizontal_section(arm, height: float, n: int, seed: int = 0, return_
         return q
 
     trial = draws(_TRIAL_DRAWS)
-    k = int(np.argmax([len(onto(trial, j)) for j in range(arm.n_joints)]))
-    kept, count = [], 0
-    for _ in range(20):  # inside the workspace a round keeps a good share of its draws
-        q = onto(draws(max(2 * (n - count), 1024)), k)
+    reached = [len(onto(trial, j)) for j in range(arm.n_joints)]
+    k = int(np.argmax(reached))
+    share = max(reached[k], 1) / _TRIAL_DRAWS  # of the draws that reach the plane: rounds are sized by it
+    kept, count, drawn = [], 0, 0
+    while count < n and drawn < 20 * n:  # (near the top or bottom few reach it: the draws stop there)
+        size = min(int(1.2 * (n - count) / share) + 64, 20 * n - drawn, 65536)  # (FK's arrays kept small)
+        q = onto(draws(size), k)
         kept.append(q)
-        count += len(q)
-        if count >= n:
-            break
+        count, drawn = count + len(q), drawn + size
     q = np.concatenate(kept)[:n]
     points = arm.fk(q)[:, :3, 3] if len(q) else np.empty((0, 3))
     on_plane = np.abs(points @ up - level) <= 1e-9 * max(1.0, arm.reach_bound)  # (the sinusoid and the line hold)
