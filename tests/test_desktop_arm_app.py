@@ -220,7 +220,8 @@ def test_the_desktop_arms_side_view_and_cut_away_are_cut_about_its_vertical(app)
         async def section(name: str) -> tuple[np.ndarray, np.ndarray]:  # its points, and where the camera looks from
             before = view._cloud
             await client.set_gui("Section", name)
-            await until(lambda: view._cloud is not before and view._cloud is not None, what=name)
+            # the run done: the camera turns after the cloud is drawn (a CI run read it in between, 2026-12-07)
+            await until(lambda: view._cloud is not before and view._cloud is not None and not view._clouds.busy, what=name)
             position, look_at = session.camera._framed_at
             return np.asarray(view._cloud.points, dtype=float), (position - look_at) / np.linalg.norm(position - look_at)
 
