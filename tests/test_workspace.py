@@ -150,10 +150,12 @@ def test_the_tool_heights_are_those_of_the_cloud(name):
 def test_a_section_nobody_reaches_is_refused(course):
     with pytest.raises(ValueError, match="outside the workspace"):
         course.sample_horizontal_section(2.0, 10)
-    with pytest.raises(ValueError, match="outside the workspace"):
+    with pytest.raises(ValueError, match="height must be one finite number"):
         course.sample_horizontal_section(float("nan"), 10)
     with pytest.raises(ValueError, match="positive integer"):
         course.sample_horizontal_section(0.5, 0)
+    with pytest.raises(ValueError, match="height must be one finite number"):
+        course.sample_horizontal_section([0.5, 0.6], 10)
     with pytest.raises(ValueError, match="no tool position found at that height"):  # on reach_bound, beyond its top
         course.sample_horizontal_section(1.6, 10)
     with pytest.raises(ValueError, match="a tool that does not move up and down"):

@@ -149,10 +149,13 @@ def sample_horizontal_section(arm, height: float, n: int, seed: int = 0, return_
     from .solvers.numerical import sampling_range
 
     n, seed = sample_size(n, seed)
-    height = float(as_float_array(height, "height"))
+    height = as_float_array(height, "height")
+    if height.ndim != 0 or not np.isfinite(height):
+        raise ValueError(f"height must be one finite number (m above the floor), got {height.tolist()!r:.40}")
+    height = float(height)
     up = np.asarray(arm.up, dtype=float)
     level = height - arm.base_height  # along ``up`` from the base frame's origin
-    if not np.isfinite(height) or abs(level) >= arm.reach_bound:
+    if abs(level) >= arm.reach_bound:
         raise ValueError(f"height {height:.3f} m is outside the workspace: the tool is never more than "
                          f"{arm.reach_bound:.3f} m above or below its base, which stands {arm.base_height:.3f} m above the floor")
     rng = np.random.default_rng(seed)
