@@ -372,6 +372,17 @@ def test_the_workspace_cloud_of_every_arm_is_its_own(app, label):
             np.testing.assert_allclose(section, expected, atol=4e-3)
             position, look_at = session.camera._framed_at
             assert (position - look_at) @ np.asarray(FROM_ABOVE) / np.linalg.norm(position - look_at) > 0.99
+            # through the tool: the section at the tool's height (to 10 mm), with points about the tool's place in it
+            tool = session.state.last.flange[:3, 3]
+            at_tool = 10.0 * round(100.0 * float(tool @ up + session.arm.base_height))
+            drawn = view._cloud
+            await client.set_gui("Section through the tool", True)
+            await until(lambda: view.height.value == at_tool and (view._cloud is not drawn or at_tool == height)
+                        and not view._clouds.busy, what="the section through the tool")  # (drawn already: at its height)
+            section = np.asarray(view._cloud.points, dtype=float)
+            np.testing.assert_allclose(section @ up + session.arm.base_height, at_tool / 1000.0, atol=4e-3)
+            across = np.linalg.norm(np.cross(section - tool, up), axis=1)  # each point's distance from the tool, seen from above
+            assert across.min() < 0.05 * session.arm.reach_bound, (across.min(), session.arm.reach_bound)
         await client.close()
 
     asyncio.run(scenario())

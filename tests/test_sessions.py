@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import asyncio
 import gc
+import math
 import threading
 import types
 import weakref
@@ -420,7 +421,7 @@ def test_a_section_slider_flood_costs_one_cloud_in_the_making_and_one_waiting(ap
 
 def test_every_height_on_the_section_slider_has_a_section(app):
     """The slider spans the heights the UR10's tool reaches (until 2026-12-07 −600 to 1600 mm, above its reach of
-    1520 mm): its two ends and its first value each draw a section in that plane."""
+    1,460 mm, docs/kinematics.md §3): its two ends and its first value each draw a section in that plane."""
     from ur10teach.features.workspace import section_heights
 
     async def scenario():
@@ -428,7 +429,7 @@ def test_every_height_on_the_section_slider_has_a_section(app):
         session = session_of(app, client)
         view, line = session.workspace, session.workspace.refusal.line
         low, high = section_heights(session.arm)
-        assert (view.height.min, view.height.max) == (low, high) and -1270 < low < -1100 and 1400 < high < 1520
+        assert (view.height.min, view.height.max) == (low, high) and -1205 < low < -1150 and 1400 < high <= 1460
         assert low < view.height.value < high
         await client.set_gui("Samples", "10 k")
         await client.set_gui("Section", "horizontal section (top view)")
@@ -438,6 +439,37 @@ def test_every_height_on_the_section_slider_has_a_section(app):
             await until(lambda: view._cloud is not None and not view._clouds.busy and np.allclose(
                 view._cloud.points[:, 2], height / 1000.0, atol=1e-3), what=f"the section at {height} mm")
             assert not line.visible and not client.received.notifications
+        await client.close()
+
+    asyncio.run(scenario())
+
+
+def test_the_section_through_the_tool_is_drawn_at_its_height_or_refused_beyond_the_slider(app):
+    """*Section through the tool* moves the slider to the tool's height (to 10 mm), which draws that section; a tool
+    above the slider's top is refused, saying so, and the slider stays."""
+
+    async def scenario():
+        client = await ViserClient(url(app)).connect()
+        session = session_of(app, client)
+        view, line = session.workspace, session.workspace.refusal.line
+        await client.set_gui("Samples", "10 k")
+        await client.set_gui("Section", "horizontal section (top view)")
+        await client.set_gui("Show workspace cloud", True)
+        await until(lambda: view._cloud is not None and not view._clouds.busy and view.through_tool.visible,
+                    what="the section, and the button beside it")
+        tool = 1000.0 * float(session.state.last.flange[2, 3])  # (the UR10 stands on the floor)
+        drawn = view._cloud
+        await client.set_gui("Section through the tool", True)
+        await until(lambda: view.height.value == 10.0 * round(tool / 10.0) and view._cloud is not drawn
+                    and not view._clouds.busy, what="the section through the tool")
+        np.testing.assert_allclose(view._cloud.points[:, 2], view.height.value / 1000.0, atol=1e-3)
+        view.height.max = 10.0 * math.floor(tool / 10.0) - 100.0  # the tool above the slider's top
+        view.height.value = view.height.max
+        await until(lambda: not view._clouds.busy, what="the section at the slider's new top")
+        await client.set_gui("Section through the tool", True)
+        await until(lambda: line.visible and f"the tool is {10 * round(tool / 10):.0f} mm above the floor, beyond the heights "
+                    f"the slider spans" in line.content.lower(), what="the refusal")
+        assert view.height.value == view.height.max
         await client.close()
 
     asyncio.run(scenario())

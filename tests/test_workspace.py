@@ -135,7 +135,9 @@ def test_the_ur10s_section_is_a_ring_as_wide_as_the_slab():
 @pytest.mark.parametrize("name", Arm.PRESETS)
 def test_the_tool_heights_are_those_of_the_cloud(name):
     """The heights the tool reaches among 20 000 draws: within 2 % of its reach of a bigger cloud's extremes, and on
-    the UR family within its exact reach up and down, d1 ± (a2 + a3 + d5 + d6); one height on the planar elbow."""
+    the UR family within 1 % of its exact reach up and down, d1 ± (a2 + a3 + √(d5² + d6²)) (docs/kinematics.md §3:
+    the upper arm and forearm vertical, d5 and d6 turned by θ4 to point up or down together); one height on the
+    planar elbow."""
     arm = Arm.preset(name)
     lowest, highest = arm.tool_heights
     cloud, _ = arm.sample_workspace(200_000, seed=5)
@@ -143,8 +145,13 @@ def test_the_tool_heights_are_those_of_the_cloud(name):
     assert abs(lowest - heights.min()) < 0.02 * arm.reach_bound and abs(highest - heights.max()) < 0.02 * arm.reach_bound
     assert (highest - lowest < 1e-9) == (name == "planar_elbow")
     if name in Arm.UR_PRESETS:
-        stretched = arm.a2 + arm.a3 + arm.d5 + arm.d6
-        assert arm.d1 - stretched < lowest < arm.d1 - stretched + 0.1 and arm.d1 + stretched - 0.1 < highest < arm.d1 + stretched
+        stretched = arm.a2 + arm.a3 + np.hypot(arm.d5, arm.d6)
+        assert arm.d1 - stretched <= lowest < arm.d1 - stretched + 0.01 * stretched
+        assert arm.d1 + stretched - 0.01 * stretched < highest <= arm.d1 + stretched
+        # reached exactly there: θ2 = 90° (down: −90°), θ3 = 0, θ5 = 90°, θ2 + θ3 + θ4 = atan2(d6, d5) (down: + 180°)
+        for up, turn in ((1.0, 0.0), (-1.0, np.pi)):
+            q = np.array([0.0, up * np.pi / 2, 0.0, np.arctan2(arm.d6, arm.d5) + turn - up * np.pi / 2, np.pi / 2, 0.0])
+            assert arm.fk(q)[2, 3] == pytest.approx(arm.d1 + up * stretched, abs=1e-12)
 
 
 def test_a_section_nobody_reaches_is_refused(course):

@@ -596,7 +596,7 @@ class Arm(JacobianUses, HasSpecs):
         """(lowest, highest) height of the tool above the floor (m) among 20 000 draws, a little within its reach;
         one height twice for an arm whose tool moves in one horizontal plane (:func:`ur10core.workspace.tool_heights`).
 
-        >>> [round(v, 2) for v in Arm.preset("ur10").tool_heights]   # within d1 ∓ (a2 + a3 + d5 + d6) = -1.26, 1.52
+        >>> [round(v, 2) for v in Arm.preset("ur10").tool_heights]   # within d1 ∓ (a2 + a3 + √(d5² + d6²)) = -1.2, 1.46
         [-1.2, 1.45]
         >>> [round(v, 3) for v in Arm.preset("planar_elbow").tool_heights]
         [0.0, 0.0]

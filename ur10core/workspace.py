@@ -237,7 +237,7 @@ def tool_heights(arm) -> tuple[float, float]:
     """(lowest, highest) height of ``arm``'s tool above its floor (m) among 20 000 joint vectors drawn within its
     limits (:meth:`Arm.sample_joints`): :attr:`Arm.tool_heights`.
 
-    A sample misses the very top and bottom, where a section is a speck (the UR10's reach 60 mm more each way),
+    A sample misses the very top and bottom, where a section is a speck (the UR10's by 8 mm, docs/kinematics.md §3),
     so a horizontal section is found at every height between the two. One height, twice, for an arm whose tool
     moves in one horizontal plane.
     """

@@ -14,7 +14,7 @@ import numpy as np
 import viser
 
 from ur10core import Arm
-from ur10core.workspace import base_turn, revolved_boundary, turnable_into, vertical_section
+from ur10core.workspace import base_turn, heights_above_floor, revolved_boundary, turnable_into, vertical_section
 
 from ..feedback import Beside, chosen, within
 from ..serving.workers import HEAVY, FoldedRuns
@@ -297,11 +297,14 @@ class WorkspaceView(View):
                                          initial_value=10.0 * round((low + high) / 20.0), visible=False,
                                          hint=f"Above the floor: from {low:g} to {high:g} mm, the heights the tool reaches in a cloud of 20 000")
             within(self.height, "section height (mm)")  # accepted: a first value refused puts it back here, not at 0
+            self.through_tool = gui.add_button("Section through the tool", visible=False,
+                                               hint="The section at the tool's height (to 10 mm): the tool lies in it")
             self.refusal = Beside(gui)  # a height beyond the slider's range or the flange's reach, an empty section
             self.progress = gui.add_progress_bar(0.0, animated=True, visible=False)
             self.legend = gui.add_html("", visible=False)
         for widget in (self.enabled, self.count, self.section, self.height):
             widget.on_update(session.guard(self._changed, beside=self.refusal))
+        self.through_tool.on_click(session.guard(self._through_tool, beside=self.refusal))
 
     def obstacles(self) -> list:
         legend = self.legend_label  # over the cloud, in the drawing's frame
@@ -313,6 +316,14 @@ class WorkspaceView(View):
             self._session.colouring_shown(self)
         # a run under way picks up the newest choices; what it refuses is said below the inputs
         self._clouds.start("workspace", lambda run: self._session.guard(run, beside=self.refusal))
+
+    def _through_tool(self, _event: viser.GuiEvent) -> None:
+        """The slider to the tool's height above the floor (the desktop arm's along its y), which draws that section."""
+        height = 10.0 * round(100.0 * float(heights_above_floor(self._session.arm, self._session.state.last.flange[:3, 3])))
+        if not self.height.min <= height <= self.height.max:
+            raise ValueError(f"the tool is {height:.0f} mm above the floor, beyond the heights the slider spans "
+                             f"({self.height.min:g} to {self.height.max:g} mm)")
+        self.height.value = height  # (its callback draws the section)
 
     def hide_colouring(self) -> None:
         self.enabled.value = False  # its callback takes the cloud away
@@ -332,7 +343,7 @@ class WorkspaceView(View):
     def _update(self) -> None:
         section = chosen(self.section, "section")
         count = SAMPLE_COUNTS[chosen(self.count, "samples")]
-        self.height.visible = section == SECTIONS[2]
+        self.height.visible = self.through_tool.visible = section == SECTIONS[2]
         if not self.enabled.value:
             self.clear()
             self.legend.visible = False
