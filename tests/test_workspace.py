@@ -148,7 +148,8 @@ def test_the_tool_heights_are_those_of_the_cloud(name):
         stretched = arm.a2 + arm.a3 + np.hypot(arm.d5, arm.d6)
         assert arm.d1 - stretched <= lowest < arm.d1 - stretched + 0.01 * stretched
         assert arm.d1 + stretched - 0.01 * stretched < highest <= arm.d1 + stretched
-        # reached exactly there: θ2 = 90° (down: −90°), θ3 = 0, θ5 = 90°, θ2 + θ3 + θ4 = atan2(d6, d5) (down: + 180°)
+        # reached exactly there: θ2 = 90° (down: −90°), θ3 = 0, θ5 = 90°,
+        # θ2 + θ3 + θ4 = atan2(d6, d5) (down: + 180°)
         for up, turn in ((1.0, 0.0), (-1.0, np.pi)):
             q = np.array([0.0, up * np.pi / 2, 0.0, np.arctan2(arm.d6, arm.d5) + turn - up * np.pi / 2, np.pi / 2, 0.0])
             assert arm.fk(q)[2, 3] == pytest.approx(arm.d1 + up * stretched, abs=1e-12)

@@ -157,7 +157,8 @@ def sample_horizontal_section(arm, height: float, n: int, seed: int = 0, return_
     level = height - arm.base_height  # along ``up`` from the base frame's origin
     if abs(level) >= arm.reach_bound:
         raise ValueError(f"height {height:.3f} m is outside the workspace: the tool is never more than "
-                         f"{arm.reach_bound:.3f} m above or below its base, which stands {arm.base_height:.3f} m above the floor")
+                         f"{arm.reach_bound:.3f} m above or below its base, which stands {arm.base_height:.3f} m "
+                         f"above the floor")
     rng = np.random.default_rng(seed)
     low, high = sampling_range(arm.limits, arm.revolute)
 

@@ -241,8 +241,8 @@ def sections_of(arm: Arm) -> tuple[tuple[str, ...], str]:
     lowest, highest = arm.tool_heights
     if highest - lowest < 1e-9:
         sections.remove(SECTIONS[2])
-        missing.append(f"No horizontal section: the tool stays {1000 * lowest:.0f} mm above the floor, so the whole cloud "
-                       f"is already its top view.")
+        missing.append(f"No horizontal section: the tool stays {1000 * lowest:.0f} mm above the floor, so the whole "
+                       f"cloud is already its top view.")
     try:
         turn = base_turn(arm)
     except ValueError as why:
@@ -293,9 +293,10 @@ class WorkspaceView(View):
             # (said in the folder too: a projector's audience cannot hover over a tooltip)
             self.sections_missing = gui.add_markdown(missing, visible=bool(missing))
             low, high = section_heights(session.arm)
-            self.height = gui.add_slider("Section height (mm)", min=low, max=high, step=10.0,
-                                         initial_value=10.0 * round((low + high) / 20.0), visible=False,
-                                         hint=f"Above the floor: from {low:g} to {high:g} mm, the heights the tool reaches in a cloud of 20 000")
+            self.height = gui.add_slider(
+                "Section height (mm)", min=low, max=high, step=10.0, initial_value=10.0 * round((low + high) / 20.0),
+                visible=False, hint=f"Above the floor: from {low:g} to {high:g} mm, the heights the tool reaches in a "
+                                    f"cloud of 20 000")
             within(self.height, "section height (mm)")  # accepted: a first value refused puts it back here, not at 0
             self.through_tool = gui.add_button("Section through the tool", visible=False,
                                                hint="The section at the tool's height (to 10 mm): the tool lies in it")
@@ -319,7 +320,8 @@ class WorkspaceView(View):
 
     def _through_tool(self, _event: viser.GuiEvent) -> None:
         """The slider to the tool's height above the floor (the desktop arm's along its y), which draws that section."""
-        height = 10.0 * round(100.0 * float(heights_above_floor(self._session.arm, self._session.state.last.flange[:3, 3])))
+        tool = self._session.state.last.flange[:3, 3]
+        height = 10.0 * round(100.0 * float(heights_above_floor(self._session.arm, tool)))  # mm, on the slider's steps
         if not self.height.min <= height <= self.height.max:
             raise ValueError(f"the tool is {height:.0f} mm above the floor, beyond the heights the slider spans "
                              f"({self.height.min:g} to {self.height.max:g} mm)")
