@@ -184,9 +184,9 @@ def sample_horizontal_section(arm, height: float, n: int, seed: int = 0, return_
         return q
 
     trial = draws(_TRIAL_DRAWS)
-    reached = [len(onto(trial, j)) for j in range(arm.n_joints)]
-    k = int(np.argmax(reached))
-    share = max(reached[k], 1) / _TRIAL_DRAWS  # of the draws that reach the plane: rounds are sized by it
+    hits = [len(onto(trial, j)) for j in range(arm.n_joints)]
+    k = int(np.argmax(hits))
+    share = max(hits[k], 1) / _TRIAL_DRAWS  # of the draws that reach the plane: rounds are sized by it
     kept, count, drawn = [], 0, 0
     while count < n and drawn < 20 * n:  # (near the top or bottom few reach it: the draws stop there)
         size = min(int(1.2 * (n - count) / share) + 64, 20 * n - drawn, 65536)  # (FK's arrays kept small)
