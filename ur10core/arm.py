@@ -30,6 +30,7 @@ from .specs import HasSpecs
 from .solvers.numerical import NumericalIK, reach_bound, sampling_range, within_limits
 from .serial import PRESETS as COURSE_ARMS
 from .solvers.ur import DESCRIPTIONS, DH_ALPHA, JOINT_LIMIT, JOINT_NAMES, LENGTHS, SingularityGeometry, URFamily
+from .workspace import sample_horizontal_section, tool_heights
 from ._validate import homogeneous_transform, poses_and_hints, sample_size
 
 __all__ = ["Arm", "DH_ALPHA", "JOINT_LIMIT", "JOINT_NAMES", "SingularityGeometry", "factor_scales"]
@@ -587,8 +588,6 @@ class Arm(JacobianUses, HasSpecs):
         >>> points[:, 2].round(12).tolist()
         [0.3, 0.3, 0.3]
         """
-        from .workspace import sample_horizontal_section
-
         return sample_horizontal_section(self, height, n, seed, return_joints)
 
     @property
@@ -601,8 +600,6 @@ class Arm(JacobianUses, HasSpecs):
         >>> [round(v, 3) for v in Arm.preset("planar_elbow").tool_heights]
         [0.0, 0.0]
         """
-        from .workspace import tool_heights
-
         return tool_heights(self)
 
 

@@ -17,6 +17,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ._validate import as_float_array, check_finite, sample_size
+from .solvers.numerical import sampling_range
 from .tolerances import FLOOR_TOLERANCE, LIMIT_TOLERANCE
 
 
@@ -146,8 +147,6 @@ def sample_horizontal_section(arm, height: float, n: int, seed: int = 0, return_
     >>> points[:, 1].round(12).tolist()
     [-1.0, -1.0]
     """
-    from .solvers.numerical import sampling_range
-
     n, seed = sample_size(n, seed)
     height = as_float_array(height, "height")
     if height.ndim != 0 or not np.isfinite(height):
