@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import contextlib
 import logging
+import threading
 import time
 from typing import Any, Callable
 
@@ -118,6 +119,7 @@ class ArmSession:
         self.refresher = refresher
         self.drags = drags
         self.closed = False
+        self._panel_drawn = threading.RLock()  # a close waits for a panel redraw under way, not the reverse
         #: called after every change, e.g. to refresh the classroom's live panel
         self.observers: list[Callable[[Snapshot], None]] = []
         #: called after a redraw with the state unchanged (a toggle): the live panel shows the overlay's gauges with it
@@ -265,19 +267,20 @@ class ArmSession:
 
     def render_panel(self) -> None:
         """The side panel, from the newest state (called by the refresher, one thread at a time)."""
-        if self.closed or not self.built:
-            return
-        start = time.perf_counter()
-        snapshot = self.state.last
-        with self.client.atomic():
-            if self._label_scene is not None and self._lecture is not None:
-                size_labels(self._label_scene, self._lecture.on)
-            with self.names.placing:  # the names before the drawing's labels, which keep clear of them; no camera move between
-                self._refusing(lambda _: self._show_names(), snapshot)
-                self._refusing(self.drawing.render_panel, snapshot)  # its panel-paced parts: the branch numbers, say
-            for view in self.panel_views:
-                self._refusing(view.render_panel, snapshot)
-        LATENCY.record("panel", time.perf_counter() - start)
+        with self._panel_drawn:
+            if self.closed or not self.built:
+                return
+            start = time.perf_counter()
+            snapshot = self.state.last
+            with self.client.atomic():
+                if self._label_scene is not None and self._lecture is not None:
+                    size_labels(self._label_scene, self._lecture.on)
+                with self.names.placing:  # the names first, as the drawing's labels keep clear of them
+                    self._refusing(lambda _: self._show_names(), snapshot)
+                    self._refusing(self.drawing.render_panel, snapshot)  # its panel-paced parts: the branch numbers
+                for view in self.panel_views:
+                    self._refusing(view.render_panel, snapshot)
+            LATENCY.record("panel", time.perf_counter() - start)
 
     def _refusing(self, draw: Callable[[Snapshot], None], snapshot: Snapshot) -> None:
         """Draw one view; a value it refuses (a slider a client set out of range, which it puts back) is
@@ -423,7 +426,8 @@ class ArmSession:
         pools = self.drawing.label_sets
         if pools and pools[0].outside == self._names_beside:  # a shared drawing outlives this session
             chain(pools)
-        with self.state.lock:  # not while a drag is being drawn
+        # not while a drag or the panel is being drawn: an update would reach a widget the browser has removed
+        with self._panel_drawn, self.state.lock:
             for view in self.panel_views:
                 how(view)
             self.names.remove()  # from a scene everyone shares too

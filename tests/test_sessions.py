@@ -871,3 +871,41 @@ def test_a_label_another_thread_removes_while_labels_are_sized_is_left_alone(app
     monkeypatch.setattr(lecture, "labels_of", lambda _: listed)  # the list, as taken before the removal
     lecture.size_labels(scene, True)
     assert kept.font_screen_scale == pytest.approx(label_scale(kept._base_scale, True)) != kept._base_scale
+
+
+def test_a_panel_redraw_under_way_ends_before_its_widgets_are_taken_away(app):
+    """The refresher draws a browser's panel on the event loop while another thread may take the session away (an arm
+    replaced by another, a hand-over). The removal went ahead mid-redraw, and the redraw's next update reached a
+    widget the browser had removed: "Tried to update non-existent component" in its console (a monkey found it,
+    2026-12-07). A removal now waits for the redraw under way; a redraw after it draws nothing."""
+
+    async def scenario():
+        client = await ViserClient(url(app)).connect()
+        session = session_of(app, client)
+        view = session.panel_views[0]
+        happened, drawing = [], threading.Event()
+        drawn, closed = view.render_panel, view.close
+
+        def slow_redraw(snapshot):
+            drawing.set()
+            wait_for(lambda: session.closed, what="the removal to have begun")
+            drawn(snapshot)
+            happened.append("drawn")
+
+        view.render_panel = slow_redraw
+        view.close = lambda: (happened.append("closed"), closed())
+        client_id = int(client.gizmo_owner)
+        await until(lambda: app.can_switch(client_id), what="the arm to be ready for a change")
+        redraw = threading.Thread(target=session.render_panel)
+        redraw.start()
+        await until(drawing.is_set, what="the panel redraw to be under way")
+        # the picker's callback, on a thread of viser's pool (not the event loop: the refresher may be waiting there)
+        handle = app.server.get_clients()[client_id]
+        await asyncio.to_thread(app._switch, handle, "Stanford arm (RRP + wrist)")  # closes the UR10's, clears its panel
+        await until(lambda: not redraw.is_alive(), what="the redraw to end")
+        assert happened == ["drawn", "closed"]
+        session.render_panel()  # the refresher's next turn, after the removal: nothing drawn
+        assert happened == ["drawn", "closed"]
+        await client.close()
+
+    asyncio.run(scenario())
