@@ -14,7 +14,7 @@ from ur10dev.browser import (
     click, drawn_frames, project, set_checkbox, settled_canvas, unfold,
 )
 from ur10dev.waiting import wait_for
-from ur10teach.features.arm_picker import ARM_CHOICES, CUSTOM, panel_title
+from ur10teach.features.arm_picker import ARM_CHOICES, CUSTOM, PAGE_TITLE, panel_title
 from ur10teach.features.branch_labels import ScreenView
 from ur10teach.features.camera import arm_points
 from ur10teach.style import ALUMINIUM, JOINT_CAP_GREY
@@ -137,7 +137,7 @@ def test_no_two_3d_labels_overlap_for_any_arm_at_home_or_at_a_singularity(open_p
     """Issue 30: the elbow arm's 1, 2, 5 and 6 stacked into one blot, the KR210's 3 and 4, the UR10's
     "1" and "8" read as "18". No two labels a student sees overlap on the screen. And the panel's title, the
     arm's name, is read whole (until 2026-12-03 four arms' ended "…: kin…" in lecture mode at 1280 px, two at
-    this test's 900 px)."""
+    this test's 900 px), and names the tab; with the panel folded the tab is named for the app."""
     page, session = open_page()
     client_id = next(k for k, v in light_app.sessions.items() if v is session)
     failures, seen = [], 0
@@ -164,6 +164,8 @@ def test_no_two_3d_labels_overlap_for_any_arm_at_home_or_at_a_singularity(open_p
                 failures.append(f"{choice} at {kind or 'home'}: {', '.join(overlaps(boxes))}")
     assert seen > 50, "hardly any labels were checked"
     assert not failures, "labels overlap on screen:\n" + "\n".join(failures)
+    page.get_by_label("Collapse panel area").click()  # the panel, and the arm's title with it, folded away
+    wait_for(lambda: page.title() == PAGE_TITLE, what=f"the tab named {PAGE_TITLE!r}")  # (until 2026-12-07 "Viser")
 
 
 def test_the_solid_arm_stands_apart_from_its_ghosts(open_page, light_app):

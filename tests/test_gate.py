@@ -477,7 +477,7 @@ def test_a_camera_no_browser_has_is_dropped_at_the_gate(app, changes, caplog):
 def test_the_gate_fails_loudly_if_viser_stops_starting_its_server_through_websockets():
     """The gate rides on viser calling websockets.asyncio.server.serve: if a viser upgrade changes that, startup fails."""
     with pytest.raises(RuntimeError, match="the gate would not apply"):
-        with gated_serve(Gate()):
+        with gated_serve(Gate(), "title"):
             pass  # nothing started a server
 
 

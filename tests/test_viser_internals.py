@@ -183,4 +183,28 @@ def test_a_markdowns_title_reaches_the_tab_as_name_tab_relies_on():
     client = pathlib.Path(viser.__file__).parent / "client"
     assert json.loads((client / "package.json").read_text())["dependencies"]["react"].startswith("^19")
     assert "rehypePlugins = [rehypeRawDom," in (client / "src" / "Markdown.tsx").read_text()
-    assert "<title>Viser</title>" in (client / "index.html").read_text()  # what the tab reads with the panel folded
+    assert viser_internals.VISER_TAB_TITLE.decode() in (client / "index.html").read_text()  # what page_titled replaces
+
+
+@pytest.mark.server
+@pytest.mark.parametrize("encoding", ["gzip", "identity"])
+def test_the_page_names_its_tab_for_the_app_not_viser(app, encoding):
+    """``page_titled``: viser's page titles the tab "Viser", which a student saw whenever the panel (and with it the
+    arm's title, ``name_tab``) was folded away, among their other tabs (until 2026-12-07). Its page, as a browser
+    asks for it compressed or not, is titled for the app, and its length is the new page's."""
+    import gzip
+    import urllib.request
+
+    from ur10teach.features.arm_picker import PAGE_TITLE
+
+    from ur10dev.waiting import HANG_TIMEOUT
+
+    from .server_support import url
+
+    asked = urllib.request.Request(url(app), headers={"Accept-Encoding": encoding})
+    with urllib.request.urlopen(asked, timeout=HANG_TIMEOUT) as page:
+        body = page.read()
+        assert int(page.headers["Content-Length"]) == len(body)
+        assert page.headers["Content-Encoding"] == encoding
+    text = (gzip.decompress(body) if encoding == "gzip" else body).decode()
+    assert re.findall("<title>(.*?)</title>", text) == [PAGE_TITLE] and "<script" in text

@@ -63,6 +63,9 @@ def choice_of(preset: str) -> str:
 #: ``Arm.preset`` name of one of the course's other arms; a typed table is built in a browser, from its DH editor.
 FIRST_ARMS = ("ur10", *(name for name in ARM_CHOICES.values() if name not in (None, "custom")))
 
+#: The browser tab's title while the panel's is not shown (folded away, or still to come).
+PAGE_TITLE = "Robot-arm kinematics"
+
 #: The panel's title while the class is shown a table the presenter typed (their picker still says CUSTOM).
 CLASS_TYPED_TITLE = "The presenter's DH table"
 

@@ -26,6 +26,7 @@ import websockets.asyncio.server
 
 from ..viser_internals import connection_of as _connection_of
 from ..viser_internals import messages as viser_messages
+from ..viser_internals import page_titled
 from ..viser_internals import serving_through
 
 log = logging.getLogger(__name__)
@@ -557,8 +558,8 @@ class GatedConnection:
 
 
 @contextlib.contextmanager
-def gated_serve(gate: Gate) -> Iterator[None]:
-    """While active, a viser server that starts serves through ``gate``.
+def gated_serve(gate: Gate, title: str) -> Iterator[None]:
+    """While active, a viser server that starts serves through ``gate``, its page's tab titled ``title``.
 
     Its websocket server (``viser_internals.serving_through``) gets the gate's limit and timeouts, a request
     check in front of viser's HTTP handler (and the browser's cookie on its page), TCP connections counted by
@@ -607,6 +608,7 @@ def gated_serve(gate: Gate) -> Iterator[None]:
             if refusal is not None:
                 return refusal
             response = process_request(connection, request) if process_request is not None else None
+            response = page_titled(response, title)
             give_browser_cookie(request, response)
             return response
 

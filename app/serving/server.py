@@ -27,6 +27,7 @@ from ..features.arm_picker import (
     ARM_CHOICES,
     CUSTOM,
     FIRST_ARMS,
+    PAGE_TITLE,
     SWITCH_INTERVAL,
     UR10,
     ArmPicker,
@@ -310,7 +311,7 @@ class TeachingServer:
         raise_open_file_limit()
         shared_frames.install()
         fast_updates.share_type_hints()
-        with gated_serve(self.gate):
+        with gated_serve(self.gate, PAGE_TITLE):
             self.server = viser.ViserServer(host=host, port=port, label=label, verbose=False)
         self.gate.value_fits = functools.partial(value_fits, self.server)
         self.screens = Screens(self._screen_told)

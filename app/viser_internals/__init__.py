@@ -14,6 +14,7 @@
   (the gate drops one that would raise inside viser's handler);
 * :func:`send_again` — a widget's value or a node's pose sent to its browser again, though viser holds it unchanged;
 * :func:`name_tab` — the browser tab's title, which viser's page fixes as "Viser";
+* :func:`page_titled` — viser's page with a tab title of the app's own, for while the panel's is not shown;
 * :func:`serving_through` — the websocket server viser starts, made with the gate's handler, request check
   and limits (the gate's connection stands in for websockets' own: viser reads it with ``recv``).
 
@@ -25,6 +26,8 @@ from __future__ import annotations
 
 import asyncio
 import contextlib
+import dataclasses
+import gzip
 import html
 import logging
 import threading
@@ -36,7 +39,7 @@ from viser import _messages as messages
 
 from .shared_frames import SEND_TIMEOUT
 
-__all__ = ["after_broadcast", "connection_of", "labels_of", "messages", "name_tab", "send_again", "serving_through",
+__all__ = ["after_broadcast", "connection_of", "labels_of", "messages", "name_tab", "page_titled", "send_again", "serving_through",
            "value_fits"]
 
 log = logging.getLogger(__name__)
@@ -46,6 +49,8 @@ BROADCAST_POLL = 0.005
 #: A broadcast window is written on its producer's next step after it leaves the queue: this much
 #: later, what the browser's own queue sends (itself a window of 1/60 s later) follows it.
 WINDOW_WRITTEN = 0.02
+#: The tab title in viser's page (``client/build/index.html``), whichever panel title is shown or not.
+VISER_TAB_TITLE = b"<title>Viser</title>"
 #: The tab title's place in a panel: last, where the few pixels viser gives any element show nothing.
 TAB_TITLE_ORDER = 1e12
 
@@ -131,7 +136,7 @@ def name_tab(gui, title: str, element=None):  # noqa: ANN001, ANN201
     """Name the browser's tab ``title``, from ``gui``'s panel (a ``viser.GuiApi``); viser's page names it "Viser".
 
     viser renders a markdown's HTML with React 19, which puts a ``<title>`` into the page's head ahead of
-    viser's own while the panel shows it (folded away to its strip, the tab reads "Viser" again).
+    viser's own while the panel shows it (folded away to its strip, the tab reads :func:`page_titled`'s).
     ``tests/test_browser_lecture_hall.py`` reads the tab's title. Returns the element that holds it: pass it
     back as ``element`` to rename the tab.
     """
@@ -140,6 +145,28 @@ def name_tab(gui, title: str, element=None):  # noqa: ANN001, ANN201
         return gui.add_markdown(text, order=TAB_TITLE_ORDER)
     element.content = text
     return element
+
+
+def page_titled(response, title: str):  # noqa: ANN001, ANN201
+    """``response`` (viser's answer to an HTTP request, a ``websockets.http11.Response`` or None) with its page's
+    tab titled ``title`` in place of "Viser"; any other answer as it is.
+
+    The panel's title names the tab (:func:`name_tab`) only while the panel shows it: a student who folds the
+    panel away, or whose page is still loading, sees this one.
+    """
+    if (response is None or response.status_code != 200
+            or not response.headers.get("Content-Type", "").startswith("text/html")):
+        return response
+    gzipped = response.headers.get("Content-Encoding") == "gzip"
+    body = gzip.decompress(response.body) if gzipped else response.body
+    if VISER_TAB_TITLE not in body:
+        return response
+    body = body.replace(VISER_TAB_TITLE, f"<title>{html.escape(title)}</title>".encode())
+    body = gzip.compress(body) if gzipped else body
+    headers = response.headers.copy()
+    del headers["Content-Length"]
+    headers["Content-Length"] = str(len(body))
+    return dataclasses.replace(response, headers=headers, body=body)
 
 
 #: One viser server starting at a time: :func:`serving_through` swaps a name of the whole process's.
