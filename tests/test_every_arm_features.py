@@ -87,6 +87,12 @@ def test_velocity_and_forces_on_every_arm_match_finite_differences(app, label):
         html = bars_html(torques, gravity, arm.specs.torque_ratings, arm.joint_names, arm.joint_types)
         await until(lambda: session.statics.bars.content == html, what="the torque bars")
         assert f"‖Jᵀ F‖ = {np.linalg.norm(reference):.2f} N·m" in html  # the statics exercise's measure, beside the bars
+        # the arrow's head clears the IK target's gizmo, drawn over everything at the same tool: at the first 50 N its
+        # whole arrow lay inside the gizmo on every arm, "F = 50 N" named at a tip no student saw (until 2026-12-07)
+        arrow = session.statics.arrow
+        await until(lambda: arrow.visible and np.allclose(np.diff(arrow.points[0], axis=0)[0, 1:], 0.0), what="the arrow")
+        shaft = np.linalg.norm(np.diff(arrow.points[0], axis=0)) - arrow.head_length
+        assert shaft > 1.1 * session.ik_target.gizmo.scale, (shaft, session.ik_target.gizmo.scale)
         await client.close()
 
     asyncio.run(scenario())

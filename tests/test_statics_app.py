@@ -33,11 +33,11 @@ def test_the_torque_bars_add_the_force_and_the_weight(app):
         arm = snapshot.arm
         expected = bars_html(arm.static_torques(snapshot.q, [0, 0, -50.0]), arm.gravity_torques(snapshot.q), arm.specs.torque_ratings, arm.joint_names, arm.joint_types)
         await until(lambda: statics.bars.content == expected, what="50 N down and the arm's weight")
-        # the arrow starts at the flange and points the way the tool pushes: 50 N down is a tenth of the arm's size down
+        # the arrow starts at the flange and points the way the tool pushes: 50 N down is a quarter of the arm's size down
         start, end = statics.arrow.points[0] + statics.arrow.position
         size = session.drawing.size
         np.testing.assert_allclose(start, snapshot.flange[:3, 3], atol=1e-6)
-        np.testing.assert_allclose(end - start, [0, 0, -0.1 * size], atol=1e-6)
+        np.testing.assert_allclose(end - start, [0, 0, -0.25 * size], atol=1e-6)
         await until(lambda: statics.names()[0][1] == "F = 50 N", what="the force's name")
         np.testing.assert_allclose(statics.names()[0][0], end, atol=1e-6)  # named at its tip
         # a payload adds its weight; a force along +x turns the arrow
@@ -45,7 +45,7 @@ def test_the_torque_bars_add_the_force_and_the_weight(app):
         await client.set_gui("Force direction", "+x")
         expected = bars_html(arm.static_torques(snapshot.q, [50.0, 0, 0]), arm.gravity_torques(snapshot.q, 5.0), arm.specs.torque_ratings, arm.joint_names, arm.joint_types)
         await until(lambda: statics.bars.content == expected, what="the payload and the new direction")
-        await until(lambda: np.allclose(np.diff(statics.arrow.points[0], axis=0), [[0.1 * size, 0, 0]], atol=1e-6), what="the arrow along +x")
+        await until(lambda: np.allclose(np.diff(statics.arrow.points[0], axis=0), [[0.25 * size, 0, 0]], atol=1e-6), what="the arrow along +x")
         # a direction that is not offered is refused beside the folder's inputs, and nothing changes
         await client.set_gui("Force direction", "sideways")
         await until(lambda: "not one of" in statics.refusal.line.content and statics.refusal.line.visible, what="the refusal")
@@ -87,7 +87,7 @@ def test_the_force_points_where_its_handle_is_dragged(app):
         arm = snapshot.arm
         expected = bars_html(arm.static_torques(snapshot.q, 50.0 * direction), arm.gravity_torques(snapshot.q), arm.specs.torque_ratings, arm.joint_names, arm.joint_types)
         await until(lambda: statics.bars.content == expected, what="the bars for the dragged force")
-        await until(lambda: np.allclose(np.diff(statics.arrow.points[0], axis=0), [0.1 * session.drawing.size * direction], atol=1e-6), what="the arrow")
+        await until(lambda: np.allclose(np.diff(statics.arrow.points[0], axis=0), [0.25 * session.drawing.size * direction], atol=1e-6), what="the arrow")
         # the arm moves: the handle keeps its direction from the new flange
         await client.set_gui("θ1 base (°)", float(np.degrees(snapshot.q[0]) + 20.0))
         await until(lambda: abs(session.state.last.q[0] - snapshot.q[0] - np.radians(20.0)) < 1e-6, what="the arm moved")

@@ -48,7 +48,9 @@ def directions_for(arm) -> dict[str, tuple[float, float, float] | str | None]:
 #: How far from the tool the direction handle sits (m, for an arm 1 m across), and the gizmo's size there.
 HANDLE_DISTANCE, HANDLE_SCALE = 0.35, 0.12
 MAX_FORCE_N = 200.0
-ARROW_METRES_PER_N = 0.002
+#: The force arrow's length per newton (m, for an arm 1 m across): the first 50 N reach a quarter of the arm's size,
+#: clear of the IK target's gizmo at the same tool (at 0.002, the whole arrow lay inside it).
+ARROW_METRES_PER_N = 0.005
 FORCE_COLOR = (0, 114, 178)
 #: The torque map's name among what the camera frames with the arm (``CameraControls.extra``).
 MAP_VIEW = "torque map"
