@@ -292,6 +292,18 @@ def test_numbers_name_the_kind_of_mistake():
     slip = COURSE.dh.jacobian(np.array(torque.joints)) @ np.r_[torque.force, torque.moment]
     assert C.check(torque, COURSE, C.Answer(numbers=slip)).group == "J [F; M], not Jᵀ [F; M]"
     assert C.check(position, COURSE, C.Answer(numbers=p * 1.009)).solved  # within 1 %
+    # a number rounded to fewer places than 1 % needs is named as such, not "off" as if the method were wrong:
+    # τ4 = 11.57 N·m typed as 12, τ5 = −9.22 as −9 (until 2026-12-07 "τ4 is off; τ5 is off")
+    tau = C.expected_numbers(torque, COURSE)
+    rounded = [round(tau[0]), round(tau[1], 1), round(tau[2], 1), round(tau[3]), round(tau[4]), round(tau[5], 1)]
+    verdict = C.check(torque, COURSE, C.Answer(numbers=rounded))
+    assert verdict.group == "τ4, τ5 are rounded too far: give another digit", verdict.group
+    assert C.check(torque, COURSE, C.Answer(numbers=[round(t, 1) for t in tau])).solved  # one place is enough here
+    off = list(tau)
+    off[3] = 12.5  # beyond half a unit of its last place: off, as before
+    assert C.check(torque, COURSE, C.Answer(numbers=off)).group == "τ4 is off"
+    off[3] = 0.0  # a zero is what the student means, not a rounding
+    assert C.check(torque, COURSE, C.Answer(numbers=off)).group == "τ4 is off"
     with pytest.raises(ValueError, match="type 3 numbers"):
         C.check(position, COURSE, C.Answer(numbers=p[:2]))
 

@@ -1041,6 +1041,8 @@ def _check_numbers(challenge: Challenge, arm: Arm, answer: Answer) -> Verdict:
             kinds.append("is in metres, not mm" if challenge.quantity in POINTS else "is 1000 times too small")
         elif not angles and abs(typed[k] - 1000 * expected[k]) <= 1000 * allowed[k]:
             kinds.append("is 1000 times too big")
+        elif typed[k] != 0.0 and gap(typed[k], expected[k]) <= _last_place(typed[k]) / 2:
+            kinds.append("is rounded too far: give another digit")
         else:
             kinds.append("is off")
     off = [names[k] for k in np.flatnonzero(wrong)]
@@ -1061,6 +1063,18 @@ def _check_numbers(challenge: Challenge, arm: Arm, answer: Answer) -> Verdict:
 
 
 @functools.lru_cache(maxsize=64)
+def _last_place(typed: float) -> float:
+    """The value of the last place ``typed`` shows, as the shortest text that gives it back: 0.1 for 2.3, 1 for 2
+    (or 2.0), 1e-08 for 1.5e-07. A number typed as rounded to that place is within half of it of the exact one.
+
+    >>> _last_place(2.3), _last_place(-0.05), _last_place(40.0), _last_place(1.5e-07)
+    (0.1, 0.01, 1.0, 1e-08)
+    """
+    mantissa, _, exponent = repr(abs(float(typed))).partition("e")
+    decimals = len(mantissa.partition(".")[2].rstrip("0")) - int(exponent or 0)
+    return 10.0 ** -decimals
+
+
 def _usual_size(challenge: Challenge, arm: Arm) -> float:
     """How large a numbers challenge's answers can be on ``arm``, in the units typed: a bound from its reach and the
     given rates, force or payload, and for det J the 99th percentile of |det J| over its joint range. A number near
