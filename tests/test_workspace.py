@@ -4,7 +4,8 @@ import numpy as np
 import pytest
 
 from ur10core import Arm, flange_to_controller
-from ur10core.workspace import MAP_PLANES, base_turn, branch_count_map, revolved_boundary, turnable_into, vertical_section
+from ur10core.workspace import (MAP_PLANES, base_turn, branch_count_map, heights_above_floor, revolved_boundary, turnable_into,
+                                vertical_section)
 
 from .conftest import urs_own_solver
 
@@ -348,6 +349,31 @@ def test_each_arm_offers_the_sections_true_of_it_and_says_why_not_the_others(nam
         assert ("no height to bound" if name == "planar_elbow" else "only, so it would take in places") in why
     if "horizontal" in lacks:  # (until 2026-12-07 every arm but the UR family's lacked it: it had the closed form)
         assert "No horizontal section: the tool stays 0 mm above the floor, so the whole cloud is already its top view" in why
+
+
+@pytest.mark.parametrize("convention, rows, types, limits", [
+    # (a mm, α°, d mm, θ°) and the limits typed (° or mm; None for the default), as a student's editor takes them
+    ("standard", [(500, 90, 100, 90), (-300, 180, 0, 90), (0, 45, -300, 0), (0, -90, -300, 0), (500, 45, 0, -90),
+                  (500, 0, 100, 0)], "RRPRRR", [None, None, (100, 110), (-180, 320), None, None]),
+    ("modified", [(1000, 180, 500, -90), (500, 0, 0, 0), (0, 90, 1000, 30), (-300, 0, 1000, 30), (500, 45, 0, 30)],
+     "RRRRP", [None, (-90, -80), None, None, None]),
+])
+def test_a_typed_arm_has_a_section_at_either_end_of_its_heights(convention, rows, types, limits):
+    """Within 10 mm of the lowest and highest of ``tool_heights`` (the slider's ends), a typed arm's section was refused
+    as "no tool position found" (a fuzz of typed tables found 7 in 600, 2026-12-07): of 256 trial draws none reached
+    so near the top, and the joint then chosen to move the tool onto the plane was θ1, which turns about the
+    vertical and never moves the height. The trial now grows until some draws reach the plane."""
+    kinds = {"R": np.radians, "P": lambda v: np.asarray(v) / 1000.0}
+    limits = [None if typed is None else kinds[kind](typed) for typed, kind in zip(limits, types)]
+    defaults = Arm.from_dh([(0, 0, 0, 0)] * len(types), joint_types=types).limits
+    arm = Arm.from_dh([(a / 1000, np.radians(alpha), d / 1000, np.radians(theta)) for a, alpha, d, theta in rows],
+                      convention, types, limits=[d if t is None else t for t, d in zip(limits, defaults)])
+    low, high = arm.tool_heights
+    for seed in (3, 5, 7, 8):  # (seeds on which the old trial failed, of the first ten)
+        for height in (low + 0.005, high - 0.005):
+            points, _, q = arm.sample_horizontal_section(height, 2000, seed=seed, return_joints=True)
+            np.testing.assert_allclose(arm.fk(q)[:, :3, 3], points, atol=1e-9)
+            np.testing.assert_allclose(heights_above_floor(arm, points), height, atol=1e-12)
 
 
 def test_a_typed_arm_whose_first_joint_slides_has_no_side_view_nor_hull_and_is_told_why():

@@ -114,8 +114,10 @@ def horizontal_section(points, height: float, thickness: float = 0.02) -> tuple[
     return out, keep
 
 
-#: Draws each joint is tried on, to pick the joint that moves the tool onto a section's height.
-_TRIAL_DRAWS = 256
+#: Draws each joint is tried on, to pick the joint that moves the tool onto a section's height: the first trial's,
+#: and the most a trial grows to (four times over) while fewer than :data:`_TRIAL_HITS` reach it (near the top or
+#: bottom of the workspace, where a first trial's joint, reaching nothing, could be one that never moves the height).
+_TRIAL_DRAWS, _MOST_TRIAL_DRAWS, _TRIAL_HITS = 256, 65536, 8
 
 
 def sample_horizontal_section(arm, height: float, n: int, seed: int = 0, return_joints: bool = False):
@@ -133,8 +135,9 @@ def sample_horizontal_section(arm, height: float, n: int, seed: int = 0, return_
     so with the others drawn as :meth:`Arm.sample_joints` does, θk = atan2(B, A) ± acos((height − K) / √(A² + B²))
     (either sign at random, the other where that one is beyond the limits) or dk = (height − h(0)) / (h(1) − h(0))
     puts the tool in the plane. k is the joint that puts the tool at ``height`` from the most of 256 trial draws
-    (θ2 on the UR10); the others are drawn until ``n`` reach the plane or 20 ``n`` have been drawn (fewer than
-    ``n`` come back only near the top or bottom of the workspace). FK checks every point, and the points are put
+    (θ2 on the UR10), or of up to 65,536 where fewer than 8 of 256 reach it; the others are drawn until ``n``
+    reach the plane or 20 ``n`` have been drawn (fewer than ``n`` come back only near the top or bottom of the
+    workspace). FK checks every point, and the points are put
     in the plane exactly. ``ValueError`` where no tool position is found at that height.
 
     Returns points (m, 3) in the base frame, m ≤ n, manipulability (m,) and the joints (m, n_joints).
@@ -184,8 +187,11 @@ def sample_horizontal_section(arm, height: float, n: int, seed: int = 0, return_
 
     trial = draws(_TRIAL_DRAWS)
     hits = [len(onto(trial, j)) for j in range(arm.n_joints)]
+    while max(hits) < _TRIAL_HITS and len(trial) < _MOST_TRIAL_DRAWS:
+        trial = draws(4 * len(trial))
+        hits = [len(onto(trial, j)) for j in range(arm.n_joints)]
     k = int(np.argmax(hits))
-    share = max(hits[k], 1) / _TRIAL_DRAWS  # of the draws that reach the plane: rounds are sized by it
+    share = max(hits[k], 1) / len(trial)  # of the draws that reach the plane: rounds are sized by it
     kept, count, drawn = [], 0, 0
     while count < n and drawn < 20 * n:  # (near the top or bottom few reach it: the draws stop there)
         size = min(int(1.2 * (n - count) / share) + 64, 20 * n - drawn, 65536)  # (FK's arrays kept small)
