@@ -875,9 +875,10 @@ def test_a_label_another_thread_removes_while_labels_are_sized_is_left_alone(app
 
 def test_a_panel_redraw_under_way_ends_before_its_widgets_are_taken_away(app):
     """The refresher draws a browser's panel on the event loop while another thread may take the session away (an arm
-    replaced by another, a hand-over). The removal went ahead mid-redraw, and the redraw's next update reached a
-    widget the browser had removed: "Tried to update non-existent component" in its console (a monkey found it,
-    2026-12-07). A removal now waits for the redraw under way; a redraw after it draws nothing."""
+    replaced by another, a hand-over). The removal went ahead mid-redraw, and the redraw's next updates were queued
+    for widgets already removed (until 2026-12-07). A removal now waits for the redraw under way; a redraw after it
+    draws nothing. (The browser's "Tried to update non-existent component", which a monkey still sees now and then,
+    is viser's page applying a window's removals before the updates queued ahead of them in the same window.)"""
 
     async def scenario():
         client = await ViserClient(url(app)).connect()
