@@ -91,7 +91,9 @@ def test_velocity_and_forces_on_every_arm_match_finite_differences(app, label):
         # whole arrow lay inside the gizmo on every arm, "F = 50 N" named at a tip no student saw (until 2026-12-07)
         arrow = session.statics.arrow
         await until(lambda: arrow.visible and np.allclose(np.diff(arrow.points[0], axis=0)[0, 1:], 0.0), what="the arrow")
-        shaft = np.linalg.norm(np.diff(arrow.points[0], axis=0)) - arrow.head_length
+        length = np.linalg.norm(np.diff(arrow.points[0], axis=0))
+        assert client.shown(f"{length / 5 * 1000:.0f} mm drawn per 10 N"), "the arrow's scale, as the velocity's is said"
+        shaft = length - arrow.head_length
         assert shaft > 1.1 * session.ik_target.gizmo.scale, (shaft, session.ik_target.gizmo.scale)
         await client.close()
 

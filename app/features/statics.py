@@ -23,7 +23,8 @@ from ur10core.specs import torque_map
 from ..feedback import Beside, chosen, put_back, within
 from ..serving.workers import HEAVY, FoldedRuns
 from ..state import Snapshot
-from ..style import COLOUR_IS_CONTENT, DANGER_RED, SAFE_GREEN, UR10_SIZE, blend, hex_color, joint_units, number, turning_and_sliding
+from ..style import (COLOUR_IS_CONTENT, DANGER_RED, SAFE_GREEN, UR10_SIZE, blend, hex_color, joint_units, number, swatch,
+                     turning_and_sliding)
 from ..view import HELD_BACK, Session, View, say_held_back
 from ..viser_internals.fast_updates import set_positions, stop_echo
 from .branch_labels import obstacle
@@ -128,8 +129,10 @@ class StaticsView(View):
         folder = gui.add_folder("Forces and gravity", expand_by_default=False)
         self.folders = (folder,)
         with folder:
+            self._metres_per_n = ARROW_METRES_PER_N * size
             gui.add_markdown("The torques the joints must hold: τ = Jᵀ F for a force the tool pushes with; "
-                             + gravity_words(arm))
+                             + gravity_words(arm) + f"  \n{swatch(FORCE_COLOR)} **F**: the arrow at the tool, "
+                             f"{number(10000 * self._metres_per_n, '.0f')} mm drawn per 10 N")
             self.enabled = gui.add_checkbox("Show the torques", False)
             self.newtons = gui.add_slider("Force at the tool (N)", min=0.0, max=MAX_FORCE_N, step=5.0, initial_value=50.0)
             within(self.newtons, "force (N)")  # accepted: a first value refused puts it back here, not at 0
@@ -145,7 +148,6 @@ class StaticsView(View):
             self.map_refusal = Beside(gui)  # a map asked for with the force along the tool's z, which turns with the arm
             self.map_legend = gui.add_markdown("", visible=False)
             self.held_back = gui.add_markdown("", visible=False)  #: why the map is off (a class challenge)
-        self._metres_per_n = ARROW_METRES_PER_N * size
         self.arrow = scene.add_arrows(f"{root}/force", np.zeros((1, 2, 3)), FORCE_COLOR, shaft_radius=0.012 * size,
                                       head_radius=0.03 * size, head_length=0.05 * size, visible=False)
         # the arrow's node rides at the tool: a drag moves one node, and the arrow's shape is sent again
