@@ -1062,7 +1062,6 @@ def _check_numbers(challenge: Challenge, arm: Arm, answer: Answer) -> Verdict:
     return Verdict(False, f"{details} (each within {within}).", group, text)
 
 
-@functools.lru_cache(maxsize=64)
 def _last_place(typed: float) -> float:
     """The value of the last place ``typed`` shows, as the shortest text that gives it back: 0.1 for 2.3, 1 for 2
     (or 2.0), 1e-08 for 1.5e-07. A number typed as rounded to that place is within half of it of the exact one.
@@ -1075,6 +1074,7 @@ def _last_place(typed: float) -> float:
     return 10.0 ** -decimals
 
 
+@functools.lru_cache(maxsize=64)
 def _usual_size(challenge: Challenge, arm: Arm) -> float:
     """How large a numbers challenge's answers can be on ``arm``, in the units typed: a bound from its reach and the
     given rates, force or payload, and for det J the 99th percentile of |det J| over its joint range. A number near

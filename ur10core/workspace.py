@@ -137,8 +137,8 @@ def sample_horizontal_section(arm, height: float, n: int, seed: int = 0, return_
     puts the tool in the plane. k is the joint that puts the tool at ``height`` from the most of 256 trial draws
     (θ2 on the UR10), or of up to 65,536 where fewer than 8 of 256 reach it; the others are drawn until ``n``
     reach the plane or 20 ``n`` have been drawn (fewer than ``n`` come back only near the top or bottom of the
-    workspace). FK checks every point, and the points are put
-    in the plane exactly. ``ValueError`` where no tool position is found at that height.
+    workspace). FK checks every point, and the points are put in the plane exactly. ``ValueError`` where no tool
+    position is found at that height.
 
     Returns points (m, 3) in the base frame, m ≤ n, manipulability (m,) and the joints (m, n_joints).
 

@@ -39,8 +39,8 @@ from viser import _messages as messages
 
 from .shared_frames import SEND_TIMEOUT
 
-__all__ = ["after_broadcast", "connection_of", "labels_of", "messages", "name_tab", "page_titled", "send_again", "serving_through",
-           "value_fits"]
+__all__ = ["after_broadcast", "connection_of", "labels_of", "messages", "name_tab", "page_titled", "send_again",
+           "serving_through", "value_fits"]
 
 log = logging.getLogger(__name__)
 
