@@ -392,6 +392,29 @@ def test_a_wrist_singular_pose_within_the_limits_always_has_a_branch_within_them
     assert error[sol.valid].max() < 1e-9
 
 
+@pytest.mark.parametrize("stroke", [0.0, 1e-10, 5e-10, 3e-8, 1e-7, 1e-6, 1e-5])
+def test_a_stanford_pose_with_its_stroke_at_the_stop_and_theta2_on_a_limit_has_a_branch_within_them(stroke):
+    """With the stroke d3 a few µm from its stop, the wrist centre lies a few µm from the shoulder, and the pose fixes
+    θ2 only to its rounding over the stroke (2e-5 rad at 1 µm); at d3 ≤ 1e-9 m θ2 is free. θ2 on its 170° limit
+    (both sliders at their ends) came out beyond it in every slot, or θ2 was taken from the rounding and the wrist
+    turned past its limits, though the arm reaches the pose within them (until 2026-12-07: 29 of 3,000 poses with
+    joints at their ends, in a probe; here 72 of 400 at 1 µm)."""
+    arm = Arm.preset("stanford")
+    rng = np.random.default_rng(11)
+    q = arm.sample_joints(400, seed=12)
+    q[:, 2] = stroke
+    q[:, 1] = rng.choice(arm.limits[1], len(q))
+    q[:, 4] = rng.choice([-1.0, 1.0], len(q)) * rng.uniform(0.1, arm.limits[4, 1], len(q))  # the wrist not singular too
+    for joint in (0, 3, 5):  # and now and then another joint on a limit
+        ends = rng.random(len(q)) < 0.3
+        q[ends, joint] = rng.choice(arm.limits[joint], ends.sum())
+    T = arm.fk(q)
+    for hint in (None, arm.sample_joints(len(q), seed=13)):
+        sol = arm.ik(T, hint=hint)
+        assert (sol.valid & sol.within_limits).any(axis=-1).all()
+        assert arm.pose_error(np.where(sol.valid[..., None], sol.q, 0.0), T[:, None])[sol.valid].max() <= 1e-9
+
+
 @pytest.mark.parametrize("name, kind", [("kr210", "elbow"), ("elbow", "elbow"), ("three_dof", "fold"), ("course", "elbow")])
 def test_a_pose_on_a_stretched_or_folded_elbow_with_joints_on_their_limits_has_a_branch_within_them(name, kind):
     """On a stretched or folded elbow the IK gives the elbow's angle, and the joints that follow from it, to

@@ -27,6 +27,8 @@ def configured(module: ModuleType) -> ModuleType:
         tolerances.REACH_ROUNDING,
         tolerances.SIDE_TOLERANCE,
         tolerances.STRETCHED_TOLERANCE,
+        tolerances.LIMIT_TOLERANCE,
+        tolerances.SQUARE_ROUNDING,
     )
     return module
 

@@ -24,7 +24,8 @@
 /* ur10core/tolerances.py, handed over by set_tolerances() when ur10core loads this module. */
 static int configured = 0;
 static double LENGTH_TOLERANCE, CHOICE_TOLERANCE, WRIST_TURN_TOLERANCE, WRIST_TOLERANCE, ROTATION_TOLERANCE,
-    BOTTOM_ROW_TOLERANCE, BAND_LEVERAGE, REACH_ROUNDING, SIDE_TOLERANCE, STRETCHED_TOLERANCE;
+    BOTTOM_ROW_TOLERANCE, BAND_LEVERAGE, REACH_ROUNDING, SIDE_TOLERANCE, STRETCHED_TOLERANCE, LIMIT_TOLERANCE,
+    SQUARE_ROUNDING;
 
 enum { REACHABLE = 0, WRIST_INSIDE_CYLINDER = 1, ELBOW_TOO_FAR = 2, ELBOW_TOO_CLOSE = 3 };
 /* ur10core/branches.py's failure codes, for the other arms */
@@ -549,12 +550,14 @@ static int check_configured(void)
     return configured;
 }
 
-/* set_tolerances(length, choice, wrist_turn, wrist, rotation, bottom_row, band_leverage, reach_rounding): ur10core/tolerances.py. */
+/* set_tolerances(length, choice, wrist_turn, wrist, rotation, bottom_row, band_leverage, reach_rounding, side,
+ * stretched, limit, square_rounding): ur10core/tolerances.py. */
 static PyObject *set_tolerances(PyObject *self, PyObject *args)
 {
-    if (!PyArg_ParseTuple(args, "dddddddddd", &LENGTH_TOLERANCE, &CHOICE_TOLERANCE, &WRIST_TURN_TOLERANCE,
+    if (!PyArg_ParseTuple(args, "dddddddddddd", &LENGTH_TOLERANCE, &CHOICE_TOLERANCE, &WRIST_TURN_TOLERANCE,
                           &WRIST_TOLERANCE, &ROTATION_TOLERANCE, &BOTTOM_ROW_TOLERANCE, &BAND_LEVERAGE,
-                          &REACH_ROUNDING, &SIDE_TOLERANCE, &STRETCHED_TOLERANCE))
+                          &REACH_ROUNDING, &SIDE_TOLERANCE, &STRETCHED_TOLERANCE, &LIMIT_TOLERANCE,
+                          &SQUARE_ROUNDING))
         return NULL;
     configured = 1;
     Py_RETURN_NONE;
@@ -1148,7 +1151,10 @@ static void stanford_arm(const WristArm *G, const double *c, const double *h, do
         double theta1 = atan2(y, x) - atan2(d2, sign * reach);
         if (hint_fits && (sign * hint_u >= 0 || fabs(hint_u) <= SIDE_TOLERANCE)) theta1 = h[0];
         const double u = cos(theta1) * x + sin(theta1) * y;
-        const double stroke = hypot(u, z);
+        double stroke = hypot(u, z);
+        if (stroke <= LENGTH_TOLERANCE) stroke = 0.0; /* WC on the shoulder, to the tolerance: θ2 free */
+        /* singular where θ2 is fixed less well than LIMIT_TOLERANCE: the rounding of u over the stroke */
+        const int loose2 = fabs(u) * stroke * LIMIT_TOLERANCE <= SQUARE_ROUNDING * rho * rho;
         for (int reversed = 0; reversed < 2; reversed++) {
             const int slot = 4 * reversed + 2 * shoulder;
             double theta2 = atan2(u, z) + PI * reversed;
@@ -1157,7 +1163,7 @@ static void stanford_arm(const WristArm *G, const double *c, const double *h, do
             q[6 * slot + 1] = wrap_mod(theta2);
             q[6 * slot + 2] = (reversed ? -stroke : stroke) - stroke_offset;
             valid[slot] = 1;
-            singular[slot] = fabs(u) <= LENGTH_TOLERANCE || stroke <= LENGTH_TOLERANCE;
+            singular[slot] = fabs(u) <= LENGTH_TOLERANCE || loose2;
         }
     }
 }

@@ -27,7 +27,7 @@ from .branches import IKSolution, keep_free_values_within_limits
 from .dh import PRISMATIC, REVOLUTE, STANDARD, DHTable
 from .differential import FLAT, TASK_ROWS, JacobianUses, task_gap
 from .specs import HasSpecs
-from .solvers.numerical import NumericalIK, reach_bound, sampling_range, within_limits
+from .solvers.numerical import NumericalIK, reach_bound, sampling_range, settle_on_limits, within_limits
 from .serial import PRESETS as COURSE_ARMS
 from .solvers.ur import DESCRIPTIONS, DH_ALPHA, JOINT_LIMIT, JOINT_NAMES, LENGTHS, SingularityGeometry, URFamily
 from .workspace import sample_horizontal_section, tool_heights
@@ -328,6 +328,8 @@ class Arm(JacobianUses, HasSpecs):
             wrist centre on axis 1), the hint's value is kept, or the value nearest it that
             keeps the slot within the joint limits where the hint's does not
             (:func:`~ur10core.branches.keep_free_values_within_limits`); the numerical IK starts there.
+            Without a hint too, a joint the pose fixes only loosely that came out just beyond a
+            limit is put on it (:func:`~ur10core.solvers.numerical.settle_on_limits`).
 
         Returns
         -------
@@ -345,6 +347,7 @@ class Arm(JacobianUses, HasSpecs):
         solution = self._branches(T, hint)
         if self._free_values_meet_limits:
             keep_free_values_within_limits(solution, self._branches, T, hint)
+            settle_on_limits(solution, T)
         return solution
 
     def _branches(self, T, hint) -> IKSolution:

@@ -346,16 +346,16 @@ def keep_free_values_within_limits(solution: IKSolution, solve, T, hint) -> None
     """
     if not np.count_nonzero(solution.singular):  # the usual case, told in a fraction of a µs (a drag's every step)
         return
-    stuck = solution.valid & solution.singular & ~solution.within_limits
-    if not stuck.any():
-        return
     arm, n = solution.arm, solution.arm.n_joints
-    slots = stuck.shape[-1]
+    slots = solution.valid.shape[-1]
     q = solution.q.reshape(-1, slots, n).copy()
-    beyond = ~arm.joints_within_limits(np.where(np.isfinite(q), q, 0.0))  # (pose, slot, n)
+    flagged = (solution.valid & solution.singular).reshape(-1, slots)
+    rows = np.flatnonzero(flagged.any(axis=-1))  # only their joints are checked: a batch's other poses cost nothing
+    beyond = np.zeros(q.shape, dtype=bool)  # (pose, slot, n)
+    beyond[rows] = ~arm.joints_within_limits(np.where(np.isfinite(q[rows]), q[rows], 0.0))
     # a joint a pose leaves free turns the arm about an axis, and no stroke changes as it turns: a slot with a stroke
     # beyond its range (a point beyond the arm's reach, on a reach map) is not probed
-    stuck = stuck.reshape(-1, slots) & ~(beyond & ~arm.revolute).any(axis=-1)
+    stuck = flagged & beyond.any(axis=-1) & ~(beyond & ~arm.revolute).any(axis=-1)
     if not stuck.any():
         return
     T = np.broadcast_to(np.asarray(T, dtype=float), solution.valid.shape[:-1] + (4, 4)).reshape(-1, 4, 4)

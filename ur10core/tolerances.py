@@ -63,6 +63,13 @@ STRETCHED_TOLERANCE = 1e-9
 #: measured on the KR210, with θ2 and θ5 on their limits): a few times that.
 LIMIT_TOLERANCE = 1e-7
 
+#: A squared length's relative rounding, a few ulp: where the IK takes the difference of two squares, the
+#: difference is known only to this times the larger. The Stanford arm's reach u, from u² = ρ² − d2², is then
+#: known to about SQUARE_ROUNDING ρ² / |u|, and θ2 = atan2(u, z) to that over the stroke. A slot whose θ2 is fixed
+#: less well than LIMIT_TOLERANCE is flagged singular; where it came out just beyond a limit, it is put on it
+#: (:func:`ur10core.solvers.numerical.settle_on_limits`).
+SQUARE_ROUNDING = 4 * 2.0**-52
+
 #: A pose's rotation part may deviate from orthonormal by this much (max |Rᵀ R − I|).
 ROTATION_TOLERANCE = 1e-6
 

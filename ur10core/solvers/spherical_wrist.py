@@ -47,7 +47,9 @@ from ..orientation import zyz_euler
 from ..tolerances import (
     CHOICE_TOLERANCE,
     LENGTH_TOLERANCE,
+    LIMIT_TOLERANCE,
     SIDE_TOLERANCE,
+    SQUARE_ROUNDING,
     STRETCHED_TOLERANCE,
     WRIST_TOLERANCE,
     WRIST_TURN_TOLERANCE,
@@ -507,8 +509,10 @@ class StanfordArm(_CompiledWristArm):
             theta1 = np.where(chosen1, hint[:, 0], theta1)
             u = np.cos(theta1) * x + np.sin(theta1) * y  # = s2 d3
             stroke = np.hypot(u, z)
-            # singular where the pose leaves a value free: WC on the d2 cylinder, or on the shoulder
-            at_singularity = (np.abs(u) <= LENGTH_TOLERANCE) | (stroke <= LENGTH_TOLERANCE)
+            # WC on the shoulder, to the tolerance: there, with the stroke 0, θ2 is free
+            stroke = np.where(stroke <= LENGTH_TOLERANCE, 0.0, stroke)
+            # θ2 fixed only to the rounding of u over the stroke (SQUARE_ROUNDING), no better than LIMIT_TOLERANCE
+            loose2 = np.abs(u) * stroke * LIMIT_TOLERANCE <= SQUARE_ROUNDING * rho * rho
             for reversed_ in (0, 1):  # (s2, c2) d3 = (u, z): θ2 and the stroke, or θ2 + π and minus the stroke
                 slot = 4 * reversed_ + 2 * shoulder
                 theta2 = np.arctan2(u, z) + math.pi * reversed_
@@ -518,7 +522,8 @@ class StanfordArm(_CompiledWristArm):
                 d3 = (-stroke if reversed_ else stroke) - self.stroke_offset
                 q[ok, slot, :3] = np.stack([wrap(theta1), wrap(theta2), d3], axis=-1)[ok]
                 valid[ok, slot] = True
-                singular[ok, slot] = at_singularity[ok]
+                # singular where the pose fixes a value loosely or not at all: WC on the d2 cylinder, θ2 (loose2)
+                singular[ok, slot] = ((np.abs(u) <= LENGTH_TOLERANCE) | loose2)[ok]
         _wrist_slots(self.table, self.wrist, out, R, hint)
         return out
 
@@ -546,6 +551,9 @@ class StanfordArm(_CompiledWristArm):
                 theta1 = h[0]
             u = math.cos(theta1) * x + math.sin(theta1) * y
             stroke = math.hypot(u, z)
+            if stroke <= LENGTH_TOLERANCE:
+                stroke = 0.0
+            loose2 = abs(u) * stroke * LIMIT_TOLERANCE <= SQUARE_ROUNDING * rho * rho
             for reversed_ in (0, 1):
                 slot = 4 * reversed_ + 2 * shoulder
                 theta2 = math.atan2(u, z) + math.pi * reversed_
@@ -553,7 +561,7 @@ class StanfordArm(_CompiledWristArm):
                     theta2 = h[1]
                 q[slot, :3] = (_wrap1(theta1), _wrap1(theta2), (-stroke if reversed_ else stroke) - self.stroke_offset)
                 valid[slot] = True
-                singular[slot] = abs(u) <= LENGTH_TOLERANCE or stroke <= LENGTH_TOLERANCE
+                singular[slot] = abs(u) <= LENGTH_TOLERANCE or loose2
         _wrist_slots_one(self.table, self.wrist, out, R, hint)
         return out
 
