@@ -345,7 +345,7 @@ class Arm(JacobianUses, HasSpecs):
         if self._straight_ik is not None:
             return self._straight_ik(self, T, hint)
         solution = self._branches(T, hint)
-        if self._free_values_meet_limits:
+        if self._free_values_meet_limits and np.count_nonzero(solution.singular):  # the usual case has no singular slot
             keep_free_values_within_limits(solution, self._branches, T, hint)
             settle_on_limits(solution, T)
         return solution

@@ -348,19 +348,18 @@ def keep_free_values_within_limits(solution: IKSolution, solve, T, hint) -> None
         return
     arm, n = solution.arm, solution.arm.n_joints
     slots = solution.valid.shape[-1]
-    q = solution.q.reshape(-1, slots, n).copy()
     flagged = (solution.valid & solution.singular).reshape(-1, slots)
-    rows = np.flatnonzero(flagged.any(axis=-1))  # only their joints are checked: a batch's other poses cost nothing
-    beyond = np.zeros(q.shape, dtype=bool)  # (pose, slot, n)
-    beyond[rows] = ~arm.joints_within_limits(np.where(np.isfinite(q[rows]), q[rows], 0.0))
+    rows = np.flatnonzero(flagged.any(axis=-1))  # the poses with a singular slot: a batch's others cost nothing
+    q = solution.q.reshape(-1, slots, n)[rows]  # (pose, slot, n) of those poses, as are the arrays below
+    beyond = ~arm.joints_within_limits(np.where(np.isfinite(q), q, 0.0))
     # a joint a pose leaves free turns the arm about an axis, and no stroke changes as it turns: a slot with a stroke
     # beyond its range (a point beyond the arm's reach, on a reach map) is not probed
-    stuck = flagged & beyond.any(axis=-1) & ~(beyond & ~arm.revolute).any(axis=-1)
+    stuck = flagged[rows] & beyond.any(axis=-1) & ~(beyond & ~arm.revolute).any(axis=-1)
     if not stuck.any():
         return
-    T = np.broadcast_to(np.asarray(T, dtype=float), solution.valid.shape[:-1] + (4, 4)).reshape(-1, 4, 4)
-    hint = np.zeros((len(q), n)) if hint is None else np.broadcast_to(
-        arm.joints(hint, "hint"), solution.valid.shape[:-1] + (n,)).reshape(-1, n)
+    T = np.broadcast_to(np.asarray(T, dtype=float), solution.valid.shape[:-1] + (4, 4)).reshape(-1, 4, 4)[rows]
+    hint = np.zeros((len(rows), n)) if hint is None else np.broadcast_to(
+        arm.joints(hint, "hint"), solution.valid.shape[:-1] + (n,)).reshape(-1, n)[rows]
     poses = np.flatnonzero(stuck.any(axis=-1))
     low, high = arm.limits[:, 0], arm.limits[:, 1]
     # each joint's hint value moved a third of its range (at most 60°) towards its farther end, one joint at a time:
@@ -411,7 +410,9 @@ def keep_free_values_within_limits(solution: IKSolution, solve, T, hint) -> None
             if turn < best[pose[k[m]], slot[m]]:
                 best[pose[k[m]], slot[m]] = turn
                 q[pose[k[m]], slot[m]] = refined[m]
-    solution.q, solution._within_limits = q.reshape(solution.q.shape), None
+    every = solution.q.reshape(-1, slots, n)  # a view of ik's own array: a batch is not copied for a few poses
+    every[rows] = q
+    solution.q, solution._within_limits = every.reshape(solution.q.shape), None
 
 
 def _beyond_limits_by(q: np.ndarray, arm: Arm) -> np.ndarray:

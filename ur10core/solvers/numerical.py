@@ -239,7 +239,7 @@ def settle_on_limits(solution, T) -> None:
     if not np.count_nonzero(solution.singular):  # the usual case, told in a fraction of a µs (a drag's every step)
         return
     arm = solution.arm
-    flagged = solution.valid & solution.singular
+    flagged = np.nonzero(solution.valid & solution.singular)  # (pose indices..., slot)
     q = solution.q[flagged]
     on_limits = into_limits(q, arm.limits, arm.revolute)
     beyond_by = np.abs(wrap_revolute(on_limits - q, arm.revolute))
@@ -247,7 +247,7 @@ def settle_on_limits(solution, T) -> None:
     if not near.any():
         return
     on_limits, moving = on_limits[near], (beyond_by[near] == 0.0).astype(float)
-    target = np.broadcast_to(np.asarray(T, dtype=float)[..., None, :, :], solution.valid.shape + (4, 4))[flagged][near]
+    target = np.broadcast_to(np.asarray(T, dtype=float), solution.valid.shape[:-1] + (4, 4))[flagged[:-1]][near]
     settled, _ = gauss_newton(lambda q: task_error(arm.fk(q), arm.jacobian(q) * moving[:, None, :], target, arm.task),
                               on_limits, SETTLE_STEPS, (arm.limits, arm.revolute))
     size = np.linalg.norm(task_error(arm.fk(settled), arm.jacobian(settled), target, arm.task)[0], axis=-1)
@@ -257,8 +257,7 @@ def settle_on_limits(solution, T) -> None:
         return
     rows = np.flatnonzero(near)[reached]
     q[rows] = wrap_revolute(settled[reached], arm.revolute)
-    solution.q = solution.q.copy()
-    solution.q[flagged] = q
+    solution.q[flagged] = q  # ik's own array
     solution._within_limits = None
 
 
