@@ -413,6 +413,9 @@ def test_a_stanford_pose_with_its_stroke_at_the_stop_and_theta2_on_a_limit_has_a
         sol = arm.ik(T, hint=hint)
         assert (sol.valid & sol.within_limits).any(axis=-1).all()
         assert arm.pose_error(np.where(sol.valid[..., None], sol.q, 0.0), T[:, None])[sol.valid].max() <= 1e-9
+    for k in range(0, len(q), 20):  # one pose at a time (a drag's path), the same
+        sol = arm.ik(T[k], hint=q[k] + 1e-3)
+        assert (sol.valid & sol.within_limits).any()
 
 
 @pytest.mark.parametrize("name, kind", [("kr210", "elbow"), ("elbow", "elbow"), ("three_dof", "fold"), ("course", "elbow")])

@@ -247,7 +247,7 @@ def settle_on_limits(solution, T) -> None:
     if not near.any():
         return
     on_limits, moving = on_limits[near], (beyond_by[near] == 0.0).astype(float)
-    target = np.broadcast_to(np.asarray(T, dtype=float), solution.valid.shape[:-1] + (4, 4))[flagged[:-1]][near]
+    target = np.broadcast_to(np.asarray(T, dtype=float)[..., None, :, :], solution.valid.shape + (4, 4))[flagged][near]
     settled, _ = gauss_newton(lambda q: task_error(arm.fk(q), arm.jacobian(q) * moving[:, None, :], target, arm.task),
                               on_limits, SETTLE_STEPS, (arm.limits, arm.revolute))
     size = np.linalg.norm(task_error(arm.fk(settled), arm.jacobian(settled), target, arm.task)[0], axis=-1)
