@@ -396,9 +396,9 @@ def test_a_wrist_singular_pose_within_the_limits_always_has_a_branch_within_them
 def test_a_stanford_pose_with_its_stroke_at_the_stop_and_theta2_on_a_limit_has_a_branch_within_them(stroke):
     """With the stroke d3 a few µm from its stop, the wrist centre lies a few µm from the shoulder, and the pose fixes
     θ2 only to its rounding over the stroke (2e-5 rad at 1 µm); at d3 ≤ 1e-9 m θ2 is free. θ2 on its 170° limit
-    (both sliders at their ends) came out beyond it in every slot, or θ2 was taken from the rounding and the wrist
-    turned past its limits, though the arm reaches the pose within them (until 2026-12-07: 29 of 3,000 poses with
-    joints at their ends, in a probe; here 72 of 400 at 1 µm)."""
+    (its slider at an end) came out beyond it in every slot, or θ2 was taken from the rounding and the wrist turned
+    past its limits, though the arm reaches the pose within them (until 2026-12-07: 29 of 3,000 poses with joints
+    at their ends, in a probe; here 2 to 159 of the 400 at each stroke but 0)."""
     arm = Arm.preset("stanford")
     rng = np.random.default_rng(11)
     q = arm.sample_joints(400, seed=12)
