@@ -375,6 +375,13 @@ def test_the_singularity_plot_says_seconds(app):
     asyncio.run(scenario())
 
 
+async def show_horizontal_section(client: ViserClient) -> None:
+    """What each section test starts from: 10 k samples, the horizontal section, the cloud shown."""
+    await client.set_gui("Samples", "10 k")
+    await client.set_gui("Section", "horizontal section (top view)")
+    await client.set_gui("Show workspace cloud", True)
+
+
 def test_a_section_slider_flood_costs_one_cloud_in_the_making_and_one_waiting(app, monkeypatch):
     """The section height at 200 Hz with a slow (1 M point) cloud queued a recomputation per message.
 
@@ -399,9 +406,7 @@ def test_a_section_slider_flood_costs_one_cloud_in_the_making_and_one_waiting(ap
     async def scenario():
         client = await ViserClient(url(app)).connect()
         session = session_of(app, client)
-        await client.set_gui("Samples", "10 k")
-        await client.set_gui("Section", "horizontal section (top view)")
-        await client.set_gui("Show workspace cloud", True)
+        await show_horizontal_section(client)
         await until(lambda: session.workspace._cloud is not None and not session.workspace._clouds.busy, what="the first section")
         before = len(computed)
         heights = [-500.0 + 10.0 * k for k in range(150)]
@@ -431,9 +436,7 @@ def test_every_height_on_the_section_slider_has_a_section(app):
         low, high = section_heights(session.arm)
         assert (view.height.min, view.height.max) == (low, high) and -1205 < low < -1150 and 1400 < high <= 1460
         assert low < view.height.value < high
-        await client.set_gui("Samples", "10 k")
-        await client.set_gui("Section", "horizontal section (top view)")
-        await client.set_gui("Show workspace cloud", True)
+        await show_horizontal_section(client)
         for height in (view.height.value, high, low):
             await client.set_gui("Section height (mm)", height)
             await until(lambda: view._cloud is not None and not view._clouds.busy and np.allclose(
@@ -452,9 +455,7 @@ def test_the_section_through_the_tool_is_drawn_at_its_height_or_refused_beyond_t
         client = await ViserClient(url(app)).connect()
         session = session_of(app, client)
         view, line = session.workspace, session.workspace.refusal.line
-        await client.set_gui("Samples", "10 k")
-        await client.set_gui("Section", "horizontal section (top view)")
-        await client.set_gui("Show workspace cloud", True)
+        await show_horizontal_section(client)
         await until(lambda: view._cloud is not None and not view._clouds.busy and view.through_tool.visible,
                     what="the section, and the button beside it")
         tool = 1000.0 * float(session.state.last.flange[2, 3])  # (the UR10 stands on the floor)
@@ -484,9 +485,7 @@ def test_a_refused_height_stays_said_while_the_section_is_drawn_again(app):
         client = await ViserClient(url(app)).connect()
         session = session_of(app, client)
         view, line = session.workspace, session.workspace.refusal.line
-        await client.set_gui("Samples", "10 k")
-        await client.set_gui("Section", "horizontal section (top view)")
-        await client.set_gui("Show workspace cloud", True)
+        await show_horizontal_section(client)
         await until(lambda: view._cloud is not None and not view._clouds.busy, what="the section")
         drawn = view._cloud
         await client.set_gui("Section height (mm)", 99999.0)
