@@ -1274,6 +1274,18 @@ async def first_framed(app, client: ViserClient):
     return controls
 
 
+async def orbit_heard(controls, reports: list, heard: int, orbit) -> None:
+    """Until ``controls`` has had the camera report ``orbit`` (a view the student turned to, at its canvas size) and
+    told ``on_moved`` (which appends to ``reports``) of it. A count of ``on_moved`` alone was not enough: a framing
+    tells it after its lock, so the first framing's own call could come after :func:`first_framed` returned, and be
+    taken for the report's (a CI run, 2026-12-08)."""
+    camera = controls._client.camera
+    await until(lambda: len(reports) > heard and np.allclose(camera.position, orbit.position)
+                and np.allclose(camera.look_at, orbit.look_at)
+                and (camera.image_width, camera.image_height) == (orbit.image_width, orbit.image_height),
+                what="the camera's report handled")
+
+
 @pytest.mark.parametrize("server", ["app", "classroom"])
 @pytest.mark.parametrize("phone", [True, False])
 def test_on_a_phone_held_upright_the_arm_is_framed_above_the_panel(request, server, phone):
@@ -1388,11 +1400,13 @@ def test_a_page_that_puts_its_camera_back_at_the_start_is_framed_again(request, 
         orbit = ((2.5, -0.4, 1.7), (0.1, 0.2, 0.3))  # a view the student turned to
         for position, look_at in [*RESET_POSES, orbit]:
             heard = len(reports)
-            await client.send(dataclasses.replace(CAMERA, position=position, look_at=look_at))
-            await until(lambda: len(reports) > heard, what="the camera's report handled")
+            message = dataclasses.replace(CAMERA, position=position, look_at=look_at)
+            await client.send(message)
             if (position, look_at) == orbit:
+                await orbit_heard(controls, reports, heard, message)
                 assert not controls._where_framed() and np.allclose(controls._client.camera.position, position)
             else:
+                await until(lambda: len(reports) > heard, what="the camera's report handled")
                 await until(lambda: controls._where_framed(), what="the camera framed again")
                 np.testing.assert_allclose(controls._framed_at[0], framed, atol=1e-9)
         await client.close()
@@ -1416,8 +1430,9 @@ def test_a_students_orbit_stays_when_viser_draws_fewer_pixels_and_a_new_shape_of
         orbit = dataclasses.replace(CAMERA, position=(2.5, -0.4, 1.7), look_at=(0.1, 0.2, 0.3))
         for width, height in [(1280, 800), (1120, 700), (961, 601), (1280, 800)]:
             heard = len(reports)
-            await client.send(dataclasses.replace(orbit, image_width=width, image_height=height))
-            await until(lambda: len(reports) > heard, what="the camera's report handled")
+            message = dataclasses.replace(orbit, image_width=width, image_height=height)
+            await client.send(message)
+            await orbit_heard(controls, reports, heard, message)
             assert not controls._where_framed() and np.allclose(controls._client.camera.position, orbit.position)
         await client.send(dataclasses.replace(orbit, image_width=1000, image_height=800))  # a window of a new shape
         await until(lambda: controls._framed_size == (1000, 800) and controls._where_framed(),
