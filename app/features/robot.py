@@ -112,6 +112,8 @@ class ArmModelControls(View):
 
     def _chosen(self, _: viser.GuiEvent) -> None:
         model = chosen(self.dropdown, "arm model")
+        if model == self._seen:  # render_panel matching the dropdown to what it read was drawn: no choice, and by
+            return  # now maybe stale (a light view turned off meanwhile drew the real arm, and this drew it back)
         with self._session.state.lock:
             self._views.show(model)
             self._seen = model
