@@ -418,6 +418,30 @@ def test_a_stanford_pose_with_its_stroke_at_the_stop_and_theta2_on_a_limit_has_a
         assert (sol.valid & sol.within_limits).any()
 
 
+@pytest.mark.parametrize("theta5", [5e-11, 1e-10, 3e-10, 1e-9, 3e-9, 1e-8])
+def test_a_stanford_pose_with_theta5_near_0_and_wrist_joints_on_their_limits_has_a_branch_within_them(theta5):
+    """Just off the wrist singularity θ4 = atan2(W23, W13) carries W's rounding over sin θ5 (1e-7 rad at θ5 = 9e-9),
+    and a hint's θ4 is kept wherever turning to it moves the pose by less than the tolerance (any θ4 at θ5 = 1e-10).
+    With θ4 or θ6 on its 170° limit, a slot then read θ4 at 170.0002°, or θ6 at 174° from the hint's θ4, while the
+    arm reaches the pose within its limits (until 2026-12-08: here 2 to 7 of the 2,000 at each θ5, with or without a
+    hint). A stroke of 0.1 mm carries θ2's rounding into W too (θ4 off by 2e-5 rad at θ5 = 1e-8)."""
+    arm = Arm.preset("stanford")
+    rng = np.random.default_rng(21)
+    q = arm.sample_joints(2000, seed=22)
+    q[:, 4] = theta5 * rng.choice([-1.0, 1.0], len(q))
+    for joint, share in ((3, 0.6), (5, 0.6), (1, 0.5)):  # θ4, θ6 and θ2 at an end, now and then together
+        ends = rng.random(len(q)) < share
+        q[ends, joint] = rng.choice(arm.limits[joint], ends.sum())
+    T = arm.fk(q)
+    for hint in (None, arm.sample_joints(len(q), seed=23)):
+        sol = arm.ik(T, hint=hint)
+        assert (sol.valid & sol.within_limits).any(axis=-1).all()
+        assert arm.pose_error(np.where(sol.valid[..., None], sol.q, 0.0), T[:, None])[sol.valid].max() <= 1e-9
+    for k in range(0, len(q), 20):  # one pose at a time
+        sol = arm.ik(T[k])
+        assert (sol.valid & sol.within_limits).any()
+
+
 @pytest.mark.parametrize("name, kind", [("kr210", "elbow"), ("elbow", "elbow"), ("three_dof", "fold"), ("course", "elbow")])
 def test_a_pose_on_a_stretched_or_folded_elbow_with_joints_on_their_limits_has_a_branch_within_them(name, kind):
     """On a stretched or folded elbow the IK gives the elbow's angle, and the joints that follow from it, to

@@ -1060,8 +1060,8 @@ static void rotation_before_wrist(const WristArm *G, const double *q3, double *R
 }
 
 /* Wrist.solve_one: joints 4-6 of slot `base` (not flipped) and base + 1 (flipped). */
-static void wrist_joints(const WristArm *G, const double *R, double hint4, double *q, npy_bool *valid, npy_bool *singular,
-                         int base)
+static void wrist_joints(const WristArm *G, const double *R, double hint4, double arm_rounding, double *q,
+                         npy_bool *valid, npy_bool *singular, int base)
 {
     double R_pre[9], PT[9], RpreT[9], postT[9], A[9], B[9], W[9];
     rotation_before_wrist(G, q + 6 * base, R_pre);
@@ -1072,13 +1072,19 @@ static void wrist_joints(const WristArm *G, const double *R, double hint4, doubl
     matmul3(A, R, B);
     matmul3(B, postT, W);
     const double sin_b = hypot(W[2], W[5]);
-    const int aligned = sin_b <= WRIST_TOLERANCE;
+    /* _loose: the wrist singular, or theta4 fixed less well than LIMIT_TOLERANCE */
+    const int loose = sin_b <= WRIST_TOLERANCE || sin_b * LIMIT_TOLERANCE <= SQUARE_ROUNDING + arm_rounding;
     const double row_hint = hint4 + G->offset[0];
     for (int flip = 0; flip < 2; flip++) {
         const double sign = (flip ? -1.0 : 1.0) * G->s5;
         const double b = atan2(sign * sin_b, W[8]);
         double a = atan2(sign * W[5], sign * W[2]);
-        if (sin_b * fabs(wrap_mod(a - row_hint)) <= WRIST_TURN_TOLERANCE) a = row_hint;
+        const double turn = fabs(wrap_mod(a - row_hint));
+        int chosen_afar = 0;
+        if (sin_b * turn <= WRIST_TURN_TOLERANCE) {
+            chosen_afar = turn > LIMIT_TOLERANCE;
+            a = row_hint;
+        }
         const double ca = cos(a), sa = sin(a), cb = cos(b), sb = sin(b);
         const double c = atan2(-sa * W[0] + ca * W[3], cb * (ca * W[0] + sa * W[3]) - sb * W[6]);
         double *slot = q + 6 * (base + flip);
@@ -1087,7 +1093,7 @@ static void wrist_joints(const WristArm *G, const double *R, double hint4, doubl
         slot[4] = wrap_mod(b * G->s5 - G->offset[1]);
         slot[5] = wrap_mod(c * G->s6 - G->offset[2]);
         valid[base + flip] = 1;
-        singular[base + flip] = singular[base] || aligned;
+        singular[base + flip] = singular[base] || loose || chosen_afar;
     }
 }
 
@@ -1131,7 +1137,7 @@ static void articulated_arm(const WristArm *G, const double *c, const double *h,
 
 /* StanfordArm._solve_one's joints 1-3 (every even slot); the wrist centre c. */
 static void stanford_arm(const WristArm *G, const double *c, const double *h, double *q, npy_bool *valid,
-                         npy_bool *singular, npy_int8 *failure, double *detail)
+                         npy_bool *singular, npy_int8 *failure, double *detail, double *arm_rounding)
 {
     const double d1 = G->arm[0], d2 = G->arm[1], stroke_offset = G->arm[2];
     const double x = c[0], y = c[1], z = c[2] - d1;
@@ -1155,6 +1161,9 @@ static void stanford_arm(const WristArm *G, const double *c, const double *h, do
         if (stroke <= LENGTH_TOLERANCE) stroke = 0.0; /* WC on the shoulder, to the tolerance: θ2 free */
         /* singular where θ2 is fixed less well than LIMIT_TOLERANCE: the rounding of u over the stroke */
         const int loose2 = fabs(u) * stroke * LIMIT_TOLERANCE <= SQUARE_ROUNDING * rho * rho;
+        /* _arm_rounding: how well theta1 and theta2 are fixed together */
+        const double rounding = u != 0.0 && stroke != 0.0 ? SQUARE_ROUNDING * rho * (rho + stroke) / (fabs(u) * stroke)
+                                                          : INFINITY;
         for (int reversed = 0; reversed < 2; reversed++) {
             const int slot = 4 * reversed + 2 * shoulder;
             double theta2 = atan2(u, z) + PI * reversed;
@@ -1164,6 +1173,7 @@ static void stanford_arm(const WristArm *G, const double *c, const double *h, do
             q[6 * slot + 2] = (reversed ? -stroke : stroke) - stroke_offset;
             valid[slot] = 1;
             singular[slot] = fabs(u) <= LENGTH_TOLERANCE || loose2;
+            arm_rounding[slot] = rounding;
         }
     }
 }
@@ -1176,16 +1186,18 @@ static void wrist_arm_pose(const WristArm *G, const double *T, const double *h, 
     double c[3];
     for (int i = 0; i < 3; i++)
         c[i] = T[4 * i + 3] + (R[3 * i] * G->centre[0] + R[3 * i + 1] * G->centre[1] + R[3 * i + 2] * G->centre[2]);
+    double arm_rounding[8];
     for (int k = 0; k < 8; k++) {
         valid[k] = singular[k] = 0;
+        arm_rounding[k] = 0.0;
         for (int j = 0; j < 6; j++) q[6 * k + j] = NAN;
     }
     if (G->kind == WRIST_ARTICULATED)
         articulated_arm(G, c, h, q, valid, singular, failure, detail);
     else
-        stanford_arm(G, c, h, q, valid, singular, failure, detail);
+        stanford_arm(G, c, h, q, valid, singular, failure, detail, arm_rounding);
     for (int base = 0; base < 8; base += 2)
-        if (valid[base]) wrist_joints(G, R, h[3], q, valid, singular, base);
+        if (valid[base]) wrist_joints(G, R, h[3], arm_rounding[base], q, valid, singular, base);
 }
 
 /* wrist_ik(T (n,4,4), hint (n,6) or None, geometry, q (n,8,6), valid, singular (n,8) bool, failure (n,8) int8,

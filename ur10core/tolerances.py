@@ -67,7 +67,9 @@ LIMIT_TOLERANCE = 1e-7
 #: difference is known only to this times the larger. The Stanford arm's reach u, from u² = ρ² − d2², is then
 #: known to about SQUARE_ROUNDING ρ² / |u|, and θ2 = atan2(u, z) to that over the stroke. A slot whose θ2 is fixed
 #: less well than LIMIT_TOLERANCE is flagged singular; where it came out just beyond a limit, it is put on it
-#: (:func:`ur10core.solvers.numerical.settle_on_limits`).
+#: (:func:`ur10core.solvers.numerical.settle_on_limits`). A spherical wrist's rotation W (a product of rotations) has
+#: entries known to about this much too, so θ4 = atan2(W23, W13) to this over sin θ5: a slot whose θ4 is fixed less
+#: well than LIMIT_TOLERANCE (θ5 within about 9e-9 rad of 0) is flagged singular likewise.
 SQUARE_ROUNDING = 4 * 2.0**-52
 
 #: A pose's rotation part may deviate from orthonormal by this much (max |Rᵀ R − I|).

@@ -116,8 +116,9 @@ class Wrist:
         self.offsets = np.array([rows[j].theta for j in (j4, j5, j6)])
         self._offsets = self.offsets.tolist()
 
-    def solve(self, R_pre: np.ndarray, R: np.ndarray, hint4: np.ndarray, flip: bool):
-        """θ4, θ5, θ6 and whether the wrist is singular (θ4 the hint's), for (N, 3, 3) rotations; ``flip`` picks θ5 ≤ 0."""
+    def solve(self, R_pre: np.ndarray, R: np.ndarray, hint4: np.ndarray, flip: bool, arm_rounding=0.0):
+        """θ4, θ5, θ6 and whether θ4 is fixed loosely or chosen (:func:`_loose`), for (N, 3, 3) rotations; ``flip``
+        picks θ5 ≤ 0. ``arm_rounding`` (N,): how well joints 1–3 fix R_pre (rad)."""
         W = self.P.T @ np.swapaxes(R_pre, -1, -2) @ R @ self.post.T
         sin_b = np.hypot(W[:, 0, 2], W[:, 1, 2])
         sign_theta5 = (-1.0 if flip else 1.0) * self.s5  # b = s5 θ5: flipped (θ5 ≤ 0) takes b of sign −s5
@@ -125,7 +126,8 @@ class Wrist:
         a = np.arctan2(sign_theta5 * W[:, 1, 2], sign_theta5 * W[:, 0, 2])
         row_hint = hint4 + self.offsets[0]
         # keep the hint's θ4 wherever turning θ4 (and θ6 against it) to it changes R by less than the tolerance
-        chosen = sin_b * np.abs(wrap(a - row_hint)) <= WRIST_TURN_TOLERANCE
+        turn = np.abs(wrap(a - row_hint))
+        chosen = sin_b * turn <= WRIST_TURN_TOLERANCE
         a = np.where(chosen, row_hint, a)
         ca, sa, cb, sb = np.cos(a), np.sin(a), np.cos(b), np.sin(b)
         # c exactly from a and b: Rz(c) = Ry(b)ᵀ Rz(a)ᵀ W
@@ -133,26 +135,37 @@ class Wrist:
         theta4 = wrap(a - self.offsets[0])
         theta5 = wrap(b * self.s5 - self.offsets[1])
         theta6 = wrap(c * self.s6 - self.offsets[2])
-        return theta4, theta5, theta6, sin_b <= WRIST_TOLERANCE
+        return theta4, theta5, theta6, _loose(sin_b, chosen & (turn > LIMIT_TOLERANCE), arm_rounding)
 
-    def solve_one(self, R_pre: np.ndarray, R: np.ndarray, hint4: float) -> list[tuple[float, float, float, bool]]:
-        """:meth:`solve` for one (3, 3) pair, in floats: (θ4, θ5, θ6, singular) not flipped, then flipped."""
+    def solve_one(self, R_pre: np.ndarray, R: np.ndarray, hint4: float,
+                  arm_rounding: float = 0.0) -> list[tuple[float, float, float, bool]]:
+        """:meth:`solve` for one (3, 3) pair, in floats: (θ4, θ5, θ6, loose) not flipped, then flipped."""
         W = (self.P.T @ R_pre.T @ R @ self.post.T).tolist()
         sin_b = math.hypot(W[0][2], W[1][2])
-        aligned = sin_b <= WRIST_TOLERANCE
         row_hint = hint4 + self._offsets[0]
         out = []
         for flip in (False, True):
             sign = (-1.0 if flip else 1.0) * self.s5
             b = math.atan2(sign * sin_b, W[2][2])
             a = math.atan2(sign * W[1][2], sign * W[0][2])
-            if sin_b * abs(_wrap1(a - row_hint)) <= WRIST_TURN_TOLERANCE:
+            turn = abs(_wrap1(a - row_hint))
+            chosen = sin_b * turn <= WRIST_TURN_TOLERANCE
+            if chosen:
                 a = row_hint
             ca, sa, cb, sb = math.cos(a), math.sin(a), math.cos(b), math.sin(b)
             c = math.atan2(-sa * W[0][0] + ca * W[1][0], cb * (ca * W[0][0] + sa * W[1][0]) - sb * W[2][0])
             out.append((_wrap1(a - self._offsets[0]), _wrap1(b * self.s5 - self._offsets[1]),
-                        _wrap1(c * self.s6 - self._offsets[2]), aligned))
+                        _wrap1(c * self.s6 - self._offsets[2]), bool(_loose(sin_b, chosen and turn > LIMIT_TOLERANCE, arm_rounding))))
         return out
+
+
+def _loose(sin_b, chosen_afar, arm_rounding):
+    """Whether θ4 is fixed loosely or not at all, from the sine of θ5 (Wrist.solve's b), whether the hint's θ4 was
+    kept more than :data:`LIMIT_TOLERANCE` from the pose's own, and how well joints 1–3 are fixed (rad): the wrist
+    singular (sin b to WRIST_TOLERANCE), θ4 fixed less well than LIMIT_TOLERANCE (it carries the rounding of W's
+    entries, SQUARE_ROUNDING and the arm's, over sin b), or a value the pose leaves free chosen. A slot so flagged is
+    searched and settled within the limits (docs/kinematics.md §7.3)."""
+    return (sin_b <= WRIST_TOLERANCE) | (sin_b * LIMIT_TOLERANCE <= SQUARE_ROUNDING + arm_rounding) | chosen_afar
 
 
 def _wrist_offset(table: DHTable, wrist: Wrist) -> np.ndarray:
@@ -174,8 +187,10 @@ def _pose_parts(centre_in_tool: np.ndarray, T: np.ndarray) -> tuple[np.ndarray, 
     return R, T[:, :3, 3] + R @ centre_in_tool
 
 
-def _wrist_slots(table: DHTable, wrist: Wrist, out: dict, R: np.ndarray, hint: np.ndarray | None) -> None:
+def _wrist_slots(table: DHTable, wrist: Wrist, out: dict, R: np.ndarray, hint: np.ndarray | None,
+                 arm_rounding: np.ndarray | None = None) -> None:
     """Joints 4–6 for every even slot whose joints 1–3 are set: the wrist not flipped there, flipped in the next.
+    ``arm_rounding`` (N, slots): how well joints 1–3 are fixed there (rad), where it can matter.
 
     All arm slots of all poses go through the wrist at once (one FK of joints 1–3, one
     solve per flip): a single pose then costs a few dozen array operations, not a hundred.
@@ -192,15 +207,17 @@ def _wrist_slots(table: DHTable, wrist: Wrist, out: dict, R: np.ndarray, hint: n
     full[:, : n - 3] = q[pose, base, : n - 3]
     R_pre = table.frames(full)[:, wrist.first_row, :3, :3]
     for flip in (False, True):
-        t4, t5, t6, aligned = wrist.solve(R_pre, R[pose], hint4[pose], flip)
+        rounding = 0.0 if arm_rounding is None else arm_rounding[pose, base]
+        t4, t5, t6, loose = wrist.solve(R_pre, R[pose], hint4[pose], flip, rounding)
         k = base + int(flip)
         q[pose, k, : n - 3] = full[:, : n - 3]
         q[pose, k, n - 3:] = np.stack([t4, t5, t6], axis=-1)
         valid[pose, k] = True
-        singular[pose, k] = singular[pose, base] | aligned
+        singular[pose, k] = singular[pose, base] | loose
 
 
-def _wrist_slots_one(table: DHTable, wrist: Wrist, out: dict, R: np.ndarray, hint: list[float] | None) -> None:
+def _wrist_slots_one(table: DHTable, wrist: Wrist, out: dict, R: np.ndarray, hint: list[float] | None,
+                     arm_rounding: list[float] | None = None) -> None:
     """:func:`_wrist_slots` for one pose (``out`` of batch 1, R (3, 3)): the wrist in floats, slot by slot."""
     q, valid, singular = out["q"][0], out["valid"][0], out["singular"][0]
     n = table.n_joints
@@ -211,11 +228,12 @@ def _wrist_slots_one(table: DHTable, wrist: Wrist, out: dict, R: np.ndarray, hin
     full = np.zeros((len(bases), n))
     full[:, : n - 3] = q[bases, : n - 3]
     for base, R_pre in zip(bases, table.frames(full)[:, wrist.first_row, :3, :3]):
-        for flip, (t4, t5, t6, aligned) in enumerate(wrist.solve_one(R_pre, R, hint4)):
+        rounding = 0.0 if arm_rounding is None else arm_rounding[base]
+        for flip, (t4, t5, t6, loose) in enumerate(wrist.solve_one(R_pre, R, hint4, rounding)):
             q[base + flip, n - 3:] = (t4, t5, t6)
             q[base + flip, : n - 3] = q[base, : n - 3]
             valid[base + flip] = True
-            singular[base + flip] = singular[base] or aligned
+            singular[base + flip] = singular[base] or loose
 
 
 #: The compiled kernel's solver of these arms (``None`` on the numpy backend: :meth:`Arm.ik` then runs the numpy code).
@@ -452,6 +470,13 @@ class ArticulatedArm(_CompiledWristArm):
         return out
 
 
+def _arm_rounding(rho, u, stroke):
+    """How well the Stanford arm's θ1 and θ2 are fixed together (rad), from the wrist centre's distance ρ from axis 1,
+    its reach u along the arm and the stroke (floats or arrays, u and the stroke not 0): u, from u² = ρ² − d2², is
+    known to about SQUARE_ROUNDING ρ²/|u|, θ1 to that over ρ and θ2 to that over the stroke. The wrist's W carries it."""
+    return SQUARE_ROUNDING * rho * (rho + stroke) / (abs(u) * stroke)
+
+
 class StanfordArm(_CompiledWristArm):
     """RRP + spherical wrist (standard DH as in docs/kinematics.md §7.5): 8 slots, the last four with the stroke reversed."""
 
@@ -501,6 +526,7 @@ class StanfordArm(_CompiledWristArm):
         out["failure"][:] = np.where(inside, INSIDE_OFFSET, 0)[:, None]
         out["detail"][:] = rho[:, None]
         ok = ~inside
+        arm_rounding = np.zeros((N, 8))
         for shoulder in (0, 1):
             sign = 1.0 if shoulder == 0 else -1.0
             # −s1 x + c1 y = d2 and c1 x + s1 y = ±reach
@@ -513,6 +539,8 @@ class StanfordArm(_CompiledWristArm):
             stroke = np.where(stroke <= LENGTH_TOLERANCE, 0.0, stroke)
             # θ2 fixed only to the rounding of u over the stroke (SQUARE_ROUNDING), no better than LIMIT_TOLERANCE
             loose2 = np.abs(u) * stroke * LIMIT_TOLERANCE <= SQUARE_ROUNDING * rho * rho
+            with np.errstate(divide="ignore", invalid="ignore"):  # (where u or the stroke is 0 the slot is singular)
+                rounding = np.where((u != 0.0) & (stroke != 0.0), _arm_rounding(rho, u, stroke), np.inf)
             for reversed_ in (0, 1):  # (s2, c2) d3 = (u, z): θ2 and the stroke, or θ2 + π and minus the stroke
                 slot = 4 * reversed_ + 2 * shoulder
                 theta2 = np.arctan2(u, z) + math.pi * reversed_
@@ -524,7 +552,8 @@ class StanfordArm(_CompiledWristArm):
                 valid[ok, slot] = True
                 # singular where the pose fixes a value loosely or not at all: WC on the d2 cylinder, θ2 (loose2)
                 singular[ok, slot] = ((np.abs(u) <= LENGTH_TOLERANCE) | loose2)[ok]
-        _wrist_slots(self.table, self.wrist, out, R, hint)
+                arm_rounding[:, slot] = rounding
+        _wrist_slots(self.table, self.wrist, out, R, hint, arm_rounding)
         return out
 
     def _solve_one(self, T: np.ndarray, hint: list[float] | None) -> dict[str, np.ndarray]:
@@ -544,6 +573,7 @@ class StanfordArm(_CompiledWristArm):
         hint_fits = abs(-s1h * x + c1h * y - d2) <= CHOICE_TOLERANCE
         failure[:] = INSIDE_OFFSET if inside else 0
         detail[:] = rho
+        arm_rounding = [0.0] * 8
         for shoulder in () if inside else (0, 1):
             sign = 1.0 if shoulder == 0 else -1.0
             theta1 = math.atan2(y, x) - math.atan2(d2, sign * reach)
@@ -554,6 +584,7 @@ class StanfordArm(_CompiledWristArm):
             if stroke <= LENGTH_TOLERANCE:
                 stroke = 0.0
             loose2 = abs(u) * stroke * LIMIT_TOLERANCE <= SQUARE_ROUNDING * rho * rho
+            rounding = _arm_rounding(rho, u, stroke) if u and stroke else math.inf
             for reversed_ in (0, 1):
                 slot = 4 * reversed_ + 2 * shoulder
                 theta2 = math.atan2(u, z) + math.pi * reversed_
@@ -562,7 +593,8 @@ class StanfordArm(_CompiledWristArm):
                 q[slot, :3] = (_wrap1(theta1), _wrap1(theta2), (-stroke if reversed_ else stroke) - self.stroke_offset)
                 valid[slot] = True
                 singular[slot] = abs(u) <= LENGTH_TOLERANCE or loose2
-        _wrist_slots_one(self.table, self.wrist, out, R, hint)
+                arm_rounding[slot] = rounding
+        _wrist_slots_one(self.table, self.wrist, out, R, hint, arm_rounding)
         return out
 
 
