@@ -424,7 +424,7 @@ def test_a_stanford_pose_with_theta5_near_0_and_wrist_joints_on_their_limits_has
     and a hint's θ4 is kept wherever turning to it moves the pose by less than the tolerance (any θ4 at θ5 = 1e-10).
     With θ4 or θ6 on its 170° limit, a slot then read θ4 at 170.0002°, or θ6 at 174° from the hint's θ4, while the
     arm reaches the pose within its limits (until 2026-12-08: here 2 to 7 of the 2,000 at each θ5, with or without a
-    hint). A stroke of 0.1 mm carries θ2's rounding into W too (θ4 off by 2e-5 rad at θ5 = 1e-8)."""
+    hint). A short stroke carries θ2's rounding into W too (at 0.8 mm, θ4 off by 4e-5 rad at θ5 = 1e-8)."""
     arm = Arm.preset("stanford")
     rng = np.random.default_rng(21)
     q = arm.sample_joints(2000, seed=22)
