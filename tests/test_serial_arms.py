@@ -392,6 +392,18 @@ def test_a_wrist_singular_pose_within_the_limits_always_has_a_branch_within_them
     assert error[sol.valid].max() < 1e-9
 
 
+def assert_a_branch_within_the_limits_reaches_each(arm, T: np.ndarray, hint_seed: int, one_pose_hints=None) -> None:
+    """Every pose of ``T`` (N, 4, 4) has a branch within the joint limits, and every slot reaches its pose to 1e-9: in
+    one batch with no hint and with random hints, and one pose at a time (a drag's path; ``one_pose_hints`` (N, n))."""
+    for hint in (None, arm.sample_joints(len(T), seed=hint_seed)):
+        sol = arm.ik(T, hint=hint)
+        assert (sol.valid & sol.within_limits).any(axis=-1).all()
+        assert arm.pose_error(np.where(sol.valid[..., None], sol.q, 0.0), T[:, None])[sol.valid].max() <= 1e-9
+    for k in range(0, len(T), 20):
+        sol = arm.ik(T[k], hint=None if one_pose_hints is None else one_pose_hints[k])
+        assert (sol.valid & sol.within_limits).any()
+
+
 @pytest.mark.parametrize("stroke", [0.0, 1e-10, 5e-10, 3e-8, 1e-7, 1e-6, 1e-5])
 def test_a_stanford_pose_with_its_stroke_at_the_stop_and_theta2_on_a_limit_has_a_branch_within_them(stroke):
     """With the stroke d3 a few µm from its stop, the wrist centre lies a few µm from the shoulder, and the pose fixes
@@ -408,14 +420,7 @@ def test_a_stanford_pose_with_its_stroke_at_the_stop_and_theta2_on_a_limit_has_a
     for joint in (0, 3, 5):  # and now and then another joint on a limit
         ends = rng.random(len(q)) < 0.3
         q[ends, joint] = rng.choice(arm.limits[joint], ends.sum())
-    T = arm.fk(q)
-    for hint in (None, arm.sample_joints(len(q), seed=13)):
-        sol = arm.ik(T, hint=hint)
-        assert (sol.valid & sol.within_limits).any(axis=-1).all()
-        assert arm.pose_error(np.where(sol.valid[..., None], sol.q, 0.0), T[:, None])[sol.valid].max() <= 1e-9
-    for k in range(0, len(q), 20):  # one pose at a time (a drag's path), the same
-        sol = arm.ik(T[k], hint=q[k] + 1e-3)
-        assert (sol.valid & sol.within_limits).any()
+    assert_a_branch_within_the_limits_reaches_each(arm, arm.fk(q), hint_seed=13, one_pose_hints=q + 1e-3)
 
 
 @pytest.mark.parametrize("theta5", [5e-11, 1e-10, 3e-10, 1e-9, 3e-9, 1e-8])
@@ -432,14 +437,7 @@ def test_a_stanford_pose_with_theta5_near_0_and_wrist_joints_on_their_limits_has
     for joint, share in ((3, 0.6), (5, 0.6), (1, 0.5)):  # θ4, θ6 and θ2 at an end, now and then together
         ends = rng.random(len(q)) < share
         q[ends, joint] = rng.choice(arm.limits[joint], ends.sum())
-    T = arm.fk(q)
-    for hint in (None, arm.sample_joints(len(q), seed=23)):
-        sol = arm.ik(T, hint=hint)
-        assert (sol.valid & sol.within_limits).any(axis=-1).all()
-        assert arm.pose_error(np.where(sol.valid[..., None], sol.q, 0.0), T[:, None])[sol.valid].max() <= 1e-9
-    for k in range(0, len(q), 20):  # one pose at a time
-        sol = arm.ik(T[k])
-        assert (sol.valid & sol.within_limits).any()
+    assert_a_branch_within_the_limits_reaches_each(arm, arm.fk(q), hint_seed=23)
 
 
 @pytest.mark.parametrize("name, kind", [("kr210", "elbow"), ("elbow", "elbow"), ("three_dof", "fold"), ("course", "elbow")])
