@@ -82,7 +82,10 @@ class IKSolution:
     singular : ndarray of bool, shape (..., k)
         A joint value was chosen, not computed (the pose does not fix it: a wrist with
         axes 4 and 6 aligned, a wrist centre on axis 1, two slots that coincide); the hint's
-        value is kept there.
+        value is kept there. Also where the pose fixes a joint less well than the limits'
+        tolerance (the Stanford arm's θ2 over a stroke of µm, a wrist's θ4 with θ5 within
+        about 1e-8 rad of 0), or the hint's value was kept where the pose fixes the joint only
+        loosely: such a slot is searched and settled within the limits (:meth:`Arm.ik`).
     failure, detail : ndarray, shape (..., k)
         Why a slot is empty (:data:`TOO_FAR`, ...) and the number behind it.
     labels : tuple of str

@@ -116,7 +116,8 @@ class Wrist:
         self.offsets = np.array([rows[j].theta for j in (j4, j5, j6)])
         self._offsets = self.offsets.tolist()
 
-    def solve(self, R_pre: np.ndarray, R: np.ndarray, hint4: np.ndarray, flip: bool, arm_rounding=0.0):
+    def solve(self, R_pre: np.ndarray, R: np.ndarray, hint4: np.ndarray, flip: bool,
+              arm_rounding: np.ndarray | float = 0.0):
         """θ4, θ5, θ6 and whether θ4 is fixed loosely or chosen (:func:`_loose`), for (N, 3, 3) rotations; ``flip``
         picks θ5 ≤ 0. ``arm_rounding`` (N,): how well joints 1–3 fix R_pre (rad)."""
         W = self.P.T @ np.swapaxes(R_pre, -1, -2) @ R @ self.post.T
