@@ -141,7 +141,7 @@ def main(argv: list[str] | None = None, started=None) -> None:
               "This computer has no network address that students could reach yet: connect it to the class's network "
               "(or start its hotspot). The console and the teacher's screen then show the address.", flush=True)
     if app.classroom is not None:
-        print(f"Join code for the presenter: {app.classroom.code} (a page at 127.0.0.1 on this computer presents "
+        print(f"Join code for the presenter: {app.classroom.code} (a page opened on this computer presents "
               "without it)", flush=True)
         print(f"Class challenges: {len(args.challenge_list)} (the presenter's Challenge folder); their results are "
               f"saved in {args.results}", flush=True)

@@ -643,6 +643,44 @@ def test_the_teachers_own_screen_presents_without_the_code_when_nobody_presents(
         app.stop()
 
 
+def test_this_machines_network_address_is_its_own_and_another_machines_is_not():
+    """A connection whose two ends have one address comes from this machine; one from elsewhere to that address does
+    not, and a gate that takes loopback for the network (the benchmarks' attacker) trusts neither."""
+    gate = Gate()
+    gate.learn("192.0.2.50", "192.0.2.2")  # a laptop, to this machine's address
+    assert not gate.trusted("192.0.2.50") and not gate.trusted("192.0.2.2")
+    gate.learn("192.0.2.2", "192.0.2.2")  # this machine, to its own address
+    assert gate.trusted("192.0.2.2") and not gate.trusted("192.0.2.50") and gate.trusted("127.0.0.1")
+    assert gate.tcp_opened("192.0.2.2") and gate.tcp_connections("192.0.2.2") == 0  # not counted, as loopback is not
+    attacked = Gate(trust_loopback=False)
+    attacked.learn("192.0.2.2", "192.0.2.2")
+    assert not attacked.trusted("192.0.2.2")
+
+
+def test_the_teachers_page_at_the_address_the_students_were_given_presents_without_the_code():
+    """The teacher who opened, on the projector's computer, the address the console gives the students (to check
+    it, or from a shortcut) came in from that address, not 127.0.0.1: it watched, "Become presenter", until the
+    teacher found the code (until 2026-12-08). It is this machine's screen, and presents."""
+    from ur10teach.serving.server import lan_addresses
+
+    addresses = lan_addresses()
+    if not addresses:
+        pytest.skip("this machine has no network address")
+    app = TeachingServer(port=0, shared=True, host="0.0.0.0")
+
+    async def scenario():
+        teacher = await ViserClient(f"http://{addresses[0]}:{app.port}").connect()
+        await until(lambda: "Stop presenting" in teacher.gui and teacher.gizmo_owner is not None, what="the teacher presenting")
+        member = member_of(app, 0)
+        assert member.address == addresses[0] and app.classroom.presenter is member and app.classroom.claims == 0
+        await teacher.close()
+
+    try:
+        asyncio.run(scenario())
+    finally:
+        app.stop()
+
+
 def test_a_projector_back_before_the_server_noticed_it_had_gone_presents_again():
     """A page whose websocket dropped retries every second, and is often back before the server notices its old
     connection has died (viser's websockets ping every 20 s and wait 20 s more): the projector came back a viewer, the

@@ -218,8 +218,9 @@ class Gate:
     allowed_origins : iterable of str
         Origins (``http://host:port``) allowed besides the server's own pages.
     trust_loopback : bool, optional
-        Whether connections from this machine skip the per-address limits: yes, unless
-        ``UR10_TEACH_LOOPBACK_IS_LAN=1`` (a benchmark's attacker on 127.0.0.2 then counts as a laptop).
+        Whether connections from this machine (its loopback, or one of its network addresses: :meth:`trusted`) skip
+        the per-address limits: yes, unless ``UR10_TEACH_LOOPBACK_IS_LAN=1`` (a benchmark's attacker on 127.0.0.2
+        then counts as a laptop).
     """
 
     def __init__(self, allowed_origins=(), trust_loopback: bool | None = None) -> None:
@@ -237,6 +238,7 @@ class Gate:
         self._tcp: collections.Counter = collections.Counter()  # address -> open TCP connections
         self._arrivals: dict[str, TokenBucket] = {}
         self._passing: dict[str, SharedRate] = {}  # address -> the rate its connections' messages pass at
+        self._own: set[str] = set()  # this machine's network addresses that connections came from (:meth:`learn`)
         self._lock = threading.Lock()
         #: ``(uuid, value)`` -> whether a widget's value converts to the widget's type (the server sets it)
         self.value_fits: Callable[[Any, Any], bool] = lambda uuid, value: True
@@ -305,9 +307,12 @@ class Gate:
         return origin in (f"http://{host.lower()}", f"https://{host.lower()}") or origin in self.allowed_origins
 
     def trusted(self, address: str) -> bool:
-        """Whether ``address`` is this machine's own (and the per-address limits skip it)."""
+        """Whether ``address`` is this machine's own (and the per-address limits skip it): a loopback address, or a
+        network address of this machine that a connection came from (:meth:`learn`)."""
         if not self.trust_loopback:
             return False
+        if address in self._own:  # (read without the lock: callers may hold it)
+            return True
         with contextlib.suppress(ValueError):
             return ipaddress.ip_address(address).is_loopback
         return False
@@ -332,6 +337,15 @@ class Gate:
             counts[address] -= 1
             if counts[address] <= 0:
                 del counts[address]
+
+    def learn(self, address: str, local_address: str) -> None:
+        """A TCP connection from ``address`` to this machine's ``local_address``: where the two are one, it came from
+        this machine (no other host can open a connection from an address this one holds), and the address is
+        trusted from then on. The teacher who opens the address the students were given, on the projector's own
+        computer, is then this machine's screen, as at 127.0.0.1."""
+        if address == local_address and address != "?":
+            with self._lock:
+                self._own.add(address)
 
     def tcp_opened(self, address: str) -> bool:
         """Count a new TCP connection from ``address``: False (and not counted) when it holds too many."""
@@ -571,8 +585,10 @@ def gated_serve(gate: Gate, title: str) -> Iterator[None]:
         request is not whole within :data:`OPEN_TIMEOUT`."""
 
         def connection_made(self, transport) -> None:  # noqa: ANN001
-            peer = transport.get_extra_info("peername")
+            peer, local = transport.get_extra_info("peername"), transport.get_extra_info("sockname")
             self._peer = str(peer[0]) if peer else "?"
+            if local:
+                gate.learn(self._peer, str(local[0]))
             self._counted = gate.tcp_opened(self._peer)
             super().connection_made(transport)
             if not self._counted:
