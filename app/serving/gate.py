@@ -340,8 +340,8 @@ class Gate:
 
     def learn(self, address: str, local_address: str) -> None:
         """A TCP connection from ``address`` to this machine's ``local_address``: where the two are one, it came from
-        this machine (no other host can open a connection from an address this one holds), and the address is
-        trusted from then on. The teacher who opens the address the students were given, on the projector's own
+        this machine (another host cannot open one from an address this one holds: the handshake's answer comes back
+        here), and the address is trusted from then on. The teacher who opens the address the students were given, on the projector's own
         computer, is then this machine's screen, as at 127.0.0.1."""
         if address == local_address and address != "?":
             with self._lock:
