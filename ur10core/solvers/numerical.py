@@ -248,11 +248,10 @@ def settle_on_limits(solution, T) -> None:
         return
     on_limits, moving = on_limits[near], (beyond_by[near] == 0.0).astype(float)
     target = np.broadcast_to(np.asarray(T, dtype=float)[..., None, :, :], solution.valid.shape + (4, 4))[flagged][near]
-    settled, _ = gauss_newton(lambda q: task_error(arm.fk(q), arm.jacobian(q) * moving[:, None, :], target, arm.task),
-                              on_limits, SETTLE_STEPS, (arm.limits, arm.revolute))
-    size = np.linalg.norm(task_error(arm.fk(settled), arm.jacobian(settled), target, arm.task)[0], axis=-1)
-    reached = ((size <= REACHED) & (task_gap(arm.fk(settled), target, arm.task) <= 1e-9)
-               & arm.within_limits(settled))
+    # (the error's size does not depend on which joints move: gauss_newton's is the settled joints' own)
+    settled, size = gauss_newton(lambda q: task_error(arm.fk(q), arm.jacobian(q) * moving[:, None, :], target, arm.task),
+                                 on_limits, SETTLE_STEPS, (arm.limits, arm.revolute))
+    reached = (size <= REACHED) & (task_gap(arm.fk(settled), target, arm.task) <= 1e-9) & arm.within_limits(settled)
     if not reached.any():
         return
     rows = np.flatnonzero(near)[reached]

@@ -207,8 +207,8 @@ def _wrist_slots(table: DHTable, wrist: Wrist, out: dict, R: np.ndarray, hint: n
     full = np.zeros((len(pose), n))
     full[:, : n - 3] = q[pose, base, : n - 3]
     R_pre = table.frames(full)[:, wrist.first_row, :3, :3]
+    rounding = 0.0 if arm_rounding is None else arm_rounding[pose, base]
     for flip in (False, True):
-        rounding = 0.0 if arm_rounding is None else arm_rounding[pose, base]
         t4, t5, t6, loose = wrist.solve(R_pre, R[pose], hint4[pose], flip, rounding)
         k = base + int(flip)
         q[pose, k, : n - 3] = full[:, : n - 3]
